@@ -1,0 +1,55 @@
+#pragma once
+// The backend interface the integrator driver talks to: whole-array operations on a fixed set of
+// `n by 3` state slots that live in the backend's memory (host arrays for the CPU reference,
+// device buffers for OpenCL). The integrator logic (host/integrator/) is written once against
+// this interface; the global sparse solve stays on the host (host/solver/).
+#include <stabint/simulator.hpp>
+
+#include <Eigen/Core>
+
+#include <string>
+
+namespace stabint {
+
+class SceneData;
+
+/// Potential energy split by the way the blend books it: springs and tets never depend on time,
+/// pins and external forces may.
+struct PotentialEnergy {
+  double strain = 0.0;     // springs + tets
+  double pins = 0.0;       // pins at time t
+  double external = 0.0;   // -sum (m g + f(t)).x
+  double elastic() const { return strain + pins; }
+  double total() const { return strain + pins + external; }
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+
+  /// Copies between host and a slot (`n by 3`).
+  virtual void write(int slot, const Eigen::MatrixX3d& host) = 0;
+  virtual void read(int slot, Eigen::MatrixX3d& host) = 0;
+  virtual void copy(int dst, int src) = 0;
+  /// dst = a * x + b * y. dst may be x or y.
+  virtual void combine(int dst, double a, int x, double b, int y) = 0;
+  /// sum_j m_j a_j . b_j
+  virtual double massDot(int a, int b) = 0;
+  /// E_int and U_ext of the positions in `x` at time t (an element pass + reduction).
+  virtual PotentialEnergy potential(int x, double t) = 0;
+  /// dst = M^-1 f(x, t), f = -grad E_int - grad U_ext.
+  virtual void accelerations(int dst, int x, double t) = 0;
+  /// Local step at positions `x` followed by the gather of the global right-hand side
+  ///   rhs = c M y + sum_e w_e A_e^T p_e(x) + (m g + f(t)),
+  /// returned on the host as `n by 3` (the only per-iteration transfer to the host).
+  virtual void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs) = 0;
+
+  /// Phase timers (local, gather, transfer, energy) accumulated since the last reset.
+  PhaseTimes& times() { return times_; }
+  virtual std::string description() const = 0;
+
+ protected:
+  PhaseTimes times_;
+};
+
+}  // namespace stabint

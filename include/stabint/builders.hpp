@@ -1,0 +1,62 @@
+#pragma once
+// Built-in scenes with parameters: the test and benchmark scenes of method.md section 5.
+#include <stabint/scene.hpp>
+
+namespace stabint {
+
+/// One particle on a zero-rest-length spring (a pin) to the origin, no gravity:
+/// omega^2 = stiffness / mass. Starts at (amplitude, 0, 0) at rest.
+struct LinearOscillatorParams {
+  double mass = 1.0;
+  double stiffness = 1.0;
+  double amplitude = 1.0;
+};
+Scene makeLinearOscillator(const LinearOscillatorParams& p = {});
+
+/// A chain of `particles` equal masses joined by springs, its first particle pinned at the
+/// origin, laid out horizontally along +x at rest (released horizontally), gravity along -y.
+struct ChainPendulumParams {
+  int particles = 10;
+  double total_mass = 0.1;  // kg
+  double length = 1.0;      // m
+  double stiffness = 1e4;   // N/m, per spring
+  double pin_stiffness = 1e6;
+  double gravity = 9.81;
+};
+Scene makeChainPendulum(const ChainPendulumParams& p = {});
+
+/// A rectangular cloth of `nx` by `ny` particles in the x-y plane (hanging under gravity along
+/// -y), with structural, shear and bending springs; masses lumped from the areal density.
+/// The particles listed in `pinned` (row-major index j*nx + i) are pinned in place; by default
+/// the two top corners.
+struct ClothGridParams {
+  int nx = 20;
+  int ny = 20;
+  double width = 1.0;   // m, along x
+  double height = 1.0;  // m, along y
+  double areal_density = 0.1;  // kg/m^2
+  double stretch_stiffness = 1e3;
+  double shear_stiffness = 1e2;
+  double bend_stiffness = 1e1;
+  double pin_stiffness = 1e5;
+  std::vector<int> pinned;  // empty: the two top corners
+  double damping = 0.0;     // one body, momentum-preserving damping factor
+};
+Scene makeClothGrid(const ClothGridParams& p = {});
+
+/// A box of `nx` by `ny` by `nz` cells along x (length) by y by z, each cell split into six
+/// tets; the particles at x = 0 are pinned; gravity along -y. Masses lumped from the density.
+struct TetBarParams {
+  int nx = 8;
+  int ny = 2;
+  int nz = 2;
+  double length = 1.0;  // m, along x
+  double width = 0.25;  // m, along y and z
+  double density = 1000.0;  // kg/m^3
+  double stiffness = 1e5;   // tet strain stiffness (Pa)
+  double pin_stiffness = 1e7;
+  double damping = 0.0;
+};
+Scene makeTetBar(const TetBarParams& p = {});
+
+}  // namespace stabint

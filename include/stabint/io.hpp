@@ -1,0 +1,35 @@
+#pragma once
+// Mesh loaders. Every error is a FileFormatError that names the file and the line.
+#include <stabint/scene.hpp>
+
+#include <string>
+
+namespace stabint {
+
+/// Material parameters applied to a loaded mesh.
+struct ClothMaterial {
+  double areal_density = 0.1;  // kg/m^2
+  double stretch_stiffness = 1e3;
+  double bend_stiffness = 1e1;
+};
+struct SolidMaterial {
+  double density = 1000.0;  // kg/m^3
+  double stiffness = 1e5;
+};
+
+/// Loads a Wavefront OBJ triangle mesh as cloth: vertices (`v`), faces (`f`, polygons are
+/// fanned into triangles, `v/vt/vn` forms accepted, negative indices allowed); springs along
+/// edges and bending springs across interior edges; masses from the area. No pins, no damping.
+Scene loadObjCloth(const std::string& path, const ClothMaterial& material = {});
+
+/// Loads a TetGen mesh from `<base>.node` and `<base>.ele` (0- or 1-based, attributes and
+/// boundary markers ignored). Tets with negative signed volume are reoriented only when every
+/// tet of the mesh has that orientation (a mesh-wide convention); mixed or zero volumes are an
+/// error naming the element.
+Scene loadTetGen(const std::string& base_path, const SolidMaterial& material = {});
+
+/// Loads a Medit `.mesh` file (sections Vertices and Tetrahedra; other sections are skipped),
+/// with the same orientation rule as loadTetGen.
+Scene loadMedit(const std::string& path, const SolidMaterial& material = {});
+
+}  // namespace stabint

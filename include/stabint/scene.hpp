@@ -1,0 +1,117 @@
+#pragma once
+// The scene model: particles, the elements acting on them (springs, tet strain, pins), gravity,
+// time-dependent force fields and per-body damping. Matrices are `#particles by 3`, one row per
+// particle. See ../shared/spec/method.md section 1 for the energies.
+#include <Eigen/Core>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace stabint {
+
+/// Spring between particles a and b: E = k/2 (|x_a - x_b| - rest_length)^2.
+struct Spring {
+  int a = 0;
+  int b = 0;
+  double rest_length = 0.0;
+  double stiffness = 0.0;
+};
+
+/// Co-rotated strain of a tetrahedron: E = k V/2 ||F - R||_F^2 with F = Ds Dm^-1 and R the
+/// nearest rotation. The rest shape (Dm, V) is taken from Scene::rest_positions, with
+/// Dm = [x1-x0, x2-x0, x3-x0]; the signed rest volume det(Dm)/6 must be positive.
+struct Tet {
+  std::array<int, 4> vertices{0, 0, 0, 0};
+  double stiffness = 0.0;
+};
+
+/// Target of a pin: q(t) = position + velocity t + amplitude sin(2 pi frequency t).
+/// A target with zero velocity and zero amplitude is static.
+struct PinTarget {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d amplitude = Eigen::Vector3d::Zero();
+  double frequency = 0.0;  // Hz
+
+  Eigen::Vector3d at(double t) const;
+  bool moving() const;
+};
+
+/// Zero-rest-length spring from a particle to a (possibly moving) target:
+/// E = k/2 |x_vertex - q(t)|^2.
+struct Pin {
+  int vertex = 0;
+  double stiffness = 0.0;
+  PinTarget target;
+};
+
+/// A force applied to each listed particle (all particles when the list is empty), in newtons:
+/// f(t) = force + rate t + amplitude sin(2 pi frequency t). Treated as the potential -f(t).x.
+struct ForceField {
+  std::vector<int> particles;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rate = Eigen::Vector3d::Zero();
+  Eigen::Vector3d amplitude = Eigen::Vector3d::Zero();
+  double frequency = 0.0;  // Hz
+
+  Eigen::Vector3d at(double t) const;
+  bool timeDependent() const;
+};
+
+/// A group of particles damped together by momentum-preserving velocity damping (method.md
+/// section 4): each velocity moves toward the body's rigid velocity by the factor `damping` in
+/// [0, 1] per step. 0 disables it.
+struct Body {
+  std::string name;
+  std::vector<int> particles;
+  double damping = 0.0;
+};
+
+/// A complete simulation scene. Rows of `rest_positions`, `positions` and `velocities`, and
+/// entries of `masses`, are per particle.
+struct Scene {
+  std::string name;
+  Eigen::MatrixX3d rest_positions;  // rest shape used by tets (springs carry their own length)
+  Eigen::MatrixX3d positions;       // initial positions x_0
+  Eigen::MatrixX3d velocities;      // initial velocities v_0
+  Eigen::VectorXd masses;           // lumped masses, > 0 (pinned particles included)
+
+  std::vector<Spring> springs;
+  std::vector<Tet> tets;
+  std::vector<Pin> pins;
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, -9.81, 0.0);  // m/s^2
+  std::vector<ForceField> force_fields;
+  std::vector<Body> bodies;
+
+  int numParticles() const { return static_cast<int>(positions.rows()); }
+};
+
+/// Checks a scene: matrix shapes agree, all values finite, masses > 0, indices in range, no
+/// spring joining a particle to itself, stiffness >= 0, rest lengths >= 0, rest volumes > 0,
+/// damping in [0, 1]. Throws InvalidInputError naming the offending element or field.
+void validateScene(const Scene& scene);
+
+/// Signed rest volume det(Dm)/6 of a tet (positive for a valid element).
+double signedVolume(const Eigen::MatrixX3d& rest_positions, const std::array<int, 4>& vertices);
+
+/// Lumped masses from a tet mesh: each tet gives density * volume / 4 to each of its vertices.
+/// Particles touched by no tet get `min_mass`.
+Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions,
+                                   const std::vector<Tet>& tets, double density,
+                                   double min_mass = 1e-6);
+
+/// Lumped masses from a triangle surface: each triangle gives areal_density * area / 3 to each
+/// of its vertices. Particles touched by no triangle get `min_mass`.
+Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
+                                        const std::vector<std::array<int, 3>>& triangles,
+                                        double areal_density, double min_mass = 1e-6);
+
+/// Springs of a cloth from a triangle mesh: one structural spring per edge, and one bending
+/// spring across each interior edge joining the two opposite vertices. Rest lengths from
+/// `rest_positions`.
+std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_positions,
+                                              const std::vector<std::array<int, 3>>& triangles,
+                                              double stretch_stiffness, double bend_stiffness);
+
+}  // namespace stabint

@@ -1,0 +1,151 @@
+#pragma once
+// The stepping API: build a Simulator from a Scene and options, call step() once per frame.
+#include <stabint/errors.hpp>
+#include <stabint/scene.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stabint {
+
+/// The six integrators of method.md section 2 and 3.
+enum class Integrator {
+  ForwardEuler,
+  SymplecticEuler,
+  BackwardEuler,
+  BDF2,
+  ImplicitMidpoint,
+  EnergyBlend,  // the paper's energy-tracking blend of IM with BE or FE
+};
+const char* integratorName(Integrator integrator);  // "FE", "SE", "BE", "BDF2", "IM", "blend"
+/// Parses a name as printed by integratorName (case-insensitive); throws InvalidInputError.
+Integrator parseIntegrator(const std::string& name);
+std::vector<Integrator> allIntegrators();
+
+enum class BackendKind { CpuReference, OpenCL };
+const char* backendName(BackendKind kind);  // "cpu", "opencl"
+BackendKind parseBackend(const std::string& name);
+
+enum class Precision { Double, Float };
+
+/// Which OpenCL device to use. Empty strings fall back to the environment variables
+/// STABINT_OPENCL_PLATFORM and STABINT_OPENCL_DEVICE, then to the first platform and device.
+/// Each selector is either an index ("0") or a case-insensitive substring of the name.
+struct OpenCLOptions {
+  std::string platform;
+  std::string device;
+  Precision precision = Precision::Double;
+};
+
+/// One available OpenCL device, as listed by listOpenCLDevices().
+struct OpenCLDeviceInfo {
+  int platform_index = 0;
+  int device_index = 0;
+  std::string platform_name;
+  std::string device_name;
+  bool fp64 = false;
+};
+/// All devices of all platforms; empty when no OpenCL platform is installed (never throws for
+/// a missing platform).
+std::vector<OpenCLDeviceInfo> listOpenCLDevices();
+
+struct SimulatorOptions {
+  Integrator integrator = Integrator::EnergyBlend;
+  double time_step = 1.0 / 30.0;  // h > 0
+
+  /// Local/global iterations per implicit solve (the real-time budget). When `tolerance` > 0 the
+  /// solve instead runs until the relative change of the objective is below it (reference
+  /// runs), at most `max_iterations`.
+  int iterations = 10;
+  double tolerance = 0.0;
+  int max_iterations = 1000;
+
+  /// Energy-tracking blend (method.md section 3).
+  int be_iterations = 3;             // budget of the BE partner solve, warm-started at x_IM
+  double energy_tolerance = 1e-3;    // tau = energy_tolerance * (K + E_int + E_scale)
+  double alpha_fe_max = 0.01;        // cap on the forward-Euler blend weight
+  int max_root_evaluations = 12;     // energy evaluations of the root find
+
+  BackendKind backend = BackendKind::CpuReference;
+  OpenCLOptions opencl;
+};
+
+/// Energies of a state (method.md section 1). `elastic` includes springs, tets and pins;
+/// `external` is gravity plus force fields, -sum (m g + f(t)).x.
+struct EnergyReport {
+  double kinetic = 0.0;
+  double elastic = 0.0;
+  double external = 0.0;
+  double total() const { return kinetic + elastic + external; }
+};
+
+/// Wall-clock seconds per phase. `local` is the per-element projection, `gather` the per-vertex
+/// right-hand-side assembly, `transfer` host<->device copies, `global` the sparse solves,
+/// `energy` energy reductions, `bookkeeping` everything else of the step.
+struct PhaseTimes {
+  double local = 0.0;
+  double gather = 0.0;
+  double transfer = 0.0;
+  double global = 0.0;
+  double energy = 0.0;
+  double bookkeeping = 0.0;
+  double total() const { return local + gather + transfer + global + energy + bookkeeping; }
+  PhaseTimes& operator+=(const PhaseTimes& o);
+};
+
+/// Which state the blend accepted (None for the other integrators).
+enum class BlendBranch { None, ImplicitMidpoint, BackwardEuler, ForwardEuler };
+const char* blendBranchName(BlendBranch branch);  // "-", "IM", "BE", "FE"
+
+struct StepReport {
+  int step = 0;           // index of this step (0 = first)
+  double time = 0.0;      // time at the end of the step
+  EnergyReport energy;    // H(x_{n+1}, v_{n+1}, t_{n+1}) split by term
+  double target = 0.0;    // tracked target H* after the step (all integrators track it)
+  double forcing = 0.0;   // energy added to H* by time-dependent potentials this step
+  double damping = 0.0;   // kinetic energy removed by damping this step (>= 0)
+  BlendBranch branch = BlendBranch::None;
+  double alpha = 0.0;     // blend weight of the BE/FE partner (0 = pure IM)
+  int iterations = 0;     // local/global iterations of all solves in this step
+  int energy_evaluations = 0;  // element energy passes (root find included)
+  PhaseTimes times;
+};
+
+class Backend;  // host/backend.hpp; not part of the public API
+
+/// Steps a scene with one integrator. The scene is validated and copied at construction; the
+/// caller's scene is never modified.
+class Simulator {
+ public:
+  /// Throws InvalidInputError for a bad scene or options, OpenCLError subtypes for OpenCL
+  /// problems (NoOpenCLDeviceError when no device matches).
+  Simulator(const Scene& scene, const SimulatorOptions& options);
+  ~Simulator();
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
+
+  /// Advances one time step. Throws NonFiniteStateError (state unchanged) when the step would
+  /// produce a non-finite position or velocity.
+  const StepReport& step();
+
+  const Eigen::MatrixX3d& positions() const;
+  const Eigen::MatrixX3d& velocities() const;
+  double time() const;
+  int stepCount() const;
+  double target() const;     // H*
+  EnergyReport energy() const;  // of the current state
+  double energyScale() const;   // E_scale used by the blend tolerance
+  const Scene& scene() const;
+  const SimulatorOptions& options() const;
+  /// Report of the last completed step (default report before the first step).
+  const StepReport& lastReport() const;
+  /// Human-readable description of the backend and device in use.
+  std::string backendDescription() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stabint

@@ -1,0 +1,7 @@
+#pragma once
+// Umbrella header.
+#include <stabint/builders.hpp>
+#include <stabint/errors.hpp>
+#include <stabint/io.hpp>
+#include <stabint/scene.hpp>
+#include <stabint/simulator.hpp>

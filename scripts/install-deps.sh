@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages stabint needs, but only those that are missing.
+# Idempotent: a second run installs nothing. Nothing is downloaded at build or run time;
+# this script is the only place packages come from (Debian's own archive via apt).
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  libeigen3-dev          # dense/sparse linear algebra, Eigen/CholmodSupport
+  libsuitesparse-dev     # CHOLMOD: the prefactored global system
+  ocl-icd-opencl-dev     # OpenCL ICD loader (libOpenCL.so) and C headers
+  opencl-clhpp-headers   # CL/opencl.hpp C++ bindings
+  pocl-opencl-icd        # CPU OpenCL device, so the OpenCL path runs without a GPU
+  clinfo
+  libgtest-dev libgmock-dev
+  libbenchmark-dev
+  nlohmann-json3-dev     # scene files
+  python3-matplotlib     # charts (used through /usr/bin/python3)
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all packages present"
+  exit 0
+fi
+
+echo "install-deps: missing: ${missing[*]}"
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+    SUDO=sudo
+  else
+    echo "install-deps: not root and no password-less sudo. Run as root:" >&2
+    echo "  apt-get update && apt-get install -y --no-install-recommends ${missing[*]}" >&2
+    exit 1
+  fi
+else
+  SUDO=
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "install-deps: done"

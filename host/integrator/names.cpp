@@ -1,0 +1,68 @@
+// Names of the public enums and small value-type helpers of simulator.hpp.
+#include <stabint/simulator.hpp>
+
+#include <algorithm>
+#include <cctype>
+
+namespace stabint {
+namespace {
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+}  // namespace
+
+const char* integratorName(Integrator integrator) {
+  switch (integrator) {
+    case Integrator::ForwardEuler: return "FE";
+    case Integrator::SymplecticEuler: return "SE";
+    case Integrator::BackwardEuler: return "BE";
+    case Integrator::BDF2: return "BDF2";
+    case Integrator::ImplicitMidpoint: return "IM";
+    case Integrator::EnergyBlend: return "blend";
+  }
+  return "?";
+}
+
+std::vector<Integrator> allIntegrators() {
+  return {Integrator::ForwardEuler, Integrator::SymplecticEuler, Integrator::BackwardEuler,
+          Integrator::BDF2,         Integrator::ImplicitMidpoint, Integrator::EnergyBlend};
+}
+
+Integrator parseIntegrator(const std::string& name) {
+  for (Integrator i : allIntegrators())
+    if (lower(name) == lower(integratorName(i))) return i;
+  throw InvalidInputError("unknown integrator '" + name + "' (expected FE, SE, BE, BDF2, IM or blend)");
+}
+
+const char* backendName(BackendKind kind) {
+  return kind == BackendKind::OpenCL ? "opencl" : "cpu";
+}
+
+BackendKind parseBackend(const std::string& name) {
+  if (lower(name) == "cpu") return BackendKind::CpuReference;
+  if (lower(name) == "opencl") return BackendKind::OpenCL;
+  throw InvalidInputError("unknown backend '" + name + "' (expected cpu or opencl)");
+}
+
+const char* blendBranchName(BlendBranch branch) {
+  switch (branch) {
+    case BlendBranch::None: return "-";
+    case BlendBranch::ImplicitMidpoint: return "IM";
+    case BlendBranch::BackwardEuler: return "BE";
+    case BlendBranch::ForwardEuler: return "FE";
+  }
+  return "?";
+}
+
+PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
+  local += o.local;
+  gather += o.gather;
+  transfer += o.transfer;
+  global += o.global;
+  energy += o.energy;
+  bookkeeping += o.bookkeeping;
+  return *this;
+}
+
+}  // namespace stabint

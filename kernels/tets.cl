@@ -1,0 +1,165 @@
+// Tet strain: A_e x = F = Ds Dm^-1 with Ds = [x1-x0, x2-x0, x3-x0], weight k V, projection the
+// nearest rotation R of F. Contributions 4t + i (vertex order) relative to the tet base:
+// column i of w P G^T with G = [[-1,-1,-1],[1,0,0],[0,1,0],[0,0,1]] Dm^-1 (4 by 3).
+// 3x3 matrices are private arrays, row-major: m[3 * row + col].
+
+#define TET_MAX_JACOBI_SWEEPS 20
+
+/// One Jacobi rotation zeroing A[p][q] of the symmetric A: A <- J^T A J, V <- V J
+/// (Golub & Van Loan, sym.schur2).
+inline void jacobiRotate(real* A, real* V, int p, int q) {
+  const real apq = A[3 * p + q];
+  if (apq == (real)0) return;
+  const real tau = (A[3 * q + q] - A[3 * p + p]) / (2 * apq);
+  const real t = (tau >= 0 ? (real)1 : (real)-1) / (fabs(tau) + sqrt(1 + tau * tau));
+  const real c = 1 / sqrt(1 + t * t);
+  const real s = t * c;
+  for (int k = 0; k < 3; ++k) {
+    const real akp = A[3 * k + p], akq = A[3 * k + q];
+    A[3 * k + p] = c * akp - s * akq;
+    A[3 * k + q] = s * akp + c * akq;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const real apk = A[3 * p + k], aqk = A[3 * q + k];
+    A[3 * p + k] = c * apk - s * aqk;
+    A[3 * q + k] = s * apk + c * aqk;
+  }
+  A[3 * p + q] = 0;
+  A[3 * q + p] = 0;
+  for (int k = 0; k < 3; ++k) {
+    const real vkp = V[3 * k + p], vkq = V[3 * k + q];
+    V[3 * k + p] = c * vkp - s * vkq;
+    V[3 * k + q] = s * vkp + c * vkq;
+  }
+}
+
+inline real3 column3(const real* M, int j) { return (real3)(M[j], M[3 + j], M[6 + j]); }
+
+inline void swapColumns(real* M, int a, int b) {
+  for (int k = 0; k < 3; ++k) {
+    const real t = M[3 * k + a];
+    M[3 * k + a] = M[3 * k + b];
+    M[3 * k + b] = t;
+  }
+}
+
+/// A unit vector orthogonal to the unit vector u (crossed with the axis u is least aligned to).
+inline real3 anyOrthogonal(real3 u) {
+  const real3 a = fabs(u.x) <= fabs(u.y) && fabs(u.x) <= fabs(u.z) ? (real3)(1, 0, 0)
+                  : fabs(u.y) <= fabs(u.z)                          ? (real3)(0, 1, 0)
+                                                                    : (real3)(0, 0, 1);
+  const real3 w = cross(u, a);
+  return w / norm3(w);
+}
+
+/// Nearest rotation R = U V^T of F (SVD F = U S V^T with det U = det V = +1, so the sign of
+/// det F lands on the smallest singular value: the "flip" of method.md). V and S^2 come from a
+/// cyclic Jacobi eigen-decomposition of F^T F (sorted descending); U from Gram-Schmidt on F V
+/// with u3 = u1 x u2, which stays defined for near-degenerate and inverted F.
+inline void nearestRotation(const real* F, real* R) {
+  real A[9], V[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      A[3 * i + j] = F[i] * F[j] + F[3 + i] * F[3 + j] + F[6 + i] * F[6 + j];
+  for (int sweep = 0; sweep < TET_MAX_JACOBI_SWEEPS; ++sweep) {
+    const real off = A[1] * A[1] + A[2] * A[2] + A[5] * A[5];
+    const real diag = A[0] * A[0] + A[4] * A[4] + A[8] * A[8];
+    if (!(off > REAL_EPSILON * REAL_EPSILON * diag)) break;
+    jacobiRotate(A, V, 0, 1);
+    jacobiRotate(A, V, 0, 2);
+    jacobiRotate(A, V, 1, 2);
+  }
+  // Sort eigenvalues (squared singular values) descending, columns of V along.
+  real e[3] = {A[0], A[4], A[8]};
+  for (int pass = 0; pass < 2; ++pass)
+    for (int i = 0; i < 2 - pass; ++i)
+      if (e[i] < e[i + 1]) {
+        const real t = e[i];
+        e[i] = e[i + 1];
+        e[i + 1] = t;
+        swapColumns(V, i, i + 1);
+      }
+  const real3 v1 = column3(V, 0), v2 = column3(V, 1);
+  real3 v3 = column3(V, 2);
+  if (dot(cross(v1, v2), v3) < 0) v3 = -v3;
+
+  const real3 f0 = (real3)(F[0], F[1], F[2]), f1 = (real3)(F[3], F[4], F[5]),
+              f2 = (real3)(F[6], F[7], F[8]);
+  const real3 b1 = (real3)(dot(f0, v1), dot(f1, v1), dot(f2, v1));
+  const real3 b2 = (real3)(dot(f0, v2), dot(f1, v2), dot(f2, v2));
+  const real n1 = norm3(b1);
+  const real3 u1 = n1 > 0 ? b1 / n1 : (real3)(1, 0, 0);
+  // Gram-Schmidt twice keeps u2 orthogonal to u1 when b2 is much shorter than b1.
+  real3 w = b2 - dot(u1, b2) * u1;
+  w -= dot(u1, w) * u1;
+  const real n2 = norm3(w);
+  const real3 u2 = n2 > REAL_EPSILON * n1 ? w / n2 : anyOrthogonal(u1);
+  const real3 u3 = cross(u1, u2);
+  // R = U V^T = u1 v1^T + u2 v2^T + u3 v3^T, row by row.
+  const real3 r0 = u1.x * v1 + u2.x * v2 + u3.x * v3;
+  const real3 r1 = u1.y * v1 + u2.y * v2 + u3.y * v3;
+  const real3 r2 = u1.z * v1 + u2.z * v2 + u3.z * v3;
+  R[0] = r0.x; R[1] = r0.y; R[2] = r0.z;
+  R[3] = r1.x; R[4] = r1.y; R[5] = r1.z;
+  R[6] = r2.x; R[7] = r2.y; R[8] = r2.z;
+}
+
+/// F = Ds Dm^-1 for the tet `v`; `dm_inv` is row-major.
+inline void deformationGradient(__global const real* x, int n, int4 v,
+                                __global const real* dm_inv, real* F) {
+  const real3 x0 = loadRow(x, n, v.x);
+  const real3 e1 = loadRow(x, n, v.y) - x0, e2 = loadRow(x, n, v.z) - x0,
+              e3 = loadRow(x, n, v.w) - x0;
+  const real3 d0 = vload3(0, dm_inv), d1 = vload3(1, dm_inv), d2 = vload3(2, dm_inv);
+  // Row i of F = (e1_i, e2_i, e3_i) Dm^-1 = e1_i d0 + e2_i d1 + e3_i d2.
+  const real3 r0 = e1.x * d0 + e2.x * d1 + e3.x * d2;
+  const real3 r1 = e1.y * d0 + e2.y * d1 + e3.y * d2;
+  const real3 r2 = e1.z * d0 + e2.z * d1 + e3.z * d2;
+  F[0] = r0.x; F[1] = r0.y; F[2] = r0.z;
+  F[3] = r1.x; F[4] = r1.y; F[5] = r1.z;
+  F[6] = r2.x; F[7] = r2.y; F[8] = r2.z;
+}
+
+/// E = w/2 ||F - R||_F^2
+inline real tetEnergy(const real* F, const real* R, real weight) {
+  real sum = 0;
+  for (int k = 0; k < 9; ++k) sum += (F[k] - R[k]) * (F[k] - R[k]);
+  return (real)0.5 * weight * sum;
+}
+
+// rest: 10 reals per tet: Dm^-1 (row-major), weight = k V.
+__kernel void tet_contributions(__global const real* x, const int n, const int count,
+                                __global const int4* vertices, __global const real* rest,
+                                const int base, const int mode, __global real* contrib) {
+  const int t = get_global_id(0);
+  if (t >= count) return;
+  __global const real* dm_inv = rest + 10 * t;
+  const real weight = dm_inv[9];
+  real F[9], P[9];
+  deformationGradient(x, n, vertices[t], dm_inv, F);
+  nearestRotation(F, P);
+  if (mode == MODE_FORCE)
+    for (int k = 0; k < 9; ++k) P[k] -= F[k];
+  // Column i of P G^T is P times row i of G; rows 1..3 of G are the rows of Dm^-1, row 0 is
+  // minus their sum.
+  const real3 g1 = vload3(0, dm_inv), g2 = vload3(1, dm_inv), g3 = vload3(2, dm_inv);
+  const real3 g0 = -(g1 + g2 + g3);
+  const real3 p0 = weight * (real3)(P[0], P[1], P[2]), p1 = weight * (real3)(P[3], P[4], P[5]),
+              p2 = weight * (real3)(P[6], P[7], P[8]);
+  vstore3((real3)(dot(p0, g0), dot(p1, g0), dot(p2, g0)), base + 4 * t + 0, contrib);
+  vstore3((real3)(dot(p0, g1), dot(p1, g1), dot(p2, g1)), base + 4 * t + 1, contrib);
+  vstore3((real3)(dot(p0, g2), dot(p1, g2), dot(p2, g2)), base + 4 * t + 2, contrib);
+  vstore3((real3)(dot(p0, g3), dot(p1, g3), dot(p2, g3)), base + 4 * t + 3, contrib);
+}
+
+__kernel void tet_energies(__global const real* x, const int n, const int count,
+                           __global const int4* vertices, __global const real* rest,
+                           __global real* energies, const int offset) {
+  const int t = get_global_id(0);
+  if (t >= count) return;
+  __global const real* dm_inv = rest + 10 * t;
+  real F[9], R[9];
+  deformationGradient(x, n, vertices[t], dm_inv, F);
+  nearestRotation(F, R);
+  energies[offset + t] = tetEnergy(F, R, dm_inv[9]);
+}

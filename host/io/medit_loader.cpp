@@ -1,0 +1,92 @@
+// Medit .mesh reader (ASCII; the format of Gmsh's and TetGen's -g output). The format is free:
+// a keyword and its count may share a line or not, so it is read as a token stream.
+#include "io/mesh_scene.hpp"
+#include "io/text_reader.hpp"
+
+#include <stabint/io.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <optional>
+
+namespace stabint {
+
+namespace {
+
+bool sameKeyword(const std::string& a, const char* b) {
+  const std::string bs(b);
+  return a.size() == bs.size() && std::equal(a.begin(), a.end(), bs.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+// Keywords start with a letter; everything in a section's body is a number.
+bool isKeyword(const std::string& token) { return std::isalpha(static_cast<unsigned char>(token[0])) != 0; }
+
+Eigen::MatrixX3d readVertices(io::TextReader& in) {
+  const int count = in.parseCount(in.requireToken("the number of vertices"), "number of vertices");
+  Eigen::MatrixX3d x(count, 3);
+  for (int i = 0; i < count; ++i) {
+    const std::string vertex = "vertex " + std::to_string(i + 1);
+    for (int c = 0; c < 3; ++c) {
+      x(i, c) = in.parseReal(in.requireToken(vertex + " of " + std::to_string(count)), vertex + " coordinate " + "xyz"[c]);
+    }
+    in.parseInt(in.requireToken(vertex + " reference"), vertex + " reference");
+  }
+  return x;
+}
+
+std::vector<io::TetRecord> readTetrahedra(io::TextReader& in, int num_vertices) {
+  const int count = in.parseCount(in.requireToken("the number of tetrahedra"), "number of tetrahedra");
+  std::vector<io::TetRecord> tets;
+  tets.reserve(count);
+  for (int i = 0; i < count; ++i) {
+    io::TetRecord tet{{}, i + 1, 0};
+    const std::string name = "tet " + std::to_string(tet.id);
+    for (int k = 0; k < 4; ++k) {
+      const std::string token = in.requireToken(name + " of " + std::to_string(count));
+      if (k == 0) tet.line = in.line();
+      tet.vertices[k] = io::parseVertexIndex(in, token, 1, num_vertices, name);
+    }
+    in.parseInt(in.requireToken(name + " reference"), name + " reference");
+    tets.push_back(tet);
+  }
+  return tets;
+}
+
+}  // namespace
+
+Scene loadMedit(const std::string& path, const SolidMaterial& material) {
+  io::TextReader in(path);
+  std::optional<Eigen::MatrixX3d> vertices;
+  std::optional<std::vector<io::TetRecord>> tets;
+  std::string token;
+  bool more = in.nextToken(token);
+  while (more) {
+    if (!isKeyword(token)) in.fail("expected a section keyword, got '" + token + "'");
+    if (sameKeyword(token, "End")) break;
+    if (sameKeyword(token, "Dimension")) {
+      const int dimension = in.parseInt(in.requireToken("the dimension"), "dimension");
+      if (dimension != 3) in.fail("dimension " + std::to_string(dimension) + " is not supported, expected 3");
+    } else if (sameKeyword(token, "Vertices")) {
+      if (vertices) in.fail("second Vertices section");
+      vertices = readVertices(in);
+    } else if (sameKeyword(token, "Tetrahedra")) {
+      if (!vertices) in.fail("Tetrahedra section before the Vertices section");
+      if (tets) in.fail("second Tetrahedra section");
+      tets = readTetrahedra(in, static_cast<int>(vertices->rows()));
+    } else {
+      // MeshVersionFormatted, Triangles, Edges, Corners, ...: skip the section's numbers; the
+      // token that ends the skip is already the next keyword.
+      while ((more = in.nextToken(token)) && !isKeyword(token)) {
+      }
+      continue;
+    }
+    more = in.nextToken(token);
+  }
+  if (!vertices) in.fail("no Vertices section");
+  if (!tets) in.fail("no Tetrahedra section");
+  return io::solidSceneFromMesh(io::sceneNameFromPath(path), path, *vertices, std::move(*tets), material);
+}
+
+}  // namespace stabint

@@ -1,0 +1,97 @@
+// Wavefront OBJ reader for cloth: only `v` and `f` matter; texture coordinates, normals, groups
+// and materials are skipped.
+#include "io/mesh_scene.hpp"
+#include "io/text_reader.hpp"
+
+#include <stabint/io.hpp>
+
+#include <array>
+#include <vector>
+
+namespace stabint {
+
+namespace {
+
+struct Face {
+  std::vector<long> vertices;  // 1-based as written, negatives already resolved
+  int number;                  // 1-based count of faces, as a user would count them
+  int line;
+};
+
+// Negative references count back from the vertices defined so far, so they are resolved now;
+// positive ones may point forward and are checked once all vertices are known.
+Face readFace(const io::TextReader& in, const std::vector<std::string>& tokens, int number, long vertices_so_far) {
+  const std::string name = "face " + std::to_string(number);
+  if (tokens.size() < 4) in.fail(name + ": needs at least 3 vertices, got " + std::to_string(tokens.size() - 1));
+  Face face{{}, number, in.line()};
+  for (size_t k = 1; k < tokens.size(); ++k) {
+    const std::string ref = tokens[k].substr(0, tokens[k].find('/'));  // "v", "v/vt", "v//vn", "v/vt/vn"
+    long index = in.parseInt(ref, name + " vertex index");
+    if (index == 0) in.fail(name + ": vertex index 0 is invalid (OBJ indices start at 1)");
+    if (index < 0) {
+      const long written = index;
+      index += vertices_so_far + 1;
+      if (index < 1) {
+        in.fail(name + ": relative vertex index " + std::to_string(written) + " points before the first vertex (" +
+                std::to_string(vertices_so_far) + " defined so far)");
+      }
+    }
+    face.vertices.push_back(index);
+  }
+  return face;
+}
+
+std::vector<std::array<int, 3>> fanTriangles(const std::string& file, const std::vector<Face>& faces, long num_vertices) {
+  std::vector<std::array<int, 3>> triangles;
+  for (const Face& face : faces) {
+    const std::string name = "face " + std::to_string(face.number);
+    for (size_t k = 0; k < face.vertices.size(); ++k) {
+      const long v = face.vertices[k];
+      if (v > num_vertices) {
+        throw FileFormatError(file, face.line, name + ": vertex index " + std::to_string(v) + " out of range [1, " +
+                                                   std::to_string(num_vertices) + "]");
+      }
+      for (size_t l = 0; l < k; ++l) {
+        if (face.vertices[l] == v) {
+          throw FileFormatError(file, face.line, name + ": vertex " + std::to_string(v) + " appears twice");
+        }
+      }
+    }
+    // A fan from the first corner is exact for the convex polygons meshes are made of.
+    for (size_t k = 1; k + 1 < face.vertices.size(); ++k) {
+      triangles.push_back({static_cast<int>(face.vertices[0] - 1), static_cast<int>(face.vertices[k] - 1),
+                           static_cast<int>(face.vertices[k + 1] - 1)});
+    }
+  }
+  return triangles;
+}
+
+}  // namespace
+
+Scene loadObjCloth(const std::string& path, const ClothMaterial& material) {
+  io::TextReader in(path);
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<Face> faces;
+  for (std::vector<std::string> tokens; in.nextLine(tokens);) {
+    if (tokens[0] == "v") {
+      const std::string name = "vertex " + std::to_string(positions.size() + 1);
+      if (tokens.size() < 4) in.fail(name + ": expected 'v <x> <y> <z>', got " + std::to_string(tokens.size() - 1) + " values");
+      Eigen::Vector3d x;
+      for (int c = 0; c < 3; ++c) x[c] = in.parseReal(tokens[1 + c], name + " coordinate " + "xyz"[c]);
+      positions.push_back(x);
+    } else if (tokens[0] == "f") {
+      faces.push_back(readFace(in, tokens, static_cast<int>(faces.size()) + 1, static_cast<long>(positions.size())));
+    }
+  }
+  if (positions.empty()) in.fail("no vertices ('v' lines)");
+  if (faces.empty()) in.fail("no faces ('f' lines)");
+
+  Eigen::MatrixX3d x(positions.size(), 3);
+  for (size_t i = 0; i < positions.size(); ++i) x.row(i) = positions[i].transpose();
+  const auto triangles = fanTriangles(path, faces, static_cast<long>(positions.size()));
+  Scene s = io::sceneFromMesh(io::sceneNameFromPath(path), x, lumpMassesFromTriangles(x, triangles, material.areal_density));
+  s.springs = clothSpringsFromTriangles(x, triangles, material.stretch_stiffness, material.bend_stiffness);
+  return s;
+}
+
+}  // namespace stabint

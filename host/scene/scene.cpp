@@ -1,0 +1,330 @@
+// Scene model: pin and force-field time laws, validation, and the geometric helpers builders and
+// loaders share (rest volumes, mass lumping, cloth springs).
+#include <stabint/errors.hpp>
+#include <stabint/scene.hpp>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace stabint {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586476925286766559;
+
+bool isZero(const Eigen::Vector3d& v) { return (v.array() == 0.0).all(); }
+
+// Oscillation with a zero amplitude or a zero frequency contributes nothing at any t.
+bool oscillates(const Eigen::Vector3d& amplitude, double frequency) {
+  return frequency != 0.0 && !isZero(amplitude);
+}
+
+}  // namespace
+
+Eigen::Vector3d PinTarget::at(double t) const {
+  return position + velocity * t + amplitude * std::sin(kTwoPi * frequency * t);
+}
+
+bool PinTarget::moving() const { return !isZero(velocity) || oscillates(amplitude, frequency); }
+
+Eigen::Vector3d ForceField::at(double t) const {
+  return force + rate * t + amplitude * std::sin(kTwoPi * frequency * t);
+}
+
+bool ForceField::timeDependent() const { return !isZero(rate) || oscillates(amplitude, frequency); }
+
+// --- validation ---------------------------------------------------------------------------------
+
+namespace {
+
+// Concatenates anything streamable; doubles print with 6 significant digits, which is enough
+// to recognise the offending value in a message.
+template <typename... Args>
+std::string cat(const Args&... args) {
+  std::ostringstream s;
+  (s << ... << args);
+  return s.str();
+}
+
+template <typename... Args>
+[[noreturn]] void invalid(const Args&... args) {
+  throw InvalidInputError(cat(args...));
+}
+
+std::string vec(const Eigen::Vector3d& v) { return cat("(", v.x(), ", ", v.y(), ", ", v.z(), ")"); }
+
+// Names an element in messages ("spring 12", "body 'cloth'"). Streamed only when a check fails,
+// so validating a large scene builds no strings.
+struct Owner {
+  const char* kind;
+  size_t index;
+  const std::string* label = nullptr;  // bodies are known to users by name, when they have one
+};
+
+std::ostream& operator<<(std::ostream& s, const Owner& o) {
+  if (o.label && !o.label->empty()) return s << o.kind << " '" << *o.label << "'";
+  return s << o.kind << " " << o.index;
+}
+
+// `field` is a member name; `subscript` >= 0 makes it a list entry, e.g. "particles[3]".
+void checkIndex(int index, int n, const Owner& owner, const char* field, long subscript = -1) {
+  if (index < 0 || index >= n) {
+    if (subscript >= 0) invalid(owner, ": index ", field, "[", subscript, "] = ", index, " out of range [0, ", n, ")");
+    invalid(owner, ": index ", field, " = ", index, " out of range [0, ", n, ")");
+  }
+}
+
+// NaN fails every comparison, so `!(k >= 0)` rejects it along with negatives.
+void checkStiffness(double k, const Owner& owner) {
+  if (!(k >= 0.0) || !std::isfinite(k)) invalid(owner, ": stiffness ", k, " must be >= 0");
+}
+
+void checkFinite(const Eigen::Vector3d& v, const Owner& owner, const char* field) {
+  if (!v.allFinite()) invalid(owner, ": ", field, " ", vec(v), " is not finite");
+}
+
+void checkRows(const Eigen::MatrixX3d& m, const char* name) {
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    if (!m.row(i).allFinite()) invalid(name, " row ", i, " is not finite");
+  }
+}
+
+void checkParticles(const Scene& s) {
+  const int n = s.numParticles();
+  if (n == 0) invalid("scene '", s.name, "' has no particles (positions has 0 rows)");
+  if (s.rest_positions.rows() != n) {
+    invalid("rest_positions has ", s.rest_positions.rows(), " rows but positions has ", n);
+  }
+  if (s.velocities.rows() != n) {
+    invalid("velocities has ", s.velocities.rows(), " rows but positions has ", n);
+  }
+  if (s.masses.size() != n) invalid("masses has ", s.masses.size(), " entries but positions has ", n, " rows");
+  checkRows(s.positions, "positions");
+  checkRows(s.rest_positions, "rest_positions");
+  checkRows(s.velocities, "velocities");
+  for (int j = 0; j < n; ++j) {
+    const double m = s.masses[j];
+    if (!(m > 0.0) || !std::isfinite(m)) invalid("masses[", j, "] = ", m, " must be > 0 and finite");
+  }
+  if (!s.gravity.allFinite()) invalid("gravity ", vec(s.gravity), " is not finite");
+}
+
+void checkSprings(const Scene& s) {
+  const int n = s.numParticles();
+  for (size_t i = 0; i < s.springs.size(); ++i) {
+    const Spring& sp = s.springs[i];
+    const Owner owner{"spring", i};
+    checkIndex(sp.a, n, owner, "a");
+    checkIndex(sp.b, n, owner, "b");
+    if (sp.a == sp.b) invalid(owner, " joins particle ", sp.a, " to itself");
+    if (!(sp.rest_length >= 0.0) || !std::isfinite(sp.rest_length)) {
+      invalid(owner, ": rest length ", sp.rest_length, " must be >= 0 and finite");
+    }
+    checkStiffness(sp.stiffness, owner);
+  }
+}
+
+void checkTets(const Scene& s) {
+  const int n = s.numParticles();
+  for (size_t i = 0; i < s.tets.size(); ++i) {
+    const Tet& tet = s.tets[i];
+    const Owner owner{"tet", i};
+    for (int k = 0; k < 4; ++k) checkIndex(tet.vertices[k], n, owner, "vertices", k);
+    for (int a = 0; a < 4; ++a) {
+      for (int b = a + 1; b < 4; ++b) {
+        if (tet.vertices[a] == tet.vertices[b]) {
+          invalid(owner, ": particle ", tet.vertices[a], " appears twice (vertices[", a, "] and vertices[", b, "])");
+        }
+      }
+    }
+    checkStiffness(tet.stiffness, owner);
+    const double volume = signedVolume(s.rest_positions, tet.vertices);
+    if (!(volume > 0.0)) invalid(owner, ": non-positive rest volume ", volume, " (degenerate or inverted)");
+  }
+}
+
+void checkPins(const Scene& s) {
+  const int n = s.numParticles();
+  for (size_t i = 0; i < s.pins.size(); ++i) {
+    const Pin& pin = s.pins[i];
+    const Owner owner{"pin", i};
+    checkIndex(pin.vertex, n, owner, "vertex");
+    checkStiffness(pin.stiffness, owner);
+    checkFinite(pin.target.position, owner, "target position");
+    checkFinite(pin.target.velocity, owner, "target velocity");
+    checkFinite(pin.target.amplitude, owner, "target amplitude");
+    if (!std::isfinite(pin.target.frequency)) {
+      invalid(owner, ": target frequency ", pin.target.frequency, " is not finite");
+    }
+  }
+}
+
+void checkForceFields(const Scene& s) {
+  const int n = s.numParticles();
+  for (size_t i = 0; i < s.force_fields.size(); ++i) {
+    const ForceField& f = s.force_fields[i];
+    const Owner owner{"force field", i};
+    for (size_t k = 0; k < f.particles.size(); ++k) {
+      checkIndex(f.particles[k], n, owner, "particles", static_cast<long>(k));
+    }
+    checkFinite(f.force, owner, "force");
+    checkFinite(f.rate, owner, "rate");
+    checkFinite(f.amplitude, owner, "amplitude");
+    if (!std::isfinite(f.frequency)) invalid(owner, ": frequency ", f.frequency, " is not finite");
+  }
+}
+
+void checkBodies(const Scene& s) {
+  const int n = s.numParticles();
+  for (size_t i = 0; i < s.bodies.size(); ++i) {
+    const Body& body = s.bodies[i];
+    const Owner owner{"body", i, &body.name};
+    if (!(body.damping >= 0.0 && body.damping <= 1.0)) {
+      invalid(owner, ": damping ", body.damping, " outside [0, 1]");
+    }
+    for (size_t k = 0; k < body.particles.size(); ++k) {
+      checkIndex(body.particles[k], n, owner, "particles", static_cast<long>(k));
+    }
+    // A particle listed twice would count twice in the body's momentum and inertia.
+    std::vector<int> sorted = body.particles;
+    std::sort(sorted.begin(), sorted.end());
+    const auto dup = std::adjacent_find(sorted.begin(), sorted.end());
+    if (dup != sorted.end()) invalid(owner, ": particle ", *dup, " listed twice");
+  }
+}
+
+}  // namespace
+
+void validateScene(const Scene& scene) {
+  // Particle data first: every later check indexes into it.
+  checkParticles(scene);
+  checkSprings(scene);
+  checkTets(scene);
+  checkPins(scene);
+  checkForceFields(scene);
+  checkBodies(scene);
+}
+
+// --- geometry -----------------------------------------------------------------------------------
+
+double signedVolume(const Eigen::MatrixX3d& rest_positions, const std::array<int, 4>& v) {
+  const Eigen::Vector3d x0 = rest_positions.row(v[0]).transpose();
+  Eigen::Matrix3d dm;
+  dm.col(0) = rest_positions.row(v[1]).transpose() - x0;
+  dm.col(1) = rest_positions.row(v[2]).transpose() - x0;
+  dm.col(2) = rest_positions.row(v[3]).transpose() - x0;
+  return dm.determinant() / 6.0;
+}
+
+namespace {
+
+template <size_t K>
+void checkElementIndices(const std::array<int, K>& element, Eigen::Index n, const char* kind, size_t i) {
+  for (int v : element) {
+    if (v < 0 || v >= n) invalid(kind, " ", i, ": index ", v, " out of range [0, ", n, ")");
+  }
+}
+
+// Lumping leaves particles that no element touches at zero; they still need a positive mass.
+Eigen::VectorXd withMinimumMass(Eigen::VectorXd masses, double min_mass) {
+  for (Eigen::Index j = 0; j < masses.size(); ++j) {
+    if (masses[j] == 0.0) masses[j] = min_mass;
+  }
+  return masses;
+}
+
+}  // namespace
+
+Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const std::vector<Tet>& tets,
+                                   double density, double min_mass) {
+  Eigen::VectorXd masses = Eigen::VectorXd::Zero(rest_positions.rows());
+  for (size_t i = 0; i < tets.size(); ++i) {
+    checkElementIndices(tets[i].vertices, rest_positions.rows(), "tet", i);
+    // Mass is a property of the shape, not of its vertex order: use |V| so an inverted tet is
+    // reported by validation as inverted rather than as a negative mass.
+    const double share = density * std::abs(signedVolume(rest_positions, tets[i].vertices)) / 4.0;
+    for (int v : tets[i].vertices) masses[v] += share;
+  }
+  return withMinimumMass(std::move(masses), min_mass);
+}
+
+Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
+                                        const std::vector<std::array<int, 3>>& triangles,
+                                        double areal_density, double min_mass) {
+  Eigen::VectorXd masses = Eigen::VectorXd::Zero(rest_positions.rows());
+  for (size_t i = 0; i < triangles.size(); ++i) {
+    const auto& t = triangles[i];
+    checkElementIndices(t, rest_positions.rows(), "triangle", i);
+    const Eigen::Vector3d e1 = (rest_positions.row(t[1]) - rest_positions.row(t[0])).transpose();
+    const Eigen::Vector3d e2 = (rest_positions.row(t[2]) - rest_positions.row(t[0])).transpose();
+    const double share = areal_density * 0.5 * e1.cross(e2).norm() / 3.0;
+    for (int v : t) masses[v] += share;
+  }
+  return withMinimumMass(std::move(masses), min_mass);
+}
+
+std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_positions,
+                                              const std::vector<std::array<int, 3>>& triangles,
+                                              double stretch_stiffness, double bend_stiffness) {
+  // Every (edge, opposite vertex) incidence, sorted by edge: equal edges become adjacent, and
+  // the sort fixes the spring order independently of the triangle order.
+  struct Incidence {
+    int lo, hi, opposite;
+    bool operator<(const Incidence& o) const {
+      return std::tie(lo, hi, opposite) < std::tie(o.lo, o.hi, o.opposite);
+    }
+  };
+  std::vector<Incidence> incidences;
+  incidences.reserve(3 * triangles.size());
+  for (size_t i = 0; i < triangles.size(); ++i) {
+    const auto& t = triangles[i];
+    checkElementIndices(t, rest_positions.rows(), "triangle", i);
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+      if (a == b) continue;  // a degenerate triangle has no such edge
+      incidences.push_back({std::min(a, b), std::max(a, b), c});
+    }
+  }
+  std::sort(incidences.begin(), incidences.end());
+
+  const auto spring = [&](int a, int b, double k) {
+    return Spring{a, b, (rest_positions.row(a) - rest_positions.row(b)).norm(), k};
+  };
+  std::vector<Spring> structural;
+  std::vector<std::pair<int, int>> bending_pairs;
+  for (size_t i = 0; i < incidences.size();) {
+    size_t end = i;
+    while (end < incidences.size() && incidences[end].lo == incidences[i].lo &&
+           incidences[end].hi == incidences[i].hi) {
+      ++end;
+    }
+    structural.push_back(spring(incidences[i].lo, incidences[i].hi, stretch_stiffness));
+    // Only a manifold interior edge (exactly two triangles) has a well-defined hinge.
+    if (end - i == 2) {
+      const int p = incidences[i].opposite, q = incidences[i + 1].opposite;
+      if (p != q) bending_pairs.emplace_back(std::min(p, q), std::max(p, q));
+    }
+    i = end;
+  }
+
+  // A bending pair can coincide with an existing edge or with another hinge's pair on coarse or
+  // irregular meshes; a second spring there would just double that stiffness.
+  std::sort(bending_pairs.begin(), bending_pairs.end());
+  bending_pairs.erase(std::unique(bending_pairs.begin(), bending_pairs.end()), bending_pairs.end());
+  std::vector<Spring> springs = structural;
+  for (const auto& [p, q] : bending_pairs) {
+    const bool is_edge = std::binary_search(
+        incidences.begin(), incidences.end(), Incidence{p, q, -1},
+        [](const Incidence& x, const Incidence& y) { return std::tie(x.lo, x.hi) < std::tie(y.lo, y.hi); });
+    if (!is_edge) springs.push_back(spring(p, q, bend_stiffness));
+  }
+  return springs;
+}
+
+}  // namespace stabint

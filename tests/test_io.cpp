@@ -1,0 +1,352 @@
+// Mesh loaders: OBJ cloth, TetGen and Medit solids. Files are written into a temporary
+// directory by each test; errors must name the file and the right line.
+#include <stabint/errors.hpp>
+#include <stabint/io.hpp>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+
+namespace stabint {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+class MeshFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("stabint_io_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::string path = (dir_ / name).string();
+    std::ofstream(path) << text;
+    return path;
+  }
+
+  fs::path dir_;
+};
+
+// The FileFormatError `load` throws; a failed expectation when it throws nothing.
+std::optional<FileFormatError> formatError(const std::function<void()>& load) {
+  try {
+    load();
+  } catch (const FileFormatError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "expected a FileFormatError";
+  return std::nullopt;
+}
+
+// Checks file, line and a part of the message; the message itself must carry "file:line".
+void expectError(const std::function<void()>& load, const std::string& file, int line, const std::string& part) {
+  const auto e = formatError(load);
+  if (!e) return;
+  EXPECT_EQ(e->file(), file);
+  EXPECT_EQ(e->line(), line) << e->what();
+  const std::string where = line > 0 ? file + ":" + std::to_string(line) + ": " : file + ": ";
+  EXPECT_THAT(e->what(), HasSubstr(where));
+  EXPECT_THAT(e->what(), HasSubstr(part));
+}
+
+fs::path scenesDir() { return fs::path(STABINT_TEST_DATA_DIR).parent_path().parent_path() / "scenes"; }
+
+// --- OBJ ------------------------------------------------------------------------------------------
+
+const char* const kUnitSquareObj =
+    "# unit square as one quad\n"
+    "mtllib cloth.mtl\n"
+    "v 0 0 0\n"
+    "v 1 0 0\n"
+    "v 1 1 0   # comment after data\n"
+    "v 0 1 0\n"
+    "vt 0 0\n"
+    "vn 0 0 1\n"
+    "g square\n"
+    "s off\n"
+    "f 1/1/1 2/1/1 3//1 4\n";
+
+TEST_F(MeshFiles, ObjQuadIsFannedIntoTwoTriangles) {
+  const ClothMaterial material{0.2, 500.0, 5.0};
+  const Scene s = loadObjCloth(write("square.obj", kUnitSquareObj), material);
+  EXPECT_EQ(s.name, "square");
+  ASSERT_EQ(s.numParticles(), 4);
+  EXPECT_TRUE(s.positions.row(2).isApprox(Eigen::RowVector3d(1, 1, 0)));
+  EXPECT_EQ(s.rest_positions, s.positions);
+  EXPECT_TRUE(s.velocities.isZero());
+  // Fan (1,2,3), (1,3,4): vertices 1 and 3 touch both triangles.
+  const double sixth = 0.2 * 0.5 / 3.0;
+  EXPECT_NEAR(s.masses[0], 2 * sixth, 1e-15);
+  EXPECT_NEAR(s.masses[1], sixth, 1e-15);
+  EXPECT_NEAR(s.masses[2], 2 * sixth, 1e-15);
+  EXPECT_NEAR(s.masses[3], sixth, 1e-15);
+  // Five edges and one hinge across the diagonal 1-3, joining 2 and 4.
+  ASSERT_EQ(s.springs.size(), 6u);
+  EXPECT_EQ(s.springs[5].a, 1);
+  EXPECT_EQ(s.springs[5].b, 3);
+  EXPECT_EQ(s.springs[5].stiffness, 5.0);
+  EXPECT_EQ(s.springs[0].stiffness, 500.0);
+  EXPECT_TRUE(s.pins.empty());
+  EXPECT_TRUE(s.tets.empty());
+  ASSERT_EQ(s.bodies.size(), 1u);
+  EXPECT_EQ(s.bodies[0].damping, 0.0);
+  EXPECT_EQ(s.bodies[0].particles.size(), 4u);
+  EXPECT_TRUE(s.gravity.isApprox(Eigen::Vector3d(0, -9.81, 0)));
+  EXPECT_NO_THROW(validateScene(s));
+}
+
+TEST_F(MeshFiles, ObjNegativeIndicesAndPolygons) {
+  const Scene quad = loadObjCloth(write("neg.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf -4 -3 -2 -1\n"));
+  ASSERT_EQ(quad.springs.size(), 6u);
+  EXPECT_NEAR(quad.masses.sum(), 0.1, 1e-15);
+  // A pentagon: three triangles, seven edges, two hinges.
+  const Scene penta =
+      loadObjCloth(write("penta.obj", "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n"));
+  EXPECT_EQ(penta.springs.size(), 7u + 2u);
+  EXPECT_NEAR(penta.masses.sum(), 0.1 * 3.0, 1e-15);
+}
+
+TEST_F(MeshFiles, ObjErrorsNameFileLineAndProblem) {
+  const std::string missing = (dir_ / "nope.obj").string();
+  expectError([&] { loadObjCloth(missing); }, missing, 0, "cannot open file");
+
+  std::string f = write("badnum.obj", "# header\nv 0 0 0\nv 0 x 0\n");
+  expectError([&] { loadObjCloth(f); }, f, 3, "expected a number for vertex 2 coordinate y, got 'x'");
+
+  f = write("nan.obj", "v 0 0 0\n\nv nan 0 0\n");
+  expectError([&] { loadObjCloth(f); }, f, 3, "vertex 2 coordinate x is not finite ('nan')");
+
+  f = write("short.obj", "v 0 0 0\nv 1 0\n");
+  expectError([&] { loadObjCloth(f); }, f, 2, "vertex 2: expected 'v <x> <y> <z>'");
+
+  f = write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 7\n");
+  expectError([&] { loadObjCloth(f); }, f, 5, "face 2: vertex index 7 out of range [1, 3]");
+
+  f = write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+  expectError([&] { loadObjCloth(f); }, f, 4, "face 1: vertex index 0 is invalid");
+
+  f = write("back.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n");
+  expectError([&] { loadObjCloth(f); }, f, 4, "face 1: relative vertex index -4 points before the first vertex");
+
+  f = write("two.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n");
+  expectError([&] { loadObjCloth(f); }, f, 3, "face 1: needs at least 3 vertices, got 2");
+
+  f = write("twice.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 1\n");
+  expectError([&] { loadObjCloth(f); }, f, 4, "face 1: vertex 1 appears twice");
+
+  f = write("idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3.5\n");
+  expectError([&] { loadObjCloth(f); }, f, 4, "expected an integer for face 1 vertex index, got '3.5'");
+
+  f = write("noface.obj", "v 0 0 0\nv 1 0 0\n");
+  expectError([&] { loadObjCloth(f); }, f, 2, "no faces");
+}
+
+// --- TetGen ---------------------------------------------------------------------------------------
+
+// Points 1..4 are the unit corner tet, 5 = (1,1,1) caps the face (2,3,4), 6 = (1,1,0) lies in
+// the plane of (1,2,3). Attributes and boundary markers present, to be ignored.
+const char* const kNodesOneBased =
+    "# six points\n"
+    "6 3 1 1\n"
+    "1 0 0 0  7.5 1\n"
+    "2 1 0 0  7.5 1\n"
+    "\n"
+    "3 0 1 0  7.5 1   # trailing comment\n"
+    "4 0 0 1  7.5 1\n"
+    "5 1 1 1  7.5 0\n"
+    "6 1 1 0  7.5 0\n";
+
+std::string zeroBased(const std::string& one_based_nodes) {
+  std::string out;
+  std::istringstream in(one_based_nodes);
+  int row = 0;
+  for (std::string line; std::getline(in, line); ++row) {
+    if (row >= 2 && !line.empty()) line[0] = static_cast<char>(line[0] - 1);
+    out += line + "\n";
+  }
+  return out;
+}
+
+TEST_F(MeshFiles, TetGenOneBased) {
+  write("two.node", kNodesOneBased);
+  write("two.ele", "# tets\n2 4 0\n1 1 2 3 4\n2 5 2 4 3\n");
+  const SolidMaterial material{300.0, 2e4};
+  const Scene s = loadTetGen((dir_ / "two").string(), material);
+  EXPECT_EQ(s.name, "two");
+  ASSERT_EQ(s.numParticles(), 6);
+  EXPECT_TRUE(s.positions.row(4).isApprox(Eigen::RowVector3d(1, 1, 1)));
+  ASSERT_EQ(s.tets.size(), 2u);
+  EXPECT_EQ(s.tets[0].vertices, (std::array<int, 4>{0, 1, 2, 3}));
+  EXPECT_EQ(s.tets[1].vertices, (std::array<int, 4>{4, 1, 3, 2}));
+  EXPECT_EQ(s.tets[1].stiffness, 2e4);
+  EXPECT_NEAR(s.masses.head(5).sum(), 300.0 * (1.0 / 6 + 1.0 / 3), 1e-12);
+  EXPECT_NEAR(s.masses[0], 300.0 / 24, 1e-12);
+  EXPECT_GT(s.masses[5], 0.0);  // untouched point still has a (tiny) mass
+  EXPECT_TRUE(s.velocities.isZero());
+  EXPECT_EQ(s.bodies.size(), 1u);
+  EXPECT_NO_THROW(validateScene(s));
+}
+
+TEST_F(MeshFiles, TetGenZeroBasedAndExtensionInPath) {
+  write("z.node", zeroBased(kNodesOneBased));
+  const std::string ele = write("z.ele", "2 4 1\n0 0 1 2 3 9.0\n1 4 1 3 2 9.0\n");
+  const Scene a = loadTetGen((dir_ / "z").string());
+  const Scene b = loadTetGen(ele);
+  ASSERT_EQ(a.tets.size(), 2u);
+  EXPECT_EQ(a.tets[1].vertices, (std::array<int, 4>{4, 1, 3, 2}));
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.masses, b.masses);
+}
+
+TEST_F(MeshFiles, TetGenMeshWideNegativeOrientationIsReoriented) {
+  write("neg.node", kNodesOneBased);
+  write("neg.ele", "2 4 0\n1 1 3 2 4\n2 5 4 2 3\n");
+  const Scene s = loadTetGen((dir_ / "neg").string());
+  for (const Tet& t : s.tets) EXPECT_GT(signedVolume(s.rest_positions, t.vertices), 0.0);
+  EXPECT_NEAR(s.masses.head(5).sum(), 1000.0 * 0.5, 1e-9);
+  EXPECT_NO_THROW(validateScene(s));
+}
+
+TEST_F(MeshFiles, TetGenErrors) {
+  write("m.node", kNodesOneBased);
+  std::string ele = write("m.ele", "# mixed\n2 4 0\n1 1 2 3 4\n2 5 4 2 3\n");
+  const std::string base = (dir_ / "m").string();
+  expectError([&] { loadTetGen(base); }, ele, 4, "tet 2: mixed orientation");
+
+  ele = write("m.ele", "2 4 0\n1 1 2 3 4\n\n7 1 2 3 6\n");
+  expectError([&] { loadTetGen(base); }, ele, 4, "tet 7: zero volume");
+
+  ele = write("m.ele", "2 4 0\n1 1 2 3 4\n2 5 2 4 9\n");
+  expectError([&] { loadTetGen(base); }, ele, 3, "tet 2: vertex index 9 out of range [1, 7)");
+
+  ele = write("m.ele", "2 4 0\n1 1 2 3 4\n2 0 2 4 3\n");
+  expectError([&] { loadTetGen(base); }, ele, 3, "tet 2: vertex index 0 out of range [1, 7)");
+
+  ele = write("m.ele", "3 4 0\n1 1 2 3 4\n2 5 2 4 3\n");
+  expectError([&] { loadTetGen(base); }, ele, 3, "unexpected end of file, expected tetrahedron 2 of 3");
+
+  ele = write("m.ele", "2 4 0\n1 1 2 3\n");
+  expectError([&] { loadTetGen(base); }, ele, 2, "tetrahedron 0: expected '<index>' and 4 node numbers, got 4 fields");
+
+  ele = write("m.ele", "2 8 0\n");
+  expectError([&] { loadTetGen(base); }, ele, 1, "nodes per tetrahedron 8 must be 4 or 10");
+
+  const std::string node = write("n.node", "# points\n\n3 3 0 0\n1 0 0 0\n2 1 0 0\n");
+  write("n.ele", "0 4 0\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 5, "unexpected end of file, expected point 2 of 3");
+
+  write("n.node", "2 2 0 0\n1 0 0\n2 1 0\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 1, "dimension 2 is not supported");
+
+  write("n.node", "two 3 0 0\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 1, "expected an integer for number of points, got 'two'");
+
+  write("n.node", "2 3 0 0\n1 0 0 0\n3 1 0 0\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 3, "point numbered 3, expected 2");
+
+  write("n.node", "2 3 0 0\n1 0 0 0\n2 1 inf 0\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 3, "point 2 coordinate y is not finite");
+
+  const std::string missing_base = (dir_ / "absent").string();
+  expectError([&] { loadTetGen(missing_base); }, missing_base + ".node", 0, "cannot open file");
+  write("only.node", kNodesOneBased);
+  expectError([&] { loadTetGen((dir_ / "only").string()); }, (dir_ / "only.ele").string(), 0, "cannot open file");
+}
+
+// --- Medit ----------------------------------------------------------------------------------------
+
+TEST_F(MeshFiles, MeditWithSkippedSectionsAndFreeLayout) {
+  const std::string path = write("two.mesh",
+                                 "MeshVersionFormatted 2\n"
+                                 "# keyword and count on separate lines, as some writers do\n"
+                                 "Dimension\n3\n"
+                                 "Vertices 5\n"
+                                 "0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n1 1 1 2\n"
+                                 "Triangles\n1\n1 2 3 4\n"
+                                 "Tetrahedra\n2\n"
+                                 "1 2 3 4 0\n"
+                                 "5 2 4 3 0\n"
+                                 "Corners 2 1 2\n"
+                                 "End\n");
+  const Scene s = loadMedit(path, SolidMaterial{10.0, 7.0});
+  EXPECT_EQ(s.name, "two");
+  ASSERT_EQ(s.numParticles(), 5);
+  ASSERT_EQ(s.tets.size(), 2u);
+  EXPECT_EQ(s.tets[1].vertices, (std::array<int, 4>{4, 1, 3, 2}));
+  EXPECT_EQ(s.tets[0].stiffness, 7.0);
+  EXPECT_NEAR(s.masses.sum(), 10.0 * 0.5, 1e-12);
+  EXPECT_NO_THROW(validateScene(s));
+}
+
+TEST_F(MeshFiles, MeditNegativeOrientationAndErrors) {
+  const std::string head = "MeshVersionFormatted 1\nDimension 3\nVertices\n5\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n1 1 1 0\n";
+  // Lines 1-9 are the head; the tetrahedra start at line 12.
+  std::string path = write("neg.mesh", head + "Tetrahedra\n2\n1 3 2 4 0\n5 4 2 3 0\nEnd\n");
+  const Scene s = loadMedit(path);
+  for (const Tet& t : s.tets) EXPECT_GT(signedVolume(s.rest_positions, t.vertices), 0.0);
+
+  path = write("mixed.mesh", head + "Tetrahedra\n2\n1 3 2 4 0\n5 2 4 3 0\nEnd\n");
+  expectError([&] { loadMedit(path); }, path, 12, "tet 1: mixed orientation");
+
+  path = write("range.mesh", head + "Tetrahedra\n2\n1 2 3 4 0\n5 2 4 6 0\nEnd\n");
+  expectError([&] { loadMedit(path); }, path, 13, "tet 2: vertex index 6 out of range [1, 6)");
+
+  path = write("short.mesh", head + "Tetrahedra\n3\n1 2 3 4 0\n5 2 4 3 0\n");
+  expectError([&] { loadMedit(path); }, path, 13, "unexpected end of file, expected tet 3 of 3");
+
+  path = write("notets.mesh", head + "End\n");
+  expectError([&] { loadMedit(path); }, path, 10, "no Tetrahedra section");
+
+  path = write("dim.mesh", "MeshVersionFormatted 1\nDimension 2\n");
+  expectError([&] { loadMedit(path); }, path, 2, "dimension 2 is not supported");
+
+  path = write("coord.mesh", "Dimension 3\nVertices 2\n0 0 0 0\n1 zero 0 0\n");
+  expectError([&] { loadMedit(path); }, path, 4, "expected a number for vertex 2 coordinate y, got 'zero'");
+
+  path = write("order.mesh", "Dimension 3\nTetrahedra 0\n");
+  expectError([&] { loadMedit(path); }, path, 2, "Tetrahedra section before the Vertices section");
+
+  const std::string missing = (dir_ / "missing.mesh").string();
+  expectError([&] { loadMedit(missing); }, missing, 0, "cannot open file");
+}
+
+// --- example meshes shipped in scenes/ ------------------------------------------------------------
+
+TEST(ExampleScenes, ClothSquareObjLoads) {
+  const Scene s = loadObjCloth((scenesDir() / "cloth_square.obj").string());
+  EXPECT_EQ(s.numParticles(), 121);
+  // 10 x 10 quads, each fanned along one diagonal: 110 + 110 + 100 edges, then the hinges.
+  EXPECT_GT(s.springs.size(), 320u);
+  EXPECT_NEAR(s.masses.sum(), 0.1, 1e-12);
+  EXPECT_NEAR(s.positions.col(1).maxCoeff(), 1.0, 1e-12);
+  EXPECT_NO_THROW(validateScene(s));
+}
+
+TEST(ExampleScenes, BarLoadsFromTetGenAndMeditAlike) {
+  const Scene tetgen = loadTetGen((scenesDir() / "bar").string());
+  const Scene medit = loadMedit((scenesDir() / "bar.mesh").string());
+  EXPECT_EQ(tetgen.numParticles(), 20);
+  EXPECT_EQ(tetgen.tets.size(), 24u);
+  EXPECT_NEAR(tetgen.masses.sum(), 1000.0 * 1.0 * 0.25 * 0.25, 1e-9);
+  EXPECT_EQ(tetgen.positions, medit.positions);
+  ASSERT_EQ(tetgen.tets.size(), medit.tets.size());
+  for (size_t i = 0; i < tetgen.tets.size(); ++i) EXPECT_EQ(tetgen.tets[i].vertices, medit.tets[i].vertices);
+  EXPECT_NO_THROW(validateScene(tetgen));
+}
+
+}  // namespace
+}  // namespace stabint

@@ -1,0 +1,1 @@
+# Install rules and package export (filled in by the install work).

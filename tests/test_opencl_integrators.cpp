@@ -1,0 +1,196 @@
+// Whole simulations with the OpenCL backend against the CPU reference backend, for all six
+// integrators: cloth and tet bar trajectories, and the blend's per-step decisions (branch,
+// alpha) on the stiff chain pendulum.
+//
+// Tolerances: positions are compared relative to the largest entry of the reference (see
+// relativeError), every step; velocities relative to max(max |v|, max |x| / h), because the
+// implicit integrators form them as difference quotients (x* - x_n) / h, which turn position
+// rounding of eps |x| into velocity errors of eps |x| / h even when the body is nearly at rest.
+//   double: 1e-9. Per-operation differences are ~1e-15 (test_opencl_backend); 100+ steps of
+//           a stiff simulation amplify them (measured on PoCL: at most 4e-13 for positions,
+//           1e-10 for the blend's velocities on the tet bar). The explicit integrators blow the
+//           stiff cloth up within a few steps; both backends must refuse the same step.
+//   float:  1e-3 over 30 steps (measured: at most 2e-6 for positions, 2e-5 for velocities).
+//           Each local step carries ~1e-7 relative rounding (float positions and
+//           contributions) into the double solve; the solves are not iterated to convergence,
+//           so the error accumulates step by step.
+#include <stabint/builders.hpp>
+#include <stabint/errors.hpp>
+#include <stabint/simulator.hpp>
+
+#include "test_opencl_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+namespace stabint {
+namespace {
+
+using testing::relativeError;
+
+struct Trajectory {
+  double energy_scale = 0.0;
+  std::vector<Eigen::MatrixX3d> x, v;
+  std::vector<StepReport> reports;
+  int refused_at = -1;  // step that threw NonFiniteStateError, -1 if none
+};
+
+Trajectory simulate(const Scene& scene, SimulatorOptions options, int steps) {
+  Trajectory run;
+  Simulator sim(scene, options);
+  run.energy_scale = sim.energyScale();
+  for (int i = 0; i < steps; ++i) {
+    try {
+      run.reports.push_back(sim.step());
+    } catch (const NonFiniteStateError& e) {
+      run.refused_at = e.step();
+      break;
+    }
+    run.x.push_back(sim.positions());
+    run.v.push_back(sim.velocities());
+  }
+  return run;
+}
+
+bool isExplicit(Integrator i) {
+  return i == Integrator::ForwardEuler || i == Integrator::SymplecticEuler;
+}
+
+struct Worst {
+  double x = 0.0, v = 0.0;
+};
+
+// Runs the scene on both backends and checks every step's state against the reference.
+// Both must refuse the same step as non-finite, except in float, whose range (3e38) an exploding
+// explicit simulation leaves many steps before double's (1e308): there only the steps both
+// completed are compared.
+Worst compareRuns(const Scene& scene, SimulatorOptions options, Precision precision, int steps,
+                  double tol) {
+  options.backend = BackendKind::CpuReference;
+  const Trajectory ref = simulate(scene, options, steps);
+  options.backend = BackendKind::OpenCL;
+  options.opencl.precision = precision;
+  const Trajectory got = simulate(scene, options, steps);
+  if (precision == Precision::Double || !isExplicit(options.integrator)) {
+    EXPECT_EQ(got.refused_at, ref.refused_at) << "steps refused as non-finite differ";
+  }
+  Worst worst;
+  const std::size_t n = std::min(ref.x.size(), got.x.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ex = relativeError(got.x[i], ref.x[i]);
+    const double v_scale = std::max(ref.v[i].cwiseAbs().maxCoeff(),
+                                    ref.x[i].cwiseAbs().maxCoeff() / options.time_step);
+    const double ev = (got.v[i] - ref.v[i]).cwiseAbs().maxCoeff() / v_scale;
+    worst.x = std::max(worst.x, ex);
+    worst.v = std::max(worst.v, ev);
+    if (ex > tol || ev > tol) {
+      ADD_FAILURE() << "step " << i << ": positions " << ex << ", velocities " << ev
+                    << " relative error > " << tol;
+      break;
+    }
+  }
+  return worst;
+}
+
+Scene testCloth() {
+  ClothGridParams p;
+  p.nx = 10;
+  p.ny = 10;
+  return makeClothGrid(p);
+}
+
+Scene testTetBar() { return makeTetBar({}); }
+
+class OpenCLIntegratorTest : public ::testing::TestWithParam<Integrator> {
+ protected:
+  SimulatorOptions options() const {
+    SimulatorOptions o;
+    o.integrator = GetParam();
+    o.iterations = 10;
+    return o;
+  }
+  double doubleTol() const { return 1e-9; }
+};
+
+TEST_P(OpenCLIntegratorTest, ClothMatchesCpuInDouble) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  const Worst w = compareRuns(testCloth(), options(), Precision::Double, 120, doubleTol());
+  RecordProperty("worst_x", std::to_string(w.x));
+  std::printf("  worst relative error: x %.3g, v %.3g\n", w.x, w.v);
+}
+
+TEST_P(OpenCLIntegratorTest, TetBarMatchesCpuInDouble) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  const Worst w = compareRuns(testTetBar(), options(), Precision::Double, 100, doubleTol());
+  std::printf("  worst relative error: x %.3g, v %.3g\n", w.x, w.v);
+}
+
+TEST_P(OpenCLIntegratorTest, ClothAndTetBarFollowCpuInFloat) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Float);
+  const Worst t = compareRuns(testTetBar(), options(), Precision::Float, 30, 1e-3);
+  std::printf("  worst relative error: tet bar x %.3g v %.3g\n", t.x, t.v);
+  // The explicit integrators amplify the stiff cloth's modes by ~(omega h)^2 ~ 4e3 per step:
+  // float rounding reaches 1e-3 within two steps, so only the implicit ones are compared there.
+  if (isExplicit(GetParam())) return;
+  const Worst c = compareRuns(testCloth(), options(), Precision::Float, 30, 1e-3);
+  std::printf("  worst relative error: cloth x %.3g v %.3g\n", c.x, c.v);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllIntegrators, OpenCLIntegratorTest, ::testing::ValuesIn(allIntegrators()),
+                         [](const ::testing::TestParamInfo<Integrator>& info) {
+                           std::string name = integratorName(info.param);
+                           return name;
+                         });
+
+// The blend's decisions depend on energy comparisons against its tolerance; with the energies
+// of both backends equal to ~1e-15, every step takes the same branch with the same alpha.
+TEST(OpenCLBlend, ChainPendulumBranchesAndAlphaMatchCpu) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  const Scene chain = makeChainPendulum({});
+  SimulatorOptions o;
+  o.integrator = Integrator::EnergyBlend;
+  o.iterations = 10;
+  o.backend = BackendKind::CpuReference;
+  const Trajectory ref = simulate(chain, o, 50);
+  o.backend = BackendKind::OpenCL;
+  const Trajectory got = simulate(chain, o, 50);
+  ASSERT_EQ(ref.reports.size(), 50u);
+  ASSERT_EQ(got.reports.size(), 50u);
+  const double swing = chain.masses.sum() * chain.gravity.norm() *
+                       (chain.rest_positions.colwise().maxCoeff() - chain.rest_positions.colwise().minCoeff()).norm();
+  int partner_steps = 0;
+  double worst_alpha = 0.0;
+  for (int i = 0; i < 50; ++i) {
+    const StepReport& a = ref.reports[i];
+    const StepReport& b = got.reports[i];
+    EXPECT_EQ(blendBranchName(b.branch), std::string(blendBranchName(a.branch))) << "step " << i;
+    EXPECT_NEAR(b.alpha, a.alpha, 1e-8) << "step " << i;
+    EXPECT_EQ(b.iterations, a.iterations) << "step " << i;
+    // H* starts at 0 here (at rest at gravity's zero): judge energies against the swing
+    // energy m g L (~1 J), the scale of what the pendulum exchanges.
+    EXPECT_NEAR(b.energy.total(), a.energy.total(), 1e-9 * swing) << "step " << i;
+    EXPECT_NEAR(b.target, a.target, 1e-9 * swing) << "step " << i;
+    if (a.branch != BlendBranch::ImplicitMidpoint) ++partner_steps;
+    worst_alpha = std::max(worst_alpha, std::abs(b.alpha - a.alpha));
+  }
+  EXPECT_GT(partner_steps, 0) << "the test should exercise the BE/FE partners";
+  std::printf("  %d partner steps, worst alpha difference %.3g\n", partner_steps, worst_alpha);
+}
+
+TEST(OpenCLBlend, SimulatorReportsOpenCLBackendAndPhaseTimes) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  SimulatorOptions o;
+  o.backend = BackendKind::OpenCL;
+  Simulator sim(testCloth(), o);
+  EXPECT_EQ(sim.backendDescription().rfind("OpenCL: ", 0), 0u) << sim.backendDescription();
+  const StepReport& r = sim.step();
+  EXPECT_GT(r.times.local, 0.0);
+  EXPECT_GT(r.times.gather, 0.0);
+  EXPECT_GT(r.times.transfer, 0.0);
+  EXPECT_GT(r.times.energy, 0.0);
+}
+
+}  // namespace
+}  // namespace stabint

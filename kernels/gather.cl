@@ -1,13 +1,18 @@
 // Per-vertex gather over the contribution CSR: each vertex sums the contributions listed for it
 // in list order, so the result does not depend on scheduling (no atomics).
 
-inline real3 sumContributions(__global const int* offsets, __global const int* list,
-                              __global const real* contrib, int j) {
-  real3 s = (real3)(0, 0, 0);
-  const int end = offsets[j + 1];
-  for (int k = offsets[j]; k < end; ++k) s += vload3(list[k], contrib);
-  return s;
-}
+// Scalar accumulators (no real3 values): PoCL compiles them to tighter loops.
+#define SUM_CONTRIBUTIONS(j, sx, sy, sz)                  \
+  real sx = 0, sy = 0, sz = 0;                            \
+  {                                                       \
+    const int end_ = offsets[(j) + 1];                    \
+    for (int k_ = offsets[j]; k_ < end_; ++k_) {          \
+      __global const real* c_ = contrib + 3 * list[k_];   \
+      sx += c_[0];                                        \
+      sy += c_[1];                                        \
+      sz += c_[2];                                        \
+    }                                                     \
+  }
 
 /// rhs_j = c m_j y_j + f_ext_j + sum_e (w_e A_e^T p_e)_j
 __kernel void gather_rhs(const int n, __global const int* offsets, __global const int* list,
@@ -15,9 +20,13 @@ __kernel void gather_rhs(const int n, __global const int* offsets, __global cons
                          __global const real* fext, __global const real* y, const real c,
                          __global real* rhs) {
   const int j = get_global_id(0);
-  if (j >= n) return;
-  const real3 s = sumContributions(offsets, list, contrib, j);
-  storeRow(rhs, n, j, (c * masses[j]) * loadRow(y, n, j) + loadRow(fext, n, j) + s);
+  if (j < n) {
+    SUM_CONTRIBUTIONS(j, sx, sy, sz)
+    const real cm = c * masses[j];
+    rhs[j] = cm * y[j] + fext[j] + sx;
+    rhs[n + j] = cm * y[n + j] + fext[n + j] + sy;
+    rhs[2 * n + j] = cm * y[2 * n + j] + fext[2 * n + j] + sz;
+  }
 }
 
 /// a_j = (f_ext_j + sum_e (w_e A_e^T (p_e - A_e x))_j) / m_j
@@ -26,7 +35,11 @@ __kernel void gather_accelerations(const int n, __global const int* offsets,
                                    __global const real* masses, __global const real* fext,
                                    __global real* dst) {
   const int j = get_global_id(0);
-  if (j >= n) return;
-  const real3 s = sumContributions(offsets, list, contrib, j);
-  storeRow(dst, n, j, (loadRow(fext, n, j) + s) / masses[j]);
+  if (j < n) {
+    SUM_CONTRIBUTIONS(j, sx, sy, sz)
+    const real m = masses[j];
+    dst[j] = (fext[j] + sx) / m;
+    dst[n + j] = (fext[n + j] + sy) / m;
+    dst[2 * n + j] = (fext[2 * n + j] + sz) / m;
+  }
 }

@@ -16,18 +16,37 @@ inline real springEnergy(real3 d, real rest, real k) {
 }
 
 // params: 5 reals per spring: rest length, stiffness, rest direction (x, y, z).
+// Written with scalar components (no real3 values) so that PoCL can vectorize across
+// work-items; the formula is springProjection's.
 __kernel void spring_contributions(__global const real* x, const int n, const int count,
-                                   __global const int2* ends, __global const real* params,
+                                   __global const int* ends, __global const real* params,
                                    const int base, const int mode, __global real* contrib) {
   const int s = get_global_id(0);
-  if (s >= count) return;
-  const int2 ab = ends[s];
-  const real3 d = loadRow(x, n, ab.x) - loadRow(x, n, ab.y);
-  __global const real* q = params + 5 * s;
-  const real3 p = springProjection(d, q[0], (real3)(q[2], q[3], q[4]));
-  const real3 c = q[1] * (mode == MODE_FORCE ? p - d : p);
-  vstore3(c, base + 2 * s, contrib);
-  vstore3(-c, base + 2 * s + 1, contrib);
+  if (s < count) {
+    const int a = ends[2 * s], b = ends[2 * s + 1];
+    const real dx = x[a] - x[b], dy = x[n + a] - x[n + b], dz = x[2 * n + a] - x[2 * n + b];
+    __global const real* q = params + 5 * s;
+    // Unconditional loads and selects (no branches) keep the work-item loop vectorizable.
+    const real rest = q[0], k = q[1], rx = q[2], ry = q[3], rz = q[4];
+    const real len = sqrt(dx * dx + dy * dy + dz * dz);
+    const bool degenerate = len < (real)1e-12 * fmax(rest, (real)1);
+    const real scale = degenerate ? (real)0 : rest / len;
+    real px = degenerate ? rest * rx : scale * dx;
+    real py = degenerate ? rest * ry : scale * dy;
+    real pz = degenerate ? rest * rz : scale * dz;
+    if (mode == MODE_FORCE) {
+      px -= dx;
+      py -= dy;
+      pz -= dz;
+    }
+    __global real* c = contrib + 3 * (base + 2 * s);
+    c[0] = k * px;
+    c[1] = k * py;
+    c[2] = k * pz;
+    c[3] = -(k * px);
+    c[4] = -(k * py);
+    c[5] = -(k * pz);
+  }
 }
 
 __kernel void spring_energies(__global const real* x, const int n, const int count,

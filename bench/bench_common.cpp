@@ -1,0 +1,107 @@
+#include "bench_common.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+
+namespace stabint::bench {
+
+const std::vector<BackendChoice>& allBackends() {
+  static const std::vector<BackendChoice> all{BackendChoice::Cpu, BackendChoice::OpenCLDouble,
+                                              BackendChoice::OpenCLFloat};
+  return all;
+}
+
+const char* backendLabel(BackendChoice choice) {
+  switch (choice) {
+    case BackendChoice::Cpu: return "cpu";
+    case BackendChoice::OpenCLDouble: return "opencl-double";
+    case BackendChoice::OpenCLFloat: return "opencl-float";
+  }
+  return "?";
+}
+
+std::string skipReason(BackendChoice choice) {
+  if (choice == BackendChoice::Cpu) return "";
+  static const std::vector<OpenCLDeviceInfo> devices = listOpenCLDevices();
+  if (devices.empty()) return "skipped: no OpenCL platform/device available";
+  if (choice == BackendChoice::OpenCLDouble &&
+      std::none_of(devices.begin(), devices.end(), [](const OpenCLDeviceInfo& d) { return d.fp64; }))
+    return "skipped: no OpenCL device with cl_khr_fp64";
+  return "";
+}
+
+SimulatorOptions optionsFor(BackendChoice choice, Integrator integrator) {
+  SimulatorOptions o;
+  o.integrator = integrator;
+  o.backend = choice == BackendChoice::Cpu ? BackendKind::CpuReference : BackendKind::OpenCL;
+  o.opencl.precision = choice == BackendChoice::OpenCLFloat ? Precision::Float : Precision::Double;
+  return o;
+}
+
+Scene clothScene(int side) {
+  ClothGridParams p;
+  p.nx = side;
+  p.ny = side;
+  return makeClothGrid(p);
+}
+
+const std::vector<SceneCase>& referenceScenes() {
+  static const std::vector<SceneCase> scenes{
+      {"cloth50x50", [] { return clothScene(50); }},
+      {"tetbar50x10x10",
+       [] {
+         TetBarParams p;
+         p.nx = 49;  // cells: (49+1) x (9+1) x (9+1) = 5,000 particles
+         p.ny = 9;
+         p.nz = 9;
+         return makeTetBar(p);
+       }},
+  };
+  return scenes;
+}
+
+int elementCount(const Scene& scene) {
+  return static_cast<int>(scene.springs.size() + scene.tets.size() + scene.pins.size());
+}
+
+bool quickMode() {
+  const char* v = std::getenv("STABINT_BENCH_QUICK");
+  return v != nullptr && *v != '\0' && std::string(v) != "0";
+}
+
+std::vector<int> scalingSides() {
+  std::vector<int> sides{10, 16, 25, 35, 50, 71, 100, 141, 180, 224};
+  if (quickMode()) sides.erase(std::remove_if(sides.begin(), sides.end(), [](int s) { return s > 71; }), sides.end());
+  return sides;
+}
+
+namespace {
+std::vector<std::function<void()>>& releases() {
+  static std::vector<std::function<void()>> r;
+  return r;
+}
+}  // namespace
+
+void registerFixtureRelease(std::function<void()> release) { releases().push_back(std::move(release)); }
+
+void releaseAllFixtures() {
+  for (auto& release : releases()) release();
+}
+
+void setPhaseCounters(benchmark::State& state, const PhaseTimes& t) {
+  using benchmark::Counter;
+  state.counters["local"] = Counter(t.local, Counter::kAvgIterations);
+  state.counters["gather"] = Counter(t.gather, Counter::kAvgIterations);
+  state.counters["transfer"] = Counter(t.transfer, Counter::kAvgIterations);
+  state.counters["global"] = Counter(t.global, Counter::kAvgIterations);
+  state.counters["energy"] = Counter(t.energy, Counter::kAvgIterations);
+  state.counters["bookkeeping"] = Counter(t.bookkeeping, Counter::kAvgIterations);
+  state.counters["phases"] = Counter(t.total(), Counter::kAvgIterations);
+}
+
+void setSizeCounters(benchmark::State& state, const Scene& scene) {
+  state.counters["particles"] = scene.numParticles();
+  state.counters["elements"] = elementCount(scene);
+}
+
+}  // namespace stabint::bench

@@ -1,0 +1,83 @@
+#pragma once
+// Shared pieces of the benchmark suite: the benchmark scenes, backend choices, a per-case fixture
+// cache (so that Google Benchmark's repeated calls of one case pay the set-up once) and the
+// counters every case reports.
+#include <stabint/stabint.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stabint::bench {
+
+/// Backends a case runs on. The two OpenCL precisions are separate cases.
+enum class BackendChoice { Cpu, OpenCLDouble, OpenCLFloat };
+const std::vector<BackendChoice>& allBackends();
+const char* backendLabel(BackendChoice choice);  // "cpu", "opencl-double", "opencl-float"
+/// Why the case cannot run here ("" when it can): no OpenCL device, or no fp64 for double.
+std::string skipReason(BackendChoice choice);
+/// Default SimulatorOptions (10 iterations, be_iterations default) on the chosen backend.
+SimulatorOptions optionsFor(BackendChoice choice, Integrator integrator);
+
+/// A named benchmark scene.
+struct SceneCase {
+  std::string name;
+  std::function<Scene()> make;
+};
+/// The two reference scenes: cloth 50x50 (2,500 particles) and the tet bar 50x10x10 vertices
+/// (5,000 particles).
+const std::vector<SceneCase>& referenceScenes();
+Scene clothScene(int side);
+int elementCount(const Scene& scene);  // springs + tets + pins
+
+/// Side lengths of the cloth scaling family, 10x10 up to 224x224 (50,176 particles). With
+/// STABINT_BENCH_QUICK set, only up to 71x71.
+std::vector<int> scalingSides();
+bool quickMode();
+
+void registerFixtureRelease(std::function<void()> release);
+/// Drops every cached fixture (called before building a new one and at the end of main, while
+/// the OpenCL runtime is still loaded).
+void releaseAllFixtures();
+
+/// Keeps the fixture of the case that ran last: Google Benchmark calls a case's function several
+/// times (growing iteration counts); the fixture (simulator, backend, factors) is built once.
+/// A different key drops the previous fixture first, so only one lives at a time.
+template <class T>
+T& cachedFixture(const std::string& key, const std::function<std::unique_ptr<T>()>& make) {
+  struct Slot {
+    std::string key;
+    std::unique_ptr<T> value;
+  };
+  static Slot slot;
+  static const bool registered = (registerFixtureRelease([] {
+                                    slot.value.reset();
+                                    slot.key.clear();
+                                  }),
+                                  true);
+  (void)registered;
+  if (!slot.value || slot.key != key) {
+    releaseAllFixtures();  // at most one fixture (of any type) alive: the scaling cases are large
+    slot.value = make();
+    slot.key = key;
+  }
+  return *slot.value;
+}
+
+/// Sets the per-phase counters (seconds per benchmark iteration, averaged): local, gather,
+/// transfer, global, energy, bookkeeping; and the phase sum.
+void setPhaseCounters(benchmark::State& state, const PhaseTimes& summed);
+/// particles and elements of the scene (constant counters).
+void setSizeCounters(benchmark::State& state, const Scene& scene);
+
+}  // namespace stabint::bench
+
+namespace stabint::bench {
+// Case registration, one function per file.
+void registerStepCases();       // bench_steps.cpp
+void registerIterationCases();  // bench_iterations.cpp
+void registerSolverCases();     // bench_solver.cpp
+}  // namespace stabint::bench

@@ -1,0 +1,116 @@
+// Exactly one local/global iteration: the internal LocalGlobalSolver driven directly with a
+// backend and the prefactored GlobalSystem (as tests/test_local_global.cpp does). One iteration
+// is local projections + gather of the right-hand side + its transfer to the host + the CHOLMOD
+// solve + the transfer of the new positions back.
+#include "bench_common.hpp"
+
+#include "backend.hpp"
+#include "cpu/cpu_backend.hpp"
+#include "opencl/opencl_backend.hpp"
+#include "scene/scene_data.hpp"
+#include "solver/global_system.hpp"
+#include "solver/local_global.hpp"
+
+#include <cmath>
+#include <exception>
+
+namespace stabint::bench {
+namespace {
+
+enum { kX, kY, kScratch, kSlots };
+
+constexpr double kTimeStep = 1.0 / 30.0;
+
+std::unique_ptr<Backend> makeBackend(const SceneData& data, BackendChoice choice) {
+  if (choice == BackendChoice::Cpu) return makeCpuBackend(data, kSlots);
+  return makeOpenCLBackend(data, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl);
+}
+
+/// The solve's constant c = (factor / h^2) per integrator (method.md section 2).
+double solveConstant(Integrator integrator) {
+  const double h2 = kTimeStep * kTimeStep;
+  switch (integrator) {
+    case Integrator::ImplicitMidpoint: return 4.0 / h2;
+    case Integrator::BDF2: return 9.0 / (4.0 * h2);
+    default: return 1.0 / h2;
+  }
+}
+
+struct IterationFixture {
+  IterationFixture(const Scene& s, BackendChoice choice, double c_)
+      : scene(s), data(s), backend(makeBackend(data, choice)), system(data),
+        solver(*backend, system, kScratch), c(c_) {
+    // Inertial target: one step of free fall from the rest shape, with a smooth perturbation of
+    // about 1 % of the body size so that every element projects non-trivially.
+    Eigen::MatrixX3d y = s.positions;
+    for (Eigen::Index j = 0; j < y.rows(); ++j) {
+      const Eigen::Vector3d p = s.positions.row(j).transpose();
+      y.row(j) += (kTimeStep * kTimeStep * s.gravity).transpose();
+      y(j, 0) += 0.01 * std::sin(7.0 * p.y() + 3.0 * p.z());
+      y(j, 2) += 0.01 * std::cos(5.0 * p.x() + 2.0 * p.y());
+    }
+    backend->write(kY, y);
+    backend->write(kX, y);
+    // First solves: the factorization of K_c and the first kernel launches.
+    solver.solve(c, kY, kX, kTimeStep, control);
+    solver.solve(c, kY, kX, kTimeStep, control);
+  }
+  Scene scene;
+  SceneData data;
+  std::unique_ptr<Backend> backend;
+  GlobalSystem system;
+  LocalGlobalSolver solver;
+  double c;
+  IterationControl control{1, 0.0, 1, 1.0};  // exactly one iteration, no objective tracking
+};
+
+void runIteration(benchmark::State& state, const std::string& key, const std::function<Scene()>& make_scene,
+                  BackendChoice choice, Integrator integrator) {
+  if (const std::string why = skipReason(choice); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  IterationFixture* fixture = nullptr;
+  try {
+    fixture = &cachedFixture<IterationFixture>(
+        key, [&] { return std::make_unique<IterationFixture>(make_scene(), choice, solveConstant(integrator)); });
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  IterationFixture& f = *fixture;
+  f.backend->times() = PhaseTimes{};
+  double iterations = 0;
+  for (auto _ : state) iterations += f.solver.solve(f.c, kY, kX, kTimeStep, f.control);
+  setSizeCounters(state, f.scene);
+  setPhaseCounters(state, f.backend->times());
+  state.counters["iterations"] = benchmark::Counter(iterations, benchmark::Counter::kAvgIterations);
+  state.SetLabel(f.backend->description());
+}
+
+}  // namespace
+
+void registerIterationCases() {
+  for (const SceneCase& scene : referenceScenes())
+    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint})
+      for (BackendChoice backend : allBackends()) {
+        const std::string name =
+            "iteration/" + scene.name + "/" + integratorName(integrator) + "/" + backendLabel(backend);
+        benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+          runIteration(state, name, scene.make, backend, integrator);
+        })->UseRealTime()->Unit(benchmark::kMicrosecond);
+      }
+
+  for (BackendChoice backend : allBackends()) {
+    const std::string name = std::string("scaling_iteration/cloth/BE/") + backendLabel(backend);
+    auto* b = benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+      const int side = static_cast<int>(state.range(0));
+      runIteration(state, name + "/" + std::to_string(side), [side] { return clothScene(side); }, backend,
+                   Integrator::BackwardEuler);
+    });
+    for (int side : scalingSides()) b->Arg(side);
+    b->ArgName("side")->UseRealTime()->Unit(benchmark::kMicrosecond);
+  }
+}
+
+}  // namespace stabint::bench

@@ -29,11 +29,5 @@ inline real3 loadRow(__global const real* m, int rows, int i) {
   return (real3)(m[i], m[rows + i], m[2 * rows + i]);
 }
 
-inline void storeRow(__global real* m, int rows, int i, real3 v) {
-  m[i] = v.x;
-  m[rows + i] = v.y;
-  m[2 * rows + i] = v.z;
-}
-
 // |v| as sqrt(v.v), the same formula as the CPU reference (OpenCL's length() rescales).
 inline real norm3(real3 v) { return sqrt(dot(v, v)); }

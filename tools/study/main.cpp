@@ -1,0 +1,109 @@
+// stabint-study: the main job's experiments. Each subcommand writes CSV files into the output
+// directory (default results/); bench/study_charts.py turns them into charts and a summary.
+#include "study.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+namespace study {
+
+namespace {
+const auto kProgramStart = std::chrono::steady_clock::now();
+}
+
+void ensureDirectory(const std::string& path) { std::filesystem::create_directories(path); }
+
+std::string joinPath(const std::string& dir, const std::string& name) {
+  return (std::filesystem::path(dir) / name).string();
+}
+
+void progress(const std::string& message) {
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - kProgramStart).count();
+  std::printf("[%6.1f s] %s\n", s, message.c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace study
+
+namespace {
+
+void usage(std::FILE* to) {
+  std::fprintf(to,
+               "usage: stabint-study <command> [--out DIR] [--backend cpu|opencl] [--quick]\n"
+               "commands:\n"
+               "  table       energy behaviour of every integrator: chain pendulum and cloth, 300 frames\n"
+               "              (printed, and energy_table.csv)\n"
+               "  reference   reference trajectories (IM, h/16, converged; cached in DIR/cache) and the\n"
+               "              accuracy of every integrator at h = 1/30, 10 iterations (reference.csv,\n"
+               "              accuracy.csv)\n"
+               "  sweep       speed versus accuracy: iteration budgets 1..32, explicit substeps 1..256,\n"
+               "              cloth and tet bar (sweep.csv)\n"
+               "  stability   stiffness x step size grid per integrator, chain and tet bar (stability.csv)\n"
+               "  energy      energy over time: tet bar and cloth with BE, BDF2, IM, blend\n"
+               "              (energy_tetbar.csv, energy_cloth.csv, cloth_still_<integrator>.csv)\n"
+               "  crosscheck  OpenCL backend against the CPU reference (backend_check.csv)\n"
+               "  all         all of the above in order\n"
+               "options:\n"
+               "  --out DIR          output directory (default results)\n"
+               "  --backend NAME     cpu (default) or opencl for the simulations; references are\n"
+               "                     always computed on the CPU reference backend\n"
+               "  --quick            smoke-test sizes (fewer frames and cells); not for reported numbers\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace study;
+  if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help")) {
+    usage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string command = argv[1];
+  StudyOptions options;
+  try {
+    for (int a = 2; a < argc; ++a) {
+      const std::string arg = argv[a];
+      auto value = [&]() -> std::string {
+        if (a + 1 >= argc) throw stabint::InvalidInputError(arg + " needs a value");
+        return argv[++a];
+      };
+      if (arg == "--out")
+        options.out = value();
+      else if (arg == "--backend")
+        options.backend = stabint::parseBackend(value());
+      else if (arg == "--quick")
+        options.quick = true;
+      else
+        throw stabint::InvalidInputError("unknown option " + arg);
+    }
+
+    struct Step {
+      const char* name;
+      void (*run)(const StudyOptions&);
+    };
+    const Step steps[] = {{"table", runTable},         {"reference", runReference}, {"sweep", runSweep},
+                          {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck}};
+    bool found = false;
+    for (const Step& s : steps) {
+      if (command != "all" && command != s.name) continue;
+      found = true;
+      progress(std::string("== ") + s.name + " (backend " + stabint::backendName(options.backend) + ", out " +
+               options.out + ")");
+      s.run(options);
+    }
+    if (!found) {
+      std::fprintf(stderr, "stabint-study: unknown command '%s'\n", command.c_str());
+      usage(stderr);
+      return 2;
+    }
+    progress("done; CSV files in " + options.out);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stabint-study: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -74,15 +74,13 @@ struct Simulator::Impl {
     potential = backend->potential(kX, 0.0);
     kinetic = kineticEnergy(v);
     target = kinetic + potential.total();
-    // E_scale: initial K + E_int plus the work gravity can do across the body's height, so the
-    // blend tolerance does not depend on where gravity's zero is.
+    // E_scale: initial K + E_int plus the work gravity can do on the body, m |g| times its size,
+    // so the blend tolerance does not depend on where gravity's zero is. [project rule] The size
+    // is the diagonal of the initial bounding box, not the extent along gravity: a chain released
+    // horizontally has zero extent along gravity (and K = E_int = 0), which would make tau zero.
     const double g = s.gravity.norm();
-    double height = 0.0;
-    if (g > 0.0 && x.rows() > 0) {
-      const Eigen::VectorXd along = x * (s.gravity / g);
-      height = along.maxCoeff() - along.minCoeff();
-    }
-    energy_scale = kinetic + potential.elastic() + s.masses.sum() * g * height;
+    const double size = x.rows() > 0 ? (x.colwise().maxCoeff() - x.colwise().minCoeff()).norm() : 0.0;
+    energy_scale = kinetic + potential.elastic() + s.masses.sum() * g * size;
     backend->times() = PhaseTimes{};
   }
 

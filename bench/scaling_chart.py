@@ -1,0 +1,338 @@
+#!/usr/bin/python3
+"""Charts and a markdown summary from stabint_bench's JSON output.
+
+    /usr/bin/python3 bench/scaling_chart.py results/bench.json \
+        [--charts results/charts] [--summary results/bench_summary.md]
+
+Writes <charts>/scaling.png and .svg (log-log: one BE local/global iteration, total and per
+phase, and BE/blend steps, against the number of particles of the cloth scaling family) and the
+summary: tables per scene/backend/integrator of step and iteration times with their phase
+breakdown, and the two performance goals (method.md section 3 and the issue):
+  - one BE iteration on the 50x50 cloth under 0.6 ms on PoCL (OpenCL backend);
+  - a blend step at most 30 % (aim 15 %) slower than a BE step with the same main iteration count.
+Use /usr/bin/python3 (Debian's python3-matplotlib); `python3` on PATH may lack matplotlib.
+"""
+import argparse
+import json
+import os
+import sys
+from collections import defaultdict
+
+ITERATION_GOAL_S = 0.6e-3
+BLEND_OVERHEAD_MAX = 0.30
+BLEND_OVERHEAD_AIM = 0.15
+PHASES = ["local", "gather", "transfer", "global", "energy", "bookkeeping"]
+ITERATION_PHASES = ["local", "gather", "transfer", "global"]
+BACKENDS = ["cpu", "opencl-double", "opencl-float"]
+INTEGRATORS = ["FE", "SE", "BE", "BDF2", "IM", "blend"]
+UNIT_S = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
+
+
+class Case:
+    """One benchmark result: its name parts, wall time per iteration (s) and counters."""
+
+    def __init__(self, entry):
+        parts = entry["run_name"].split("/")
+        if parts and parts[-1] in ("real_time", "manual_time"):
+            parts = parts[:-1]
+        self.parts = parts
+        self.kind = parts[0]
+        self.time = entry["real_time"] * UNIT_S[entry.get("time_unit", "ns")]
+        self.counters = {k: v for k, v in entry.items() if isinstance(v, (int, float))}
+        self.label = entry.get("label", "")
+        self.side = None
+        for p in parts:
+            if p.startswith("side:"):
+                self.side = int(p.split(":", 1)[1])
+
+    def get(self, name, default=0.0):
+        return self.counters.get(name, default)
+
+
+def load(path):
+    """Cases by run name. With repetitions the median aggregate is used; errors are kept apart."""
+    with open(path) as f:
+        data = json.load(f)
+    runs, medians, errors = {}, {}, {}
+    for entry in data.get("benchmarks", []):
+        name = entry.get("run_name", entry["name"])
+        if entry.get("error_occurred"):
+            errors[name] = entry.get("error_message", "error")
+            continue
+        if entry.get("run_type") == "aggregate":
+            if entry.get("aggregate_name") == "median":
+                medians[name] = Case(entry)
+        else:
+            runs.setdefault(name, Case(entry))  # first repetition when not aggregated
+    runs.update(medians)
+    return data.get("context", {}), list(runs.values()), errors
+
+
+def index(cases):
+    by = defaultdict(dict)
+    for c in cases:
+        p = c.parts
+        if c.kind in ("step", "iteration") and len(p) >= 4:
+            by[c.kind][(p[1], p[2], p[3])] = c  # (scene, integrator, backend)
+        elif c.kind in ("scaling_step", "scaling_iteration") and len(p) >= 5 and c.side:
+            by[c.kind][(p[2], p[3], c.side)] = c  # (integrator, backend, side)
+        elif c.kind == "global_solve" and len(p) >= 3:
+            by[c.kind][(p[1], p[2])] = c  # (scene, variant)
+    return by
+
+
+def fmt_time(seconds):
+    if seconds is None:
+        return "-"
+    if seconds >= 1.0:
+        return f"{seconds:.2f} s"
+    if seconds >= 1e-3:
+        return f"{seconds * 1e3:.2f} ms"
+    return f"{seconds * 1e6:.0f} us"
+
+
+def fmt_pct(x):
+    return "-" if x is None else f"{x * 100:+.1f} %"
+
+
+# ---- charts ------------------------------------------------------------------------------------
+
+def draw_charts(by, out_dir):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    colors = {"cpu": "tab:blue", "opencl-double": "tab:red", "opencl-float": "tab:orange"}
+    phase_styles = {"local": "o--", "gather": "s--", "transfer": "^--", "global": "D--"}
+    it = by.get("scaling_iteration", {})
+    st = by.get("scaling_step", {})
+    if not it and not st:
+        print("scaling_chart: no scaling cases in the JSON; no chart written", file=sys.stderr)
+        return []
+
+    def series(table, integrator, backend, value):
+        pts = sorted((c.get("particles"), value(c)) for (i, b, _), c in table.items()
+                     if i == integrator and b == backend)
+        pts = [(n, v) for n, v in pts if n and v and v > 0]
+        return [n for n, _ in pts], [v for _, v in pts]
+
+    def legend(ax, **kw):
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(**kw)
+
+    fig, axes = plt.subplots(2, 2, figsize=(13, 10))
+    ax = axes[0][0]
+    for b in BACKENDS:
+        n, t = series(it, "BE", b, lambda c: c.time)
+        if n:
+            ax.plot(n, t, "o-", color=colors[b], label=b)
+    ax.axhline(ITERATION_GOAL_S, color="gray", ls=":", lw=1)
+    ax.axvline(2500, color="gray", ls=":", lw=1)
+    ax.annotate("goal: 0.6 ms at 50x50 (PoCL)", (2500, ITERATION_GOAL_S), textcoords="offset points",
+                xytext=(5, 5), fontsize=8, color="gray")
+    ax.set_title("one BE local/global iteration (cloth), wall time")
+    legend(ax)
+
+    for ax, backend in ((axes[0][1], "cpu"), (axes[1][0], "opencl-double")):
+        n, t = series(it, "BE", backend, lambda c: c.time)
+        if n:
+            ax.plot(n, t, "k-", lw=2, label="total")
+        for ph in ITERATION_PHASES:
+            n, t = series(it, "BE", backend, lambda c, ph=ph: c.get(ph))
+            if n:
+                ax.plot(n, t, phase_styles[ph], label=ph, ms=4)
+        ax.set_title(f"BE iteration by phase: {backend}")
+        legend(ax)
+
+    ax = axes[1][1]
+    for b in BACKENDS:
+        for integ, style in (("BE", "s--"), ("blend", "o-")):
+            n, t = series(st, integ, b, lambda c: c.time)
+            if n:
+                ax.plot(n, t, style, color=colors[b], label=f"{integ} step, {b}", ms=4)
+    ax.set_title("one step (10 iterations; blend: IM + BE partner)")
+    legend(ax, fontsize=8)
+
+    for row in axes:
+        for a in row:
+            a.set_xscale("log")
+            a.set_yscale("log")
+            a.set_xlabel("particles")
+            a.set_ylabel("seconds")
+            a.grid(True, which="both", alpha=0.3)
+    fig.suptitle("stabint: time against cloth size (10x10 to 224x224 particles)")
+    fig.tight_layout()
+    os.makedirs(out_dir, exist_ok=True)
+    written = []
+    for ext in ("png", "svg"):
+        path = os.path.join(out_dir, f"scaling.{ext}")
+        fig.savefig(path, dpi=110)
+        written.append(path)
+    plt.close(fig)
+    return written
+
+
+# ---- summary -----------------------------------------------------------------------------------
+
+def goal_checks(by):
+    lines = []
+    its = by.get("iteration", {})
+    lines.append("### Goal 1: one BE iteration on the 50x50 cloth under 0.6 ms on PoCL\n")
+    lines.append("| backend | iteration | local | gather | transfer | global | verdict |")
+    lines.append("|---|---|---|---|---|---|---|")
+    found = False
+    for b in BACKENDS:
+        c = its.get(("cloth50x50", "BE", b))
+        if not c:
+            continue
+        found = True
+        verdict = "-" if b == "cpu" else ("PASS" if c.time < ITERATION_GOAL_S else "MISS")
+        lines.append(f"| {b} | {fmt_time(c.time)} | " +
+                     " | ".join(fmt_time(c.get(p)) for p in ITERATION_PHASES) + f" | {verdict} |")
+    if not found:
+        lines.append("| (no iteration/cloth50x50/BE case in the JSON) | | | | | | |")
+    lines.append("")
+
+    lines.append("### Goal 2: blend step at most 30 % (aim 15 %) slower than a BE step\n")
+    lines.append("Both with the same main iteration count (10); the blend adds its BE partner "
+                 "(be_iterations), energy evaluations and the root find when it leaves the IM branch.\n")
+    lines.append("| scene | backend | BE step | blend step | overhead | blend iterations/step | "
+                 "blend energy evals/step | branch IM/BE/FE | verdict |")
+    lines.append("|---|---|---|---|---|---|---|---|---|")
+    steps = by.get("step", {})
+    scenes = sorted({k[0] for k in steps})
+    for scene in scenes:
+        for b in BACKENDS:
+            be, bl = steps.get((scene, "BE", b)), steps.get((scene, "blend", b))
+            if not be or not bl:
+                continue
+            over = bl.time / be.time - 1.0
+            verdict = ("PASS (aim met)" if over <= BLEND_OVERHEAD_AIM else
+                       "PASS" if over <= BLEND_OVERHEAD_MAX else "MISS")
+            branches = "/".join(f"{bl.get('branch_' + x) * 100:.0f}%" for x in ("IM", "BE", "FE"))
+            lines.append(f"| {scene} | {b} | {fmt_time(be.time)} | {fmt_time(bl.time)} | {fmt_pct(over)} | "
+                         f"{bl.get('iterations'):.1f} | {bl.get('energy_evaluations'):.2f} | {branches} | {verdict} |")
+    lines.append("")
+    return lines
+
+
+def step_tables(by):
+    lines = ["## Steps (Simulator::step, per step)\n",
+             "Phase columns are wall time per step from StepReport::times; `iter` is the time of one "
+             "local/global iteration inside the step (local+gather+transfer+global per iteration).\n"]
+    steps = by.get("step", {})
+    for scene in sorted({k[0] for k in steps}):
+        c0 = next(c for k, c in steps.items() if k[0] == scene)
+        lines.append(f"### {scene} ({c0.get('particles'):.0f} particles, {c0.get('elements'):.0f} elements)\n")
+        lines.append("| integrator | backend | step | iterations | iter | " + " | ".join(PHASES) + " |")
+        lines.append("|---|---|---|---|---|" + "---|" * len(PHASES))
+        for integ in INTEGRATORS:
+            for b in BACKENDS:
+                c = steps.get((scene, integ, b))
+                if not c:
+                    continue
+                iter_t = c.counters.get("iteration_time")
+                lines.append(f"| {integ} | {b} | {fmt_time(c.time)} | {c.get('iterations'):.1f} | "
+                             f"{fmt_time(iter_t) if iter_t else '-'} | " +
+                             " | ".join(fmt_time(c.get(p)) for p in PHASES) + " |")
+        lines.append("")
+    return lines
+
+
+def iteration_tables(by):
+    lines = ["## One local/global iteration (LocalGlobalSolver, 1 iteration)\n",
+             "`other` is the wall time not booked to a phase (launch/queue overhead outside the "
+             "timers, the write-back of x is booked as transfer).\n"]
+    its = by.get("iteration", {})
+    lines.append("| scene | integrator (c) | backend | iteration | " + " | ".join(ITERATION_PHASES) + " | other |")
+    lines.append("|---|---|---|---|" + "---|" * len(ITERATION_PHASES) + "---|")
+    for (scene, integ, b), c in sorted(its.items(), key=lambda kv: (kv[0][0], INTEGRATORS.index(kv[0][1])
+                                                                   if kv[0][1] in INTEGRATORS else 9,
+                                                                   BACKENDS.index(kv[0][2])
+                                                                   if kv[0][2] in BACKENDS else 9)):
+        other = c.time - sum(c.get(p) for p in ITERATION_PHASES)
+        lines.append(f"| {scene} | {integ} | {b} | {fmt_time(c.time)} | " +
+                     " | ".join(fmt_time(c.get(p)) for p in ITERATION_PHASES) + f" | {fmt_time(max(other, 0.0))} |")
+    lines.append("")
+    return lines
+
+
+def scaling_table(by):
+    it, st = by.get("scaling_iteration", {}), by.get("scaling_step", {})
+    if not it and not st:
+        return []
+    sides = sorted({k[2] for k in it} | {k[2] for k in st})
+    lines = ["## Cloth scaling\n",
+             "| cloth | particles | backend | BE iteration | local | gather | transfer | global | "
+             "BE step | blend step | blend overhead |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for side in sides:
+        for b in BACKENDS:
+            i = it.get(("BE", b, side))
+            be, bl = st.get(("BE", b, side)), st.get(("blend", b, side))
+            if not (i or be or bl):
+                continue
+            n = (i or be or bl).get("particles")
+            over = bl.time / be.time - 1.0 if be and bl else None
+            phases = " | ".join(fmt_time(i.get(p)) if i else "-" for p in ITERATION_PHASES)
+            lines.append(f"| {side}x{side} | {n:.0f} | {b} | {fmt_time(i.time) if i else '-'} | {phases} | "
+                         f"{fmt_time(be.time) if be else '-'} | {fmt_time(bl.time) if bl else '-'} | {fmt_pct(over)} |")
+    lines.append("")
+    return lines
+
+
+def solver_table(by):
+    gs = by.get("global_solve", {})
+    if not gs:
+        return []
+    lines = ["## Global solve variants (K_c x = rhs, 3 columns)\n",
+             "| scene | variant | solve | vs library |", "|---|---|---|---|"]
+    for scene in sorted({k[0] for k in gs}):
+        lib = gs.get((scene, "library"))
+        for (s, variant), c in sorted(gs.items()):
+            if s != scene:
+                continue
+            rel = f"{c.time / lib.time:.2f}x" if lib else "-"
+            lines.append(f"| {scene} | {variant} | {fmt_time(c.time)} | {rel} |")
+    lines.append("")
+    return lines
+
+
+def summary(context, by, errors):
+    lines = ["# stabint benchmark summary\n"]
+    host = context.get("host_name", "?")
+    lines.append(f"Run {context.get('date', '?')} on {host}: {context.get('num_cpus', '?')} CPUs at "
+                 f"{context.get('mhz_per_cpu', '?')} MHz; OpenCL: {context.get('opencl_devices', '?')}; "
+                 f"quick mode: {context.get('quick_mode', '?')}. Times are wall-clock per benchmark "
+                 f"iteration (median when repeated).\n")
+    lines.append("## Goals\n")
+    lines += goal_checks(by)
+    lines += iteration_tables(by)
+    lines += step_tables(by)
+    lines += scaling_table(by)
+    lines += solver_table(by)
+    if errors:
+        skipped = sorted({msg for msg in errors.values()})
+        lines.append(f"## Not run\n\n{len(errors)} cases: " + "; ".join(skipped) + "\n")
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("json", help="benchmark output (--benchmark_out_format=json)")
+    ap.add_argument("--charts", default="results/charts", help="directory for scaling.png/.svg")
+    ap.add_argument("--summary", default="results/bench_summary.md", help="markdown summary to write")
+    args = ap.parse_args()
+
+    context, cases, errors = load(args.json)
+    by = index(cases)
+    for path in draw_charts(by, args.charts):
+        print(f"scaling_chart: wrote {path}")
+    os.makedirs(os.path.dirname(os.path.abspath(args.summary)), exist_ok=True)
+    with open(args.summary, "w") as f:
+        f.write(summary(context, by, errors))
+    print(f"scaling_chart: wrote {args.summary}")
+
+
+if __name__ == "__main__":
+    main()

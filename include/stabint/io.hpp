@@ -32,4 +32,17 @@ Scene loadTetGen(const std::string& base_path, const SolidMaterial& material = {
 /// with the same orientation rule as loadTetGen.
 Scene loadMedit(const std::string& path, const SolidMaterial& material = {});
 
+/// Loads a scene file (JSON, format described in docs/scene-format.md): explicit particles and
+/// elements, built-in scenes by name, meshes (paths relative to the JSON file's directory), pins
+/// selected by region. Every error is a FileFormatError naming the file and the JSON field path,
+/// e.g. `scenes/foo.json: springs[3].stiffness: expected a number, got string`; malformed JSON
+/// carries the line. The scene is validated before it is returned.
+Scene loadSceneFile(const std::string& path);
+
+/// Writes `scene` as a JSON scene file in the explicit form (no builtin or mesh entries), with
+/// every number written so that loadSceneFile reads back exactly the same scene. Throws
+/// FileFormatError when the file cannot be written and InvalidInputError for a scene that does
+/// not validate (JSON cannot hold non-finite numbers).
+void saveSceneFile(const Scene& scene, const std::string& path);
+
 }  // namespace stabint

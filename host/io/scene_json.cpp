@@ -1,0 +1,952 @@
+// JSON scene files (docs/scene-format.md): the explicit form saveSceneFile writes, plus the
+// conveniences people write by hand: built-in scenes by name, meshes next to the JSON file, pins
+// and particle sets selected by region. Every error names the file and the JSON field path.
+#include "io/scene_json.hpp"
+
+#include "io/mesh_scene.hpp"
+#include "io/text_reader.hpp"
+
+#include <stabint/builders.hpp>
+#include <stabint/errors.hpp>
+#include <stabint/io.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <climits>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <utility>
+
+namespace stabint::io {
+
+namespace {
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+
+constexpr const char* kFormatName = "stabint-scene";
+constexpr int kFormatVersion = 1;
+
+// --- reading fields with their path -------------------------------------------------------------
+
+// A JSON value together with where it sits ("springs[3].stiffness"), so that every check can
+// name the field. Keys starting with '_' are comments and are ignored everywhere.
+class Field {
+ public:
+  Field(const json& value, std::string path, const std::string& file) : value_(&value), path_(std::move(path)), file_(&file) {}
+
+  const json& value() const { return *value_; }
+  const std::string& path() const { return path_; }
+
+  [[noreturn]] void fail(const std::string& message) const {
+    throw FileFormatError(*file_, 0, (path_.empty() ? std::string("top level") : path_) + ": " + message);
+  }
+
+  void requireObject() const {
+    if (!value_->is_object()) fail(std::string("expected an object, got ") + value_->type_name());
+  }
+  void requireArray() const {
+    if (!value_->is_array()) fail(std::string("expected an array, got ") + value_->type_name());
+  }
+
+  std::optional<Field> find(const std::string& key) const {
+    requireObject();
+    const auto it = value_->find(key);
+    if (it == value_->end()) return std::nullopt;
+    return Field(*it, path_.empty() ? key : path_ + "." + key, *file_);
+  }
+  Field member(const std::string& key) const {
+    auto f = find(key);
+    if (!f) fail("missing field '" + key + "'");
+    return *f;
+  }
+  bool has(const std::string& key) const { return find(key).has_value(); }
+
+  size_t size() const {
+    requireArray();
+    return value_->size();
+  }
+  Field operator[](size_t i) const {
+    requireArray();
+    return Field((*value_)[i], path_ + "[" + std::to_string(i) + "]", *file_);
+  }
+
+  /// Unknown keys are almost always typos ("stifness"): reject them rather than run a scene
+  /// with a silently defaulted value.
+  void allowOnly(const std::set<std::string>& keys) const {
+    requireObject();
+    for (const auto& item : value_->items()) {
+      if (item.key().empty() || item.key()[0] == '_') continue;
+      if (!keys.count(item.key())) {
+        std::string expected;
+        for (const auto& k : keys) expected += (expected.empty() ? "" : ", ") + k;
+        fail("unknown field '" + item.key() + "' (expected one of: " + expected + ")");
+      }
+    }
+  }
+
+  double number() const {
+    if (!value_->is_number()) fail(std::string("expected a number, got ") + value_->type_name());
+    const double x = value_->get<double>();
+    if (!std::isfinite(x)) fail("expected a finite number");
+    return x;
+  }
+  double nonNegative() const {
+    const double x = number();
+    if (x < 0.0) fail("must be >= 0, got " + text(x));
+    return x;
+  }
+  double positive() const {
+    const double x = number();
+    if (!(x > 0.0)) fail("must be > 0, got " + text(x));
+    return x;
+  }
+  int integer() const {
+    if (value_->is_number_float()) {
+      const double x = value_->get<double>();
+      if (std::isfinite(x) && x == std::floor(x) && std::abs(x) <= INT_MAX) return static_cast<int>(x);
+      fail("expected an integer, got " + value_->dump());
+    }
+    if (!value_->is_number()) fail(std::string("expected an integer, got ") + value_->type_name());
+    if (value_->is_number_unsigned()) {
+      if (value_->get<unsigned long long>() > static_cast<unsigned long long>(INT_MAX)) fail("integer out of range");
+      return static_cast<int>(value_->get<unsigned long long>());
+    }
+    const long long v = value_->get<long long>();
+    if (v < INT_MIN || v > INT_MAX) fail("integer out of range");
+    return static_cast<int>(v);
+  }
+  /// A particle index of a scene with `n` particles.
+  int particle(int n) const {
+    const int i = integer();
+    if (i < 0 || i >= n) fail("particle index " + std::to_string(i) + " out of range [0, " + std::to_string(n) + ")");
+    return i;
+  }
+  std::string string() const {
+    if (!value_->is_string()) fail(std::string("expected a string, got ") + value_->type_name());
+    return value_->get<std::string>();
+  }
+  Eigen::Vector3d vector3() const {
+    if (!value_->is_array() || value_->size() != 3) fail("expected an array of 3 numbers [x, y, z], got " + shortDump());
+    return Eigen::Vector3d((*this)[0].number(), (*this)[1].number(), (*this)[2].number());
+  }
+  std::vector<int> particles(int n) const {
+    std::vector<int> out(size());
+    for (size_t i = 0; i < out.size(); ++i) out[i] = (*this)[i].particle(n);
+    return out;
+  }
+
+  static std::string text(double x) {
+    std::ostringstream s;
+    s << x;
+    return s.str();
+  }
+
+ private:
+  std::string shortDump() const {
+    std::string d = value_->dump();
+    return d.size() > 40 ? d.substr(0, 37) + "..." : d;
+  }
+
+  const json* value_;
+  std::string path_;
+  const std::string* file_;
+};
+
+// --- built-in scenes ------------------------------------------------------------------------------
+
+// One list of parameter names per builder, used both to read them and to list them.
+template <typename Visit>
+void visitParams(Visit&& v, LinearOscillatorParams& p) {
+  v("mass", p.mass);
+  v("stiffness", p.stiffness);
+  v("amplitude", p.amplitude);
+}
+template <typename Visit>
+void visitParams(Visit&& v, ChainPendulumParams& p) {
+  v("particles", p.particles);
+  v("total_mass", p.total_mass);
+  v("length", p.length);
+  v("stiffness", p.stiffness);
+  v("pin_stiffness", p.pin_stiffness);
+  v("gravity", p.gravity);
+}
+template <typename Visit>
+void visitParams(Visit&& v, ClothGridParams& p) {
+  v("nx", p.nx);
+  v("ny", p.ny);
+  v("width", p.width);
+  v("height", p.height);
+  v("areal_density", p.areal_density);
+  v("stretch_stiffness", p.stretch_stiffness);
+  v("shear_stiffness", p.shear_stiffness);
+  v("bend_stiffness", p.bend_stiffness);
+  v("pin_stiffness", p.pin_stiffness);
+  v("pinned", p.pinned);
+  v("damping", p.damping);
+}
+template <typename Visit>
+void visitParams(Visit&& v, TetBarParams& p) {
+  v("nx", p.nx);
+  v("ny", p.ny);
+  v("nz", p.nz);
+  v("length", p.length);
+  v("width", p.width);
+  v("density", p.density);
+  v("stiffness", p.stiffness);
+  v("pin_stiffness", p.pin_stiffness);
+  v("damping", p.damping);
+}
+
+struct ParamReader {
+  const Field& params;
+  std::set<std::string>& known;
+  void operator()(const char* key, int& out) const {
+    known.insert(key);
+    if (auto f = params.find(key)) out = f->integer();
+  }
+  void operator()(const char* key, double& out) const {
+    known.insert(key);
+    if (auto f = params.find(key)) out = f->number();
+  }
+  void operator()(const char* key, std::vector<int>& out) const {
+    known.insert(key);
+    if (auto f = params.find(key)) {
+      out.resize(f->size());
+      for (size_t i = 0; i < out.size(); ++i) out[i] = (*f)[i].integer();  // range: the builder checks
+    }
+  }
+};
+
+struct ParamNames {
+  std::vector<std::string>& names;
+  template <typename T>
+  void operator()(const char* key, T&) const {
+    names.emplace_back(key);
+  }
+};
+
+// Same triangulation as makeClothGrid: the surface a viewer shows.
+std::vector<std::array<int, 3>> clothGridTriangles(int nx, int ny) {
+  std::vector<std::array<int, 3>> triangles;
+  const auto id = [nx](int i, int j) { return j * nx + i; };
+  for (int j = 0; j + 1 < ny; ++j) {
+    for (int i = 0; i + 1 < nx; ++i) {
+      triangles.push_back({id(i, j), id(i, j + 1), id(i + 1, j)});
+      triangles.push_back({id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)});
+    }
+  }
+  return triangles;
+}
+
+// Reads the builder parameters from `params` (an object; `extra` keys belong to the caller).
+template <typename Params, typename Make>
+Scene buildWith(const Field& params, const std::set<std::string>& extra, Params& p, Make make) {
+  std::set<std::string> known = extra;
+  visitParams(ParamReader{params, known}, p);
+  params.allowOnly(known);
+  try {
+    return make(p);
+  } catch (const InvalidInputError& e) {
+    params.fail(e.what());
+  }
+}
+
+SceneWithSurface builtinFromField(const std::string& name, const Field& params, const std::set<std::string>& extra,
+                                  const Field& name_field) {
+  SceneWithSurface out;
+  if (name == "oscillator") {
+    LinearOscillatorParams p;
+    out.scene = buildWith(params, extra, p, [](const auto& q) { return makeLinearOscillator(q); });
+  } else if (name == "chain") {
+    ChainPendulumParams p;
+    out.scene = buildWith(params, extra, p, [](const auto& q) { return makeChainPendulum(q); });
+  } else if (name == "cloth") {
+    ClothGridParams p;
+    out.scene = buildWith(params, extra, p, [](const auto& q) { return makeClothGrid(q); });
+    out.triangles = clothGridTriangles(p.nx, p.ny);
+  } else if (name == "tetbar") {
+    TetBarParams p;
+    out.scene = buildWith(params, extra, p, [](const auto& q) { return makeTetBar(q); });
+  } else {
+    name_field.fail("unknown built-in scene '" + name + "' (expected oscillator, chain, cloth or tetbar)");
+  }
+  return out;
+}
+
+// --- meshes ---------------------------------------------------------------------------------------
+
+// The OBJ loader keeps no faces (a Scene has none); read them again for the surface. The file
+// has just been loaded, so it is known to be well formed.
+std::vector<std::array<int, 3>> objTriangles(const std::string& path) {
+  TextReader in(path);
+  std::vector<std::array<int, 3>> triangles;
+  long vertices = 0;
+  for (std::vector<std::string> tokens; in.nextLine(tokens);) {
+    if (tokens[0] == "v") {
+      ++vertices;
+    } else if (tokens[0] == "f") {
+      std::vector<int> face;
+      for (size_t k = 1; k < tokens.size(); ++k) {
+        long index = in.parseInt(tokens[k].substr(0, tokens[k].find('/')), "face vertex index");
+        if (index < 0) index += vertices + 1;
+        face.push_back(static_cast<int>(index - 1));
+      }
+      for (size_t k = 1; k + 1 < face.size(); ++k) triangles.push_back({face[0], face[k], face[k + 1]});
+    }
+  }
+  return triangles;
+}
+
+std::string lowerExtension(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+SceneWithSurface meshFromField(const Field& mesh, const fs::path& dir) {
+  mesh.requireObject();
+  const Field file_field = mesh.member("file");
+  const fs::path relative = file_field.string();
+  const fs::path path = relative.is_absolute() ? relative : dir / relative;
+
+  std::string type;
+  if (auto t = mesh.find("type")) {
+    type = t->string();
+    if (type != "obj" && type != "tetgen" && type != "medit") {
+      t->fail("unknown mesh type '" + type + "' (expected obj, tetgen or medit)");
+    }
+  } else {
+    const std::string ext = lowerExtension(path);
+    if (ext == ".obj") type = "obj";
+    else if (ext == ".mesh") type = "medit";
+    else if (ext == ".node" || ext == ".ele") type = "tetgen";
+    else file_field.fail("cannot tell the mesh type from '" + relative.string() + "'; add \"type\": obj, tetgen or medit");
+  }
+
+  const std::set<std::string> common = {"file", "type", "translate", "damping", "name"};
+  SceneWithSurface out;
+  try {
+    if (type == "obj") {
+      std::set<std::string> keys = common;
+      keys.insert({"areal_density", "stretch_stiffness", "bend_stiffness"});
+      mesh.allowOnly(keys);
+      ClothMaterial m;
+      if (auto f = mesh.find("areal_density")) m.areal_density = f->positive();
+      if (auto f = mesh.find("stretch_stiffness")) m.stretch_stiffness = f->nonNegative();
+      if (auto f = mesh.find("bend_stiffness")) m.bend_stiffness = f->nonNegative();
+      out.scene = loadObjCloth(path.string(), m);
+      out.triangles = objTriangles(path.string());
+    } else {
+      std::set<std::string> keys = common;
+      keys.insert({"density", "stiffness"});
+      mesh.allowOnly(keys);
+      SolidMaterial m;
+      if (auto f = mesh.find("density")) m.density = f->positive();
+      if (auto f = mesh.find("stiffness")) m.stiffness = f->nonNegative();
+      if (type == "medit") {
+        out.scene = loadMedit(path.string(), m);
+      } else {
+        const std::string ext = lowerExtension(path);
+        fs::path base = path;
+        if (ext == ".node" || ext == ".ele") base.replace_extension();
+        out.scene = loadTetGen(base.string(), m);
+      }
+    }
+  } catch (const FileFormatError& e) {
+    // The mesh file's own error (file and line) inside the scene file's context.
+    file_field.fail(e.what());
+  }
+  if (auto f = mesh.find("damping")) {
+    const double d = f->number();
+    if (d < 0.0 || d > 1.0) f->fail("must be in [0, 1], got " + Field::text(d));
+    for (Body& b : out.scene.bodies) b.damping = d;
+  }
+  if (auto f = mesh.find("name")) {
+    out.scene.name = f->string();
+    for (Body& b : out.scene.bodies) b.name = out.scene.name;
+  }
+  return out;
+}
+
+// --- assembling parts ------------------------------------------------------------------------------
+
+template <typename Matrix>
+void appendRows(Matrix& into, const Matrix& rows) {
+  const Eigen::Index n = into.rows();
+  into.conservativeResize(n + rows.rows(), Eigen::NoChange);
+  into.bottomRows(rows.rows()) = rows;
+}
+
+void translate(Scene& s, const Eigen::Vector3d& t) {
+  s.positions.rowwise() += t.transpose();
+  s.rest_positions.rowwise() += t.transpose();
+  for (Pin& pin : s.pins) pin.target.position += t;
+}
+
+// Concatenates `part` after the particles of `into`, shifting its indices.
+void append(SceneWithSurface& into, SceneWithSurface part) {
+  Scene& s = into.scene;
+  Scene& p = part.scene;
+  const int offset = s.numParticles();
+  appendRows(s.positions, p.positions);
+  appendRows(s.rest_positions, p.rest_positions);
+  appendRows(s.velocities, p.velocities);
+  s.masses.conservativeResize(offset + p.masses.size());
+  s.masses.tail(p.masses.size()) = p.masses;
+  for (Spring sp : p.springs) {
+    sp.a += offset;
+    sp.b += offset;
+    s.springs.push_back(sp);
+  }
+  for (Tet t : p.tets) {
+    for (int& v : t.vertices) v += offset;
+    s.tets.push_back(t);
+  }
+  for (Pin pin : p.pins) {
+    pin.vertex += offset;
+    s.pins.push_back(pin);
+  }
+  for (ForceField f : p.force_fields) {
+    // "All particles" of a part means the part's own particles once it has neighbours.
+    if (f.particles.empty()) {
+      for (int j = 0; j < p.numParticles(); ++j) f.particles.push_back(j);
+    }
+    for (int& j : f.particles) j += offset;
+    s.force_fields.push_back(std::move(f));
+  }
+  for (Body b : p.bodies) {
+    for (int& j : b.particles) j += offset;
+    s.bodies.push_back(std::move(b));
+  }
+  for (auto t : part.triangles) {
+    for (int& v : t) v += offset;
+    into.triangles.push_back(t);
+  }
+}
+
+// Calls `each` for the object, or for every object of the array, under `key`.
+template <typename Each>
+void forEachEntry(const Field& root, const std::string& key, Each each) {
+  auto f = root.find(key);
+  if (!f) return;
+  if (f->value().is_array()) {
+    for (size_t i = 0; i < f->size(); ++i) each((*f)[i]);
+  } else {
+    f->requireObject();
+    each(*f);
+  }
+}
+
+Eigen::MatrixX3d readRows(const Field& f) {
+  Eigen::MatrixX3d m(f.size(), 3);
+  for (size_t i = 0; i < f.size(); ++i) m.row(i) = f[i].vector3().transpose();
+  return m;
+}
+
+// Explicit particles: appended after the builtin and mesh parts. Masses are read later, once
+// the tets and triangles that may lump them are known.
+void readParticles(const Field& block, Scene& s) {
+  block.allowOnly({"positions", "rest_positions", "velocities", "masses", "density", "areal_density"});
+  const Eigen::MatrixX3d x = readRows(block.member("positions"));
+  const auto sameRows = [&](const char* key) -> Eigen::MatrixX3d {
+    auto f = block.find(key);
+    if (!f) return key == std::string("velocities") ? Eigen::MatrixX3d::Zero(x.rows(), 3) : x;
+    Eigen::MatrixX3d m = readRows(*f);
+    if (m.rows() != x.rows()) {
+      f->fail("has " + std::to_string(m.rows()) + " rows, expected " + std::to_string(x.rows()) + " (one per position)");
+    }
+    return m;
+  };
+  appendRows(s.positions, x);
+  appendRows(s.rest_positions, sameRows("rest_positions"));
+  appendRows(s.velocities, sameRows("velocities"));
+}
+
+void readMasses(const Field& block, Scene& s, int first, const std::vector<std::array<int, 3>>& triangles) {
+  const int count = s.numParticles() - first;
+  s.masses.conservativeResize(s.numParticles());
+  const bool by_density = block.has("density") || block.has("areal_density");
+  if (auto f = block.find("masses")) {
+    if (by_density) f->fail("give either masses or density/areal_density, not both");
+    if (f->value().is_number()) {
+      s.masses.tail(count).setConstant(f->positive());
+    } else {
+      if (static_cast<int>(f->size()) != count) {
+        f->fail("has " + std::to_string(f->size()) + " entries, expected " + std::to_string(count) + " (one per position)");
+      }
+      for (int i = 0; i < count; ++i) s.masses[first + i] = (*f)[i].positive();
+    }
+    return;
+  }
+  if (!by_density) block.fail("needs masses, or density (tets) / areal_density (triangles) to lump them");
+  Eigen::VectorXd lumped = Eigen::VectorXd::Zero(s.numParticles());
+  if (auto f = block.find("density")) lumped += lumpMassesFromTets(s.rest_positions, s.tets, f->positive(), 0.0);
+  if (auto f = block.find("areal_density")) {
+    lumped += lumpMassesFromTriangles(s.rest_positions, triangles, f->positive(), 0.0);
+  }
+  for (int i = 0; i < count; ++i) {
+    if (!(lumped[first + i] > 0.0)) {
+      block.fail("particle " + std::to_string(first + i) +
+                 " gets no mass from density/areal_density (it is in no tet or triangle); give masses instead");
+    }
+  }
+  s.masses.tail(count) = lumped.tail(count);
+}
+
+// A region of the rest shape: {"axis": "x", "min": a, "max": b} (a slab; either bound may be
+// left out) or {"min": [x, y, z], "max": [x, y, z]} (a box). Bounds are inclusive.
+std::vector<int> selectWhere(const Field& where, const Scene& s) {
+  where.requireObject();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(-INFINITY), hi = Eigen::Vector3d::Constant(INFINITY);
+  if (auto axis = where.find("axis")) {
+    where.allowOnly({"axis", "min", "max"});
+    const std::string name = axis->string();
+    if (name != "x" && name != "y" && name != "z") axis->fail("expected \"x\", \"y\" or \"z\", got \"" + name + "\"");
+    const int c = name[0] - 'x';
+    if (!where.has("min") && !where.has("max")) where.fail("needs min, max or both");
+    if (auto f = where.find("min")) lo[c] = f->number();
+    if (auto f = where.find("max")) hi[c] = f->number();
+  } else {
+    where.allowOnly({"min", "max"});
+    if (!where.has("min") && !where.has("max")) where.fail("needs \"axis\" with min/max, or min/max corners [x, y, z]");
+    if (auto f = where.find("min")) lo = f->vector3();
+    if (auto f = where.find("max")) hi = f->vector3();
+  }
+  std::vector<int> selected;
+  for (int j = 0; j < s.numParticles(); ++j) {
+    const Eigen::Vector3d x = s.rest_positions.row(j).transpose();
+    if ((x.array() >= lo.array()).all() && (x.array() <= hi.array()).all()) selected.push_back(j);
+  }
+  if (selected.empty()) where.fail("selects no particle (bounds are compared with the rest positions)");
+  return selected;
+}
+
+// "particles": [..] or "where": {..}; neither: every particle.
+std::vector<int> readSelection(const Field& entry, const Scene& s, bool& given) {
+  auto list = entry.find("particles");
+  auto where = entry.find("where");
+  given = list || where;
+  if (list && where) where->fail("give either particles or where, not both");
+  if (list) return list->particles(s.numParticles());
+  if (where) return selectWhere(*where, s);
+  return {};
+}
+
+Eigen::Vector3d vectorOr(const Field& entry, const char* key) {
+  auto f = entry.find(key);
+  return f ? f->vector3() : Eigen::Vector3d::Zero();
+}
+
+double frequencyOf(const Field& entry) {
+  auto f = entry.find("frequency");
+  return f ? f->number() : 0.0;
+}
+
+void readSprings(const Field& list, Scene& s) {
+  const int n = s.numParticles();
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field e = list[i];
+    e.allowOnly({"a", "b", "stiffness", "rest_length"});
+    Spring sp;
+    sp.a = e.member("a").particle(n);
+    sp.b = e.member("b").particle(n);
+    if (sp.a == sp.b) e.member("b").fail("spring joins particle " + std::to_string(sp.a) + " to itself");
+    sp.stiffness = e.member("stiffness").nonNegative();
+    auto rest = e.find("rest_length");
+    sp.rest_length = rest ? rest->nonNegative() : (s.rest_positions.row(sp.a) - s.rest_positions.row(sp.b)).norm();
+    s.springs.push_back(sp);
+  }
+}
+
+void readTets(const Field& list, Scene& s) {
+  const int n = s.numParticles();
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field e = list[i];
+    e.allowOnly({"vertices", "stiffness"});
+    const Field v = e.member("vertices");
+    if (v.size() != 4) v.fail("expected 4 particle indices, got " + std::to_string(v.size()));
+    Tet tet;
+    for (int k = 0; k < 4; ++k) tet.vertices[k] = v[k].particle(n);
+    tet.stiffness = e.member("stiffness").nonNegative();
+    const double volume = signedVolume(s.rest_positions, tet.vertices);
+    if (!(volume > 0.0)) {
+      v.fail("rest volume " + Field::text(volume) + " is not positive (degenerate, or list the vertices in the other order)");
+    }
+    s.tets.push_back(tet);
+  }
+}
+
+std::vector<std::array<int, 3>> readTriangles(const Field& list, int n) {
+  std::vector<std::array<int, 3>> triangles(list.size());
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field t = list[i];
+    if (t.size() != 3) t.fail("expected 3 particle indices, got " + std::to_string(t.size()));
+    for (int k = 0; k < 3; ++k) triangles[i][k] = t[k].particle(n);
+  }
+  return triangles;
+}
+
+PinTarget readTarget(const Field& target, bool allow_position, const Eigen::Vector3d& default_position) {
+  target.allowOnly({"position", "velocity", "amplitude", "frequency"});
+  PinTarget t;
+  t.position = default_position;
+  if (auto f = target.find("position")) {
+    if (!allow_position) f->fail("not allowed with pin_where: each pin targets its own particle's rest position");
+    t.position = f->vector3();
+  }
+  t.velocity = vectorOr(target, "velocity");
+  t.amplitude = vectorOr(target, "amplitude");
+  t.frequency = frequencyOf(target);
+  return t;
+}
+
+void readPins(const Field& list, Scene& s) {
+  const int n = s.numParticles();
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field e = list[i];
+    e.allowOnly({"vertex", "pin_where", "stiffness", "target"});
+    const double k = e.member("stiffness").nonNegative();
+    auto vertex = e.find("vertex");
+    auto where = e.find("pin_where");
+    if (vertex && where) where->fail("give either vertex or pin_where, not both");
+    if (!vertex && !where) e.fail("needs vertex or pin_where");
+    auto target = e.find("target");
+    if (vertex) {
+      Pin pin;
+      pin.vertex = vertex->particle(n);
+      pin.stiffness = k;
+      const Eigen::Vector3d rest = s.rest_positions.row(pin.vertex).transpose();
+      pin.target = target ? readTarget(*target, true, rest) : PinTarget{rest};
+      s.pins.push_back(pin);
+    } else {
+      for (int j : selectWhere(*where, s)) {
+        Pin pin;
+        pin.vertex = j;
+        pin.stiffness = k;
+        const Eigen::Vector3d rest = s.rest_positions.row(j).transpose();
+        pin.target = target ? readTarget(*target, false, rest) : PinTarget{rest};
+        s.pins.push_back(pin);
+      }
+    }
+  }
+}
+
+void readForceFields(const Field& list, Scene& s) {
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field e = list[i];
+    e.allowOnly({"particles", "where", "force", "rate", "amplitude", "frequency"});
+    ForceField f;
+    bool given = false;
+    f.particles = readSelection(e, s, given);
+    f.force = vectorOr(e, "force");
+    f.rate = vectorOr(e, "rate");
+    f.amplitude = vectorOr(e, "amplitude");
+    f.frequency = frequencyOf(e);
+    s.force_fields.push_back(std::move(f));
+  }
+}
+
+void readBodies(const Field& list, Scene& s) {
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field e = list[i];
+    e.allowOnly({"name", "particles", "where", "damping"});
+    Body b;
+    if (auto f = e.find("name")) b.name = f->string();
+    bool given = false;
+    b.particles = readSelection(e, s, given);
+    if (!given) {
+      b.particles.resize(s.numParticles());
+      for (int j = 0; j < s.numParticles(); ++j) b.particles[j] = j;
+    }
+    if (auto f = e.find("damping")) {
+      b.damping = f->number();
+      if (b.damping < 0.0 || b.damping > 1.0) f->fail("must be in [0, 1], got " + Field::text(b.damping));
+    }
+    s.bodies.push_back(std::move(b));
+  }
+}
+
+SceneWithSurface sceneFromJson(const json& doc, const std::string& file) {
+  const Field root(doc, "", file);
+  root.requireObject();
+  root.allowOnly({"format", "version", "name", "gravity", "builtin", "mesh", "particles", "triangles", "springs",
+                  "tets", "pins", "force_fields", "bodies"});
+  if (auto f = root.find("format")) {
+    if (f->string() != kFormatName) f->fail("expected \"" + std::string(kFormatName) + "\", got \"" + f->string() + "\"");
+  }
+  if (auto f = root.find("version")) {
+    if (f->integer() != kFormatVersion) {
+      f->fail("unsupported version " + std::to_string(f->integer()) + " (this library reads version " +
+              std::to_string(kFormatVersion) + ")");
+    }
+  }
+  const fs::path dir = fs::path(file).parent_path();
+
+  SceneWithSurface out;
+  Scene& s = out.scene;
+  int parts = 0;
+  std::string part_name;
+  std::optional<Eigen::Vector3d> part_gravity;
+  const auto addPart = [&](SceneWithSurface part, const Field& entry) {
+    if (auto t = entry.find("translate")) translate(part.scene, t->vector3());
+    ++parts;
+    part_name = part.scene.name;
+    if (!part_gravity) part_gravity = part.scene.gravity;
+    append(out, std::move(part));
+  };
+  forEachEntry(root, "builtin", [&](const Field& entry) {
+    const Field name = entry.member("name");
+    addPart(builtinFromField(name.string(), entry, {"name", "translate"}, name), entry);
+  });
+  forEachEntry(root, "mesh", [&](const Field& entry) { addPart(meshFromField(entry, dir), entry); });
+
+  const int first_explicit = s.numParticles();
+  auto block = root.find("particles");
+  if (block) {
+    block->requireObject();
+    readParticles(*block, s);
+  }
+  if (s.numParticles() == 0) root.fail("no particles: give particles, builtin or mesh");
+
+  std::vector<std::array<int, 3>> explicit_triangles;
+  if (auto f = root.find("triangles")) explicit_triangles = readTriangles(*f, s.numParticles());
+  if (auto f = root.find("tets")) readTets(*f, s);
+  if (block) readMasses(*block, s, first_explicit, explicit_triangles);
+  out.triangles.insert(out.triangles.end(), explicit_triangles.begin(), explicit_triangles.end());
+  if (auto f = root.find("springs")) readSprings(*f, s);
+  if (auto f = root.find("pins")) readPins(*f, s);
+  if (auto f = root.find("force_fields")) readForceFields(*f, s);
+  if (auto f = root.find("bodies")) readBodies(*f, s);
+
+  if (auto f = root.find("gravity")) {
+    s.gravity = f->vector3();
+  } else {
+    s.gravity = part_gravity.value_or(Scene().gravity);
+  }
+  if (auto f = root.find("name")) {
+    s.name = f->string();
+  } else {
+    s.name = (parts == 1 && !block) ? part_name : sceneNameFromPath(file);
+  }
+  try {
+    validateScene(s);
+  } catch (const InvalidInputError& e) {
+    root.fail(e.what());
+  }
+  return out;
+}
+
+json parseJson(const std::string& text, const std::string& file) {
+  try {
+    return json::parse(text);
+  } catch (const json::parse_error& e) {
+    // e.byte is the 1-based offset of the offending character; report line and column.
+    const size_t end = std::min<size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size());
+    int line = 1;
+    size_t line_start = 0;
+    for (size_t i = 0; i < end; ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        line_start = i + 1;
+      }
+    }
+    std::string what = e.what();
+    const size_t column_at = what.find("column");
+    const size_t colon = column_at == std::string::npos ? std::string::npos : what.find(": ", column_at);
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    throw FileFormatError(file, line,
+                          "malformed JSON (column " + std::to_string(end - line_start + 1) + "): " + what);
+  } catch (const json::exception& e) {
+    // Number overflow ("1e999") comes without a position.
+    std::string what = e.what();
+    const size_t bracket = what.find("] ");
+    if (bracket != std::string::npos) what = what.substr(bracket + 2);
+    throw FileFormatError(file, 0, "malformed JSON: " + what);
+  }
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in || fs::is_directory(path)) throw FileFormatError(path, 0, "cannot open file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// --- writing --------------------------------------------------------------------------------------
+
+using ordered = nlohmann::ordered_json;
+
+ordered vec(const Eigen::Vector3d& v) { return ordered::array({v.x(), v.y(), v.z()}); }
+
+ordered rows(const Eigen::MatrixX3d& m) {
+  ordered a = ordered::array();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) a.push_back(ordered::array({m(i, 0), m(i, 1), m(i, 2)}));
+  return a;
+}
+
+bool bitwiseEqual(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
+  return a.rows() == b.rows() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+}
+
+// +0.0 only: a -0.0 must be written to come back as -0.0.
+bool plainZero(double x) { return x == 0.0 && !std::signbit(x); }
+
+template <typename Derived>
+bool plainZero(const Eigen::DenseBase<Derived>& m) {
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    for (Eigen::Index j = 0; j < m.cols(); ++j) {
+      if (!plainZero(static_cast<double>(m(i, j)))) return false;
+    }
+  }
+  return true;
+}
+
+// One item per line once a container no longer fits on one: readable and diff-friendly for
+// lists of particles and springs, compact for vectors.
+void pretty(std::string& out, const ordered& v, int indent) {
+  const std::string flat = v.dump();
+  if (!v.is_structured() || v.empty() || flat.size() + indent <= 100) {
+    out += flat;
+    return;
+  }
+  out += v.is_object() ? "{\n" : "[\n";
+  bool first = true;
+  for (auto it = v.begin(); it != v.end(); ++it) {
+    if (!first) out += ",\n";
+    first = false;
+    out.append(indent + 2, ' ');
+    if (v.is_object()) out += ordered(it.key()).dump() + ": ";
+    pretty(out, it.value(), indent + 2);
+  }
+  out += '\n';
+  out.append(indent, ' ');
+  out += v.is_object() ? '}' : ']';
+}
+
+ordered sceneToJson(const Scene& s) {
+  ordered doc;
+  doc["format"] = kFormatName;
+  doc["version"] = kFormatVersion;
+  doc["name"] = s.name;
+  doc["gravity"] = vec(s.gravity);
+  ordered particles;
+  particles["positions"] = rows(s.positions);
+  if (!bitwiseEqual(s.rest_positions, s.positions)) particles["rest_positions"] = rows(s.rest_positions);
+  if (!plainZero(s.velocities)) particles["velocities"] = rows(s.velocities);
+  particles["masses"] = ordered(std::vector<double>(s.masses.data(), s.masses.data() + s.masses.size()));
+  doc["particles"] = std::move(particles);
+  if (!s.springs.empty()) {
+    ordered a = ordered::array();
+    for (const Spring& sp : s.springs) {
+      a.push_back({{"a", sp.a}, {"b", sp.b}, {"stiffness", sp.stiffness}, {"rest_length", sp.rest_length}});
+    }
+    doc["springs"] = std::move(a);
+  }
+  if (!s.tets.empty()) {
+    ordered a = ordered::array();
+    for (const Tet& t : s.tets) {
+      a.push_back({{"vertices", ordered(std::vector<int>(t.vertices.begin(), t.vertices.end()))}, {"stiffness", t.stiffness}});
+    }
+    doc["tets"] = std::move(a);
+  }
+  if (!s.pins.empty()) {
+    ordered a = ordered::array();
+    for (const Pin& p : s.pins) {
+      ordered target = {{"position", vec(p.target.position)}};
+      if (!plainZero(p.target.velocity) || !plainZero(p.target.amplitude) || !plainZero(p.target.frequency)) {
+        target["velocity"] = vec(p.target.velocity);
+        target["amplitude"] = vec(p.target.amplitude);
+        target["frequency"] = p.target.frequency;
+      }
+      a.push_back({{"vertex", p.vertex}, {"stiffness", p.stiffness}, {"target", std::move(target)}});
+    }
+    doc["pins"] = std::move(a);
+  }
+  if (!s.force_fields.empty()) {
+    ordered a = ordered::array();
+    for (const ForceField& f : s.force_fields) {
+      ordered e;
+      if (!f.particles.empty()) e["particles"] = f.particles;
+      e["force"] = vec(f.force);
+      e["rate"] = vec(f.rate);
+      e["amplitude"] = vec(f.amplitude);
+      e["frequency"] = f.frequency;
+      a.push_back(std::move(e));
+    }
+    doc["force_fields"] = std::move(a);
+  }
+  if (!s.bodies.empty()) {
+    ordered a = ordered::array();
+    for (const Body& b : s.bodies) {
+      a.push_back({{"name", b.name}, {"damping", b.damping}, {"particles", b.particles}});
+    }
+    doc["bodies"] = std::move(a);
+  }
+  return doc;
+}
+
+}  // namespace
+
+SceneWithSurface loadSceneFileWithSurface(const std::string& path) {
+  const std::string text = readText(path);
+  return sceneFromJson(parseJson(text, path), path);
+}
+
+SceneWithSurface builtinScene(const std::string& name, const std::string& params_json, const std::string& label) {
+  const json params = parseJson(params_json.empty() ? "{}" : params_json, label);
+  const json name_value = name;
+  const Field root(params, "params", label);
+  root.requireObject();
+  return builtinFromField(name, root, {}, Field(name_value, "name", label));
+}
+
+std::vector<std::string> builtinSceneNames() { return {"oscillator", "chain", "cloth", "tetbar"}; }
+
+std::vector<std::string> builtinSceneParameters(const std::string& name) {
+  std::vector<std::string> names;
+  const ParamNames collect{names};
+  if (name == "oscillator") {
+    LinearOscillatorParams p;
+    visitParams(collect, p);
+  } else if (name == "chain") {
+    ChainPendulumParams p;
+    visitParams(collect, p);
+  } else if (name == "cloth") {
+    ClothGridParams p;
+    visitParams(collect, p);
+  } else if (name == "tetbar") {
+    TetBarParams p;
+    visitParams(collect, p);
+  }
+  return names;
+}
+
+}  // namespace stabint::io
+
+namespace stabint {
+
+Scene loadSceneFile(const std::string& path) { return io::loadSceneFileWithSurface(path).scene; }
+
+void saveSceneFile(const Scene& scene, const std::string& path) {
+  validateScene(scene);
+  std::string text;
+  io::pretty(text, io::sceneToJson(scene), 0);
+  text += '\n';
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw FileFormatError(path, 0, "cannot open file for writing");
+  out << text;
+  out.flush();
+  if (!out) throw FileFormatError(path, 0, "write failed");
+}
+
+}  // namespace stabint

@@ -1,1 +1,47 @@
-# Install rules and package export (filled in by the install work).
+# Install rules and the relocatable CMake package:
+#   find_package(stabint)  +  target_link_libraries(app PRIVATE stabint::stabint)
+#
+# Layout under the prefix (GNUInstallDirs):
+#   lib/libstabint.a, include/stabint/*.hpp, bin/stabint-run,
+#   lib/cmake/stabint/{stabintConfig,stabintConfigVersion,stabintTargets*,FindCHOLMOD}.cmake
+#
+# libstabint is static, so its private dependencies (CHOLMOD, OpenCL) end up on the consumer's
+# link line as $<LINK_ONLY:...>: the config file finds them again, with the FindCHOLMOD module
+# installed next to it (Debian's SuiteSparse has no CMake config). nlohmann_json is header-only
+# and used only inside the library's sources, so it is a build-tree dependency only.
+include(CMakePackageConfigHelpers)
+
+set(STABINT_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/stabint" CACHE STRING
+    "Where the stabint CMake package files are installed, relative to the prefix")
+
+install(TARGETS stabint
+  EXPORT stabintTargets
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})  # include dir: INSTALL_INTERFACE of the target
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/stabint
+  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+  FILES_MATCHING PATTERN "*.hpp")
+
+if(TARGET stabint-run)
+  install(TARGETS stabint-run RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+endif()
+
+install(EXPORT stabintTargets
+  NAMESPACE stabint::
+  FILE stabintTargets.cmake
+  DESTINATION ${STABINT_INSTALL_CMAKEDIR})
+
+configure_package_config_file(
+  ${PROJECT_SOURCE_DIR}/cmake/stabintConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/stabintConfig.cmake
+  INSTALL_DESTINATION ${STABINT_INSTALL_CMAKEDIR})
+write_basic_package_version_file(
+  ${PROJECT_BINARY_DIR}/stabintConfigVersion.cmake
+  VERSION ${PROJECT_VERSION}
+  COMPATIBILITY SameMinorVersion)  # 0.x: minor versions may change the API
+install(FILES
+  ${PROJECT_BINARY_DIR}/stabintConfig.cmake
+  ${PROJECT_BINARY_DIR}/stabintConfigVersion.cmake
+  ${PROJECT_SOURCE_DIR}/cmake/FindCHOLMOD.cmake
+  DESTINATION ${STABINT_INSTALL_CMAKEDIR})

@@ -1,0 +1,458 @@
+// stabint-run: one scene, one integrator, N frames; per-frame energies and timings as CSV and the
+// deformed mesh as one OBJ per frame. Options are parsed by hand (no dependency for a CLI).
+#include "io/scene_json.hpp"
+
+#include <stabint/stabint.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kProgram = "stabint-run";
+
+// A bad command line or a failed run: printed as "stabint-run: error: <message>", exit 1.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  std::string scene;
+  std::vector<std::pair<std::string, std::string>> params;
+  stabint::SimulatorOptions sim;
+  bool backend_explicit = false;
+  bool precision_explicit = false;
+  int frames = 100;
+  int every = 1;
+  std::string csv;
+  std::string obj_dir;
+  bool list_devices = false;
+  bool help = false;
+  bool quiet = false;
+};
+
+std::string usage() {
+  std::ostringstream s;
+  s << "Usage: stabint-run --scene NAME|FILE.json [options]\n"
+       "\n"
+       "Steps one scene with one integrator and writes per-frame energies, timings and meshes.\n"
+       "\n"
+       "Scene:\n"
+       "  --scene NAME|FILE.json    built-in scene (oscillator, chain, cloth, tetbar) or a JSON scene\n"
+       "                            file (format: docs/scene-format.md)\n"
+       "  --param KEY=VALUE         built-in scene parameter, repeatable (nx=50, pinned=[0,49])\n"
+       "Integrator:\n"
+       "  --integrator NAME         FE, SE, BE, BDF2, IM or blend (default blend)\n"
+       "  --dt SECONDS              time step (default 0.0333333)\n"
+       "  --iterations N            local/global iterations per implicit solve (default 10)\n"
+       "  --be-iterations N         iterations of the blend's backward-Euler solve (default 3)\n"
+       "  --tolerance TOL           solve each step to this relative tolerance instead of a fixed\n"
+       "                            iteration budget (default 0: fixed budget)\n"
+       "Backend:\n"
+       "  --backend cpu|opencl      default opencl, falling back to cpu when no OpenCL device\n"
+       "                            exists; an explicit --backend opencl never falls back\n"
+       "  --precision double|float  OpenCL arithmetic (the CPU reference always runs in double)\n"
+       "  --platform SEL            OpenCL platform: index or name substring\n"
+       "  --device SEL              OpenCL device: index or name substring\n"
+       "  --list-devices            list the OpenCL devices and exit\n"
+       "Output:\n"
+       "  --frames N                number of time steps (default 100)\n"
+       "  --csv FILE                per-frame CSV, '-' for standard output: frame, time, kinetic,\n"
+       "                            elastic, external, total, target, branch, alpha, iterations,\n"
+       "                            energy_evaluations, local_s, gather_s, transfer_s, global_s,\n"
+       "                            energy_s, bookkeeping_s (frame 0 is the initial state)\n"
+       "  --obj-dir DIR             one OBJ per written frame (DIR/frame_00000.obj, ...): vertices,\n"
+       "                            surface triangles when known, else tet boundary faces, else\n"
+       "                            springs as lines\n"
+       "  --every N                 write every Nth frame to the CSV and OBJ files (default 1; the\n"
+       "                            last frame is always written)\n"
+       "  --quiet                   no progress or summary on standard error\n"
+       "  --help                    this text\n"
+       "\n"
+       "Built-in scene parameters (see include/stabint/builders.hpp):\n";
+  for (const std::string& name : stabint::io::builtinSceneNames()) {
+    s << "  " << name << ":";
+    for (const std::string& p : stabint::io::builtinSceneParameters(name)) s << " " << p;
+    s << "\n";
+  }
+  s << "\n"
+       "Exit status: 0 success; 1 error; 2 the state became non-finite (the CSV keeps the frames\n"
+       "before it).\n";
+  return s.str();
+}
+
+// --- option parsing ------------------------------------------------------------------------------
+
+double parseNumber(const std::string& option, const std::string& text) {
+  char* end = nullptr;
+  errno = 0;
+  const double x = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(x)) {
+    throw UsageError(option + ": expected a number, got '" + text + "'");
+  }
+  return x;
+}
+
+int parseInteger(const std::string& option, const std::string& text) {
+  char* end = nullptr;
+  errno = 0;
+  const long x = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || errno == ERANGE || x < INT32_MIN || x > INT32_MAX) {
+    throw UsageError(option + ": expected an integer, got '" + text + "'");
+  }
+  return static_cast<int>(x);
+}
+
+Options parseArgs(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    std::string arg = argv[i];
+    std::optional<std::string> inline_value;
+    if (arg.rfind("--", 0) == 0) {
+      const size_t eq = arg.find('=');
+      if (eq != std::string::npos) {
+        inline_value = arg.substr(eq + 1);
+        arg = arg.substr(0, eq);
+      }
+    } else {
+      throw UsageError("unexpected argument '" + arg + "' (options start with --; see --help)");
+    }
+    const auto value = [&]() -> std::string {
+      if (inline_value) return *inline_value;
+      if (i + 1 >= argc) throw UsageError(arg + ": missing value");
+      return argv[++i];
+    };
+    const auto flag = [&]() {
+      if (inline_value) throw UsageError(arg + ": takes no value");
+    };
+    try {
+      if (arg == "--help" || arg == "-h") {
+        flag();
+        o.help = true;
+      } else if (arg == "--scene") {
+        o.scene = value();
+      } else if (arg == "--param") {
+        const std::string kv = value();
+        const size_t eq = kv.find('=');
+        if (eq == std::string::npos || eq == 0) throw UsageError("--param: expected KEY=VALUE, got '" + kv + "'");
+        o.params.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+      } else if (arg == "--integrator") {
+        o.sim.integrator = stabint::parseIntegrator(value());
+      } else if (arg == "--backend") {
+        o.sim.backend = stabint::parseBackend(value());
+        o.backend_explicit = true;
+      } else if (arg == "--precision") {
+        const std::string p = value();
+        if (p == "double") o.sim.opencl.precision = stabint::Precision::Double;
+        else if (p == "float") o.sim.opencl.precision = stabint::Precision::Float;
+        else throw UsageError("--precision: expected double or float, got '" + p + "'");
+        o.precision_explicit = true;
+      } else if (arg == "--platform") {
+        o.sim.opencl.platform = value();
+      } else if (arg == "--device") {
+        o.sim.opencl.device = value();
+      } else if (arg == "--dt") {
+        o.sim.time_step = parseNumber(arg, value());
+      } else if (arg == "--iterations") {
+        o.sim.iterations = parseInteger(arg, value());
+      } else if (arg == "--be-iterations") {
+        o.sim.be_iterations = parseInteger(arg, value());
+      } else if (arg == "--tolerance") {
+        o.sim.tolerance = parseNumber(arg, value());
+      } else if (arg == "--frames") {
+        o.frames = parseInteger(arg, value());
+        if (o.frames < 0) throw UsageError("--frames: must be >= 0, got " + std::to_string(o.frames));
+      } else if (arg == "--every") {
+        o.every = parseInteger(arg, value());
+        if (o.every < 1) throw UsageError("--every: must be >= 1, got " + std::to_string(o.every));
+      } else if (arg == "--csv") {
+        o.csv = value();
+      } else if (arg == "--obj-dir") {
+        o.obj_dir = value();
+      } else if (arg == "--list-devices") {
+        flag();
+        o.list_devices = true;
+      } else if (arg == "--quiet") {
+        flag();
+        o.quiet = true;
+      } else {
+        throw UsageError("unknown option '" + arg + "' (see --help)");
+      }
+    } catch (const stabint::InvalidInputError& e) {
+      throw UsageError(arg + ": " + e.what());  // names from parseIntegrator / parseBackend
+    }
+  }
+  if (!o.help && !o.list_devices && o.scene.empty()) throw UsageError("missing --scene (see --help)");
+  return o;
+}
+
+// --- the scene ------------------------------------------------------------------------------------
+
+bool isBuiltin(const std::string& name) {
+  for (const std::string& b : stabint::io::builtinSceneNames()) {
+    if (b == name) return true;
+  }
+  return false;
+}
+
+// A --param value becomes JSON: numbers and [lists] as written, anything else as a string (the
+// loader then says which parameter wanted a number).
+std::string paramsAsJson(const std::vector<std::pair<std::string, std::string>>& params) {
+  std::string out = "{";
+  for (size_t i = 0; i < params.size(); ++i) {
+    const auto& [key, value] = params[i];
+    out += (i ? ", " : "");
+    std::string quoted = "\"";
+    for (char c : key) {
+      if (c == '"' || c == '\\') quoted += '\\';
+      quoted += c;
+    }
+    out += quoted + "\": ";
+    char* end = nullptr;
+    std::strtod(value.c_str(), &end);
+    const bool number = !value.empty() && *end == '\0';
+    if (number || (!value.empty() && value.front() == '[')) {
+      out += value;
+    } else {
+      out += '"';
+      for (char c : value) {
+        if (c == '"' || c == '\\') out += '\\';
+        out += c;
+      }
+      out += '"';
+    }
+  }
+  return out + "}";
+}
+
+stabint::io::SceneWithSurface loadScene(const Options& o) {
+  if (isBuiltin(o.scene)) {
+    return stabint::io::builtinScene(o.scene, paramsAsJson(o.params), "builtin scene '" + o.scene + "'");
+  }
+  if (!o.params.empty()) throw UsageError("--param applies to built-in scenes only, not to '" + o.scene + "'");
+  if (fs::path(o.scene).extension() != ".json" && !fs::exists(o.scene)) {
+    throw UsageError("--scene: unknown scene '" + o.scene + "' (expected oscillator, chain, cloth, tetbar or a .json file)");
+  }
+  return stabint::io::loadSceneFileWithSurface(o.scene);
+}
+
+// Faces for the OBJ frames of a tet mesh: the triangles that belong to exactly one tet, wound
+// outward (tets have positive rest volume).
+std::vector<std::array<int, 3>> tetBoundary(const std::vector<stabint::Tet>& tets) {
+  std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> faces;
+  for (const stabint::Tet& t : tets) {
+    const auto& v = t.vertices;
+    const std::array<std::array<int, 3>, 4> local = {{{v[0], v[2], v[1]}, {v[0], v[1], v[3]}, {v[0], v[3], v[2]}, {v[1], v[2], v[3]}}};
+    for (const auto& f : local) {
+      std::array<int, 3> key = f;
+      std::sort(key.begin(), key.end());
+      auto& entry = faces[key];
+      ++entry.first;
+      entry.second = f;
+    }
+  }
+  std::vector<std::array<int, 3>> boundary;
+  for (const auto& [key, entry] : faces) {
+    if (entry.first == 1) boundary.push_back(entry.second);
+  }
+  return boundary;
+}
+
+// --- output ---------------------------------------------------------------------------------------
+
+class ObjWriter {
+ public:
+  ObjWriter(std::string dir, const stabint::io::SceneWithSurface& loaded) : dir_(std::move(dir)) {
+    fs::create_directories(dir_);
+    triangles_ = loaded.triangles.empty() ? tetBoundary(loaded.scene.tets) : loaded.triangles;
+    if (triangles_.empty()) {
+      for (const stabint::Spring& s : loaded.scene.springs) lines_.push_back({s.a, s.b});
+    }
+  }
+
+  void write(int frame, const Eigen::MatrixX3d& x) const {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%05d.obj", frame);
+    const std::string path = (fs::path(dir_) / name).string();
+    std::ofstream out(path);
+    if (!out) throw UsageError("--obj-dir: cannot write " + path);
+    char line[96];
+    for (Eigen::Index i = 0; i < x.rows(); ++i) {
+      std::snprintf(line, sizeof(line), "v %.9g %.9g %.9g\n", x(i, 0), x(i, 1), x(i, 2));
+      out << line;
+    }
+    for (const auto& t : triangles_) out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+    for (const auto& l : lines_) out << "l " << l[0] + 1 << ' ' << l[1] + 1 << '\n';
+    if (!out) throw UsageError("--obj-dir: write failed for " + path);
+  }
+
+ private:
+  std::string dir_;
+  std::vector<std::array<int, 3>> triangles_;
+  std::vector<std::array<int, 2>> lines_;
+};
+
+class CsvWriter {
+ public:
+  explicit CsvWriter(const std::string& path) {
+    if (path == "-") {
+      out_ = &std::cout;
+    } else {
+      file_.open(path);
+      if (!file_) throw UsageError("--csv: cannot write '" + path + "'");
+      out_ = &file_;
+    }
+    *out_ << "frame,time,kinetic,elastic,external,total,target,branch,alpha,iterations,energy_evaluations,"
+             "local_s,gather_s,transfer_s,global_s,energy_s,bookkeeping_s\n";
+  }
+
+  void row(int frame, const stabint::StepReport& r) {
+    const auto& e = r.energy;
+    const auto& t = r.times;
+    char buf[512];
+    std::snprintf(buf, sizeof(buf),
+                  "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame,
+                  r.time, e.kinetic, e.elastic, e.external, e.total(), r.target, stabint::blendBranchName(r.branch),
+                  r.alpha, r.iterations, r.energy_evaluations, t.local, t.gather, t.transfer, t.global, t.energy,
+                  t.bookkeeping);
+    *out_ << buf;
+  }
+
+  void flush() { out_->flush(); }
+
+ private:
+  std::ofstream file_;
+  std::ostream* out_ = nullptr;
+};
+
+// --- running --------------------------------------------------------------------------------------
+
+std::unique_ptr<stabint::Simulator> makeSimulator(const stabint::Scene& scene, Options& o) {
+  if (!o.backend_explicit) o.sim.backend = stabint::BackendKind::OpenCL;
+  try {
+    return std::make_unique<stabint::Simulator>(scene, o.sim);
+  } catch (const stabint::NoOpenCLDeviceError& e) {
+    if (o.backend_explicit) throw;
+    std::cerr << kProgram << ": no OpenCL device (" << e.what()
+              << "); falling back to the CPU reference backend\n";
+    o.sim.backend = stabint::BackendKind::CpuReference;
+    return std::make_unique<stabint::Simulator>(scene, o.sim);
+  }
+}
+
+int listDevices() {
+  const auto devices = stabint::listOpenCLDevices();
+  if (devices.empty()) {
+    std::cout << "no OpenCL devices found\n";
+    return 0;
+  }
+  for (const auto& d : devices) {
+    std::cout << "platform " << d.platform_index << " device " << d.device_index << ": " << d.platform_name << " / "
+              << d.device_name << " (fp64: " << (d.fp64 ? "yes" : "no") << ")\n";
+  }
+  return 0;
+}
+
+int run(Options& o) {
+  const stabint::io::SceneWithSurface loaded = loadScene(o);
+  const stabint::Scene& scene = loaded.scene;
+  auto sim = makeSimulator(scene, o);
+  if (o.precision_explicit && o.sim.backend == stabint::BackendKind::CpuReference &&
+      o.sim.opencl.precision == stabint::Precision::Float && !o.quiet) {
+    std::cerr << kProgram << ": note: --precision float applies to OpenCL only; the CPU reference runs in double\n";
+  }
+  if (!o.quiet) {
+    std::cerr << kProgram << ": scene '" << scene.name << "' (" << scene.numParticles() << " particles, "
+              << scene.springs.size() << " springs, " << scene.tets.size() << " tets, " << scene.pins.size()
+              << " pins), " << stabint::integratorName(o.sim.integrator) << ", dt " << o.sim.time_step << ", "
+              << o.frames << " frames on " << sim->backendDescription() << "\n";
+  }
+
+  std::optional<CsvWriter> csv;
+  if (!o.csv.empty()) csv.emplace(o.csv);
+  std::optional<ObjWriter> obj;
+  if (!o.obj_dir.empty()) obj.emplace(o.obj_dir, loaded);
+
+  // Frame 0 is the initial state: the reference every energy drift is measured against.
+  stabint::StepReport initial;
+  initial.energy = sim->energy();
+  initial.target = sim->target();
+  const double initial_total = initial.energy.total();
+  if (csv) csv->row(0, initial);
+  if (obj) obj->write(0, sim->positions());
+
+  const auto start = Clock::now();
+  auto last_progress = start;
+  int last_written = 0;
+  for (int frame = 1; frame <= o.frames; ++frame) {
+    try {
+      sim->step();
+    } catch (const stabint::NonFiniteStateError& e) {
+      const int bad = e.step() + 1;
+      // Keep the last finite frame even when --every skipped it.
+      if (csv && last_written != bad - 1 && bad - 1 > 0) csv->row(bad - 1, sim->lastReport());
+      if (csv) csv->flush();
+      std::cerr << kProgram << ": error: the state became non-finite at frame " << bad << " (t = " << sim->time() + o.sim.time_step
+                << " s); " << (csv ? "CSV kept up to frame " + std::to_string(bad - 1) + "; " : std::string())
+                << e.what() << "\n";
+      return 2;
+    }
+    if (frame % o.every == 0 || frame == o.frames) {
+      if (csv) csv->row(frame, sim->lastReport());
+      if (obj) obj->write(frame, sim->positions());
+      last_written = frame;
+    }
+    const auto now = Clock::now();
+    if (!o.quiet && now - last_progress >= std::chrono::seconds(1)) {
+      const double elapsed = std::chrono::duration<double>(now - start).count();
+      std::cerr << kProgram << ": frame " << frame << "/" << o.frames << ", " << 1e3 * elapsed / frame
+                << " ms/frame\n";
+      last_progress = now;
+    }
+  }
+  if (csv) csv->flush();
+  if (!o.quiet) {
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    const double total = sim->energy().total();
+    std::cerr << kProgram << ": " << o.frames << " frames in " << elapsed << " s ("
+              << (o.frames ? 1e3 * elapsed / o.frames : 0.0) << " ms/frame); energy " << initial_total << " -> "
+              << total << ", target " << sim->target() << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    Options o = parseArgs(argc, argv);
+    if (o.help) {
+      std::cout << usage();
+      return 0;
+    }
+    if (o.list_devices) return listDevices();
+    return run(o);
+  } catch (const std::exception& e) {
+    std::cerr << kProgram << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# The main job (the README's first command): installs missing dependencies, builds the study
+# tool (Release, into build/, the same build directory as scripts/test.sh), runs every
+# experiment of stabint-study (energy table printed), and draws the charts and the summary.
+# Idempotent; the reference trajectories are cached in results/cache/ so a rerun skips them.
+# About 3-5 minutes on a 2-core machine from a fresh clone, most of it the build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+start=$(date +%s)
+elapsed() { echo "$(( $(date +%s) - start )) s"; }
+
+bash scripts/install-deps.sh
+
+echo "== build (Release, build/, target stabint-study)"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSTABINT_BUILD_TOOLS=ON
+cmake --build build --target stabint-study -j"$(nproc)"
+echo "== built in $(elapsed)"
+
+echo "== experiments: build/tools/study/stabint-study all --out results"
+build/tools/study/stabint-study all --out results
+
+echo "== charts"
+/usr/bin/python3 bench/study_charts.py results
+
+echo
+echo "main.sh: done in $(elapsed)."
+echo "  energy table:   results/energy_table.csv (printed above)"
+echo "  summary:        results/summary.md"
+echo "  charts:         results/charts/{speed_vs_accuracy,stability_map,energy_over_time,cloth_still}.png (and .svg)"
+echo "  all CSV files:  results/*.csv; cached reference trajectories: results/cache/"

@@ -3,6 +3,7 @@
 // StepReport::times, averaged per step.
 #include "bench_common.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <exception>
 
@@ -24,9 +25,11 @@ bool exploded(const StepReport& r) { return !(std::abs(r.energy.total()) < 1e30)
 // The first steps pay the CHOLMOD factorizations (one per distinct c) and, on OpenCL, the first
 // kernel launches. The blend factors c = 1/h^2 only when it first takes the BE branch, so it
 // warms up until it has.
-void warmUp(StepFixture& f, int min_steps, int max_steps) {
+// Returns the number of steps taken.
+int warmUp(StepFixture& f, int min_steps, int max_steps) {
   bool saw_be = f.options.integrator != Integrator::EnergyBlend;
-  for (int i = 0; i < max_steps && (i < min_steps || !saw_be); ++i) {
+  int i = 0;
+  for (; i < max_steps && (i < min_steps || !saw_be); ++i) {
     try {
       const StepReport& r = f.sim->step();
       saw_be = saw_be || r.branch == BlendBranch::BackwardEuler;
@@ -35,6 +38,7 @@ void warmUp(StepFixture& f, int min_steps, int max_steps) {
       f.rebuild();
     }
   }
+  return i;
 }
 
 void runSteps(benchmark::State& state, const std::string& key, const std::function<Scene()>& make_scene,
@@ -107,9 +111,84 @@ void runSteps(benchmark::State& state, const std::string& key, const std::functi
   state.SetLabel(f.sim->backendDescription());
 }
 
+// The blend against BE with the same options (main iteration count 10), stepped alternately in
+// one case so that other load on a shared machine hits both alike: each benchmark iteration is
+// one BE step and one blend step, each timed on its own. The two simulators start from the same
+// state and advance in lock step.
+struct PairFixture {
+  StepFixture be, blend;
+};
+
+void runPair(benchmark::State& state, const std::string& key, const std::function<Scene()>& make_scene,
+             BackendChoice backend) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  PairFixture* fixture = nullptr;
+  try {
+    fixture = &cachedFixture<PairFixture>(key, [&] {
+      auto f = std::make_unique<PairFixture>();
+      for (StepFixture* s : {&f->be, &f->blend}) {
+        s->scene = make_scene();
+        s->options = optionsFor(backend, s == &f->be ? Integrator::BackwardEuler : Integrator::EnergyBlend);
+        s->rebuild();
+      }
+      const int steps = warmUp(f->blend, 3, 20);
+      warmUp(f->be, steps, steps);  // same step index: both integrate the same time span
+      return f;
+    });
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  PairFixture& f = *fixture;
+  using Clock = std::chrono::steady_clock;
+  double be_time = 0, blend_time = 0, be_iterations = 0, blend_iterations = 0;
+  double branch_im = 0, branch_be = 0, branch_fe = 0, blend_energy_evaluations = 0;
+  try {
+    for (auto _ : state) {
+      auto start = Clock::now();
+      be_iterations += f.be.sim->step().iterations;
+      be_time += std::chrono::duration<double>(Clock::now() - start).count();
+      start = Clock::now();
+      const StepReport& r = f.blend.sim->step();
+      blend_time += std::chrono::duration<double>(Clock::now() - start).count();
+      blend_iterations += r.iterations;
+      blend_energy_evaluations += r.energy_evaluations;
+      branch_im += r.branch == BlendBranch::ImplicitMidpoint;
+      branch_be += r.branch == BlendBranch::BackwardEuler;
+      branch_fe += r.branch == BlendBranch::ForwardEuler;
+    }
+  } catch (const NonFiniteStateError& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  using benchmark::Counter;
+  setSizeCounters(state, f.be.scene);
+  state.counters["be_step"] = Counter(be_time, Counter::kAvgIterations);
+  state.counters["blend_step"] = Counter(blend_time, Counter::kAvgIterations);
+  state.counters["overhead"] = be_time > 0 ? blend_time / be_time - 1.0 : 0.0;
+  state.counters["be_iterations"] = Counter(be_iterations, Counter::kAvgIterations);
+  state.counters["blend_iterations"] = Counter(blend_iterations, Counter::kAvgIterations);
+  state.counters["blend_energy_evaluations"] = Counter(blend_energy_evaluations, Counter::kAvgIterations);
+  state.counters["branch_IM"] = Counter(branch_im, Counter::kAvgIterations);
+  state.counters["branch_BE"] = Counter(branch_be, Counter::kAvgIterations);
+  state.counters["branch_FE"] = Counter(branch_fe, Counter::kAvgIterations);
+  state.SetLabel(f.be.sim->backendDescription());
+}
+
 }  // namespace
 
 void registerStepCases() {
+  for (const SceneCase& scene : referenceScenes())
+    for (BackendChoice backend : allBackends()) {
+      const std::string name = "blend_vs_be/" + scene.name + "/" + backendLabel(backend);
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+        runPair(state, name, scene.make, backend);
+      })->UseRealTime()->Unit(benchmark::kMillisecond);
+    }
+
   for (const SceneCase& scene : referenceScenes())
     for (Integrator integrator : allIntegrators())
       for (BackendChoice backend : allBackends()) {

@@ -1,5 +1,6 @@
 // stabint_bench: Google Benchmark suite of stabint. Case names are
 //   step/<scene>/<integrator>/<backend>               one Simulator::step()
+//   blend_vs_be/<scene>/<backend>                     one BE step and one blend step, alternated
 //   iteration/<scene>/<integrator>/<backend>          one local/global iteration
 //   scaling_step/cloth/<integrator>/<backend>/side:N  step on an N x N cloth
 //   scaling_iteration/cloth/BE/<backend>/side:N       iteration on an N x N cloth

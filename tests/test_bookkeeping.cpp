@@ -88,31 +88,53 @@ TEST(Bookkeeping, MomentumPreservingDampingReportsItsEnergyAndKeepsMomentum) {
   EXPECT_NEAR((rigid - rigid_before).norm(), 0.0, 1e-12);
 }
 
-// Moving pin: H* changes by sum_pins k/2 (|x_n - q(t_{n+1})|^2 - |x_n - q(t_n)|^2), computed here
-// from the scene description, independently of the library's energy code.
+// Time-dependent forcing: H* changes by U(xm, t_{n+1}) - U(xm, t_n) at the step's midpoint
+// positions xm = (x_n + x_{n+1})/2 (README, project rule "forcing"), computed here from the scene
+// description, independently of the library's energy code. For the blend xm is the IM midpoint,
+// which equals (x_n + x_{n+1})/2 on the steps that accept the IM candidate; those are checked,
+// with a loose blend tolerance so that IM is accepted.
+double expectedForcing(const Scene& s, const Eigen::MatrixX3d& xm, double t0, double t1) {
+  double work = 0.0;
+  for (const Pin& pin : s.pins) {
+    const Eigen::Vector3d xj = xm.row(pin.vertex).transpose();
+    work += 0.5 * pin.stiffness * ((xj - pin.target.at(t1)).squaredNorm() - (xj - pin.target.at(t0)).squaredNorm());
+  }
+  for (const ForceField& field : s.force_fields)
+    for (int j : field.particles) work -= (field.at(t1) - field.at(t0)).dot(xm.row(j).transpose());
+  return work;
+}
+
+// Returns how many steps were checked.
+int checkForcing(const Scene& s, Integrator integrator, int steps) {
+  SimulatorOptions o;
+  o.integrator = integrator;
+  o.energy_tolerance = 0.5;
+  Simulator sim(s, o);
+  int checked = 0;
+  for (int n = 0; n < steps; ++n) {
+    const Eigen::MatrixX3d x0 = sim.positions();
+    const double t0 = sim.time(), t1 = t0 + o.time_step, before = sim.target();
+    const StepReport& r = sim.step();
+    EXPECT_NE(r.forcing, 0.0) << "step " << n;
+    EXPECT_NEAR(r.target, before + r.forcing - r.damping, 1e-12 * std::max(1.0, std::abs(before)));
+    if (integrator == Integrator::EnergyBlend && r.branch != BlendBranch::ImplicitMidpoint) continue;
+    const double expected = expectedForcing(s, 0.5 * (x0 + sim.positions()), t0, t1);
+    EXPECT_NEAR(r.forcing, expected, 1e-9 * std::max(1.0, std::abs(expected))) << "step " << n;
+    ++checked;
+  }
+  return checked;
+}
+
 TEST(Bookkeeping, MovingPinChangesTheTargetByThePotentialChange) {
   Scene s = smallCloth(0.0);
   s.pins[0].target.velocity = Eigen::Vector3d(0.2, 0.0, 0.1);
   s.pins[1].target.amplitude = Eigen::Vector3d(0.0, 0.0, 0.05);
   s.pins[1].target.frequency = 1.0;
-  SimulatorOptions o;
-  o.integrator = Integrator::EnergyBlend;
-  Simulator sim(s, o);
-  for (int n = 0; n < 30; ++n) {
-    const Eigen::MatrixX3d x = sim.positions();
-    const double t0 = sim.time(), t1 = t0 + o.time_step, before = sim.target();
-    double expected = 0.0;
-    for (const Pin& pin : s.pins) {
-      const Eigen::Vector3d xj = x.row(pin.vertex).transpose();
-      expected += 0.5 * pin.stiffness * ((xj - pin.target.at(t1)).squaredNorm() - (xj - pin.target.at(t0)).squaredNorm());
-    }
-    const StepReport& r = sim.step();
-    ASSERT_NEAR(r.forcing, expected, 1e-9 * std::max(1.0, std::abs(expected))) << "step " << n;
-    ASSERT_NEAR(r.target, before + expected, 1e-9 * std::max(1.0, std::abs(before))) << "step " << n;
-  }
+  EXPECT_EQ(checkForcing(s, Integrator::BackwardEuler, 30), 30);
+  EXPECT_EQ(checkForcing(s, Integrator::ImplicitMidpoint, 30), 30);
+  EXPECT_GT(checkForcing(s, Integrator::EnergyBlend, 30), 20);
 }
 
-// Changing force field: H* changes by -(f(t_{n+1}) - f(t_n)) . x_n summed over the field's particles.
 TEST(Bookkeeping, ChangingForceFieldChangesTheTargetByThePotentialChange) {
   Scene s = smallCloth(0.0);
   ForceField wind;
@@ -122,17 +144,27 @@ TEST(Bookkeeping, ChangingForceFieldChangesTheTargetByThePotentialChange) {
   wind.amplitude = Eigen::Vector3d(0.01, 0.0, 0.0);
   wind.frequency = 2.0;
   s.force_fields.push_back(wind);
+  EXPECT_EQ(checkForcing(s, Integrator::BDF2, 30), 30);
+  EXPECT_GT(checkForcing(s, Integrator::EnergyBlend, 30), 20);
+}
+
+// A cloth dragged by a stiff handle along a steady path: the target must follow the physical
+// work, not grow by k/2 |dq|^2 every step. After the start-up transient the handle pulls a cloth
+// that moves with it, so the target stays within a few joules; the x_n rule of method.md grew
+// it by ~55 J per step here.
+TEST(Bookkeeping, StiffMovingHandleDoesNotPumpTheTarget) {
+  Scene s = smallCloth(0.0);
+  for (Pin& pin : s.pins) pin.target.velocity = Eigen::Vector3d(1.0, 0.0, 0.0);
+  for (Pin& pin : s.pins) pin.stiffness = 1e5;
   SimulatorOptions o;
+  o.integrator = Integrator::EnergyBlend;
   Simulator sim(s, o);
-  for (int n = 0; n < 30; ++n) {
-    const Eigen::MatrixX3d x = sim.positions();
-    const double t0 = sim.time(), t1 = t0 + o.time_step, before = sim.target();
-    double expected = 0.0;
-    for (int j : wind.particles) expected -= (wind.at(t1) - wind.at(t0)).dot(x.row(j).transpose());
-    const StepReport& r = sim.step();
-    ASSERT_NEAR(r.forcing, expected, 1e-12) << "step " << n;
-    ASSERT_NEAR(r.target, before + expected, 1e-12 * std::max(1.0, std::abs(before))) << "step " << n;
-  }
+  const double h0 = sim.target();
+  double max_forcing = 0.0;
+  for (int n = 0; n < 60; ++n) max_forcing = std::max(max_forcing, std::abs(sim.step().forcing));
+  const double k_half_dq2 = 0.5 * 1e5 * std::pow(o.time_step, 2.0);  // the bias per pin per step
+  EXPECT_LT(max_forcing, 0.1 * k_half_dq2);
+  EXPECT_LT(std::abs(sim.target() - h0), 5.0);
 }
 
 }  // namespace

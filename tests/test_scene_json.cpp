@@ -10,6 +10,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "temp_dir_test.hpp"
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -31,22 +33,8 @@ using ::testing::HasSubstr;
 // The repository's scenes/ folder, next to tests/.
 const std::string kScenesDir = (fs::path(__FILE__).parent_path().parent_path() / "scenes").string();
 
-class SceneJson : public ::testing::Test {
+class SceneJson : public testing::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("stabint_json_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string write(const std::string& name, const std::string& text) const {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path) << text;
-    return path;
-  }
 
   // Loads `text` as a scene file; the error it must raise is "<file>: <message>" with line 0
   // unless a line is given.
@@ -63,8 +51,6 @@ class SceneJson : public ::testing::Test {
       EXPECT_EQ(std::string(e.what()).rfind(prefix, 0), 0u) << e.what();
     }
   }
-
-  fs::path dir_;
 };
 
 // Two-particle scene text with `extra` members appended to the top-level object.

@@ -315,8 +315,8 @@ def write_summary(results):
         out.append("")
     sweep = read_csv(results, "sweep.csv")
     if sweep:
-        out.append("## Speed versus accuracy: cheapest non-exploded setting per integrator and its best accuracy\n")
-        out.append("| scene | integrator | cheapest stable setting | ms/frame | error [m] | most accurate setting | "
+        out.append("## Speed versus accuracy: cheapest non-exploded setting per integrator and its most accurate one\n")
+        out.append("| scene | integrator | cheapest non-exploded setting | ms/frame | error [m] | most accurate setting | "
                    "ms/frame | error [m] |")
         out.append("|---|---|---|---:|---:|---|---:|---:|")
         for scene in ("cloth", "tetbar"):
@@ -327,7 +327,7 @@ def write_summary(results):
                     out.append(f"| {scene} | {integ} | exploded at every setting tried | | | | | |")
                     continue
                 knob = (lambda r: f"{r['substeps']} substeps") if integ in ("FE", "SE") else \
-                    (lambda r: f"{r['iterations']} iterations")
+                    (lambda r: f"{r['iterations']} iteration{'s' if r['iterations'] != '1' else ''}")
                 cheap = min(rs, key=lambda r: num(r, "ms_per_frame"))
                 best = min(rs, key=lambda r: num(r, "position_error_m"))
                 out.append(f"| {scene} | {integ} | {knob(cheap)} | {fmt(num(cheap, 'ms_per_frame'))} | "

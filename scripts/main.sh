@@ -3,7 +3,7 @@
 # tool (Release, into build/, the same build directory as scripts/test.sh), runs every
 # experiment of stabint-study (energy table printed), and draws the charts and the summary.
 # Idempotent; the reference trajectories are cached in results/cache/ so a rerun skips them.
-# About 3-5 minutes on a 2-core machine from a fresh clone, most of it the build.
+# Measured: about 4-5 minutes on a 2-core machine from a fresh clone (build about 2 of them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)

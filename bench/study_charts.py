@@ -112,7 +112,7 @@ def chart_speed_vs_accuracy(results, charts):
                         mew=1.0, alpha=0.7, label="Pareto front")
             if ci == 0 and scene in ref_error:
                 ax.axhline(ref_error[scene], color="gray", lw=0.8, ls=":")
-                ax.text(0.99, ref_error[scene], "reference's own error (h/16 vs h/8)", color="gray", fontsize=7,
+                ax.text(0.99, ref_error[scene], "reference: h/16 vs h/8 difference", color="gray", fontsize=7,
                         ha="right", va="bottom", transform=ax.get_yaxis_transform())
             ax.set_xscale("log")
             ax.set_yscale("log")

@@ -3,7 +3,8 @@
 # tool (Release, into build/, the same build directory as scripts/test.sh), runs every
 # experiment of stabint-study (energy table printed), and draws the charts and the summary.
 # Idempotent; the reference trajectories are cached in results/cache/ so a rerun skips them.
-# Measured: about 4-5 minutes on a 2-core machine from a fresh clone (build about 2 of them).
+# Measured on a 2-core machine from a fresh clone: 2.5-4.5 minutes (build 1-2 of them, depending on
+# what else runs); a rerun about 1.2 minutes (build up to date, references cached).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)

@@ -178,8 +178,8 @@ def chart_stability_map(results, charts):
                ncol=3, fontsize=9, bbox_to_anchor=(0.5, -0.02))
     fig.suptitle(f"Stability over {steps} steps, 10 iterations (cell text: energy lost, % of E_avail; "
                  "exploded: |H - H0| > 10 E_avail or non-finite; over-damped: lost > 50 %)\n"
-                 "stiffness of the springs (chain) or tets (bar); pins keep the builders' stiffness (chain 1e6 N/m, "
-                 "bar 1e7 N/m), which alone puts FE and SE beyond omega h < 2 at every step shown", fontsize=10)
+                 "stiffness k of the springs (chain) or tets (bar); pins scale with it (chain: k, bar: k times "
+                 "the cell size)", fontsize=10)
     fig.tight_layout(rect=(0, 0.03, 1, 0.95))
     save(fig, charts, "stability_map")
 

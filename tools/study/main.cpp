@@ -49,7 +49,8 @@ void usage(std::FILE* to) {
                "  all         all of the above in order\n"
                "options:\n"
                "  --out DIR          output directory (default results)\n"
-               "  --backend NAME     cpu (default) or opencl for the simulations; references are\n"
+               "  --backend NAME     opencl (default; cpu when no OpenCL device exists) or cpu for the\n"
+               "                     simulations; references are\n"
                "                     always computed on the CPU reference backend\n"
                "  --quick            smoke-test sizes (fewer frames and cells); not for reported numbers\n");
 }
@@ -64,6 +65,7 @@ int main(int argc, char** argv) {
   }
   const std::string command = argv[1];
   StudyOptions options;
+  bool backend_given = false;
   try {
     for (int a = 2; a < argc; ++a) {
       const std::string arg = argv[a];
@@ -73,12 +75,24 @@ int main(int argc, char** argv) {
       };
       if (arg == "--out")
         options.out = value();
-      else if (arg == "--backend")
+      else if (arg == "--backend") {
         options.backend = stabint::parseBackend(value());
+        backend_given = true;
+      }
       else if (arg == "--quick")
         options.quick = true;
       else
         throw stabint::InvalidInputError("unknown option " + arg);
+    }
+
+    // The default backend is OpenCL (PoCL when there is no GPU), falling back to the CPU
+    // reference when no OpenCL device exists; an explicit --backend never falls back.
+    if (!backend_given) {
+      options.backend = stabint::BackendKind::OpenCL;
+      if (stabint::listOpenCLDevices().empty()) {
+        progress("no OpenCL device found: running on the CPU reference backend");
+        options.backend = stabint::BackendKind::CpuReference;
+      }
     }
 
     struct Step {

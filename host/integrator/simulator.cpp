@@ -183,30 +183,32 @@ struct Simulator::Impl {
     // H(alpha) = K(alpha) + P(alpha). The kinetic part is an exact quadratic in alpha:
     // K = 1/2 (vv + 2 alpha vd + alpha^2 dd) with d = v_partner - v_IM.
     backend->combine(kScratch, 1.0, kVPartner, -1.0, kVNew);
-    const double vv = backend->massDot(kVNew, kVNew);
-    const double vd = backend->massDot(kVNew, kScratch);
-    const double dd = backend->massDot(kScratch, kScratch);
+    KineticQuadratic kinetic;
+    kinetic.vv = backend->massDot(kVNew, kVNew);
+    kinetic.vd = backend->massDot(kVNew, kScratch);
+    kinetic.dd = backend->massDot(kScratch, kScratch);
     struct Evaluation {
       double alpha;
-      double g;
+      double g;  // H(alpha) - H*
       PotentialEnergy potential;
     };
     std::vector<Evaluation> evaluations;
-    auto g = [&](double alpha) {
+    auto potentialAt = [&](double alpha) {
       backend->combine(kXTrial, 1.0 - alpha, kXNew, alpha, kXPartner);
       const PotentialEnergy p = backend->potential(kXTrial, t1);
       ++report.energy_evaluations;
-      const double value = 0.5 * (vv + 2.0 * alpha * vd + alpha * alpha * dd) + p.total() - target_now;
-      evaluations.push_back({alpha, value, p});
-      return value;
+      evaluations.push_back({alpha, kinetic.at(alpha) + p.total() - target_now, p});
+      return p.total();
     };
 
-    const double g_max = g(alpha_max);
+    const double p_max = potentialAt(alpha_max);
+    const double g_max = evaluations.front().g;
     const bool partner_cannot_reach_target =
         report.branch == BlendBranch::BackwardEuler ? g_max >= 0.0 : g_max <= 0.0;
     // Otherwise H - H* changes sign on [0, alpha_max]: bracket the root.
     if (!partner_cannot_reach_target && std::abs(g_max) > tau)
-      illinoisRoot(g, 0.0, h_im - target_now, alpha_max, g_max, tau, options.max_root_evaluations);
+      findBlendWeight(kinetic, potentialAt, target_now, 0.0, p_im.total(), alpha_max, p_max, tau,
+                      options.max_root_evaluations);
     Evaluation accepted = evaluations.front();  // alpha_max, taken whole when the target is out of reach
     if (!partner_cannot_reach_target)
       for (const Evaluation& e : evaluations)

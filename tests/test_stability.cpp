@@ -84,7 +84,7 @@ TEST(StiffChain, BackwardEulerLosesMostOfTheSwingEnergy) {
 // The blend stays bounded near its target. Transient deviations come from the capped FE partner
 // (which by design cannot restore a large deficit in one step) and from the unconverged BE
 // partner; they are corrected within a few frames. Thresholds: every frame within 30 % of the
-// swing energy (measured max: 19 %), RMS over the run within 6 % (measured: 2.8 %), and the
+// swing energy (measured max: 22 %), RMS over the run within 6 % (measured: 2.9 %), and the
 // final state within 10 % (measured: 0.1 %). IM alone exceeds these by five orders of magnitude.
 TEST(StiffChain, BlendStaysBoundedCloseToItsTarget) {
   const ChainRun run = runChain(Integrator::EnergyBlend);

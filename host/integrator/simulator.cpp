@@ -153,7 +153,8 @@ struct Simulator::Impl {
     target_now += forcingWork(kXPartner, report);
     const PotentialEnergy p_im = backend->potential(kXNew, t1);
     ++report.energy_evaluations;
-    const double h_im = 0.5 * backend->massDot(kVNew, kVNew) + p_im.total();
+    const double vv_im = backend->massDot(kVNew, kVNew);
+    const double h_im = 0.5 * vv_im + p_im.total();
     const double tau = options.energy_tolerance * (kinetic + potential.elastic() + energy_scale);
 
     report.branch = BlendBranch::ImplicitMidpoint;
@@ -183,10 +184,7 @@ struct Simulator::Impl {
     // H(alpha) = K(alpha) + P(alpha). The kinetic part is an exact quadratic in alpha:
     // K = 1/2 (vv + 2 alpha vd + alpha^2 dd) with d = v_partner - v_IM.
     backend->combine(kScratch, 1.0, kVPartner, -1.0, kVNew);
-    KineticQuadratic kinetic;
-    kinetic.vv = backend->massDot(kVNew, kVNew);
-    kinetic.vd = backend->massDot(kVNew, kScratch);
-    kinetic.dd = backend->massDot(kScratch, kScratch);
+    const KineticQuadratic k_alpha{vv_im, backend->massDot(kVNew, kScratch), backend->massDot(kScratch, kScratch)};
     struct Evaluation {
       double alpha;
       double g;  // H(alpha) - H*
@@ -197,7 +195,7 @@ struct Simulator::Impl {
       backend->combine(kXTrial, 1.0 - alpha, kXNew, alpha, kXPartner);
       const PotentialEnergy p = backend->potential(kXTrial, t1);
       ++report.energy_evaluations;
-      evaluations.push_back({alpha, kinetic.at(alpha) + p.total() - target_now, p});
+      evaluations.push_back({alpha, k_alpha.at(alpha) + p.total() - target_now, p});
       return p.total();
     };
 
@@ -207,7 +205,7 @@ struct Simulator::Impl {
         report.branch == BlendBranch::BackwardEuler ? g_max >= 0.0 : g_max <= 0.0;
     // Otherwise H - H* changes sign on [0, alpha_max]: bracket the root.
     if (!partner_cannot_reach_target && std::abs(g_max) > tau)
-      findBlendWeight(kinetic, potentialAt, target_now, 0.0, p_im.total(), alpha_max, p_max, tau,
+      findBlendWeight(k_alpha, potentialAt, target_now, 0.0, p_im.total(), alpha_max, p_max, tau,
                       options.max_root_evaluations);
     Evaluation accepted = evaluations.front();  // alpha_max, taken whole when the target is out of reach
     if (!partner_cannot_reach_target)

@@ -23,9 +23,18 @@ build/tools/study/stabint-study all --out results
 echo "== charts"
 /usr/bin/python3 bench/study_charts.py results
 
+# Chart 4 (scaling): the benchmark suite's cloth scaling family, 10x10 to 224x224 particles, on
+# the CPU reference and OpenCL backends (about a minute). scripts/bench.sh runs the whole suite.
+echo "== scaling benchmark: build/bench/stabint_bench --benchmark_filter='^scaling_'"
+cmake --build build --target stabint_bench -j"$(nproc)"
+build/bench/stabint_bench --benchmark_filter='^scaling_' \
+  --benchmark_out=results/bench_scaling.json --benchmark_out_format=json
+/usr/bin/python3 bench/scaling_chart.py results/bench_scaling.json --charts results/charts \
+  --summary results/bench_scaling_summary.md
+
 echo
 echo "main.sh: done in $(elapsed)."
 echo "  energy table:   results/energy_table.csv (printed above)"
 echo "  summary:        results/summary.md"
-echo "  charts:         results/charts/{speed_vs_accuracy,stability_map,energy_over_time,cloth_still}.png (and .svg)"
+echo "  charts:         results/charts/{speed_vs_accuracy,stability_map,energy_over_time,cloth_still,scaling}.png (and .svg)"
 echo "  all CSV files:  results/*.csv; cached reference trajectories: results/cache/"

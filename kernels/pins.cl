@@ -28,14 +28,10 @@ __kernel void pin_contributions(__global const real* x, const int n, const int c
   }
 }
 
-__kernel void pin_energies(__global const real* x, const int n, const int count,
-                           __global const int* vertex, __global const real* stiffness,
-                           __global const real* targets, __global real* energies,
-                           const int offset) {
-  const int p = get_global_id(0);
-  if (p < count) {
-    const int j = vertex[p];
-    energies[offset + p] = pinEnergy(x[j] - targets[p], x[n + j] - targets[count + p],
-                                     x[2 * n + j] - targets[2 * count + p], stiffness[p]);
-  }
+/// Energy of pin p (of `count`) at the positions x (summed by potential_partials in energy.cl).
+inline real pinEnergyAt(__global const real* x, int n, int count, __global const int* vertex,
+                        __global const real* stiffness, __global const real* targets, int p) {
+  const int j = vertex[p];
+  return pinEnergy(x[j] - targets[p], x[n + j] - targets[count + p],
+                   x[2 * n + j] - targets[2 * count + p], stiffness[p]);
 }

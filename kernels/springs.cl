@@ -48,13 +48,10 @@ __kernel void spring_contributions(__global const real* x, const int n, const in
   }
 }
 
-__kernel void spring_energies(__global const real* x, const int n, const int count,
-                              __global const int* ends, __global const real* params,
-                              __global real* energies, const int offset) {
-  const int s = get_global_id(0);
-  if (s < count) {
-    const int a = ends[2 * s], b = ends[2 * s + 1];
-    const real dx = x[a] - x[b], dy = x[n + a] - x[n + b], dz = x[2 * n + a] - x[2 * n + b];
-    energies[offset + s] = springEnergy(dx, dy, dz, params[5 * s], params[5 * s + 1]);
-  }
+/// Energy of spring s at the positions x (summed by potential_partials in energy.cl).
+inline real springEnergyAt(__global const real* x, int n, __global const int* ends,
+                           __global const real* params, int s) {
+  const int a = ends[2 * s], b = ends[2 * s + 1];
+  const real dx = x[a] - x[b], dy = x[n + a] - x[n + b], dz = x[2 * n + a] - x[2 * n + b];
+  return springEnergy(dx, dy, dz, params[5 * s], params[5 * s + 1]);
 }

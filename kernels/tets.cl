@@ -152,14 +152,12 @@ __kernel void tet_contributions(__global const real* x, const int n, const int c
   vstore3((real3)(dot(p0, g3), dot(p1, g3), dot(p2, g3)), base + 4 * t + 3, contrib);
 }
 
-__kernel void tet_energies(__global const real* x, const int n, const int count,
-                           __global const int4* vertices, __global const real* rest,
-                           __global real* energies, const int offset) {
-  const int t = get_global_id(0);
-  if (t >= count) return;
+/// Energy of tet t at the positions x (summed by potential_partials in energy.cl).
+inline real tetEnergyAt(__global const real* x, int n, __global const int4* vertices,
+                        __global const real* rest, int t) {
   __global const real* dm_inv = rest + 10 * t;
   real F[9], R[9];
   deformationGradient(x, n, vertices[t], dm_inv, F);
   nearestRotation(F, R);
-  energies[offset + t] = tetEnergy(F, R, dm_inv[9]);
+  return tetEnergy(F, R, dm_inv[9]);
 }

@@ -23,8 +23,8 @@ double secondsSince(Clock::time_point start) {
 }
 
 // Kernel files in the order they are concatenated into one program (real.cl defines `real`).
-const char* const kProgramFiles[] = {"real.cl",   "springs.cl",    "tets.cl", "pins.cl",
-                                     "gather.cl", "vector_ops.cl", "reduce.cl"};
+const char* const kProgramFiles[] = {"real.cl",       "springs.cl", "tets.cl",  "pins.cl",
+                                     "gather.cl",     "vector_ops.cl", "reduce.cl", "energy.cl"};
 
 std::string programSource() {
   std::string source;
@@ -94,11 +94,6 @@ class OpenCLBackend final : public Backend {
     uploadTets();
     uploadPins();
 
-    // Energy terms: [springs | tets | pins | vertices]; massDot reuses the vertex segment.
-    const int terms = num_springs_ + num_tets_ + num_pins_ + n_;
-    terms_ = zeroBuffer(std::size_t(std::max(terms, 1)));
-    vertex_terms_begin_ = num_springs_ + num_tets_ + num_pins_;
-
     buildKernels(csr);
 
     // Forcing of a time-independent scene is uploaded once here.
@@ -150,8 +145,8 @@ class OpenCLBackend final : public Backend {
     mass_dot_.bindSlot(2, a, slots_);
     mass_dot_.bindSlot(3, b, slots_);
     enqueue(mass_dot_);
-    enqueue(reduce_one_);
-    const double sum = readPartials(1)[0];
+    readPartials(mass_dot_groups_);
+    const double sum = sumPartials(0, mass_dot_groups_);
     times_.energy += secondsSince(start);
     return sum;
   }
@@ -160,27 +155,15 @@ class OpenCLBackend final : public Backend {
     checkSlot(x);
     uploadForcing(t, false);
     const auto start = Clock::now();
-    if (num_springs_ > 0) {
-      spring_energy_.bindSlot(0, x, slots_);
-      enqueue(spring_energy_);
-    }
-    if (num_tets_ > 0) {
-      tet_energy_.bindSlot(0, x, slots_);
-      enqueue(tet_energy_);
-    }
-    if (num_pins_ > 0) {
-      pin_energy_.bindSlot(0, x, slots_);
-      enqueue(pin_energy_);
-    }
-    external_energy_.bindSlot(1, x, slots_);
-    enqueue(external_energy_);
-    enqueue(reduce_three_);
-    const std::array<double, 3> sums = readPartials(3);
-    times_.energy += secondsSince(start);
+    potential_.bindSlot(0, x, slots_);
+    enqueue(potential_);
+    const std::array<int, 5>& g = energy_segments_;
+    readPartials(g[4]);
     PotentialEnergy e;
-    e.strain = sums[0];
-    e.pins = sums[1];
-    e.external = sums[2];
+    e.strain = sumPartials(g[0], g[1]) + sumPartials(g[1], g[2]);  // springs + tets
+    e.pins = sumPartials(g[2], g[3]);
+    e.external = sumPartials(g[3], g[4]);
+    times_.energy += secondsSince(start);
     return e;
   }
 
@@ -231,7 +214,8 @@ class OpenCLBackend final : public Backend {
   static constexpr bool kDouble = std::is_same<Real, double>::value;
   static constexpr int kElementLocalSize = 256;  // larger groups amortise PoCL's per-group cost
   static constexpr int kReduceLocalSize = 128;
-  static constexpr int kMaxReduceGroups = 64;
+  static constexpr int kMaxReduceGroups = 64;  // per segment
+  static constexpr int kMinTermsPerWorkItem = 4;
 
   static std::size_t bytes(std::size_t count) { return count * sizeof(Real); }
 
@@ -362,15 +346,26 @@ class OpenCLBackend final : public Backend {
     }
   }
 
-  // Per-group partials of `segments` segments, added on the host in group order.
-  std::array<double, 3> readPartials(int segments) {
-    const std::size_t count = std::size_t(segments) * reduce_groups_;
-    ocl::check(queue_.enqueueReadBuffer(partials_, CL_TRUE, 0, bytes(count), host_partials_.data()),
+  // The first `count` per-group partials to the host: the only wait of an energy pass.
+  void readPartials(int count) {
+    ocl::check(queue_.enqueueReadBuffer(partials_, CL_TRUE, 0, bytes(std::size_t(count)),
+                                        host_partials_.data()),
                "clEnqueueReadBuffer");
-    std::array<double, 3> sums{0.0, 0.0, 0.0};
-    for (int s = 0; s < segments; ++s)
-      for (int g = 0; g < reduce_groups_; ++g) sums[s] += double(host_partials_[s * reduce_groups_ + g]);
-    return sums;
+  }
+
+  // Partials [first, last) added in group order (a fixed order: deterministic).
+  double sumPartials(int first, int last) const {
+    double sum = 0.0;
+    for (int g = first; g < last; ++g) sum += double(host_partials_[g]);
+    return sum;
+  }
+
+  // Groups of a reduction segment of `count` terms: fixed by the scene size, so every call adds
+  // the same terms in the same order; none for an empty element segment.
+  static int reductionGroups(int count, std::size_t local) {
+    if (count <= 0) return 0;
+    const int per_group = kMinTermsPerWorkItem * int(local);
+    return std::clamp((count + per_group - 1) / per_group, 1, kMaxReduceGroups);
   }
 
   void enqueue(const Launch& launch, cl::Event* event = nullptr) {
@@ -451,28 +446,6 @@ class OpenCLBackend final : public Backend {
       p.set(8, contrib_);
     }
 
-    // Energy terms go to one buffer at their segment offsets: springs, tets, pins, vertices.
-    spring_energy_ = elementLaunch("spring_energies", num_springs_);
-    spring_energy_.set(1, n), spring_energy_.set(2, cl_int(num_springs_));
-    spring_energy_.set(3, spring_ends_), spring_energy_.set(4, spring_params_);
-    spring_energy_.set(5, terms_), spring_energy_.set(6, cl_int(0));
-    tet_energy_ = elementLaunch("tet_energies", num_tets_);
-    tet_energy_.set(1, n), tet_energy_.set(2, cl_int(num_tets_));
-    tet_energy_.set(3, tet_vertices_), tet_energy_.set(4, tet_rest_);
-    tet_energy_.set(5, terms_), tet_energy_.set(6, cl_int(num_springs_));
-    pin_energy_ = elementLaunch("pin_energies", num_pins_);
-    pin_energy_.set(1, n), pin_energy_.set(2, cl_int(num_pins_));
-    pin_energy_.set(3, pin_vertex_), pin_energy_.set(4, pin_stiffness_);
-    pin_energy_.set(5, pin_targets_), pin_energy_.set(6, terms_);
-    pin_energy_.set(7, cl_int(num_springs_ + num_tets_));
-    external_energy_ = elementLaunch("external_energies", n_);
-    external_energy_.set(0, n), external_energy_.set(2, fext_);
-    external_energy_.set(3, terms_), external_energy_.set(4, cl_int(vertex_terms_begin_));
-
-    mass_dot_ = elementLaunch("mass_dot_terms", n_);
-    mass_dot_.set(0, n), mass_dot_.set(1, masses_);
-    mass_dot_.set(4, terms_), mass_dot_.set(5, cl_int(vertex_terms_begin_));
-
     combine_ = elementLaunch("combine", 3 * n_);
     combine_.set(0, cl_int(3 * n_));
 
@@ -484,36 +457,51 @@ class OpenCLBackend final : public Backend {
     gather_accel_.set(0, n), gather_accel_.set(1, offsets_), gather_accel_.set(2, list_);
     gather_accel_.set(3, contrib_), gather_accel_.set(4, masses_), gather_accel_.set(5, fext_);
 
-    // Reductions: a fixed number of groups per segment, from the scene size only, so every call
-    // adds the same terms in the same order.
-    const int largest = std::max({num_springs_ + num_tets_, num_pins_, n_, 1});
-    reduce_three_.kernel = makeKernel("reduce_segments");
-    reduce_one_.kernel = makeKernel("reduce_segments");
-    const std::size_t local = localSize(reduce_three_.kernel, kReduceLocalSize);
-    reduce_groups_ = std::clamp<int>((largest + 4 * int(local) - 1) / (4 * int(local)), 1,
-                                     kMaxReduceGroups);
-    partials_ = zeroBuffer(3 * std::size_t(reduce_groups_));
-    host_partials_.resize(3 * std::size_t(reduce_groups_));
-    for (Launch* r : {&reduce_three_, &reduce_one_}) {
-      r->global = cl::NDRange(local * reduce_groups_, r == &reduce_three_ ? 3 : 1);
-      r->local = cl::NDRange(local, 1);
-      r->set(0, terms_);
-      r->set(7, partials_);
-      r->set(8, cl::Local(bytes(local)));
-    }
-    const cl_int strain_count = num_springs_ + num_tets_;
-    reduce_three_.set(1, cl_int(0)), reduce_three_.set(2, strain_count);
-    reduce_three_.set(3, strain_count), reduce_three_.set(4, cl_int(num_pins_));
-    reduce_three_.set(5, cl_int(vertex_terms_begin_)), reduce_three_.set(6, n);
-    reduce_one_.set(1, cl_int(vertex_terms_begin_)), reduce_one_.set(2, n);
-    for (int i = 3; i <= 6; ++i) reduce_one_.set(i, cl_int(0));
+    // Energy passes: element terms reduced per work-group inside the kernel (energy.cl). Segment
+    // group ranges of potential_partials: [springs | tets | pins | vertices].
+    potential_.kernel = makeKernel("potential_partials");
+    mass_dot_.kernel = makeKernel("mass_dot_partials");
+    const std::size_t local = std::min(localSize(potential_.kernel, kReduceLocalSize),
+                                       localSize(mass_dot_.kernel, kReduceLocalSize));
+    const int counts[4] = {num_springs_, num_tets_, num_pins_, n_};
+    energy_segments_[0] = 0;
+    for (int s = 0; s < 4; ++s)
+      energy_segments_[s + 1] = energy_segments_[s] + reductionGroups(counts[s], local);
+    energy_segments_[4] = std::max(energy_segments_[4], energy_segments_[3] + 1);  // n_ == 0
+    mass_dot_groups_ = std::max(reductionGroups(n_, local), 1);
+    const int max_partials = std::max(energy_segments_[4], mass_dot_groups_);
+    partials_ = zeroBuffer(std::size_t(max_partials));
+    host_partials_.resize(std::size_t(max_partials));
+
+    potential_.global = cl::NDRange(local * std::size_t(energy_segments_[4]));
+    potential_.local = cl::NDRange(local);
+    potential_.set(1, n);
+    potential_.set(2, cl_int(num_springs_)), potential_.set(3, spring_ends_);
+    potential_.set(4, spring_params_);
+    potential_.set(5, cl_int(num_tets_)), potential_.set(6, tet_vertices_);
+    potential_.set(7, tet_rest_);
+    potential_.set(8, cl_int(num_pins_)), potential_.set(9, pin_vertex_);
+    potential_.set(10, pin_stiffness_), potential_.set(11, pin_targets_);
+    potential_.set(12, fext_);
+    const cl_int4 seg_begin = {{energy_segments_[1], energy_segments_[2], energy_segments_[3], 0}};
+    potential_.set(13, seg_begin);
+    potential_.set(14, partials_);
+    potential_.set(15, cl::Local(bytes(local)));
+
+    mass_dot_.global = cl::NDRange(local * std::size_t(mass_dot_groups_));
+    mass_dot_.local = cl::NDRange(local);
+    mass_dot_.set(0, n), mass_dot_.set(1, masses_);
+    mass_dot_.set(4, partials_);
+    mass_dot_.set(5, cl::Local(bytes(local)));
   }
 
   const SceneData& scene_;
   const int n_;
   int num_springs_ = 0, num_tets_ = 0, num_pins_ = 0;
-  int vertex_terms_begin_ = 0;
-  int reduce_groups_ = 1;
+  // First group of each potential_partials segment (springs, tets, pins, vertices), then the
+  // launch's group count.
+  std::array<int, 5> energy_segments_{};
+  int mass_dot_groups_ = 1;
 
   ocl::SelectedDevice device_;
   cl::Context context_;
@@ -524,12 +512,12 @@ class OpenCLBackend final : public Backend {
   cl::Buffer masses_, fext_, rhs_, contrib_, offsets_, list_;
   cl::Buffer spring_ends_, spring_params_, tet_vertices_, tet_rest_;
   cl::Buffer pin_vertex_, pin_stiffness_, pin_targets_;
-  cl::Buffer terms_, partials_;
+  cl::Buffer partials_;
 
   Launch spring_project_, spring_force_, tet_project_, tet_force_, pin_project_, pin_force_;
-  Launch spring_energy_, tet_energy_, pin_energy_, external_energy_;
+  Launch potential_;
   cl::Event local_events_[3], gather_event_;
-  Launch mass_dot_, combine_, gather_rhs_, gather_accel_, reduce_three_, reduce_one_;
+  Launch mass_dot_, combine_, gather_rhs_, gather_accel_;
 
   double fext_time_ = std::numeric_limits<double>::quiet_NaN();
   double pins_time_ = std::numeric_limits<double>::quiet_NaN();

@@ -101,13 +101,16 @@ class OpenCLBackend final : public Backend {
     ocl::check(queue_.finish(), "clFinish");
   }
 
+  // Pending non-blocking writes read the staging buffers destroyed with us.
+  ~OpenCLBackend() override { queue_.finish(); }
+
   void write(int slot, const Eigen::MatrixX3d& host) override {
     checkSlot(slot);
     if (host.rows() != n_) throw InvalidInputError("OpenCL backend: write of a matrix with " +
                                                    std::to_string(host.rows()) + " rows, expected " +
                                                    std::to_string(n_));
     const auto start = Clock::now();
-    writeMatrix(slots_[slot], host);
+    writeMatrixAsync(slots_[slot], host);
     times_.transfer += secondsSince(start);
   }
 
@@ -306,28 +309,31 @@ class OpenCLBackend final : public Backend {
     const auto start = Clock::now();
     if (fields) {
       scene_.externalForces(t, host_fext_);
-      writeMatrix(fext_, host_fext_);
+      writeMatrixAsync(fext_, host_fext_);
       fext_time_ = t;
     }
     if (pins) {
       scene_.pinTargets(t, host_targets_);
-      writeMatrix(pin_targets_, host_targets_);
+      writeMatrixAsync(pin_targets_, host_targets_);
       pins_time_ = t;
     }
     times_.transfer += secondsSince(start);
   }
 
-  // Blocking: the caller may change `host` as soon as we return.
-  void writeMatrix(const cl::Buffer& buffer, const Eigen::MatrixX3d& host) {
+  // Non-blocking: `host` is copied to a staging buffer of a small ring first, so the caller may
+  // change or free it as soon as we return; the next blocking call of the in-order queue (every
+  // read and energy pass ends with one) waits for the transfer, which saves a synchronisation
+  // per local/global iteration (solve, write x, then the next local step or energy pass). A
+  // staging buffer is refilled only after its previous transfer has completed.
+  void writeMatrixAsync(const cl::Buffer& buffer, const Eigen::MatrixX3d& host) {
     const std::size_t count = std::size_t(host.size());
     if (count == 0) return;
-    const void* src = host.data();
-    if (!kDouble) {
-      staging_.resize(count);
-      std::copy(host.data(), host.data() + count, staging_.begin());
-      src = staging_.data();
-    }
-    ocl::check(queue_.enqueueWriteBuffer(buffer, CL_TRUE, 0, bytes(count), src),
+    PendingWrite& w = pending_writes_[next_write_];
+    next_write_ = (next_write_ + 1) % pending_writes_.size();
+    if (w.done()) ocl::check(w.done.wait(), "clWaitForEvents");
+    w.data.assign(host.data(), host.data() + count);
+    ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, 0, bytes(count), w.data.data(), nullptr,
+                                         &w.done),
                "clEnqueueWriteBuffer");
   }
 
@@ -523,6 +529,12 @@ class OpenCLBackend final : public Backend {
   double pins_time_ = std::numeric_limits<double>::quiet_NaN();
   Eigen::MatrixX3d host_fext_, host_targets_;
   std::vector<Real> staging_;
+  struct PendingWrite {
+    std::vector<Real> data;
+    cl::Event done;
+  };
+  std::array<PendingWrite, 4> pending_writes_;  // a step writes at most x, v, f_ext, pin targets between waits
+  std::size_t next_write_ = 0;
   std::vector<Real> host_partials_;
 };
 

@@ -3,8 +3,8 @@
 # tool (Release, into build/, the same build directory as scripts/test.sh), runs every
 # experiment of stabint-study (energy table printed), and draws the charts and the summary.
 # Idempotent; the reference trajectories are cached in results/cache/ so a rerun skips them.
-# Measured on a 2-core machine from a fresh clone: 2.5-4.5 minutes (build 1-2 of them, depending on
-# what else runs); a rerun about 1.2 minutes (build up to date, references cached).
+# Measured on a 2-core machine from a fresh clone: about 4 minutes (build about 1.5 of them, the
+# scaling benchmark about 1); a rerun skips the build and the cached reference trajectories.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)

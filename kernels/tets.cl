@@ -43,6 +43,16 @@ inline void swapColumns(real* M, int a, int b) {
   }
 }
 
+/// M = a p^T + b q^T + c r^T (row-major 3x3): both U V^T and Ds Dm^-1 have this form.
+inline void sumOfOuterProducts(real3 a, real3 p, real3 b, real3 q, real3 c, real3 r, real* M) {
+  const real3 m0 = a.x * p + b.x * q + c.x * r;
+  const real3 m1 = a.y * p + b.y * q + c.y * r;
+  const real3 m2 = a.z * p + b.z * q + c.z * r;
+  M[0] = m0.x; M[1] = m0.y; M[2] = m0.z;
+  M[3] = m1.x; M[4] = m1.y; M[5] = m1.z;
+  M[6] = m2.x; M[7] = m2.y; M[8] = m2.z;
+}
+
 /// A unit vector orthogonal to the unit vector u (crossed with the axis u is least aligned to).
 inline real3 anyOrthogonal(real3 u) {
   const real3 a = fabs(u.x) <= fabs(u.y) && fabs(u.x) <= fabs(u.z) ? (real3)(1, 0, 0)
@@ -95,13 +105,8 @@ inline void nearestRotation(const real* F, real* R) {
   const real n2 = norm3(w);
   const real3 u2 = n2 > REAL_EPSILON * n1 ? w / n2 : anyOrthogonal(u1);
   const real3 u3 = cross(u1, u2);
-  // R = U V^T = u1 v1^T + u2 v2^T + u3 v3^T, row by row.
-  const real3 r0 = u1.x * v1 + u2.x * v2 + u3.x * v3;
-  const real3 r1 = u1.y * v1 + u2.y * v2 + u3.y * v3;
-  const real3 r2 = u1.z * v1 + u2.z * v2 + u3.z * v3;
-  R[0] = r0.x; R[1] = r0.y; R[2] = r0.z;
-  R[3] = r1.x; R[4] = r1.y; R[5] = r1.z;
-  R[6] = r2.x; R[7] = r2.y; R[8] = r2.z;
+  // R = U V^T = u1 v1^T + u2 v2^T + u3 v3^T.
+  sumOfOuterProducts(u1, v1, u2, v2, u3, v3, R);
 }
 
 /// F = Ds Dm^-1 for the tet `v`; `dm_inv` is row-major.
@@ -111,13 +116,8 @@ inline void deformationGradient(__global const real* x, int n, int4 v,
   const real3 e1 = loadRow(x, n, v.y) - x0, e2 = loadRow(x, n, v.z) - x0,
               e3 = loadRow(x, n, v.w) - x0;
   const real3 d0 = vload3(0, dm_inv), d1 = vload3(1, dm_inv), d2 = vload3(2, dm_inv);
-  // Row i of F = (e1_i, e2_i, e3_i) Dm^-1 = e1_i d0 + e2_i d1 + e3_i d2.
-  const real3 r0 = e1.x * d0 + e2.x * d1 + e3.x * d2;
-  const real3 r1 = e1.y * d0 + e2.y * d1 + e3.y * d2;
-  const real3 r2 = e1.z * d0 + e2.z * d1 + e3.z * d2;
-  F[0] = r0.x; F[1] = r0.y; F[2] = r0.z;
-  F[3] = r1.x; F[4] = r1.y; F[5] = r1.z;
-  F[6] = r2.x; F[7] = r2.y; F[8] = r2.z;
+  // F = Ds Dm^-1 = e1 d0^T + e2 d1^T + e3 d2^T (d_k: rows of Dm^-1).
+  sumOfOuterProducts(e1, d0, e2, d1, e3, d2, F);
 }
 
 /// E = w/2 ||F - R||_F^2

@@ -83,7 +83,7 @@ void runSteps(benchmark::State& state, const std::string& key, const std::functi
     alpha += r->alpha;
     branch_im += r->branch == BlendBranch::ImplicitMidpoint;
     branch_be += r->branch == BlendBranch::BackwardEuler;
-    branch_fe += r->branch == BlendBranch::ForwardEuler;
+    branch_fe += r->branch == BlendBranch::VelocityScale;
     if (exploded(*r)) {
       state.PauseTiming();
       f.rebuild();
@@ -158,7 +158,7 @@ void runPair(benchmark::State& state, const std::string& key, const std::functio
       blend_energy_evaluations += r.energy_evaluations;
       branch_im += r.branch == BlendBranch::ImplicitMidpoint;
       branch_be += r.branch == BlendBranch::BackwardEuler;
-      branch_fe += r.branch == BlendBranch::ForwardEuler;
+      branch_fe += r.branch == BlendBranch::VelocityScale;
     }
   } catch (const NonFiniteStateError& e) {
     state.SkipWithError(e.what());

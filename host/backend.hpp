@@ -42,7 +42,10 @@ class Backend {
   /// Local step at positions `x` followed by the gather of the global right-hand side
   ///   rhs = c M y + sum_e w_e A_e^T p_e(x) + (m g + f(t)),
   /// returned on the host as `n by 3` (the only per-iteration transfer to the host).
-  virtual void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs) = 0;
+  /// When `energy_at_x` is given it receives the potential E_int + U_ext at `x` (time t): the
+  /// accelerated solver needs the objective at every iterate, and the projections are at hand.
+  virtual void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
+                            PotentialEnergy* energy_at_x = nullptr) = 0;
 
   /// Phase timers (local, gather, transfer, energy) accumulated since the last reset.
   PhaseTimes& times() { return times_; }

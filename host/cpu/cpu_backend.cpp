@@ -74,7 +74,9 @@ class CpuBackend final : public Backend {
     times_.local += secondsSince(start);
   }
 
-  void localStepRhs(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& rhs) override {
+  void localStepRhs(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& rhs,
+                    PotentialEnergy* energy_at_x) override {
+    if (energy_at_x) *energy_at_x = potential(x_slot, t);
     const auto start = Clock::now();
     rhs = (c * slots_[y_slot]).array().colwise() * scene_.masses().array();
     rhs += externalForces(t);

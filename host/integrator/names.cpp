@@ -50,9 +50,19 @@ const char* blendBranchName(BlendBranch branch) {
     case BlendBranch::None: return "-";
     case BlendBranch::ImplicitMidpoint: return "IM";
     case BlendBranch::BackwardEuler: return "BE";
-    case BlendBranch::ForwardEuler: return "FE";
+    case BlendBranch::VelocityScale: return "scale";
   }
   return "?";
+}
+
+const char* accelerationName(Acceleration acceleration) {
+  return acceleration == Acceleration::Chebyshev ? "chebyshev" : "none";
+}
+
+Acceleration parseAcceleration(const std::string& name) {
+  for (Acceleration a : {Acceleration::None, Acceleration::Chebyshev})
+    if (lower(name) == accelerationName(a)) return a;
+  throw InvalidInputError("unknown acceleration '" + name + "' (expected none or chebyshev)");
 }
 
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {

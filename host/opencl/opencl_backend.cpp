@@ -189,9 +189,11 @@ class OpenCLBackend final : public Backend {
     times_.local += std::max(0.0, wall - gather);
   }
 
-  void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs) override {
+  void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
+                    PotentialEnergy* energy_at_x) override {
     checkSlot(x);
     checkSlot(y);
+    if (energy_at_x) *energy_at_x = potential(x, t);
     uploadForcing(t, false);
     const auto start = Clock::now();
     const int launched = enqueueContributions(x, kModeProjection);

@@ -29,6 +29,16 @@ BackendKind parseBackend(const std::string& name);
 
 enum class Precision { Double, Float };
 
+/// Acceleration of the local/global iterations. Every variant keeps the objective monotone: an
+/// accelerated iterate that would raise it is replaced by the plain one.
+enum class Acceleration {
+  None,       // plain local/global iterations
+  Chebyshev,  // Chebyshev semi-iteration (Wang 2015), safeguarded
+};
+const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev"
+/// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
+Acceleration parseAcceleration(const std::string& name);
+
 /// Which OpenCL device to use. Empty strings fall back to the environment variables
 /// STABINT_OPENCL_PLATFORM and STABINT_OPENCL_DEVICE, then to the first platform and device.
 /// Each selector is either an index ("0") or a case-insensitive substring of the name.
@@ -60,11 +70,17 @@ struct SimulatorOptions {
   int iterations = 10;
   double tolerance = 0.0;
   int max_iterations = 1000;
+  /// Acceleration of every local/global solve, and the spectral-radius estimate of the plain
+  /// iteration that the Chebyshev recurrence uses (in (0, 1)).
+  Acceleration acceleration = Acceleration::None;
+  double chebyshev_rho = 0.98;
 
-  /// Energy-tracking blend (method.md section 3).
-  int be_iterations = 3;             // budget of the BE partner solve, warm-started at x_IM
+  /// Energy-tracking blend (docs/method.md, "The blend").
+  int be_iterations = 3;             // budget of the BE partner solve, warm-started at x_n
   double energy_tolerance = 1e-3;    // tau = energy_tolerance * (K + E_int + E_scale)
-  double alpha_fe_max = 0.01;        // cap on the forward-Euler blend weight
+  /// Largest factor by which one step may scale the velocities up to restore missing energy:
+  /// energy comes back over a few steps, never as a kinetic jump of a nearly resting body.
+  double max_velocity_scale = 2.0;
   int max_root_evaluations = 12;     // energy evaluations of the root find
 
   BackendKind backend = BackendKind::CpuReference;
@@ -94,9 +110,11 @@ struct PhaseTimes {
   PhaseTimes& operator+=(const PhaseTimes& o);
 };
 
-/// Which state the blend accepted (None for the other integrators).
-enum class BlendBranch { None, ImplicitMidpoint, BackwardEuler, ForwardEuler };
-const char* blendBranchName(BlendBranch branch);  // "-", "IM", "BE", "FE"
+/// What the blend did with the implicit-midpoint candidate (None for the other integrators):
+/// accepted it, blended it with a backward-Euler partner (too much energy), or scaled its
+/// velocities (too little energy).
+enum class BlendBranch { None, ImplicitMidpoint, BackwardEuler, VelocityScale };
+const char* blendBranchName(BlendBranch branch);  // "-", "IM", "BE", "scale"
 
 struct StepReport {
   int step = 0;           // index of this step (0 = first)
@@ -106,7 +124,8 @@ struct StepReport {
   double forcing = 0.0;   // energy added to H* by time-dependent potentials this step
   double damping = 0.0;   // kinetic energy removed by damping this step (>= 0)
   BlendBranch branch = BlendBranch::None;
-  double alpha = 0.0;     // blend weight of the BE/FE partner (0 = pure IM)
+  double alpha = 0.0;     // blend weight of the BE partner (0 = pure IM)
+  double velocity_scale = 1.0;  // factor the blend applied to the velocities (1 = none)
   int iterations = 0;     // local/global iterations of all solves in this step
   int energy_evaluations = 0;  // element energy passes (root find included)
   PhaseTimes times;

@@ -61,7 +61,7 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
         switch (r.branch) {
           case BlendBranch::ImplicitMidpoint: ++run.branch_im; break;
           case BlendBranch::BackwardEuler: ++run.branch_be; break;
-          case BlendBranch::ForwardEuler: ++run.branch_fe; break;
+          case BlendBranch::VelocityScale: ++run.branch_fe; break;
           case BlendBranch::None: break;
         }
       }

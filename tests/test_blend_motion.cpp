@@ -57,8 +57,9 @@ TEST(RigidMotion, SetMomentaHitsTheRequestedMomentaAndTheRestCarriesNone) {
 
 // A free tet bar (no pins, no gravity) spinning at 6 rad/s: IM keeps its angular momentum, BE
 // loses most of it over 10 s; the blend must keep it within 1 % (the first version lost 27 %
-// about a principal axis and 49 % about a general axis with a 20 % initial stretch). Measured
-// with the default options: 0.02 % and 0.16 %.
+// about a principal axis and 49 % about a general axis with a 20 % initial stretch). What the
+// blend loses is what its IM candidate loses to unconverged solves, so this runs with Chebyshev
+// acceleration: measured 0.02 % and 0.16 % (plain iterations: 0.02 % and 1.4 %).
 TEST(BlendMotion, FreeSpinningBarKeepsItsAngularMomentum) {
   for (bool general : {false, true}) {
     TetBarParams p;
@@ -77,6 +78,7 @@ TEST(BlendMotion, FreeSpinningBarKeepsItsAngularMomentum) {
     auto keptAfter10s = [&](Integrator integrator) {
       SimulatorOptions o;
       o.integrator = integrator;
+      o.acceleration = Acceleration::Chebyshev;
       Simulator sim(s, o);
       for (int f = 0; f < 300; ++f) sim.step();
       return angularMomentum(s, sim.positions(), sim.velocities()).dot(l0) / l0.squaredNorm();
@@ -94,7 +96,7 @@ TEST(BlendMotion, FreeSpinningBarKeepsItsAngularMomentum) {
 // ratio of 1.1. The first version of the blend kept H on target with the energy in stretched
 // springs (mean K 0.07 E_avail, K ratio 6.0); BE loses the motion (0.003 E_avail). Required
 // here: mean K at least half the reference's (0.26 E_avail), K ratio at most 1.5, |H - H*| at
-// most 5 % of E_avail. Measured with the default options: 0.38 E_avail, 1.22, 0.6 %.
+// most 5 % of E_avail. Measured with the default options: 0.40 E_avail, 1.23, 0.6 %.
 Scene fallingCloth(Eigen::MatrixX3d& hanging) {
   ClothGridParams p;
   p.nx = 20;

@@ -72,7 +72,7 @@ struct SimulatorOptions {
   int max_iterations = 1000;
   /// Acceleration of every local/global solve, and the spectral-radius estimate of the plain
   /// iteration that the Chebyshev recurrence uses (in (0, 1)).
-  Acceleration acceleration = Acceleration::Chebyshev;
+  Acceleration acceleration = Acceleration::None;
   double chebyshev_rho = 0.98;
 
   /// Energy-tracking blend (docs/method.md, "The blend").

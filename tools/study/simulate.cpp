@@ -9,6 +9,9 @@ namespace study {
 
 namespace {
 
+// alpha comes out of a root find; "whole" means alpha_max = 1 itself, within round-off.
+constexpr double kWholePartnerSlack = 1e-12;
+
 FrameSample sampleOf(const stabint::Simulator& sim) {
   FrameSample f;
   f.time = sim.time();
@@ -21,6 +24,12 @@ FrameSample sampleOf(const stabint::Simulator& sim) {
 }
 
 }  // namespace
+
+std::string RunResult::branchSummary() const {
+  std::string text;
+  for (const auto& [name, count] : branches) text += (text.empty() ? "" : ";") + name + "=" + std::to_string(count);
+  return text.empty() ? "-" : text;
+}
 
 RunResult simulate(const Scene& scene, const RunSpec& spec,
                    const std::function<void(int, const stabint::Simulator&)>& on_frame) {
@@ -58,11 +67,11 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
         partial.iterations += r.iterations;
         partial.branch = r.branch;
         partial.alpha = r.alpha;
-        switch (r.branch) {
-          case BlendBranch::ImplicitMidpoint: ++run.branch_im; break;
-          case BlendBranch::BackwardEuler: ++run.branch_be; break;
-          case BlendBranch::VelocityScale: ++run.branch_fe; break;
-          case BlendBranch::None: break;
+        // Counted by printed name, so that branches added or renamed in the library need no
+        // change here.
+        if (r.branch != BlendBranch::None) {
+          ++run.branches[stabint::blendBranchName(r.branch)];
+          if (r.branch != BlendBranch::ImplicitMidpoint && r.alpha >= 1.0 - kWholePartnerSlack) ++run.partner_whole;
         }
       }
     } catch (const stabint::NonFiniteStateError& e) {

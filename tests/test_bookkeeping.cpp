@@ -191,7 +191,7 @@ TEST(Bookkeeping, ChangingForceFieldChangesTheTargetByThePotentialChange) {
 
 // A cloth dragged by a stiff handle along a steady path: the target must follow the physical
 // work, not grow by k/2 |dq|^2 every step. After the start-up transient the handle pulls a cloth
-// that moves with it, so the target stays within a few joules; the x_n rule of method.md grew
+// that moves with it, so the target stays within a few joules; the x_n rule of the starting spec grew
 // it by ~55 J per step here.
 TEST(Bookkeeping, StiffMovingHandleDoesNotPumpTheTarget) {
   Scene s = smallCloth(0.0);

@@ -1,4 +1,4 @@
-// The integrator driver (method.md sections 2-4), written once against the Backend interface:
+// The integrator driver (docs/method.md sections 2-8), written once against the Backend interface:
 // y formation, finalisation, the energy-tracking blend, damping and the per-step bookkeeping.
 #include <stabint/simulator.hpp>
 

@@ -9,7 +9,7 @@
 
 namespace stabint {
 
-/// The six integrators of method.md section 2 and 3.
+/// The six integrators of docs/method.md sections 2 and 3.
 enum class Integrator {
   ForwardEuler,
   SymplecticEuler,
@@ -87,7 +87,7 @@ struct SimulatorOptions {
   OpenCLOptions opencl;
 };
 
-/// Energies of a state (method.md section 1). `elastic` includes springs, tets and pins;
+/// Energies of a state (docs/method.md section 1). `elastic` includes springs, tets and pins;
 /// `external` is gravity plus force fields, -sum (m g + f(t)).x.
 struct EnergyReport {
   double kinetic = 0.0;

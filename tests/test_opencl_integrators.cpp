@@ -165,20 +165,23 @@ INSTANTIATE_TEST_SUITE_P(AllIntegrators, OpenCLIntegratorTest, ::testing::Values
                            return name;
                          });
 
-// Chebyshev-accelerated solves: the safeguard decides on objective comparisons, which agree
-// between backends to round-off, so both take the same iterates. IM only over the steps before
-// its energy takes off on this cloth (see OpenCLIntegratorTest::options).
-TEST(OpenCLChebyshev, AcceleratedSolvesMatchCpu) {
+// Accelerated solves (Chebyshev, Anderson): the safeguard decides on objective comparisons,
+// which agree between backends to round-off, so both take the same iterates. IM only over the
+// steps before its energy takes off on this cloth (see OpenCLIntegratorTest::options).
+TEST(OpenCLAcceleration, AcceleratedSolvesMatchCpu) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
-  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint,
-                                Integrator::EnergyBlend}) {
-    SimulatorOptions o;
-    o.integrator = integrator;
-    o.acceleration = Acceleration::Chebyshev;
-    const int steps = integrator == Integrator::ImplicitMidpoint ? 12 : 100;
-    const Worst c = compareRuns(testCloth(), o, Precision::Double, steps, 1e-9);
-    const Worst t = compareRuns(testTetBar(), o, Precision::Double, steps, 1e-9);
-    std::printf("  %s worst relative error: cloth x %.3g, tet bar x %.3g\n", integratorName(integrator), c.x, t.x);
+  for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson}) {
+    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint,
+                                  Integrator::EnergyBlend}) {
+      SimulatorOptions o;
+      o.integrator = integrator;
+      o.acceleration = acceleration;
+      const int steps = integrator == Integrator::ImplicitMidpoint ? 12 : 100;
+      const Worst c = compareRuns(testCloth(), o, Precision::Double, steps, 1e-9);
+      const Worst t = compareRuns(testTetBar(), o, Precision::Double, steps, 1e-9);
+      std::printf("  %s %s worst relative error: cloth x %.3g, tet bar x %.3g\n", accelerationName(acceleration),
+                  integratorName(integrator), c.x, t.x);
+    }
   }
 }
 

@@ -56,13 +56,18 @@ const char* blendBranchName(BlendBranch branch) {
 }
 
 const char* accelerationName(Acceleration acceleration) {
-  return acceleration == Acceleration::Chebyshev ? "chebyshev" : "none";
+  switch (acceleration) {
+    case Acceleration::None: return "none";
+    case Acceleration::Chebyshev: return "chebyshev";
+    case Acceleration::Anderson: return "anderson";
+  }
+  return "?";
 }
 
 Acceleration parseAcceleration(const std::string& name) {
-  for (Acceleration a : {Acceleration::None, Acceleration::Chebyshev})
+  for (Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson})
     if (lower(name) == accelerationName(a)) return a;
-  throw InvalidInputError("unknown acceleration '" + name + "' (expected none or chebyshev)");
+  throw InvalidInputError("unknown acceleration '" + name + "' (expected none, chebyshev or anderson)");
 }
 
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {

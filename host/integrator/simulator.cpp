@@ -50,8 +50,11 @@ void validateOptions(const SimulatorOptions& o) {
     fail("energy_tolerance must be finite and > 0");
   if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
     fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
-  if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev)
+  if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
+      o.acceleration != Acceleration::Anderson)
     fail("acceleration = " + std::to_string(static_cast<int>(o.acceleration)) + " is not an Acceleration value");
+  if (o.anderson_window < 1 || o.anderson_window > 50)
+    fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
   if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
     fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
   if (o.max_root_evaluations < 1) fail("max_root_evaluations must be >= 1");
@@ -96,8 +99,8 @@ struct Simulator::Impl {
   }
 
   IterationControl control(int iterations) const {
-    return IterationControl{iterations,   options.tolerance,           options.max_iterations,
-                            energy_scale, options.acceleration, options.chebyshev_rho};
+    return IterationControl{iterations,   options.tolerance,    options.max_iterations, energy_scale,
+                            options.acceleration, options.chebyshev_rho, options.anderson_window};
   }
 
   // ---- the integrators: each leaves x_{n+1}, v_{n+1} in (kXNew, kVNew), returns iterations ----

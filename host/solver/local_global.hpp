@@ -25,6 +25,7 @@ struct IterationControl {
   double energy_scale = 1.0;
   Acceleration acceleration = Acceleration::None;
   double chebyshev_rho = 0.98;  // spectral radius estimate of the plain iteration
+  int anderson_window = 5;      // iterates Anderson acceleration combines
 };
 
 class LocalGlobalSolver {
@@ -48,8 +49,8 @@ class LocalGlobalSolver {
  private:
   int solvePlain(double c, int y, int x, double t, const IterationControl& control,
                  std::vector<double>* objective_history);
-  int solveChebyshev(double c, int y, int x, double t, const IterationControl& control,
-                     std::vector<double>* objective_history);
+  int solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
+                       std::vector<double>* objective_history);
   void globalSolve(double c);
   double inertia(double c, const Eigen::MatrixX3d& x) const;
 
@@ -58,7 +59,7 @@ class LocalGlobalSolver {
   int scratch_;
   int rejected_ = 0;
   // Reused across iterations and solves: no per-iteration allocation.
-  Eigen::MatrixX3d rhs_, x_host_, y_host_, x_cur_, x_prev_;
+  Eigen::MatrixX3d rhs_, x_host_, y_host_, x_cur_, x_next_;
   Eigen::VectorXd masses_;
 };
 

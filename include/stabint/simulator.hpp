@@ -33,9 +33,10 @@ enum class Precision { Double, Float };
 /// accelerated iterate that would raise it is replaced by the plain one.
 enum class Acceleration {
   None,       // plain local/global iterations
-  Chebyshev,  // Chebyshev semi-iteration (Wang 2015), safeguarded
+  Chebyshev,  // Chebyshev semi-iteration (Wang 2015)
+  Anderson,   // Anderson acceleration (Peng et al. 2018)
 };
-const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev"
+const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev", "anderson"
 /// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
 Acceleration parseAcceleration(const std::string& name);
 
@@ -70,10 +71,12 @@ struct SimulatorOptions {
   int iterations = 10;
   double tolerance = 0.0;
   int max_iterations = 1000;
-  /// Acceleration of every local/global solve, and the spectral-radius estimate of the plain
-  /// iteration that the Chebyshev recurrence uses (in (0, 1)).
+  /// Acceleration of every local/global solve; the spectral-radius estimate of the plain
+  /// iteration that the Chebyshev recurrence uses (in (0, 1)); the number of past iterates
+  /// Anderson acceleration combines (>= 1).
   Acceleration acceleration = Acceleration::None;
   double chebyshev_rho = 0.98;
+  int anderson_window = 5;
 
   /// Energy-tracking blend (docs/method.md, "The blend").
   int be_iterations = 3;             // budget of the BE partner solve, warm-started at x_n

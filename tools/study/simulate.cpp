@@ -31,6 +31,12 @@ std::string RunResult::branchSummary() const {
   return text.empty() ? "-" : text;
 }
 
+double RunResult::medianMsPerFrame() const {
+  std::vector<double> ms;
+  for (size_t f = 1; f < samples.size(); ++f) ms.push_back(1e3 * samples[f].seconds);
+  return ms.empty() ? ms_per_frame() : median(std::move(ms));
+}
+
 RunResult simulate(const Scene& scene, const RunSpec& spec,
                    const std::function<void(int, const stabint::Simulator&)>& on_frame) {
   stabint::SimulatorOptions o;
@@ -62,7 +68,9 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
           run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
           throw;
         }
-        run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        run.seconds += seconds;
+        partial.seconds += seconds;
         const stabint::StepReport& r = sim.lastReport();
         partial.iterations += r.iterations;
         partial.branch = r.branch;
@@ -83,6 +91,7 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
     f.iterations = partial.iterations;
     f.branch = partial.branch;
     f.alpha = partial.alpha;
+    f.seconds = partial.seconds;
     run.samples.push_back(f);
     if (spec.record_positions) run.positions.push_back(sim.positions());
     run.frames_done = frame;

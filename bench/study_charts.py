@@ -443,8 +443,13 @@ def motion_table(results):
     out.append(line("cloth: mean K 5-10 s / reference's", "cloth", "mean_K_ratio"))
     out.append(line("cloth: flicker of K", "cloth", "flicker"))
     out.append(line("cloth: max abs(H - H*) / E_avail", "cloth", "max_dev_target_rel"))
-    out.append(line("cloth: ms/frame (median)", "cloth",
-                    "ms_per_frame_median" if "ms_per_frame_median" in motion[0] else "ms_per_frame"))
+    time_key = "ms_per_frame_median" if "ms_per_frame_median" in motion[0] else "ms_per_frame"
+    out.append(line("cloth: ms/frame (median)", "cloth", time_key))
+    be = rows.get(("cloth", "BE"))
+    if be:
+        out.append("| cloth: time per frame / BE's | " + " | ".join(
+            fmt(num(rows[("cloth", c)], time_key) / num(be, time_key)) if ("cloth", c) in rows and c != "reference"
+            else "" for c in cols) + " |")
     out.append(verdicts("cloth: verdict", "cloth"))
     out.append(line("chain: max abs(H - H*) / E_avail", "chain", "max_dev_target_rel"))
     out.append(line("chain: mean K 5-10 s / reference's", "chain", "mean_K_ratio"))
@@ -577,7 +582,8 @@ def write_summary(results):
                    "both; **L kept** = L(10 s).L0/abs(L0)^2 about the centre of mass; **drop** = largest drop of the "
                    "centre of mass within 1 s. Verdicts: *exploded* as above; otherwise the flags that apply of "
                    "*over-damped*, **frozen** (mean K < 0.3 x the reference's) and **jittery** (flicker > 1.5); "
-                   "else *stable*. h = 1/30 s and 10 iterations unless said; `stabint-study motion` "
+                   "else *stable*. The stability map's cells are judged on energy only (no small-step reference "
+                   "per stiffness and step size). h = 1/30 s and 10 iterations unless said; `stabint-study motion` "
                    f"(backend {read_csv(results, 'motion.csv')[0]['backend']}).\n")
         out.extend(table)
         out.append("")

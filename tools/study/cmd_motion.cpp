@@ -46,7 +46,7 @@ class MotionTable {
               "ms_per_frame_median", "exploded_at_s", "E_avail",
               "rms_0_0.5s_m", "rms_0_1s_m", "k_window_from_s", "k_window_to_s", "mean_K_J", "mean_K_ref_J",
               "mean_K_ratio", "flicker", "flicker_ref", "max_dev_target_rel", "com_drop_1s_m", "com_drop_1s_ref_m",
-              "L_kept", "L_error", "H_end_over_H0", "partner_whole_steps", "steps", "branches", "blew_up_frame",
+              "L_kept", "L_error", "H_end_over_H0", "partner_whole_steps", "partner_whole_by_branch", "steps", "branches", "blew_up_frame",
               "energy_verdict", "verdict"}),
         backend_(stabint::backendName(options.backend)) {
     std::printf("\nMotion table (issue 8), backend %s: trajectory error against the small-step reference, mean K over\n"
@@ -66,7 +66,7 @@ class MotionTable {
     csv_ << s.key << "reference" << "cpu" << ref.frame_step / ref.substeps << 0 << ref.positions.size() - 1
          << ref.positions.size() - 1 << kNaN << kNaN << kNaN << ref.available << 0.0 << 0.0 << w.from << w.to << mean_k << mean_k
          << 1.0 << flicker << flicker << ref.energy_error << com_drop << com_drop << kNaN << kNaN << kNaN << 0
-         << 0 << "-" << -1 << "reference" << "reference";
+         << "-" << 0 << "-" << -1 << "reference" << "reference";
     csv_.endRow();
     std::printf("%-15s %-6s %7s %9s %9s %9.3g %7s %8.3g %9.2g %8.3g %8s %7s %9s  %s\n", s.key.c_str(), "ref", "-", "-",
                 "-", mean_k, "1", flicker, ref.energy_error, com_drop, "-", "-", "-", ref.method.c_str());
@@ -79,7 +79,7 @@ class MotionTable {
     csv_ << r.scene << r.integrator << backend_ << h << iterations << frames << run.frames_done << run.ms_per_frame()
          << run.medianMsPerFrame() << e.exploded_at << e.available << m.rms_short << m.rms_long << m.k_window.from << m.k_window.to << m.mean_k << m.mean_k_ref
          << m.mean_k_ratio << m.flicker << m.flicker_ref << e.max_target_dev << r.com_drop << r.com_drop_ref
-         << r.l_kept << r.l_error << r.energy_kept << run.partner_whole << run.steps_tried << run.branchSummary()
+         << r.l_kept << r.l_error << r.energy_kept << run.partner_whole << run.partnerWholeSummary() << run.steps_tried << run.branchSummary()
          << run.blew_up_frame << e.verdict << m.verdict;
     csv_.endRow();
     char whole[16] = "-";

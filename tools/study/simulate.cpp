@@ -25,11 +25,16 @@ FrameSample sampleOf(const stabint::Simulator& sim) {
 
 }  // namespace
 
-std::string RunResult::branchSummary() const {
+namespace {
+std::string countSummary(const std::map<std::string, int>& counts) {
   std::string text;
-  for (const auto& [name, count] : branches) text += (text.empty() ? "" : ";") + name + "=" + std::to_string(count);
+  for (const auto& [name, count] : counts) text += (text.empty() ? "" : ";") + name + "=" + std::to_string(count);
   return text.empty() ? "-" : text;
 }
+}  // namespace
+
+std::string RunResult::branchSummary() const { return countSummary(branches); }
+std::string RunResult::partnerWholeSummary() const { return countSummary(partner_whole_by_branch); }
 
 double RunResult::medianMsPerFrame() const {
   std::vector<double> ms;
@@ -79,7 +84,10 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
         // change here.
         if (r.branch != BlendBranch::None) {
           ++run.branches[stabint::blendBranchName(r.branch)];
-          if (r.branch != BlendBranch::ImplicitMidpoint && r.alpha >= 1.0 - kWholePartnerSlack) ++run.partner_whole;
+          if (r.branch != BlendBranch::ImplicitMidpoint && r.alpha >= 1.0 - kWholePartnerSlack) {
+            ++run.partner_whole;
+            ++run.partner_whole_by_branch[stabint::blendBranchName(r.branch)];
+          }
         }
       }
     } catch (const stabint::NonFiniteStateError& e) {

@@ -125,12 +125,15 @@ struct RunResult {
   /// Steps whose blend took its partner whole (alpha = 1): the target was out of the partner's
   /// reach, or the root find ended there.
   int partner_whole = 0;
+  std::map<std::string, int> partner_whole_by_branch;  // the same, per branch name
   int branchCount(const std::string& name) const {
     const auto it = branches.find(name);
     return it == branches.end() ? 0 : it->second;
   }
   /// "IM=3;BE=196;FE=101": every branch taken, in name order (no commas: a CSV field).
   std::string branchSummary() const;
+  /// The same for partner_whole_by_branch ("BE=244").
+  std::string partnerWholeSummary() const;
   double energy_scale = 0.0;   // Simulator::energyScale()
   int substeps = 1;
   /// Wall clock per frame from every step tried, so a run that blew up early still has a cost.

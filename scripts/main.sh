@@ -5,9 +5,9 @@
 # summary and the compact motion table (issue 8's targets, printed at the end of the charts step).
 # Idempotent; the reference trajectories (the IM h/16 accuracy references and the small-step
 # motion references) are cached in results/cache/ so a rerun skips them.
-# Measured on the shared 2-core machine with the build already there: 3.5 minutes with no cache
-# (the motion references about 1.3 of them), about 2.5 with it; a fresh clone adds the build
-# (about 1.5 minutes).
+# Measured on the shared 2-core machine (load average 2-5 from other jobs) with the build already
+# there: 3.5-4.2 minutes with no cache (computing the motion references about 1.5 of them), 2.9
+# with it; a fresh clone adds the build (about 1.5 minutes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)

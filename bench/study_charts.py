@@ -68,12 +68,22 @@ def chart_speed_vs_accuracy(results, charts):
     if not rows:
         return
     scenes = [s for s in ("cloth", "tetbar") if any(r["scene"] == s for r in rows)]
-    fig, axes = plt.subplots(len(scenes), 2, figsize=(13, 5.2 * len(scenes)), squeeze=False)
+    # Panels: error against the IM h/16 reference over 2 s, energy drift, and (when the sweep has
+    # it) the RMS error over 0-1 s against the small-step motion reference (issue 8).
+    panels = [("position_error_m", "position error vs reference, RMS [m]", "position error"),
+              ("drift_rel", "|energy drift| over 2 s [E_avail]", "energy drift")]
+    if "rms_0_1s_m" in rows[0]:
+        panels.append(("rms_0_1s_m", "RMS error over 0-1 s vs small-step reference [m]",
+                       "error over 0-1 s vs small-step reference"))
+    fig, axes = plt.subplots(len(scenes), len(panels), figsize=(6.5 * len(panels), 5.2 * len(scenes)),
+                             squeeze=False)
     backend = rows[0].get("backend", "cpu")
+    # The median frame time when the sweep has it: robust to stalls on a shared machine.
+    time_key = "ms_per_frame_median" if "ms_per_frame_median" in rows[0] else "ms_per_frame"
     ref_error = {r["scene"]: num(r, "self_error_m") for r in (read_csv(results, "reference.csv") or [])}
+    motion_ref = {r["scene"]: r for r in (read_csv(results, "motion_reference.csv") or [])}
     for si, scene in enumerate(scenes):
-        for ci, (key, label) in enumerate((("position_error_m", "position error vs reference, RMS [m]"),
-                                           ("drift_rel", "|energy drift| over 2 s [E_avail]"))):
+        for ci, (key, label, what) in enumerate(panels):
             ax = axes[si][ci]
             everything = []
             exploded = {}
@@ -82,7 +92,7 @@ def chart_speed_vs_accuracy(results, charts):
                 for r in rows:
                     if r["scene"] != scene or r["integrator"] != integ:
                         continue
-                    t, v = num(r, "ms_per_frame"), abs(num(r, key))
+                    t, v = num(r, time_key), abs(num(r, key))
                     if r["verdict"] == "exploded" or not math.isfinite(v):
                         exploded[integ] = exploded.get(integ, 0) + 1
                         continue
@@ -115,11 +125,16 @@ def chart_speed_vs_accuracy(results, charts):
                 ax.axhline(ref_error[scene], color="gray", lw=0.8, ls=":")
                 ax.text(0.99, ref_error[scene], "reference: h/16 vs h/8 difference", color="gray", fontsize=7,
                         ha="right", va="bottom", transform=ax.get_yaxis_transform())
+            if key == "rms_0_1s_m" and scene in motion_ref:
+                m = motion_ref[scene]
+                ax.axhline(num(m, "self_rms_0_1s_m"), color="gray", lw=0.8, ls=":")
+                ax.text(0.99, num(m, "self_rms_0_1s_m"), f"reference {m['method']}: difference to half the steps",
+                        color="gray", fontsize=7, ha="right", va="bottom", transform=ax.get_yaxis_transform())
             ax.set_xscale("log")
             ax.set_yscale("log")
-            ax.set_xlabel(f"time per frame [ms], {backend} backend")
+            ax.set_xlabel(f"{'median ' if time_key.endswith('median') else ''}time per frame [ms], {backend} backend")
             ax.set_ylabel(label)
-            title = f"{SCENE_TITLES.get(scene, scene)}: {'position error' if ci == 0 else 'energy drift'}"
+            title = f"{SCENE_TITLES.get(scene, scene)}: {what}"
             ax.set_title(title, fontsize=10)
             ax.grid(True, which="both", alpha=0.25)
             note = ", ".join(f"{k} {n}" for k, n in exploded.items())
@@ -287,11 +302,21 @@ def chart_motion(results, charts):
         return
     fig, axes = plt.subplots(2, 2, figsize=(14, 9.5))
 
+    exploded_at = {(r["scene"], r["integrator"]): num(r, "exploded_at_s") for r in (motion or [])
+                   if "exploded_at_s" in r}
+
     def lines(ax, scene, key, log=False):
         for integ in ["reference"] + MOTION_SHOWN:
-            rs = [r for r in series if r["scene"] == scene and r["integrator"] == integ]
+            # A run is drawn until it explodes (IM on the cloth at about 3 s): after that its
+            # curve only sets the axis range.
+            end = exploded_at.get((scene, integ), math.inf)
+            end = end if math.isfinite(end) else math.inf
+            rs = [r for r in series if r["scene"] == scene and r["integrator"] == integ and num(r, "time") <= end]
             if not rs:
                 continue
+            if math.isfinite(end):
+                ax.annotate(f"{integ} exploded", (num(rs[-1], "time"), num(rs[-1], key)), fontsize=7,
+                            color=COLORS[integ], textcoords="offset points", xytext=(3, 3))
             t = [num(r, "time") for r in rs]
             y = [max(num(r, key), 1e-12) if log else num(r, key) for r in rs]
             ax.plot(t, y, color="black" if integ == "reference" else COLORS[integ],
@@ -321,9 +346,16 @@ def chart_motion(results, charts):
     if motion:
         pts = [r for r in motion if r["integrator"] in INTEGRATORS and r["energy_verdict"] != "exploded"
                and math.isfinite(num(r, "mean_K_ratio")) and math.isfinite(num(r, "flicker"))]
+        # Axes clipped to where the verdicts are decided; a point beyond shows on the edge with
+        # its value.
+        ycap = 30.0
         xs = [max(num(r, "mean_K_ratio"), 1e-4) for r in pts]
-        ys = [max(num(r, "flicker"), 1.0) for r in pts]
-        xmax, ymax = max(xs + [10.0]) * 1.5, max(ys + [10.0]) * 1.5
+        ys = [min(max(num(r, "flicker"), 1.0), ycap) for r in pts]
+        xmax, ymax = max(xs + [10.0]) * 1.5, ycap * 1.2
+        for r, x in zip(pts, xs):
+            if num(r, "flicker") > ycap:
+                ax.annotate(f"flicker {fmt(num(r, 'flicker'), 2)}", (x, ycap), textcoords="offset points",
+                            xytext=(4, -10), fontsize=7, color=COLORS[r["integrator"]])
         ax.axvspan(1e-4, 0.3, color="#377eb8", alpha=0.12, label="frozen (mean K < 0.3 x reference)")
         ax.axhspan(1.5, ymax, color="#e41a1c", alpha=0.10, label="jittery (flicker > 1.5)")
         for r, x, y in zip(pts, xs, ys):
@@ -341,7 +373,7 @@ def chart_motion(results, charts):
         ax.set_ylabel("flicker: median of max(K_i+1/K_i, K_i/K_i+1)")
         ax.set_title("every non-exploded run: motion kept against flicker", fontsize=10)
         ax.grid(True, which="both", alpha=0.25)
-        ax.legend(fontsize=7, loc="upper left")
+        ax.legend(fontsize=7, loc="center right")
     fig.suptitle("Motion against the small-step reference (h = 1/30 s unless said, 10 iterations)", fontsize=11)
     fig.tight_layout(rect=(0, 0, 1, 0.96))
     save(fig, charts, "motion")
@@ -365,10 +397,11 @@ def equal_time_errors(sweep, scene="cloth", budget="10"):
     blend = [r for r in sweep if r["scene"] == scene and r["integrator"] == "blend" and r["iterations"] == budget]
     if not blend:
         return {}, None
-    t = num(blend[0], "ms_per_frame")
+    time_key = "ms_per_frame_median" if "ms_per_frame_median" in sweep[0] else "ms_per_frame"
+    t = num(blend[0], time_key)
     out = {}
     for integ in ("BE", "BDF2", "IM", "blend"):
-        pts = [(num(r, "ms_per_frame"), num(r, "rms_0_1s_m")) for r in sweep
+        pts = [(num(r, time_key), num(r, "rms_0_1s_m")) for r in sweep
                if r["scene"] == scene and r["integrator"] == integ and r["verdict"] != "exploded"]
         out[integ] = num(blend[0], "rms_0_1s_m") if integ == "blend" else interpolate_at_time(pts, t)
     return out, t
@@ -382,16 +415,19 @@ def motion_table(results):
     cols = INTEGRATORS + ["reference"]
     rows = {(r["scene"], r["integrator"]): r for r in motion}
 
-    def line(label, scene, key, digits=3, scale=1.0, only=None):
+    def line(label, scene, key, digits=3, scale=1.0, until=math.inf):
+        """One measure per integrator; `until`: the end of the measure's window [s]. A run that
+        exploded before it shows "exploded": its numbers say only how fast it blew up."""
         cells = []
         for c in cols:
             r = rows.get((scene, c))
-            if r is None or (only and c not in only):
+            if r is None:
                 cells.append("")
                 continue
             v = num(r, key) * scale
-            if r["energy_verdict"] == "exploded" and key != "ms_per_frame":
-                cells.append("exploded")  # its numbers say only how fast it blew up
+            exploded_at = num(r, "exploded_at_s") if "exploded_at_s" in r else math.inf
+            if r["energy_verdict"] == "exploded" and not exploded_at > until and not key.startswith("ms_per"):
+                cells.append("exploded")
             else:
                 cells.append(fmt(v, digits) if math.isfinite(v) else "-")
         return f"| {label} | " + " | ".join(cells) + " |"
@@ -401,19 +437,25 @@ def motion_table(results):
                                             else "" for c in cols) + " |"
 
     out = ["| scene: measure | " + " | ".join(cols) + " |", "|---|" + "---:|" * len(cols)]
-    out.append(line("cloth: RMS error 0-0.5 s [m]", "cloth", "rms_0_0.5s_m"))
-    out.append(line("cloth: RMS error 0-1 s [m]", "cloth", "rms_0_1s_m"))
+    out.append(line("cloth: RMS error 0-0.5 s [m]", "cloth", "rms_0_0.5s_m", until=0.5))
+    out.append(line("cloth: RMS error 0-1 s [m]", "cloth", "rms_0_1s_m", until=1.0))
     equal, t = equal_time_errors(read_csv(results, "sweep.csv"))
     if equal:
         cells = [fmt(equal[c]) if equal.get(c) is not None else ("" if c not in equal else "out of range")
                  for c in cols]
-        out.append(f"| cloth: RMS error 0-1 s at the blend's {fmt(t)} ms/frame (sweep) [m] | " + " | ".join(cells)
+        out.append(f"| cloth: RMS error 0-1 s at the blend's median {fmt(t)} ms/frame (sweep, interpolated) [m] | " + " | ".join(cells)
                    + " |")
     out.append(line("cloth: mean K 5-10 s [J]", "cloth", "mean_K_J"))
     out.append(line("cloth: mean K 5-10 s / reference's", "cloth", "mean_K_ratio"))
     out.append(line("cloth: flicker of K", "cloth", "flicker"))
     out.append(line("cloth: max abs(H - H*) / E_avail", "cloth", "max_dev_target_rel"))
-    out.append(line("cloth: ms/frame", "cloth", "ms_per_frame"))
+    time_key = "ms_per_frame_median" if "ms_per_frame_median" in motion[0] else "ms_per_frame"
+    out.append(line("cloth: ms/frame (median)", "cloth", time_key))
+    be = rows.get(("cloth", "BE"))
+    if be:
+        out.append("| cloth: time per frame / BE's | " + " | ".join(
+            fmt(num(rows[("cloth", c)], time_key) / num(be, time_key)) if ("cloth", c) in rows and c != "reference"
+            else "" for c in cols) + " |")
     out.append(verdicts("cloth: verdict", "cloth"))
     out.append(line("chain: max abs(H - H*) / E_avail", "chain", "max_dev_target_rel"))
     out.append(line("chain: mean K 5-10 s / reference's", "chain", "mean_K_ratio"))
@@ -429,7 +471,7 @@ def motion_table(results):
     out.append(line("handle cloth: mean K 5-10 s / reference's", "handle", "mean_K_ratio"))
     out.append(line("handle cloth: flicker of K", "handle", "flicker"))
     out.append(line("stiff cloth (h = 1/15): drop of the centre of mass within 1 s [m]", "cloth_stiff",
-                    "com_drop_1s_m"))
+                    "com_drop_1s_m", until=1.0))
     out.append(line("stiff cloth: flicker of K over 10 s", "cloth_stiff", "flicker"))
     pin = read_csv(results, "moving_pin.csv")
     if pin:
@@ -452,23 +494,27 @@ def write_summary(results):
     out.append("Generated by `bench/study_charts.py` from the CSV files of `stabint-study all`. Energies are "
                "relative to **E_avail** = H0 minus the potential energy of the static equilibrium (the energy "
                "the scene can turn into motion). Verdict: *exploded* = non-finite or max |H - H0| > 10 E_avail; "
-               "*over-damped* = lost more than 50 % of E_avail; else *stable*. Timings are wall clock on the "
+               "*over-damped* = lost more than 50 % of E_avail; else *stable*; where a run is also judged against a "
+               "small-step reference, the motion flags *frozen* and *jittery* are added (see the motion section). "
+               "Timings are wall clock on the "
                "machine that ran the study (shared, so noisy).\n")
     acc = read_csv(results, "accuracy.csv")
     if acc:
         out.append("## Real-time setting: h = 1/30 s, 10 iterations, 60 frames (2 s) against the reference\n")
         out.append(f"Backend: {acc[0].get('backend', 'cpu')}.\n")
-        out.append("| scene | integrator | ms/frame | position error [m] | energy drift [E_avail] | "
-                   "energy lost (damping) [E_avail] | verdict |")
-        out.append("|---|---|---:|---:|---:|---:|---|")
+        out.append("| scene | integrator | ms/frame | position error [m] | RMS error 0-1 s vs small-step reference [m] "
+                   "| energy drift [E_avail] | energy lost (damping) [E_avail] | verdict (energy) |")
+        out.append("|---|---|---:|---:|---:|---:|---:|---|")
         for r in acc:
             out.append(f"| {r['scene']} | {r['integrator']} | {fmt(num(r, 'ms_per_frame'))} | "
-                       f"{fmt(num(r, 'position_error_m'))} | {fmt(num(r, 'drift_rel'))} | "
-                       f"{fmt(num(r, 'damping_rel'))} | {r['verdict']} |")
+                       f"{fmt(num(r, 'position_error_m'))} | {fmt(num(r, 'rms_0_1s_m'))} | "
+                       f"{fmt(num(r, 'drift_rel'))} | {fmt(num(r, 'damping_rel'))} | {r['verdict']} |")
         out.append("")
     table = read_csv(results, "energy_table.csv")
     if table:
         out.append("## Energy behaviour over 300 frames (10 s), h = 1/30 s, 10 iterations\n")
+        out.append("Verdict: energy verdict, then the motion flags against the small-step reference (frozen, "
+                   "jittery; see the motion section).\n")
         out.append("| scene | integrator | ms/frame | drift [E_avail] | max abs(H - H*) [E_avail] | H min .. max | "
                    "blew up at | blend branches | verdict |")
         out.append("|---|---|---:|---:|---:|---|---:|---|---|")
@@ -544,8 +590,11 @@ def write_summary(results):
                    "both; **L kept** = L(10 s).L0/abs(L0)^2 about the centre of mass; **drop** = largest drop of the "
                    "centre of mass within 1 s. Verdicts: *exploded* as above; otherwise the flags that apply of "
                    "*over-damped*, **frozen** (mean K < 0.3 x the reference's) and **jittery** (flicker > 1.5); "
-                   "else *stable*. h = 1/30 s and 10 iterations unless said; `stabint-study motion` "
-                   f"(backend {read_csv(results, 'motion.csv')[0]['backend']}).\n")
+                   "else *stable*. The stability map's cells are judged on energy only (no small-step reference "
+                   "per stiffness and step size). h = 1/30 s and 10 iterations unless said; `stabint-study motion` "
+                   f"(backend {read_csv(results, 'motion.csv')[0]['backend']}). Times are medians of per-frame "
+                   "wall clock on the machine that ran the study; on a shared machine they still vary by up to 2x "
+                   "between runs, and so does the equal-time row (read off the sweep's iteration-budget curves).\n")
         out.extend(table)
         out.append("")
         refs = read_csv(results, "motion_reference.csv")

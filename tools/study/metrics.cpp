@@ -17,6 +17,8 @@ Metrics energyMetrics(const RunResult& run, double available_energy) {
   double max_abs_change = 0.0;
   for (const FrameSample& f : s) {
     const double h = f.total();
+    if (!(std::abs(h - m.h0) <= kExplodeFactor * available_energy) && !std::isfinite(m.exploded_at))
+      m.exploded_at = f.time;
     m.h_min = std::min(m.h_min, h);
     m.h_max = std::max(m.h_max, h);
     m.max_target_dev = std::max(m.max_target_dev, std::abs(h - f.target));
@@ -33,6 +35,7 @@ Metrics energyMetrics(const RunResult& run, double available_energy) {
   mean /= static_cast<double>(tail);
   m.damping = (m.h0 - mean) / e;
 
+  if (run.blew_up_frame >= 0 && !std::isfinite(m.exploded_at)) m.exploded_at = s.back().time;
   if (run.blew_up_frame >= 0 || run.stopped_early || !(max_abs_change <= kExplodeFactor * e))
     m.verdict = "exploded";
   else if (m.damping > kOverDampedFraction)

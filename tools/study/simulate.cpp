@@ -25,10 +25,21 @@ FrameSample sampleOf(const stabint::Simulator& sim) {
 
 }  // namespace
 
-std::string RunResult::branchSummary() const {
+namespace {
+std::string countSummary(const std::map<std::string, int>& counts) {
   std::string text;
-  for (const auto& [name, count] : branches) text += (text.empty() ? "" : ";") + name + "=" + std::to_string(count);
+  for (const auto& [name, count] : counts) text += (text.empty() ? "" : ";") + name + "=" + std::to_string(count);
   return text.empty() ? "-" : text;
+}
+}  // namespace
+
+std::string RunResult::branchSummary() const { return countSummary(branches); }
+std::string RunResult::partnerWholeSummary() const { return countSummary(partner_whole_by_branch); }
+
+double RunResult::medianMsPerFrame() const {
+  std::vector<double> ms;
+  for (size_t f = 1; f < samples.size(); ++f) ms.push_back(1e3 * samples[f].seconds);
+  return ms.empty() ? ms_per_frame() : median(std::move(ms));
 }
 
 RunResult simulate(const Scene& scene, const RunSpec& spec,
@@ -62,7 +73,9 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
           run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
           throw;
         }
-        run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        run.seconds += seconds;
+        partial.seconds += seconds;
         const stabint::StepReport& r = sim.lastReport();
         partial.iterations += r.iterations;
         partial.branch = r.branch;
@@ -71,7 +84,10 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
         // change here.
         if (r.branch != BlendBranch::None) {
           ++run.branches[stabint::blendBranchName(r.branch)];
-          if (r.branch != BlendBranch::ImplicitMidpoint && r.alpha >= 1.0 - kWholePartnerSlack) ++run.partner_whole;
+          if (r.branch != BlendBranch::ImplicitMidpoint && r.alpha >= 1.0 - kWholePartnerSlack) {
+            ++run.partner_whole;
+            ++run.partner_whole_by_branch[stabint::blendBranchName(r.branch)];
+          }
         }
       }
     } catch (const stabint::NonFiniteStateError& e) {
@@ -83,6 +99,7 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
     f.iterations = partial.iterations;
     f.branch = partial.branch;
     f.alpha = partial.alpha;
+    f.seconds = partial.seconds;
     run.samples.push_back(f);
     if (spec.record_positions) run.positions.push_back(sim.positions());
     run.frames_done = frame;

@@ -107,6 +107,7 @@ struct FrameSample {
   BlendBranch branch = BlendBranch::None;  // of the frame's last step
   double alpha = 0.0;
   int iterations = 0;   // all solves of all substeps of the frame
+  double seconds = 0.0; // wall clock of the frame's step() calls
   double total() const { return kinetic + elastic + external; }
 };
 
@@ -124,16 +125,23 @@ struct RunResult {
   /// Steps whose blend took its partner whole (alpha = 1): the target was out of the partner's
   /// reach, or the root find ended there.
   int partner_whole = 0;
+  std::map<std::string, int> partner_whole_by_branch;  // the same, per branch name
   int branchCount(const std::string& name) const {
     const auto it = branches.find(name);
     return it == branches.end() ? 0 : it->second;
   }
   /// "IM=3;BE=196;FE=101": every branch taken, in name order (no commas: a CSV field).
   std::string branchSummary() const;
+  /// The same for partner_whole_by_branch ("BE=244").
+  std::string partnerWholeSummary() const;
   double energy_scale = 0.0;   // Simulator::energyScale()
   int substeps = 1;
   /// Wall clock per frame from every step tried, so a run that blew up early still has a cost.
   double ms_per_frame() const { return steps_tried > 0 ? 1e3 * seconds * substeps / steps_tried : 0.0; }
+  /// Median over the completed frames of their wall clock: on a machine shared with other jobs
+  /// the mean picks up every stall, the median does not (the sweep's equal-time comparisons use
+  /// it). ms_per_frame() when no frame completed.
+  double medianMsPerFrame() const;
 };
 
 /// Runs `spec.frames` frames; a NonFiniteStateError ends the run and is recorded as the blow-up.
@@ -150,6 +158,11 @@ struct Metrics {
   double max_rise = 0.0;        // max (H - H_0) / E_avail
   double drift = 0.0;           // (H_end - H_0) / E_avail
   double damping = 0.0;         // (H_0 - mean H over the last 10 % of frames) / E_avail
+  /// Time [s] of the first frame with |H - H_0| > kExplodeFactor E_avail, or of the last finite
+  /// frame before a blow-up; +inf when the run never exploded. Statistics over a window that
+  /// ends before it (the trajectory error over 0-1 s of a run that explodes at 3 s) still mean
+  /// something.
+  double exploded_at = std::numeric_limits<double>::infinity();
   std::string verdict;          // "stable", "over-damped", "exploded"
 };
 /// Verdict thresholds: exploded when the run blew up or max |H - H_0| > kExplodeFactor E_avail;

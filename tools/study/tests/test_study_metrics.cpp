@@ -140,5 +140,23 @@ TEST(Cache, RoundTripAndDescriptionCheck) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(EnergyMetrics, ExplodedAtIsTheFirstFrameBeyondTheThreshold) {
+  // H_0 = 1, E_avail = 1: H exceeds H_0 + 10 E_avail first at t = 0.3 s.
+  RunResult run;
+  const double energies[] = {1.0, 2.0, 5.0, 12.0, 3.0};
+  for (int f = 0; f < 5; ++f) {
+    FrameSample s;
+    s.time = 0.1 * f;
+    s.kinetic = energies[f];
+    s.target = 1.0;
+    run.samples.push_back(s);
+  }
+  const Metrics m = energyMetrics(run, 1.0);
+  EXPECT_EQ(m.verdict, "exploded");
+  EXPECT_DOUBLE_EQ(m.exploded_at, 0.3);
+  run.samples[3].kinetic = 4.0;  // never beyond: +inf
+  EXPECT_TRUE(std::isinf(energyMetrics(run, 1.0).exploded_at));
+}
+
 }  // namespace
 }  // namespace study

@@ -21,9 +21,11 @@ from matplotlib.colors import ListedColormap  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 INTEGRATORS = ["FE", "SE", "BE", "BDF2", "IM", "blend"]
+# Series with Anderson-accelerated solves (the sweep's "<integrator>+AA" rows).
+ACCELERATED = ["BE+AA", "blend+AA"]
 COLORS = {"FE": "#8c564b", "SE": "#9467bd", "BE": "#1f77b4", "BDF2": "#2ca02c", "IM": "#d62728",
-          "blend": "#ff7f0e"}
-MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*"}
+          "blend": "#ff7f0e", "BE+AA": "#17becf", "blend+AA": "#e377c2"}
+MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*", "BE+AA": "P", "blend+AA": "X"}
 VERDICTS = ["stable", "over-damped", "exploded"]
 VERDICT_COLORS = ["#4daf4a", "#377eb8", "#e41a1c"]
 SCENE_TITLES = {"cloth": "cloth 20x20 (pinned corners)", "tetbar": "tet bar 8x2x2 (pinned at x = 0)",
@@ -87,7 +89,7 @@ def chart_speed_vs_accuracy(results, charts):
             ax = axes[si][ci]
             everything = []
             exploded = {}
-            for integ in INTEGRATORS:
+            for integ in INTEGRATORS + ACCELERATED:
                 pts = []
                 for r in rows:
                     if r["scene"] != scene or r["integrator"] != integ:

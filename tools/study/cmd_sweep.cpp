@@ -106,8 +106,20 @@ void runSweep(const StudyOptions& options) {
                 {"scene", "integrator", "backend", "iterations", "substeps", "frames", "ms_per_frame",
                  "ms_per_frame_median", "position_error_m", "rms_0_0.5s_m", "rms_0_1s_m", "drift_rel", "damping_rel", "max_rise_rel",
                  "verdict", "blew_up_frame"});
+  // Every integrator with plain iterations, then the blend and BE with Anderson acceleration
+  // (labelled "<integrator>+AA"): the shift acceleration gives on the chart.
+  struct Series {
+    Integrator integrator;
+    stabint::Acceleration acceleration;
+  };
+  std::vector<Series> series;
+  for (Integrator i : stabint::allIntegrators()) series.push_back({i, stabint::Acceleration::None});
+  for (Integrator i : {Integrator::BackwardEuler, Integrator::EnergyBlend}) series.push_back({i, stabint::Acceleration::Anderson});
   for (const AccuracyScene& a : scenes) {
-    for (Integrator i : stabint::allIntegrators()) {
+    for (const Series& sr : series) {
+      const Integrator i = sr.integrator;
+      const std::string label = std::string(stabint::integratorName(i)) +
+                                (sr.acceleration == stabint::Acceleration::Anderson ? "+AA" : "");
       const bool explicit_integrator = isExplicit(i);
       std::vector<int> values = budgets;
       if (explicit_integrator) {
@@ -119,6 +131,7 @@ void runSweep(const StudyOptions& options) {
         if (explicit_integrator && stable_in_a_row >= 2) break;
         RunSpec spec;
         spec.integrator = i;
+        spec.acceleration = sr.acceleration;
         spec.backend = options.backend;
         if (explicit_integrator)
           spec.substeps = value;
@@ -128,16 +141,14 @@ void runSweep(const StudyOptions& options) {
         spec.energy_unit = a.available;
         const Evaluation e = evaluate(a, spec);
         stable_in_a_row = e.metrics.verdict == "exploded" ? 0 : stable_in_a_row + 1;
-        csv << a.scene.key << stabint::integratorName(i) << stabint::backendName(options.backend)
+        csv << a.scene.key << label << stabint::backendName(options.backend)
             << (explicit_integrator ? 0 : value) << spec.substeps << kReferenceFrames << e.run.ms_per_frame()
             << e.run.medianMsPerFrame()
             << e.position_error << e.motion.rms_short << e.motion.rms_long << e.metrics.drift << e.metrics.damping
             << e.metrics.max_rise << e.metrics.verdict << e.run.blew_up_frame;
         csv.endRow();
       }
-      std::ostringstream line;
-      line << "sweep " << a.scene.key << ' ' << stabint::integratorName(i) << " done";
-      progress(line.str());
+      progress("sweep " + a.scene.key + " " + label + " done");
     }
   }
 }

@@ -51,6 +51,7 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
   o.tolerance = spec.tolerance;
   o.max_iterations = spec.max_iterations;
   o.be_iterations = spec.be_iterations;
+  o.acceleration = spec.acceleration;
   o.backend = spec.backend;
   stabint::Simulator sim(scene, o);
 

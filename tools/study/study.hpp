@@ -86,6 +86,7 @@ double availableEnergy(const StudyScene& scene);
 
 struct RunSpec {
   Integrator integrator = Integrator::EnergyBlend;
+  stabint::Acceleration acceleration = stabint::Acceleration::None;
   double frame_step = 1.0 / 30.0;
   int substeps = 1;          // simulator steps per frame (h = frame_step / substeps)
   int iterations = 10;

@@ -89,11 +89,20 @@ TEST_P(OpenCLBackendTest, LocalStepRhsMatchesCpu) {
     // time-dependent force fields, and the unchanged-time fast path.
     for (double t : {0.0, 0.37, 0.37, 1.25}) {
       for (double cc : {900.0, 3600.0}) {
-        Eigen::MatrixX3d ref, got;
+        Eigen::MatrixX3d ref, got, got_fused;
         p.cpu->localStepRhs(0, 1, cc, t, ref);
         p.ocl->localStepRhs(0, 1, cc, t, got);
         ASSERT_EQ(got.rows(), ref.rows());
         EXPECT_LE(relativeError(got, ref), tol()) << "t = " << t << ", c = " << cc;
+        // The fused energy comes from the same launch and the same reduction as potential():
+        // bit-identical, and it leaves the right-hand side unchanged.
+        PotentialEnergy fused;
+        p.ocl->localStepRhs(0, 1, cc, t, got_fused, &fused);
+        EXPECT_EQ(std::memcmp(got_fused.data(), got.data(), sizeof(double) * got.size()), 0);
+        const PotentialEnergy separate = p.ocl->potential(0, t);
+        EXPECT_EQ(fused.internal, separate.internal);
+        EXPECT_EQ(fused.pins, separate.pins);
+        EXPECT_EQ(fused.external, separate.external);
       }
     }
   }

@@ -13,14 +13,14 @@ namespace stabint {
 
 class SceneData;
 
-/// Potential energy split by the way the blend books it: springs and tets never depend on time,
-/// pins and external forces may.
+/// Potential energy split by the way the blend books it: the internal energy of the elements
+/// never depends on time, pins and external forces may.
 struct PotentialEnergy {
-  double strain = 0.0;     // springs + tets
+  double internal = 0.0;   // every element type of EnergyTerm::Internal (all but pins)
   double pins = 0.0;       // pins at time t
   double external = 0.0;   // -sum (m g + f(t)).x
-  double elastic() const { return strain + pins; }
-  double total() const { return strain + pins + external; }
+  double elastic() const { return internal + pins; }
+  double total() const { return internal + pins + external; }
 };
 
 class Backend {
@@ -41,9 +41,9 @@ class Backend {
   virtual void accelerations(int dst, int x, double t) = 0;
   /// Local step at positions `x` followed by the gather of the global right-hand side
   ///   rhs = c M y + sum_e w_e A_e^T p_e(x) + (m g + f(t)),
-  /// returned on the host as `n by 3` (the only per-iteration transfer to the host).
-  /// When `energy_at_x` is given it receives the potential E_int + U_ext at `x` (time t): the
-  /// accelerated solver needs the objective at every iterate, and the projections are at hand.
+  /// returned on the host as `n by 3` (the only per-iteration transfer to the host). When
+  /// `energy_at_x` is given it also receives potential(x, t), computed in the same element pass
+  /// from the projections the local step has anyway.
   virtual void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
                             PotentialEnergy* energy_at_x = nullptr) = 0;
 

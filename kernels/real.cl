@@ -4,9 +4,11 @@
 // Memory layouts:
 //   state slots, external forces, rhs:  n by 3, column-major (all x, then all y, then all z),
 //                                       the layout of Eigen::MatrixX3d;
-//   pin targets:                        #pins by 3, column-major likewise;
-//   contributions:                      one packed 3-vector per contribution (vload3/vstore3),
-//                                       numbered as in ContributionCsr.
+//   element data (per type):           vertices K per element, coefficients of A_e R by K
+//                                       row-major per element (or once when shared), params P
+//                                       per element with the weight first (ElementBlock);
+//   contributions:                      one packed 3-vector per contribution, numbered as in
+//                                       ContributionCsr.
 #if defined(STABINT_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double real;
@@ -20,10 +22,13 @@ typedef float3 real3;
 #error "build with -DSTABINT_DOUBLE or -DSTABINT_FLOAT"
 #endif
 
-// What an element kernel writes per contribution: w_e A_e^T p_e (the local step's share of the
-// global right-hand side) or w_e A_e^T (p_e - A_e x) (the element's force, -grad E_e).
-#define MODE_PROJECTION 0
-#define MODE_FORCE 1
+// What an element pass computes, as bit flags (PassFlags in host/elements/element_type.hpp):
+// per contribution w_e A_e^T p_e (the local step's share of the global right-hand side) or
+// w_e A_e^T (p_e - A_e x) (the element's force, -grad E_e); and per work-group the summed
+// energies w_e/2 ||A_e x - p_e||^2.
+#define PASS_PROJECTION 1
+#define PASS_FORCE 2
+#define PASS_ENERGY 4
 
 inline real3 loadRow(__global const real* m, int rows, int i) {
   return (real3)(m[i], m[rows + i], m[2 * rows + i]);

@@ -4,7 +4,7 @@
 #include <stabint/stabint.hpp>
 
 #include "cpu/cpu_backend.hpp"
-#include "cpu/elements.hpp"
+#include "elements/projections.hpp"
 #include "scene/scene_data.hpp"
 
 #include <Eigen/Geometry>
@@ -28,7 +28,7 @@ TEST(Elements, NearestRotationIsProperAndOrthonormalForAnyF) {
     for (int i = 0; i < 9; ++i) F(i) = u(rng);
     if (trial % 5 == 0) F.col(2) = 0.3 * F.col(0) - F.col(1);  // rank-deficient (flat tet)
     if (trial % 7 == 0) F.col(0) *= -1.0;                      // inverted
-    const Eigen::Matrix3d R = elements::nearestRotation(F);
+    const Eigen::Matrix3d R = projections::nearestRotation(F);
     EXPECT_NEAR((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-12) << F;
     EXPECT_NEAR(R.determinant(), 1.0, 1e-12) << F;
     // Nearest among proper rotations: no random rotation is closer.
@@ -42,19 +42,20 @@ TEST(Elements, NearestRotationRecoversTheRotationOfAStretch) {
   for (int trial = 0; trial < 50; ++trial) {
     const Eigen::Matrix3d Q = randomRotation(rng);
     const Eigen::Matrix3d S = Eigen::Vector3d(1.5, 0.8, 0.3).asDiagonal();
-    EXPECT_NEAR((elements::nearestRotation(Q * S) - Q).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((projections::nearestRotation(Q * S) - Q).norm(), 0.0, 1e-12);
   }
 }
 
-TEST(Elements, SpringProjectionHasRestLengthAndDefinedDegenerateCase) {
+TEST(Elements, SphereProjectionHasTheRadiusAndADefinedDegenerateCase) {
   const Eigen::Vector3d d(0.3, -0.4, 1.2);
-  const Eigen::Vector3d p = elements::projectSpring(d, 0.7, Eigen::Vector3d::UnitX());
+  const Eigen::Vector3d unit_x = Eigen::Vector3d::UnitX(), unit_y = Eigen::Vector3d::UnitY();
+  Eigen::Vector3d p;
+  projections::ontoSphere(d.data(), 0.7, unit_x.data(), p.data());
   EXPECT_NEAR(p.norm(), 0.7, 1e-15);
   EXPECT_NEAR(p.normalized().dot(d.normalized()), 1.0, 1e-15);
-  const Eigen::Vector3d coincident = elements::projectSpring(Eigen::Vector3d::Zero(), 0.7, Eigen::Vector3d::UnitY());
-  EXPECT_EQ(coincident, Eigen::Vector3d(0.0, 0.7, 0.0));
-  EXPECT_NEAR(elements::springEnergy(d, d.norm(), 10.0), 0.0, 1e-15);
-  EXPECT_NEAR(elements::springEnergy(d, 0.0, 10.0), 5.0 * d.squaredNorm(), 1e-12);
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  projections::ontoSphere(zero.data(), 0.7, unit_y.data(), p.data());
+  EXPECT_EQ(p, Eigen::Vector3d(0.0, 0.7, 0.0));
 }
 
 // A scene with springs, tets, pins (one moving), gravity and a time-dependent force field.
@@ -98,13 +99,13 @@ TEST(Elements, EnergyIsZeroAtRestAndInvariantUnderRigidMotion) {
 
   const Eigen::MatrixX3d deformed = perturbed(s.rest_positions, 0.02, 1);
   backend->write(0, deformed);
-  const double e = backend->potential(0, 0.0).strain;
+  const double e = backend->potential(0, 0.0).internal;
   EXPECT_GT(e, 0.0);
   std::mt19937 rng(5);
   const Eigen::Matrix3d Q = randomRotation(rng);
   Eigen::MatrixX3d moved = (deformed * Q.transpose()).rowwise() + Eigen::RowVector3d(1.0, -2.0, 0.5);
   backend->write(0, moved);
-  EXPECT_NEAR(backend->potential(0, 0.0).strain, e, 1e-10 * e);
+  EXPECT_NEAR(backend->potential(0, 0.0).internal, e, 1e-10 * e);
 }
 
 // f = -grad (E_int + U_ext): compare M a with a central finite difference of the energy.

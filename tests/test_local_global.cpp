@@ -161,6 +161,24 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
 INSTANTIATE_TEST_SUITE_P(SpringsAndTets, LocalGlobalTest, ::testing::Values(false, true),
                          [](const auto& info) { return info.param ? "Tets" : "Springs"; });
 
+// The energy the local step returns with the right-hand side is the potential at its input.
+TEST_P(LocalGlobalTest, FusedEnergyOfTheLocalStepIsThePotential) {
+  const Scene s = scene();
+  Fixture f(s);
+  f.backend->write(kX, inertialTarget(s));
+  f.backend->write(kY, s.positions);
+  Eigen::MatrixX3d plain, fused_rhs;
+  PotentialEnergy fused;
+  f.backend->localStepRhs(kX, kY, 900.0, 0.3, plain);
+  f.backend->localStepRhs(kX, kY, 900.0, 0.3, fused_rhs, &fused);
+  EXPECT_EQ(fused_rhs, plain);
+  const PotentialEnergy separate = f.backend->potential(kX, 0.3);
+  EXPECT_EQ(fused.internal, separate.internal);
+  EXPECT_EQ(fused.pins, separate.pins);
+  EXPECT_EQ(fused.external, separate.external);
+  EXPECT_GT(fused.internal, 0.0);
+}
+
 TEST(GlobalSystem, FactorsOncePerDistinctC) {
   const Scene s = clothScene();
   Fixture f(s);

@@ -16,7 +16,6 @@
 #include <stabint/simulator.hpp>
 
 #include "cpu/cpu_backend.hpp"
-#include "cpu/elements.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_data.hpp"
 #include "test_opencl_support.hpp"
@@ -90,11 +89,20 @@ TEST_P(OpenCLBackendTest, LocalStepRhsMatchesCpu) {
     // time-dependent force fields, and the unchanged-time fast path.
     for (double t : {0.0, 0.37, 0.37, 1.25}) {
       for (double cc : {900.0, 3600.0}) {
-        Eigen::MatrixX3d ref, got;
+        Eigen::MatrixX3d ref, got, got_fused;
         p.cpu->localStepRhs(0, 1, cc, t, ref);
         p.ocl->localStepRhs(0, 1, cc, t, got);
         ASSERT_EQ(got.rows(), ref.rows());
         EXPECT_LE(relativeError(got, ref), tol()) << "t = " << t << ", c = " << cc;
+        // The fused energy comes from the same launch and the same reduction as potential():
+        // bit-identical, and it leaves the right-hand side unchanged.
+        PotentialEnergy fused;
+        p.ocl->localStepRhs(0, 1, cc, t, got_fused, &fused);
+        EXPECT_EQ(std::memcmp(got_fused.data(), got.data(), sizeof(double) * got.size()), 0);
+        const PotentialEnergy separate = p.ocl->potential(0, t);
+        EXPECT_EQ(fused.internal, separate.internal);
+        EXPECT_EQ(fused.pins, separate.pins);
+        EXPECT_EQ(fused.external, separate.external);
       }
     }
   }
@@ -127,7 +135,7 @@ TEST_P(OpenCLBackendTest, PotentialMatchesCpu) {
       p.data->externalForces(t, f);
       p.cpu->read(0, x);
       const double external_scale = f.cwiseAbs().cwiseProduct(x.cwiseAbs()).sum();
-      EXPECT_LE(std::abs(got.strain - ref.strain), energyTol() * std::abs(ref.strain)) << "t = " << t;
+      EXPECT_LE(std::abs(got.internal - ref.internal), energyTol() * std::abs(ref.internal)) << "t = " << t;
       EXPECT_LE(std::abs(got.pins - ref.pins), energyTol() * std::max(std::abs(ref.pins), 1e-300))
           << "t = " << t;
       EXPECT_LE(std::abs(got.external - ref.external), energyTol() * external_scale) << "t = " << t;
@@ -191,7 +199,7 @@ TEST_P(OpenCLBackendTest, ResultsAreBitIdenticalAcrossRunsAndInstances) {
       const PotentialEnergy e = b.potential(0, 0.25);
       out.insert(out.end(), rhs.data(), rhs.data() + rhs.size());
       out.insert(out.end(), acc.data(), acc.data() + acc.size());
-      out.insert(out.end(), {e.strain, e.pins, e.external, b.massDot(0, 1)});
+      out.insert(out.end(), {e.internal, e.pins, e.external, b.massDot(0, 1)});
     }
     return out;
   };
@@ -216,11 +224,12 @@ TEST_P(OpenCLBackendTest, LargeReductionMatchesCompensatedSum) {
   ocl->write(0, x);
   std::vector<double> energies;
   energies.reserve(scene.springs.size());
-  for (const Spring& s : scene.springs)
-    energies.push_back(elements::springEnergy((x.row(s.a) - x.row(s.b)).transpose(), s.rest_length,
-                                              s.stiffness));
+  for (const Spring& s : scene.springs) {
+    const double stretch = (x.row(s.a) - x.row(s.b)).norm() - s.rest_length;
+    energies.push_back(0.5 * s.stiffness * stretch * stretch);
+  }
   const double ref = testing::compensatedSum(energies);
-  const double got = ocl->potential(0, 0.0).strain;
+  const double got = ocl->potential(0, 0.0).internal;
   EXPECT_LE(std::abs(got - ref), (precision() == Precision::Double ? 1e-13 : 1e-4) * ref)
       << "got " << got << ", compensated " << ref;
 

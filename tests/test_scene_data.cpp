@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace stabint {
@@ -49,29 +51,39 @@ TEST(SceneGeometry, SignedVolumeOfTheUnitCornerTet) {
   EXPECT_DOUBLE_EQ(signedVolume(x, {0, 2, 1, 3}), -1.0 / 6.0);
 }
 
-TEST(SceneData, TetRestDataInvertsDmAndWeighsByVolume) {
+const ElementBlock& blockNamed(const SceneData& data, const std::string& name) {
+  for (const ElementBlock& block : data.blocks())
+    if (name == block.type->name()) return block;
+  throw std::runtime_error("no block " + name);
+}
+
+// The tet block: A_e maps the rest positions of its vertices to F^T = I, and w = k V.
+TEST(SceneData, TetBlockMapsTheRestShapeToIdentityAndWeighsByVolume) {
   const Scene s = twoTetScene();
   const SceneData data(s);
-  ASSERT_EQ(data.tets().size(), 2u);
-  for (size_t i = 0; i < 2; ++i) {
-    const TetRest& t = data.tets()[i];
-    EXPECT_EQ(t.vertices, s.tets[i].vertices);
-    Eigen::Matrix3d dm;
-    for (int k = 0; k < 3; ++k) dm.col(k) = (s.rest_positions.row(t.vertices[k + 1]) - s.rest_positions.row(t.vertices[0])).transpose();
-    EXPECT_TRUE((dm * t.dm_inverse).isIdentity(1e-12));
-    EXPECT_NEAR(t.weight, s.tets[i].stiffness * signedVolume(s.rest_positions, t.vertices), 1e-12);
+  const ElementBlock& tets = blockNamed(data, "tet");
+  ASSERT_EQ(tets.count, 2);
+  ASSERT_EQ(tets.coefficients.size(), 2u * 12u);
+  ASSERT_EQ(tets.params.size(), 2u);
+  for (int e = 0; e < 2; ++e) {
+    const std::array<int, 4>& v = s.tets[e].vertices;
+    EXPECT_EQ(std::vector<int>(tets.vertices.begin() + 4 * e, tets.vertices.begin() + 4 * e + 4),
+              std::vector<int>(v.begin(), v.end()));
+    const Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>> a(&tets.coefficients[12 * e]);
+    Eigen::Matrix<double, 4, 3> x;
+    for (int k = 0; k < 4; ++k) x.row(k) = s.rest_positions.row(v[k]);
+    EXPECT_TRUE((a * x).isIdentity(1e-12)) << a * x;
+    EXPECT_NEAR(tets.params[e], s.tets[e].stiffness * signedVolume(s.rest_positions, v), 1e-12);
   }
-  // The rest shape has F = I.
-  const TetRest& t = data.tets()[0];
-  EXPECT_NEAR(t.weight, 100.0 / 6.0, 1e-12);
+  EXPECT_NEAR(tets.params[0], 100.0 / 6.0, 1e-12);
 }
 
 TEST(SceneData, ContributionCsrFollowsTheDocumentedNumbering) {
   const SceneData data(twoTetScene());
   const ContributionCsr& csr = data.csr();
-  EXPECT_EQ(csr.springBase, 0);
-  EXPECT_EQ(csr.tetBase, 4);
-  EXPECT_EQ(csr.pinBase, 12);
+  EXPECT_EQ(blockNamed(data, "spring").contribution_base, 0);
+  EXPECT_EQ(blockNamed(data, "tet").contribution_base, 4);
+  EXPECT_EQ(blockNamed(data, "pin").contribution_base, 12);
   EXPECT_EQ(csr.numContributions, 14);
   ASSERT_EQ(csr.offsets.size(), 7u);
   EXPECT_EQ(csr.offsets.front(), 0);

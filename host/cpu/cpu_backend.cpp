@@ -1,6 +1,5 @@
 #include "cpu/cpu_backend.hpp"
 
-#include "cpu/elements.hpp"
 #include "scene/scene_data.hpp"
 
 #include <chrono>
@@ -19,17 +18,12 @@ double secondsSince(Clock::time_point start) {
 class CpuBackend final : public Backend {
  public:
   CpuBackend(const SceneData& scene, int num_slots)
-      : scene_(scene), slots_(num_slots, Eigen::MatrixX3d::Zero(scene.numParticles(), 3)) {
-    const Eigen::MatrixX3d& rest = scene.scene().rest_positions;
-    spring_rest_direction_.reserve(scene.springs().size());
-    for (const Spring& s : scene.springs()) {
-      Eigen::Vector3d dir = (rest.row(s.a) - rest.row(s.b)).transpose();
-      const double len = dir.norm();
-      spring_rest_direction_.push_back(len > 0.0 ? Eigen::Vector3d(dir / len)
-                                                 : Eigen::Vector3d::UnitX());
+      : scene_(scene),
+        slots_(num_slots, Eigen::MatrixX3d::Zero(scene.numParticles(), 3)),
+        params_(scene.blocks().size()) {
+    for (size_t b = 0; b < params_.size(); ++b) {
+      params_[b].time_dependent = scene.blocks()[b].type->timeDependent(scene.scene());
     }
-    tet_g_.reserve(scene.tets().size());
-    for (const TetRest& tet : scene.tets()) tet_g_.push_back(elements::tetGradientOperator(tet.dm_inverse));
   }
 
   void write(int slot, const Eigen::MatrixX3d& host) override { slots_[slot] = host; }
@@ -44,89 +38,63 @@ class CpuBackend final : public Backend {
 
   PotentialEnergy potential(int slot, double t) override {
     const auto start = Clock::now();
-    const Eigen::MatrixX3d& x = slots_[slot];
-    PotentialEnergy e;
-    for (const Spring& s : scene_.springs())
-      e.strain += elements::springEnergy((x.row(s.a) - x.row(s.b)).transpose(), s.rest_length, s.stiffness);
-    for (size_t i = 0; i < scene_.tets().size(); ++i) {
-      const Eigen::Matrix3d F = tetDeformationGradient(x, i);
-      e.strain += elements::tetEnergy(F, elements::nearestRotation(F), scene_.tets()[i].weight);
-    }
-    const Eigen::MatrixX3d& q = pinTargets(t);
-    for (size_t i = 0; i < scene_.pins().size(); ++i) {
-      const Pin& pin = scene_.pins()[i];
-      e.pins += elements::pinEnergy(x.row(pin.vertex).transpose(), q.row(i).transpose(), pin.stiffness);
-    }
-    e.external = -externalForces(t).cwiseProduct(x).sum();
+    const PotentialEnergy e = elementPass(slots_[slot], t, kPassEnergy, nullptr);
     times_.energy += secondsSince(start);
     return e;
   }
 
   void accelerations(int dst, int slot, double t) override {
     const auto start = Clock::now();
-    // f = f_ext - sum_e w_e A_e^T (A_e x - p_e)
+    // f = f_ext + sum_e w_e A_e^T (p_e - A_e x)
     Eigen::MatrixX3d f = externalForces(t);
-    const Eigen::MatrixX3d& x = slots_[slot];
-    forEachContribution(x, t, [&](int vertex, const Eigen::Vector3d& gradient_part) {
-      f.row(vertex) -= gradient_part.transpose();
-    }, /*gradient=*/true);
+    elementPass(slots_[slot], t, kPassForce, &f);
     slots_[dst] = f.array().colwise() / scene_.masses().array();
     times_.local += secondsSince(start);
   }
 
   void localStepRhs(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& rhs,
                     PotentialEnergy* energy_at_x) override {
-    if (energy_at_x) *energy_at_x = potential(x_slot, t);
     const auto start = Clock::now();
     rhs = (c * slots_[y_slot]).array().colwise() * scene_.masses().array();
     rhs += externalForces(t);
-    forEachContribution(slots_[x_slot], t, [&](int vertex, const Eigen::Vector3d& projection_part) {
-      rhs.row(vertex) += projection_part.transpose();
-    }, /*gradient=*/false);
+    const int flags = kPassProjection | (energy_at_x ? kPassEnergy : 0);
+    const PotentialEnergy e = elementPass(slots_[x_slot], t, flags, &rhs);
+    if (energy_at_x) *energy_at_x = e;
     times_.local += secondsSince(start);
   }
 
   std::string description() const override { return "CPU reference (double)"; }
 
  private:
-  Eigen::Matrix3d tetDeformationGradient(const Eigen::MatrixX3d& x, size_t i) const {
-    const TetRest& tet = scene_.tets()[i];
-    Eigen::Matrix<double, 3, 4> X;
-    for (int k = 0; k < 4; ++k) X.col(k) = x.row(tet.vertices[k]).transpose();
-    return X * tet_g_[i];
+  /// Every block in the order of the contribution numbering (so the scattered sums add in the
+  /// order of the OpenCL gather), plus the external potential when energies are asked for.
+  PotentialEnergy elementPass(const Eigen::MatrixX3d& x, double t, int flags, Eigen::MatrixX3d* out) {
+    PotentialEnergy e;
+    const std::vector<ElementBlock>& blocks = scene_.blocks();
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      const ElementBlock& block = blocks[b];
+      if (block.count == 0) continue;
+      const double energy = block.type->pass(block, paramsAt(b, t), x, flags, out);
+      (block.type->term() == EnergyTerm::Pins ? e.pins : e.internal) += energy;
+    }
+    if (flags & kPassEnergy) e.external = -externalForces(t).cwiseProduct(x).sum();
+    return e;
   }
 
-  /// Visits every per-vertex element contribution in the order of SceneData's CSR (springs,
-  /// tets, pins): w A^T p (gradient = false) or w A^T (A x - p) (gradient = true).
-  template <class Visit>
-  void forEachContribution(const Eigen::MatrixX3d& x, double t, Visit&& visit, bool gradient) {
-    const auto& springs = scene_.springs();
-    for (size_t i = 0; i < springs.size(); ++i) {
-      const Spring& s = springs[i];
-      const Eigen::Vector3d d = (x.row(s.a) - x.row(s.b)).transpose();
-      const Eigen::Vector3d p = elements::projectSpring(d, s.rest_length, spring_rest_direction_[i]);
-      const Eigen::Vector3d part = s.stiffness * (gradient ? Eigen::Vector3d(d - p) : p);
-      visit(s.a, part);
-      visit(s.b, Eigen::Vector3d(-part));
+  // Params of block b at time t: the block's own unless its type depends on time; cached
+  // because the driver asks for the same t many times per step.
+  const std::vector<double>& paramsAt(size_t b, double t) {
+    const ElementBlock& block = scene_.blocks()[b];
+    TimedParams& cached = params_[b];
+    if (!cached.time_dependent) return block.params;
+    if (!(t == cached.time)) {
+      block.type->paramsAt(scene_.scene(), t, cached.values);
+      cached.time = t;
     }
-    for (size_t i = 0; i < scene_.tets().size(); ++i) {
-      const TetRest& tet = scene_.tets()[i];
-      const Eigen::Matrix3d F = tetDeformationGradient(x, i);
-      const Eigen::Matrix3d R = elements::nearestRotation(F);
-      const Eigen::Matrix<double, 3, 4> part =
-          tet.weight * (gradient ? Eigen::Matrix3d(F - R) : R) * tet_g_[i].transpose();
-      for (int k = 0; k < 4; ++k) visit(tet.vertices[k], Eigen::Vector3d(part.col(k)));
-    }
-    const Eigen::MatrixX3d& q = pinTargets(t);
-    for (size_t i = 0; i < scene_.pins().size(); ++i) {
-      const Pin& pin = scene_.pins()[i];
-      const Eigen::Vector3d target = q.row(i).transpose();
-      const Eigen::Vector3d xj = x.row(pin.vertex).transpose();
-      visit(pin.vertex, Eigen::Vector3d(pin.stiffness * (gradient ? Eigen::Vector3d(xj - target) : target)));
-    }
+    return cached.values;
   }
 
-  // Forcing at time t, cached because the driver asks for the same t many times per step.
+  // Forcing at time t, cached like the params.
   const Eigen::MatrixX3d& externalForces(double t) {
     if (!(t == external_time_)) {
       scene_.externalForces(t, external_);
@@ -134,21 +102,18 @@ class CpuBackend final : public Backend {
     }
     return external_;
   }
-  const Eigen::MatrixX3d& pinTargets(double t) {
-    if (!(t == pin_time_)) {
-      scene_.pinTargets(t, pin_targets_);
-      pin_time_ = t;
-    }
-    return pin_targets_;
-  }
+
+  struct TimedParams {
+    bool time_dependent = false;
+    std::vector<double> values;
+    double time = std::numeric_limits<double>::quiet_NaN();
+  };
 
   const SceneData& scene_;
   std::vector<Eigen::MatrixX3d> slots_;
-  std::vector<Eigen::Vector3d> spring_rest_direction_;
-  std::vector<Eigen::Matrix<double, 4, 3>> tet_g_;
-  Eigen::MatrixX3d external_, pin_targets_;
+  std::vector<TimedParams> params_;  // per block
+  Eigen::MatrixX3d external_;
   double external_time_ = std::numeric_limits<double>::quiet_NaN();
-  double pin_time_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace

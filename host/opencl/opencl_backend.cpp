@@ -1,7 +1,7 @@
 #include "opencl/opencl_backend.hpp"
 
 #include "opencl/cl_runtime.hpp"
-#include "opencl/embedded_kernels.hpp"
+#include "opencl/element_program.hpp"
 #include "scene/scene_data.hpp"
 
 #include <algorithm>
@@ -22,33 +22,25 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// Kernel files in the order they are concatenated into one program (real.cl defines `real`).
-const char* const kProgramFiles[] = {"real.cl",       "springs.cl", "tets.cl",  "pins.cl",
-                                     "gather.cl",     "vector_ops.cl", "reduce.cl", "energy.cl"};
-
-std::string programSource() {
-  std::string source;
-  for (const char* file : kProgramFiles) {
-    source += "// ---- ";
-    source += file;
-    source += " ----\n";
-    source += ocl::embeddedKernel(file);
-    source += "\n";
-  }
-  return source;
-}
-
-constexpr int kModeProjection = 0;
-constexpr int kModeForce = 1;
-
-// A kernel with its launch geometry; buffer arguments that change between calls (the slots) are
-// re-set only when they differ from the bound one.
+// A kernel with its launch geometry. Arguments are appended in the order of the kernel's
+// signature (add, addSlot); those that change between calls keep the index add returned and are
+// re-set with set or bindSlot, the latter only when the slot differs from the bound one.
 struct Launch {
   cl::Kernel kernel;
   cl::NDRange global = cl::NullRange;
   cl::NDRange local = cl::NullRange;
   std::vector<int> bound;  // slot bound to each argument index, -1 if none
+  cl_uint next = 0;        // index of the next argument add appends
 
+  template <typename T>
+  cl_uint add(const T& value) {
+    set(next, value);
+    return next++;
+  }
+  cl_uint addSlot(int slot, const std::vector<cl::Buffer>& slots) {
+    bindSlot(next, slot, slots);
+    return next++;
+  }
   void bindSlot(cl_uint arg, int slot, const std::vector<cl::Buffer>& slots) {
     if (bound.size() <= arg) bound.resize(arg + 1, -1);
     if (bound[arg] == slot) return;
@@ -74,27 +66,34 @@ class OpenCLBackend final : public Backend {
     queue_ = cl::CommandQueue(context_, device_.device, CL_QUEUE_PROFILING_ENABLE, &err);
     ocl::check(err, "clCreateCommandQueue");
     program_ = ocl::cachedProgram(
-        context_, device_.device, programSource(),
+        context_, device_.device, ocl::elementProgramSource(),
         std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
 
-    const ContributionCsr& csr = scene.csr();
-    num_springs_ = static_cast<int>(scene.springs().size());
-    num_tets_ = static_cast<int>(scene.tets().size());
-    num_pins_ = static_cast<int>(scene.pins().size());
-
     // --- resident data -----------------------------------------------------------------------
+    const ContributionCsr& csr = scene.csr();
     for (int s = 0; s < num_slots; ++s) slots_.push_back(zeroBuffer(3 * std::size_t(n_)));
-    masses_ = upload(std::vector<Real>(scene.masses().data(), scene.masses().data() + n_));
+    masses_ = upload(toReal(scene.masses().data(), std::size_t(n_)));
     fext_ = zeroBuffer(3 * std::size_t(n_));
     rhs_ = zeroBuffer(3 * std::size_t(n_));
     contrib_ = zeroBuffer(3 * std::size_t(std::max(csr.numContributions, 1)));
     offsets_ = upload(csr.offsets);
     list_ = upload(csr.contributions.empty() ? std::vector<int>{0} : csr.contributions);
-    uploadSprings();
-    uploadTets();
-    uploadPins();
+    for (const ElementBlock& block : scene.blocks()) {
+      DeviceBlock d;
+      d.block = &block;
+      d.time_dependent = block.type->timeDependent(scene.scene());
+      d.vertices = upload(block.vertices);
+      d.coefficients = upload(toReal(block.coefficients.data(), block.coefficients.size()));
+      d.params = d.time_dependent ? zeroBuffer(block.params.size())
+                                  : upload(toReal(block.params.data(), block.params.size()));
+      blocks_.push_back(std::move(d));
+    }
+    // A step writes x, v and the forcing (f_ext, time-dependent params) between two waits.
+    std::size_t timed = 0;
+    for (const DeviceBlock& d : blocks_) timed += d.time_dependent ? 1 : 0;
+    pending_writes_.resize(3 + timed);
 
-    buildKernels(csr);
+    buildKernels();
 
     // Forcing of a time-independent scene is uploaded once here.
     uploadForcing(0.0, /*force=*/true);
@@ -110,7 +109,7 @@ class OpenCLBackend final : public Backend {
                                                    std::to_string(host.rows()) + " rows, expected " +
                                                    std::to_string(n_));
     const auto start = Clock::now();
-    writeMatrixAsync(slots_[slot], host);
+    writeAsync(slots_[slot], host.data(), std::size_t(host.size()));
     times_.transfer += secondsSince(start);
   }
 
@@ -133,11 +132,11 @@ class OpenCLBackend final : public Backend {
     checkSlot(dst);
     checkSlot(x);
     checkSlot(y);
-    combine_.set(1, Real(a));
-    combine_.bindSlot(2, x, slots_);
-    combine_.set(3, Real(b));
-    combine_.bindSlot(4, y, slots_);
-    combine_.bindSlot(5, dst, slots_);
+    combine_.set(combine_args_.a, Real(a));
+    combine_.bindSlot(combine_args_.x, x, slots_);
+    combine_.set(combine_args_.b, Real(b));
+    combine_.bindSlot(combine_args_.y, y, slots_);
+    combine_.bindSlot(combine_args_.dst, dst, slots_);
     enqueue(combine_);
   }
 
@@ -145,8 +144,8 @@ class OpenCLBackend final : public Backend {
     checkSlot(a);
     checkSlot(b);
     const auto start = Clock::now();
-    mass_dot_.bindSlot(2, a, slots_);
-    mass_dot_.bindSlot(3, b, slots_);
+    mass_dot_.bindSlot(mass_dot_args_.a, a, slots_);
+    mass_dot_.bindSlot(mass_dot_args_.b, b, slots_);
     enqueue(mass_dot_);
     readPartials(mass_dot_groups_);
     const double sum = sumPartials(0, mass_dot_groups_);
@@ -158,19 +157,14 @@ class OpenCLBackend final : public Backend {
     checkSlot(x);
     uploadForcing(t, false);
     const auto start = Clock::now();
-    potential_.bindSlot(0, x, slots_);
-    enqueue(potential_);
-    const std::array<int, 5>& g = energy_segments_;
-    readPartials(g[4]);
-    PotentialEnergy e;
-    e.strain = sumPartials(g[0], g[1]) + sumPartials(g[1], g[2]);  // springs + tets
-    e.pins = sumPartials(g[2], g[3]);
-    e.external = sumPartials(g[3], g[4]);
+    enqueueElementPass(x, kPassEnergy);
+    readPartials(full_groups_);
+    const PotentialEnergy e = sumEnergies();
     times_.energy += secondsSince(start);
     return e;
   }
 
-  // Timing without extra waits: the element kernels and the gather are queued back to back and
+  // Timing without extra waits: the element pass and the gather are queued back to back and
   // the host waits once (blocking read or clFinish). The local and gather phases are the
   // device's own durations (event profiling); the rest of the wall time (command submission,
   // wake-up, the copy itself) is booked as transfer, or as local where nothing is copied.
@@ -179,8 +173,8 @@ class OpenCLBackend final : public Backend {
     checkSlot(x);
     uploadForcing(t, false);
     const auto start = Clock::now();
-    enqueueContributions(x, kModeForce);
-    gather_accel_.bindSlot(6, dst, slots_);
+    enqueueElementPass(x, kPassForce);
+    gather_accel_.bindSlot(gather_accel_dst_, dst, slots_);
     enqueue(gather_accel_, &gather_event_);
     ocl::check(queue_.finish(), "clFinish");
     const double wall = secondsSince(start);
@@ -196,14 +190,15 @@ class OpenCLBackend final : public Backend {
     if (energy_at_x) *energy_at_x = potential(x, t);
     uploadForcing(t, false);
     const auto start = Clock::now();
-    const int launched = enqueueContributions(x, kModeProjection);
-    gather_rhs_.bindSlot(6, y, slots_);
-    gather_rhs_.set(7, Real(c));
+    const bool launched = enqueueElementPass(x, kPassProjection | (energy_at_x ? kPassEnergy : 0));
+    gather_rhs_.bindSlot(gather_rhs_args_.y, y, slots_);
+    gather_rhs_.set(gather_rhs_args_.c, Real(c));
     enqueue(gather_rhs_, &gather_event_);
+    if (energy_at_x) readPartials(full_groups_, /*blocking=*/false);
     readMatrix(rhs_, rhs);  // blocking: everything queued above has completed
+    if (energy_at_x) *energy_at_x = sumEnergies();
     const double wall = secondsSince(start);
-    const double local =
-        launched > 0 ? deviceSeconds(local_events_[0], local_events_[launched - 1]) : 0.0;
+    const double local = launched ? deviceSeconds(element_event_, element_event_) : 0.0;
     const double gather = deviceSeconds(gather_event_, gather_event_);
     times_.local += local;
     times_.gather += gather;
@@ -219,10 +214,24 @@ class OpenCLBackend final : public Backend {
   static constexpr bool kDouble = std::is_same<Real, double>::value;
   static constexpr int kElementLocalSize = 256;  // larger groups amortise PoCL's per-group cost
   static constexpr int kReduceLocalSize = 128;
-  static constexpr int kMaxReduceGroups = 64;  // per segment
+  static constexpr int kMaxReduceGroups = 64;
   static constexpr int kMinTermsPerWorkItem = 4;
 
+  // An element block on the device; the params of a time-dependent type are rewritten whenever
+  // the time changes.
+  struct DeviceBlock {
+    const ElementBlock* block = nullptr;
+    bool time_dependent = false;
+    cl::Buffer vertices, coefficients, params;
+    double params_time = std::numeric_limits<double>::quiet_NaN();
+    std::vector<double> host_params;
+  };
+
   static std::size_t bytes(std::size_t count) { return count * sizeof(Real); }
+
+  static std::vector<Real> toReal(const double* data, std::size_t count) {
+    return std::vector<Real>(data, data + count);
+  }
 
   void checkSlot(int slot) const {
     if (slot < 0 || slot >= static_cast<int>(slots_.size()))
@@ -253,71 +262,20 @@ class OpenCLBackend final : public Backend {
     return buffer;
   }
 
-  void uploadSprings() {
-    const std::vector<Spring>& springs = scene_.springs();
-    const Eigen::MatrixX3d& rest = scene_.scene().rest_positions;
-    std::vector<cl_int> ends;
-    std::vector<Real> params;
-    ends.reserve(2 * springs.size());
-    params.reserve(5 * springs.size());
-    for (const Spring& s : springs) {
-      ends.push_back(s.a);
-      ends.push_back(s.b);
-      // Direction for coincident endpoints: the rest direction from b to a, else +x.
-      Eigen::Vector3d dir(1.0, 0.0, 0.0);
-      if (rest.rows() == n_) {
-        const Eigen::Vector3d d = (rest.row(s.a) - rest.row(s.b)).transpose();
-        const double len = d.norm();
-        if (len > 0.0 && std::isfinite(len)) dir = d / len;
-      }
-      params.insert(params.end(), {Real(s.rest_length), Real(s.stiffness), Real(dir.x()),
-                                   Real(dir.y()), Real(dir.z())});
-    }
-    spring_ends_ = upload(ends);
-    spring_params_ = upload(params);
-  }
-
-  void uploadTets() {
-    std::vector<cl_int> vertices;
-    std::vector<Real> rest;
-    for (const TetRest& t : scene_.tets()) {
-      vertices.insert(vertices.end(), t.vertices.begin(), t.vertices.end());
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) rest.push_back(Real(t.dm_inverse(i, j)));
-      rest.push_back(Real(t.weight));
-    }
-    tet_vertices_ = upload(vertices);
-    tet_rest_ = upload(rest);
-  }
-
-  void uploadPins() {
-    std::vector<cl_int> vertex;
-    std::vector<Real> stiffness;
-    for (const Pin& p : scene_.pins()) {
-      vertex.push_back(p.vertex);
-      stiffness.push_back(Real(p.stiffness));
-    }
-    pin_vertex_ = upload(vertex);
-    pin_stiffness_ = upload(stiffness);
-    pin_targets_ = zeroBuffer(3 * std::size_t(num_pins_));
-  }
-
-  // External forces and pin targets at time t; uploaded only when t changed and they depend on
-  // time (or once, at construction).
+  // External forces and time-dependent element params at time t; uploaded only when t changed
+  // and they depend on time (or everything once, at construction).
   void uploadForcing(double t, bool force) {
-    const bool fields = force || (scene_.hasTimeDependentForceFields() && t != fext_time_);
-    const bool pins = num_pins_ > 0 && (force || (scene_.hasMovingPins() && t != pins_time_));
-    if (!fields && !pins) return;
     const auto start = Clock::now();
-    if (fields) {
+    if (force || (scene_.hasTimeDependentForceFields() && t != fext_time_)) {
       scene_.externalForces(t, host_fext_);
-      writeMatrixAsync(fext_, host_fext_);
+      writeAsync(fext_, host_fext_.data(), std::size_t(host_fext_.size()));
       fext_time_ = t;
     }
-    if (pins) {
-      scene_.pinTargets(t, host_targets_);
-      writeMatrixAsync(pin_targets_, host_targets_);
-      pins_time_ = t;
+    for (DeviceBlock& d : blocks_) {
+      if (!d.time_dependent || d.block->count == 0 || (!force && t == d.params_time)) continue;
+      d.block->type->paramsAt(scene_.scene(), t, d.host_params);
+      writeAsync(d.params, d.host_params.data(), d.host_params.size());
+      d.params_time = t;
     }
     times_.transfer += secondsSince(start);
   }
@@ -327,13 +285,12 @@ class OpenCLBackend final : public Backend {
   // read and energy pass ends with one) waits for the transfer, which saves a synchronisation
   // per local/global iteration (solve, write x, then the next local step or energy pass). A
   // staging buffer is refilled only after its previous transfer has completed.
-  void writeMatrixAsync(const cl::Buffer& buffer, const Eigen::MatrixX3d& host) {
-    const std::size_t count = std::size_t(host.size());
+  void writeAsync(const cl::Buffer& buffer, const double* host, std::size_t count) {
     if (count == 0) return;
     PendingWrite& w = pending_writes_[next_write_];
     next_write_ = (next_write_ + 1) % pending_writes_.size();
     if (w.done()) ocl::check(w.done.wait(), "clWaitForEvents");
-    w.data.assign(host.data(), host.data() + count);
+    w.data.assign(host, host + count);
     ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, 0, bytes(count), w.data.data(), nullptr,
                                          &w.done),
                "clEnqueueWriteBuffer");
@@ -354,10 +311,11 @@ class OpenCLBackend final : public Backend {
     }
   }
 
-  // The first `count` per-group partials to the host: the only wait of an energy pass.
-  void readPartials(int count) {
-    ocl::check(queue_.enqueueReadBuffer(partials_, CL_TRUE, 0, bytes(std::size_t(count)),
-                                        host_partials_.data()),
+  // The first `count` per-group partials to the host: the only wait of an energy pass (or none,
+  // when a blocking read queued after it waits).
+  void readPartials(int count, bool blocking = true) {
+    ocl::check(queue_.enqueueReadBuffer(partials_, blocking ? CL_TRUE : CL_FALSE, 0,
+                                        bytes(std::size_t(count)), host_partials_.data()),
                "clEnqueueReadBuffer");
   }
 
@@ -368,12 +326,15 @@ class OpenCLBackend final : public Backend {
     return sum;
   }
 
-  // Groups of a reduction segment of `count` terms: fixed by the scene size, so every call adds
-  // the same terms in the same order; none for an empty element segment.
-  static int reductionGroups(int count, std::size_t local) {
-    if (count <= 0) return 0;
-    const int per_group = kMinTermsPerWorkItem * int(local);
-    return std::clamp((count + per_group - 1) / per_group, 1, kMaxReduceGroups);
+  // The energies of a full element pass, segment by segment.
+  PotentialEnergy sumEnergies() const {
+    PotentialEnergy e;
+    for (std::size_t s = 0; s < blocks_.size(); ++s) {
+      const double sum = sumPartials(segment_groups_[s], segment_groups_[s + 1]);
+      (blocks_[s].block->type->term() == EnergyTerm::Pins ? e.pins : e.internal) += sum;
+    }
+    e.external = sumPartials(segment_groups_[blocks_.size()], full_groups_);
+    return e;
   }
 
   void enqueue(const Launch& launch, cl::Event* event = nullptr) {
@@ -390,20 +351,19 @@ class OpenCLBackend final : public Backend {
     return end > begin ? double(end - begin) * 1e-9 : 0.0;
   }
 
-  // Queues the element kernels (springs, tets, pins) writing contributions of `mode`; their
-  // events go to local_events_. Returns how many were queued.
-  int enqueueContributions(int x, int mode) {
-    Launch* launches[3] = {mode == kModeForce ? &spring_force_ : &spring_project_,
-                           mode == kModeForce ? &tet_force_ : &tet_project_,
-                           mode == kModeForce ? &pin_force_ : &pin_project_};
-    const int counts[3] = {num_springs_, num_tets_, num_pins_};
-    int launched = 0;
-    for (int i = 0; i < 3; ++i) {
-      if (counts[i] == 0) continue;
-      launches[i]->bindSlot(0, x, slots_);
-      enqueue(*launches[i], &local_events_[launched++]);
-    }
-    return launched;
+  // Queues the element pass at positions `x` with `flags`: the element segments, plus the
+  // vertex segment (external potential) when energies are asked for. Returns false when there
+  // was nothing to launch (no elements, no energy).
+  bool enqueueElementPass(int x, int flags) {
+    const int groups = (flags & kPassEnergy) ? full_groups_ : segment_groups_[blocks_.size()];
+    if (groups == 0) return false;
+    element_pass_.bindSlot(element_args_.x, x, slots_);
+    element_pass_.set(element_args_.flags, cl_int(flags));
+    ocl::check(queue_.enqueueNDRangeKernel(element_pass_.kernel, cl::NullRange,
+                                           cl::NDRange(element_local_ * std::size_t(groups)),
+                                           element_pass_.local, nullptr, &element_event_),
+               "clEnqueueNDRangeKernel");
+    return true;
   }
 
   cl::Kernel makeKernel(const char* name) {
@@ -434,81 +394,84 @@ class OpenCLBackend final : public Backend {
     return l;
   }
 
-  void buildKernels(const ContributionCsr& csr) {
+  // Groups of the mass-dot reduction over n terms: fixed by the scene size, so every call adds
+  // the same terms in the same order.
+  static int reductionGroups(int count, std::size_t local) {
+    const int per_group = kMinTermsPerWorkItem * int(local);
+    return std::clamp((count + per_group - 1) / per_group, 1, kMaxReduceGroups);
+  }
+
+  void buildKernels() {
     const cl_int n = n_;
-    for (int mode : {kModeProjection, kModeForce}) {
-      Launch& s = mode == kModeForce ? spring_force_ : spring_project_;
-      s = elementLaunch("spring_contributions", num_springs_);
-      s.set(1, n), s.set(2, cl_int(num_springs_)), s.set(3, spring_ends_), s.set(4, spring_params_);
-      s.set(5, cl_int(csr.springBase)), s.set(6, cl_int(mode)), s.set(7, contrib_);
+    // --- the element pass: one work-item per element, one segment of groups per type --------
+    element_pass_.kernel = makeKernel("element_pass");
+    element_local_ = localSize(element_pass_.kernel, kElementLocalSize);
+    element_pass_.local = cl::NDRange(element_local_);
+    const auto groupsFor = [&](int count) { return int((std::size_t(count) + element_local_ - 1) / element_local_); };
+    segment_groups_.assign(1, 0);
+    for (const DeviceBlock& d : blocks_) segment_groups_.push_back(segment_groups_.back() + groupsFor(d.block->count));
+    full_groups_ = segment_groups_.back() + groupsFor(n_);
 
-      Launch& t = mode == kModeForce ? tet_force_ : tet_project_;
-      t = elementLaunch("tet_contributions", num_tets_);
-      t.set(1, n), t.set(2, cl_int(num_tets_)), t.set(3, tet_vertices_), t.set(4, tet_rest_);
-      t.set(5, cl_int(csr.tetBase)), t.set(6, cl_int(mode)), t.set(7, contrib_);
-
-      Launch& p = mode == kModeForce ? pin_force_ : pin_project_;
-      p = elementLaunch("pin_contributions", num_pins_);
-      p.set(1, n), p.set(2, cl_int(num_pins_)), p.set(3, pin_vertex_), p.set(4, pin_stiffness_);
-      p.set(5, pin_targets_), p.set(6, cl_int(csr.pinBase)), p.set(7, cl_int(mode));
-      p.set(8, contrib_);
-    }
-
-    combine_ = elementLaunch("combine", 3 * n_);
-    combine_.set(0, cl_int(3 * n_));
-
-    gather_rhs_ = elementLaunch("gather_rhs", n_);
-    gather_rhs_.set(0, n), gather_rhs_.set(1, offsets_), gather_rhs_.set(2, list_);
-    gather_rhs_.set(3, contrib_), gather_rhs_.set(4, masses_), gather_rhs_.set(5, fext_);
-    gather_rhs_.set(8, rhs_);
-    gather_accel_ = elementLaunch("gather_accelerations", n_);
-    gather_accel_.set(0, n), gather_accel_.set(1, offsets_), gather_accel_.set(2, list_);
-    gather_accel_.set(3, contrib_), gather_accel_.set(4, masses_), gather_accel_.set(5, fext_);
-
-    // Energy passes: element terms reduced per work-group inside the kernel (energy.cl). Segment
-    // group ranges of potential_partials: [springs | tets | pins | vertices].
-    potential_.kernel = makeKernel("potential_partials");
+    // Both reductions write their per-group partials into one buffer.
     mass_dot_.kernel = makeKernel("mass_dot_partials");
-    const std::size_t local = std::min(localSize(potential_.kernel, kReduceLocalSize),
-                                       localSize(mass_dot_.kernel, kReduceLocalSize));
-    const int counts[4] = {num_springs_, num_tets_, num_pins_, n_};
-    energy_segments_[0] = 0;
-    for (int s = 0; s < 4; ++s)
-      energy_segments_[s + 1] = energy_segments_[s] + reductionGroups(counts[s], local);
-    energy_segments_[4] = std::max(energy_segments_[4], energy_segments_[3] + 1);  // n_ == 0
-    mass_dot_groups_ = std::max(reductionGroups(n_, local), 1);
-    const int max_partials = std::max(energy_segments_[4], mass_dot_groups_);
+    const std::size_t reduce_local = localSize(mass_dot_.kernel, kReduceLocalSize);
+    mass_dot_groups_ = reductionGroups(n_, reduce_local);
+    mass_dot_.global = cl::NDRange(reduce_local * std::size_t(mass_dot_groups_));
+    mass_dot_.local = cl::NDRange(reduce_local);
+    const int max_partials = std::max(full_groups_, mass_dot_groups_);
     partials_ = zeroBuffer(std::size_t(max_partials));
     host_partials_.resize(std::size_t(max_partials));
 
-    potential_.global = cl::NDRange(local * std::size_t(energy_segments_[4]));
-    potential_.local = cl::NDRange(local);
-    potential_.set(1, n);
-    potential_.set(2, cl_int(num_springs_)), potential_.set(3, spring_ends_);
-    potential_.set(4, spring_params_);
-    potential_.set(5, cl_int(num_tets_)), potential_.set(6, tet_vertices_);
-    potential_.set(7, tet_rest_);
-    potential_.set(8, cl_int(num_pins_)), potential_.set(9, pin_vertex_);
-    potential_.set(10, pin_stiffness_), potential_.set(11, pin_targets_);
-    potential_.set(12, fext_);
-    const cl_int4 seg_begin = {{energy_segments_[1], energy_segments_[2], energy_segments_[3], 0}};
-    potential_.set(13, seg_begin);
-    potential_.set(14, partials_);
-    potential_.set(15, cl::Local(bytes(local)));
+    element_args_.x = element_pass_.addSlot(0, slots_);
+    element_pass_.add(n);
+    element_args_.flags = element_pass_.add(cl_int(0));
+    element_pass_.add(fext_);
+    element_pass_.add(contrib_);
+    element_pass_.add(partials_);
+    element_pass_.add(cl::Local(bytes(element_local_)));
+    element_pass_.add(cl_int(segment_groups_.back()));
+    for (std::size_t b = 0; b < blocks_.size(); ++b) {
+      const DeviceBlock& d = blocks_[b];
+      element_pass_.add(cl_int4{{segment_groups_[b], segment_groups_[b + 1], d.block->count,
+                                 d.block->contribution_base}});
+      element_pass_.add(d.vertices);
+      element_pass_.add(d.coefficients);
+      element_pass_.add(d.params);
+    }
 
-    mass_dot_.global = cl::NDRange(local * std::size_t(mass_dot_groups_));
-    mass_dot_.local = cl::NDRange(local);
-    mass_dot_.set(0, n), mass_dot_.set(1, masses_);
-    mass_dot_.set(4, partials_);
-    mass_dot_.set(5, cl::Local(bytes(local)));
+    // --- vector operations and the gathers -------------------------------------------------------
+    combine_ = elementLaunch("combine", 3 * n_);
+    combine_.add(cl_int(3 * n_));
+    combine_args_.a = combine_.add(Real(0));
+    combine_args_.x = combine_.addSlot(0, slots_);
+    combine_args_.b = combine_.add(Real(0));
+    combine_args_.y = combine_.addSlot(0, slots_);
+    combine_args_.dst = combine_.addSlot(0, slots_);
+
+    gather_rhs_ = elementLaunch("gather_rhs", n_);
+    gather_accel_ = elementLaunch("gather_accelerations", n_);
+    for (Launch* g : {&gather_rhs_, &gather_accel_}) {
+      g->add(n), g->add(offsets_), g->add(list_), g->add(contrib_), g->add(masses_), g->add(fext_);
+    }
+    gather_rhs_args_.y = gather_rhs_.addSlot(0, slots_);
+    gather_rhs_args_.c = gather_rhs_.add(Real(0));
+    gather_rhs_.add(rhs_);
+    gather_accel_dst_ = gather_accel_.addSlot(0, slots_);
+
+    mass_dot_.add(n), mass_dot_.add(masses_);
+    mass_dot_args_.a = mass_dot_.addSlot(0, slots_);
+    mass_dot_args_.b = mass_dot_.addSlot(0, slots_);
+    mass_dot_.add(partials_);
+    mass_dot_.add(cl::Local(bytes(reduce_local)));
   }
 
   const SceneData& scene_;
   const int n_;
-  int num_springs_ = 0, num_tets_ = 0, num_pins_ = 0;
-  // First group of each potential_partials segment (springs, tets, pins, vertices), then the
-  // launch's group count.
-  std::array<int, 5> energy_segments_{};
+  std::vector<DeviceBlock> blocks_;
+  // First group of each element segment, then of the vertex segment; full_groups_ ends it.
+  std::vector<int> segment_groups_;
+  int full_groups_ = 0;
+  std::size_t element_local_ = 1;
   int mass_dot_groups_ = 1;
 
   ocl::SelectedDevice device_;
@@ -518,24 +481,24 @@ class OpenCLBackend final : public Backend {
 
   std::vector<cl::Buffer> slots_;
   cl::Buffer masses_, fext_, rhs_, contrib_, offsets_, list_;
-  cl::Buffer spring_ends_, spring_params_, tet_vertices_, tet_rest_;
-  cl::Buffer pin_vertex_, pin_stiffness_, pin_targets_;
   cl::Buffer partials_;
 
-  Launch spring_project_, spring_force_, tet_project_, tet_force_, pin_project_, pin_force_;
-  Launch potential_;
-  cl::Event local_events_[3], gather_event_;
-  Launch mass_dot_, combine_, gather_rhs_, gather_accel_;
+  Launch element_pass_, mass_dot_, combine_, gather_rhs_, gather_accel_;
+  struct { cl_uint x, flags; } element_args_{};
+  struct { cl_uint a, x, b, y, dst; } combine_args_{};
+  struct { cl_uint y, c; } gather_rhs_args_{};
+  struct { cl_uint a, b; } mass_dot_args_{};
+  cl_uint gather_accel_dst_ = 0;
+  cl::Event element_event_, gather_event_;
 
   double fext_time_ = std::numeric_limits<double>::quiet_NaN();
-  double pins_time_ = std::numeric_limits<double>::quiet_NaN();
-  Eigen::MatrixX3d host_fext_, host_targets_;
+  Eigen::MatrixX3d host_fext_;
   std::vector<Real> staging_;
   struct PendingWrite {
     std::vector<Real> data;
     cl::Event done;
   };
-  std::array<PendingWrite, 4> pending_writes_;  // a step writes at most x, v, f_ext, pin targets between waits
+  std::vector<PendingWrite> pending_writes_;
   std::size_t next_write_ = 0;
   std::vector<Real> host_partials_;
 };

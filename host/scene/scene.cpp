@@ -3,11 +3,13 @@
 #include <stabint/errors.hpp>
 #include <stabint/scene.hpp>
 
+#include "elements/element_type.hpp"
+#include "scene/validation.hpp"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -43,51 +45,11 @@ bool ForceField::timeDependent() const { return !isZero(rate) || oscillates(ampl
 
 namespace {
 
-// Concatenates anything streamable; doubles print with 6 significant digits, which is enough
-// to recognise the offending value in a message.
-template <typename... Args>
-std::string cat(const Args&... args) {
-  std::ostringstream s;
-  (s << ... << args);
-  return s.str();
-}
-
-template <typename... Args>
-[[noreturn]] void invalid(const Args&... args) {
-  throw InvalidInputError(cat(args...));
-}
-
-std::string vec(const Eigen::Vector3d& v) { return cat("(", v.x(), ", ", v.y(), ", ", v.z(), ")"); }
-
-// Names an element in messages ("spring 12", "body 'cloth'"). Streamed only when a check fails,
-// so validating a large scene builds no strings.
-struct Owner {
-  const char* kind;
-  size_t index;
-  const std::string* label = nullptr;  // bodies are known to users by name, when they have one
-};
-
-std::ostream& operator<<(std::ostream& s, const Owner& o) {
-  if (o.label && !o.label->empty()) return s << o.kind << " '" << *o.label << "'";
-  return s << o.kind << " " << o.index;
-}
-
-// `field` is a member name; `subscript` >= 0 makes it a list entry, e.g. "particles[3]".
-void checkIndex(int index, int n, const Owner& owner, const char* field, long subscript = -1) {
-  if (index < 0 || index >= n) {
-    if (subscript >= 0) invalid(owner, ": index ", field, "[", subscript, "] = ", index, " out of range [0, ", n, ")");
-    invalid(owner, ": index ", field, " = ", index, " out of range [0, ", n, ")");
-  }
-}
-
-// NaN fails every comparison, so `!(k >= 0)` rejects it along with negatives.
-void checkStiffness(double k, const Owner& owner) {
-  if (!(k >= 0.0) || !std::isfinite(k)) invalid(owner, ": stiffness ", k, " must be >= 0");
-}
-
-void checkFinite(const Eigen::Vector3d& v, const Owner& owner, const char* field) {
-  if (!v.allFinite()) invalid(owner, ": ", field, " ", vec(v), " is not finite");
-}
+using validation::checkFinite;
+using validation::checkIndex;
+using validation::invalid;
+using validation::Owner;
+using validation::vec;
 
 void checkRows(const Eigen::MatrixX3d& m, const char* name) {
   for (Eigen::Index i = 0; i < m.rows(); ++i) {
@@ -113,56 +75,6 @@ void checkParticles(const Scene& s) {
     if (!(m > 0.0) || !std::isfinite(m)) invalid("masses[", j, "] = ", m, " must be > 0 and finite");
   }
   if (!s.gravity.allFinite()) invalid("gravity ", vec(s.gravity), " is not finite");
-}
-
-void checkSprings(const Scene& s) {
-  const int n = s.numParticles();
-  for (size_t i = 0; i < s.springs.size(); ++i) {
-    const Spring& sp = s.springs[i];
-    const Owner owner{"spring", i};
-    checkIndex(sp.a, n, owner, "a");
-    checkIndex(sp.b, n, owner, "b");
-    if (sp.a == sp.b) invalid(owner, " joins particle ", sp.a, " to itself");
-    if (!(sp.rest_length >= 0.0) || !std::isfinite(sp.rest_length)) {
-      invalid(owner, ": rest length ", sp.rest_length, " must be >= 0 and finite");
-    }
-    checkStiffness(sp.stiffness, owner);
-  }
-}
-
-void checkTets(const Scene& s) {
-  const int n = s.numParticles();
-  for (size_t i = 0; i < s.tets.size(); ++i) {
-    const Tet& tet = s.tets[i];
-    const Owner owner{"tet", i};
-    for (int k = 0; k < 4; ++k) checkIndex(tet.vertices[k], n, owner, "vertices", k);
-    for (int a = 0; a < 4; ++a) {
-      for (int b = a + 1; b < 4; ++b) {
-        if (tet.vertices[a] == tet.vertices[b]) {
-          invalid(owner, ": particle ", tet.vertices[a], " appears twice (vertices[", a, "] and vertices[", b, "])");
-        }
-      }
-    }
-    checkStiffness(tet.stiffness, owner);
-    const double volume = signedVolume(s.rest_positions, tet.vertices);
-    if (!(volume > 0.0)) invalid(owner, ": non-positive rest volume ", volume, " (degenerate or inverted)");
-  }
-}
-
-void checkPins(const Scene& s) {
-  const int n = s.numParticles();
-  for (size_t i = 0; i < s.pins.size(); ++i) {
-    const Pin& pin = s.pins[i];
-    const Owner owner{"pin", i};
-    checkIndex(pin.vertex, n, owner, "vertex");
-    checkStiffness(pin.stiffness, owner);
-    checkFinite(pin.target.position, owner, "target position");
-    checkFinite(pin.target.velocity, owner, "target velocity");
-    checkFinite(pin.target.amplitude, owner, "target amplitude");
-    if (!std::isfinite(pin.target.frequency)) {
-      invalid(owner, ": target frequency ", pin.target.frequency, " is not finite");
-    }
-  }
 }
 
 void checkForceFields(const Scene& s) {
@@ -204,9 +116,7 @@ void checkBodies(const Scene& s) {
 void validateScene(const Scene& scene) {
   // Particle data first: every later check indexes into it.
   checkParticles(scene);
-  checkSprings(scene);
-  checkTets(scene);
-  checkPins(scene);
+  for (const ElementType* type : elementTypes()) type->validate(scene);
   checkForceFields(scene);
   checkBodies(scene);
 }

@@ -1,6 +1,8 @@
 #pragma once
 // SceneData: the validated scene in the form both backends consume. Built once per Simulator;
 // everything here is immutable afterwards except through the time-dependent forcing queries.
+#include "elements/element_type.hpp"
+
 #include <stabint/scene.hpp>
 
 #include <Eigen/Core>
@@ -9,25 +11,14 @@
 
 namespace stabint {
 
-/// A tet with its rest shape precomputed: F = Ds * dm_inverse where
-/// Ds = [x1-x0, x2-x0, x3-x0]; weight = stiffness * rest volume.
-struct TetRest {
-  std::array<int, 4> vertices;
-  Eigen::Matrix3d dm_inverse;
-  double weight;
-};
-
-/// Per-vertex list (CSR) of the element contributions A_e^T p_e that land on that vertex. The
-/// contributions are numbered: springs first (2 per spring: end a, then end b), then tets (4 per
-/// tet, vertex order), then pins (1 per pin). The gather sums them in list order, so the
-/// right-hand side is deterministic.
+/// Per-vertex list (CSR) of the element contributions w_e A_e^T p_e that land on that vertex.
+/// Contributions are numbered block by block in the order of elementTypes(), element by element,
+/// vertex tuple order within an element (ElementBlock::contribution_base). The gather sums each
+/// vertex's list in that order, so the right-hand side is deterministic.
 struct ContributionCsr {
   std::vector<int> offsets;        // size n + 1
   std::vector<int> contributions;  // contribution indices, sorted ascending per vertex
   int numContributions = 0;
-  int springBase = 0;
-  int tetBase = 0;
-  int pinBase = 0;
 };
 
 class SceneData {
@@ -38,9 +29,8 @@ class SceneData {
   int numParticles() const { return n_; }
   const Scene& scene() const { return scene_; }
   const Eigen::VectorXd& masses() const { return scene_.masses; }
-  const std::vector<Spring>& springs() const { return scene_.springs; }
-  const std::vector<TetRest>& tets() const { return tets_; }
-  const std::vector<Pin>& pins() const { return scene_.pins; }
+  /// One block per element type, in the order of elementTypes() (empty ones included).
+  const std::vector<ElementBlock>& blocks() const { return blocks_; }
   const ContributionCsr& csr() const { return csr_; }
 
   /// External force m_j g + sum of force fields at time t, `n by 3`.
@@ -55,7 +45,7 @@ class SceneData {
  private:
   Scene scene_;
   int n_ = 0;
-  std::vector<TetRest> tets_;
+  std::vector<ElementBlock> blocks_;
   ContributionCsr csr_;
   bool moving_pins_ = false;
   bool time_dependent_fields_ = false;

@@ -1,10 +1,10 @@
 #include "solver/global_system.hpp"
 
-#include "cpu/elements.hpp"
 #include "scene/scene_data.hpp"
 
 #include <stabint/errors.hpp>
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -13,22 +13,30 @@ namespace stabint {
 GlobalSystem::GlobalSystem(const SceneData& scene) : masses_(scene.masses()) {
   const int n = scene.numParticles();
   std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(4 * scene.springs().size() + 16 * scene.tets().size() + scene.pins().size());
-  for (const Spring& s : scene.springs()) {
-    // A = e_a - e_b
-    entries.emplace_back(s.a, s.a, s.stiffness);
-    entries.emplace_back(s.b, s.b, s.stiffness);
-    entries.emplace_back(s.a, s.b, -s.stiffness);
-    entries.emplace_back(s.b, s.a, -s.stiffness);
+  std::size_t count = 0;
+  for (const ElementBlock& block : scene.blocks()) {
+    const int k = block.type->shape().vertices;
+    count += std::size_t(block.count) * std::size_t(k * k);
   }
-  for (const TetRest& tet : scene.tets()) {
-    // Block w G G^T over the tet's four vertices.
-    const Eigen::Matrix<double, 4, 3> g = elements::tetGradientOperator(tet.dm_inverse);
-    const Eigen::Matrix4d block = tet.weight * g * g.transpose();
-    for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) entries.emplace_back(tet.vertices[i], tet.vertices[j], block(i, j));
+  entries.reserve(count);
+  for (const ElementBlock& block : scene.blocks()) {
+    // Block w A^T A over the element's vertex tuple: entry (i, j) = w sum_r A(r, i) A(r, j).
+    const ElementShape shape = block.type->shape();
+    const int K = shape.vertices, R = shape.rows;
+    const int stride = shape.shared_coefficients ? 0 : R * K;
+    for (int e = 0; e < block.count; ++e) {
+      const int* v = &block.vertices[std::size_t(K) * e];
+      const double* a = block.coefficients.data() + std::size_t(stride) * e;
+      const double w = block.params[std::size_t(shape.params) * e];
+      for (int i = 0; i < K; ++i) {
+        for (int j = 0; j < K; ++j) {
+          double sum = 0.0;
+          for (int r = 0; r < R; ++r) sum += a[K * r + i] * a[K * r + j];
+          entries.emplace_back(v[i], v[j], w * sum);
+        }
+      }
+    }
   }
-  for (const Pin& pin : scene.pins()) entries.emplace_back(pin.vertex, pin.vertex, pin.stiffness);
   laplacian_.resize(n, n);
   laplacian_.setFromTriplets(entries.begin(), entries.end());
 }

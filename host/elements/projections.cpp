@@ -1,10 +1,10 @@
-#include "cpu/elements.hpp"
+#include "elements/projections.hpp"
 
 #include <Eigen/LU>
 #include <Eigen/SVD>
 
-namespace stabint {
-namespace elements {
+
+namespace stabint::projections {
 
 Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& F) {
   // The reference path uses Eigen's two-sided Jacobi SVD: slow but accurate for any F,
@@ -17,5 +17,4 @@ Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& F) {
   return U * V.transpose();
 }
 
-}  // namespace elements
-}  // namespace stabint
+}  // namespace stabint::projections

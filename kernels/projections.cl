@@ -1,9 +1,29 @@
-// Tet strain: A_e x = F = Ds Dm^-1 with Ds = [x1-x0, x2-x0, x3-x0], weight k V, projection the
-// nearest rotation R of F. Contributions 4t + i (vertex order) relative to the tet base:
-// column i of w P G^T with G = [[-1,-1,-1],[1,0,0],[0,1,0],[0,0,1]] Dm^-1 (4 by 3).
-// 3x3 matrices are private arrays, row-major: m[3 * row + col].
+// Projections shared by several element types; the OpenCL twins of host/elements/projections.cpp.
+// Small matrices are private arrays, row-major: m[3 * row + col].
 
-#define TET_MAX_JACOBI_SWEEPS 20
+/// Projection of v onto the sphere |p| = radius: p = radius v/|v|. A v shorter than
+/// 1e-12 max(radius, 1) projects along the unit `fallback` instead, so the answer is defined.
+/// Returns |v|. Written without branches on scalar components: PoCL then vectorizes the
+/// work-item loop.
+inline real ontoSphere(const real* v, real radius, __global const real* fallback, real* p) {
+  const real len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  const bool degenerate = len < (real)1e-12 * fmax(radius, (real)1);
+  const real scale = degenerate ? (real)0 : radius / len;
+  p[0] = degenerate ? radius * fallback[0] : scale * v[0];
+  p[1] = degenerate ? radius * fallback[1] : scale * v[1];
+  p[2] = degenerate ? radius * fallback[2] : scale * v[2];
+  return len;
+}
+
+/// w/2 ||a - b||^2 over `count` reals: the energy of an element whose type has no form of its own.
+inline real halfWeightedSquaredDistance(real w, const real* a, const real* b, int count) {
+  real sum = 0;
+#pragma unroll
+  for (int i = 0; i < count; ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
+  return (real)0.5 * w * sum;
+}
+
+#define MAX_JACOBI_SWEEPS 20
 
 /// One Jacobi rotation zeroing A[p][q] of the symmetric A: A <- J^T A J, V <- V J
 /// (Golub & Van Loan, sym.schur2).
@@ -43,7 +63,7 @@ inline void swapColumns(real* M, int a, int b) {
   }
 }
 
-/// M = a p^T + b q^T + c r^T (row-major 3x3): both U V^T and Ds Dm^-1 have this form.
+/// M = a p^T + b q^T + c r^T (row-major 3x3).
 inline void sumOfOuterProducts(real3 a, real3 p, real3 b, real3 q, real3 c, real3 r, real* M) {
   const real3 m0 = a.x * p + b.x * q + c.x * r;
   const real3 m1 = a.y * p + b.y * q + c.y * r;
@@ -63,7 +83,7 @@ inline real3 anyOrthogonal(real3 u) {
 }
 
 /// Nearest rotation R = U V^T of F (SVD F = U S V^T with det U = det V = +1, so the sign of
-/// det F lands on the smallest singular value: the "flip" of method.md). V and S^2 come from a
+/// det F lands on the smallest singular value: the "flip" of docs/elements.md). V and S^2 come from a
 /// cyclic Jacobi eigen-decomposition of F^T F (sorted descending); U from Gram-Schmidt on F V
 /// with u3 = u1 x u2, which stays defined for near-degenerate and inverted F.
 inline void nearestRotation(const real* F, real* R) {
@@ -71,7 +91,7 @@ inline void nearestRotation(const real* F, real* R) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       A[3 * i + j] = F[i] * F[j] + F[3 + i] * F[3 + j] + F[6 + i] * F[6 + j];
-  for (int sweep = 0; sweep < TET_MAX_JACOBI_SWEEPS; ++sweep) {
+  for (int sweep = 0; sweep < MAX_JACOBI_SWEEPS; ++sweep) {
     const real off = A[1] * A[1] + A[2] * A[2] + A[5] * A[5];
     const real diag = A[0] * A[0] + A[4] * A[4] + A[8] * A[8];
     if (!(off > REAL_EPSILON * REAL_EPSILON * diag)) break;
@@ -107,57 +127,4 @@ inline void nearestRotation(const real* F, real* R) {
   const real3 u3 = cross(u1, u2);
   // R = U V^T = u1 v1^T + u2 v2^T + u3 v3^T.
   sumOfOuterProducts(u1, v1, u2, v2, u3, v3, R);
-}
-
-/// F = Ds Dm^-1 for the tet `v`; `dm_inv` is row-major.
-inline void deformationGradient(__global const real* x, int n, int4 v,
-                                __global const real* dm_inv, real* F) {
-  const real3 x0 = loadRow(x, n, v.x);
-  const real3 e1 = loadRow(x, n, v.y) - x0, e2 = loadRow(x, n, v.z) - x0,
-              e3 = loadRow(x, n, v.w) - x0;
-  const real3 d0 = vload3(0, dm_inv), d1 = vload3(1, dm_inv), d2 = vload3(2, dm_inv);
-  // F = Ds Dm^-1 = e1 d0^T + e2 d1^T + e3 d2^T (d_k: rows of Dm^-1).
-  sumOfOuterProducts(e1, d0, e2, d1, e3, d2, F);
-}
-
-/// E = w/2 ||F - R||_F^2
-inline real tetEnergy(const real* F, const real* R, real weight) {
-  real sum = 0;
-  for (int k = 0; k < 9; ++k) sum += (F[k] - R[k]) * (F[k] - R[k]);
-  return (real)0.5 * weight * sum;
-}
-
-// rest: 10 reals per tet: Dm^-1 (row-major), weight = k V.
-__kernel void tet_contributions(__global const real* x, const int n, const int count,
-                                __global const int4* vertices, __global const real* rest,
-                                const int base, const int mode, __global real* contrib) {
-  const int t = get_global_id(0);
-  if (t >= count) return;
-  __global const real* dm_inv = rest + 10 * t;
-  const real weight = dm_inv[9];
-  real F[9], P[9];
-  deformationGradient(x, n, vertices[t], dm_inv, F);
-  nearestRotation(F, P);
-  if (mode == MODE_FORCE)
-    for (int k = 0; k < 9; ++k) P[k] -= F[k];
-  // Column i of P G^T is P times row i of G; rows 1..3 of G are the rows of Dm^-1, row 0 is
-  // minus their sum.
-  const real3 g1 = vload3(0, dm_inv), g2 = vload3(1, dm_inv), g3 = vload3(2, dm_inv);
-  const real3 g0 = -(g1 + g2 + g3);
-  const real3 p0 = weight * (real3)(P[0], P[1], P[2]), p1 = weight * (real3)(P[3], P[4], P[5]),
-              p2 = weight * (real3)(P[6], P[7], P[8]);
-  vstore3((real3)(dot(p0, g0), dot(p1, g0), dot(p2, g0)), base + 4 * t + 0, contrib);
-  vstore3((real3)(dot(p0, g1), dot(p1, g1), dot(p2, g1)), base + 4 * t + 1, contrib);
-  vstore3((real3)(dot(p0, g2), dot(p1, g2), dot(p2, g2)), base + 4 * t + 2, contrib);
-  vstore3((real3)(dot(p0, g3), dot(p1, g3), dot(p2, g3)), base + 4 * t + 3, contrib);
-}
-
-/// Energy of tet t at the positions x (summed by potential_partials in energy.cl).
-inline real tetEnergyAt(__global const real* x, int n, __global const int4* vertices,
-                        __global const real* rest, int t) {
-  __global const real* dm_inv = rest + 10 * t;
-  real F[9], R[9];
-  deformationGradient(x, n, vertices[t], dm_inv, F);
-  nearestRotation(F, R);
-  return tetEnergy(F, R, dm_inv[9]);
 }

@@ -1,0 +1,221 @@
+#pragma once
+// ElementTypeOf<Kind>: an ElementType from a small struct that states what is specific to one
+// element type (see host/elements/spring.cpp for the shortest one, docs/elements.md for the
+// how-to). A Kind derives from KindDefaults<Element> (Element: the public struct of
+// include/stabint/scene.hpp) and provides:
+//
+//   static constexpr auto kList = &Scene::tets;    where a scene keeps them
+//   static constexpr const char* kName, kIdentifier;
+//   static constexpr int kVertices, kRows, kParams;
+//   static std::array<int*, kVertices> vertexRefs(Element&);
+//   static void check(const Scene&, const Element&, const validation::Owner&);
+//   static void params(const Scene&, const Element&, double* params);     // params[0] = weight
+//   static double project(const double* ax, const double* params, double* p);  // energy
+// and either
+//   static constexpr std::array<double, kRows * kVertices> kCoefficients;  (kSharedCoefficients)
+// or
+//   static void coefficients(const Scene&, const Element&, double* a);    // R by K, row-major
+// plus, to differ from KindDefaults: kTerm, kMayDependOnTime with timeDependent/paramsAt, and
+// jsonFields() for the generic JSON form.
+#include "elements/element_type.hpp"
+#include "scene/validation.hpp"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+namespace stabint {
+
+/// w/2 ||ax - p||^2 over `count` reals: the energy of an element whose type has no cheaper or
+/// more accurate form of its own.
+inline double halfWeightedSquaredDistance(double w, const double* ax, const double* p, int count) {
+  double sum = 0.0;
+  for (int i = 0; i < count; ++i) sum += (ax[i] - p[i]) * (ax[i] - p[i]);
+  return 0.5 * w * sum;
+}
+
+/// A numeric member of an element struct in the generic JSON form.
+template <class Element>
+struct KindField {
+  const char* key;
+  double Element::*member;
+  double default_value;
+  bool required;
+};
+
+template <class ElementStruct>
+struct KindDefaults {
+  using Element = ElementStruct;
+  static constexpr bool kSharedCoefficients = false;
+  static constexpr EnergyTerm kTerm = EnergyTerm::Internal;
+  static constexpr bool kMayDependOnTime = false;
+  static std::vector<KindField<Element>> jsonFields() { return {}; }
+};
+
+template <class Kind>
+class ElementTypeOf final : public ElementType {
+  using Element = typename Kind::Element;
+  static constexpr int K = Kind::kVertices;
+  static constexpr int R = Kind::kRows;
+  static constexpr int P = Kind::kParams;
+  static constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
+
+  static std::array<int, K> vertexTuple(const Element& element) {
+    Element copy = element;
+    std::array<int, K> out{};
+    const std::array<int*, K> refs = Kind::vertexRefs(copy);
+    for (int k = 0; k < K; ++k) out[k] = *refs[k];
+    return out;
+  }
+  static const std::vector<Element>& list(const Scene& scene) { return scene.*Kind::kList; }
+
+ public:
+  const char* name() const override { return Kind::kName; }
+  const char* identifier() const override { return Kind::kIdentifier; }
+  ElementShape shape() const override { return {K, R, P, Kind::kSharedCoefficients}; }
+  std::vector<double> sharedCoefficients() const override {
+    if constexpr (Kind::kSharedCoefficients) return {Kind::kCoefficients.begin(), Kind::kCoefficients.end()};
+    return {};
+  }
+  EnergyTerm term() const override { return Kind::kTerm; }
+
+  int count(const Scene& scene) const override { return static_cast<int>(list(scene).size()); }
+
+  void validate(const Scene& scene) const override {
+    const std::vector<Element>& elements = list(scene);
+    for (std::size_t i = 0; i < elements.size(); ++i) {
+      Kind::check(scene, elements[i], validation::Owner{Kind::kName, i});
+    }
+  }
+
+  ElementBlock build(const Scene& scene) const override {
+    const std::vector<Element>& elements = list(scene);
+    ElementBlock block;
+    block.type = this;
+    block.count = static_cast<int>(elements.size());
+    block.vertices.reserve(K * elements.size());
+    block.params.resize(P * elements.size());
+    if constexpr (Kind::kSharedCoefficients) {
+      block.coefficients.assign(Kind::kCoefficients.begin(), Kind::kCoefficients.end());
+    } else {
+      block.coefficients.resize(R * K * elements.size());
+    }
+    for (std::size_t e = 0; e < elements.size(); ++e) {
+      for (int v : vertexTuple(elements[e])) block.vertices.push_back(v);
+      if constexpr (!Kind::kSharedCoefficients) Kind::coefficients(scene, elements[e], &block.coefficients[R * K * e]);
+      Kind::params(scene, elements[e], &block.params[P * e]);
+    }
+    return block;
+  }
+
+  bool timeDependent(const Scene& scene) const override {
+    if constexpr (Kind::kMayDependOnTime) return Kind::timeDependent(scene);
+    (void)scene;
+    return false;
+  }
+
+  void paramsAt(const Scene& scene, double t, std::vector<double>& params) const override {
+    const std::vector<Element>& elements = list(scene);
+    params.resize(P * elements.size());
+    for (std::size_t e = 0; e < elements.size(); ++e) {
+      if constexpr (Kind::kMayDependOnTime) {
+        Kind::paramsAt(scene, elements[e], t, &params[P * e]);
+      } else {
+        Kind::params(scene, elements[e], &params[P * e]);
+      }
+    }
+  }
+
+  void appendShifted(Scene& into, const Scene& part, int offset) const override {
+    std::vector<Element>& target = into.*Kind::kList;
+    for (Element element : list(part)) {
+      for (int* v : Kind::vertexRefs(element)) *v += offset;
+      target.push_back(element);
+    }
+  }
+
+  double project(const double* ax, const double* params, double* p) const override {
+    return Kind::project(ax, params, p);
+  }
+
+  // Plain arrays with compile-time bounds, the same loops as kernels/element_pass.cl: the
+  // compiler unrolls them and keeps A_e x and p_e in registers.
+  double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
+              int flags, Eigen::MatrixX3d* out) const override {
+    const bool write = (flags & (kPassProjection | kPassForce)) != 0;
+    const bool force = (flags & kPassForce) != 0;
+    const Eigen::Index n = x.rows();
+    const double* xs = x.data();
+    double* os = write ? out->data() : nullptr;
+    double shared[R * K];
+    if constexpr (Kind::kSharedCoefficients) {
+      for (int i = 0; i < R * K; ++i) shared[i] = Kind::kCoefficients[i];
+    }
+    double energy = 0.0;
+    for (int e = 0; e < block.count; ++e) {
+      const int* v = block.vertices.data() + K * e;
+      const double* a = Kind::kSharedCoefficients ? shared : block.coefficients.data() + kStride * e;
+      const double* prm = params.data() + P * e;
+      // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
+      // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
+      // exactly x_a - x_b or x_j.
+      double ax[3 * R];
+      for (int k = 0; k < K; ++k) {
+        const double x0 = xs[v[k]], x1 = xs[n + v[k]], x2 = xs[2 * n + v[k]];
+        for (int r = 0; r < R; ++r) {
+          const double c = a[K * r + k];
+          ax[3 * r] = k == 0 ? c * x0 : ax[3 * r] + c * x0;
+          ax[3 * r + 1] = k == 0 ? c * x1 : ax[3 * r + 1] + c * x1;
+          ax[3 * r + 2] = k == 0 ? c * x2 : ax[3 * r + 2] + c * x2;
+        }
+      }
+      double p[3 * R];
+      const double element_energy = Kind::project(ax, prm, p);
+      if (flags & kPassEnergy) energy += element_energy;
+      if (!write) continue;
+      const double w = prm[0];
+      for (int i = 0; i < 3 * R; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
+      for (int k = 0; k < K; ++k) {
+        double c0 = a[k] * p[0], c1 = a[k] * p[1], c2 = a[k] * p[2];
+        for (int r = 1; r < R; ++r) {
+          c0 += a[K * r + k] * p[3 * r];
+          c1 += a[K * r + k] * p[3 * r + 1];
+          c2 += a[K * r + k] * p[3 * r + 2];
+        }
+        os[v[k]] += c0;
+        os[n + v[k]] += c1;
+        os[2 * n + v[k]] += c2;
+      }
+    }
+    return energy;
+  }
+
+  std::vector<Field> jsonFields() const override {
+    std::vector<Field> fields;
+    for (const KindField<Element>& f : Kind::jsonFields()) {
+      fields.push_back({f.key, f.default_value, f.required});
+    }
+    return fields;
+  }
+
+  void record(const Scene& scene, int i, std::vector<int>& vertices, std::vector<double>& values) const override {
+    const Element& element = list(scene)[i];
+    const std::array<int, K> tuple = vertexTuple(element);
+    vertices.assign(tuple.begin(), tuple.end());
+    values.clear();
+    for (const KindField<Element>& f : Kind::jsonFields()) values.push_back(element.*f.member);
+  }
+
+  void appendRecord(Scene& scene, const std::vector<int>& vertices, const std::vector<double>& values) const override {
+    Element element{};
+    const std::array<int*, K> refs = Kind::vertexRefs(element);
+    for (int k = 0; k < K; ++k) *refs[k] = vertices.at(k);
+    const std::vector<KindField<Element>> fields = Kind::jsonFields();
+    for (std::size_t i = 0; i < fields.size(); ++i) element.*fields[i].member = values.at(i);
+    (scene.*Kind::kList).push_back(element);
+  }
+};
+
+}  // namespace stabint

@@ -1,0 +1,115 @@
+#pragma once
+// The generic element pipeline (docs/elements.md). Every element has the Projective-Dynamics
+// form E_e = w_e/2 ||A_e x - p_e||^2 with p_e the projection of A_e x onto the element's rest
+// set. An element type supplies only what is specific to it, in one file host/elements/<type>.cpp:
+//   - its vertex tuple (K vertices) and the rows R of A_e (A_e x is R by 3),
+//   - the coefficients of A_e (R by K, shared by the type or one set per element), its weight w_e
+//     and the rest data its projection reads (P reals per element, the first of which is w_e),
+//   - validation of its rest state, and
+//   - the projection with the element's energy: a C++ function here and an OpenCL function in
+//     kernels/<type>.cl.
+// Everything else is generic over the table of types (elementTypes()): the contribution CSR,
+// L = sum w_e A_e^T A_e, the right-hand-side gather, the energy reductions and the kernels.
+#include <stabint/scene.hpp>
+
+#include <Eigen/Core>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace stabint {
+
+class ElementType;
+
+/// Which term of the potential an element's energy belongs to: the blend books pins apart
+/// because their targets may move.
+enum class EnergyTerm { Internal, Pins };
+
+/// What an element pass computes, as bit flags (the same values as PASS_* in kernels/real.cl).
+enum PassFlags : int {
+  kPassProjection = 1,  // out += w A^T p: the local step's share of the global right-hand side
+  kPassForce = 2,       // out += w A^T (p - A x) = -grad E_e
+  kPassEnergy = 4,      // returns sum_e w/2 ||A x - p||^2
+};
+
+/// All elements of one type in a scene, in the flat form every backend consumes. Element e has
+/// vertices[K e + k] (k < K), the R by K row-major coefficients of A_e at
+/// coefficients[R K e] (or at 0 when the type shares one A_e), and params[P e + i] (i < P) with
+/// params[P e] = w_e. Its contributions w_e (A_e^T p_e) to vertex k are numbered
+/// contribution_base + K e + k in the CSR.
+struct ElementBlock {
+  const ElementType* type = nullptr;
+  int count = 0;
+  std::vector<int> vertices;
+  std::vector<double> coefficients;
+  std::vector<double> params;
+  int contribution_base = 0;
+};
+
+/// Sizes of a type's data, fixed at compile time for each type.
+struct ElementShape {
+  int vertices;              // K
+  int rows;                  // R
+  int params;                // P (weight included)
+  bool shared_coefficients;  // one A_e for every element of the type
+};
+
+/// One element type. Implementations are ElementTypeOf<Kind> (element_kind.hpp).
+class ElementType {
+ public:
+  virtual ~ElementType() = default;
+
+  /// Name in messages ("triangle strain 3: ..."); `identifier()` prefixes its OpenCL functions
+  /// (`<identifier>_project` in kernels/<identifier>.cl) and names its JSON list when it has one.
+  virtual const char* name() const = 0;
+  virtual const char* identifier() const = 0;
+  virtual ElementShape shape() const = 0;
+  /// The R by K coefficients (row-major) every element shares when shape().shared_coefficients.
+  virtual std::vector<double> sharedCoefficients() const = 0;
+  virtual EnergyTerm term() const = 0;
+
+  // ---- the scene side --------------------------------------------------------------------------
+  virtual int count(const Scene& scene) const = 0;
+  /// Indices in range and distinct, parameters finite and in range, rest state valid. Throws
+  /// InvalidInputError naming the element ("<name> <index>: ...").
+  virtual void validate(const Scene& scene) const = 0;
+  /// The block of a validated scene at t = 0 (contribution_base left to the caller).
+  virtual ElementBlock build(const Scene& scene) const = 0;
+  /// True when the params depend on time (pins with moving targets); then paramsAt gives them.
+  virtual bool timeDependent(const Scene& scene) const = 0;
+  virtual void paramsAt(const Scene& scene, double t, std::vector<double>& params) const = 0;
+  /// Appends the elements of `part` to `into`, with vertex indices shifted by `offset`.
+  virtual void appendShifted(Scene& into, const Scene& part, int offset) const = 0;
+
+  // ---- the math (reference, double) ------------------------------------------------------------
+  /// p = projection of `ax` (R by 3, row-major) for an element with these params; returns the
+  /// element's energy w/2 ||ax - p||^2.
+  virtual double project(const double* ax, const double* params, double* p) const = 0;
+  /// One pass over the block at positions x (`n by 3`) with `params` (block.params, or
+  /// paramsAt's for a time-dependent type): adds the contributions of `flags` (kPassProjection or
+  /// kPassForce) into `out` (`n by 3`, may be null without them) in element order, and returns
+  /// the summed energy when kPassEnergy is set (else 0).
+  virtual double pass(const ElementBlock& block, const std::vector<double>& params,
+                      const Eigen::MatrixX3d& x, int flags, Eigen::MatrixX3d* out) const = 0;
+
+  // ---- the generic JSON form (types that have one) ---------------------------------------------
+  /// Names of the numeric fields of an element in its JSON object, besides "vertices"; an empty
+  /// list means the type has a hand-written JSON form (springs, tets, pins).
+  struct Field {
+    const char* key;
+    double default_value;  // used when the key is absent
+    bool required;
+  };
+  virtual std::vector<Field> jsonFields() const = 0;
+  /// Element i as its vertices and field values (in jsonFields order).
+  virtual void record(const Scene& scene, int i, std::vector<int>& vertices,
+                      std::vector<double>& values) const = 0;
+  virtual void appendRecord(Scene& scene, const std::vector<int>& vertices,
+                            const std::vector<double>& values) const = 0;
+};
+
+/// Every element type, in the order of the contribution numbering and of the kernels' segments.
+const std::vector<const ElementType*>& elementTypes();
+
+}  // namespace stabint

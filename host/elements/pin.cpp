@@ -1,0 +1,62 @@
+// Pin (vertex j, target q(t), stiffness k): E = k/2 |x_j - q(t)|^2.
+// A x = x_j (coefficient [1]), w = k, p = q(t): the only element whose params depend on time.
+#include "elements/element_kind.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace stabint {
+namespace {
+
+using validation::invalid;
+
+struct PinKind : KindDefaults<Pin> {
+  static constexpr auto kList = &Scene::pins;
+  static constexpr const char* kName = "pin";
+  static constexpr const char* kIdentifier = "pin";
+  static constexpr int kVertices = 1, kRows = 1;
+  static constexpr int kParams = 4;  // k, q(t)
+  static constexpr bool kSharedCoefficients = true;
+  static constexpr std::array<double, 1> kCoefficients{1.0};
+  static constexpr EnergyTerm kTerm = EnergyTerm::Pins;
+  static constexpr bool kMayDependOnTime = true;
+
+  static std::array<int*, 1> vertexRefs(Pin& pin) { return {&pin.vertex}; }
+
+  static void check(const Scene& scene, const Pin& pin, const validation::Owner& owner) {
+    validation::checkIndex(pin.vertex, scene.numParticles(), owner, "vertex");
+    validation::checkStiffness(pin.stiffness, owner);
+    validation::checkFinite(pin.target.position, owner, "target position");
+    validation::checkFinite(pin.target.velocity, owner, "target velocity");
+    validation::checkFinite(pin.target.amplitude, owner, "target amplitude");
+    if (!std::isfinite(pin.target.frequency)) {
+      invalid(owner, ": target frequency ", pin.target.frequency, " is not finite");
+    }
+  }
+
+  static bool timeDependent(const Scene& scene) {
+    return std::any_of(scene.pins.begin(), scene.pins.end(), [](const Pin& p) { return p.target.moving(); });
+  }
+  static void paramsAt(const Scene&, const Pin& pin, double t, double* p) {
+    const Eigen::Vector3d q = pin.target.at(t);
+    p[0] = pin.stiffness;
+    p[1] = q.x();
+    p[2] = q.y();
+    p[3] = q.z();
+  }
+  static void params(const Scene& scene, const Pin& pin, double* p) { paramsAt(scene, pin, 0.0, p); }
+
+  static double project(const double* ax, const double* params, double* p) {
+    for (int c = 0; c < 3; ++c) p[c] = params[1 + c];
+    return halfWeightedSquaredDistance(params[0], ax, p, 3);
+  }
+};
+
+}  // namespace
+
+const ElementType& pinElementType() {
+  static const ElementTypeOf<PinKind> type;
+  return type;
+}
+
+}  // namespace stabint

@@ -1,0 +1,71 @@
+// Co-rotated tet strain: E = k V/2 ||F - R||_F^2, F = Ds Dm^-1 with Ds = [x1-x0, x2-x0, x3-x0]
+// and R the nearest rotation. A x = F^T = G^T X with the 4 by 3
+// G = [[-1,-1,-1],[1,0,0],[0,1,0],[0,0,1]] Dm^-1 (so that F = X G for X = [x0 x1 x2 x3]),
+// w = k V, p = R^T.
+#include "elements/element_kind.hpp"
+#include "elements/projections.hpp"
+
+#include <Eigen/LU>
+
+namespace stabint {
+namespace {
+
+using validation::invalid;
+
+Eigen::Matrix3d restEdges(const Scene& scene, const Tet& tet) {
+  const auto& x = scene.rest_positions;
+  const auto& v = tet.vertices;
+  Eigen::Matrix3d dm;
+  for (int k = 0; k < 3; ++k) dm.col(k) = (x.row(v[k + 1]) - x.row(v[0])).transpose();
+  return dm;
+}
+
+struct TetKind : KindDefaults<Tet> {
+  static constexpr auto kList = &Scene::tets;
+  static constexpr const char* kName = "tet";
+  static constexpr const char* kIdentifier = "tet";
+  static constexpr int kVertices = 4, kRows = 3;
+  static constexpr int kParams = 1;  // k V
+
+  static std::array<int*, 4> vertexRefs(Tet& t) {
+    return {&t.vertices[0], &t.vertices[1], &t.vertices[2], &t.vertices[3]};
+  }
+
+  static void check(const Scene& scene, const Tet& tet, const validation::Owner& owner) {
+    validation::checkVertexList(tet.vertices, scene.numParticles(), owner);
+    validation::checkStiffness(tet.stiffness, owner);
+    const double volume = signedVolume(scene.rest_positions, tet.vertices);
+    if (!(volume > 0.0)) invalid(owner, ": non-positive rest volume ", volume, " (degenerate or inverted)");
+  }
+
+  static void coefficients(const Scene& scene, const Tet& tet, double* a) {
+    // check() has guaranteed det(Dm) > 0, so the inverse exists.
+    const Eigen::Matrix3d dm_inverse = restEdges(scene, tet).inverse();
+    Eigen::Matrix<double, 4, 3> g;
+    g.row(0) = -dm_inverse.colwise().sum();
+    g.bottomRows<3>() = dm_inverse;
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 4; ++k) a[4 * r + k] = g(k, r);
+  }
+
+  static void params(const Scene& scene, const Tet& tet, double* p) {
+    p[0] = tet.stiffness * restEdges(scene, tet).determinant() / 6.0;
+  }
+
+  static double project(const double* ax, const double* params, double* p) {
+    // ax holds F^T row-major, i.e. F column-major; p = R^T row-major is R column-major.
+    const Eigen::Map<const Eigen::Matrix3d> F(ax);
+    Eigen::Map<Eigen::Matrix3d> rotation(p);
+    rotation = projections::nearestRotation(F);
+    return halfWeightedSquaredDistance(params[0], ax, p, 9);
+  }
+};
+
+}  // namespace
+
+const ElementType& tetElementType() {
+  static const ElementTypeOf<TetKind> type;
+  return type;
+}
+
+}  // namespace stabint

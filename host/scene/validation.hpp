@@ -1,0 +1,76 @@
+#pragma once
+// The checks validateScene and the element types share, each throwing InvalidInputError with a
+// message that names the element or field ("spring 12: stiffness -1 must be >= 0").
+#include <stabint/errors.hpp>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <cstddef>
+#include <ostream>
+#include <sstream>
+#include <string>
+
+namespace stabint::validation {
+
+/// Concatenates anything streamable; doubles print with 6 significant digits, which is enough to
+/// recognise the offending value in a message.
+template <typename... Args>
+std::string cat(const Args&... args) {
+  std::ostringstream s;
+  (s << ... << args);
+  return s.str();
+}
+
+template <typename... Args>
+[[noreturn]] void invalid(const Args&... args) {
+  throw InvalidInputError(cat(args...));
+}
+
+inline std::string vec(const Eigen::Vector3d& v) { return cat("(", v.x(), ", ", v.y(), ", ", v.z(), ")"); }
+
+/// Names an element in messages ("spring 12", "body 'cloth'"). Streamed only when a check
+/// fails, so validating a large scene builds no strings.
+struct Owner {
+  const char* kind;
+  std::size_t index;
+  const std::string* label = nullptr;  // bodies are known to users by name, when they have one
+};
+
+inline std::ostream& operator<<(std::ostream& s, const Owner& o) {
+  if (o.label && !o.label->empty()) return s << o.kind << " '" << *o.label << "'";
+  return s << o.kind << " " << o.index;
+}
+
+/// `field` is a member name; `subscript` >= 0 makes it a list entry, e.g. "particles[3]".
+inline void checkIndex(int index, int n, const Owner& owner, const char* field, long subscript = -1) {
+  if (index < 0 || index >= n) {
+    if (subscript >= 0) invalid(owner, ": index ", field, "[", subscript, "] = ", index, " out of range [0, ", n, ")");
+    invalid(owner, ": index ", field, " = ", index, " out of range [0, ", n, ")");
+  }
+}
+
+/// NaN fails every comparison, so `!(k >= 0)` rejects it along with negatives.
+inline void checkStiffness(double k, const Owner& owner) {
+  if (!(k >= 0.0) || !std::isfinite(k)) invalid(owner, ": stiffness ", k, " must be >= 0");
+}
+
+inline void checkFinite(const Eigen::Vector3d& v, const Owner& owner, const char* field) {
+  if (!v.allFinite()) invalid(owner, ": ", field, " ", vec(v), " is not finite");
+}
+
+/// Each of `count` vertices `vertices[k]` (field "vertices[k]") in range and no particle twice.
+template <typename Vertices>
+void checkVertexList(const Vertices& vertices, int n, const Owner& owner) {
+  const long count = static_cast<long>(vertices.size());
+  for (long k = 0; k < count; ++k) checkIndex(vertices[k], n, owner, "vertices", k);
+  for (long a = 0; a < count; ++a) {
+    for (long b = a + 1; b < count; ++b) {
+      if (vertices[a] == vertices[b]) {
+        invalid(owner, ": particle ", vertices[a], " appears twice (vertices[", a, "] and vertices[", b, "])");
+      }
+    }
+  }
+}
+
+}  // namespace stabint::validation

@@ -264,8 +264,13 @@ struct Simulator::Impl {
                                  1.0, options.max_velocity_scale);
     } else if (excess() > tau) {
       changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
-      if (excess() > tau && report.branch == BlendBranch::BackwardEuler)
+      if (excess() > tau && report.branch == BlendBranch::BackwardEuler) {
         p_new = lowerPotentialTowardPartner(target_now - kineticEnergy(v_new), p_new, report);
+        // Moving the positions moved the angular momentum about the origin with them.
+        if (momentum_conserved && im_momenta_known)
+          setMomenta(rigidMotion(scene.masses(), x_new, v_new), im_momenta.momentum,
+                     im_momenta.angularMomentumAboutOrigin(), x_new, v_new);
+      }
       if (excess() > tau && !momentum_conserved)
         changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/false, 0.0, 1.0);
     }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <vector>
 
 namespace stabint {
 namespace {
@@ -64,6 +65,24 @@ TEST(SimulatorInput, NamesRoundTrip) {
   EXPECT_THROW(parseIntegrator("RK4"), InvalidInputError);
   EXPECT_EQ(parseBackend("OpenCL"), BackendKind::OpenCL);
   EXPECT_THROW(parseBackend("cuda"), InvalidInputError);
+}
+
+// A Simulator moves (into containers, out of factories) and the moved-to one carries on the same
+// trajectory as one that never moved.
+TEST(SimulatorMove, MovedSimulatorContinuesTheSameRun) {
+  SimulatorOptions o;
+  Simulator a(makeChainPendulum(), o);
+  Simulator b(makeChainPendulum(), o);
+  for (int i = 0; i < 5; ++i) a.step(), b.step();
+  std::vector<Simulator> moved;
+  moved.push_back(std::move(b));
+  moved.emplace_back(makeLinearOscillator(), o);  // may reallocate: moves again
+  for (int i = 0; i < 5; ++i) a.step(), moved[0].step();
+  EXPECT_EQ(a.stepCount(), moved[0].stepCount());
+  EXPECT_EQ((a.positions() - moved[0].positions()).cwiseAbs().maxCoeff(), 0.0);
+  Simulator c(makeLinearOscillator(), o);
+  c = std::move(moved[0]);
+  EXPECT_EQ((a.positions() - c.positions()).cwiseAbs().maxCoeff(), 0.0);
 }
 
 }  // namespace

@@ -443,6 +443,8 @@ struct Simulator::Impl {
 Simulator::Simulator(const Scene& scene, const SimulatorOptions& options)
     : impl_(std::make_unique<Impl>(scene, options)) {}
 Simulator::~Simulator() = default;
+Simulator::Simulator(Simulator&&) noexcept = default;
+Simulator& Simulator::operator=(Simulator&&) noexcept = default;
 
 const StepReport& Simulator::step() { return impl_->step(); }
 const Eigen::MatrixX3d& Simulator::positions() const { return impl_->x; }

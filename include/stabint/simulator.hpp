@@ -146,6 +146,10 @@ class Simulator {
   ~Simulator();
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;
+  /// Movable (e.g. into a std::vector); a moved-from Simulator may only be destroyed or
+  /// assigned to.
+  Simulator(Simulator&&) noexcept;
+  Simulator& operator=(Simulator&&) noexcept;
 
   /// Advances one time step. Throws NonFiniteStateError (state unchanged) when the step would
   /// produce a non-finite position or velocity.

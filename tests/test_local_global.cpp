@@ -7,6 +7,7 @@
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
+#include "triangle_cloth_scene.hpp"
 
 #include <gtest/gtest.h>
 
@@ -55,9 +56,17 @@ Eigen::MatrixX3d inertialTarget(const Scene& s) {
   return y;
 }
 
-class LocalGlobalTest : public ::testing::TestWithParam<bool> {
+enum class SceneKind { Springs, Tets, Triangles };
+
+class LocalGlobalTest : public ::testing::TestWithParam<SceneKind> {
  protected:
-  Scene scene() const { return GetParam() ? tetScene() : clothScene(); }
+  Scene scene() const {
+    switch (GetParam()) {
+      case SceneKind::Tets: return tetScene();
+      case SceneKind::Triangles: return testing::triangleCloth(6, 5);
+      default: return clothScene();
+    }
+  }
 };
 
 TEST_P(LocalGlobalTest, ObjectiveNeverIncreases) {
@@ -113,8 +122,13 @@ TEST_P(LocalGlobalTest, ConvergedSolutionHasVanishingGradient) {
   EXPECT_LT(gradient.cwiseAbs().maxCoeff(), 1e-5 * force_scale);
 }
 
-INSTANTIATE_TEST_SUITE_P(SpringsAndTets, LocalGlobalTest, ::testing::Values(false, true),
-                         [](const auto& info) { return info.param ? "Tets" : "Springs"; });
+INSTANTIATE_TEST_SUITE_P(Elements, LocalGlobalTest,
+                         ::testing::Values(SceneKind::Springs, SceneKind::Tets, SceneKind::Triangles),
+                         [](const auto& info) {
+                           return info.param == SceneKind::Tets        ? "Tets"
+                                  : info.param == SceneKind::Triangles ? "TrianglesAndHinges"
+                                                                       : "Springs";
+                         });
 
 // The energy the local step returns with the right-hand side is the potential at its input.
 TEST_P(LocalGlobalTest, FusedEnergyOfTheLocalStepIsThePotential) {

@@ -26,7 +26,7 @@ std::unique_ptr<Backend> makeBackend(const SceneData& data, BackendChoice choice
   return makeOpenCLBackend(data, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl);
 }
 
-/// The solve's constant c = (factor / h^2) per integrator (method.md section 2).
+/// The solve's constant c = (factor / h^2) per integrator (docs/method.md section 2).
 double solveConstant(Integrator integrator) {
   const double h2 = kTimeStep * kTimeStep;
   switch (integrator) {

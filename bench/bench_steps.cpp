@@ -65,7 +65,7 @@ void runSteps(benchmark::State& state, const std::string& key, const std::functi
 
   PhaseTimes summed;
   double iterations = 0, energy_evaluations = 0, alpha = 0;
-  double branch_im = 0, branch_be = 0, branch_fe = 0, rebuilds = 0;
+  double branch_im = 0, branch_be = 0, branch_scale = 0, rebuilds = 0;
   for (auto _ : state) {
     const StepReport* r = nullptr;
     try {
@@ -83,7 +83,7 @@ void runSteps(benchmark::State& state, const std::string& key, const std::functi
     alpha += r->alpha;
     branch_im += r->branch == BlendBranch::ImplicitMidpoint;
     branch_be += r->branch == BlendBranch::BackwardEuler;
-    branch_fe += r->branch == BlendBranch::ForwardEuler;
+    branch_scale += r->branch == BlendBranch::VelocityScale;
     if (exploded(*r)) {
       state.PauseTiming();
       f.rebuild();
@@ -104,7 +104,7 @@ void runSteps(benchmark::State& state, const std::string& key, const std::functi
   if (integrator == Integrator::EnergyBlend) {
     state.counters["branch_IM"] = Counter(branch_im, Counter::kAvgIterations);
     state.counters["branch_BE"] = Counter(branch_be, Counter::kAvgIterations);
-    state.counters["branch_FE"] = Counter(branch_fe, Counter::kAvgIterations);
+    state.counters["branch_scale"] = Counter(branch_scale, Counter::kAvgIterations);
     state.counters["alpha"] = Counter(alpha, Counter::kAvgIterations);
   }
   if (rebuilds > 0) state.counters["rebuilds"] = rebuilds;
@@ -145,7 +145,7 @@ void runPair(benchmark::State& state, const std::string& key, const std::functio
   PairFixture& f = *fixture;
   using Clock = std::chrono::steady_clock;
   double be_time = 0, blend_time = 0, be_iterations = 0, blend_iterations = 0;
-  double branch_im = 0, branch_be = 0, branch_fe = 0, blend_energy_evaluations = 0;
+  double branch_im = 0, branch_be = 0, branch_scale = 0, blend_energy_evaluations = 0;
   try {
     for (auto _ : state) {
       auto start = Clock::now();
@@ -158,7 +158,7 @@ void runPair(benchmark::State& state, const std::string& key, const std::functio
       blend_energy_evaluations += r.energy_evaluations;
       branch_im += r.branch == BlendBranch::ImplicitMidpoint;
       branch_be += r.branch == BlendBranch::BackwardEuler;
-      branch_fe += r.branch == BlendBranch::ForwardEuler;
+      branch_scale += r.branch == BlendBranch::VelocityScale;
     }
   } catch (const NonFiniteStateError& e) {
     state.SkipWithError(e.what());
@@ -174,7 +174,7 @@ void runPair(benchmark::State& state, const std::string& key, const std::functio
   state.counters["blend_energy_evaluations"] = Counter(blend_energy_evaluations, Counter::kAvgIterations);
   state.counters["branch_IM"] = Counter(branch_im, Counter::kAvgIterations);
   state.counters["branch_BE"] = Counter(branch_be, Counter::kAvgIterations);
-  state.counters["branch_FE"] = Counter(branch_fe, Counter::kAvgIterations);
+  state.counters["branch_scale"] = Counter(branch_scale, Counter::kAvgIterations);
   state.SetLabel(f.be.sim->backendDescription());
 }
 

@@ -7,7 +7,7 @@
 Writes <charts>/scaling.png and .svg (log-log: one BE local/global iteration, total and per
 phase, and BE/blend steps, against the number of particles of the cloth scaling family) and the
 summary: tables per scene/backend/integrator of step and iteration times with their phase
-breakdown, and the two performance goals (method.md section 3 and the issue):
+breakdown, and the two performance goals (docs/method.md section 3 and the issue):
   - one BE iteration on the 50x50 cloth under 0.6 ms on PoCL (OpenCL backend);
   - a blend step at most 30 % (aim 15 %) slower than a BE step with the same main iteration count.
 Use /usr/bin/python3 (Debian's python3-matplotlib); `python3` on PATH may lack matplotlib.

@@ -4,8 +4,9 @@
 usage: /usr/bin/python3 bench/study_charts.py [RESULTS_DIR]   (default: results)
 
 Reads RESULTS_DIR/{sweep,stability,energy_tetbar,energy_cloth,accuracy,energy_table,reference,
-backend_check}.csv and cloth_still_<integrator>.csv, writes PNG and SVG charts into
-RESULTS_DIR/charts/ and RESULTS_DIR/summary.md. A missing CSV skips its chart with a note.
+backend_check,motion,motion_series,motion_reference,moving_pin}.csv and cloth_still_<integrator>.csv,
+writes PNG and SVG charts into RESULTS_DIR/charts/ and RESULTS_DIR/summary.md, and prints the motion
+table (issue 8's targets). A missing CSV skips its chart with a note.
 """
 import csv
 import math
@@ -20,9 +21,11 @@ from matplotlib.colors import ListedColormap  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 INTEGRATORS = ["FE", "SE", "BE", "BDF2", "IM", "blend"]
+# Series with Anderson-accelerated solves (the sweep's "<integrator>+AA" rows).
+ACCELERATED = ["BE+AA", "blend+AA"]
 COLORS = {"FE": "#8c564b", "SE": "#9467bd", "BE": "#1f77b4", "BDF2": "#2ca02c", "IM": "#d62728",
-          "blend": "#ff7f0e"}
-MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*"}
+          "blend": "#ff7f0e", "BE+AA": "#17becf", "blend+AA": "#e377c2"}
+MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*", "BE+AA": "P", "blend+AA": "X"}
 VERDICTS = ["stable", "over-damped", "exploded"]
 VERDICT_COLORS = ["#4daf4a", "#377eb8", "#e41a1c"]
 SCENE_TITLES = {"cloth": "cloth 20x20 (pinned corners)", "tetbar": "tet bar 8x2x2 (pinned at x = 0)",
@@ -67,21 +70,31 @@ def chart_speed_vs_accuracy(results, charts):
     if not rows:
         return
     scenes = [s for s in ("cloth", "tetbar") if any(r["scene"] == s for r in rows)]
-    fig, axes = plt.subplots(len(scenes), 2, figsize=(13, 5.2 * len(scenes)), squeeze=False)
+    # Panels: error against the IM h/16 reference over 2 s, energy drift, and (when the sweep has
+    # it) the RMS error over 0-1 s against the small-step motion reference (issue 8).
+    panels = [("position_error_m", "position error vs reference, RMS [m]", "position error"),
+              ("drift_rel", "|energy drift| over 2 s [E_avail]", "energy drift")]
+    if "rms_0_1s_m" in rows[0]:
+        panels.append(("rms_0_1s_m", "RMS error over 0-1 s vs small-step reference [m]",
+                       "error over 0-1 s vs small-step reference"))
+    fig, axes = plt.subplots(len(scenes), len(panels), figsize=(6.5 * len(panels), 5.2 * len(scenes)),
+                             squeeze=False)
     backend = rows[0].get("backend", "cpu")
+    # The median frame time when the sweep has it: robust to stalls on a shared machine.
+    time_key = "ms_per_frame_median" if "ms_per_frame_median" in rows[0] else "ms_per_frame"
     ref_error = {r["scene"]: num(r, "self_error_m") for r in (read_csv(results, "reference.csv") or [])}
+    motion_ref = {r["scene"]: r for r in (read_csv(results, "motion_reference.csv") or [])}
     for si, scene in enumerate(scenes):
-        for ci, (key, label) in enumerate((("position_error_m", "position error vs reference, RMS [m]"),
-                                           ("drift_rel", "|energy drift| over 2 s [E_avail]"))):
+        for ci, (key, label, what) in enumerate(panels):
             ax = axes[si][ci]
             everything = []
             exploded = {}
-            for integ in INTEGRATORS:
+            for integ in INTEGRATORS + ACCELERATED:
                 pts = []
                 for r in rows:
                     if r["scene"] != scene or r["integrator"] != integ:
                         continue
-                    t, v = num(r, "ms_per_frame"), abs(num(r, key))
+                    t, v = num(r, time_key), abs(num(r, key))
                     if r["verdict"] == "exploded" or not math.isfinite(v):
                         exploded[integ] = exploded.get(integ, 0) + 1
                         continue
@@ -114,11 +127,16 @@ def chart_speed_vs_accuracy(results, charts):
                 ax.axhline(ref_error[scene], color="gray", lw=0.8, ls=":")
                 ax.text(0.99, ref_error[scene], "reference: h/16 vs h/8 difference", color="gray", fontsize=7,
                         ha="right", va="bottom", transform=ax.get_yaxis_transform())
+            if key == "rms_0_1s_m" and scene in motion_ref:
+                m = motion_ref[scene]
+                ax.axhline(num(m, "self_rms_0_1s_m"), color="gray", lw=0.8, ls=":")
+                ax.text(0.99, num(m, "self_rms_0_1s_m"), f"reference {m['method']}: difference to half the steps",
+                        color="gray", fontsize=7, ha="right", va="bottom", transform=ax.get_yaxis_transform())
             ax.set_xscale("log")
             ax.set_yscale("log")
-            ax.set_xlabel(f"time per frame [ms], {backend} backend")
+            ax.set_xlabel(f"{'median ' if time_key.endswith('median') else ''}time per frame [ms], {backend} backend")
             ax.set_ylabel(label)
-            title = f"{SCENE_TITLES.get(scene, scene)}: {'position error' if ci == 0 else 'energy drift'}"
+            title = f"{SCENE_TITLES.get(scene, scene)}: {what}"
             ax.set_title(title, fontsize=10)
             ax.grid(True, which="both", alpha=0.25)
             note = ", ".join(f"{k} {n}" for k, n in exploded.items())
@@ -273,6 +291,199 @@ def chart_cloth_still(results, charts):
     save(fig, charts, "cloth_still")
 
 
+MOTION_SHOWN = ["BE", "BDF2", "IM", "blend"]
+
+
+def chart_motion(results, charts):
+    """Motion against the small-step reference: the cloth's centre-of-mass path and kinetic energy,
+    every run's mean K against its flicker (the frozen and jittery regions shaded), and the stiff
+    cloth's fall."""
+    series = read_csv(results, "motion_series.csv")
+    motion = read_csv(results, "motion.csv")
+    if not series and not motion:
+        return
+    fig, axes = plt.subplots(2, 2, figsize=(14, 9.5))
+
+    exploded_at = {(r["scene"], r["integrator"]): num(r, "exploded_at_s") for r in (motion or [])
+                   if "exploded_at_s" in r}
+
+    def lines(ax, scene, key, log=False):
+        for integ in ["reference"] + MOTION_SHOWN:
+            # A run is drawn until it explodes (IM on the cloth at about 3 s): after that its
+            # curve only sets the axis range.
+            end = exploded_at.get((scene, integ), math.inf)
+            end = end if math.isfinite(end) else math.inf
+            rs = [r for r in series if r["scene"] == scene and r["integrator"] == integ and num(r, "time") <= end]
+            if not rs:
+                continue
+            if math.isfinite(end):
+                ax.annotate(f"{integ} exploded", (num(rs[-1], "time"), num(rs[-1], key)), fontsize=7,
+                            color=COLORS[integ], textcoords="offset points", xytext=(3, 3))
+            t = [num(r, "time") for r in rs]
+            y = [max(num(r, key), 1e-12) if log else num(r, key) for r in rs]
+            ax.plot(t, y, color="black" if integ == "reference" else COLORS[integ],
+                    lw=1.8 if integ == "reference" else 1.0, alpha=0.9, label=integ)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+        if log:
+            ax.set_yscale("log")
+
+    if series:
+        method = {r["scene"]: r["method"] for r in (read_csv(results, "motion_reference.csv") or [])}
+        lines(axes[0][0], "cloth", "com_y")
+        axes[0][0].set_title(f"cloth: centre of mass height (reference: {method.get('cloth', '?')})", fontsize=10)
+        axes[0][0].set_ylabel("y of the centre of mass [m]")
+        lines(axes[0][1], "cloth", "kinetic", log=True)
+        axes[0][1].set_title("cloth: kinetic energy per frame (log scale)", fontsize=10)
+        axes[0][1].set_ylabel("K [J]")
+        axes[0][1].set_ylim(bottom=1e-5)  # frame 0 is the release from rest (K = 0)
+        lines(axes[1][1], "cloth_stiff", "com_y")
+        axes[1][1].set_xlim(0.0, 1.0)  # the reference covers 1 s; the runs go on for 10
+        axes[1][1].set_title(f"stiff cloth (springs 1e6 N/m, h = 1/15 s): centre of mass height "
+                             f"(reference {method.get('cloth_stiff', '?')}, 1 s)", fontsize=10)
+        axes[1][1].set_ylabel("y of the centre of mass [m]")
+        for ax in (axes[0][0], axes[0][1], axes[1][1]):
+            ax.set_xlabel("time [s]  (10 iterations)")
+    ax = axes[1][0]
+    if motion:
+        pts = [r for r in motion if r["integrator"] in INTEGRATORS and r["energy_verdict"] != "exploded"
+               and math.isfinite(num(r, "mean_K_ratio")) and math.isfinite(num(r, "flicker"))]
+        # Axes clipped to where the verdicts are decided; a point beyond shows on the edge with
+        # its value.
+        ycap = 30.0
+        xs = [max(num(r, "mean_K_ratio"), 1e-4) for r in pts]
+        ys = [min(max(num(r, "flicker"), 1.0), ycap) for r in pts]
+        xmax, ymax = max(xs + [10.0]) * 1.5, ycap * 1.2
+        for r, x in zip(pts, xs):
+            if num(r, "flicker") > ycap:
+                ax.annotate(f"flicker {fmt(num(r, 'flicker'), 2)}", (x, ycap), textcoords="offset points",
+                            xytext=(4, -10), fontsize=7, color=COLORS[r["integrator"]])
+        ax.axvspan(1e-4, 0.3, color="#377eb8", alpha=0.12, label="frozen (mean K < 0.3 x reference)")
+        ax.axhspan(1.5, ymax, color="#e41a1c", alpha=0.10, label="jittery (flicker > 1.5)")
+        for r, x, y in zip(pts, xs, ys):
+            ax.plot(x, y, MARKERS[r["integrator"]], color=COLORS[r["integrator"]], ms=9)
+            ax.annotate(r["scene"], (x, y), textcoords="offset points", xytext=(4, 3), fontsize=7)
+        for integ in INTEGRATORS:
+            if any(r["integrator"] == integ for r in pts):
+                ax.plot([], [], MARKERS[integ], color=COLORS[integ], label=integ)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(1e-4, xmax)
+        ax.set_ylim(0.9, ymax)
+        ax.axvline(1.0, color="gray", lw=0.8, ls=":")
+        ax.set_xlabel("mean K over the K window / reference's (5-10 s; stiff cloth 0.5-1 s)")
+        ax.set_ylabel("flicker: median of max(K_i+1/K_i, K_i/K_i+1)")
+        ax.set_title("every non-exploded run: motion kept against flicker", fontsize=10)
+        ax.grid(True, which="both", alpha=0.25)
+        ax.legend(fontsize=7, loc="center right")
+    fig.suptitle("Motion against the small-step reference (h = 1/30 s unless said, 10 iterations)", fontsize=11)
+    fig.tight_layout(rect=(0, 0, 1, 0.96))
+    save(fig, charts, "motion")
+
+
+def interpolate_at_time(points, t):
+    """log-log interpolation of (ms per frame, error) points at time t; None outside their range."""
+    pts = sorted((p for p in points if p[0] > 0 and math.isfinite(p[1]) and p[1] > 0), key=lambda p: p[0])
+    for (t0, e0), (t1, e1) in zip(pts, pts[1:]):
+        if t0 <= t <= t1:
+            w = 0.0 if t1 == t0 else (math.log(t) - math.log(t0)) / (math.log(t1) - math.log(t0))
+            return math.exp((1 - w) * math.log(e0) + w * math.log(e1))
+    return None
+
+
+def equal_time_errors(sweep, scene="cloth", budget="10"):
+    """RMS error over 0-1 s of each implicit integrator at the blend's time per frame at `budget`
+    iterations, read off each integrator's iteration-budget curve of the same sweep."""
+    if not sweep or "rms_0_1s_m" not in sweep[0]:
+        return {}, None
+    blend = [r for r in sweep if r["scene"] == scene and r["integrator"] == "blend" and r["iterations"] == budget]
+    if not blend:
+        return {}, None
+    time_key = "ms_per_frame_median" if "ms_per_frame_median" in sweep[0] else "ms_per_frame"
+    t = num(blend[0], time_key)
+    out = {}
+    for integ in ("BE", "BDF2", "IM", "blend"):
+        pts = [(num(r, time_key), num(r, "rms_0_1s_m")) for r in sweep
+               if r["scene"] == scene and r["integrator"] == integ and r["verdict"] != "exploded"]
+        out[integ] = num(blend[0], "rms_0_1s_m") if integ == "blend" else interpolate_at_time(pts, t)
+    return out, t
+
+
+def motion_table(results):
+    """The compact motion table of issue 8's targets, as markdown lines (integrators as columns)."""
+    motion = read_csv(results, "motion.csv")
+    if not motion:
+        return []
+    cols = INTEGRATORS + ["reference"]
+    rows = {(r["scene"], r["integrator"]): r for r in motion}
+
+    def line(label, scene, key, digits=3, scale=1.0, until=math.inf):
+        """One measure per integrator; `until`: the end of the measure's window [s]. A run that
+        exploded before it shows "exploded": its numbers say only how fast it blew up."""
+        cells = []
+        for c in cols:
+            r = rows.get((scene, c))
+            if r is None:
+                cells.append("")
+                continue
+            v = num(r, key) * scale
+            exploded_at = num(r, "exploded_at_s") if "exploded_at_s" in r else math.inf
+            if r["energy_verdict"] == "exploded" and not exploded_at > until and not key.startswith("ms_per"):
+                cells.append("exploded")
+            else:
+                cells.append(fmt(v, digits) if math.isfinite(v) else "-")
+        return f"| {label} | " + " | ".join(cells) + " |"
+
+    def verdicts(label, scene):
+        return f"| {label} | " + " | ".join(rows[(scene, c)]["verdict"] if (scene, c) in rows and c != "reference"
+                                            else "" for c in cols) + " |"
+
+    out = ["| scene: measure | " + " | ".join(cols) + " |", "|---|" + "---:|" * len(cols)]
+    out.append(line("cloth: RMS error 0-0.5 s [m]", "cloth", "rms_0_0.5s_m", until=0.5))
+    out.append(line("cloth: RMS error 0-1 s [m]", "cloth", "rms_0_1s_m", until=1.0))
+    equal, t = equal_time_errors(read_csv(results, "sweep.csv"))
+    if equal:
+        cells = [fmt(equal[c]) if equal.get(c) is not None else ("" if c not in equal else "out of range")
+                 for c in cols]
+        out.append(f"| cloth: RMS error 0-1 s at the blend's median {fmt(t)} ms/frame (sweep, interpolated) [m] | " + " | ".join(cells)
+                   + " |")
+    out.append(line("cloth: mean K 5-10 s [J]", "cloth", "mean_K_J"))
+    out.append(line("cloth: mean K 5-10 s / reference's", "cloth", "mean_K_ratio"))
+    out.append(line("cloth: flicker of K", "cloth", "flicker"))
+    out.append(line("cloth: max abs(H - H*) / E_avail", "cloth", "max_dev_target_rel"))
+    time_key = "ms_per_frame_median" if "ms_per_frame_median" in motion[0] else "ms_per_frame"
+    out.append(line("cloth: ms/frame (median)", "cloth", time_key))
+    be = rows.get(("cloth", "BE"))
+    if be:
+        out.append("| cloth: time per frame / BE's | " + " | ".join(
+            fmt(num(rows[("cloth", c)], time_key) / num(be, time_key)) if ("cloth", c) in rows and c != "reference"
+            else "" for c in cols) + " |")
+    out.append(verdicts("cloth: verdict", "cloth"))
+    out.append(line("chain: max abs(H - H*) / E_avail", "chain", "max_dev_target_rel"))
+    out.append(line("chain: mean K 5-10 s / reference's", "chain", "mean_K_ratio"))
+    out.append(line("chain: flicker of K", "chain", "flicker"))
+    out.append(verdicts("chain: verdict", "chain"))
+    out.append(line("spinning bar (y axis): L kept after 10 s [%]", "spinbar", "L_kept", 4, 100.0))
+    out.append(line("spinning bar (general axis, 20 % stretch): L kept [%]", "spinbar_general", "L_kept", 4, 100.0))
+    r = rows.get(("handle", "blend"))
+    if r:
+        frac = num(r, "partner_whole_steps") / max(num(r, "steps"), 1.0)
+        out.append("| handle cloth: steps with the partner taken whole [%] | " + " | ".join(
+            fmt(100 * frac) if c == "blend" else "" for c in cols) + " |")
+    out.append(line("handle cloth: mean K 5-10 s / reference's", "handle", "mean_K_ratio"))
+    out.append(line("handle cloth: flicker of K", "handle", "flicker"))
+    out.append(line("stiff cloth (h = 1/15): drop of the centre of mass within 1 s [m]", "cloth_stiff",
+                    "com_drop_1s_m", until=1.0))
+    out.append(line("stiff cloth: flicker of K over 10 s", "cloth_stiff", "flicker"))
+    pin = read_csv(results, "moving_pin.csv")
+    if pin:
+        out.append("| particle on a moving pin, IM: max abs(H* - H_IM) [J] for k = "
+                   + ", ".join(f"{num(r, 'stiffness'):.0e}" for r in pin) + " | " + " | ".join(
+                       ", ".join(fmt(num(r, "max_abs_target_minus_H_IM_J")) for r in pin) if c == "IM" else ""
+                       for c in cols) + " |")
+    return out
+
+
 def fmt(v, digits=3):
     if not math.isfinite(v):
         return "inf" if v > 0 else "nan"
@@ -285,30 +496,33 @@ def write_summary(results):
     out.append("Generated by `bench/study_charts.py` from the CSV files of `stabint-study all`. Energies are "
                "relative to **E_avail** = H0 minus the potential energy of the static equilibrium (the energy "
                "the scene can turn into motion). Verdict: *exploded* = non-finite or max |H - H0| > 10 E_avail; "
-               "*over-damped* = lost more than 50 % of E_avail; else *stable*. Timings are wall clock on the "
+               "*over-damped* = lost more than 50 % of E_avail; else *stable*; where a run is also judged against a "
+               "small-step reference, the motion flags *frozen* and *jittery* are added (see the motion section). "
+               "Timings are wall clock on the "
                "machine that ran the study (shared, so noisy).\n")
     acc = read_csv(results, "accuracy.csv")
     if acc:
         out.append("## Real-time setting: h = 1/30 s, 10 iterations, 60 frames (2 s) against the reference\n")
         out.append(f"Backend: {acc[0].get('backend', 'cpu')}.\n")
-        out.append("| scene | integrator | ms/frame | position error [m] | energy drift [E_avail] | "
-                   "energy lost (damping) [E_avail] | verdict |")
-        out.append("|---|---|---:|---:|---:|---:|---|")
+        out.append("| scene | integrator | ms/frame | position error [m] | RMS error 0-1 s vs small-step reference [m] "
+                   "| energy drift [E_avail] | energy lost (damping) [E_avail] | verdict (energy) |")
+        out.append("|---|---|---:|---:|---:|---:|---:|---|")
         for r in acc:
             out.append(f"| {r['scene']} | {r['integrator']} | {fmt(num(r, 'ms_per_frame'))} | "
-                       f"{fmt(num(r, 'position_error_m'))} | {fmt(num(r, 'drift_rel'))} | "
-                       f"{fmt(num(r, 'damping_rel'))} | {r['verdict']} |")
+                       f"{fmt(num(r, 'position_error_m'))} | {fmt(num(r, 'rms_0_1s_m'))} | "
+                       f"{fmt(num(r, 'drift_rel'))} | {fmt(num(r, 'damping_rel'))} | {r['verdict']} |")
         out.append("")
     table = read_csv(results, "energy_table.csv")
     if table:
         out.append("## Energy behaviour over 300 frames (10 s), h = 1/30 s, 10 iterations\n")
+        out.append("Verdict: energy verdict, then the motion flags against the small-step reference (frozen, "
+                   "jittery; see the motion section).\n")
         out.append("| scene | integrator | ms/frame | drift [E_avail] | max abs(H - H*) [E_avail] | H min .. max | "
-                   "blew up at | blend IM/BE/FE | verdict |")
+                   "blew up at | blend branches | verdict |")
         out.append("|---|---|---:|---:|---:|---|---:|---|---|")
         for r in table:
             blow = r["blew_up_frame"] if r["blew_up_frame"] != "-1" else "-"
-            branches = (f"{r['branch_IM']}/{r['branch_BE']}/{r['branch_FE']}"
-                        if r["integrator"].startswith("blend") else "-")
+            branches = r.get("branches", "-").replace(";", " ") if r["integrator"].startswith("blend") else "-"
             out.append(f"| {r['scene']} | {r['integrator']} | {fmt(num(r, 'ms_per_frame'))} | "
                        f"{fmt(num(r, 'drift_rel'))} | {fmt(num(r, 'max_dev_target_rel'))} | "
                        f"{fmt(num(r, 'H_min'))} .. {fmt(num(r, 'H_max'))} | {blow} | {branches} | {r['verdict']} |")
@@ -368,13 +582,44 @@ def write_summary(results):
                        f"{chk[0]['frames']} frames on chain, cloth and tet bar: max position difference "
                        f"{fmt(dx)} m; all integrators, relative to the state's size: {fmt(rel)}. The CPU "
                        "numbers above stand for both backends.\n")
+    table = motion_table(results)
+    if table:
+        out.append("## Motion against a small-step reference (issue 8)\n")
+        out.append("Every run judged on motion, not only on energy: **RMS error** = sqrt of the mean over frames "
+                   "1..N (0-0.5 s, 0-1 s) and particles of abs(x - x_ref)^2; **mean K** over 5-10 s relative to the "
+                   "reference's (stiff cloth: over the second half of its 1 s reference); **flicker** = median over "
+                   "consecutive frames (from frame 1) of max(K_i+1/K_i, K_i/K_i+1), with 1e-9 E_avail added to "
+                   "both; **L kept** = L(10 s).L0/abs(L0)^2 about the centre of mass; **drop** = largest drop of the "
+                   "centre of mass within 1 s. Verdicts: *exploded* as above; otherwise the flags that apply of "
+                   "*over-damped*, **frozen** (mean K < 0.3 x the reference's) and **jittery** (flicker > 1.5); "
+                   "else *stable*. The stability map's cells are judged on energy only (no small-step reference "
+                   "per stiffness and step size). h = 1/30 s and 10 iterations unless said; `stabint-study motion` "
+                   f"(backend {read_csv(results, 'motion.csv')[0]['backend']}). Times are medians of per-frame "
+                   "wall clock on the machine that ran the study; on a shared machine they still vary by up to 2x "
+                   "between runs, and so does the equal-time row (read off the sweep's iteration-budget curves).\n")
+        out.extend(table)
+        out.append("")
+        refs = read_csv(results, "motion_reference.csv")
+        if refs:
+            out.append("References (CPU backend; the check run has half the steps per frame):\n")
+            columns = [("scene", "scene", None), ("method", "method", None), ("horizon [s]", "horizon_s", 3),
+                       ("energy error max abs(H - H*) / E_avail", "energy_error_rel", 2),
+                       ("check: RMS 0-1 s [m]", "self_rms_0_1s_m", 2), ("check: mean K ratio", "self_mean_K_ratio", 4),
+                       ("computed in [s]", "compute_s", 3)]
+            out.append("| " + " | ".join(c[0] for c in columns) + " |")
+            out.append("|" + "".join("---|" if c[2] is None else "---:|" for c in columns))
+            out.extend("| " + " | ".join(r[key] if digits is None else fmt(num(r, key), digits)
+                                         for _, key, digits in columns) + " |" for r in refs)
+            out.append("")
     charts = os.path.join(results, "charts")
     out.append("## Charts\n")
     for name, what in (("speed_vs_accuracy", "time per frame against position error and energy drift, Pareto "
                         "front circled"),
                        ("stability_map", "verdict per stiffness and step size, per integrator"),
                        ("energy_over_time", "tet bar free-end height and energy; cloth energy"),
-                       ("cloth_still", "the cloth at the same frame with BE and the blend")):
+                       ("cloth_still", "the cloth at the same frame with BE and the blend"),
+                       ("motion", "centre-of-mass path and kinetic energy of the cloth against the small-step "
+                        "reference, mean K against flicker for every run, the stiff cloth's fall")):
         if os.path.exists(os.path.join(charts, name + ".png")):
             out.append(f"- `charts/{name}.png` (and .svg): {what}")
     path = os.path.join(results, "summary.md")
@@ -391,7 +636,12 @@ def main():
     chart_stability_map(results, charts)
     chart_energy_over_time(results, charts)
     chart_cloth_still(results, charts)
+    chart_motion(results, charts)
     write_summary(results)
+    table = motion_table(results)
+    if table:
+        print("\nMotion table (issue 8; definitions in summary.md):")
+        print("\n".join(table))
 
 
 if __name__ == "__main__":

@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # The main job (the README's first command): installs missing dependencies, builds the study
 # tool (Release, into build/, the same build directory as scripts/test.sh), runs every
-# experiment of stabint-study (energy table printed), and draws the charts and the summary.
-# Idempotent; the reference trajectories are cached in results/cache/ so a rerun skips them.
-# Measured on a 2-core machine from a fresh clone: about 4 minutes (build about 1.5 of them, the
-# scaling benchmark about 1); a rerun skips the build and the cached reference trajectories.
+# experiment of stabint-study (energy and motion tables printed), and draws the charts, the
+# summary and the compact motion table (issue 8's targets, printed at the end of the charts step).
+# Idempotent; the reference trajectories (the IM h/16 accuracy references and the small-step
+# motion references) are cached in results/cache/ so a rerun skips them.
+# Measured on the shared 2-core machine (load average 2-5 from other jobs) with the build already
+# there: 3.5-4.2 minutes with no cache (computing the motion references about 1.5 of them), 2.9
+# with it; a fresh clone adds the build (about 1.5 minutes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)
@@ -36,5 +39,6 @@ echo
 echo "main.sh: done in $(elapsed)."
 echo "  energy table:   results/energy_table.csv (printed above)"
 echo "  summary:        results/summary.md"
-echo "  charts:         results/charts/{speed_vs_accuracy,stability_map,energy_over_time,cloth_still,scaling}.png (and .svg)"
+echo "  motion table:   results/motion.csv (printed above, and in the summary)"
+echo "  charts:         results/charts/{speed_vs_accuracy,stability_map,energy_over_time,cloth_still,motion,scaling}.png (and .svg)"
 echo "  all CSV files:  results/*.csv; cached reference trajectories: results/cache/"

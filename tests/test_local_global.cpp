@@ -1,4 +1,4 @@
-// Local/global iterations (method.md section 2): each iteration never increases the objective,
+// Local/global iterations (docs/method.md): each iteration never increases the objective,
 // and run to convergence the objective's gradient c M (x - y) - f(x) vanishes, checked against
 // a finite-difference gradient of the implemented objective.
 #include <stabint/stabint.hpp>
@@ -120,6 +120,55 @@ TEST_P(LocalGlobalTest, ConvergedSolutionHasVanishingGradient) {
   // And the analytic gradient c M (x - y) - f agrees (Newton's equation of the step).
   const Eigen::MatrixX3d gradient = ((c * (x - y) - a).array().colwise() * s.masses.array()).matrix();
   EXPECT_LT(gradient.cwiseAbs().maxCoeff(), 1e-5 * force_scale);
+}
+
+// Accelerated iterations (Chebyshev, Anderson) keep the objective monotone (the safeguard
+// replaces any iterate that would raise it by the plain one; rises within 1e-12 relative are
+// round-off) and get closer to the minimum than plain ones in the same number of iterations.
+void checkAcceleration(const Scene& s, bool tets, Acceleration acceleration) {
+  SCOPED_TRACE(accelerationName(acceleration));
+  Fixture f(s);
+  const Eigen::MatrixX3d y = inertialTarget(s);
+  const double c = 900.0, t = 0.0;
+  auto run = [&](Acceleration variant, int iterations, double tolerance) {
+    f.backend->write(kY, y);
+    f.backend->write(kX, y);
+    IterationControl control{iterations, tolerance, 20000, 1e-12, variant, 0.98, 5};
+    std::vector<double> history;
+    f.solver.solve(c, kY, kX, t, control, &history);
+    return history;
+  };
+  const std::vector<double> converged = run(Acceleration::None, 0, 1e-15);
+  const double minimum = converged.back();
+  const std::vector<double> plain = run(Acceleration::None, 10, 0.0);
+  const std::vector<double> fast = run(acceleration, 10, 0.0);
+  ASSERT_EQ(fast.size(), 11u);
+  for (size_t k = 1; k < fast.size(); ++k)
+    EXPECT_LE(fast[k], fast[k - 1] + 1e-12 * std::abs(fast[k - 1])) << "iteration " << k;
+  const double gap_plain = plain.back() - minimum, gap_fast = fast.back() - minimum;
+  std::printf("  objective gap after 10 iterations: plain %.3g, %s %.3g\n", gap_plain,
+              accelerationName(acceleration), gap_fast);
+  // The cloth contracts slowly per plain iteration (the regime acceleration is for); the small
+  // tet bar is all but converged after 10 plain iterations, where it must not be worse.
+  // Measured: cloth 2.77 plain, 0.96 Chebyshev, 0.90 Anderson; tets 1.4e-6 plain and Chebyshev,
+  // 1.6e-10 Anderson.
+  if (!tets) {
+    EXPECT_LT(gap_fast, 0.5 * gap_plain);
+  } else {
+    EXPECT_LE(gap_fast, 1.01 * gap_plain);
+  }
+  // Iterated to a tolerance it finds the same minimum.
+  const std::vector<double> fast_converged = run(acceleration, 0, 1e-15);
+  EXPECT_NEAR(fast_converged.back(), minimum, 1e-9 * std::abs(minimum));
+}
+
+TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
+  // Strain limits make the membrane energy flat within them: the objective then has many
+  // minima, and plain and accelerated iterations may settle in different ones (measured: 4e-4
+  // apart relative). The triangle cloth without limits has one.
+  const Scene s = GetParam() == SceneKind::Triangles ? testing::triangleCloth(6, 5, false) : scene();
+  for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson})
+    checkAcceleration(s, GetParam() == SceneKind::Tets, acceleration);
 }
 
 INSTANTIATE_TEST_SUITE_P(Elements, LocalGlobalTest,

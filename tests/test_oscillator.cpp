@@ -1,4 +1,4 @@
-// Linear oscillator (method.md section 5): one particle on a zero-rest-length spring (a pin) to
+// Linear oscillator (docs/method.md section 9): one particle on a zero-rest-length spring (a pin) to
 // the origin, omega^2 = k/m, no gravity. The local step's projection is the constant pin
 // target, so one local/global iteration solves each implicit step exactly and every integrator
 // must match its closed form to round-off.

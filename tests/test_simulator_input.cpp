@@ -31,8 +31,12 @@ TEST(SimulatorInput, BadOptionsNameTheField) {
   expectRejected([](SimulatorOptions& o) { o.be_iterations = 0; }, "be_iterations");
   expectRejected([](SimulatorOptions& o) { o.tolerance = -1.0; }, "tolerance");
   expectRejected([](SimulatorOptions& o) { o.energy_tolerance = 0.0; }, "energy_tolerance");
-  expectRejected([](SimulatorOptions& o) { o.alpha_fe_max = 0.0; }, "alpha_fe_max");
-  expectRejected([](SimulatorOptions& o) { o.alpha_fe_max = 1.5; }, "alpha_fe_max");
+  expectRejected([](SimulatorOptions& o) { o.max_velocity_scale = 0.9; }, "max_velocity_scale");
+  expectRejected([](SimulatorOptions& o) { o.max_velocity_scale = std::nan(""); }, "max_velocity_scale");
+  expectRejected([](SimulatorOptions& o) { o.chebyshev_rho = 1.0; }, "chebyshev_rho");
+  expectRejected([](SimulatorOptions& o) { o.chebyshev_rho = 0.0; }, "chebyshev_rho");
+  expectRejected([](SimulatorOptions& o) { o.acceleration = static_cast<Acceleration>(42); }, "acceleration");
+  expectRejected([](SimulatorOptions& o) { o.anderson_window = 0; }, "anderson_window");
   expectRejected([](SimulatorOptions& o) { o.max_root_evaluations = 0; }, "max_root_evaluations");
 }
 

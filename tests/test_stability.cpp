@@ -1,4 +1,4 @@
-// Stability where methods fail: the stiff chain pendulum of method.md section 5 (10 particles,
+// Stability where methods fail: the stiff chain pendulum of docs/method.md section 9 (10 particles,
 // k = 1e4 N/m, 0.1 kg, 1 m, top pinned, released horizontally, h = 1/30, 10 iterations).
 // Energies are measured against the swing energy E_swing = m g L / 2 (the potential energy the
 // chain's centre of mass releases falling from horizontal to hanging), 0.49 J.
@@ -101,7 +101,7 @@ TEST(StiffChain, BlendStaysBoundedCloseToItsTarget) {
 namespace stabint {
 namespace {
 
-// Hanging tet bar (method.md section 5): pinned at x = 0, released straight under gravity, it
+// Hanging tet bar (docs/method.md section 9): pinned at x = 0, released straight under gravity, it
 // swings down and bounces. BE's bounces die out, so late in the run its free end stays far below
 // the start height; the blend keeps bouncing back close to it. Measured (k = 3e5, 10 iterations,
 // h = 1/30, frames 200-300): BE's highest point -0.42 m after a first drop to -0.69 m; the

@@ -1,5 +1,5 @@
 #pragma once
-// Momentum-preserving velocity damping per body (method.md section 4, after Mueller et al. 2007,
+// Momentum-preserving velocity damping per body (docs/method.md section 6, after Mueller et al. 2007,
 // Position Based Dynamics): each velocity moves toward the body's rigid velocity
 // v_cm + omega x r_j (omega = I^-1 L) by the body's factor kd in [0, 1]. Linear and angular
 // momentum of each body are unchanged; kd = 0 leaves the velocities untouched.

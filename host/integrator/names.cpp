@@ -50,9 +50,24 @@ const char* blendBranchName(BlendBranch branch) {
     case BlendBranch::None: return "-";
     case BlendBranch::ImplicitMidpoint: return "IM";
     case BlendBranch::BackwardEuler: return "BE";
-    case BlendBranch::ForwardEuler: return "FE";
+    case BlendBranch::VelocityScale: return "scale";
   }
   return "?";
+}
+
+const char* accelerationName(Acceleration acceleration) {
+  switch (acceleration) {
+    case Acceleration::None: return "none";
+    case Acceleration::Chebyshev: return "chebyshev";
+    case Acceleration::Anderson: return "anderson";
+  }
+  return "?";
+}
+
+Acceleration parseAcceleration(const std::string& name) {
+  for (Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson})
+    if (lower(name) == accelerationName(a)) return a;
+  throw InvalidInputError("unknown acceleration '" + name + "' (expected none, chebyshev or anderson)");
 }
 
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {

@@ -1,16 +1,13 @@
 #pragma once
-// Root find for the blend weight (method.md section 3): alpha in [a, b] with
+// Root find for the blend weight (docs/method.md section 5): alpha in [a, b] with
 // H(alpha) = K(alpha) + P(alpha) = H*, where H - H* changes sign on the bracket.
 //
 // K(alpha) is an exact quadratic (three dot products), only the potential P needs an element
-// pass per evaluation. [project rule] Plain regula falsi (or Illinois) interpolates H linearly and
-// wastes evaluations on the kinetic curvature, which dominates when the partner's velocities
-// differ a lot (always for the FE partner); here each step solves K(alpha) + P_model(alpha) = H*
-// exactly, with P interpolated by a parabola through the bracket ends and the last replaced
-// point (linearly on the first step). It is still a bracketing method: every candidate lies inside
-// the bracket, which shrinks with every evaluation, and a bisection follows two steps that made
-// too little progress. Measured on the stiff chain (300 frames, 10 iterations): energy passes
-// per step 5.9 (BE branch) and 3.0 (FE branch), against 7.2 and 4.5 with Illinois.
+// pass per evaluation. [project rule] Each step solves K(alpha) + P_model(alpha) = H* exactly,
+// with P interpolated by a parabola through the bracket ends and the last replaced point; every
+// candidate stays inside the bracket, and a bisection follows two steps that made too little
+// progress. Regula falsi wastes evaluations on the kinetic curvature (docs/method.md section 5
+// has the measurements).
 #include <algorithm>
 #include <cmath>
 

@@ -1,16 +1,18 @@
-// The integrator driver (method.md sections 2-4), written once against the Backend interface:
+// The integrator driver (docs/method.md sections 2-8), written once against the Backend interface:
 // y formation, finalisation, the energy-tracking blend, damping and the per-step bookkeeping.
 #include <stabint/simulator.hpp>
 
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "integrator/damping.hpp"
+#include "integrator/rigid_motion.hpp"
 #include "integrator/root_find.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -46,8 +48,15 @@ void validateOptions(const SimulatorOptions& o) {
   if (o.be_iterations < 1) fail("be_iterations = " + std::to_string(o.be_iterations) + " must be >= 1");
   if (!std::isfinite(o.energy_tolerance) || o.energy_tolerance <= 0.0)
     fail("energy_tolerance must be finite and > 0");
-  if (!(o.alpha_fe_max > 0.0 && o.alpha_fe_max <= 1.0))
-    fail("alpha_fe_max = " + std::to_string(o.alpha_fe_max) + " must be in (0, 1]");
+  if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
+    fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
+  if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
+      o.acceleration != Acceleration::Anderson)
+    fail("acceleration = " + std::to_string(static_cast<int>(o.acceleration)) + " is not an Acceleration value");
+  if (o.anderson_window < 1 || o.anderson_window > 50)
+    fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
+  if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
+    fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
   if (o.max_root_evaluations < 1) fail("max_root_evaluations must be >= 1");
 }
 
@@ -81,6 +90,7 @@ struct Simulator::Impl {
     const double g = s.gravity.norm();
     const double size = x.rows() > 0 ? (x.colwise().maxCoeff() - x.colwise().minCoeff()).norm() : 0.0;
     energy_scale = kinetic + potential.elastic() + s.masses.sum() * g * size;
+    momentum_conserved = s.pins.empty() && s.force_fields.empty();
     backend->times() = PhaseTimes{};
   }
 
@@ -89,7 +99,8 @@ struct Simulator::Impl {
   }
 
   IterationControl control(int iterations) const {
-    return IterationControl{iterations, options.tolerance, options.max_iterations, energy_scale};
+    return IterationControl{iterations,   options.tolerance,    options.max_iterations, energy_scale,
+                            options.acceleration, options.chebyshev_rho, options.anderson_window};
   }
 
   // ---- the integrators: each leaves x_{n+1}, v_{n+1} in (kXNew, kVNew), returns iterations ----
@@ -141,45 +152,52 @@ struct Simulator::Impl {
     backend->combine(x_out, 1.0, kX, h, symplectic ? v_out : kV);
   }
 
-  // ---- the energy-tracking blend (method.md section 3) ----------------------------------------
-  // Leaves the accepted state in (kXNew, kVNew) and returns its potential energy at t + h.
+  // ---- the energy-tracking blend (docs/method.md, "The blend") ------------------------------
+  // Leaves the blend's positions and IM-or-BE velocities in (kXNew, kVNew) and returns their
+  // potential at t + h; the velocity corrections (momenta, energy) follow on the host in step().
   PotentialEnergy blend(double& target_now, StepReport& report) {
     const double h = options.time_step;
     const double t1 = t + h;
-    // The midpoint x* is kept in kXPartner: the forcing work is evaluated there.
-    report.iterations += implicitMidpoint(kXNew, kVNew, kXPartner);
-    // Forcing at the IM midpoint x* (see forcingWork); the target must include it before the
-    // candidate is judged.
-    target_now += forcingWork(kXPartner, report);
-    const PotentialEnergy p_im = backend->potential(kXNew, t1);
+    report.iterations += implicitMidpoint(kXNew, kVNew);
+    PotentialEnergy p_im = backend->potential(kXNew, t1);
     ++report.energy_evaluations;
     const double vv_im = backend->massDot(kVNew, kVNew);
     const double h_im = 0.5 * vv_im + p_im.total();
-    const double tau = options.energy_tolerance * (kinetic + potential.elastic() + energy_scale);
-
     report.branch = BlendBranch::ImplicitMidpoint;
     report.alpha = 0.0;
-    if (std::abs(h_im - target_now) <= tau || !std::isfinite(h_im)) return p_im;
+    im_momenta_known = false;
 
-    double alpha_max = 1.0;
-    if (h_im > target_now) {
-      // Too much energy: backward Euler from (x_n, v_n). [project rule, README "method"] The
-      // partner's local/global iterations start at x_n, where the BE objective
-      // 1/(2h^2) ||x - x_n - h v_n||_M^2 + E_int + U_ext equals H_n; the iterations never
-      // increase it, so however few they are, they cannot pile up elastic energy. method.md
-      // warm-starts at x_IM = 2x* - x_n instead, which carries (doubled) the unconverged
-      // stretch of the IM solve, and a few BE iterations cannot remove it: measured with
-      // be_iterations = 3 on the stiff chain (max |H - H*| 0.37 J at x_IM, 0.19 J at x*,
-      // 0.095 J at x_n) and on a falling cloth (7.5 E_avail at x*, 0.011 E_avail at x_n).
+    if (!std::isfinite(h_im)) {
+      // An IM candidate that blew up is no candidate: the step is the BE partner, with the full
+      // iteration budget since nothing else of the step is usable.
       report.branch = BlendBranch::BackwardEuler;
-      backend->copy(kXPartner, kX);
-      report.iterations += backwardEuler(kXPartner, kVPartner, options.be_iterations, /*warm_start=*/true);
-    } else {
-      // Too little energy: forward Euler, with its weight capped (see method.md for why).
-      report.branch = BlendBranch::ForwardEuler;
-      explicitEuler(kXPartner, kVPartner, /*symplectic=*/false);
-      alpha_max = options.alpha_fe_max;
+      report.alpha = 1.0;
+      backend->copy(kXNew, kX);
+      report.iterations += backwardEuler(kXNew, kVNew, options.iterations, /*warm_start=*/true);
+      const PotentialEnergy p_be = backend->potential(kXNew, t1);
+      ++report.energy_evaluations;
+      target_now += forcingWork(kXNew, p_be, report);
+      return p_be;
     }
+    // The target must include this step's forcing before the candidate is judged.
+    target_now += forcingWork(kXNew, p_im, report);
+    const double tau = tolerance();
+    if (std::abs(h_im - target_now) <= tau) return p_im;
+    if (h_im < target_now) {
+      report.branch = BlendBranch::VelocityScale;  // step() scales the velocities up
+      return p_im;
+    }
+
+    // Too much energy: blend with backward Euler from (x_n, v_n). [project rule] The partner's
+    // iterations start at x_n, where the BE objective equals H_n and can only decrease, so a
+    // few iterations cannot pile up elastic energy (docs/method.md has the measurements).
+    report.branch = BlendBranch::BackwardEuler;
+    backend->read(kXNew, x_im);
+    backend->read(kVNew, v_im);
+    im_momenta = rigidMotion(scene.masses(), x_im, v_im);
+    im_momenta_known = true;
+    backend->copy(kXPartner, kX);
+    report.iterations += backwardEuler(kXPartner, kVPartner, options.be_iterations, /*warm_start=*/true);
 
     // H(alpha) = K(alpha) + P(alpha). The kinetic part is an exact quadratic in alpha:
     // K = 1/2 (vv + 2 alpha vd + alpha^2 dd) with d = v_partner - v_IM.
@@ -198,41 +216,122 @@ struct Simulator::Impl {
       evaluations.push_back({alpha, k_alpha.at(alpha) + p.total() - target_now, p});
       return p.total();
     };
-
-    const double p_max = potentialAt(alpha_max);
-    const double g_max = evaluations.front().g;
-    const bool partner_cannot_reach_target =
-        report.branch == BlendBranch::BackwardEuler ? g_max >= 0.0 : g_max <= 0.0;
-    // Otherwise H - H* changes sign on [0, alpha_max]: bracket the root.
-    if (!partner_cannot_reach_target && std::abs(g_max) > tau)
-      findBlendWeight(k_alpha, potentialAt, target_now, 0.0, p_im.total(), alpha_max, p_max, tau,
+    const double p_be = potentialAt(1.0);
+    const bool partner_cannot_reach_target = evaluations.front().g >= 0.0;
+    if (!partner_cannot_reach_target && std::abs(evaluations.front().g) > tau)
+      findBlendWeight(k_alpha, potentialAt, target_now, 0.0, p_im.total(), 1.0, p_be, tau,
                       options.max_root_evaluations);
-    Evaluation accepted = evaluations.front();  // alpha_max, taken whole when the target is out of reach
+    // The best evaluation; the partner whole when even it has too much energy. When the root
+    // find runs out of evaluations the residual is left to the velocity scale in step().
+    Evaluation accepted = evaluations.front();
     if (!partner_cannot_reach_target)
       for (const Evaluation& e : evaluations)
         if (std::abs(e.g) < std::abs(accepted.g)) accepted = e;
-    const double alpha_best = accepted.alpha;
-    const PotentialEnergy p_best = accepted.potential;
-    report.alpha = alpha_best;
-    backend->combine(kXNew, 1.0 - alpha_best, kXNew, alpha_best, kXPartner);
-    backend->combine(kVNew, 1.0 - alpha_best, kVNew, alpha_best, kVPartner);
-    return p_best;
+    report.alpha = accepted.alpha;
+    backend->combine(kXNew, 1.0 - accepted.alpha, kXNew, accepted.alpha, kXPartner);
+    backend->combine(kVNew, 1.0 - accepted.alpha, kVNew, accepted.alpha, kVPartner);
+    return accepted.potential;
   }
 
-  // 1. Forcing: the energy the user puts in through time-dependent potentials (moving pins,
-  // changing force fields) during the step, added to H*. [project rule] method.md evaluates
-  // U(x, t_{n+1}) - U(x, t_n) at x = x_n. For a pin, U(x, t1) - U(x, t0) = -k dq.(x - q_mid): at
-  // x_n that is biased by +k/2 |dq|^2 per step when the particle follows its target, which pumps
-  // energy into a cloth dragged by a stiff handle (measured: H* grew to 1000 J in 2 s on
-  // scenes/cloth_handle.json with k = 1e5). At the step's midpoint positions the bias cancels
-  // (the midpoint rule for the work integral of dU/dt), so we evaluate there: at x* for the blend
-  // (the IM midpoint, known before the blend decides) and at (x_n + x_{n+1})/2 otherwise.
-  double forcingWork(int midpoint_slot, StepReport& report) {
+  double tolerance() const { return options.energy_tolerance * (kinetic + potential.elastic() + energy_scale); }
+
+  // The blend's corrections of the accepted state (host copies x_new, v_new; kXNew on the
+  // backend), so that the energy it keeps is motion [project rules, docs/method.md]:
+  // 1. after a BE blend, the IM candidate's linear and angular momentum are put back with a rigid
+  //    velocity field: the partner, a few iterations from x_n, would otherwise stop the swing of
+  //    a pendulum-like body at every blend;
+  // 2. too little energy: the velocities are scaled up, by at most max_velocity_scale per step:
+  //    where the scene conserves momentum (no pins, no force fields) only their non-rigid part,
+  //    which carries no momentum, elsewhere all of it. This replaces the forward-Euler partner,
+  //    whose explicit forces put the missing energy into stretch and flicker;
+  // 3. too much energy: removed first from the non-rigid velocities (keeping the swing), then
+  //    from the stretch, by moving the positions toward the BE partner's, and only then from the
+  //    rigid velocities.
+  // Returns true when the velocities changed; p_new follows the positions.
+  bool correctBlendState(double target_now, PotentialEnergy& p_new, StepReport& report) {
+    if (report.branch == BlendBranch::ImplicitMidpoint || report.branch == BlendBranch::None) return false;
+    const double k_before = kineticEnergy(v_new);
+    bool changed = false;
+    if (report.branch == BlendBranch::BackwardEuler && im_momenta_known && report.alpha > 0.0) {
+      setMomenta(rigidMotion(scene.masses(), x_new, v_new), im_momenta.momentum,
+                 im_momenta.angularMomentumAboutOrigin(), x_new, v_new);
+      changed = true;
+    }
+    const double tau = tolerance();
+    auto excess = [&] { return kineticEnergy(v_new) + p_new.total() - target_now; };
+    if (excess() < -tau) {
+      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/momentum_conserved,
+                                 1.0, options.max_velocity_scale);
+    } else if (excess() > tau) {
+      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
+      if (excess() > tau && report.branch == BlendBranch::BackwardEuler)
+        p_new = lowerPotentialTowardPartner(target_now - kineticEnergy(v_new), p_new, report);
+      if (excess() > tau && !momentum_conserved)
+        changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/false, 0.0, 1.0);
+    }
+    if (k_before > 0.0) report.velocity_scale = std::sqrt(kineticEnergy(v_new) / k_before);
+    return changed;
+  }
+
+  // Scales v_new (its non-rigid part when keep_rigid) so that the kinetic energy approaches
+  // `kinetic_wanted`, with the factor clamped to [s_min, s_max]. Returns true when it scaled.
+  bool scaleVelocities(double kinetic_wanted, bool keep_rigid, double s_min, double s_max) {
+    const double k = kineticEnergy(v_new);
+    const RigidMotion rigid = keep_rigid ? rigidMotion(scene.masses(), x_new, v_new) : RigidMotion{};
+    const double k_scaled = k - rigid.kinetic;
+    if (!(k_scaled > 1e-14 * std::max(k, energy_scale))) return false;
+    const double s = std::clamp(std::sqrt(std::max(0.0, kinetic_wanted - rigid.kinetic) / k_scaled), s_min, s_max);
+    for (Eigen::Index j = 0; j < v_new.rows(); ++j) {
+      const Eigen::Vector3d kept = keep_rigid ? rigid.velocityAt(x_new.row(j).transpose()) : Eigen::Vector3d::Zero();
+      v_new.row(j) = (kept + s * (v_new.row(j).transpose() - kept)).transpose();
+    }
+    return true;
+  }
+
+  // Moves the blended positions toward the BE partner's (kXPartner), which carry less elastic
+  // energy, until their potential is `potential_wanted` or they reach the partner's. Velocities
+  // stay as they are.
+  PotentialEnergy lowerPotentialTowardPartner(double potential_wanted, const PotentialEnergy& p_new,
+                                              StepReport& report) {
+    const double t1 = t + options.time_step;
+    const double tau = tolerance();
+    PotentialEnergy best = p_new;
+    double best_beta = 0.0, best_g = p_new.total() - potential_wanted;
+    auto potentialAt = [&](double beta) {
+      backend->combine(kXTrial, 1.0 - beta, kXNew, beta, kXPartner);
+      const PotentialEnergy p = backend->potential(kXTrial, t1);
+      ++report.energy_evaluations;
+      if (std::abs(p.total() - potential_wanted) < std::abs(best_g))
+        best = p, best_beta = beta, best_g = p.total() - potential_wanted;
+      return p.total();
+    };
+    const double p_partner = potentialAt(1.0);
+    if (p_partner - potential_wanted < -tau)
+      findBlendWeight(KineticQuadratic{}, potentialAt, potential_wanted, 0.0, p_new.total(), 1.0, p_partner, tau,
+                      options.max_root_evaluations);
+    if (best_beta > 0.0) {
+      backend->combine(kXNew, 1.0 - best_beta, kXNew, best_beta, kXPartner);
+      backend->read(kXNew, x_new);
+    }
+    return best;
+  }
+
+  // Forcing: the energy the user puts in through time-dependent potentials U(x, t) (moving pins,
+  // changing force fields) during the step, added to H*. [project rule] The work rule is the one
+  // implicit midpoint itself obeys: for U quadratic in x (pins, forces), an IM step satisfies
+  //   H_1 - H_0 = [U(x_1, t_1) - U(x_1, t_m)] + [U(x_0, t_m) - U(x_0, t_0)],  t_m = t + h/2,
+  // exactly, so a blend that accepts IM tracks H* to round-off whatever path the handle takes.
+  // (Evaluating dU at one midpoint position left a ripple of about k h^2 |dq/dt|^2 / 16 on
+  // curved handle paths; at x_n it pumped +k/2 |dq|^2 per step.) `x_new` is the step's new
+  // positions (the IM candidate for the blend) and `p_new` their potential at t + h.
+  double forcingWork(int x_new_slot, const PotentialEnergy& p_new, StepReport& report) {
     if (!scene.hasTimeDependentForcing()) return 0.0;
-    const PotentialEnergy before = backend->potential(midpoint_slot, t);
-    const PotentialEnergy after = backend->potential(midpoint_slot, t + options.time_step);
+    const double tm = t + 0.5 * options.time_step;
+    const PotentialEnergy new_at_midtime = backend->potential(x_new_slot, tm);
+    const PotentialEnergy old_at_midtime = backend->potential(kX, tm);
     report.energy_evaluations += 2;
-    report.forcing = (after.pins + after.external) - (before.pins + before.external);
+    auto forced = [](const PotentialEnergy& p) { return p.pins + p.external; };
+    report.forcing = (forced(p_new) - forced(new_at_midtime)) + (forced(old_at_midtime) - forced(potential));
     return report.forcing;
   }
 
@@ -246,7 +345,6 @@ struct Simulator::Impl {
     r.time = t1;
     double target_now = target;
 
-    bool potential_known = false;
     PotentialEnergy p_new;
     switch (options.integrator) {
       case Integrator::ForwardEuler: explicitEuler(kXNew, kVNew, false); break;
@@ -259,32 +357,29 @@ struct Simulator::Impl {
         r.iterations = has_history ? bdf2(kXNew, kVNew) : backwardEuler(kXNew, kVNew, options.iterations, false);
         break;
       case Integrator::ImplicitMidpoint: r.iterations = implicitMidpoint(kXNew, kVNew); break;
-      case Integrator::EnergyBlend:
-        p_new = blend(target_now, r);
-        potential_known = true;
-        break;
+      case Integrator::EnergyBlend: p_new = blend(target_now, r); break;
     }
-    if (options.integrator != Integrator::EnergyBlend && scene.hasTimeDependentForcing()) {
-      backend->combine(kScratch, 0.5, kX, 0.5, kXNew);
-      target_now += forcingWork(kScratch, r);
+    if (options.integrator != Integrator::EnergyBlend) {
+      p_new = backend->potential(kXNew, t1);
+      ++r.energy_evaluations;
+      if (std::isfinite(p_new.total())) target_now += forcingWork(kXNew, p_new, r);
     }
 
     backend->read(kXNew, x_new);
     backend->read(kVNew, v_new);
     if (!allFinite(x_new) || !allFinite(v_new)) refuse(r, "non-finite position or velocity");
+    bool velocities_changed = correctBlendState(target_now, p_new, r);
 
     // Damping acts on the accepted velocities; the energy it removes leaves the target too, so
     // the blend never undoes physical damping.
     r.damping = applyMomentumPreservingDamping(scene.scene().bodies, scene.masses(), x_new, v_new);
-    if (r.damping != 0.0) backend->write(kVNew, v_new);
+    velocities_changed = velocities_changed || r.damping != 0.0;
+    if (velocities_changed) backend->write(kVNew, v_new);
     target_now -= r.damping;
 
-    if (!potential_known) {
-      p_new = backend->potential(kXNew, t1);
-      ++r.energy_evaluations;
-    }
     const double k_new = kineticEnergy(v_new);
-    if (!std::isfinite(k_new) || !std::isfinite(p_new.total())) refuse(r, "non-finite energy");
+    if (!std::isfinite(k_new) || !std::isfinite(p_new.total()) || !std::isfinite(target_now))
+      refuse(r, "non-finite energy");
 
     // Commit.
     if (options.integrator == Integrator::BDF2) {
@@ -333,6 +428,10 @@ struct Simulator::Impl {
   PotentialEnergy potential;       // of the accepted state at time t
   double target = 0.0;
   double energy_scale = 0.0;
+  bool momentum_conserved = false;  // no pins and no force fields: IM keeps P and L
+  RigidMotion im_momenta;           // of the IM candidate, when the blend took a BE partner
+  bool im_momenta_known = false;
+  Eigen::MatrixX3d x_im, v_im;      // host copies of that candidate
   StepReport report;
 };
 

@@ -187,6 +187,7 @@ class OpenCLBackend final : public Backend {
                     PotentialEnergy* energy_at_x) override {
     checkSlot(x);
     checkSlot(y);
+    if (energy_at_x) *energy_at_x = potential(x, t);
     uploadForcing(t, false);
     const auto start = Clock::now();
     const bool launched = enqueueElementPass(x, kPassProjection | (energy_at_x ? kPassEnergy : 0));

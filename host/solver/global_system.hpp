@@ -21,6 +21,8 @@ class GlobalSystem {
 
   /// L = sum_e w_e A_e^T A_e (assembled once).
   const Eigen::SparseMatrix<double>& stiffnessLaplacian() const { return laplacian_; }
+  /// Lumped masses (the M of c M + L).
+  const Eigen::VectorXd& masses() const { return masses_; }
   /// Number of factorizations done so far (one per distinct c).
   int factorizations() const { return static_cast<int>(factors_.size()); }
 

@@ -9,7 +9,7 @@
 
 namespace stabint {
 
-/// The six integrators of method.md section 2 and 3.
+/// The six integrators of docs/method.md sections 2 and 3.
 enum class Integrator {
   ForwardEuler,
   SymplecticEuler,
@@ -28,6 +28,17 @@ const char* backendName(BackendKind kind);  // "cpu", "opencl"
 BackendKind parseBackend(const std::string& name);
 
 enum class Precision { Double, Float };
+
+/// Acceleration of the local/global iterations. Every variant keeps the objective monotone: an
+/// accelerated iterate that would raise it is replaced by the plain one.
+enum class Acceleration {
+  None,       // plain local/global iterations
+  Chebyshev,  // Chebyshev semi-iteration (Wang 2015)
+  Anderson,   // Anderson acceleration (Peng et al. 2018)
+};
+const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev", "anderson"
+/// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
+Acceleration parseAcceleration(const std::string& name);
 
 /// Which OpenCL device to use. Empty strings fall back to the environment variables
 /// STABINT_OPENCL_PLATFORM and STABINT_OPENCL_DEVICE, then to the first platform and device.
@@ -60,18 +71,26 @@ struct SimulatorOptions {
   int iterations = 10;
   double tolerance = 0.0;
   int max_iterations = 1000;
+  /// Acceleration of every local/global solve; the spectral-radius estimate of the plain
+  /// iteration that the Chebyshev recurrence uses (in (0, 1)); the number of past iterates
+  /// Anderson acceleration combines (>= 1).
+  Acceleration acceleration = Acceleration::None;
+  double chebyshev_rho = 0.98;
+  int anderson_window = 5;
 
-  /// Energy-tracking blend (method.md section 3).
-  int be_iterations = 3;             // budget of the BE partner solve, warm-started at x_IM
+  /// Energy-tracking blend (docs/method.md, "The blend").
+  int be_iterations = 3;             // budget of the BE partner solve, warm-started at x_n
   double energy_tolerance = 1e-3;    // tau = energy_tolerance * (K + E_int + E_scale)
-  double alpha_fe_max = 0.01;        // cap on the forward-Euler blend weight
+  /// Largest factor by which one step may scale the velocities up to restore missing energy:
+  /// energy comes back over a few steps, never as a kinetic jump of a nearly resting body.
+  double max_velocity_scale = 2.0;
   int max_root_evaluations = 12;     // energy evaluations of the root find
 
   BackendKind backend = BackendKind::CpuReference;
   OpenCLOptions opencl;
 };
 
-/// Energies of a state (method.md section 1). `elastic` includes springs, tets and pins;
+/// Energies of a state (docs/method.md section 1). `elastic` includes springs, tets and pins;
 /// `external` is gravity plus force fields, -sum (m g + f(t)).x.
 struct EnergyReport {
   double kinetic = 0.0;
@@ -94,9 +113,11 @@ struct PhaseTimes {
   PhaseTimes& operator+=(const PhaseTimes& o);
 };
 
-/// Which state the blend accepted (None for the other integrators).
-enum class BlendBranch { None, ImplicitMidpoint, BackwardEuler, ForwardEuler };
-const char* blendBranchName(BlendBranch branch);  // "-", "IM", "BE", "FE"
+/// What the blend did with the implicit-midpoint candidate (None for the other integrators):
+/// accepted it, blended it with a backward-Euler partner (too much energy), or scaled its
+/// velocities (too little energy).
+enum class BlendBranch { None, ImplicitMidpoint, BackwardEuler, VelocityScale };
+const char* blendBranchName(BlendBranch branch);  // "-", "IM", "BE", "scale"
 
 struct StepReport {
   int step = 0;           // index of this step (0 = first)
@@ -106,7 +127,8 @@ struct StepReport {
   double forcing = 0.0;   // energy added to H* by time-dependent potentials this step
   double damping = 0.0;   // kinetic energy removed by damping this step (>= 0)
   BlendBranch branch = BlendBranch::None;
-  double alpha = 0.0;     // blend weight of the BE/FE partner (0 = pure IM)
+  double alpha = 0.0;     // blend weight of the BE partner (0 = pure IM)
+  double velocity_scale = 1.0;  // factor the blend applied to the velocities (1 = none)
   int iterations = 0;     // local/global iterations of all solves in this step
   int energy_evaluations = 0;  // element energy passes (root find included)
   PhaseTimes times;

@@ -39,34 +39,32 @@ void runEnergy(const StudyOptions& options) {
   ensureDirectory(options.out);
   const int frames = options.quick ? 60 : 300;
   for (const StudyScene& s : {tetBarScene(), clothScene()}) {
-    const double available = availableEnergy(s);
     const bool bar = s.key == "tetbar";
     CsvWriter csv(joinPath(options.out, "energy_" + s.key + ".csv"),
                   {"integrator", "backend", "frame", "time", "H", "H_target", "kinetic", "elastic", "external",
-                   "E_avail", "free_end_y", "branch", "alpha", "iterations"});
+                   "E_avail", "free_end_y", "com_y", "branch", "alpha", "iterations"});
     for (Integrator i : kIntegrators) {
       RunSpec spec;
       spec.integrator = i;
       spec.frames = frames;
       spec.backend = options.backend;
-      spec.record_positions = true;
-      const RunResult run = simulate(s.scene, spec, [&](int frame, const stabint::Simulator& sim) {
-        if (!bar && frame == kStillFrame &&
-            (i == Integrator::BackwardEuler || i == Integrator::EnergyBlend || i == Integrator::BDF2 ||
-             i == Integrator::ImplicitMidpoint))
-          writeStill(options, s, i, frame, sim.positions());
-      });
+      const JudgedRun j = judgedRun(s, spec, options);
+      const RunResult& run = j.run;
+      if (!bar && run.positions.size() > static_cast<size_t>(kStillFrame))
+        writeStill(options, s, i, kStillFrame, run.positions[kStillFrame]);
       for (size_t f = 0; f < run.samples.size(); ++f) {
         const FrameSample& fs = run.samples[f];
         csv << stabint::integratorName(i) << stabint::backendName(options.backend) << f << fs.time << fs.total()
-            << fs.target << fs.kinetic << fs.elastic << fs.external << available
-            << (bar ? freeEndHeight(s, run.positions[f]) : 0.0) << stabint::blendBranchName(fs.branch) << fs.alpha
-            << fs.iterations;
+            << fs.target << fs.kinetic << fs.elastic << fs.external << j.energy.available
+            << (bar ? freeEndHeight(s, run.positions[f]) : 0.0) << comY(run, s.scene, f)
+            << stabint::blendBranchName(fs.branch) << fs.alpha << fs.iterations;
         csv.endRow();
       }
-      const Metrics m = energyMetrics(run, available);
-      std::printf("  energy %-6s %-5s drift %+8.3f E_avail, max |H - H*| %.3g E_avail%s\n", s.key.c_str(),
-                  stabint::integratorName(i), m.drift, m.max_target_dev,
+      const Metrics& m = j.energy;
+      std::printf("  energy %-6s %-5s drift %+8.3f E_avail, max |H - H*| %.3g E_avail, mean K %.3g x reference's, "
+                  "flicker %.3g: %s%s\n",
+                  s.key.c_str(), stabint::integratorName(i), m.drift, m.max_target_dev, j.motion.mean_k_ratio,
+                  j.motion.flicker, j.motion.verdict.c_str(),
                   run.blew_up_frame >= 0 ? (", blew up at frame " + std::to_string(run.blew_up_frame)).c_str() : "");
       std::fflush(stdout);
     }

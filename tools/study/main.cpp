@@ -2,32 +2,10 @@
 // directory (default results/); bench/study_charts.py turns them into charts and a summary.
 #include "study.hpp"
 
-#include <chrono>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <iostream>
 #include <string>
-
-namespace study {
-
-namespace {
-const auto kProgramStart = std::chrono::steady_clock::now();
-}
-
-void ensureDirectory(const std::string& path) { std::filesystem::create_directories(path); }
-
-std::string joinPath(const std::string& dir, const std::string& name) {
-  return (std::filesystem::path(dir) / name).string();
-}
-
-void progress(const std::string& message) {
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - kProgramStart).count();
-  std::printf("[%6.1f s] %s\n", s, message.c_str());
-  std::fflush(stdout);
-}
-
-}  // namespace study
 
 namespace {
 
@@ -46,6 +24,9 @@ void usage(std::FILE* to) {
                "  energy      energy over time: tet bar and cloth with BE, BDF2, IM, blend\n"
                "              (energy_tetbar.csv, energy_cloth.csv, cloth_still_<integrator>.csv)\n"
                "  crosscheck  OpenCL backend against the CPU reference (backend_check.csv)\n"
+               "  motion      issue 8's motion targets against small-step references (cached in DIR/cache):\n"
+               "              cloth, chain, handle cloth, stiff cloth, spinning tet bars, particle on a moving pin\n"
+               "              (printed; motion.csv, motion_series.csv, motion_reference.csv, moving_pin.csv)\n"
                "  all         all of the above in order\n"
                "options:\n"
                "  --out DIR          output directory (default results)\n"
@@ -100,7 +81,8 @@ int main(int argc, char** argv) {
       void (*run)(const StudyOptions&);
     };
     const Step steps[] = {{"table", runTable},         {"reference", runReference}, {"sweep", runSweep},
-                          {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck}};
+                          {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck},
+                          {"motion", runMotion}};
     bool found = false;
     for (const Step& s : steps) {
       if (command != "all" && command != s.name) continue;

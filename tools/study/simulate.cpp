@@ -9,6 +9,9 @@ namespace study {
 
 namespace {
 
+// alpha comes out of a root find; "whole" means alpha_max = 1 itself, within round-off.
+constexpr double kWholePartnerSlack = 1e-12;
+
 FrameSample sampleOf(const stabint::Simulator& sim) {
   FrameSample f;
   f.time = sim.time();
@@ -22,6 +25,23 @@ FrameSample sampleOf(const stabint::Simulator& sim) {
 
 }  // namespace
 
+namespace {
+std::string countSummary(const std::map<std::string, int>& counts) {
+  std::string text;
+  for (const auto& [name, count] : counts) text += (text.empty() ? "" : ";") + name + "=" + std::to_string(count);
+  return text.empty() ? "-" : text;
+}
+}  // namespace
+
+std::string RunResult::branchSummary() const { return countSummary(branches); }
+std::string RunResult::partnerWholeSummary() const { return countSummary(partner_whole_by_branch); }
+
+double RunResult::medianMsPerFrame() const {
+  std::vector<double> ms;
+  for (size_t f = 1; f < samples.size(); ++f) ms.push_back(1e3 * samples[f].seconds);
+  return ms.empty() ? ms_per_frame() : median(std::move(ms));
+}
+
 RunResult simulate(const Scene& scene, const RunSpec& spec,
                    const std::function<void(int, const stabint::Simulator&)>& on_frame) {
   stabint::SimulatorOptions o;
@@ -31,6 +51,7 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
   o.tolerance = spec.tolerance;
   o.max_iterations = spec.max_iterations;
   o.be_iterations = spec.be_iterations;
+  o.acceleration = spec.acceleration;
   o.backend = spec.backend;
   stabint::Simulator sim(scene, o);
 
@@ -53,16 +74,21 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
           run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
           throw;
         }
-        run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        run.seconds += seconds;
+        partial.seconds += seconds;
         const stabint::StepReport& r = sim.lastReport();
         partial.iterations += r.iterations;
         partial.branch = r.branch;
         partial.alpha = r.alpha;
-        switch (r.branch) {
-          case BlendBranch::ImplicitMidpoint: ++run.branch_im; break;
-          case BlendBranch::BackwardEuler: ++run.branch_be; break;
-          case BlendBranch::ForwardEuler: ++run.branch_fe; break;
-          case BlendBranch::None: break;
+        // Counted by printed name, so that branches added or renamed in the library need no
+        // change here.
+        if (r.branch != BlendBranch::None) {
+          ++run.branches[stabint::blendBranchName(r.branch)];
+          if (r.branch != BlendBranch::ImplicitMidpoint && r.alpha >= 1.0 - kWholePartnerSlack) {
+            ++run.partner_whole;
+            ++run.partner_whole_by_branch[stabint::blendBranchName(r.branch)];
+          }
         }
       }
     } catch (const stabint::NonFiniteStateError& e) {
@@ -74,6 +100,7 @@ RunResult simulate(const Scene& scene, const RunSpec& spec,
     f.iterations = partial.iterations;
     f.branch = partial.branch;
     f.alpha = partial.alpha;
+    f.seconds = partial.seconds;
     run.samples.push_back(f);
     if (spec.record_positions) run.positions.push_back(sim.positions());
     run.frames_done = frame;

@@ -3,7 +3,11 @@
 // computed from it, the cached reference trajectory and the subcommands.
 #include <stabint/stabint.hpp>
 
+#include <Eigen/Geometry>  // cross products (angular momentum, spinning scenes)
+
 #include <functional>
+#include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -36,13 +40,36 @@ struct StudyScene {
   /// descent from a pose far from equilibrium can take minutes (the tilted cloth swinging down
   /// through 120 degrees); from a pose near it, milliseconds.
   Eigen::MatrixX3d equilibrium_start;
+  /// The real-time frame step the study runs this scene at (one simulator step per frame).
+  double frame_step = 1.0 / 30.0;
+  /// The small-step motion reference (motion_reference.cpp): integrator, steps per frame,
+  /// solve tolerance (implicit references only) and horizon. Chosen per scene so that its energy
+  /// error stays below 3e-4 E_avail and two step counts agree (the checks it reports).
+  Integrator reference_integrator = Integrator::SymplecticEuler;
+  int reference_substeps = 2000;
+  double reference_tolerance = 0.0;
+  double reference_seconds = 10.0;
 };
 
 /// makeChainPendulum() with the given spring stiffness (default scene: 1e4 N/m).
 StudyScene chainScene(double stiffness = 1e4);
 /// makeClothGrid 20x20 pinned at the two corners of its top edge, tilted 30 degrees below the
 /// horizontal about that edge so it falls, swings and folds (see study_scenes.cpp for why).
-StudyScene clothScene();
+/// The default stretch stiffness (1e3 N/m) is the main job's cloth (key "cloth"); any other is
+/// the stiff cloth of issue 8 (key "cloth_stiff", run at h = 1/15).
+StudyScene clothScene(double stretch_stiffness = 1e3);
+constexpr double kStiffClothStretch = 1e6;
+/// scenes/cloth_handle.json: a cloth on a swinging handle in a gusty wind, with damping.
+StudyScene handleClothScene();
+/// The tet bar with no pins and no gravity, spinning rigidly at `omega` rad/s about an axis
+/// through its centre of mass. `general`: about the axis (1, 2, 3)/|.| (not a principal axis)
+/// and stretched by 20 % along its length; else about y (end over end), at its rest shape.
+StudyScene spinningBarScene(bool general, double omega = 6.0);
+/// One 1 kg particle on a pin of stiffness k whose target moves as 0.3 m sin(2 pi 2 Hz t) along
+/// x; no gravity. Linear: implicit midpoint is exact in one iteration.
+StudyScene movingPinScene(double stiffness);
+constexpr double kMovingPinAmplitude = 0.3;  // m
+constexpr double kMovingPinFrequency = 2.0;  // Hz
 /// makeTetBar 8x2x2 (1 m x 0.25 m x 0.25 m), pinned at x = 0, with the given tet stiffness.
 StudyScene tetBarScene(double stiffness = 1e5);
 
@@ -59,6 +86,7 @@ double availableEnergy(const StudyScene& scene);
 
 struct RunSpec {
   Integrator integrator = Integrator::EnergyBlend;
+  stabint::Acceleration acceleration = stabint::Acceleration::None;
   double frame_step = 1.0 / 30.0;
   int substeps = 1;          // simulator steps per frame (h = frame_step / substeps)
   int iterations = 10;
@@ -80,6 +108,7 @@ struct FrameSample {
   BlendBranch branch = BlendBranch::None;  // of the frame's last step
   double alpha = 0.0;
   int iterations = 0;   // all solves of all substeps of the frame
+  double seconds = 0.0; // wall clock of the frame's step() calls
   double total() const { return kinetic + elastic + external; }
 };
 
@@ -92,11 +121,28 @@ struct RunResult {
   double seconds = 0.0;        // wall clock of all step() calls, the refused one included
   int frames_done = 0;
   long steps_tried = 0;        // step() calls, the refused one included
-  int branch_im = 0, branch_be = 0, branch_fe = 0;  // blend decisions over all steps
+  /// Blend decisions over all steps, keyed by blendBranchName() (no entry for "-").
+  std::map<std::string, int> branches;
+  /// Steps whose blend took its partner whole (alpha = 1): the target was out of the partner's
+  /// reach, or the root find ended there.
+  int partner_whole = 0;
+  std::map<std::string, int> partner_whole_by_branch;  // the same, per branch name
+  int branchCount(const std::string& name) const {
+    const auto it = branches.find(name);
+    return it == branches.end() ? 0 : it->second;
+  }
+  /// "IM=3;BE=196;FE=101": every branch taken, in name order (no commas: a CSV field).
+  std::string branchSummary() const;
+  /// The same for partner_whole_by_branch ("BE=244").
+  std::string partnerWholeSummary() const;
   double energy_scale = 0.0;   // Simulator::energyScale()
   int substeps = 1;
   /// Wall clock per frame from every step tried, so a run that blew up early still has a cost.
   double ms_per_frame() const { return steps_tried > 0 ? 1e3 * seconds * substeps / steps_tried : 0.0; }
+  /// Median over the completed frames of their wall clock: on a machine shared with other jobs
+  /// the mean picks up every stall, the median does not (the sweep's equal-time comparisons use
+  /// it). ms_per_frame() when no frame completed.
+  double medianMsPerFrame() const;
 };
 
 /// Runs `spec.frames` frames; a NonFiniteStateError ends the run and is recorded as the blow-up.
@@ -113,6 +159,11 @@ struct Metrics {
   double max_rise = 0.0;        // max (H - H_0) / E_avail
   double drift = 0.0;           // (H_end - H_0) / E_avail
   double damping = 0.0;         // (H_0 - mean H over the last 10 % of frames) / E_avail
+  /// Time [s] of the first frame with |H - H_0| > kExplodeFactor E_avail, or of the last finite
+  /// frame before a blow-up; +inf when the run never exploded. Statistics over a window that
+  /// ends before it (the trajectory error over 0-1 s of a run that explodes at 3 s) still mean
+  /// something.
+  double exploded_at = std::numeric_limits<double>::infinity();
   std::string verdict;          // "stable", "over-damped", "exploded"
 };
 /// Verdict thresholds: exploded when the run blew up or max |H - H_0| > kExplodeFactor E_avail;
@@ -125,6 +176,48 @@ Metrics energyMetrics(const RunResult& run, double available_energy);
 /// missing: the result is +inf when the run blew up before the reference horizon.
 double positionRmsError(const RunResult& run, const std::vector<Eigen::MatrixX3d>& reference);
 
+// ---- motion metrics (issue 8): pure functions of recorded series, tested on synthetic data ---
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// RMS trajectory error sqrt(sum_{f=1..last_frame} sum_p |x_f,p - xref_f,p|^2 / (last_frame P)):
+/// over particles and frames 1..last_frame (frame 0 is the shared initial state). +inf when the
+/// run has fewer frames (it blew up) or a non-finite entry; NaN when the reference is too short.
+double rmsTrajectoryError(const std::vector<Eigen::MatrixX3d>& run, const std::vector<Eigen::MatrixX3d>& reference,
+                          int last_frame);
+/// Mean of values[f] over the frames f whose time f*frame_step lies in [t0, t1] (1e-9 s slack);
+/// NaN when the series does not reach t1.
+double meanOverWindow(const std::vector<double>& values, double frame_step, double t0, double t1);
+/// Frame-to-frame flicker of the kinetic energy: the median over consecutive frame pairs
+/// (frames 1..N; frame 0 is the release from rest) of max(K_i+1/K_i, K_i/K_i+1), computed as
+/// (max + floor)/(min + floor) so that two frames at rest count as 1, not 0/0. `floor` is a
+/// negligible energy (the study uses 1e-9 E_avail). 1 for smooth motion, about 1.1 for the
+/// reference cloth; a K that flips between two levels every frame gives their ratio. NaN when
+/// fewer than two frames.
+double kineticFlicker(const std::vector<double>& kinetic, double floor);
+double median(std::vector<double> values);
+/// Mass-weighted centre of mass of the rows of x.
+Eigen::Vector3d centreOfMass(const Eigen::MatrixX3d& x, const Eigen::VectorXd& masses);
+/// Angular momentum sum_p m_p (x_p - c) x v_p about the centre of mass c.
+Eigen::Vector3d angularMomentum(const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v, const Eigen::VectorXd& masses);
+
+/// The window of the mean-K statistic: 5-10 s (the cloth's swing has settled into its long-run
+/// pattern); for a shorter horizon T (quick mode) the second half [T/2, T].
+struct TimeWindow {
+  double from = 0.0, to = 0.0;
+};
+TimeWindow kineticWindow(double horizon);
+constexpr double kShortRmsSeconds = 0.5;  // RMS trajectory error over 0-0.5 s ...
+constexpr double kLongRmsSeconds = 1.0;   // ... and 0-1 s, where the reference is sharp
+/// Verdicts on motion: frozen when the mean K over the window is below kFrozenFraction of the
+/// reference's; jittery when the flicker exceeds kJitteryFlicker.
+constexpr double kFrozenFraction = 0.3;
+constexpr double kJitteryFlicker = 1.5;
+constexpr double kFlickerFloor = 1e-9;  // times E_avail
+
+/// The combined verdict: "exploded" (energy verdict); else the flags that apply, joined by '+',
+/// among "over-damped" (energy), "frozen", "jittery"; else "stable". A NaN statistic (no
+/// reference over that window) raises no flag.
+std::string combinedVerdict(const std::string& energy_verdict, double mean_k_ratio, double flicker);
 // ---- reference -----------------------------------------------------------------------------
 
 struct Reference {
@@ -141,6 +234,55 @@ constexpr int kReferenceSubsteps = 16;   // reference step h/16
 /// sampled at frame times; cached in <out>/cache/<scene>-<hash>.bin.
 Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& options);
 
+// ---- motion reference ----------------------------------------------------------------------
+
+/// A small-step reference run of a scene (StudyScene::reference_*), sampled at the scene's
+/// frame times, with the checks of its sharpness.
+struct MotionReference {
+  std::string method;                       // e.g. "SE h/2000"
+  double frame_step = 0.0;
+  std::vector<Eigen::MatrixX3d> positions;  // frames 0..N
+  std::vector<double> kinetic, energy;      // K and H per frame
+  double available = 0.0;                   // E_avail of the scene
+  int substeps = 0, check_substeps = 0;     // the reference and its check run (half the steps)
+  double energy_error = 0.0;   // max |H - H*| / E_avail (H* books forcing and damping exactly)
+  double self_rms = 0.0;       // RMS |x(substeps) - x(check_substeps)| over 0-1 s [m]
+  double self_mean_k = 0.0;    // mean K of the check run over the K window / the reference's
+  double seconds = 0.0;        // wall clock of both runs (0 when cached)
+  bool from_cache = false;
+  double horizon() const { return frame_step * static_cast<double>(positions.size() - 1); }
+};
+/// Computes (or reads from <out>/cache/) the scene's motion reference over its horizon
+/// (StudyScene::reference_seconds; at most 1 s in --quick mode), on the CPU reference backend.
+const MotionReference& motionReference(const StudyScene& scene, const StudyOptions& options);
+
+/// Motion of one run against the scene's reference.
+struct MotionMetrics {
+  double rms_short = kNaN, rms_long = kNaN;  // RMS trajectory error over 0-0.5 s and 0-1 s [m]
+  TimeWindow k_window;
+  double mean_k = kNaN, mean_k_ref = kNaN, mean_k_ratio = kNaN;
+  double flicker = kNaN, flicker_ref = kNaN;
+  std::string verdict;  // combinedVerdict
+};
+/// `run` must have recorded positions for the trajectory errors; the K window is that of the
+/// shorter of the run's planned horizon (`frames`) and the reference's.
+MotionMetrics motionMetrics(const RunResult& run, int frames, const MotionReference& reference,
+                            const Metrics& energy);
+std::vector<double> kineticSeries(const RunResult& run);
+
+/// One run of a study scene judged on energy and motion: the run (positions recorded), its
+/// energy metrics and its motion metrics against the scene's motion reference.
+struct JudgedRun {
+  RunResult run;
+  Metrics energy;
+  MotionMetrics motion;
+};
+/// Runs `spec` (frames, integrator, budget; the frame step and position recording are set here)
+/// on `scene` and judges it against motionReference(scene).
+JudgedRun judgedRun(const StudyScene& scene, RunSpec spec, const StudyOptions& options);
+/// y of the centre of mass at frame f (positions recorded).
+double comY(const RunResult& run, const Scene& scene, size_t frame);
+
 // ---- subcommands ---------------------------------------------------------------------------
 
 void runTable(const StudyOptions& options);
@@ -149,6 +291,7 @@ void runSweep(const StudyOptions& options);
 void runStability(const StudyOptions& options);
 void runEnergy(const StudyOptions& options);
 void runCrosscheck(const StudyOptions& options);
+void runMotion(const StudyOptions& options);
 
 // ---- small helpers -------------------------------------------------------------------------
 

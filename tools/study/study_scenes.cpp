@@ -1,8 +1,13 @@
 // The study's scenes and their energy scale.
+#include "cache.hpp"
 #include "study.hpp"
 
 #include <cmath>
 #include <sstream>
+
+#ifndef STABINT_STUDY_SCENES_DIR
+#define STABINT_STUDY_SCENES_DIR "scenes"
+#endif
 
 namespace study {
 
@@ -15,6 +20,46 @@ std::string fmt(double v) {
   return s.str();
 }
 
+// A hash of every number of a scene loaded from a file: the cache key of its reference changes
+// whenever the file (or the mesh it names) does.
+std::string fingerprint(const Scene& sc) {
+  std::ostringstream t;
+  t.precision(17);
+  auto put = [&t](const auto& matrix) {
+    for (Eigen::Index i = 0; i < matrix.size(); ++i) t << matrix.data()[i] << ' ';
+  };
+  put(sc.positions);
+  put(sc.rest_positions);
+  put(sc.velocities);
+  put(sc.masses);
+  put(sc.gravity);
+  for (const stabint::Spring& e : sc.springs) t << e.a << ' ' << e.b << ' ' << e.rest_length << ' ' << e.stiffness << ' ';
+  for (const stabint::Tet& e : sc.tets) {
+    for (int v : e.vertices) t << v << ' ';
+    t << e.stiffness << ' ';
+  }
+  for (const stabint::Pin& p : sc.pins) {
+    t << p.vertex << ' ' << p.stiffness << ' ' << p.target.frequency << ' ';
+    put(p.target.position);
+    put(p.target.velocity);
+    put(p.target.amplitude);
+  }
+  for (const stabint::ForceField& f : sc.force_fields) {
+    for (int v : f.particles) t << v << ' ';
+    t << f.frequency << ' ';
+    put(f.force);
+    put(f.rate);
+    put(f.amplitude);
+  }
+  for (const stabint::Body& b : sc.bodies) {
+    for (int v : b.particles) t << v << ' ';
+    t << b.damping << ' ';
+  }
+  std::ostringstream hex;
+  hex << std::hex << fnv1a(t.str());
+  return hex.str();
+}
+
 }  // namespace
 
 StudyScene chainScene(double stiffness) {
@@ -22,6 +67,10 @@ StudyScene chainScene(double stiffness) {
   p.stiffness = stiffness;
   StudyScene s;
   s.key = "chain";
+  // SE's energy error is first order in h and peaks when the chain whips around its pin:
+  // max |H - H0| over 10 s is 1.9e-3, 8.6e-4, 3.1e-4 J at h/2000, h/4000, h/8000 (E_avail
+  // 0.49 J); h/32000 keeps it below 3e-4 E_avail. A step costs 0.6 us here.
+  s.reference_substeps = 32000;
   s.scene = stabint::makeChainPendulum(p);
   s.params = "chain particles=" + std::to_string(p.particles) + " mass=" + fmt(p.total_mass) +
              " length=" + fmt(p.length) + " k=" + fmt(p.stiffness) + " pin=" + fmt(p.pin_stiffness) +
@@ -34,13 +83,14 @@ StudyScene chainScene(double stiffness) {
 // away (method.md section 5). Tilting it about its pinned top edge to 30 degrees below the
 // horizontal makes it fall, swing and fold, and keeps a non-zero vertical extent so the
 // simulator's E_scale (m g times the height along gravity) is not zero.
-StudyScene clothScene() {
+StudyScene clothScene(double stretch_stiffness) {
   stabint::ClothGridParams p;
   p.nx = 20;
   p.ny = 20;
+  p.stretch_stiffness = stretch_stiffness;
   const double tilt = 30.0 * M_PI / 180.0;
   StudyScene s;
-  s.key = "cloth";
+  s.key = stretch_stiffness == stabint::ClothGridParams{}.stretch_stiffness ? "cloth" : "cloth_stiff";
   s.grid_nx = p.nx;
   s.grid_ny = p.ny;
   s.scene = stabint::makeClothGrid(p);
@@ -63,6 +113,55 @@ StudyScene clothScene() {
   s.params = "cloth nx=20 ny=20 w=" + fmt(p.width) + " h=" + fmt(p.height) + " rho=" + fmt(p.areal_density) +
              " ks=" + fmt(p.stretch_stiffness) + " kshear=" + fmt(p.shear_stiffness) + " kb=" +
              fmt(p.bend_stiffness) + " pin=" + fmt(p.pin_stiffness) + " tilt=30deg";
+  // SE needs omega h < 2 on the corner pins (1e5 N/m on ~6e-5 kg: omega ~ 4e4 /s): h/2000 at
+  // 1/30 gives omega h ~ 0.7. Issue 8 runs the stiff cloth (springs 1e6 N/m, highest lattice
+  // mode ~ 2.4e5 /s) at h = 1/15 and judges how far it falls in 1 s: h/20000 there.
+  if (s.key == "cloth_stiff") {
+    s.frame_step = 1.0 / 15.0;
+    s.reference_substeps = 20000;
+    s.reference_seconds = 1.0;
+  }
+  return s;
+}
+
+StudyScene handleClothScene() {
+  StudyScene s;
+  s.key = "handle";
+  s.scene = stabint::loadSceneFile(std::string(STABINT_STUDY_SCENES_DIR) + "/cloth_handle.json");
+  s.params = "cloth_handle.json fingerprint=" + fingerprint(s.scene);
+  return s;
+}
+
+StudyScene spinningBarScene(bool general, double omega) {
+  StudyScene s = tetBarScene();
+  s.key = general ? "spinbar_general" : "spinbar";
+  Scene& sc = s.scene;
+  sc.pins.clear();
+  sc.gravity.setZero();
+  const Eigen::Vector3d centre = centreOfMass(sc.positions, sc.masses);
+  // 20 % stretch along the length about the centre: elastic energy that the spin must carry
+  // through the tets' non-linear (co-rotated) response.
+  if (general)
+    for (Eigen::Index r = 0; r < sc.positions.rows(); ++r) sc.positions(r, 0) = centre.x() + 1.2 * (sc.positions(r, 0) - centre.x());
+  const Eigen::Vector3d axis = general ? Eigen::Vector3d(1.0, 2.0, 3.0).normalized() : Eigen::Vector3d::UnitY();
+  for (Eigen::Index r = 0; r < sc.positions.rows(); ++r)
+    sc.velocities.row(r) = (omega * axis).cross(sc.positions.row(r).transpose() - centre).transpose();
+  s.params += " free spin omega=" + fmt(omega) + (general ? " axis=(1,2,3) stretch=1.2" : " axis=y");
+  return s;
+}
+
+StudyScene movingPinScene(double stiffness) {
+  stabint::LinearOscillatorParams p;
+  p.stiffness = stiffness;
+  p.amplitude = 0.0;  // the particle starts on the pin's target, at rest
+  StudyScene s;
+  s.key = "moving_pin";
+  s.scene = stabint::makeLinearOscillator(p);
+  stabint::PinTarget& target = s.scene.pins.at(0).target;
+  target.amplitude = Eigen::Vector3d(kMovingPinAmplitude, 0.0, 0.0);
+  target.frequency = kMovingPinFrequency;
+  s.params = "moving pin m=" + fmt(p.mass) + " k=" + fmt(stiffness) + " a=" + fmt(kMovingPinAmplitude) +
+             " f=" + fmt(kMovingPinFrequency);
   return s;
 }
 
@@ -82,6 +181,11 @@ StudyScene tetBarScene(double stiffness) {
   s.free_end_first = p.nx;
   s.free_end_stride = px;
   s.free_end_count = py * pz;
+  // An SE step costs 270 us here (per-tet rotations) and the 1e7 N/m pins need h/200 for
+  // stability alone: converged implicit midpoint at h/16 instead (energy error ~4e-5 E_avail).
+  s.reference_integrator = Integrator::ImplicitMidpoint;
+  s.reference_substeps = 16;
+  s.reference_tolerance = 1e-10;
   return s;
 }
 

@@ -1,0 +1,162 @@
+// The study's motion metrics on small synthetic series whose answers are known in closed form
+// (not produced by the code under test), and the reference cache's round trip.
+#include "cache.hpp"
+#include "study.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace study {
+namespace {
+
+std::vector<Eigen::MatrixX3d> constantFrames(int frames, const Eigen::MatrixX3d& x) {
+  return std::vector<Eigen::MatrixX3d>(static_cast<size_t>(frames), x);
+}
+
+TEST(RmsTrajectoryError, ConstantOffsetGivesItsLength) {
+  Eigen::MatrixX3d x = Eigen::MatrixX3d::Random(5, 3);
+  const auto reference = constantFrames(11, x);
+  auto run = reference;
+  for (size_t f = 1; f < run.size(); ++f) run[f].rowwise() += Eigen::RowVector3d(0.3, 0.4, 0.0);  // |d| = 0.5
+  EXPECT_NEAR(rmsTrajectoryError(run, reference, 10), 0.5, 1e-15);
+  EXPECT_NEAR(rmsTrajectoryError(run, reference, 3), 0.5, 1e-15);
+}
+
+TEST(RmsTrajectoryError, OnlyFramesUpToTheLimitCount) {
+  const auto reference = constantFrames(11, Eigen::MatrixX3d::Zero(2, 3));
+  auto run = reference;
+  // Frames 1..4 off by 1 m in x, frames 5.. by 100 m: over 1..4 the RMS is 1; over 1..8 it is
+  // sqrt((4 * 1 + 4 * 100^2) / 8).
+  for (size_t f = 1; f < run.size(); ++f) run[f].col(0).setConstant(f <= 4 ? 1.0 : 100.0);
+  EXPECT_DOUBLE_EQ(rmsTrajectoryError(run, reference, 4), 1.0);
+  EXPECT_NEAR(rmsTrajectoryError(run, reference, 8), std::sqrt((4.0 + 4.0 * 1e4) / 8.0), 1e-12);
+}
+
+TEST(RmsTrajectoryError, ShortRunIsInfiniteAndShortReferenceIsNaN) {
+  const auto reference = constantFrames(11, Eigen::MatrixX3d::Zero(2, 3));
+  const auto short_run = constantFrames(5, Eigen::MatrixX3d::Zero(2, 3));  // blew up at frame 5
+  EXPECT_TRUE(std::isinf(rmsTrajectoryError(short_run, reference, 10)));
+  EXPECT_DOUBLE_EQ(rmsTrajectoryError(short_run, reference, 4), 0.0);
+  EXPECT_TRUE(std::isnan(rmsTrajectoryError(reference, short_run, 10)));
+  auto nonfinite = reference;
+  nonfinite[3](1, 2) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(std::isinf(rmsTrajectoryError(nonfinite, reference, 10)));
+}
+
+TEST(MeanOverWindow, LinearSeriesAveragesToTheWindowMidpoint) {
+  // values[f] = t_f = f h with h = 1/30 over 10 s: the mean over the frames in [5, 10] of an
+  // evenly sampled linear function is its value at the window's midpoint, 7.5.
+  const double h = 1.0 / 30.0;
+  std::vector<double> t;
+  for (int f = 0; f <= 300; ++f) t.push_back(f * h);
+  EXPECT_NEAR(meanOverWindow(t, h, 5.0, 10.0), 7.5, 1e-12);
+  EXPECT_NEAR(meanOverWindow(t, h, 0.0, 1.0), 0.5, 1e-12);
+  EXPECT_TRUE(std::isnan(meanOverWindow(t, h, 5.0, 10.5)));  // the series ends at 10 s
+}
+
+TEST(KineticFlicker, SmoothAlternatingAndGeometricSeries) {
+  // Frame 0 (released from rest, K = 0) is excluded by definition.
+  EXPECT_DOUBLE_EQ(kineticFlicker({0.0, 2.0, 2.0, 2.0, 2.0}, 0.0), 1.0);
+  // K flips between 1 and 6 every frame: every consecutive ratio is 6.
+  EXPECT_DOUBLE_EQ(kineticFlicker({0.0, 1.0, 6.0, 1.0, 6.0, 1.0}, 0.0), 6.0);
+  // K = 3^f: every ratio is 3, decreasing or increasing alike.
+  EXPECT_NEAR(kineticFlicker({0.0, 3.0, 9.0, 27.0, 81.0}, 0.0), 3.0, 1e-15);
+  EXPECT_NEAR(kineticFlicker({0.0, 81.0, 27.0, 9.0, 3.0}, 0.0), 3.0, 1e-15);
+  // Two frames at rest count as 1 thanks to the floor, not 0/0.
+  EXPECT_DOUBLE_EQ(kineticFlicker({0.0, 0.0, 0.0, 0.0}, 1e-12), 1.0);
+  EXPECT_TRUE(std::isnan(kineticFlicker({0.0, 1.0}, 0.0)));
+}
+
+TEST(Median, OddAndEvenCounts) {
+  EXPECT_DOUBLE_EQ(median({5.0, 1.0, 3.0}), 3.0);
+  EXPECT_DOUBLE_EQ(median({4.0, 1.0, 3.0, 2.0}), 2.5);
+  EXPECT_TRUE(std::isnan(median({})));
+}
+
+TEST(CentreOfMass, MassWeighted) {
+  Eigen::MatrixX3d x(2, 3);
+  x << 0.0, 0.0, 0.0, 4.0, 8.0, -4.0;
+  const Eigen::Vector2d m(1.0, 3.0);
+  EXPECT_TRUE(centreOfMass(x, m).isApprox(Eigen::Vector3d(3.0, 6.0, -3.0), 1e-15));
+}
+
+TEST(AngularMomentum, RigidRotationAndTranslationInvariance) {
+  // Two masses m at +-r on x rotating about z at omega: L = 2 m r^2 omega e_z about the centre.
+  const double m = 0.7, r = 0.4, omega = 6.0;
+  Eigen::MatrixX3d x(2, 3), v(2, 3);
+  x << r, 0.0, 0.0, -r, 0.0, 0.0;
+  const Eigen::Vector3d w(0.0, 0.0, omega);
+  for (int p = 0; p < 2; ++p) v.row(p) = w.cross(x.row(p).transpose()).transpose();
+  const Eigen::Vector2d masses(m, m);
+  const Eigen::Vector3d expected(0.0, 0.0, 2.0 * m * r * r * omega);
+  EXPECT_TRUE(angularMomentum(x, v, masses).isApprox(expected, 1e-14));
+  // About the centre of mass, a shift of the body and a common velocity change nothing.
+  x.rowwise() += Eigen::RowVector3d(5.0, -2.0, 1.0);
+  v.rowwise() += Eigen::RowVector3d(1.0, 2.0, 3.0);
+  EXPECT_TRUE(angularMomentum(x, v, masses).isApprox(expected, 1e-13));
+}
+
+TEST(KineticWindow, FiveToTenSecondsElseTheSecondHalf) {
+  EXPECT_DOUBLE_EQ(kineticWindow(10.0).from, 5.0);
+  EXPECT_DOUBLE_EQ(kineticWindow(20.0).to, 10.0);
+  EXPECT_DOUBLE_EQ(kineticWindow(2.0).from, 1.0);
+  EXPECT_DOUBLE_EQ(kineticWindow(2.0).to, 2.0);
+}
+
+TEST(CombinedVerdict, FlagsAndPrecedence) {
+  EXPECT_EQ(combinedVerdict("exploded", 0.0, 100.0), "exploded");
+  EXPECT_EQ(combinedVerdict("stable", 1.0, 1.1), "stable");
+  EXPECT_EQ(combinedVerdict("stable", 0.29, 1.1), "frozen");
+  EXPECT_EQ(combinedVerdict("stable", 0.31, 1.6), "jittery");
+  EXPECT_EQ(combinedVerdict("stable", 0.1, 6.0), "frozen+jittery");
+  EXPECT_EQ(combinedVerdict("over-damped", 0.01, 1.0), "over-damped+frozen");
+  EXPECT_EQ(combinedVerdict("stable", kNaN, kNaN), "stable");  // no reference: no motion flag
+}
+
+TEST(Cache, RoundTripAndDescriptionCheck) {
+  const std::string dir = (std::filesystem::temp_directory_path() / "stabint_study_cache_test").string();
+  std::filesystem::remove_all(dir);
+  const std::string path = cachePath(dir, "scene", "description A");
+  std::vector<Eigen::MatrixX3d> frames = {Eigen::MatrixX3d::Random(4, 3), Eigen::MatrixX3d::Random(4, 3)};
+  std::vector<double> payload = {2.0, 4.0};
+  appendFrames(payload, frames);
+  writeCache(path, "description A", payload);
+
+  std::vector<double> back;
+  ASSERT_TRUE(readCache(path, "description A", back));
+  PayloadReader in(back);
+  double count = 0, particles = 0;
+  ASSERT_TRUE(in.next(count) && in.next(particles));
+  std::vector<Eigen::MatrixX3d> frames_back;
+  ASSERT_TRUE(readFrames(in, static_cast<int>(count), static_cast<int>(particles), frames_back));
+  EXPECT_TRUE(in.done());
+  EXPECT_EQ(frames_back[1], frames[1]);  // bit for bit
+  EXPECT_FALSE(readFrames(in, 1, 4, frames_back));  // nothing left: a short file reads as invalid
+
+  EXPECT_FALSE(readCache(path, "description B", back));  // same file name, other settings
+  EXPECT_NE(cachePath(dir, "scene", "description B"), path);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(EnergyMetrics, ExplodedAtIsTheFirstFrameBeyondTheThreshold) {
+  // H_0 = 1, E_avail = 1: H exceeds H_0 + 10 E_avail first at t = 0.3 s.
+  RunResult run;
+  const double energies[] = {1.0, 2.0, 5.0, 12.0, 3.0};
+  for (int f = 0; f < 5; ++f) {
+    FrameSample s;
+    s.time = 0.1 * f;
+    s.kinetic = energies[f];
+    s.target = 1.0;
+    run.samples.push_back(s);
+  }
+  const Metrics m = energyMetrics(run, 1.0);
+  EXPECT_EQ(m.verdict, "exploded");
+  EXPECT_DOUBLE_EQ(m.exploded_at, 0.3);
+  run.samples[3].kinetic = 4.0;  // never beyond: +inf
+  EXPECT_TRUE(std::isinf(energyMetrics(run, 1.0).exploded_at));
+}
+
+}  // namespace
+}  // namespace study

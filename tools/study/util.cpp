@@ -1,0 +1,26 @@
+// Small helpers of stabint-study: directories, paths, progress lines.
+#include "study.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+namespace study {
+
+namespace {
+const auto kProgramStart = std::chrono::steady_clock::now();
+}
+
+void ensureDirectory(const std::string& path) { std::filesystem::create_directories(path); }
+
+std::string joinPath(const std::string& dir, const std::string& name) {
+  return (std::filesystem::path(dir) / name).string();
+}
+
+void progress(const std::string& message) {
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - kProgramStart).count();
+  std::printf("[%6.1f s] %s\n", s, message.c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace study

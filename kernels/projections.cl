@@ -1,18 +1,20 @@
 // Projections shared by several element types; the OpenCL twins of host/elements/projections.cpp.
 // Small matrices are private arrays, row-major: m[3 * row + col].
 
-/// Projection of v onto the sphere |p| = radius: p = radius v/|v|. A v shorter than
-/// 1e-12 max(radius, 1) projects along the unit `fallback` instead, so the answer is defined.
-/// Returns |v|. Written without branches on scalar components: PoCL then vectorizes the
-/// work-item loop.
-inline real ontoSphere(const real* v, real radius, __global const real* fallback, real* p) {
+/// The projection of an element whose A x = v is one 3-vector held at a length r (springs,
+/// bending hinges), with params = (w, r, unit fallback direction): p = r v/|v|, along the
+/// fallback when |v| < 1e-12 max(r, 1). Returns the energy w/2 (|v| - r)^2. Written without
+/// branches on scalar components: PoCL then vectorizes the work-item loop.
+inline real ontoSphere(const real* v, __global const real* params, real* p) {
+  const real r = params[1];
   const real len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  const bool degenerate = len < (real)1e-12 * fmax(radius, (real)1);
-  const real scale = degenerate ? (real)0 : radius / len;
-  p[0] = degenerate ? radius * fallback[0] : scale * v[0];
-  p[1] = degenerate ? radius * fallback[1] : scale * v[1];
-  p[2] = degenerate ? radius * fallback[2] : scale * v[2];
-  return len;
+  const bool degenerate = len < (real)1e-12 * fmax(r, (real)1);
+  const real scale = degenerate ? (real)0 : r / len;
+  p[0] = degenerate ? r * params[2] : scale * v[0];
+  p[1] = degenerate ? r * params[3] : scale * v[1];
+  p[2] = degenerate ? r * params[4] : scale * v[2];
+  const real stretch = len - r;
+  return (real)0.5 * params[0] * stretch * stretch;
 }
 
 /// w/2 ||a - b||^2 over `count` reals: the energy of an element whose type has no form of its own.

@@ -1,16 +1,25 @@
 // Element math of the CPU reference path against independent checks: rotations are proper and
-// orthonormal, energies vanish at rest and are invariant under rigid motion, and the forces the
-// backend computes are the negative finite-difference gradient of the energy it reports.
+// orthonormal, projections are idempotent and nearest, energies vanish at rest and are
+// invariant under rigid motion, and the forces the backend computes are the negative
+// finite-difference gradient of the energy it reports; for springs, tets and pins and for
+// triangle strain and bending hinges.
 #include <stabint/stabint.hpp>
 
 #include "cpu/cpu_backend.hpp"
+#include "elements/element_type.hpp"
 #include "elements/projections.hpp"
 #include "scene/scene_data.hpp"
+#include "triangle_cloth_scene.hpp"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <Eigen/SVD>
+
+#include <array>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 namespace stabint {
 namespace {
@@ -48,13 +57,14 @@ TEST(Elements, NearestRotationRecoversTheRotationOfAStretch) {
 
 TEST(Elements, SphereProjectionHasTheRadiusAndADefinedDegenerateCase) {
   const Eigen::Vector3d d(0.3, -0.4, 1.2);
-  const Eigen::Vector3d unit_x = Eigen::Vector3d::UnitX(), unit_y = Eigen::Vector3d::UnitY();
+  const double params_x[5] = {10.0, 0.7, 1.0, 0.0, 0.0}, params_y[5] = {10.0, 0.7, 0.0, 1.0, 0.0};
   Eigen::Vector3d p;
-  projections::ontoSphere(d.data(), 0.7, unit_x.data(), p.data());
+  const double energy = projections::ontoSphere(d.data(), params_x, p.data());
   EXPECT_NEAR(p.norm(), 0.7, 1e-15);
   EXPECT_NEAR(p.normalized().dot(d.normalized()), 1.0, 1e-15);
+  EXPECT_NEAR(energy, 5.0 * (d.norm() - 0.7) * (d.norm() - 0.7), 1e-15);
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  projections::ontoSphere(zero.data(), 0.7, unit_y.data(), p.data());
+  EXPECT_NEAR(projections::ontoSphere(zero.data(), params_y, p.data()), 5.0 * 0.49, 1e-15);
   EXPECT_EQ(p, Eigen::Vector3d(0.0, 0.7, 0.0));
 }
 
@@ -86,21 +96,39 @@ Eigen::MatrixX3d perturbed(const Eigen::MatrixX3d& x, double scale, unsigned see
   return out;
 }
 
-TEST(Elements, EnergyIsZeroAtRestAndInvariantUnderRigidMotion) {
-  Scene s = mixedScene();
-  s.springs.clear();  // the extra springs above are not at rest
-  s.pins.clear();     // pins are not rigid-invariant
+// The scenes the energy and force checks run on: springs, tets and pins with time-dependent
+// forcing; and triangle strain with bending hinges on a curved rest shape.
+Scene forcesScene(bool triangles) {
+  if (!triangles) return mixedScene();
+  Scene s = testing::triangleCloth();
+  s.pins[0].target.velocity = Eigen::Vector3d(0.0, 0.1, 0.2);
+  ForceField wind;
+  wind.force = Eigen::Vector3d(0.0, 0.0, 0.02);
+  wind.rate = Eigen::Vector3d(0.01, 0.0, 0.0);
+  s.force_fields.push_back(wind);
+  return s;
+}
+
+class ElementEnergyTest : public ::testing::TestWithParam<bool> {};
+
+TEST_P(ElementEnergyTest, EnergyIsZeroAtRestAndInvariantUnderRigidMotion) {
+  Scene s = forcesScene(GetParam());
+  if (!GetParam()) s.springs.clear();  // mixedScene's extra springs are not at rest
+  s.pins.clear();                      // pins are not rigid-invariant
   s.gravity.setZero();
   s.force_fields.clear();
   SceneData data(s);
   auto backend = makeCpuBackend(data, 1);
   backend->write(0, s.rest_positions);
-  EXPECT_NEAR(backend->potential(0, 0.0).total(), 0.0, 1e-12);
+  // At rest each projection returns A x itself up to round-off (1e-16 relative), whose square
+  // is far below 1e-20 of the deformed energy below.
+  const double at_rest = backend->potential(0, 0.0).total();
 
   const Eigen::MatrixX3d deformed = perturbed(s.rest_positions, 0.02, 1);
   backend->write(0, deformed);
   const double e = backend->potential(0, 0.0).internal;
   EXPECT_GT(e, 0.0);
+  EXPECT_LT(std::abs(at_rest), 1e-20 * e);
   std::mt19937 rng(5);
   const Eigen::Matrix3d Q = randomRotation(rng);
   Eigen::MatrixX3d moved = (deformed * Q.transpose()).rowwise() + Eigen::RowVector3d(1.0, -2.0, 0.5);
@@ -109,8 +137,8 @@ TEST(Elements, EnergyIsZeroAtRestAndInvariantUnderRigidMotion) {
 }
 
 // f = -grad (E_int + U_ext): compare M a with a central finite difference of the energy.
-TEST(Elements, ForcesAreTheNegativeEnergyGradient) {
-  const Scene s = mixedScene();
+TEST_P(ElementEnergyTest, ForcesAreTheNegativeEnergyGradient) {
+  const Scene s = forcesScene(GetParam());
   SceneData data(s);
   auto backend = makeCpuBackend(data, 2);
   const double t = 0.37;
@@ -136,8 +164,89 @@ TEST(Elements, ForcesAreTheNegativeEnergyGradient) {
     max_force = std::max(max_force, std::abs(force(i)));
   }
   // Central differences: truncation O(eps^2 E''') plus round-off O(E/eps * 1e-16); with the
-  // energies and stiffnesses here both are below 1e-6 of the largest force.
+  // energies and stiffnesses here both are below 1e-6 of the largest force. (The strain limits
+  // make the triangle energy's second derivative jump where a singular value crosses a limit;
+  // with this perturbation no singular value lies within eps of one.)
   EXPECT_LT(max_error, 1e-6 * max_force) << "max force " << max_force;
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, ElementEnergyTest, ::testing::Values(false, true),
+                         [](const auto& info) { return info.param ? "TrianglesAndHinges" : "SpringsTetsPins"; });
+
+size_t typeIndex(const std::string& name) {
+  for (size_t i = 0; i < elementTypes().size(); ++i)
+    if (name == elementTypes()[i]->name()) return i;
+  throw std::runtime_error("no element type " + name);
+}
+
+Eigen::Vector2d singularValues(const Eigen::Matrix<double, 3, 2>& m) {
+  return Eigen::JacobiSVD<Eigen::Matrix<double, 3, 2>>(m).singularValues();
+}
+
+// Triangle strain: P has its singular values in [s_min, s_max], projecting it again changes
+// nothing, and no other matrix with singular values in the range is closer to F.
+TEST(Elements, TriangleStrainProjectionIsIdempotentAndNearestWithinTheLimits) {
+  const ElementType& type = *elementTypes()[typeIndex("triangle strain")];
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  for (const auto& limits : {std::array<double, 2>{1.0, 1.0}, std::array<double, 2>{0.8, 1.1}}) {
+    const double params[3] = {2.0, limits[0], limits[1]};
+    std::uniform_real_distribution<double> in_range(limits[0], limits[1]);
+    for (int trial = 0; trial < 300; ++trial) {
+      Eigen::Matrix<double, 3, 2> F;
+      for (int i = 0; i < 6; ++i) F(i) = u(rng);
+      if (trial % 10 == 0) F.col(1) = 0.5 * F.col(0);  // rank 1: a collapsed triangle
+      Eigen::Matrix<double, 3, 2> P, PP;
+      // ax is F^T row-major, i.e. F column-major: the same memory.
+      const double energy = type.project(F.data(), params, P.data());
+      EXPECT_NEAR(energy, 0.5 * params[0] * (F - P).squaredNorm(), 1e-12);
+      const Eigen::Vector2d s = singularValues(P);
+      EXPECT_GE(s.minCoeff(), limits[0] - 1e-12) << F;
+      EXPECT_LE(s.maxCoeff(), limits[1] + 1e-12) << F;
+      EXPECT_NEAR(type.project(P.data(), params, PP.data()), 0.0, 1e-24);
+      EXPECT_LT((PP - P).norm(), 1e-12) << F;
+      for (int k = 0; k < 20; ++k) {
+        // A random member of the set: orthonormal columns scaled by values in the range.
+        const Eigen::Matrix3d Q = randomRotation(rng);
+        const Eigen::Matrix2d V = Eigen::Rotation2Dd(u(rng)).toRotationMatrix();
+        const Eigen::Matrix<double, 3, 2> candidate =
+            Q.leftCols<2>() * Eigen::Vector2d(in_range(rng), in_range(rng)).asDiagonal() * V.transpose();
+        EXPECT_LE((F - P).norm(), (F - candidate).norm() + 1e-12);
+      }
+    }
+  }
+}
+
+// Bending hinge: p has the rest length and the direction of A x; projecting again changes nothing.
+TEST(Elements, BendingHingeProjectionKeepsTheRestCurvatureMagnitude) {
+  const ElementType& type = *elementTypes()[typeIndex("bending hinge")];
+  const double params[5] = {3.0, 0.4, 0.0, 0.0, 1.0};
+  const Eigen::Vector3d v(0.3, -0.2, 0.9);
+  Eigen::Vector3d p, pp;
+  EXPECT_NEAR(type.project(v.data(), params, p.data()), 1.5 * (v.norm() - 0.4) * (v.norm() - 0.4), 1e-15);
+  EXPECT_NEAR(p.norm(), 0.4, 1e-15);
+  EXPECT_NEAR(p.normalized().dot(v.normalized()), 1.0, 1e-15);
+  EXPECT_NEAR(type.project(p.data(), params, pp.data()), 0.0, 1e-30);
+  EXPECT_LT((pp - p).norm(), 1e-15);
+}
+
+// The hinge weights K of a flat hinge whose four edge angles are 45 degrees (cot = 1):
+// K = [c1 + c3, c0 + c2, -(c0 + c1), -(c2 + c3)] = [2, 2, -2, -2], summing to zero
+// (translations), with K x = 0 for the flat rest; w = 3 k / (A_0 + A_1) with both areas 1/4.
+TEST(Elements, BendingHingeCoefficientsAreTheCotangentLaplacian) {
+  Scene s;
+  s.rest_positions.resize(4, 3);
+  s.rest_positions << 0, 0, 0, 1, 0, 0, 0.5, 0.5, 0, 0.5, -0.5, 0;
+  s.positions = s.rest_positions;
+  s.velocities = Eigen::MatrixX3d::Zero(4, 3);
+  s.masses = Eigen::VectorXd::Ones(4);
+  s.bending_hinges.push_back(BendingHinge{{0, 1, 2, 3}, 1.0});
+  const SceneData data(s);
+  const ElementBlock& block = data.blocks()[typeIndex("bending hinge")];
+  ASSERT_EQ(block.count, 1);
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(block.coefficients[k], k < 2 ? 2.0 : -2.0, 1e-15);
+  EXPECT_NEAR(block.params[0], 6.0, 1e-15);
+  EXPECT_EQ(block.params[1], 0.0);
 }
 
 }  // namespace

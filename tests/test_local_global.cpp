@@ -7,6 +7,7 @@
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
+#include "triangle_cloth_scene.hpp"
 
 #include <gtest/gtest.h>
 
@@ -55,9 +56,17 @@ Eigen::MatrixX3d inertialTarget(const Scene& s) {
   return y;
 }
 
-class LocalGlobalTest : public ::testing::TestWithParam<bool> {
+enum class SceneKind { Springs, Tets, Triangles };
+
+class LocalGlobalTest : public ::testing::TestWithParam<SceneKind> {
  protected:
-  Scene scene() const { return GetParam() ? tetScene() : clothScene(); }
+  Scene scene() const {
+    switch (GetParam()) {
+      case SceneKind::Tets: return tetScene();
+      case SceneKind::Triangles: return testing::triangleCloth(6, 5);
+      default: return clothScene();
+    }
+  }
 };
 
 TEST_P(LocalGlobalTest, ObjectiveNeverIncreases) {
@@ -154,12 +163,21 @@ void checkAcceleration(const Scene& s, bool tets, Acceleration acceleration) {
 }
 
 TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
+  // Strain limits make the membrane energy flat within them: the objective then has many
+  // minima, and plain and accelerated iterations may settle in different ones (measured: 4e-4
+  // apart relative). The triangle cloth without limits has one.
+  const Scene s = GetParam() == SceneKind::Triangles ? testing::triangleCloth(6, 5, false) : scene();
   for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson})
-    checkAcceleration(scene(), GetParam(), acceleration);
+    checkAcceleration(s, GetParam() == SceneKind::Tets, acceleration);
 }
 
-INSTANTIATE_TEST_SUITE_P(SpringsAndTets, LocalGlobalTest, ::testing::Values(false, true),
-                         [](const auto& info) { return info.param ? "Tets" : "Springs"; });
+INSTANTIATE_TEST_SUITE_P(Elements, LocalGlobalTest,
+                         ::testing::Values(SceneKind::Springs, SceneKind::Tets, SceneKind::Triangles),
+                         [](const auto& info) {
+                           return info.param == SceneKind::Tets        ? "Tets"
+                                  : info.param == SceneKind::Triangles ? "TrianglesAndHinges"
+                                                                       : "Springs";
+                         });
 
 // The energy the local step returns with the right-hand side is the potential at its input.
 TEST_P(LocalGlobalTest, FusedEnergyOfTheLocalStepIsThePotential) {

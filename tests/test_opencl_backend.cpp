@@ -19,6 +19,7 @@
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_data.hpp"
 #include "test_opencl_support.hpp"
+#include "triangle_cloth_scene.hpp"
 
 #include <gtest/gtest.h>
 
@@ -49,6 +50,7 @@ std::vector<Case> equivalenceCases() {
   cloth.ny = 12;
   cases.push_back({"cloth", makeClothGrid(cloth), 0.01});
   cases.push_back({"tet_bar", makeTetBar({}), 0.01});
+  cases.push_back({"triangle_cloth", testing::triangleCloth(12, 10), 0.01});
   cases.push_back({"chain", makeChainPendulum({}), 0.02});
   cases.push_back({"oscillator", makeLinearOscillator({}), 0.1});
   return cases;

@@ -1,7 +1,6 @@
 // JSON scene files: every field of the Scene model, the conveniences (builtin, mesh, pin_where,
 // where, density lumping), exact round trips through saveSceneFile, and every error path with the
 // file and field path it must name.
-#include "io/scene_json.hpp"
 
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
@@ -109,6 +108,19 @@ void expectSameScene(const Scene& a, const Scene& b) {
     EXPECT_EQ(a.bodies[i].particles, b.bodies[i].particles);
     EXPECT_TRUE(same(a.bodies[i].damping, b.bodies[i].damping));
   }
+  ASSERT_EQ(a.triangle_strains.size(), b.triangle_strains.size());
+  for (size_t i = 0; i < a.triangle_strains.size(); ++i) {
+    EXPECT_EQ(a.triangle_strains[i].vertices, b.triangle_strains[i].vertices);
+    EXPECT_TRUE(same(a.triangle_strains[i].stiffness, b.triangle_strains[i].stiffness));
+    EXPECT_TRUE(same(a.triangle_strains[i].strain_min, b.triangle_strains[i].strain_min));
+    EXPECT_TRUE(same(a.triangle_strains[i].strain_max, b.triangle_strains[i].strain_max));
+  }
+  ASSERT_EQ(a.bending_hinges.size(), b.bending_hinges.size());
+  for (size_t i = 0; i < a.bending_hinges.size(); ++i) {
+    EXPECT_EQ(a.bending_hinges[i].vertices, b.bending_hinges[i].vertices);
+    EXPECT_TRUE(same(a.bending_hinges[i].stiffness, b.bending_hinges[i].stiffness));
+  }
+  EXPECT_EQ(a.triangles, b.triangles);
 }
 
 // --- the explicit form ---------------------------------------------------------------------------
@@ -183,8 +195,7 @@ TEST_F(SceneJson, MassesLumpedFromDensities) {
   EXPECT_DOUBLE_EQ(s.masses[0], tet + tri);
   EXPECT_DOUBLE_EQ(s.masses[2], tet + tri);
   EXPECT_DOUBLE_EQ(s.masses[3], tet);
-  const auto with_surface = io::loadSceneFileWithSurface((dir_ / "lumped.json").string());
-  ASSERT_EQ(with_surface.triangles.size(), 1u);
+  ASSERT_EQ(s.triangles.size(), 1u);
 }
 
 // --- conveniences ----------------------------------------------------------------------------------
@@ -197,7 +208,7 @@ TEST_F(SceneJson, BuiltinMatchesTheBuilder) {
   p.damping = 0.1;
   p.pinned = {0};
   expectSameScene(s, makeClothGrid(p));
-  EXPECT_EQ(io::loadSceneFileWithSurface((dir_ / "b.json").string()).triangles.size(), 2u * 4 * 3);
+  EXPECT_EQ(s.triangles.size(), 2u * 4 * 3);
 
   const Scene chain = loadSceneFile(write("c.json", R"({"builtin": {"name": "chain", "particles": 4, "gravity": 1}})"));
   ChainPendulumParams cp;
@@ -237,8 +248,7 @@ TEST_F(SceneJson, MeshesRelativeToTheSceneFile) {
              {"file": "meshes/one.node", "density": 60, "stiffness": 9, "translate": [0, 0, 5]}],
     "pins": [{"pin_where": {"axis": "y", "min": 0.5, "max": 2}, "stiffness": 3}]
   })");
-  const auto loaded = io::loadSceneFileWithSurface(path);
-  const Scene& s = loaded.scene;
+  const Scene s = loadSceneFile(path);
   ASSERT_EQ(s.numParticles(), 8);
   EXPECT_DOUBLE_EQ(s.masses[0], 2 * 3.0 * 0.5 / 3.0);  // the quad fans into 1-2-3 and 1-3-4
   EXPECT_DOUBLE_EQ(s.masses[1], 3.0 * 0.5 / 3.0);
@@ -249,7 +259,7 @@ TEST_F(SceneJson, MeshesRelativeToTheSceneFile) {
   EXPECT_EQ(s.tets[0].stiffness, 9.0);
   EXPECT_DOUBLE_EQ(s.masses[4], 60.0 / 6.0 / 4.0);
   EXPECT_EQ(s.positions(7, 2), 6.0);
-  EXPECT_EQ(loaded.triangles.size(), 2u);
+  EXPECT_EQ(s.triangles.size(), 2u);
   // pin_where picks rest y in [0.5, 2]: quad vertices 2 and 3, tet vertex 6 (0, 1, 5).
   ASSERT_EQ(s.pins.size(), 3u);
   EXPECT_EQ(s.pins[0].vertex, 2);
@@ -328,6 +338,86 @@ TEST_F(SceneJson, SaveLoadRoundTripsBuiltinsExactly) {
     saveSceneFile(s, path);
     expectSameScene(loadSceneFile(path), s);
   }
+}
+
+// Triangle strain (with strain limits) and bending hinges through their generic JSON form.
+TEST_F(SceneJson, SaveLoadRoundTripsTriangleElementsExactly) {
+  ClothGridParams cloth;
+  cloth.nx = 6;
+  cloth.ny = 4;
+  cloth.model = ClothModel::Triangles;
+  cloth.strain_min = 0.95;
+  cloth.strain_max = 1.0 / 3.0 + 1.0;
+  cloth.hinge_stiffness = 0.1 / 3.0;
+  Scene s = makeClothGrid(cloth);
+  s.rest_positions(7, 2) = 0.01;  // a curved rest shape: hinges with rest curvature
+  ASSERT_FALSE(s.triangle_strains.empty());
+  ASSERT_FALSE(s.bending_hinges.empty());
+  const std::string path = (dir_ / "triangles.json").string();
+  saveSceneFile(s, path);
+  expectSameScene(loadSceneFile(path), s);
+}
+
+TEST_F(SceneJson, TriangleElementsInTheExplicitForm) {
+  const Scene s = loadSceneFile(write("tri.json", R"({
+    "particles": {"positions": [[0,0,0],[1,0,0],[0,1,0],[1,1,0.1]], "masses": 1},
+    "triangle_strains": [{"vertices": [0, 1, 2], "stiffness": 50},
+                         {"vertices": [1, 3, 2], "stiffness": 60, "strain_min": 0.9, "strain_max": 1.2}],
+    "bending_hinges": [{"vertices": [1, 2, 0, 3], "stiffness": 0.5}]
+  })"));
+  ASSERT_EQ(s.triangle_strains.size(), 2u);
+  EXPECT_EQ(s.triangle_strains[0].vertices, (std::array<int, 3>{0, 1, 2}));
+  EXPECT_EQ(s.triangle_strains[0].strain_min, 1.0);  // defaults
+  EXPECT_EQ(s.triangle_strains[0].strain_max, 1.0);
+  EXPECT_EQ(s.triangle_strains[1].stiffness, 60.0);
+  EXPECT_EQ(s.triangle_strains[1].strain_min, 0.9);
+  EXPECT_EQ(s.triangle_strains[1].strain_max, 1.2);
+  ASSERT_EQ(s.bending_hinges.size(), 1u);
+  EXPECT_EQ(s.bending_hinges[0].vertices, (std::array<int, 4>{1, 2, 0, 3}));
+  EXPECT_EQ(s.bending_hinges[0].stiffness, 0.5);
+}
+
+TEST_F(SceneJson, TriangleElementErrorsNameTheField) {
+  const std::string particles = R"("particles": {"positions": [[0,0,0],[1,0,0],[0,1,0],[2,0,0]], "masses": 1})";
+  expectError("{" + particles + R"(, "triangle_strains": [{"vertices": [0, 1], "stiffness": 1}]})",
+              "triangle_strains[0].vertices: expected 3 particle indices, got 2");
+  expectError("{" + particles + R"(, "triangle_strains": [{"vertices": [0, 1, 2]}]})",
+              "triangle_strains[0]: missing field 'stiffness'");
+  expectError("{" + particles + R"(, "triangle_strains": [{"vertices": [0, 1, 9], "stiffness": 1}]})",
+              "triangle_strains[0].vertices[2]: particle index 9 out of range [0, 4)");
+  expectError("{" + particles + R"(, "bending_hinges": [{"vertices": [0, 1, 2, 3], "stifness": 1}]})",
+              "bending_hinges[0]: unknown field 'stifness'");
+  // Rest-state errors come from validation, which names the element.
+  expectError("{" + particles + R"(, "triangle_strains": [{"vertices": [0, 1, 3], "stiffness": 1}]})",
+              "top level: triangle strain 0: degenerate rest triangle (0, 1, 3), area 0");
+}
+
+TEST_F(SceneJson, TriangleClothFromBuiltinAndMesh) {
+  const Scene grid = loadSceneFile(write("tc.json", R"({"builtin": {"name": "cloth", "nx": 4, "ny": 3,
+    "model": "triangles", "strain_stiffness": 200, "strain_max": 1.1, "hinge_stiffness": 0.02}})"));
+  ClothGridParams p;
+  p.nx = 4;
+  p.ny = 3;
+  p.model = ClothModel::Triangles;
+  p.strain_stiffness = 200;
+  p.strain_max = 1.1;
+  p.hinge_stiffness = 0.02;
+  expectSameScene(grid, makeClothGrid(p));
+  EXPECT_TRUE(grid.springs.empty());
+  EXPECT_EQ(grid.triangle_strains.size(), 12u);
+  expectError(R"({"builtin": {"name": "cloth", "model": "beams"}})",
+              "builtin.model: unknown cloth model 'beams' (expected springs or triangles)");
+
+  write("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+  const Scene mesh = loadSceneFile(write("tm.json", R"({"mesh": {"file": "quad.obj", "model": "triangles",
+    "strain_stiffness": 30, "strain_min": 0.5, "hinge_stiffness": 0.25}})"));
+  EXPECT_TRUE(mesh.springs.empty());
+  ASSERT_EQ(mesh.triangle_strains.size(), 2u);
+  EXPECT_EQ(mesh.triangle_strains[1].stiffness, 30.0);
+  EXPECT_EQ(mesh.triangle_strains[1].strain_min, 0.5);
+  ASSERT_EQ(mesh.bending_hinges.size(), 1u);  // the quad's diagonal 1-3
+  EXPECT_EQ(mesh.bending_hinges[0].vertices, (std::array<int, 4>{0, 2, 1, 3}));
+  EXPECT_EQ(mesh.bending_hinges[0].stiffness, 0.25);
 }
 
 TEST_F(SceneJson, SaveLoadRoundTripsAwkwardNumbersExactly) {
@@ -508,17 +598,17 @@ TEST_F(SceneJson, BuiltinAndMeshErrors) {
 }
 
 TEST_F(SceneJson, BuiltinSceneFromParameterText) {
-  const auto cloth = io::builtinScene("cloth", R"({"nx": 3, "ny": 3})", "cli");
-  EXPECT_EQ(cloth.scene.numParticles(), 9);
+  const Scene cloth = builtinScene("cloth", R"({"nx": 3, "ny": 3})", "cli");
+  EXPECT_EQ(cloth.numParticles(), 9);
   EXPECT_EQ(cloth.triangles.size(), 8u);
   try {
-    io::builtinScene("cloth", R"({"nx": "3"})", "builtin scene 'cloth'");
+    builtinScene("cloth", R"({"nx": "3"})", "builtin scene 'cloth'");
     ADD_FAILURE();
   } catch (const FileFormatError& e) {
     EXPECT_EQ(std::string(e.what()), "builtin scene 'cloth': params.nx: expected an integer, got string");
   }
-  EXPECT_THROW(io::builtinScene("rope", "{}", "cli"), FileFormatError);
-  EXPECT_EQ(io::builtinSceneParameters("tetbar").size(), 9u);
+  EXPECT_THROW(builtinScene("rope", "{}", "cli"), FileFormatError);
+  EXPECT_EQ(builtinSceneParameters("tetbar").size(), 9u);
 }
 
 }  // namespace

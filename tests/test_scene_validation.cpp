@@ -33,6 +33,10 @@ Scene validScene() {
   s.springs.push_back(Spring{1, 4, 1.0, 100.0});
   s.springs.push_back(Spring{0, 1, 1.0, 100.0});
   s.tets.push_back(Tet{{0, 1, 2, 3}, 1e3});
+  s.triangle_strains.push_back(TriangleStrain{{0, 1, 2}, 10.0, 0.9, 1.1});
+  // Edge 1-2 with particle 0 on one side and particle 4 on the other, all in the plane z = 0.
+  s.bending_hinges.push_back(BendingHinge{{1, 2, 0, 4}, 0.1});
+  s.triangles.push_back({0, 1, 2});
   Pin pin;
   pin.vertex = 0;
   pin.stiffness = 1e4;
@@ -136,6 +140,45 @@ TEST(SceneValidation, TetVolumeUsesRestPositionsNotPositions) {
     s.positions.row(3) << 0, 0, -1;  // the current shape may be inverted
     return s;
   }()));
+}
+
+TEST(SceneValidation, TriangleStrainRules) {
+  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].vertices[1] = 9; }),
+              HasSubstr("triangle strain 0: index vertices[1] = 9 out of range [0, 5)"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].vertices = {0, 1, 0}; }),
+              HasSubstr("triangle strain 0: particle 0 appears twice (vertices[0] and vertices[2])"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].stiffness = -2.0; }),
+              HasSubstr("triangle strain 0: stiffness -2 must be >= 0"));
+  // Particles 0, 1 and 4 lie on the x axis.
+  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains.push_back(TriangleStrain{{0, 1, 4}, 1.0}); }),
+              HasSubstr("triangle strain 1: degenerate rest triangle (0, 1, 4), area 0"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].strain_min = 1.2; }),
+              HasSubstr("triangle strain 0: strain limits [1.2, 1.1] must satisfy 0 <= strain_min <= 1 <= strain_max"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].strain_max = kInf; }),
+              HasSubstr("triangle strain 0: strain limits [0.9, inf]"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].strain_min = kNaN; }),
+              HasSubstr("triangle strain 0: strain limits [nan, 1.1]"));
+  // Only the rest shape counts: the current one may be degenerate or flipped.
+  EXPECT_EQ(messageAfter([](Scene& s) { s.positions.row(2) << 1, 0, 0; }), "<no error>");
+}
+
+TEST(SceneValidation, BendingHingeRules) {
+  EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].vertices[3] = -1; }),
+              HasSubstr("bending hinge 0: index vertices[3] = -1 out of range [0, 5)"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].vertices = {1, 2, 0, 2}; }),
+              HasSubstr("bending hinge 0: particle 2 appears twice"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].stiffness = kNaN; }),
+              HasSubstr("bending hinge 0: stiffness nan must be >= 0"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].vertices = {0, 1, 2, 4}; }),
+              HasSubstr("bending hinge 0: degenerate rest triangle (1, 0, 4), area 0"));
+  // Particle 3 sits above particle 0's side of edge 1-2: the hinge folds past 90 degrees.
+  EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].vertices = {1, 2, 0, 3}; }),
+              HasSubstr("bending hinge 0: flipped rest hinge: triangles (1, 2, 0) and (2, 1, 3) are folded onto each other"));
+}
+
+TEST(SceneValidation, SurfaceTriangleIndicesAreInRange) {
+  EXPECT_THAT(messageAfter([](Scene& s) { s.triangles.push_back({0, 4, 7}); }),
+              HasSubstr("triangle 1: index vertices[2] = 7 out of range [0, 5)"));
 }
 
 TEST(SceneValidation, PinRules) {

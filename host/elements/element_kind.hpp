@@ -36,6 +36,17 @@ inline double halfWeightedSquaredDistance(double w, const double* ax, const doub
   return 0.5 * w * sum;
 }
 
+/// A_e of a simplex with D edges from its first vertex: A x = F^T = G^T X with the (D + 1) by D
+/// G = [-1 ... -1; I] Dm^-1 (so that F = Ds Dm^-1 = X G for X = [x0 ... xD]); written to `a`
+/// as D by (D + 1), row-major. Tets (D = 3) and triangle strain (D = 2) share it.
+template <int D>
+void simplexCoefficients(const Eigen::Matrix<double, D, D>& dm_inverse, double* a) {
+  for (int r = 0; r < D; ++r) {
+    a[(D + 1) * r] = -dm_inverse.col(r).sum();
+    for (int k = 0; k < D; ++k) a[(D + 1) * r + k + 1] = dm_inverse(k, r);
+  }
+}
+
 /// A numeric member of an element struct in the generic JSON form.
 template <class Element>
 struct KindField {

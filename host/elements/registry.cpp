@@ -6,12 +6,16 @@ namespace stabint {
 
 const ElementType& springElementType();
 const ElementType& tetElementType();
+const ElementType& triangleStrainElementType();
+const ElementType& bendingHingeElementType();
 const ElementType& pinElementType();
 
 const std::vector<const ElementType*>& elementTypes() {
   static const std::vector<const ElementType*> types = {
       &springElementType(),
       &tetElementType(),
+      &triangleStrainElementType(),
+      &bendingHingeElementType(),
       &pinElementType(),
   };
   return types;

@@ -44,11 +44,8 @@ struct SpringKind : KindDefaults<Spring> {
     p[4] = dir.z();
   }
 
-  /// E = k/2 (|d| - r)^2, from the length rather than |d - p|: the same value with one
-  /// rounding less.
   static double project(const double* ax, const double* params, double* p) {
-    const double stretch = projections::ontoSphere(ax, params[1], params + 2, p) - params[1];
-    return 0.5 * params[0] * stretch * stretch;
+    return projections::ontoSphere(ax, params, p);
   }
 };
 

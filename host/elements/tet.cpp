@@ -40,12 +40,7 @@ struct TetKind : KindDefaults<Tet> {
 
   static void coefficients(const Scene& scene, const Tet& tet, double* a) {
     // check() has guaranteed det(Dm) > 0, so the inverse exists.
-    const Eigen::Matrix3d dm_inverse = restEdges(scene, tet).inverse();
-    Eigen::Matrix<double, 4, 3> g;
-    g.row(0) = -dm_inverse.colwise().sum();
-    g.bottomRows<3>() = dm_inverse;
-    for (int r = 0; r < 3; ++r)
-      for (int k = 0; k < 4; ++k) a[4 * r + k] = g(k, r);
+    simplexCoefficients<3>(restEdges(scene, tet).inverse(), a);
   }
 
   static void params(const Scene& scene, const Tet& tet, double* p) {

@@ -88,9 +88,15 @@ Scene loadObjCloth(const std::string& path, const ClothMaterial& material) {
 
   Eigen::MatrixX3d x(positions.size(), 3);
   for (size_t i = 0; i < positions.size(); ++i) x.row(i) = positions[i].transpose();
-  const auto triangles = fanTriangles(path, faces, static_cast<long>(positions.size()));
+  auto triangles = fanTriangles(path, faces, static_cast<long>(positions.size()));
   Scene s = io::sceneFromMesh(io::sceneNameFromPath(path), x, lumpMassesFromTriangles(x, triangles, material.areal_density));
-  s.springs = clothSpringsFromTriangles(x, triangles, material.stretch_stiffness, material.bend_stiffness);
+  s.triangles = std::move(triangles);
+  if (material.model == ClothModel::Triangles) {
+    addTriangleClothElements(s, material.strain_stiffness, material.strain_min, material.strain_max,
+                             material.hinge_stiffness);
+  } else {
+    s.springs = clothSpringsFromTriangles(x, s.triangles, material.stretch_stiffness, material.bend_stiffness);
+  }
   return s;
 }
 

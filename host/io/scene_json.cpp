@@ -1,8 +1,7 @@
 // JSON scene files (docs/scene-format.md): the explicit form saveSceneFile writes, plus the
 // conveniences people write by hand: built-in scenes by name, meshes next to the JSON file, pins
 // and particle sets selected by region. Every error names the file and the JSON field path.
-#include "io/scene_json.hpp"
-
+#include "elements/element_type.hpp"
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
 
@@ -189,6 +188,11 @@ void visitParams(Visit&& v, ClothGridParams& p) {
   v("stretch_stiffness", p.stretch_stiffness);
   v("shear_stiffness", p.shear_stiffness);
   v("bend_stiffness", p.bend_stiffness);
+  v("model", p.model);
+  v("strain_stiffness", p.strain_stiffness);
+  v("strain_min", p.strain_min);
+  v("strain_max", p.strain_max);
+  v("hinge_stiffness", p.hinge_stiffness);
   v("pin_stiffness", p.pin_stiffness);
   v("pinned", p.pinned);
   v("damping", p.damping);
@@ -206,6 +210,14 @@ void visitParams(Visit&& v, TetBarParams& p) {
   v("damping", p.damping);
 }
 
+// "springs" or "triangles".
+ClothModel clothModel(const Field& f) {
+  const std::string name = f.string();
+  if (name == "springs") return ClothModel::Springs;
+  if (name == "triangles") return ClothModel::Triangles;
+  f.fail("unknown cloth model '" + name + "' (expected springs or triangles)");
+}
+
 struct ParamReader {
   const Field& params;
   std::set<std::string>& known;
@@ -216,6 +228,10 @@ struct ParamReader {
   void operator()(const char* key, double& out) const {
     known.insert(key);
     if (auto f = params.find(key)) out = f->number();
+  }
+  void operator()(const char* key, ClothModel& out) const {
+    known.insert(key);
+    if (auto f = params.find(key)) out = clothModel(*f);
   }
   void operator()(const char* key, std::vector<int>& out) const {
     known.insert(key);
@@ -234,19 +250,6 @@ struct ParamNames {
   }
 };
 
-// Same triangulation as makeClothGrid: the surface a viewer shows.
-std::vector<std::array<int, 3>> clothGridTriangles(int nx, int ny) {
-  std::vector<std::array<int, 3>> triangles;
-  const auto id = [nx](int i, int j) { return j * nx + i; };
-  for (int j = 0; j + 1 < ny; ++j) {
-    for (int i = 0; i + 1 < nx; ++i) {
-      triangles.push_back({id(i, j), id(i, j + 1), id(i + 1, j)});
-      triangles.push_back({id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)});
-    }
-  }
-  return triangles;
-}
-
 // Reads the builder parameters from `params` (an object; `extra` keys belong to the caller).
 template <typename Params, typename Make>
 Scene buildWith(const Field& params, const std::set<std::string>& extra, Params& p, Make make) {
@@ -260,22 +263,21 @@ Scene buildWith(const Field& params, const std::set<std::string>& extra, Params&
   }
 }
 
-SceneWithSurface builtinFromField(const std::string& name, const Field& params, const std::set<std::string>& extra,
-                                  const Field& name_field) {
-  SceneWithSurface out;
+Scene builtinFromField(const std::string& name, const Field& params, const std::set<std::string>& extra,
+                       const Field& name_field) {
+  Scene out;
   if (name == "oscillator") {
     LinearOscillatorParams p;
-    out.scene = buildWith(params, extra, p, [](const auto& q) { return makeLinearOscillator(q); });
+    out = buildWith(params, extra, p, [](const auto& q) { return makeLinearOscillator(q); });
   } else if (name == "chain") {
     ChainPendulumParams p;
-    out.scene = buildWith(params, extra, p, [](const auto& q) { return makeChainPendulum(q); });
+    out = buildWith(params, extra, p, [](const auto& q) { return makeChainPendulum(q); });
   } else if (name == "cloth") {
     ClothGridParams p;
-    out.scene = buildWith(params, extra, p, [](const auto& q) { return makeClothGrid(q); });
-    out.triangles = clothGridTriangles(p.nx, p.ny);
+    out = buildWith(params, extra, p, [](const auto& q) { return makeClothGrid(q); });
   } else if (name == "tetbar") {
     TetBarParams p;
-    out.scene = buildWith(params, extra, p, [](const auto& q) { return makeTetBar(q); });
+    out = buildWith(params, extra, p, [](const auto& q) { return makeTetBar(q); });
   } else {
     name_field.fail("unknown built-in scene '" + name + "' (expected oscillator, chain, cloth or tetbar)");
   }
@@ -284,35 +286,13 @@ SceneWithSurface builtinFromField(const std::string& name, const Field& params, 
 
 // --- meshes ---------------------------------------------------------------------------------------
 
-// The OBJ loader keeps no faces (a Scene has none); read them again for the surface. The file
-// has just been loaded, so it is known to be well formed.
-std::vector<std::array<int, 3>> objTriangles(const std::string& path) {
-  TextReader in(path);
-  std::vector<std::array<int, 3>> triangles;
-  long vertices = 0;
-  for (std::vector<std::string> tokens; in.nextLine(tokens);) {
-    if (tokens[0] == "v") {
-      ++vertices;
-    } else if (tokens[0] == "f") {
-      std::vector<int> face;
-      for (size_t k = 1; k < tokens.size(); ++k) {
-        long index = in.parseInt(tokens[k].substr(0, tokens[k].find('/')), "face vertex index");
-        if (index < 0) index += vertices + 1;
-        face.push_back(static_cast<int>(index - 1));
-      }
-      for (size_t k = 1; k + 1 < face.size(); ++k) triangles.push_back({face[0], face[k], face[k + 1]});
-    }
-  }
-  return triangles;
-}
-
 std::string lowerExtension(const fs::path& p) {
   std::string ext = p.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
-SceneWithSurface meshFromField(const Field& mesh, const fs::path& dir) {
+Scene meshFromField(const Field& mesh, const fs::path& dir) {
   mesh.requireObject();
   const Field file_field = mesh.member("file");
   const fs::path relative = file_field.string();
@@ -333,18 +313,23 @@ SceneWithSurface meshFromField(const Field& mesh, const fs::path& dir) {
   }
 
   const std::set<std::string> common = {"file", "type", "translate", "damping", "name"};
-  SceneWithSurface out;
+  Scene out;
   try {
     if (type == "obj") {
       std::set<std::string> keys = common;
-      keys.insert({"areal_density", "stretch_stiffness", "bend_stiffness"});
+      keys.insert({"areal_density", "model", "stretch_stiffness", "bend_stiffness", "strain_stiffness", "strain_min",
+                   "strain_max", "hinge_stiffness"});
       mesh.allowOnly(keys);
       ClothMaterial m;
       if (auto f = mesh.find("areal_density")) m.areal_density = f->positive();
+      if (auto f = mesh.find("model")) m.model = clothModel(*f);
       if (auto f = mesh.find("stretch_stiffness")) m.stretch_stiffness = f->nonNegative();
       if (auto f = mesh.find("bend_stiffness")) m.bend_stiffness = f->nonNegative();
-      out.scene = loadObjCloth(path.string(), m);
-      out.triangles = objTriangles(path.string());
+      if (auto f = mesh.find("strain_stiffness")) m.strain_stiffness = f->nonNegative();
+      if (auto f = mesh.find("strain_min")) m.strain_min = f->nonNegative();
+      if (auto f = mesh.find("strain_max")) m.strain_max = f->nonNegative();
+      if (auto f = mesh.find("hinge_stiffness")) m.hinge_stiffness = f->nonNegative();
+      out = loadObjCloth(path.string(), m);
     } else {
       std::set<std::string> keys = common;
       keys.insert({"density", "stiffness"});
@@ -353,12 +338,12 @@ SceneWithSurface meshFromField(const Field& mesh, const fs::path& dir) {
       if (auto f = mesh.find("density")) m.density = f->positive();
       if (auto f = mesh.find("stiffness")) m.stiffness = f->nonNegative();
       if (type == "medit") {
-        out.scene = loadMedit(path.string(), m);
+        out = loadMedit(path.string(), m);
       } else {
         const std::string ext = lowerExtension(path);
         fs::path base = path;
         if (ext == ".node" || ext == ".ele") base.replace_extension();
-        out.scene = loadTetGen(base.string(), m);
+        out = loadTetGen(base.string(), m);
       }
     }
   } catch (const FileFormatError& e) {
@@ -368,11 +353,11 @@ SceneWithSurface meshFromField(const Field& mesh, const fs::path& dir) {
   if (auto f = mesh.find("damping")) {
     const double d = f->number();
     if (d < 0.0 || d > 1.0) f->fail("must be in [0, 1], got " + Field::text(d));
-    for (Body& b : out.scene.bodies) b.damping = d;
+    for (Body& b : out.bodies) b.damping = d;
   }
   if (auto f = mesh.find("name")) {
-    out.scene.name = f->string();
-    for (Body& b : out.scene.bodies) b.name = out.scene.name;
+    out.name = f->string();
+    for (Body& b : out.bodies) b.name = out.name;
   }
   return out;
 }
@@ -392,29 +377,15 @@ void translate(Scene& s, const Eigen::Vector3d& t) {
   for (Pin& pin : s.pins) pin.target.position += t;
 }
 
-// Concatenates `part` after the particles of `into`, shifting its indices.
-void append(SceneWithSurface& into, SceneWithSurface part) {
-  Scene& s = into.scene;
-  Scene& p = part.scene;
+// Concatenates `p` after the particles of `s`, shifting its indices.
+void append(Scene& s, const Scene& p) {
   const int offset = s.numParticles();
   appendRows(s.positions, p.positions);
   appendRows(s.rest_positions, p.rest_positions);
   appendRows(s.velocities, p.velocities);
   s.masses.conservativeResize(offset + p.masses.size());
   s.masses.tail(p.masses.size()) = p.masses;
-  for (Spring sp : p.springs) {
-    sp.a += offset;
-    sp.b += offset;
-    s.springs.push_back(sp);
-  }
-  for (Tet t : p.tets) {
-    for (int& v : t.vertices) v += offset;
-    s.tets.push_back(t);
-  }
-  for (Pin pin : p.pins) {
-    pin.vertex += offset;
-    s.pins.push_back(pin);
-  }
+  for (const ElementType* type : elementTypes()) type->appendShifted(s, p, offset);
   for (ForceField f : p.force_fields) {
     // "All particles" of a part means the part's own particles once it has neighbours.
     if (f.particles.empty()) {
@@ -427,9 +398,9 @@ void append(SceneWithSurface& into, SceneWithSurface part) {
     for (int& j : b.particles) j += offset;
     s.bodies.push_back(std::move(b));
   }
-  for (auto t : part.triangles) {
+  for (auto t : p.triangles) {
     for (int& v : t) v += offset;
-    into.triangles.push_back(t);
+    s.triangles.push_back(t);
   }
 }
 
@@ -595,6 +566,40 @@ std::vector<std::array<int, 3>> readTriangles(const Field& list, int n) {
   return triangles;
 }
 
+// The generic JSON form of an element type: {"vertices": [...], <field>: number, ...}.
+void readGenericElements(const ElementType& type, const Field& list, Scene& s) {
+  const int n = s.numParticles();
+  const std::vector<ElementType::Field> fields = type.jsonFields();
+  std::set<std::string> keys = {"vertices"};
+  for (const auto& f : fields) keys.insert(f.key);
+  const size_t k = size_t(type.shape().vertices);
+  std::vector<int> vertices(k);
+  std::vector<double> values(fields.size());
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field e = list[i];
+    e.allowOnly(keys);
+    const Field v = e.member("vertices");
+    if (v.size() != k) v.fail("expected " + std::to_string(k) + " particle indices, got " + std::to_string(v.size()));
+    for (size_t j = 0; j < k; ++j) vertices[j] = v[j].particle(n);
+    for (size_t j = 0; j < fields.size(); ++j) {
+      auto f = fields[j].required ? std::optional<Field>(e.member(fields[j].key)) : e.find(fields[j].key);
+      values[j] = f ? f->number() : fields[j].default_value;
+    }
+    type.appendRecord(s, vertices, values);
+  }
+}
+
+// JSON key of a type with a generic form: its identifier, plural ("triangle_strains").
+std::string genericKey(const ElementType& type) { return std::string(type.identifier()) + "s"; }
+
+std::vector<const ElementType*> genericTypes() {
+  std::vector<const ElementType*> out;
+  for (const ElementType* type : elementTypes()) {
+    if (!type->jsonFields().empty()) out.push_back(type);
+  }
+  return out;
+}
+
 PinTarget readTarget(const Field& target, bool allow_position, const Eigen::Vector3d& default_position) {
   target.allowOnly({"position", "velocity", "amplitude", "frequency"});
   PinTarget t;
@@ -675,11 +680,13 @@ void readBodies(const Field& list, Scene& s) {
   }
 }
 
-SceneWithSurface sceneFromJson(const json& doc, const std::string& file) {
+Scene sceneFromJson(const json& doc, const std::string& file) {
   const Field root(doc, "", file);
   root.requireObject();
-  root.allowOnly({"format", "version", "name", "gravity", "builtin", "mesh", "particles", "triangles", "springs",
-                  "tets", "pins", "force_fields", "bodies"});
+  std::set<std::string> keys = {"format", "version", "name",  "gravity", "builtin",      "mesh",  "particles",
+                                "triangles", "springs", "tets", "pins",    "force_fields", "bodies"};
+  for (const ElementType* type : genericTypes()) keys.insert(genericKey(*type));
+  root.allowOnly(keys);
   if (auto f = root.find("format")) {
     if (f->string() != kFormatName) f->fail("expected \"" + std::string(kFormatName) + "\", got \"" + f->string() + "\"");
   }
@@ -691,17 +698,16 @@ SceneWithSurface sceneFromJson(const json& doc, const std::string& file) {
   }
   const fs::path dir = fs::path(file).parent_path();
 
-  SceneWithSurface out;
-  Scene& s = out.scene;
+  Scene s;
   int parts = 0;
   std::string part_name;
   std::optional<Eigen::Vector3d> part_gravity;
-  const auto addPart = [&](SceneWithSurface part, const Field& entry) {
-    if (auto t = entry.find("translate")) translate(part.scene, t->vector3());
+  const auto addPart = [&](Scene part, const Field& entry) {
+    if (auto t = entry.find("translate")) translate(part, t->vector3());
     ++parts;
-    part_name = part.scene.name;
-    if (!part_gravity) part_gravity = part.scene.gravity;
-    append(out, std::move(part));
+    part_name = part.name;
+    if (!part_gravity) part_gravity = part.gravity;
+    append(s, part);
   };
   forEachEntry(root, "builtin", [&](const Field& entry) {
     const Field name = entry.member("name");
@@ -721,8 +727,11 @@ SceneWithSurface sceneFromJson(const json& doc, const std::string& file) {
   if (auto f = root.find("triangles")) explicit_triangles = readTriangles(*f, s.numParticles());
   if (auto f = root.find("tets")) readTets(*f, s);
   if (block) readMasses(*block, s, first_explicit, explicit_triangles);
-  out.triangles.insert(out.triangles.end(), explicit_triangles.begin(), explicit_triangles.end());
+  s.triangles.insert(s.triangles.end(), explicit_triangles.begin(), explicit_triangles.end());
   if (auto f = root.find("springs")) readSprings(*f, s);
+  for (const ElementType* type : genericTypes()) {
+    if (auto f = root.find(genericKey(*type))) readGenericElements(*type, *f, s);
+  }
   if (auto f = root.find("pins")) readPins(*f, s);
   if (auto f = root.find("force_fields")) readForceFields(*f, s);
   if (auto f = root.find("bodies")) readBodies(*f, s);
@@ -742,7 +751,7 @@ SceneWithSurface sceneFromJson(const json& doc, const std::string& file) {
   } catch (const InvalidInputError& e) {
     root.fail(e.what());
   }
-  return out;
+  return s;
 }
 
 json parseJson(const std::string& text, const std::string& file) {
@@ -859,6 +868,21 @@ ordered sceneToJson(const Scene& s) {
     }
     doc["tets"] = std::move(a);
   }
+  for (const ElementType* type : genericTypes()) {
+    if (type->count(s) == 0) continue;
+    const std::vector<ElementType::Field> fields = type->jsonFields();
+    ordered a = ordered::array();
+    std::vector<int> vertices;
+    std::vector<double> values;
+    for (int i = 0; i < type->count(s); ++i) {
+      type->record(s, i, vertices, values);
+      ordered e;
+      e["vertices"] = vertices;
+      for (size_t j = 0; j < fields.size(); ++j) e[fields[j].key] = values[j];
+      a.push_back(std::move(e));
+    }
+    doc[genericKey(*type)] = std::move(a);
+  }
   if (!s.pins.empty()) {
     ordered a = ordered::array();
     for (const Pin& p : s.pins) {
@@ -892,27 +916,35 @@ ordered sceneToJson(const Scene& s) {
     }
     doc["bodies"] = std::move(a);
   }
+  if (!s.triangles.empty()) {
+    ordered a = ordered::array();
+    for (const auto& t : s.triangles) a.push_back(ordered::array({t[0], t[1], t[2]}));
+    doc["triangles"] = std::move(a);
+  }
   return doc;
 }
 
 }  // namespace
 
-SceneWithSurface loadSceneFileWithSurface(const std::string& path) {
-  const std::string text = readText(path);
-  return sceneFromJson(parseJson(text, path), path);
-}
+}  // namespace stabint::io
 
-SceneWithSurface builtinScene(const std::string& name, const std::string& params_json, const std::string& label) {
-  const json params = parseJson(params_json.empty() ? "{}" : params_json, label);
+namespace stabint {
+
+using io::Field;
+using io::json;
+
+Scene builtinScene(const std::string& name, const std::string& params_json, const std::string& label) {
+  const json params = io::parseJson(params_json.empty() ? "{}" : params_json, label);
   const json name_value = name;
   const Field root(params, "params", label);
   root.requireObject();
-  return builtinFromField(name, root, {}, Field(name_value, "name", label));
+  return io::builtinFromField(name, root, {}, Field(name_value, "name", label));
 }
 
 std::vector<std::string> builtinSceneNames() { return {"oscillator", "chain", "cloth", "tetbar"}; }
 
 std::vector<std::string> builtinSceneParameters(const std::string& name) {
+  using namespace io;
   std::vector<std::string> names;
   const ParamNames collect{names};
   if (name == "oscillator") {
@@ -931,11 +963,7 @@ std::vector<std::string> builtinSceneParameters(const std::string& name) {
   return names;
 }
 
-}  // namespace stabint::io
-
-namespace stabint {
-
-Scene loadSceneFile(const std::string& path) { return io::loadSceneFileWithSurface(path).scene; }
+Scene loadSceneFile(const std::string& path) { return io::sceneFromJson(io::parseJson(io::readText(path), path), path); }
 
 void saveSceneFile(const Scene& scene, const std::string& path) {
   validateScene(scene);

@@ -4,6 +4,7 @@
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
 
+#include <algorithm>
 #include <array>
 #include <string>
 #include <utility>
@@ -82,6 +83,19 @@ Scene makeChainPendulum(const ChainPendulumParams& p) {
   return finish(std::move(s));
 }
 
+std::vector<std::array<int, 3>> clothGridTriangles(int nx, int ny) {
+  const auto id = [nx](int i, int j) { return j * nx + i; };
+  std::vector<std::array<int, 3>> triangles;
+  triangles.reserve(2 * std::max(nx - 1, 0) * std::max(ny - 1, 0));
+  for (int j = 0; j + 1 < ny; ++j) {
+    for (int i = 0; i + 1 < nx; ++i) {
+      triangles.push_back({id(i, j), id(i, j + 1), id(i + 1, j)});
+      triangles.push_back({id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)});
+    }
+  }
+  return triangles;
+}
+
 // Particle (i, j) is index j*nx + i at (i dx, height - j dy, 0): row j = 0 is the top edge at
 // y = height, so the default pins hang the cloth from its top corners.
 Scene makeClothGrid(const ClothGridParams& p) {
@@ -96,36 +110,33 @@ Scene makeClothGrid(const ClothGridParams& p) {
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) x.row(id(i, j)) << i * dx, p.height - j * dy, 0.0;
   }
-  std::vector<std::array<int, 3>> triangles;
-  triangles.reserve(2 * (nx - 1) * (ny - 1));
-  for (int j = 0; j + 1 < ny; ++j) {
-    for (int i = 0; i + 1 < nx; ++i) {
-      triangles.push_back({id(i, j), id(i, j + 1), id(i + 1, j)});
-      triangles.push_back({id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)});
-    }
-  }
-  Eigen::VectorXd masses = lumpMassesFromTriangles(x, triangles, p.areal_density);
+  s.triangles = clothGridTriangles(nx, ny);
+  Eigen::VectorXd masses = lumpMassesFromTriangles(x, s.triangles, p.areal_density);
   setParticles(s, std::move(x), std::move(masses));
 
-  // Grouped by kind (structural, shear, bending), each in row-major order.
-  const auto add = [&](int a, int b, double k) { s.springs.push_back(springBetween(s, a, b, k)); };
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i + 1 < nx; ++i) add(id(i, j), id(i + 1, j), p.stretch_stiffness);
-  }
-  for (int j = 0; j + 1 < ny; ++j) {
-    for (int i = 0; i < nx; ++i) add(id(i, j), id(i, j + 1), p.stretch_stiffness);
-  }
-  for (int j = 0; j + 1 < ny; ++j) {
-    for (int i = 0; i + 1 < nx; ++i) {
-      add(id(i, j), id(i + 1, j + 1), p.shear_stiffness);
-      add(id(i + 1, j), id(i, j + 1), p.shear_stiffness);
+  if (p.model == ClothModel::Triangles) {
+    addTriangleClothElements(s, p.strain_stiffness, p.strain_min, p.strain_max, p.hinge_stiffness);
+  } else {
+    // Grouped by kind (structural, shear, bending), each in row-major order.
+    const auto add = [&](int a, int b, double k) { s.springs.push_back(springBetween(s, a, b, k)); };
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i + 1 < nx; ++i) add(id(i, j), id(i + 1, j), p.stretch_stiffness);
     }
-  }
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i + 2 < nx; ++i) add(id(i, j), id(i + 2, j), p.bend_stiffness);
-  }
-  for (int j = 0; j + 2 < ny; ++j) {
-    for (int i = 0; i < nx; ++i) add(id(i, j), id(i, j + 2), p.bend_stiffness);
+    for (int j = 0; j + 1 < ny; ++j) {
+      for (int i = 0; i < nx; ++i) add(id(i, j), id(i, j + 1), p.stretch_stiffness);
+    }
+    for (int j = 0; j + 1 < ny; ++j) {
+      for (int i = 0; i + 1 < nx; ++i) {
+        add(id(i, j), id(i + 1, j + 1), p.shear_stiffness);
+        add(id(i + 1, j), id(i, j + 1), p.shear_stiffness);
+      }
+    }
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i + 2 < nx; ++i) add(id(i, j), id(i + 2, j), p.bend_stiffness);
+    }
+    for (int j = 0; j + 2 < ny; ++j) {
+      for (int i = 0; i < nx; ++i) add(id(i, j), id(i, j + 2), p.bend_stiffness);
+    }
   }
 
   const std::vector<int> pinned = p.pinned.empty() ? std::vector<int>{id(0, 0), id(nx - 1, 0)} : p.pinned;

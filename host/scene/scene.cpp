@@ -77,6 +77,12 @@ void checkParticles(const Scene& s) {
   if (!s.gravity.allFinite()) invalid("gravity ", vec(s.gravity), " is not finite");
 }
 
+void checkSurface(const Scene& s) {
+  for (size_t i = 0; i < s.triangles.size(); ++i) {
+    for (long k = 0; k < 3; ++k) checkIndex(s.triangles[i][k], s.numParticles(), Owner{"triangle", i}, "vertices", k);
+  }
+}
+
 void checkForceFields(const Scene& s) {
   const int n = s.numParticles();
   for (size_t i = 0; i < s.force_fields.size(); ++i) {
@@ -117,6 +123,7 @@ void validateScene(const Scene& scene) {
   // Particle data first: every later check indexes into it.
   checkParticles(scene);
   for (const ElementType* type : elementTypes()) type->validate(scene);
+  checkSurface(scene);
   checkForceFields(scene);
   checkBodies(scene);
 }
@@ -179,22 +186,20 @@ Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
   return withMinimumMass(std::move(masses), min_mass);
 }
 
-std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_positions,
-                                              const std::vector<std::array<int, 3>>& triangles,
-                                              double stretch_stiffness, double bend_stiffness) {
-  // Every (edge, opposite vertex) incidence, sorted by edge: equal edges become adjacent, and
-  // the sort fixes the spring order independently of the triangle order.
-  struct Incidence {
-    int lo, hi, opposite;
-    bool operator<(const Incidence& o) const {
-      return std::tie(lo, hi, opposite) < std::tie(o.lo, o.hi, o.opposite);
-    }
-  };
+namespace {
+
+// One (edge, opposite vertex) incidence of a triangle mesh.
+struct Incidence {
+  int lo, hi, opposite;
+  bool operator<(const Incidence& o) const { return std::tie(lo, hi, opposite) < std::tie(o.lo, o.hi, o.opposite); }
+};
+
+// Every incidence, sorted by edge: equal edges become adjacent, and the order does not depend on
+// the triangle order.
+std::vector<Incidence> edgeIncidences(const std::vector<std::array<int, 3>>& triangles) {
   std::vector<Incidence> incidences;
   incidences.reserve(3 * triangles.size());
-  for (size_t i = 0; i < triangles.size(); ++i) {
-    const auto& t = triangles[i];
-    checkElementIndices(t, rest_positions.rows(), "triangle", i);
+  for (const auto& t : triangles) {
     for (int k = 0; k < 3; ++k) {
       const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
       if (a == b) continue;  // a degenerate triangle has no such edge
@@ -202,26 +207,45 @@ std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_posit
     }
   }
   std::sort(incidences.begin(), incidences.end());
+  return incidences;
+}
 
+// Calls visit(first, count) for the incidences [first, first + count) of each edge.
+template <typename Visit>
+void forEachEdge(const std::vector<Incidence>& incidences, Visit visit) {
+  for (size_t i = 0; i < incidences.size();) {
+    size_t end = i;
+    while (end < incidences.size() && incidences[end].lo == incidences[i].lo && incidences[end].hi == incidences[i].hi) {
+      ++end;
+    }
+    visit(&incidences[i], end - i);
+    i = end;
+  }
+}
+
+// Only a manifold interior edge (exactly two triangles, distinct opposite vertices) has a
+// well-defined hinge.
+bool isHinge(const Incidence* edge, size_t count) { return count == 2 && edge[0].opposite != edge[1].opposite; }
+
+}  // namespace
+
+std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_positions,
+                                              const std::vector<std::array<int, 3>>& triangles,
+                                              double stretch_stiffness, double bend_stiffness) {
+  for (size_t i = 0; i < triangles.size(); ++i) checkElementIndices(triangles[i], rest_positions.rows(), "triangle", i);
+  const std::vector<Incidence> incidences = edgeIncidences(triangles);
   const auto spring = [&](int a, int b, double k) {
     return Spring{a, b, (rest_positions.row(a) - rest_positions.row(b)).norm(), k};
   };
   std::vector<Spring> structural;
   std::vector<std::pair<int, int>> bending_pairs;
-  for (size_t i = 0; i < incidences.size();) {
-    size_t end = i;
-    while (end < incidences.size() && incidences[end].lo == incidences[i].lo &&
-           incidences[end].hi == incidences[i].hi) {
-      ++end;
+  forEachEdge(incidences, [&](const Incidence* edge, size_t count) {
+    structural.push_back(spring(edge->lo, edge->hi, stretch_stiffness));
+    if (isHinge(edge, count)) {
+      const int p = edge[0].opposite, q = edge[1].opposite;
+      bending_pairs.emplace_back(std::min(p, q), std::max(p, q));
     }
-    structural.push_back(spring(incidences[i].lo, incidences[i].hi, stretch_stiffness));
-    // Only a manifold interior edge (exactly two triangles) has a well-defined hinge.
-    if (end - i == 2) {
-      const int p = incidences[i].opposite, q = incidences[i + 1].opposite;
-      if (p != q) bending_pairs.emplace_back(std::min(p, q), std::max(p, q));
-    }
-    i = end;
-  }
+  });
 
   // A bending pair can coincide with an existing edge or with another hinge's pair on coarse or
   // irregular meshes; a second spring there would just double that stiffness.
@@ -235,6 +259,31 @@ std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_posit
     if (!is_edge) springs.push_back(spring(p, q, bend_stiffness));
   }
   return springs;
+}
+
+void addTriangleClothElements(Scene& scene, double strain_stiffness, double strain_min, double strain_max,
+                              double hinge_stiffness) {
+  for (const TriangleStrain& t : triangleStrainsFromTriangles(scene.triangles, strain_stiffness, strain_min, strain_max)) {
+    scene.triangle_strains.push_back(t);
+  }
+  for (const BendingHinge& h : bendingHingesFromTriangles(scene.triangles, hinge_stiffness)) scene.bending_hinges.push_back(h);
+}
+
+std::vector<TriangleStrain> triangleStrainsFromTriangles(const std::vector<std::array<int, 3>>& triangles,
+                                                         double stiffness, double strain_min, double strain_max) {
+  std::vector<TriangleStrain> out;
+  out.reserve(triangles.size());
+  for (const auto& t : triangles) out.push_back(TriangleStrain{t, stiffness, strain_min, strain_max});
+  return out;
+}
+
+std::vector<BendingHinge> bendingHingesFromTriangles(const std::vector<std::array<int, 3>>& triangles,
+                                                     double stiffness) {
+  std::vector<BendingHinge> hinges;
+  forEachEdge(edgeIncidences(triangles), [&](const Incidence* edge, size_t count) {
+    if (isHinge(edge, count)) hinges.push_back(BendingHinge{{edge->lo, edge->hi, edge[0].opposite, edge[1].opposite}, stiffness});
+  });
+  return hinges;
 }
 
 }  // namespace stabint

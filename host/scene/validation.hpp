@@ -4,6 +4,9 @@
 #include <stabint/errors.hpp>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <algorithm>
 
 #include <cmath>
 #include <cstddef>
@@ -70,6 +73,18 @@ void checkVertexList(const Vertices& vertices, int n, const Owner& owner) {
         invalid(owner, ": particle ", vertices[a], " appears twice (vertices[", a, "] and vertices[", b, "])");
       }
     }
+  }
+}
+
+/// The rest triangle (a, b, c) of `x` is not degenerate: its area is above 1e-12 times its
+/// longest edge squared (round-off on collinear points does not pass as a sliver).
+inline void checkRestTriangle(const Eigen::MatrixX3d& x, int a, int b, int c, const Owner& owner) {
+  const Eigen::Vector3d e1 = (x.row(b) - x.row(a)).transpose();
+  const Eigen::Vector3d e2 = (x.row(c) - x.row(a)).transpose();
+  const double twice_area = e1.cross(e2).norm();
+  const double longest = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
+  if (!(twice_area > 1e-12 * longest)) {
+    invalid(owner, ": degenerate rest triangle (", a, ", ", b, ", ", c, "), area ", 0.5 * twice_area);
   }
 }
 

@@ -26,9 +26,10 @@ struct ChainPendulumParams {
 Scene makeChainPendulum(const ChainPendulumParams& p = {});
 
 /// A rectangular cloth of `nx` by `ny` particles in the x-y plane (hanging under gravity along
-/// -y), with structural, shear and bending springs; masses lumped from the areal density.
-/// The particles listed in `pinned` (row-major index j*nx + i) are pinned in place; by default
-/// the two top corners.
+/// -y), triangulated into Scene::triangles (two triangles per cell), with the elements of
+/// `model` (springs with the stretch/shear/bend stiffnesses, or triangle strain and bending
+/// hinges with the strain and hinge parameters); masses lumped from the areal density. The particles listed in `pinned` (row-major
+/// index j*nx + i) are pinned in place; by default the two top corners.
 struct ClothGridParams {
   int nx = 20;
   int ny = 20;
@@ -41,8 +42,17 @@ struct ClothGridParams {
   double pin_stiffness = 1e5;
   std::vector<int> pinned;  // empty: the two top corners
   double damping = 0.0;     // one body, momentum-preserving damping factor
+  ClothModel model = ClothModel::Springs;
+  double strain_stiffness = 1e3;  // triangle strain k, N/m (model Triangles)
+  double strain_min = 1.0;        // triangle strain limits (model Triangles)
+  double strain_max = 1.0;
+  double hinge_stiffness = 1e-3;  // bending hinge k, J (model Triangles)
 };
 Scene makeClothGrid(const ClothGridParams& p = {});
+
+/// The triangles of makeClothGrid's `nx` by `ny` grid: cell (i, j) is split along the diagonal
+/// from (i + 1, j) to (i, j + 1), consistently wound.
+std::vector<std::array<int, 3>> clothGridTriangles(int nx, int ny);
 
 /// A box of `nx` by `ny` by `nz` cells along x (length) by y by z, each cell split into six
 /// tets; the particles at x = 0 are pinned; gravity along -y. Masses lumped from the density.

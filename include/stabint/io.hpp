@@ -3,14 +3,20 @@
 #include <stabint/scene.hpp>
 
 #include <string>
+#include <vector>
 
 namespace stabint {
 
 /// Material parameters applied to a loaded mesh.
 struct ClothMaterial {
   double areal_density = 0.1;  // kg/m^2
-  double stretch_stiffness = 1e3;
-  double bend_stiffness = 1e1;
+  double stretch_stiffness = 1e3;  // springs along edges (model Springs)
+  double bend_stiffness = 1e1;     // springs across interior edges (model Springs)
+  ClothModel model = ClothModel::Springs;
+  double strain_stiffness = 1e3;   // triangle strain k, N/m (model Triangles)
+  double strain_min = 1.0;
+  double strain_max = 1.0;
+  double hinge_stiffness = 1e-3;   // bending hinge k, J (model Triangles)
 };
 struct SolidMaterial {
   double density = 1000.0;  // kg/m^3
@@ -18,8 +24,10 @@ struct SolidMaterial {
 };
 
 /// Loads a Wavefront OBJ triangle mesh as cloth: vertices (`v`), faces (`f`, polygons are
-/// fanned into triangles, `v/vt/vn` forms accepted, negative indices allowed); springs along
-/// edges and bending springs across interior edges; masses from the area. No pins, no damping.
+/// fanned into triangles, `v/vt/vn` forms accepted, negative indices allowed) into
+/// Scene::triangles; the elements of `material.model` (springs along edges and bending springs
+/// across interior edges, or triangle strain and bending hinges); masses from the area. No pins,
+/// no damping.
 Scene loadObjCloth(const std::string& path, const ClothMaterial& material = {});
 
 /// Loads a TetGen mesh from `<base>.node` and `<base>.ele` (0- or 1-based, attributes and
@@ -38,6 +46,17 @@ Scene loadMedit(const std::string& path, const SolidMaterial& material = {});
 /// e.g. `scenes/foo.json: springs[3].stiffness: expected a number, got string`; malformed JSON
 /// carries the line. The scene is validated before it is returned.
 Scene loadSceneFile(const std::string& path);
+
+/// A built-in scene ("oscillator", "chain", "cloth", "tetbar"; builders.hpp) with parameters
+/// given as the text of a JSON object whose keys are the fields of the builder's parameter
+/// struct, e.g. `{"nx": 50, "pinned": [0, 49], "model": "triangles"}`. Errors are
+/// FileFormatError(label, 0, "params.<key>: ...").
+Scene builtinScene(const std::string& name, const std::string& params_json = "{}",
+                   const std::string& label = "builtin scene");
+
+/// Names accepted by builtinScene, and the parameter names of one of them (for usage texts).
+std::vector<std::string> builtinSceneNames();
+std::vector<std::string> builtinSceneParameters(const std::string& name);
 
 /// Writes `scene` as a JSON scene file in the explicit form (no builtin or mesh entries), with
 /// every number written so that loadSceneFile reads back exactly the same scene. Throws

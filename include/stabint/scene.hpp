@@ -1,7 +1,8 @@
 #pragma once
-// The scene model: particles, the elements acting on them (springs, tet strain, pins), gravity,
-// time-dependent force fields and per-body damping. Matrices are `#particles by 3`, one row per
-// particle. See ../shared/spec/method.md section 1 for the energies.
+// The scene model: particles, the elements acting on them (springs, tet strain, triangle strain,
+// bending hinges, pins), gravity, time-dependent force fields, per-body damping and the surface
+// triangles. Matrices are `#particles by 3`, one row per particle. docs/elements.md has the
+// energies.
 #include <Eigen/Core>
 
 #include <array>
@@ -24,6 +25,33 @@ struct Spring {
 struct Tet {
   std::array<int, 4> vertices{0, 0, 0, 0};
   double stiffness = 0.0;
+};
+
+/// Membrane strain of a triangle (Projective Dynamics' strain constraint):
+/// E = k A/2 ||F - P||_F^2 with F = Ds Dm^-1 the 3 by 2 deformation gradient against the rest
+/// triangle (Ds = [x1-x0, x2-x0], Dm the same rest edges in the rest triangle's own plane), A the
+/// rest area and P the nearest 3 by 2 matrix whose singular values lie in
+/// [strain_min, strain_max]. The default [1, 1] makes P the nearest rotation (as rigid as
+/// possible); wider limits let the triangle stretch or shrink freely by that much. The rest
+/// triangle, from Scene::rest_positions, must not be degenerate.
+struct TriangleStrain {
+  std::array<int, 3> vertices{0, 0, 0};
+  double stiffness = 0.0;   // k, N/m (energy per rest area per unit strain^2)
+  double strain_min = 1.0;  // in [0, 1]
+  double strain_max = 1.0;  // >= 1
+};
+
+/// Bending across the edge (vertices[0], vertices[1]) shared by the triangles
+/// (vertices[0], vertices[1], vertices[2]) and (vertices[1], vertices[0], vertices[3]):
+/// E = w/2 (|K x| - |K x_rest|)^2 with K x = sum_i K_i x_i the cotangent-weight discrete Laplacian
+/// of the hinge (its mean-curvature vector; Bergou et al. 2006) and w = 3 k / (A_0 + A_1) with
+/// A_0, A_1 the rest areas of the two triangles. As in Projective Dynamics, K x is projected onto
+/// the rest mean-curvature magnitude, so a flat or a curved rest shape has zero energy, and
+/// rigid motions change nothing. The rest triangles must not be degenerate, nor folded onto
+/// each other (a rest dihedral angle beyond 90 degrees).
+struct BendingHinge {
+  std::array<int, 4> vertices{0, 0, 0, 0};
+  double stiffness = 0.0;  // k, J
 };
 
 /// Target of a pin: q(t) = position + velocity t + amplitude sin(2 pi frequency t).
@@ -79,17 +107,23 @@ struct Scene {
 
   std::vector<Spring> springs;
   std::vector<Tet> tets;
+  std::vector<TriangleStrain> triangle_strains;
+  std::vector<BendingHinge> bending_hinges;
   std::vector<Pin> pins;
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, -9.81, 0.0);  // m/s^2
   std::vector<ForceField> force_fields;
   std::vector<Body> bodies;
+  /// The surface, for renderers, OBJ output and mass lumping (cloth grids and OBJ meshes fill
+  /// it); it exerts no force of its own. May be empty.
+  std::vector<std::array<int, 3>> triangles;
 
   int numParticles() const { return static_cast<int>(positions.rows()); }
 };
 
 /// Checks a scene: matrix shapes agree, all values finite, masses > 0, indices in range, no
-/// spring joining a particle to itself, stiffness >= 0, rest lengths >= 0, rest volumes > 0,
-/// damping in [0, 1]. Throws InvalidInputError naming the offending element or field.
+/// element using a particle twice, stiffness >= 0, rest lengths >= 0, rest volumes > 0, rest
+/// triangles not degenerate, hinges not folded, strain limits around 1, damping in [0, 1].
+/// Throws InvalidInputError naming the offending element or field.
 void validateScene(const Scene& scene);
 
 /// Signed rest volume det(Dm)/6 of a tet (positive for a valid element).
@@ -113,5 +147,25 @@ Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
 std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_positions,
                                               const std::vector<std::array<int, 3>>& triangles,
                                               double stretch_stiffness, double bend_stiffness);
+
+/// How a cloth resists deformation: springs (along edges and across interior edges; the grid
+/// builder adds shear springs) or triangle elements (a TriangleStrain per surface triangle and
+/// a BendingHinge per interior edge).
+enum class ClothModel { Springs, Triangles };
+
+/// The triangle-element cloth on `scene.triangles`: appends triangleStrainsFromTriangles and
+/// bendingHingesFromTriangles of them.
+void addTriangleClothElements(Scene& scene, double strain_stiffness, double strain_min, double strain_max,
+                              double hinge_stiffness);
+
+/// One TriangleStrain per triangle.
+std::vector<TriangleStrain> triangleStrainsFromTriangles(const std::vector<std::array<int, 3>>& triangles,
+                                                         double stiffness, double strain_min = 1.0,
+                                                         double strain_max = 1.0);
+
+/// One BendingHinge per interior edge of a triangle mesh (an edge shared by exactly two
+/// triangles), edge vertices in ascending order.
+std::vector<BendingHinge> bendingHingesFromTriangles(const std::vector<std::array<int, 3>>& triangles,
+                                                     double stiffness);
 
 }  // namespace stabint

@@ -1,7 +1,5 @@
 // stabint-run: one scene, one integrator, N frames; per-frame energies and timings as CSV and the
 // deformed mesh as one OBJ per frame. Options are parsed by hand (no dependency for a CLI).
-#include "io/scene_json.hpp"
-
 #include <stabint/stabint.hpp>
 
 #include <algorithm>
@@ -89,9 +87,9 @@ std::string usage() {
        "  --help                    this text\n"
        "\n"
        "Built-in scene parameters (see include/stabint/builders.hpp):\n";
-  for (const std::string& name : stabint::io::builtinSceneNames()) {
+  for (const std::string& name : stabint::builtinSceneNames()) {
     s << "  " << name << ":";
-    for (const std::string& p : stabint::io::builtinSceneParameters(name)) s << " " << p;
+    for (const std::string& p : stabint::builtinSceneParameters(name)) s << " " << p;
     s << "\n";
   }
   s << "\n"
@@ -208,7 +206,7 @@ Options parseArgs(int argc, char** argv) {
 // --- the scene ------------------------------------------------------------------------------------
 
 bool isBuiltin(const std::string& name) {
-  for (const std::string& b : stabint::io::builtinSceneNames()) {
+  for (const std::string& b : stabint::builtinSceneNames()) {
     if (b == name) return true;
   }
   return false;
@@ -244,15 +242,15 @@ std::string paramsAsJson(const std::vector<std::pair<std::string, std::string>>&
   return out + "}";
 }
 
-stabint::io::SceneWithSurface loadScene(const Options& o) {
+stabint::Scene loadScene(const Options& o) {
   if (isBuiltin(o.scene)) {
-    return stabint::io::builtinScene(o.scene, paramsAsJson(o.params), "builtin scene '" + o.scene + "'");
+    return stabint::builtinScene(o.scene, paramsAsJson(o.params), "builtin scene '" + o.scene + "'");
   }
   if (!o.params.empty()) throw UsageError("--param applies to built-in scenes only, not to '" + o.scene + "'");
   if (fs::path(o.scene).extension() != ".json" && !fs::exists(o.scene)) {
     throw UsageError("--scene: unknown scene '" + o.scene + "' (expected oscillator, chain, cloth, tetbar or a .json file)");
   }
-  return stabint::io::loadSceneFileWithSurface(o.scene);
+  return stabint::loadSceneFile(o.scene);
 }
 
 // Faces for the OBJ frames of a tet mesh: the triangles that belong to exactly one tet, wound
@@ -281,11 +279,11 @@ std::vector<std::array<int, 3>> tetBoundary(const std::vector<stabint::Tet>& tet
 
 class ObjWriter {
  public:
-  ObjWriter(std::string dir, const stabint::io::SceneWithSurface& loaded) : dir_(std::move(dir)) {
+  ObjWriter(std::string dir, const stabint::Scene& scene) : dir_(std::move(dir)) {
     fs::create_directories(dir_);
-    triangles_ = loaded.triangles.empty() ? tetBoundary(loaded.scene.tets) : loaded.triangles;
+    triangles_ = scene.triangles.empty() ? tetBoundary(scene.tets) : scene.triangles;
     if (triangles_.empty()) {
-      for (const stabint::Spring& s : loaded.scene.springs) lines_.push_back({s.a, s.b});
+      for (const stabint::Spring& s : scene.springs) lines_.push_back({s.a, s.b});
     }
   }
 
@@ -373,8 +371,7 @@ int listDevices() {
 }
 
 int run(Options& o) {
-  const stabint::io::SceneWithSurface loaded = loadScene(o);
-  const stabint::Scene& scene = loaded.scene;
+  const stabint::Scene scene = loadScene(o);
   auto sim = makeSimulator(scene, o);
   if (o.precision_explicit && o.sim.backend == stabint::BackendKind::CpuReference &&
       o.sim.opencl.precision == stabint::Precision::Float && !o.quiet) {
@@ -390,7 +387,7 @@ int run(Options& o) {
   std::optional<CsvWriter> csv;
   if (!o.csv.empty()) csv.emplace(o.csv);
   std::optional<ObjWriter> obj;
-  if (!o.obj_dir.empty()) obj.emplace(o.obj_dir, loaded);
+  if (!o.obj_dir.empty()) obj.emplace(o.obj_dir, scene);
 
   // Frame 0 is the initial state: the reference every energy drift is measured against.
   stabint::StepReport initial;

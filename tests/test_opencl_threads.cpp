@@ -66,21 +66,25 @@ bool bitwiseEqual(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
   return a.rows() == b.rows() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
 }
 
+// Runs work(i) on kThreads threads that all start together: each waits until every thread is
+// running, so the first OpenCL calls really overlap.
+template <typename Work>
+void runAtOnce(const Work& work) {
+  std::atomic<int> ready{0};
+  std::vector<std::thread> threads;
+  for (int i = 0; i < kThreads; ++i) {
+    threads.emplace_back([&, i] {
+      ready.fetch_add(1);
+      while (ready.load() < kThreads) std::this_thread::yield();
+      work(i);
+    });
+  }
+  for (std::thread& t : threads) t.join();
+}
+
 void concurrentRunsAgreeWithSerialRuns(BackendKind backend) {
   std::vector<Outcome> concurrent(kThreads);
-  {
-    // All threads start constructing together: each waits until every thread is running.
-    std::atomic<int> ready{0};
-    std::vector<std::thread> threads;
-    for (int i = 0; i < kThreads; ++i) {
-      threads.emplace_back([&, i] {
-        ready.fetch_add(1);
-        while (ready.load() < kThreads) std::this_thread::yield();
-        concurrent[i] = simulate(i, backend);
-      });
-    }
-    for (std::thread& t : threads) t.join();
-  }
+  runAtOnce([&](int i) { concurrent[i] = simulate(i, backend); });
   for (int i = 0; i < kThreads; ++i) {
     const Outcome serial = simulate(i, backend);
     if (serial.no_device) GTEST_SKIP() << "no OpenCL device: " << serial.error;
@@ -109,24 +113,17 @@ TEST(Threads, ListingDevicesWhileOthersConstruct) {
   std::vector<std::vector<OpenCLDeviceInfo>> lists(kThreads);
   std::vector<Outcome> runs(kThreads);
   std::vector<std::string> list_errors(kThreads);
-  std::atomic<int> ready{0};
-  std::vector<std::thread> threads;
-  for (int i = 0; i < kThreads; ++i) {
-    threads.emplace_back([&, i] {
-      ready.fetch_add(1);
-      while (ready.load() < kThreads) std::this_thread::yield();
-      if (i % 2 == 0) {
-        try {
-          lists[i] = listOpenCLDevices();
-        } catch (const std::exception& e) {
-          list_errors[i] = e.what();
-        }
-      } else {
-        runs[i] = simulate(i, BackendKind::OpenCL);
+  runAtOnce([&](int i) {
+    if (i % 2 == 0) {
+      try {
+        lists[i] = listOpenCLDevices();
+      } catch (const std::exception& e) {
+        list_errors[i] = e.what();
       }
-    });
-  }
-  for (std::thread& t : threads) t.join();
+    } else {
+      runs[i] = simulate(i, BackendKind::OpenCL);
+    }
+  });
   const std::vector<OpenCLDeviceInfo> serial = listOpenCLDevices();
   if (serial.empty()) GTEST_SKIP() << "no OpenCL device";
   for (int i = 0; i < kThreads; ++i) {

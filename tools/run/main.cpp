@@ -71,6 +71,8 @@ std::string usage() {
        "  --be-iterations N         iterations of the blend's backward-Euler solve (default 3)\n"
        "  --tolerance TOL           solve each step to this relative tolerance instead of a fixed\n"
        "                            iteration budget (default 0: fixed budget)\n"
+       "  --energy-limit L          stop (exit 2) at the first step whose energy exceeds the target\n"
+       "                            H* by more than L * E_scale (default 0: no limit)\n"
        "Backend:\n"
        "  --backend cpu|opencl      default opencl, falling back to cpu when no OpenCL device\n"
        "                            exists; an explicit --backend opencl never falls back\n"
@@ -99,9 +101,9 @@ std::string usage() {
     s << "\n";
   }
   s << "\n"
-       "Exit status: 0 success; 1 error (a failed write included); 2 the state became non-finite\n"
-       "(the CSV keeps the frames before it); 130 / 143 interrupted by SIGINT / SIGTERM (the CSV\n"
-       "keeps the frames up to the one reported).\n";
+       "Exit status: 0 success; 1 error (a failed write included); 2 the state became non-finite or\n"
+       "exceeded --energy-limit (the CSV keeps the frames before it); 130 / 143 interrupted by\n"
+       "SIGINT / SIGTERM (the CSV keeps the frames up to the one reported).\n";
   return s.str();
 }
 
@@ -183,6 +185,8 @@ Options parseArgs(int argc, char** argv) {
         o.sim.be_iterations = parseInteger(arg, value());
       } else if (arg == "--tolerance") {
         o.sim.tolerance = parseNumber(arg, value());
+      } else if (arg == "--energy-limit") {
+        o.sim.energy_limit = parseNumber(arg, value());
       } else if (arg == "--frames") {
         o.frames = parseInteger(arg, value());
         if (o.frames < 0) throw UsageError("--frames: must be >= 0, got " + std::to_string(o.frames));
@@ -470,7 +474,9 @@ int run(Options& o) {
       // Keep the last finite frame even when --every skipped it.
       if (csv && last_written != bad - 1 && bad - 1 > 0) csv->row(bad - 1, sim->lastReport());
       if (csv) csv->flush();
-      std::cerr << kProgram << ": error: the state became non-finite at frame " << bad << " (t = " << sim->time() + o.sim.time_step
+      const bool limit = dynamic_cast<const stabint::EnergyLimitError*>(&e) != nullptr;
+      std::cerr << kProgram << ": error: " << (limit ? "the energy limit was exceeded" : "the state became non-finite")
+                << " at frame " << bad << " (t = " << sim->time() + o.sim.time_step
                 << " s); " << (csv ? "CSV kept up to frame " + std::to_string(bad - 1) + "; " : std::string())
                 << e.what() << "\n";
       return 2;

@@ -67,6 +67,9 @@ elseif(CASE STREQUAL "blow_up")
   if(n LESS 2)
     message(FATAL_ERROR "the CSV should keep the frames before the blow-up")
   endif()
+  # The same run with an energy ceiling stops at once, the same way.
+  expect_run(2 "stabint-run: error: the energy limit was exceeded at frame 2 .*exceeds the target H"
+             --scene chain --backend cpu --integrator FE --frames 2000 --energy-limit 10 --quiet)
 elseif(CASE STREQUAL "opencl_fallback")
   # An empty ICD vendor directory: the loader finds no platform. The default backend falls back to
   # the CPU reference and says so; an explicit --backend opencl fails.

@@ -41,6 +41,57 @@ TEST(SimulatorInput, BadOptionsNameTheField) {
   expectRejected([](SimulatorOptions& o) { o.max_root_evaluations = 0; }, "max_root_evaluations");
 }
 
+// Enums from a config file or a binding can hold any integer: an Integrator of 42 used to run no
+// integrator and commit a zero state. A finite step whose 1/h^2 overflows (or h^2 underflows)
+// used to pass and be reported later as a blow-up.
+TEST(SimulatorInput, OutOfRangeEnumsAndOverflowingStepsNameTheField) {
+  expectRejected([](SimulatorOptions& o) { o.integrator = static_cast<Integrator>(42); }, "integrator = 42");
+  expectRejected([](SimulatorOptions& o) { o.integrator = static_cast<Integrator>(-1); }, "integrator = -1");
+  expectRejected([](SimulatorOptions& o) { o.backend = static_cast<BackendKind>(7); }, "backend = 7");
+  expectRejected([](SimulatorOptions& o) { o.opencl.precision = static_cast<Precision>(2); }, "opencl.precision = 2");
+  expectRejected([](SimulatorOptions& o) { o.time_step = 1e-300; }, "time_step = 1e-300");
+  expectRejected([](SimulatorOptions& o) { o.time_step = 1e-160; }, "time_step");
+  expectRejected([](SimulatorOptions& o) { o.time_step = 1e200; }, "time_step = 1e+200");
+  expectRejected([](SimulatorOptions& o) { o.energy_limit = -1.0; }, "energy_limit");
+  expectRejected([](SimulatorOptions& o) { o.energy_limit = std::nan(""); }, "energy_limit");
+}
+
+// Forward Euler on the stiff chain gains energy every step until it overflows (about 60 steps).
+// With a ceiling the run stops as soon as H exceeds H* by energy_limit * E_scale, refused like a
+// non-finite step: the state is the last accepted one, below the ceiling.
+TEST(SimulatorInput, EnergyLimitStopsAGainingRunEarly) {
+  auto stepsUntilRefused = [](double limit, bool& limited) {
+    SimulatorOptions o;
+    o.integrator = Integrator::ForwardEuler;
+    o.energy_limit = limit;
+    Simulator sim(makeChainPendulum(), o);
+    for (int n = 0; n < 10000; ++n) {
+      try {
+        sim.step();
+      } catch (const NonFiniteStateError& e) {
+        limited = dynamic_cast<const EnergyLimitError*>(&e) != nullptr;
+        EXPECT_EQ(e.step(), n);
+        EXPECT_EQ(sim.stepCount(), n);  // refused: nothing committed
+        EXPECT_TRUE(sim.positions().allFinite());
+        if (limited) {
+          EXPECT_LE(sim.energy().total() - sim.target(), limit * sim.energyScale());
+          EXPECT_NE(std::string(e.what()).find("energy_limit"), std::string::npos) << e.what();
+        }
+        return n;
+      }
+    }
+    return -1;
+  };
+  bool limited = false;
+  const int overflow = stepsUntilRefused(0.0, limited);
+  EXPECT_FALSE(limited);
+  ASSERT_GT(overflow, 0);
+  const int ceiling = stepsUntilRefused(10.0, limited);
+  EXPECT_TRUE(limited);
+  EXPECT_GT(ceiling, 0);
+  EXPECT_LT(ceiling, overflow);
+}
+
 TEST(SimulatorInput, BadSceneIsRejectedAndCallerSceneUntouched) {
   Scene s = makeChainPendulum();
   s.masses[3] = -1.0;

@@ -67,6 +67,8 @@ std::string usage() {
        "  --dt SECONDS              time step (default 0.0333333)\n"
        "  --iterations N            local/global iterations per implicit solve (default 10)\n"
        "  --be-iterations N         iterations of the blend's backward-Euler solve (default 3)\n"
+       "  --acceleration NAME       none (default), chebyshev or anderson: safeguarded acceleration\n"
+       "                            of every local/global solve\n"
        "  --tolerance TOL           solve each step to this relative tolerance instead of a fixed\n"
        "                            iteration budget (default 0: fixed budget)\n"
        "  --energy-limit L          stop (exit 2) at the first step whose energy exceeds the target\n"
@@ -81,7 +83,8 @@ std::string usage() {
        "Output:\n"
        "  --frames N                number of time steps (default 100)\n"
        "  --csv FILE                per-frame CSV, '-' for standard output: frame, time, kinetic,\n"
-       "                            elastic, external, total, target, branch, alpha, iterations,\n"
+       "                            elastic, external, total, target, branch, alpha,\n"
+       "                            velocity_scale, iterations,\n"
        "                            energy_evaluations, local_s, gather_s, transfer_s, global_s,\n"
        "                            energy_s, bookkeeping_s (frame 0 is the initial state)\n"
        "  --obj-dir DIR             one OBJ per written frame (DIR/frame_00000.obj, ...): vertices,\n"
@@ -181,6 +184,8 @@ Options parseArgs(int argc, char** argv) {
         o.sim.iterations = parseInteger(arg, value());
       } else if (arg == "--be-iterations") {
         o.sim.be_iterations = parseInteger(arg, value());
+      } else if (arg == "--acceleration") {
+        o.sim.acceleration = stabint::parseAcceleration(value());
       } else if (arg == "--tolerance") {
         o.sim.tolerance = parseNumber(arg, value());
       } else if (arg == "--energy-limit") {
@@ -341,7 +346,7 @@ class CsvWriter {
       if (!file_) throw UsageError("--csv: cannot write '" + path + "'");
       out_ = &file_;
     }
-    *out_ << "frame,time,kinetic,elastic,external,total,target,branch,alpha,iterations,energy_evaluations,"
+    *out_ << "frame,time,kinetic,elastic,external,total,target,branch,alpha,velocity_scale,iterations,energy_evaluations,"
              "local_s,gather_s,transfer_s,global_s,energy_s,bookkeeping_s\n";
     check();
   }
@@ -351,9 +356,9 @@ class CsvWriter {
     const auto& t = r.times;
     char buf[512];
     std::snprintf(buf, sizeof(buf),
-                  "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame,
+                  "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%.17g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame,
                   r.time, e.kinetic, e.elastic, e.external, e.total(), r.target, stabint::blendBranchName(r.branch),
-                  r.alpha, r.iterations, r.energy_evaluations, t.local, t.gather, t.transfer, t.global, t.energy,
+                  r.alpha, r.velocity_scale, r.iterations, r.energy_evaluations, t.local, t.gather, t.transfer, t.global, t.energy,
                   t.bookkeeping);
     *out_ << buf;
     check();

@@ -60,10 +60,6 @@ const std::vector<SceneCase>& referenceScenes() {
   return scenes;
 }
 
-int elementCount(const Scene& scene) {
-  return static_cast<int>(scene.springs.size() + scene.tets.size() + scene.pins.size());
-}
-
 bool quickMode() {
   const char* v = std::getenv("STABINT_BENCH_QUICK");
   return v != nullptr && *v != '\0' && std::string(v) != "0";
@@ -101,7 +97,7 @@ void setPhaseCounters(benchmark::State& state, const PhaseTimes& t) {
 
 void setSizeCounters(benchmark::State& state, const Scene& scene) {
   state.counters["particles"] = scene.numParticles();
-  state.counters["elements"] = elementCount(scene);
+  state.counters["elements"] = stabint::elementCount(scene);
 }
 
 }  // namespace stabint::bench

@@ -31,7 +31,6 @@ struct SceneCase {
 /// (5,000 particles).
 const std::vector<SceneCase>& referenceScenes();
 Scene clothScene(int side);
-int elementCount(const Scene& scene);  // springs + tets + pins
 
 /// Side lengths of the cloth scaling family, 10x10 up to 224x224 (50,176 particles). With
 /// STABINT_BENCH_QUICK set, only up to 71x71.

@@ -1,4 +1,4 @@
-// Built-in scenes of method.md section 5. Every builder ends with validateScene, so a bad
+// Built-in scenes (docs/method.md section 9). Every builder ends with validateScene, so a bad
 // parameter (negative stiffness, zero mass, out-of-range pin) fails here with the scene's own
 // message instead of later inside a solver.
 #include <stabint/builders.hpp>

@@ -128,6 +128,22 @@ void validateScene(const Scene& scene) {
   checkBodies(scene);
 }
 
+int elementCount(const Scene& scene) {
+  int count = 0;
+  for (const ElementType* type : elementTypes()) count += type->count(scene);
+  return count;
+}
+
+std::string elementSummary(const Scene& scene) {
+  std::string out;
+  for (const ElementType* type : elementTypes()) {
+    const int count = type->count(scene);
+    if (count == 0) continue;
+    out += (out.empty() ? "" : ", ") + std::to_string(count) + " " + type->name() + (count == 1 ? "" : "s");
+  }
+  return out.empty() ? "no elements" : out;
+}
+
 // --- geometry -----------------------------------------------------------------------------------
 
 double signedVolume(const Eigen::MatrixX3d& rest_positions, const std::array<int, 4>& v) {

@@ -1,7 +1,7 @@
 #pragma once
 // The global step of the local/global solver: K_c = c M + L with L = sum_e w_e A_e^T A_e, an
 // `n by n` scalar matrix shared by x, y and z. Factored once per distinct c with CHOLMOD and
-// reused for every iteration of every step (method.md section 2).
+// reused for every iteration of every step (docs/method.md section 2).
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
 

@@ -1,5 +1,5 @@
 #pragma once
-// Built-in scenes with parameters: the test and benchmark scenes of method.md section 5.
+// Built-in scenes with parameters: the test and benchmark scenes of docs/method.md section 9.
 #include <stabint/scene.hpp>
 
 namespace stabint {

@@ -87,8 +87,8 @@ struct ForceField {
   bool timeDependent() const;
 };
 
-/// A group of particles damped together by momentum-preserving velocity damping (method.md
-/// section 4): each velocity moves toward the body's rigid velocity by the factor `damping` in
+/// A group of particles damped together by momentum-preserving velocity damping (docs/method.md
+/// section 6): each velocity moves toward the body's rigid velocity by the factor `damping` in
 /// [0, 1] per step. 0 disables it.
 struct Body {
   std::string name;
@@ -125,6 +125,11 @@ struct Scene {
 /// triangles not degenerate, hinges not folded, strain limits around 1, damping in [0, 1].
 /// Throws InvalidInputError naming the offending element or field.
 void validateScene(const Scene& scene);
+
+/// Number of elements of all kinds (springs, tets, triangle strains, bending hinges, pins).
+int elementCount(const Scene& scene);
+/// The non-empty element kinds with their counts, e.g. "14502 springs, 2 pins".
+std::string elementSummary(const Scene& scene);
 
 /// Signed rest volume det(Dm)/6 of a tet (positive for a valid element).
 double signedVolume(const Eigen::MatrixX3d& rest_positions, const std::array<int, 4>& vertices);

@@ -446,8 +446,7 @@ int run(Options& o) {
   }
   if (!o.quiet) {
     std::cerr << kProgram << ": scene '" << scene.name << "' (" << scene.numParticles() << " particles, "
-              << scene.springs.size() << " springs, " << scene.tets.size() << " tets, " << scene.pins.size()
-              << " pins), " << stabint::integratorName(o.sim.integrator) << ", dt " << o.sim.time_step << ", "
+              << stabint::elementSummary(scene) << "), " << stabint::integratorName(o.sim.integrator) << ", dt " << o.sim.time_step << ", "
               << o.frames << " frames on " << sim->backendDescription() << "\n";
   }
 

@@ -50,7 +50,7 @@ if(CASE STREQUAL "chain_csv")
     message(FATAL_ERROR "frame_00010.obj: ${nv} vertices and ${nl} lines, expected 8 and 7")
   endif()
 elseif(CASE STREQUAL "scene_files")
-  foreach(scene chain cloth_handle tetbar cloth_wind)
+  foreach(scene chain cloth_handle tetbar cloth_wind cloth_triangles)
     expect_run(0 "3 frames in" --scene "${SCENES}/${scene}.json" --backend cpu --frames 3 --every 2 --csv -)
     string(REGEX MATCHALL "\n[0-9]+," rows "\n${run_stdout}")
     list(LENGTH rows n)
@@ -58,6 +58,18 @@ elseif(CASE STREQUAL "scene_files")
       message(FATAL_ERROR "${scene}.json: expected 3 CSV rows on stdout, got ${n}:\n${run_stdout}")
     endif()
   endforeach()
+elseif(CASE STREQUAL "triangle_cloth")
+  # The cloth grid built from triangle strain and bending hinges; its OBJ frames carry the
+  # grid's faces (Scene::triangles).
+  expect_run(0 "40 triangle strains, 51 bending hinges, 2 pins.*3 frames in" --scene cloth --param model=triangles
+             --param nx=6 --param ny=5 --backend cpu --frames 3 --obj-dir "${dir}/obj")
+  file(STRINGS "${dir}/obj/frame_00003.obj" v REGEX "^v ")
+  file(STRINGS "${dir}/obj/frame_00003.obj" f REGEX "^f ")
+  list(LENGTH v nv)
+  list(LENGTH f nf)
+  if(NOT nv EQUAL 30 OR NOT nf EQUAL 40)
+    message(FATAL_ERROR "frame_00003.obj: ${nv} vertices and ${nf} faces, expected 30 and 40")
+  endif()
 elseif(CASE STREQUAL "blow_up")
   # Forward Euler on the stiff chain at 30 Hz diverges within a few dozen steps.
   expect_run(2 "stabint-run: error: the state became non-finite at frame [0-9]+" --scene chain --backend cpu

@@ -29,7 +29,8 @@ MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*"
 VERDICTS = ["stable", "over-damped", "exploded"]
 VERDICT_COLORS = ["#4daf4a", "#377eb8", "#e41a1c"]
 SCENE_TITLES = {"cloth": "cloth 20x20 (pinned corners)", "tetbar": "tet bar 8x2x2 (pinned at x = 0)",
-                "chain": "stiff chain pendulum"}
+                "chain": "stiff chain pendulum",
+                "cloth_triangles": "cloth 20x20 of triangle strain + bending hinges"}
 
 
 def read_csv(results, name):
@@ -69,7 +70,7 @@ def chart_speed_vs_accuracy(results, charts):
     rows = read_csv(results, "sweep.csv")
     if not rows:
         return
-    scenes = [s for s in ("cloth", "tetbar") if any(r["scene"] == s for r in rows)]
+    scenes = [s for s in ("cloth", "cloth_triangles", "tetbar") if any(r["scene"] == s for r in rows)]
     # Panels: error against the IM h/16 reference over 2 s, energy drift, and (when the sweep has
     # it) the RMS error over 0-1 s against the small-step motion reference (issue 8).
     panels = [("position_error_m", "position error vs reference, RMS [m]", "position error"),
@@ -156,7 +157,7 @@ def chart_stability_map(results, charts):
     rows = read_csv(results, "stability.csv")
     if not rows:
         return
-    scenes = [s for s in ("chain", "tetbar") if any(r["scene"] == s for r in rows)]
+    scenes = [s for s in ("chain", "cloth_triangles", "tetbar") if any(r["scene"] == s for r in rows)]
     cmap = ListedColormap(VERDICT_COLORS)
     fig, axes = plt.subplots(len(scenes), len(INTEGRATORS), figsize=(2.6 * len(INTEGRATORS), 3.1 * len(scenes)),
                              squeeze=False)
@@ -164,7 +165,7 @@ def chart_stability_map(results, charts):
         srows = [r for r in rows if r["scene"] == scene]
         ks = sorted({num(r, "stiffness") for r in srows})
         hs = sorted({num(r, "h") for r in srows})
-        unit = "N/m" if scene == "chain" else "Pa"
+        unit = "Pa" if scene == "tetbar" else "N/m"
         for ii, integ in enumerate(INTEGRATORS):
             ax = axes[si][ii]
             grid = [[float("nan")] * len(hs) for _ in ks]
@@ -196,8 +197,8 @@ def chart_stability_map(results, charts):
                ncol=3, fontsize=9, bbox_to_anchor=(0.5, -0.02))
     fig.suptitle(f"Stability over {steps} steps, 10 iterations (cell text: energy lost, % of E_avail; "
                  "exploded: |H - H0| > 10 E_avail or non-finite; over-damped: lost > 50 %)\n"
-                 "stiffness k of the springs (chain) or tets (bar); pins scale with it (chain: k, bar: k times "
-                 "the cell size)", fontsize=10)
+                 "stiffness k of the springs (chain), triangle strain (cloth) or tets (bar); pins scale with it "
+                 "(chain and cloth: k, bar: k times the cell size)", fontsize=10)
     fig.tight_layout(rect=(0, 0.03, 1, 0.95))
     save(fig, charts, "stability_map")
 
@@ -533,7 +534,7 @@ def write_summary(results):
         out.append("| scene | integrator | cheapest non-exploded setting | ms/frame | error [m] | most accurate setting | "
                    "ms/frame | error [m] |")
         out.append("|---|---|---|---:|---:|---|---:|---:|")
-        for scene in ("cloth", "tetbar"):
+        for scene in ("cloth", "cloth_triangles", "tetbar"):
             for integ in INTEGRATORS:
                 rs = [r for r in sweep if r["scene"] == scene and r["integrator"] == integ
                       and r["verdict"] != "exploded" and math.isfinite(num(r, "position_error_m"))]
@@ -553,7 +554,7 @@ def write_summary(results):
         out.append("## Stability grid (stable / over-damped / exploded cells of stiffness x step size)\n")
         out.append("| scene | " + " | ".join(INTEGRATORS) + " |")
         out.append("|---|" + "---|" * len(INTEGRATORS))
-        for scene in ("chain", "tetbar"):
+        for scene in ("chain", "cloth_triangles", "tetbar"):
             cells = []
             for integ in INTEGRATORS:
                 rs = [r for r in stab if r["scene"] == scene and r["integrator"] == integ]

@@ -25,6 +25,7 @@ build/tools/study/stabint-study all --out results
 
 echo "== charts"
 /usr/bin/python3 bench/study_charts.py results
+/usr/bin/python3 bench/teaser.py results
 
 # Chart 4 (scaling): the benchmark suite's cloth scaling family, 10x10 to 224x224 particles, on
 # the CPU reference and OpenCL backends (about a minute). scripts/bench.sh runs the whole suite.
@@ -41,4 +42,5 @@ echo "  energy table:   results/energy_table.csv (printed above)"
 echo "  summary:        results/summary.md"
 echo "  motion table:   results/motion.csv (printed above, and in the summary)"
 echo "  charts:         results/charts/{speed_vs_accuracy,stability_map,energy_over_time,cloth_still,motion,scaling}.png (and .svg)"
+echo "  teaser:         results/charts/teaser.gif (animation), teaser.png (still and energy curves), teaser_energy.png"
 echo "  all CSV files:  results/*.csv; cached reference trajectories: results/cache/"

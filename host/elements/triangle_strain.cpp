@@ -11,12 +11,6 @@
 #include <algorithm>
 #include <cmath>
 
-// GCC 12 warns that Eigen's fixed-size 3 by 2 JacobiSVD may read its singular values
-// uninitialized; they are written before any read (a known false positive).
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
-
 namespace stabint {
 namespace {
 
@@ -32,6 +26,34 @@ Eigen::Matrix2d restEdges2d(const Scene& scene, const TriangleStrain& t) {
   Eigen::Matrix2d dm;
   dm << e1.dot(t1), e2.dot(t1), 0.0, e2.dot(t2);
   return dm;
+}
+
+struct Svd2 {
+  Eigen::Matrix2d U, V;
+  Eigen::Vector2d s;
+};
+
+Eigen::Matrix2d rotation2(double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  Eigen::Matrix2d r;
+  r << c, -s, s, c;
+  return r;
+}
+
+// M = U diag(s) V^T in closed form for det M >= 0 (Blinn, "Consider the lowly 2x2 matrix"):
+// M = [[E + F, G - H], [G + H, E - F]] is a rotation by (a2 + a1)/2 after diag(s1, s2) after a
+// rotation by (a2 - a1)/2, with s = sqrt(E^2 + H^2) +- sqrt(F^2 + G^2), a1 = atan2(G, F),
+// a2 = atan2(H, E).
+Svd2 svd2(const Eigen::Matrix2d& m) {
+  const double e = 0.5 * (m(0, 0) + m(1, 1)), f = 0.5 * (m(0, 0) - m(1, 1));
+  const double g = 0.5 * (m(1, 0) + m(0, 1)), h = 0.5 * (m(1, 0) - m(0, 1));
+  const double q = std::hypot(e, h), r = std::hypot(f, g);
+  const double a1 = std::atan2(g, f), a2 = std::atan2(h, e);
+  Svd2 out;
+  out.s = Eigen::Vector2d(q + r, q - r);
+  out.U = rotation2(0.5 * (a2 + a1));
+  out.V = rotation2(0.5 * (a2 - a1)).transpose();
+  return out;
 }
 
 struct TriangleStrainKind : KindDefaults<TriangleStrain> {
@@ -69,11 +91,22 @@ struct TriangleStrainKind : KindDefaults<TriangleStrain> {
   static double project(const double* ax, const double* params, double* p) {
     // ax holds F^T row-major, i.e. F (3 by 2) column-major; so does p for P.
     const Eigen::Map<const Eigen::Matrix<double, 3, 2>> F(ax);
-    // The reference path uses Eigen's Jacobi SVD (an oracle independent of the kernel's method).
-    const Eigen::JacobiSVD<Eigen::Matrix<double, 3, 2>> svd(F, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    const Eigen::Vector2d s = svd.singularValues().cwiseMax(params[1]).cwiseMin(params[2]);
+    // F = Q R (Gram-Schmidt, twice for orthogonality), then the closed-form SVD of the 2 by 2
+    // R: no squared singular values, independent of the kernel's method (eigenvectors of
+    // F^T F), and a fraction of the cost of an iterative 3 by 2 SVD.
+    Eigen::Matrix<double, 3, 2> Q;
+    Eigen::Matrix2d R = Eigen::Matrix2d::Zero();
+    R(0, 0) = F.col(0).norm();
+    Q.col(0) = R(0, 0) > 0.0 ? Eigen::Vector3d(F.col(0) / R(0, 0)) : Eigen::Vector3d::UnitX();
+    Eigen::Vector3d w = F.col(1) - Q.col(0).dot(F.col(1)) * Q.col(0);
+    w -= Q.col(0).dot(w) * Q.col(0);
+    R(0, 1) = Q.col(0).dot(F.col(1));
+    R(1, 1) = w.norm();
+    Q.col(1) = R(1, 1) > 1e-300 ? Eigen::Vector3d(w / R(1, 1)) : Q.col(0).unitOrthogonal();
+    const Svd2 svd = svd2(R);
+    const Eigen::Vector2d s = svd.s.cwiseMax(params[1]).cwiseMin(params[2]);
     Eigen::Map<Eigen::Matrix<double, 3, 2>> projection(p);
-    projection = svd.matrixU() * s.asDiagonal() * svd.matrixV().transpose();
+    projection = Q * svd.U * s.asDiagonal() * svd.V.transpose();
     return halfWeightedSquaredDistance(params[0], ax, p, 6);
   }
 

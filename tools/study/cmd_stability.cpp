@@ -17,20 +17,24 @@ void runStability(const StudyOptions& options) {
     std::string key;
     std::vector<double> stiffness;
   };
-  // Each range is centred on the scene's default stiffness (chain 1e4 N/m, tet bar 1e5 Pa).
-  const std::vector<Grid> grids = {{"chain", {1e2, 1e3, 1e4, 1e5, 1e6}}, {"tetbar", {1e3, 1e4, 1e5, 1e6, 1e7}}};
+  // Each range is centred on the scene's default stiffness (chain 1e4 N/m, tet bar 1e5 Pa,
+  // triangle cloth 1e3 N/m of triangle strain).
+  const std::vector<Grid> grids = {{"chain", {1e2, 1e3, 1e4, 1e5, 1e6}},
+                                   {"cloth_triangles", {1e1, 1e2, 1e3, 1e4, 1e5}},
+                                   {"tetbar", {1e3, 1e4, 1e5, 1e6, 1e7}}};
   CsvWriter csv(joinPath(options.out, "stability.csv"),
                 {"scene", "integrator", "backend", "stiffness", "h", "steps", "steps_done", "E_avail", "max_rise_rel",
                  "damping_rel", "drift_rel", "blew_up_step", "verdict"});
   for (const Grid& g : grids) {
     for (double k : g.stiffness) {
-      StudyScene s = g.key == "chain" ? chainScene(k) : tetBarScene(k);
+      const bool bar = g.key == "tetbar";
+      StudyScene s = g.key == "chain" ? chainScene(k) : bar ? tetBarScene(k) : triangleClothScene(20, k);
       // Pins scale with the element stiffness: with the builders' fixed stiff pins (1e6 N/m on a
       // 0.01 kg chain particle) the pins alone decide the explicit integrators' fate in every
-      // cell. Chain: the pin is as stiff as a link. Tet bar: k times the cell size (N/m from Pa),
-      // about the stiffness of one cell.
+      // cell. Chain: the pin is as stiff as a link; triangle cloth: as stiff as the membrane
+      // (N/m). Tet bar: k times the cell size (N/m from Pa), about the stiffness of one cell.
       const double cell = s.scene.rest_positions.col(0).maxCoeff() / 8.0;
-      for (stabint::Pin& pin : s.scene.pins) pin.stiffness = g.key == "chain" ? k : k * cell;
+      for (stabint::Pin& pin : s.scene.pins) pin.stiffness = bar ? k * cell : k;
       const double available = availableEnergy(s);
       for (int rate : rates) {
         for (Integrator i : stabint::allIntegrators()) {

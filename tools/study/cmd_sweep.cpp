@@ -20,7 +20,7 @@ struct AccuracyScene {
 
 std::vector<AccuracyScene> accuracyScenes(const StudyOptions& options) {
   std::vector<AccuracyScene> scenes;
-  for (StudyScene s : {clothScene(), tetBarScene()}) {
+  for (StudyScene s : {clothScene(), triangleClothScene(), tetBarScene()}) {
     AccuracyScene a;
     a.reference = loadOrComputeReference(s, options);
     a.motion = &motionReference(s, options);

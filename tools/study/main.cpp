@@ -27,6 +27,8 @@ void usage(std::FILE* to) {
                "  motion      issue 8's motion targets against small-step references (cached in DIR/cache):\n"
                "              cloth, chain, handle cloth, stiff cloth, spinning tet bars, particle on a moving pin\n"
                "              (printed; motion.csv, motion_series.csv, motion_reference.csv, moving_pin.csv)\n"
+               "  teaser      the teaser: a 40 x 40 cloth of triangle strain and bending hinges with BE, BDF2\n"
+               "              and the blend (teaser_triangles.csv, teaser_energy.csv, teaser_<integrator>.bin)\n"
                "  all         all of the above in order\n"
                "options:\n"
                "  --out DIR          output directory (default results)\n"
@@ -82,7 +84,7 @@ int main(int argc, char** argv) {
     };
     const Step steps[] = {{"table", runTable},         {"reference", runReference}, {"sweep", runSweep},
                           {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck},
-                          {"motion", runMotion}};
+                          {"motion", runMotion},       {"teaser", runTeaser}};
     bool found = false;
     for (const Step& s : steps) {
       if (command != "all" && command != s.name) continue;

@@ -59,6 +59,12 @@ StudyScene chainScene(double stiffness = 1e4);
 /// the stiff cloth of issue 8 (key "cloth_stiff", run at h = 1/15).
 StudyScene clothScene(double stretch_stiffness = 1e3);
 constexpr double kStiffClothStretch = 1e6;
+/// The same tilted cloth as clothScene, n x n, built from triangle strain and bending hinges
+/// instead of springs (ClothModel::Triangles; key "cloth_triangles" for n = 20).
+/// `strain_min` < 1 lets the membrane compress freely down to it (cloth buckles rather than
+/// resisting compression).
+StudyScene triangleClothScene(int n = 20, double strain_stiffness = 1e3, double strain_min = 1.0);
+constexpr double kTriangleClothHinge = 1e-4;  // J: bending hinge stiffness of the study's triangle cloths
 /// scenes/cloth_handle.json: a cloth on a swinging handle in a gusty wind, with damping.
 StudyScene handleClothScene();
 /// The tet bar with no pins and no gravity, spinning rigidly at `omega` rad/s about an axis
@@ -292,6 +298,7 @@ void runStability(const StudyOptions& options);
 void runEnergy(const StudyOptions& options);
 void runCrosscheck(const StudyOptions& options);
 void runMotion(const StudyOptions& options);
+void runTeaser(const StudyOptions& options);  // cmd_teaser.cpp
 
 // ---- small helpers -------------------------------------------------------------------------
 

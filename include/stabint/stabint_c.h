@@ -5,6 +5,11 @@
  * boundary), and stabint_last_error_message() returns "<ClassName>: <text>" for the last failed
  * call on the calling thread. A successful call leaves the last error as it was.
  *
+ * Getters that return a plain value (counts, time, H*) return -1 (counts) or NaN for a NULL
+ * handle instead of a status.
+ *
+ * Threads: the last error is per thread; one handle must not be used by two threads at once.
+ *
  * Ownership: a handle returned through an out-parameter belongs to the caller and is released
  * with the matching *_destroy function (which accepts NULL). A simulator copies its scene, so a
  * scene may be destroyed as soon as the simulators built from it exist.

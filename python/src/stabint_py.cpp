@@ -393,7 +393,8 @@ void bindSimulator(nb::module_& m) {
            "Raises InvalidInputError for a bad scene or option, OpenCLError subtypes for the OpenCL backend.")
       .def("step", [](Simulator& s) { return s.step(); }, nb::call_guard<nb::gil_scoped_release>(),
            "Advances one step and returns its report. Raises NonFiniteStateError (EnergyLimitError) when the "
-           "step is refused; the simulator then keeps the last accepted state.")
+           "step is refused; the simulator then keeps the last accepted state. The GIL is released while it "
+           "runs, so simulators may step in parallel threads; one Simulator must not be used by two threads at once.")
       .def_prop_ro("positions", [](const Simulator& s) { return rowsCopy(s.positions()); }, nb::rv_policy::move,
                    "(n, 3) current positions, a C-contiguous float64 copy (x y z per particle).")
       .def_prop_ro("velocities", [](const Simulator& s) { return rowsCopy(s.velocities()); }, nb::rv_policy::move,

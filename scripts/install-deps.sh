@@ -17,6 +17,7 @@ packages=(
   nlohmann-json3-dev     # scene files
   python3-matplotlib     # charts (used through /usr/bin/python3)
   python3-pil            # the teaser animation (matplotlib's GIF writer)
+  python3-venv python3-dev  # the Python package: .venv and the extension's headers (scripts/python.sh)
 )
 
 missing=()

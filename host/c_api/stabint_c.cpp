@@ -1,0 +1,357 @@
+// The C API (include/stabint/stabint_c.h) over the C++ API. Every entry point that can fail runs
+// its body through guarded(), which turns every exception into a status code and the thread's
+// last-error message, so that no exception unwinds into C frames.
+#include <stabint/stabint.hpp>
+#include <stabint/stabint_c.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <new>
+#include <string>
+
+struct stabint_scene {
+  stabint::Scene scene;
+};
+struct stabint_simulator {
+  stabint::Simulator sim;
+};
+
+namespace {
+
+struct LastError {
+  stabint_status status = STABINT_OK;
+  std::string message;
+  int step = -1;
+};
+thread_local LastError last_error;
+
+stabint_status fail(stabint_status status, const char* class_name, const std::string& text,
+                    int step = -1) {
+  last_error.status = status;
+  last_error.message = std::string(class_name) + ": " + text;
+  last_error.step = step;
+  return status;
+}
+
+// Raised by the C layer itself for API misuse (NULL handles, short buffers).
+struct ArgumentError {
+  std::string text;
+};
+
+// Most specific class first: each catch below must precede the catches of its bases.
+template <class Body>
+stabint_status guarded(Body&& body) noexcept {
+  try {
+    body();
+    return STABINT_OK;
+  } catch (const ArgumentError& e) {
+    return fail(STABINT_INVALID_ARGUMENT, "InvalidArgument", e.text);
+  } catch (const stabint::EnergyLimitError& e) {
+    return fail(STABINT_ENERGY_LIMIT, "EnergyLimitError", e.what(), e.step());
+  } catch (const stabint::NonFiniteStateError& e) {
+    return fail(STABINT_NON_FINITE_STATE, "NonFiniteStateError", e.what(), e.step());
+  } catch (const stabint::InvalidInputError& e) {
+    return fail(STABINT_INVALID_INPUT, "InvalidInputError", e.what());
+  } catch (const stabint::FileFormatError& e) {
+    return fail(STABINT_FILE_FORMAT, "FileFormatError", e.what());
+  } catch (const stabint::NoOpenCLDeviceError& e) {
+    return fail(STABINT_NO_OPENCL_DEVICE, "NoOpenCLDeviceError", e.what());
+  } catch (const stabint::KernelBuildError& e) {
+    return fail(STABINT_KERNEL_BUILD, "KernelBuildError", e.what());
+  } catch (const stabint::UnsupportedPrecisionError& e) {
+    return fail(STABINT_UNSUPPORTED_PRECISION, "UnsupportedPrecisionError", e.what());
+  } catch (const stabint::OpenCLError& e) {
+    return fail(STABINT_OPENCL, "OpenCLError", e.what());
+  } catch (const stabint::Error& e) {
+    return fail(STABINT_ERROR, "Error", e.what());
+  } catch (const std::bad_alloc&) {
+    return fail(STABINT_OUT_OF_MEMORY, "OutOfMemory", "allocation failed");
+  } catch (const std::exception& e) {
+    return fail(STABINT_INTERNAL, "InternalError", e.what());
+  } catch (...) {
+    return fail(STABINT_INTERNAL, "InternalError", "unknown exception");
+  }
+}
+
+template <class T>
+void require(const T* pointer, const char* what) {
+  if (pointer == nullptr) throw ArgumentError{std::string(what) + " is NULL"};
+}
+
+void requireCapacity(size_t capacity, size_t needed, const char* what) {
+  if (capacity < needed) {
+    throw ArgumentError{std::string(what) + ": buffer holds " + std::to_string(capacity) +
+                        " values, " + std::to_string(needed) + " needed"};
+  }
+}
+
+// C enums arrive as plain ints: check the range before casting to the C++ enum.
+template <class Enum>
+Enum checkedEnum(int value, int count, const char* field) {
+  if (value < 0 || value >= count) {
+    throw stabint::InvalidInputError(std::string("options.") + field + ": invalid value " +
+                                     std::to_string(value));
+  }
+  return static_cast<Enum>(value);
+}
+
+stabint_energy toC(const stabint::EnergyReport& e) {
+  return {e.kinetic, e.elastic, e.external, e.total()};
+}
+
+stabint_step_report toC(const stabint::StepReport& r) {
+  stabint_step_report c{};
+  c.step = r.step;
+  c.time = r.time;
+  c.energy = toC(r.energy);
+  c.target = r.target;
+  c.forcing = r.forcing;
+  c.damping = r.damping;
+  c.branch = static_cast<stabint_blend_branch>(r.branch);
+  c.alpha = r.alpha;
+  c.velocity_scale = r.velocity_scale;
+  c.iterations = r.iterations;
+  c.energy_evaluations = r.energy_evaluations;
+  const stabint::PhaseTimes& t = r.times;
+  c.times = {t.local, t.gather, t.transfer, t.global, t.energy, t.bookkeeping, t.total()};
+  return c;
+}
+
+// Rows of an n by 3 matrix, interleaved x y z, converted to T.
+template <class T>
+stabint_status copyRows(const stabint_simulator* sim, bool positions, T* out, size_t capacity) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(out, "out");
+    const Eigen::MatrixX3d& m = positions ? sim->sim.positions() : sim->sim.velocities();
+    const size_t n = static_cast<size_t>(m.rows());
+    requireCapacity(capacity, 3 * n, positions ? "positions" : "velocities");
+    for (size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) out[3 * i + k] = static_cast<T>(m(static_cast<Eigen::Index>(i), k));
+    }
+  });
+}
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+}  // namespace
+
+extern "C" {
+
+const char* stabint_status_name(stabint_status status) {
+  switch (status) {
+    case STABINT_OK: return "OK";
+    case STABINT_ERROR: return "Error";
+    case STABINT_INVALID_INPUT: return "InvalidInputError";
+    case STABINT_FILE_FORMAT: return "FileFormatError";
+    case STABINT_NON_FINITE_STATE: return "NonFiniteStateError";
+    case STABINT_ENERGY_LIMIT: return "EnergyLimitError";
+    case STABINT_OPENCL: return "OpenCLError";
+    case STABINT_NO_OPENCL_DEVICE: return "NoOpenCLDeviceError";
+    case STABINT_KERNEL_BUILD: return "KernelBuildError";
+    case STABINT_UNSUPPORTED_PRECISION: return "UnsupportedPrecisionError";
+    case STABINT_INVALID_ARGUMENT: return "InvalidArgument";
+    case STABINT_OUT_OF_MEMORY: return "OutOfMemory";
+    case STABINT_INTERNAL: return "InternalError";
+  }
+  return "unknown";
+}
+
+int stabint_status_is(stabint_status status, stabint_status base) {
+  if (status == base) return 1;
+  if (status == STABINT_OK) return 0;
+  switch (base) {
+    case STABINT_ERROR: return 1;
+    case STABINT_NON_FINITE_STATE: return status == STABINT_ENERGY_LIMIT;
+    case STABINT_OPENCL:
+      return status == STABINT_NO_OPENCL_DEVICE || status == STABINT_KERNEL_BUILD ||
+             status == STABINT_UNSUPPORTED_PRECISION;
+    default: return 0;
+  }
+}
+
+const char* stabint_last_error_message(void) { return last_error.message.c_str(); }
+stabint_status stabint_last_error_status(void) { return last_error.status; }
+int stabint_last_error_step(void) { return last_error.step; }
+
+const char* stabint_integrator_name(stabint_integrator integrator) {
+  if (integrator < 0 || integrator > STABINT_ENERGY_BLEND) return nullptr;
+  return stabint::integratorName(static_cast<stabint::Integrator>(integrator));
+}
+
+const char* stabint_blend_branch_name(stabint_blend_branch branch) {
+  if (branch < 0 || branch > STABINT_BRANCH_VELOCITY_SCALE) return nullptr;
+  return stabint::blendBranchName(static_cast<stabint::BlendBranch>(branch));
+}
+
+stabint_status stabint_scene_create_builtin(const char* name, const char* params_json,
+                                            stabint_scene** out) {
+  return guarded([&] {
+    require(name, "name");
+    require(out, "out");
+    *out = new stabint_scene{stabint::builtinScene(name, params_json ? params_json : "{}")};
+  });
+}
+
+stabint_status stabint_scene_load(const char* path, stabint_scene** out) {
+  return guarded([&] {
+    require(path, "path");
+    require(out, "out");
+    *out = new stabint_scene{stabint::loadSceneFile(path)};
+  });
+}
+
+void stabint_scene_destroy(stabint_scene* scene) { delete scene; }
+
+int stabint_scene_num_particles(const stabint_scene* scene) {
+  return scene ? scene->scene.numParticles() : -1;
+}
+
+int stabint_scene_num_triangles(const stabint_scene* scene) {
+  return scene ? static_cast<int>(scene->scene.triangles.size()) : -1;
+}
+
+stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t* out,
+                                            size_t capacity) {
+  return guarded([&] {
+    require(scene, "scene");
+    const auto& triangles = scene->scene.triangles;
+    requireCapacity(capacity, 3 * triangles.size(), "triangles");
+    if (!triangles.empty()) require(out, "out");
+    for (size_t t = 0; t < triangles.size(); ++t) {
+      for (int k = 0; k < 3; ++k) out[3 * t + k] = triangles[t][k];
+    }
+  });
+}
+
+void stabint_simulator_options_default(stabint_simulator_options* options) {
+  if (options == nullptr) return;
+  const stabint::SimulatorOptions d;  // the C++ defaults are the only source of truth
+  options->integrator = static_cast<stabint_integrator>(d.integrator);
+  options->time_step = d.time_step;
+  options->iterations = d.iterations;
+  options->tolerance = d.tolerance;
+  options->max_iterations = d.max_iterations;
+  options->acceleration = static_cast<stabint_acceleration>(d.acceleration);
+  options->chebyshev_rho = d.chebyshev_rho;
+  options->anderson_window = d.anderson_window;
+  options->be_iterations = d.be_iterations;
+  options->energy_tolerance = d.energy_tolerance;
+  options->max_velocity_scale = d.max_velocity_scale;
+  options->max_root_evaluations = d.max_root_evaluations;
+  options->energy_limit = d.energy_limit;
+  options->backend = static_cast<stabint_backend>(d.backend);
+  options->opencl_platform = nullptr;
+  options->opencl_device = nullptr;
+  options->opencl_precision = static_cast<stabint_precision>(d.opencl.precision);
+}
+
+stabint_status stabint_simulator_create(const stabint_scene* scene,
+                                        const stabint_simulator_options* options,
+                                        stabint_simulator** out) {
+  return guarded([&] {
+    require(scene, "scene");
+    require(options, "options");
+    require(out, "out");
+    stabint::SimulatorOptions o;
+    o.integrator = checkedEnum<stabint::Integrator>(options->integrator, 6, "integrator");
+    o.time_step = options->time_step;
+    o.iterations = options->iterations;
+    o.tolerance = options->tolerance;
+    o.max_iterations = options->max_iterations;
+    o.acceleration = checkedEnum<stabint::Acceleration>(options->acceleration, 3, "acceleration");
+    o.chebyshev_rho = options->chebyshev_rho;
+    o.anderson_window = options->anderson_window;
+    o.be_iterations = options->be_iterations;
+    o.energy_tolerance = options->energy_tolerance;
+    o.max_velocity_scale = options->max_velocity_scale;
+    o.max_root_evaluations = options->max_root_evaluations;
+    o.energy_limit = options->energy_limit;
+    o.backend = checkedEnum<stabint::BackendKind>(options->backend, 2, "backend");
+    o.opencl.platform = options->opencl_platform ? options->opencl_platform : "";
+    o.opencl.device = options->opencl_device ? options->opencl_device : "";
+    o.opencl.precision =
+        checkedEnum<stabint::Precision>(options->opencl_precision, 2, "opencl_precision");
+    *out = new stabint_simulator{stabint::Simulator(scene->scene, o)};
+  });
+}
+
+void stabint_simulator_destroy(stabint_simulator* sim) { delete sim; }
+
+stabint_status stabint_simulator_step(stabint_simulator* sim, stabint_step_report* report) {
+  return guarded([&] {
+    require(sim, "simulator");
+    const stabint::StepReport& r = sim->sim.step();
+    if (report != nullptr) *report = toC(r);
+  });
+}
+
+int stabint_simulator_num_particles(const stabint_simulator* sim) {
+  return sim ? static_cast<int>(sim->sim.positions().rows()) : -1;
+}
+
+stabint_status stabint_simulator_copy_positions(const stabint_simulator* sim, double* out,
+                                                size_t capacity) {
+  return copyRows(sim, true, out, capacity);
+}
+stabint_status stabint_simulator_copy_positions_float(const stabint_simulator* sim, float* out,
+                                                      size_t capacity) {
+  return copyRows(sim, true, out, capacity);
+}
+stabint_status stabint_simulator_copy_velocities(const stabint_simulator* sim, double* out,
+                                                 size_t capacity) {
+  return copyRows(sim, false, out, capacity);
+}
+stabint_status stabint_simulator_copy_velocities_float(const stabint_simulator* sim, float* out,
+                                                       size_t capacity) {
+  return copyRows(sim, false, out, capacity);
+}
+
+stabint_status stabint_simulator_energy(const stabint_simulator* sim, stabint_energy* out) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(out, "out");
+    *out = toC(sim->sim.energy());
+  });
+}
+
+stabint_status stabint_simulator_last_report(const stabint_simulator* sim,
+                                             stabint_step_report* out) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(out, "out");
+    *out = toC(sim->sim.lastReport());
+  });
+}
+
+double stabint_simulator_time(const stabint_simulator* sim) { return sim ? sim->sim.time() : kNaN; }
+int stabint_simulator_step_count(const stabint_simulator* sim) {
+  return sim ? sim->sim.stepCount() : -1;
+}
+double stabint_simulator_target(const stabint_simulator* sim) {
+  return sim ? sim->sim.target() : kNaN;
+}
+double stabint_simulator_energy_scale(const stabint_simulator* sim) {
+  return sim ? sim->sim.energyScale() : kNaN;
+}
+
+size_t stabint_simulator_backend_description(const stabint_simulator* sim, char* out,
+                                             size_t capacity) {
+  if (sim == nullptr) return 0;
+  std::string text;
+  try {
+    text = sim->sim.backendDescription();
+  } catch (...) {
+    return 0;  // a description is informational: never let it throw into C
+  }
+  if (out != nullptr && capacity > 0) {
+    const size_t n = std::min(text.size(), capacity - 1);
+    std::memcpy(out, text.data(), n);
+    out[n] = '\0';
+  }
+  return text.size();
+}
+
+}  // extern "C"

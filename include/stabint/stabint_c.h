@@ -1,0 +1,202 @@
+/* The C API of stabint: opaque handles, status codes and a thread-local last-error message.
+ *
+ * Every function that can fail returns a stabint_status. STABINT_OK is 0; any other value names
+ * the C++ exception class that the call raised inside the library (no exception crosses this
+ * boundary), and stabint_last_error_message() returns "<ClassName>: <text>" for the last failed
+ * call on the calling thread. A successful call leaves the last error as it was.
+ *
+ * Getters that return a plain value (counts, time, H*) return -1 (counts) or NaN for a NULL
+ * handle instead of a status.
+ *
+ * Threads: the last error is per thread; one handle must not be used by two threads at once.
+ *
+ * Ownership: a handle returned through an out-parameter belongs to the caller and is released
+ * with the matching *_destroy function (which accepts NULL). A simulator copies its scene, so a
+ * scene may be destroyed as soon as the simulators built from it exist.
+ *
+ * Not here yet: the per-frame interactive calls (grabbing a vertex, moving pins, editing forces
+ * while stepping); they come with the library's interactive API. */
+#ifndef STABINT_STABINT_C_H
+#define STABINT_STABINT_C_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Status codes, one per class of stabint/errors.hpp, plus the failures of the C layer itself.
+ * The C++ hierarchy is kept by stabint_status_is(): ENERGY_LIMIT is a NON_FINITE_STATE, the
+ * three OpenCL subtypes are OPENCL, and every code except OK is ERROR. */
+typedef enum stabint_status {
+  STABINT_OK = 0,
+  STABINT_ERROR = 1,                   /* stabint::Error of no more specific class */
+  STABINT_INVALID_INPUT = 2,           /* InvalidInputError: scene or option failed validation */
+  STABINT_FILE_FORMAT = 3,             /* FileFormatError: file missing or malformed */
+  STABINT_NON_FINITE_STATE = 4,        /* NonFiniteStateError: step refused, last state kept */
+  STABINT_ENERGY_LIMIT = 5,            /* EnergyLimitError: step over options.energy_limit */
+  STABINT_OPENCL = 6,                  /* OpenCLError */
+  STABINT_NO_OPENCL_DEVICE = 7,        /* NoOpenCLDeviceError: fall back to STABINT_BACKEND_CPU */
+  STABINT_KERNEL_BUILD = 8,            /* KernelBuildError (message carries the build log) */
+  STABINT_UNSUPPORTED_PRECISION = 9,   /* UnsupportedPrecisionError */
+  STABINT_INVALID_ARGUMENT = 10,       /* misuse of the C API: NULL handle, buffer too small */
+  STABINT_OUT_OF_MEMORY = 11,          /* std::bad_alloc */
+  STABINT_INTERNAL = 12                /* any other exception: a bug in stabint */
+} stabint_status;
+
+/* "OK", "Error", "InvalidInputError", ... (the C++ class name); "unknown" for other values. */
+const char* stabint_status_name(stabint_status status);
+/* 1 when `status` is `base` or one of its subtypes (see stabint_status), else 0. */
+int stabint_status_is(stabint_status status, stabint_status base);
+/* Message of the last failed call on this thread, "" when none failed yet. Valid until the next
+ * failing call on this thread. */
+const char* stabint_last_error_message(void);
+/* Status of the last failed call on this thread (STABINT_OK when none). */
+stabint_status stabint_last_error_status(void);
+/* For a last error of NON_FINITE_STATE or ENERGY_LIMIT, the index of the refused step; else -1. */
+int stabint_last_error_step(void);
+
+/* ---- enumerations (values match the C++ enums' order) ---- */
+typedef enum stabint_integrator {
+  STABINT_FORWARD_EULER = 0,
+  STABINT_SYMPLECTIC_EULER = 1,
+  STABINT_BACKWARD_EULER = 2,
+  STABINT_BDF2 = 3,
+  STABINT_IMPLICIT_MIDPOINT = 4,
+  STABINT_ENERGY_BLEND = 5
+} stabint_integrator;
+typedef enum stabint_backend { STABINT_BACKEND_CPU = 0, STABINT_BACKEND_OPENCL = 1 } stabint_backend;
+typedef enum stabint_precision { STABINT_PRECISION_DOUBLE = 0, STABINT_PRECISION_FLOAT = 1 } stabint_precision;
+typedef enum stabint_acceleration {
+  STABINT_ACCELERATION_NONE = 0,
+  STABINT_ACCELERATION_CHEBYSHEV = 1,
+  STABINT_ACCELERATION_ANDERSON = 2
+} stabint_acceleration;
+typedef enum stabint_blend_branch {
+  STABINT_BRANCH_NONE = 0,
+  STABINT_BRANCH_IMPLICIT_MIDPOINT = 1,
+  STABINT_BRANCH_BACKWARD_EULER = 2,
+  STABINT_BRANCH_VELOCITY_SCALE = 3
+} stabint_blend_branch;
+
+/* "FE", "SE", "BE", "BDF2", "IM", "blend"; "-", "IM", "BE", "scale"; NULL for a bad value. */
+const char* stabint_integrator_name(stabint_integrator integrator);
+const char* stabint_blend_branch_name(stabint_blend_branch branch);
+
+/* ---- scenes ---- */
+typedef struct stabint_scene stabint_scene;
+
+/* A built-in scene ("oscillator", "chain", "cloth", "tetbar") with its builder's parameters as
+ * the text of a JSON object (NULL or "{}" for the defaults), e.g. "{\"nx\": 30}" for a 30 x 30
+ * cloth; the keys are the fields of the builder's parameter struct (stabint/builders.hpp).
+ * Unknown names or parameters: STABINT_FILE_FORMAT naming the key. */
+stabint_status stabint_scene_create_builtin(const char* name, const char* params_json,
+                                            stabint_scene** out);
+/* A JSON scene file (docs/scene-format.md), which may itself load OBJ, TetGen or Medit meshes. */
+stabint_status stabint_scene_load(const char* path, stabint_scene** out);
+void stabint_scene_destroy(stabint_scene* scene);
+/* Number of particles and of surface triangles (0 for scenes without a surface, e.g. the chain). */
+int stabint_scene_num_particles(const stabint_scene* scene);
+int stabint_scene_num_triangles(const stabint_scene* scene);
+/* Copies the surface triangles, 3 particle indices each, into `out` (capacity in int32 entries,
+ * at least 3 * stabint_scene_num_triangles). */
+stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t* out,
+                                            size_t capacity);
+
+/* ---- simulators ---- */
+typedef struct stabint_simulator stabint_simulator;
+
+/* The fields of stabint::SimulatorOptions (stabint/simulator.hpp documents each). Fill with
+ * stabint_simulator_options_default() first, then change what you need. */
+typedef struct stabint_simulator_options {
+  stabint_integrator integrator;
+  double time_step;
+  int iterations;
+  double tolerance;
+  int max_iterations;
+  stabint_acceleration acceleration;
+  double chebyshev_rho;
+  int anderson_window;
+  int be_iterations;
+  double energy_tolerance;
+  double max_velocity_scale;
+  int max_root_evaluations;
+  double energy_limit;
+  stabint_backend backend;
+  const char* opencl_platform; /* NULL or "": environment variable, then the first */
+  const char* opencl_device;   /* NULL or "": environment variable, then the first */
+  stabint_precision opencl_precision;
+} stabint_simulator_options;
+
+/* The C++ defaults (blend, h = 1/30, 10 iterations, CPU reference backend, ...). */
+void stabint_simulator_options_default(stabint_simulator_options* options);
+
+typedef struct stabint_energy {
+  double kinetic;
+  double elastic;  /* springs, tets, triangles, hinges, pins */
+  double external; /* gravity and force fields */
+  double total;    /* kinetic + elastic + external */
+} stabint_energy;
+
+typedef struct stabint_phase_times { /* wall-clock seconds */
+  double local, gather, transfer, global, energy, bookkeeping, total;
+} stabint_phase_times;
+
+/* The fields of stabint::StepReport. */
+typedef struct stabint_step_report {
+  int step;
+  double time;
+  stabint_energy energy;
+  double target;  /* H* after the step */
+  double forcing;
+  double damping;
+  stabint_blend_branch branch;
+  double alpha;
+  double velocity_scale;
+  int iterations;
+  int energy_evaluations;
+  stabint_phase_times times;
+} stabint_step_report;
+
+/* Validates and copies the scene. INVALID_INPUT for a bad scene or option (the message names
+ * the field), OPENCL subtypes for the OpenCL backend (NO_OPENCL_DEVICE when none matches). */
+stabint_status stabint_simulator_create(const stabint_scene* scene,
+                                        const stabint_simulator_options* options,
+                                        stabint_simulator** out);
+void stabint_simulator_destroy(stabint_simulator* sim);
+
+/* Advances one step; fills `report` (may be NULL). A refused step returns NON_FINITE_STATE or
+ * ENERGY_LIMIT, keeps the last accepted state, and stabint_last_error_step() tells which. */
+stabint_status stabint_simulator_step(stabint_simulator* sim, stabint_step_report* report);
+
+int stabint_simulator_num_particles(const stabint_simulator* sim);
+/* Current state copied interleaved, x y z per particle (ready for a vertex buffer), into `out`
+ * with room for `capacity` values (at least 3 * stabint_simulator_num_particles). */
+stabint_status stabint_simulator_copy_positions(const stabint_simulator* sim, double* out,
+                                                size_t capacity);
+stabint_status stabint_simulator_copy_positions_float(const stabint_simulator* sim, float* out,
+                                                      size_t capacity);
+stabint_status stabint_simulator_copy_velocities(const stabint_simulator* sim, double* out,
+                                                 size_t capacity);
+stabint_status stabint_simulator_copy_velocities_float(const stabint_simulator* sim, float* out,
+                                                       size_t capacity);
+
+/* Energies of the current state; the report of the last completed step (zeros before the first). */
+stabint_status stabint_simulator_energy(const stabint_simulator* sim, stabint_energy* out);
+stabint_status stabint_simulator_last_report(const stabint_simulator* sim,
+                                             stabint_step_report* out);
+double stabint_simulator_time(const stabint_simulator* sim);
+int stabint_simulator_step_count(const stabint_simulator* sim);
+double stabint_simulator_target(const stabint_simulator* sim);       /* H* */
+double stabint_simulator_energy_scale(const stabint_simulator* sim); /* E_scale of the blend */
+/* The backend and device description, truncated to `capacity` bytes with a terminating NUL;
+ * returns the full length (without NUL), so a call with capacity 0 asks for the size. */
+size_t stabint_simulator_backend_description(const stabint_simulator* sim, char* out,
+                                             size_t capacity);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* STABINT_STABINT_C_H */

@@ -1,0 +1,423 @@
+// The Python extension stabint._stabint (nanobind). The pure-Python package python/stabint
+// re-exports it and adds scene_from_arrays and the builder shortcuts.
+//
+// Copies and views: every numpy array this module returns (positions, velocities, masses,
+// triangles, gravity) is a fresh copy that the caller owns: a view into a Simulator's state
+// would change under the caller at the next step(), and one into a Scene would dangle when the
+// scene is reassigned. Element lists (scene.springs, scene.pins, ...) are the opposite: opaque
+// list-like views into the scene, so scene.springs.append(...) edits the scene.
+#include <stabint/stabint.hpp>
+
+#include <nanobind/eigen/dense.h>
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/bind_vector.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
+
+#include <cstdint>
+#include <cstring>
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using namespace stabint;
+
+NB_MAKE_OPAQUE(std::vector<Spring>)
+NB_MAKE_OPAQUE(std::vector<Tet>)
+NB_MAKE_OPAQUE(std::vector<TriangleStrain>)
+NB_MAKE_OPAQUE(std::vector<BendingHinge>)
+NB_MAKE_OPAQUE(std::vector<Pin>)
+NB_MAKE_OPAQUE(std::vector<ForceField>)
+NB_MAKE_OPAQUE(std::vector<Body>)
+
+namespace {
+
+using Rows3d = nb::ndarray<nb::numpy, double, nb::shape<-1, 3>, nb::c_contig>;
+using Rows3i = nb::ndarray<nb::numpy, int32_t, nb::shape<-1, 3>, nb::c_contig>;
+using Triangles = std::vector<std::array<int, 3>>;
+
+// An n by 3 matrix as a new C-contiguous (n, 3) array: x y z per row, interleaved.
+Rows3d rowsCopy(const Eigen::MatrixX3d& m) {
+  const size_t n = static_cast<size_t>(m.rows());
+  double* data = new double[3 * n];
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(data, m.rows(), 3) = m;
+  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<double*>(p); });
+  return Rows3d(data, {n, 3}, owner);
+}
+
+Rows3i trianglesCopy(const Triangles& triangles) {
+  const size_t n = triangles.size();
+  int32_t* data = new int32_t[3 * n];
+  for (size_t t = 0; t < n; ++t)
+    for (int k = 0; k < 3; ++k) data[3 * t + k] = triangles[t][k];
+  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<int32_t*>(p); });
+  return Rows3i(data, {n, 3}, owner);
+}
+
+Triangles trianglesFrom(nb::ndarray<const int32_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu> a) {
+  Triangles triangles(a.shape(0));
+  for (size_t t = 0; t < a.shape(0); ++t)
+    for (size_t k = 0; k < 3; ++k) triangles[t][k] = a(t, k);
+  return triangles;
+}
+
+// The exception classes, created once at import; owned by the module (never freed).
+struct ErrorTypes {
+  PyObject* error = nullptr;
+  PyObject* invalid_input = nullptr;
+  PyObject* file_format = nullptr;
+  PyObject* non_finite_state = nullptr;
+  PyObject* energy_limit = nullptr;
+  PyObject* opencl = nullptr;
+  PyObject* no_opencl_device = nullptr;
+  PyObject* kernel_build = nullptr;
+  PyObject* unsupported_precision = nullptr;
+} errors;
+
+PyObject* newErrorType(nb::module_& m, const char* name, PyObject* base, const char* doc) {
+  // Defined in stabint._stabint so that stubgen writes the classes into the stub; the package
+  // sets __module__ to "stabint" for readable tracebacks.
+  const std::string qualified = std::string("stabint._stabint.") + name;
+  PyObject* type = PyErr_NewExceptionWithDoc(qualified.c_str(), doc, base, nullptr);
+  if (type == nullptr) throw nb::python_error();
+  m.attr(name) = nb::handle(type);
+  return type;
+}
+
+// Raises `type` with message `what` and the given attributes on the exception object.
+void raise(PyObject* type, const char* what,
+           std::initializer_list<std::pair<const char*, nb::object>> attributes = {}) {
+  nb::object exc = nb::handle(type)(nb::str(what));
+  for (const auto& [name, value] : attributes) nb::setattr(exc, name, value);
+  PyErr_SetObject(type, exc.ptr());
+}
+
+// Most specific class first, as in the C API: each catch precedes the catches of its bases.
+void translate(const std::exception_ptr& p, void*) {
+  try {
+    std::rethrow_exception(p);
+  } catch (const EnergyLimitError& e) {
+    raise(errors.energy_limit, e.what(), {{"step", nb::int_(e.step())}});
+  } catch (const NonFiniteStateError& e) {
+    raise(errors.non_finite_state, e.what(), {{"step", nb::int_(e.step())}});
+  } catch (const InvalidInputError& e) {
+    raise(errors.invalid_input, e.what());
+  } catch (const FileFormatError& e) {
+    raise(errors.file_format, e.what(), {{"file", nb::str(e.file().c_str())}, {"line", nb::int_(e.line())}});
+  } catch (const NoOpenCLDeviceError& e) {
+    raise(errors.no_opencl_device, e.what());
+  } catch (const KernelBuildError& e) {
+    raise(errors.kernel_build, e.what(), {{"build_log", nb::str(e.buildLog().c_str())}});
+  } catch (const UnsupportedPrecisionError& e) {
+    raise(errors.unsupported_precision, e.what());
+  } catch (const OpenCLError& e) {
+    raise(errors.opencl, e.what());
+  } catch (const Error& e) {
+    raise(errors.error, e.what());
+  }
+  // Anything else propagates to nanobind's own translators (bad_alloc -> MemoryError, ...).
+}
+
+void bindErrors(nb::module_& m) {
+  errors.error = newErrorType(m, "Error", PyExc_RuntimeError,
+                              "Base of every error stabint raises (C++ stabint::Error).");
+  errors.invalid_input = newErrorType(m, "InvalidInputError", errors.error,
+                                      "A scene or an option failed validation; the message names the field.");
+  errors.file_format = newErrorType(m, "FileFormatError", errors.error,
+                                    "A file could not be opened or parsed. Attributes: file, line (0: none).");
+  errors.non_finite_state = newErrorType(
+      m, "NonFiniteStateError", errors.error,
+      "A step was refused (non-finite state); the simulator keeps the last accepted state. Attribute: step.");
+  errors.energy_limit = newErrorType(m, "EnergyLimitError", errors.non_finite_state,
+                                     "A step would have exceeded SimulatorOptions.energy_limit. Attribute: step.");
+  errors.opencl = newErrorType(m, "OpenCLError", errors.error, "Any OpenCL failure.");
+  errors.no_opencl_device = newErrorType(m, "NoOpenCLDeviceError", errors.opencl,
+                                         "No OpenCL device matches: fall back to BackendKind.CpuReference.");
+  errors.kernel_build = newErrorType(m, "KernelBuildError", errors.opencl,
+                                     "A kernel failed to compile. Attribute: build_log.");
+  errors.unsupported_precision = newErrorType(m, "UnsupportedPrecisionError", errors.opencl,
+                                              "Double precision on a device without cl_khr_fp64.");
+  nb::register_exception_translator(translate);
+}
+
+void bindEnums(nb::module_& m) {
+  nb::enum_<Integrator>(m, "Integrator", "The six integrators (docs/method.md sections 2 and 3).")
+      .value("ForwardEuler", Integrator::ForwardEuler)
+      .value("SymplecticEuler", Integrator::SymplecticEuler)
+      .value("BackwardEuler", Integrator::BackwardEuler)
+      .value("BDF2", Integrator::BDF2)
+      .value("ImplicitMidpoint", Integrator::ImplicitMidpoint)
+      .value("EnergyBlend", Integrator::EnergyBlend, "The energy-tracking blend of IM with BE.");
+  nb::enum_<BackendKind>(m, "BackendKind")
+      .value("CpuReference", BackendKind::CpuReference)
+      .value("OpenCL", BackendKind::OpenCL);
+  nb::enum_<Precision>(m, "Precision").value("Double", Precision::Double).value("Float", Precision::Float);
+  nb::enum_<Acceleration>(m, "Acceleration")
+      .value("None_", Acceleration::None, "Plain local/global iterations ('None' is a Python keyword).")
+      .value("Chebyshev", Acceleration::Chebyshev)
+      .value("Anderson", Acceleration::Anderson);
+  nb::enum_<BlendBranch>(m, "BlendBranch", "What the blend did with the IM candidate.")
+      .value("None_", BlendBranch::None, "Not a blend step.")
+      .value("ImplicitMidpoint", BlendBranch::ImplicitMidpoint)
+      .value("BackwardEuler", BlendBranch::BackwardEuler)
+      .value("VelocityScale", BlendBranch::VelocityScale);
+  nb::enum_<ClothModel>(m, "ClothModel").value("Springs", ClothModel::Springs).value("Triangles", ClothModel::Triangles);
+
+  m.def("integrator_name", &integratorName, "'FE', 'SE', 'BE', 'BDF2', 'IM' or 'blend'.");
+  m.def("parse_integrator", &parseIntegrator, "name"_a, "Integrator from a name as integrator_name prints it (any case).");
+  m.def("backend_name", &backendName);
+  m.def("parse_backend", &parseBackend, "name"_a);
+  m.def("acceleration_name", &accelerationName);
+  m.def("parse_acceleration", &parseAcceleration, "name"_a);
+  m.def("blend_branch_name", &blendBranchName);
+  m.def("all_integrators", &allIntegrators);
+}
+
+void bindElements(nb::module_& m) {
+  nb::class_<Spring>(m, "Spring", "E = k/2 (|x_a - x_b| - rest_length)^2.")
+      .def(nb::init<>())
+      .def("__init__", [](Spring* s, int a, int b, double rest_length, double stiffness) {
+        new (s) Spring{a, b, rest_length, stiffness};
+      }, "a"_a, "b"_a, "rest_length"_a, "stiffness"_a)
+      .def_rw("a", &Spring::a).def_rw("b", &Spring::b)
+      .def_rw("rest_length", &Spring::rest_length).def_rw("stiffness", &Spring::stiffness);
+  nb::class_<Tet>(m, "Tet", "Co-rotated strain of a tetrahedron against the scene's rest positions.")
+      .def(nb::init<>())
+      .def("__init__", [](Tet* t, std::array<int, 4> v, double k) { new (t) Tet{v, k}; },
+           "vertices"_a, "stiffness"_a)
+      .def_rw("vertices", &Tet::vertices).def_rw("stiffness", &Tet::stiffness);
+  nb::class_<TriangleStrain>(m, "TriangleStrain", "Membrane strain of a triangle, singular values kept in [strain_min, strain_max].")
+      .def(nb::init<>())
+      .def("__init__", [](TriangleStrain* t, std::array<int, 3> v, double k, double lo, double hi) {
+        new (t) TriangleStrain{v, k, lo, hi};
+      }, "vertices"_a, "stiffness"_a, "strain_min"_a = 1.0, "strain_max"_a = 1.0)
+      .def_rw("vertices", &TriangleStrain::vertices).def_rw("stiffness", &TriangleStrain::stiffness)
+      .def_rw("strain_min", &TriangleStrain::strain_min).def_rw("strain_max", &TriangleStrain::strain_max);
+  nb::class_<BendingHinge>(m, "BendingHinge", "Bending across the edge (vertices[0], vertices[1]).")
+      .def(nb::init<>())
+      .def("__init__", [](BendingHinge* h, std::array<int, 4> v, double k) { new (h) BendingHinge{v, k}; },
+           "vertices"_a, "stiffness"_a)
+      .def_rw("vertices", &BendingHinge::vertices).def_rw("stiffness", &BendingHinge::stiffness);
+  nb::class_<PinTarget>(m, "PinTarget", "q(t) = position + velocity t + amplitude sin(2 pi frequency t).")
+      .def(nb::init<>())
+      .def_rw("position", &PinTarget::position).def_rw("velocity", &PinTarget::velocity)
+      .def_rw("amplitude", &PinTarget::amplitude).def_rw("frequency", &PinTarget::frequency)
+      .def("at", &PinTarget::at, "t"_a).def("moving", &PinTarget::moving);
+  nb::class_<Pin>(m, "Pin", "Zero-rest-length spring from a particle to a target: E = k/2 |x - q(t)|^2.")
+      .def(nb::init<>())
+      .def("__init__", [](Pin* p, int vertex, double k, const Eigen::Vector3d& position) {
+        new (p) Pin{vertex, k, PinTarget{}};
+        p->target.position = position;
+      }, "vertex"_a, "stiffness"_a, "position"_a, "A static pin at `position`.")
+      .def_rw("vertex", &Pin::vertex).def_rw("stiffness", &Pin::stiffness).def_rw("target", &Pin::target);
+  nb::class_<ForceField>(m, "ForceField", "f(t) = force + rate t + amplitude sin(2 pi frequency t) on `particles` (all when empty).")
+      .def(nb::init<>())
+      .def_rw("particles", &ForceField::particles).def_rw("force", &ForceField::force)
+      .def_rw("rate", &ForceField::rate).def_rw("amplitude", &ForceField::amplitude)
+      .def_rw("frequency", &ForceField::frequency).def("at", &ForceField::at, "t"_a);
+  nb::class_<Body>(m, "Body", "Particles damped together (momentum-preserving), damping in [0, 1].")
+      .def(nb::init<>())
+      .def_rw("name", &Body::name).def_rw("particles", &Body::particles).def_rw("damping", &Body::damping);
+
+  nb::bind_vector<std::vector<Spring>>(m, "SpringList");
+  nb::bind_vector<std::vector<Tet>>(m, "TetList");
+  nb::bind_vector<std::vector<TriangleStrain>>(m, "TriangleStrainList");
+  nb::bind_vector<std::vector<BendingHinge>>(m, "BendingHingeList");
+  nb::bind_vector<std::vector<Pin>>(m, "PinList");
+  nb::bind_vector<std::vector<ForceField>>(m, "ForceFieldList");
+  nb::bind_vector<std::vector<Body>>(m, "BodyList");
+}
+
+// Matrix properties of a Scene: get a copy, set from any (n, 3) array.
+template <Eigen::MatrixX3d Scene::*field>
+void rowsProperty(nb::class_<Scene>& c, const char* name, const char* doc) {
+  c.def_prop_rw(
+      name, [](const Scene& s) { return rowsCopy(s.*field); },
+      [](Scene& s, const Eigen::MatrixX3d& value) { s.*field = value; }, nb::for_getter(nb::rv_policy::move),
+      doc);
+}
+
+void bindScene(nb::module_& m) {
+  nb::class_<Scene> scene(m, "Scene",
+                          "A simulation scene. Array properties return copies (assign to change them); "
+                          "element lists (springs, tets, pins, ...) are views: append to edit the scene.");
+  scene.def(nb::init<>()).def(nb::init<const Scene&>(), "other"_a, "A deep copy.");
+  scene.def_rw("name", &Scene::name);
+  rowsProperty<&Scene::rest_positions>(scene, "rest_positions", "(n, 3) rest shape used by tets, triangles and hinges (copy).");
+  rowsProperty<&Scene::positions>(scene, "positions", "(n, 3) initial positions (copy).");
+  rowsProperty<&Scene::velocities>(scene, "velocities", "(n, 3) initial velocities (copy).");
+  scene.def_prop_rw(
+      "masses", [](const Scene& s) { return Eigen::VectorXd(s.masses); },
+      [](Scene& s, const Eigen::VectorXd& v) { s.masses = v; }, nb::for_getter(nb::rv_policy::move),
+      "(n,) lumped masses, > 0 (copy).");
+  scene.def_rw("gravity", &Scene::gravity, "(3,) gravity in m/s^2.");
+  scene.def_prop_rw(
+      "triangles", [](const Scene& s) { return trianglesCopy(s.triangles); },
+      [](Scene& s, nb::ndarray<const int32_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu> a) {
+        s.triangles = trianglesFrom(a);
+      },
+      nb::for_getter(nb::rv_policy::move),
+      "(m, 3) int32 surface triangles for rendering and mass lumping (copy); no force of their own.");
+  scene.def_rw("springs", &Scene::springs)
+      .def_rw("tets", &Scene::tets)
+      .def_rw("triangle_strains", &Scene::triangle_strains)
+      .def_rw("bending_hinges", &Scene::bending_hinges)
+      .def_rw("pins", &Scene::pins)
+      .def_rw("force_fields", &Scene::force_fields)
+      .def_rw("bodies", &Scene::bodies)
+      .def_prop_ro("num_particles", &Scene::numParticles)
+      .def("validate", [](const Scene& s) { validateScene(s); },
+           "Raises InvalidInputError naming the first offending element or field.");
+
+  m.def("builtin_scene", &builtinScene, "name"_a, "params_json"_a = "{}", "label"_a = "builtin scene",
+        "A built-in scene ('oscillator', 'chain', 'cloth', 'tetbar') with its builder's parameters as a "
+        "JSON object text; prefer the shortcuts cloth_grid(**params) etc. Raises FileFormatError for an "
+        "unknown name or parameter.");
+  m.def("builtin_scene_names", &builtinSceneNames);
+  m.def("builtin_scene_parameters", &builtinSceneParameters, "name"_a);
+  m.def("cloth_grid_triangles", [](int nx, int ny) { return trianglesCopy(clothGridTriangles(nx, ny)); },
+        "nx"_a, "ny"_a, "The (m, 3) triangles of cloth_grid's nx by ny grid.");
+
+  nb::class_<ClothMaterial>(m, "ClothMaterial", "Material of a loaded cloth mesh.")
+      .def(nb::init<>())
+      .def_rw("areal_density", &ClothMaterial::areal_density)
+      .def_rw("stretch_stiffness", &ClothMaterial::stretch_stiffness)
+      .def_rw("bend_stiffness", &ClothMaterial::bend_stiffness)
+      .def_rw("model", &ClothMaterial::model)
+      .def_rw("strain_stiffness", &ClothMaterial::strain_stiffness)
+      .def_rw("strain_min", &ClothMaterial::strain_min)
+      .def_rw("strain_max", &ClothMaterial::strain_max)
+      .def_rw("hinge_stiffness", &ClothMaterial::hinge_stiffness);
+  nb::class_<SolidMaterial>(m, "SolidMaterial", "Material of a loaded tet mesh.")
+      .def(nb::init<>())
+      .def_rw("density", &SolidMaterial::density)
+      .def_rw("stiffness", &SolidMaterial::stiffness);
+  m.def("load_obj_cloth", &loadObjCloth, "path"_a, "material"_a = ClothMaterial(),
+        "A Wavefront OBJ triangle mesh as cloth. Raises FileFormatError (file, line).");
+  m.def("load_tetgen", &loadTetGen, "base_path"_a, "material"_a = SolidMaterial(),
+        "A TetGen mesh from <base_path>.node and <base_path>.ele.");
+  m.def("load_medit", &loadMedit, "path"_a, "material"_a = SolidMaterial(), "A Medit .mesh file.");
+  m.def("load_scene_file", &loadSceneFile, "path"_a, "A JSON scene file (docs/scene-format.md), validated.");
+  m.def("save_scene_file", &saveSceneFile, "scene"_a, "path"_a,
+        "Writes the scene as an explicit JSON scene file that load_scene_file reads back exactly.");
+}
+
+void bindSimulator(nb::module_& m) {
+  const SimulatorOptions d;  // the defaults of every keyword come from the C++ struct
+  nb::class_<OpenCLOptions>(m, "OpenCLOptions", "OpenCL device choice: index or name substring; empty: "
+                            "STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE, then the first.")
+      .def(nb::init<>())
+      .def_rw("platform", &OpenCLOptions::platform)
+      .def_rw("device", &OpenCLOptions::device)
+      .def_rw("precision", &OpenCLOptions::precision);
+  nb::class_<OpenCLDeviceInfo>(m, "OpenCLDeviceInfo")
+      .def_ro("platform_index", &OpenCLDeviceInfo::platform_index)
+      .def_ro("device_index", &OpenCLDeviceInfo::device_index)
+      .def_ro("platform_name", &OpenCLDeviceInfo::platform_name)
+      .def_ro("device_name", &OpenCLDeviceInfo::device_name)
+      .def_ro("fp64", &OpenCLDeviceInfo::fp64);
+  m.def("list_opencl_devices", &listOpenCLDevices, "Every OpenCL device; empty when none is installed.");
+
+  nb::class_<SimulatorOptions>(m, "SimulatorOptions",
+                               "Options of a Simulator; every field is documented in stabint/simulator.hpp.")
+      .def("__init__",
+           [](SimulatorOptions* o, Integrator integrator, double time_step, int iterations, double tolerance,
+              int max_iterations, Acceleration acceleration, double chebyshev_rho, int anderson_window,
+              int be_iterations, double energy_tolerance, double max_velocity_scale, int max_root_evaluations,
+              double energy_limit, BackendKind backend, const OpenCLOptions& opencl) {
+             new (o) SimulatorOptions{integrator, time_step, iterations, tolerance, max_iterations,
+                                      acceleration, chebyshev_rho, anderson_window, be_iterations,
+                                      energy_tolerance, max_velocity_scale, max_root_evaluations,
+                                      energy_limit, backend, opencl};
+           },
+           nb::kw_only(), "integrator"_a = d.integrator, "time_step"_a = d.time_step, "iterations"_a = d.iterations,
+           "tolerance"_a = d.tolerance, "max_iterations"_a = d.max_iterations, "acceleration"_a = d.acceleration,
+           "chebyshev_rho"_a = d.chebyshev_rho, "anderson_window"_a = d.anderson_window,
+           "be_iterations"_a = d.be_iterations, "energy_tolerance"_a = d.energy_tolerance,
+           "max_velocity_scale"_a = d.max_velocity_scale, "max_root_evaluations"_a = d.max_root_evaluations,
+           "energy_limit"_a = d.energy_limit, "backend"_a = d.backend, "opencl"_a = d.opencl,
+           "Keyword arguments set the fields of the same names; values are checked when a Simulator is built.")
+      .def_rw("integrator", &SimulatorOptions::integrator)
+      .def_rw("time_step", &SimulatorOptions::time_step)
+      .def_rw("iterations", &SimulatorOptions::iterations)
+      .def_rw("tolerance", &SimulatorOptions::tolerance)
+      .def_rw("max_iterations", &SimulatorOptions::max_iterations)
+      .def_rw("acceleration", &SimulatorOptions::acceleration)
+      .def_rw("chebyshev_rho", &SimulatorOptions::chebyshev_rho)
+      .def_rw("anderson_window", &SimulatorOptions::anderson_window)
+      .def_rw("be_iterations", &SimulatorOptions::be_iterations)
+      .def_rw("energy_tolerance", &SimulatorOptions::energy_tolerance)
+      .def_rw("max_velocity_scale", &SimulatorOptions::max_velocity_scale)
+      .def_rw("max_root_evaluations", &SimulatorOptions::max_root_evaluations)
+      .def_rw("energy_limit", &SimulatorOptions::energy_limit)
+      .def_rw("backend", &SimulatorOptions::backend)
+      .def_rw("opencl", &SimulatorOptions::opencl);
+
+  nb::class_<EnergyReport>(m, "EnergyReport", "Energies of a state, in joules.")
+      .def_ro("kinetic", &EnergyReport::kinetic)
+      .def_ro("elastic", &EnergyReport::elastic, "Springs, tets, triangles, hinges and pins.")
+      .def_ro("external", &EnergyReport::external, "Gravity and force fields.")
+      .def_prop_ro("total", &EnergyReport::total, "H = kinetic + elastic + external.")
+      .def("__repr__", [](const EnergyReport& e) {
+        return "EnergyReport(kinetic=" + std::to_string(e.kinetic) + ", elastic=" + std::to_string(e.elastic) +
+               ", external=" + std::to_string(e.external) + ")";
+      });
+  nb::class_<PhaseTimes>(m, "PhaseTimes", "Wall-clock seconds per phase of a step.")
+      .def_ro("local", &PhaseTimes::local).def_ro("gather", &PhaseTimes::gather)
+      .def_ro("transfer", &PhaseTimes::transfer).def_ro("global_", &PhaseTimes::global, "'global' is a Python keyword.")
+      .def_ro("energy", &PhaseTimes::energy).def_ro("bookkeeping", &PhaseTimes::bookkeeping)
+      .def_prop_ro("total", &PhaseTimes::total);
+  nb::class_<StepReport>(m, "StepReport", "What one step did (a copy: later steps do not change it).")
+      .def_ro("step", &StepReport::step, "Index of the step (0 = first).")
+      .def_ro("time", &StepReport::time, "Time at the end of the step.")
+      .def_ro("energy", &StepReport::energy, "H of the new state, split by term.")
+      .def_ro("target", &StepReport::target, "Tracked target H* after the step.")
+      .def_ro("forcing", &StepReport::forcing, "Energy added to H* by time-dependent potentials.")
+      .def_ro("damping", &StepReport::damping, "Kinetic energy removed by damping.")
+      .def_ro("branch", &StepReport::branch)
+      .def_ro("alpha", &StepReport::alpha, "Blend weight of the BE partner (0 = pure IM).")
+      .def_ro("velocity_scale", &StepReport::velocity_scale)
+      .def_ro("iterations", &StepReport::iterations, "Local/global iterations of all solves of the step.")
+      .def_ro("energy_evaluations", &StepReport::energy_evaluations)
+      .def_ro("times", &StepReport::times)
+      .def("__repr__", [](const StepReport& r) {
+        return "StepReport(step=" + std::to_string(r.step) + ", time=" + std::to_string(r.time) +
+               ", H=" + std::to_string(r.energy.total()) + ", target=" + std::to_string(r.target) +
+               ", branch='" + blendBranchName(r.branch) + "')";
+      });
+
+  nb::class_<Simulator>(m, "Simulator",
+                        "Steps a scene with one integrator. The scene is validated and copied at construction.")
+      .def(nb::init<const Scene&, const SimulatorOptions&>(), "scene"_a, "options"_a = SimulatorOptions(),
+           "Raises InvalidInputError for a bad scene or option, OpenCLError subtypes for the OpenCL backend.")
+      .def("step", [](Simulator& s) { return s.step(); }, nb::call_guard<nb::gil_scoped_release>(),
+           "Advances one step and returns its report. Raises NonFiniteStateError (EnergyLimitError) when the "
+           "step is refused; the simulator then keeps the last accepted state. The GIL is released while it "
+           "runs, so simulators may step in parallel threads; one Simulator must not be used by two threads at once.")
+      .def_prop_ro("positions", [](const Simulator& s) { return rowsCopy(s.positions()); }, nb::rv_policy::move,
+                   "(n, 3) current positions, a C-contiguous float64 copy (x y z per particle).")
+      .def_prop_ro("velocities", [](const Simulator& s) { return rowsCopy(s.velocities()); }, nb::rv_policy::move,
+                   "(n, 3) current velocities, a C-contiguous float64 copy.")
+      .def_prop_ro("time", &Simulator::time)
+      .def_prop_ro("step_count", &Simulator::stepCount)
+      .def_prop_ro("target", &Simulator::target, "H*, the energy the blend tracks.")
+      .def("energy", &Simulator::energy, "Energies of the current state.")
+      .def_prop_ro("energy_scale", &Simulator::energyScale, "E_scale of the blend tolerance.")
+      .def_prop_ro("scene", [](const Simulator& s) { return s.scene(); }, "A copy of the simulated scene.")
+      .def_prop_ro("options", [](const Simulator& s) { return s.options(); }, "A copy of the options.")
+      .def_prop_ro("last_report", [](const Simulator& s) { return s.lastReport(); },
+                   "Report of the last completed step (a copy; zeros before the first).")
+      .def_prop_ro("backend_description", &Simulator::backendDescription);
+}
+
+}  // namespace
+
+NB_MODULE(_stabint, m) {
+  m.doc() = "stabint: stabilizing integrators for real-time deformable bodies (C++ extension).";
+  bindErrors(m);
+  bindEnums(m);
+  bindElements(m);
+  bindScene(m);
+  bindSimulator(m);
+}

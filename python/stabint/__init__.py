@@ -1,0 +1,103 @@
+"""stabint: stabilizing integrators for real-time deformable bodies.
+
+The C++ library's API (scenes, builders, loaders, ``Simulator``, ``StepReport``, errors) from
+the extension ``stabint._stabint``, plus builder shortcuts and :func:`scene_from_arrays`.
+
+Copies and views: arrays returned by ``Simulator.positions``/``velocities`` and by the array
+properties of :class:`Scene` are fresh copies the caller owns; step reports are copies; the
+element lists of a scene (``scene.springs``, ``scene.pins``, ...) are views that edit it.
+
+Example::
+
+    import stabint
+    sim = stabint.Simulator(stabint.cloth_grid(nx=30, ny=30),
+                            stabint.SimulatorOptions(integrator=stabint.Integrator.EnergyBlend))
+    for _ in range(300):
+        report = sim.step()          # report.energy.total, report.target, report.branch, ...
+    x = sim.positions                # (900, 3) float64 copy
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Optional
+
+import numpy as np
+
+from ._stabint import *  # noqa: F401,F403  (the extension's public names)
+from ._stabint import Pin, Scene, Spring, Tet, builtin_scene
+from . import _stabint
+
+# The exception classes live in the extension (so that its stub declares them); they are used
+# as stabint.<Name>, so they say so in tracebacks.
+for _name in ("Error", "InvalidInputError", "FileFormatError", "NonFiniteStateError", "EnergyLimitError",
+              "OpenCLError", "NoOpenCLDeviceError", "KernelBuildError", "UnsupportedPrecisionError"):
+    getattr(_stabint, _name).__module__ = "stabint"
+
+__version__ = "0.1.0"
+
+
+def _builtin(name: str, params: dict[str, Any]) -> Scene:
+    # The builder's own parameter parsing (io.hpp builtinScene) checks names and types, so the
+    # parameter lists are not repeated here; enum values are passed by name.
+    text = {k: (v.name.lower() if hasattr(v, "name") else v) for k, v in params.items()}
+    return builtin_scene(name, json.dumps(text), label=name)
+
+
+def cloth_grid(**params: Any) -> Scene:
+    """Rectangular cloth (``ClothGridParams`` fields as keywords, e.g. ``nx=30, pinned=[0, 29]``)."""
+    return _builtin("cloth", params)
+
+
+def tet_bar(**params: Any) -> Scene:
+    """Box of tets pinned at x = 0 (``TetBarParams`` fields as keywords, e.g. ``nx=8``)."""
+    return _builtin("tetbar", params)
+
+
+def chain_pendulum(**params: Any) -> Scene:
+    """Chain of springs pinned at the origin (``ChainPendulumParams`` fields as keywords)."""
+    return _builtin("chain", params)
+
+
+def linear_oscillator(**params: Any) -> Scene:
+    """One particle on a pin to the origin (``mass``, ``stiffness``, ``amplitude``)."""
+    return _builtin("oscillator", params)
+
+
+def scene_from_arrays(
+    positions: Any,
+    masses: Any,
+    *,
+    velocities: Optional[Any] = None,
+    springs: Optional[Any] = None,
+    spring_stiffness: float = 0.0,
+    tets: Optional[Any] = None,
+    tet_stiffness: float = 0.0,
+    triangles: Optional[Any] = None,
+    pinned: Optional[Any] = None,
+    pin_stiffness: float = 1e5,
+    gravity: Any = (0.0, -9.81, 0.0),
+    name: str = "arrays",
+) -> Scene:
+    """A scene from numpy arrays: ``positions`` (n, 3) (also the rest shape), ``masses`` (n,) or
+    a scalar per particle, ``springs`` (m, 2) particle pairs (rest lengths from ``positions``),
+    ``tets`` (m, 4), ``triangles`` (m, 3) surface, ``pinned`` particle indices held in place.
+    Nothing is validated here: a Simulator validates the scene (InvalidInputError)."""
+    x = np.asarray(positions, dtype=np.float64)
+    scene = Scene()
+    scene.name = name
+    scene.positions = x
+    scene.rest_positions = x
+    scene.velocities = np.zeros_like(x) if velocities is None else np.asarray(velocities, np.float64)
+    scene.masses = np.broadcast_to(np.asarray(masses, np.float64), (x.shape[0],)).copy()
+    scene.gravity = np.asarray(gravity, np.float64)
+    for a, b in np.asarray(springs if springs is not None else np.empty((0, 2)), np.int64):
+        rest = float(np.linalg.norm(x[a] - x[b]))
+        scene.springs.append(Spring(int(a), int(b), rest, spring_stiffness))
+    for t in np.asarray(tets if tets is not None else np.empty((0, 4)), np.int64):
+        scene.tets.append(Tet([int(i) for i in t], tet_stiffness))
+    if triangles is not None:
+        scene.triangles = np.ascontiguousarray(triangles, dtype=np.int32)
+    for v in np.asarray(pinned if pinned is not None else [], np.int64):
+        scene.pins.append(Pin(int(v), pin_stiffness, x[v]))
+    return scene

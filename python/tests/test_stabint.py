@@ -1,0 +1,260 @@
+"""The Python package against closed forms and the library's documented behaviour.
+
+Run by scripts/python.sh (after ctest in scripts/test.sh) against the installed package."""
+
+import math
+import pathlib
+
+import numpy as np
+import pytest
+
+import stabint
+from stabint import Integrator
+
+SCENES = pathlib.Path(__file__).resolve().parents[2] / "scenes"
+# The chain's swing energy m g L / 2 with the builder's defaults, the unit of
+# tests/test_stability.cpp and tests/c_api/test_c_api.c.
+SWING_ENERGY = 0.1 * 9.81 * 1.0 / 2.0
+
+
+def run(scene, frames, **options):
+    sim = stabint.Simulator(scene, stabint.SimulatorOptions(**options))
+    return sim, [sim.step() for _ in range(frames)]
+
+
+def test_installed_package_is_used_and_has_stubs():
+    package = pathlib.Path(stabint.__file__).parent
+    assert "site-packages" in str(package)  # not the source folder python/stabint
+    assert (package / "_stabint.pyi").stat().st_size > 0
+    assert (package / "py.typed").exists()
+    assert "class InvalidInputError(Error)" in (package / "_stabint.pyi").read_text()
+
+
+# --- closed forms (docs/method.md; tests/test_oscillator.cpp does the same in C++) -----------
+# Linear oscillator, omega h = 1/3: BE multiplies H by 1/(1 + (omega h)^2) per step, IM keeps it.
+# The pin is linear, so one local/global iteration solves each step exactly: round-off only.
+OMEGA_H = 1.0 / 3.0
+
+
+def oscillator(integrator):
+    return run(stabint.linear_oscillator(mass=1.0, stiffness=100.0), 20,
+               integrator=integrator, time_step=OMEGA_H / 10.0)
+
+
+def test_backward_euler_damps_the_oscillator_by_the_closed_form_factor():
+    sim, reports = oscillator(Integrator.BackwardEuler)
+    h = [r.energy.total for r in reports]
+    for before, after in zip(h, h[1:]):
+        assert after / before == pytest.approx(1.0 / (1.0 + OMEGA_H**2), rel=1e-12)
+
+
+def test_implicit_midpoint_keeps_the_oscillator_energy():
+    sim, reports = oscillator(Integrator.ImplicitMidpoint)
+    h0 = 0.5 * 100.0 * 1.0**2  # k A^2 / 2
+    assert max(abs(r.energy.total - h0) for r in reports) < 1e-12 * h0
+
+
+# --- stability on the stiff chain (README motion table) --------------------------------------
+def test_blend_tracks_its_target_where_implicit_midpoint_explodes():
+    # Measured: blend 0.3 % of the swing energy (README), IM 4e4 x. Bounds with 10x margin.
+    _, blend = run(stabint.chain_pendulum(), 300, integrator=Integrator.EnergyBlend)
+    _, im = run(stabint.chain_pendulum(), 300, integrator=Integrator.ImplicitMidpoint)
+    assert max(abs(r.energy.total - r.target) for r in blend) < 0.05 * SWING_ENERGY
+    assert max(abs(r.energy.total - r.target) for r in im) > 100 * SWING_ENERGY
+    branches = {r.branch for r in blend}
+    assert branches <= {stabint.BlendBranch.ImplicitMidpoint, stabint.BlendBranch.BackwardEuler,
+                        stabint.BlendBranch.VelocityScale}
+    assert stabint.BlendBranch.BackwardEuler in branches  # the blend had to remove energy
+
+
+def test_a_blow_up_is_refused_and_the_last_state_kept():
+    # SE is unstable on the chain's springs (omega h ~ 30 > 2).
+    sim = stabint.Simulator(stabint.chain_pendulum(),
+                            stabint.SimulatorOptions(integrator=Integrator.SymplecticEuler))
+    with pytest.raises(stabint.NonFiniteStateError) as refused:
+        for _ in range(300):
+            last = sim.positions
+            sim.step()
+    assert refused.value.step == sim.step_count
+    assert isinstance(refused.value, stabint.Error)
+    np.testing.assert_array_equal(sim.positions, last)
+    assert np.isfinite(sim.positions).all()
+
+
+def test_energy_limit_stops_implicit_midpoint_early():
+    sim = stabint.Simulator(stabint.chain_pendulum(), stabint.SimulatorOptions(
+        integrator=Integrator.ImplicitMidpoint, energy_limit=1.0))
+    with pytest.raises(stabint.EnergyLimitError) as refused:
+        for _ in range(300):
+            sim.step()
+    assert isinstance(refused.value, stabint.NonFiniteStateError)
+    # The accepted state is within the limit: H - H* <= energy_limit * E_scale.
+    assert sim.energy().total - sim.target <= 1.0 * sim.energy_scale
+
+
+# --- errors ------------------------------------------------------------------------------------
+def test_error_hierarchy_matches_the_library():
+    assert issubclass(stabint.Error, RuntimeError)
+    for name in ("InvalidInputError", "FileFormatError", "NonFiniteStateError", "OpenCLError"):
+        assert getattr(stabint, name).__bases__ == (stabint.Error,)
+    assert stabint.EnergyLimitError.__bases__ == (stabint.NonFiniteStateError,)
+    for name in ("NoOpenCLDeviceError", "KernelBuildError", "UnsupportedPrecisionError"):
+        assert getattr(stabint, name).__bases__ == (stabint.OpenCLError,)
+    assert stabint.InvalidInputError.__module__ == "stabint"
+
+
+def test_a_bad_option_raises_invalid_input_naming_the_field():
+    with pytest.raises(stabint.InvalidInputError, match="time_step"):
+        stabint.Simulator(stabint.linear_oscillator(), stabint.SimulatorOptions(time_step=-0.1))
+
+
+def test_a_bad_scene_raises_invalid_input_naming_the_element():
+    scene = stabint.scene_from_arrays([[0, 0, 0], [1, 0, 0]], [1.0, -1.0])
+    with pytest.raises(stabint.InvalidInputError, match="mass"):
+        stabint.Simulator(scene)
+
+
+def test_file_errors_carry_file_and_line(tmp_path):
+    with pytest.raises(stabint.FileFormatError) as missing:
+        stabint.load_scene_file(str(tmp_path / "none.json"))
+    assert missing.value.file.endswith("none.json") and missing.value.line == 0
+    bad = tmp_path / "bad.json"
+    bad.write_text('{\n  "format": "stabint-scene",\n  "version": 1,,\n}\n')
+    with pytest.raises(stabint.FileFormatError) as malformed:
+        stabint.load_scene_file(str(bad))
+    assert malformed.value.line == 3
+    with pytest.raises(stabint.FileFormatError, match="no_such_param"):
+        stabint.cloth_grid(no_such_param=1)
+
+
+def test_an_unmatched_opencl_device_raises_no_device():
+    options = stabint.SimulatorOptions(backend=stabint.BackendKind.OpenCL)
+    options.opencl.device = "no-such-device-anywhere"
+    with pytest.raises(stabint.NoOpenCLDeviceError):
+        stabint.Simulator(stabint.linear_oscillator(), options)
+
+
+# --- options and reports -----------------------------------------------------------------------
+NON_DEFAULT_OPTIONS = dict(
+    integrator=Integrator.BackwardEuler, time_step=0.01, iterations=3, tolerance=1e-9,
+    max_iterations=50, acceleration=stabint.Acceleration.Anderson, chebyshev_rho=0.9,
+    anderson_window=3, be_iterations=2, energy_tolerance=1e-2, max_velocity_scale=1.5,
+    max_root_evaluations=8, energy_limit=10.0, backend=stabint.BackendKind.CpuReference)
+
+
+def test_every_option_reaches_the_simulator():
+    defaults = stabint.SimulatorOptions()
+    for name, value in NON_DEFAULT_OPTIONS.items():
+        assert getattr(defaults, name) != value or name == "backend", name
+    sim = stabint.Simulator(stabint.linear_oscillator(), stabint.SimulatorOptions(**NON_DEFAULT_OPTIONS))
+    for name, value in NON_DEFAULT_OPTIONS.items():
+        assert getattr(sim.options, name) == value, name
+    assert sim.options.opencl.precision == stabint.Precision.Double
+
+
+def test_report_fields():
+    sim, reports = run(stabint.cloth_grid(nx=6, ny=5), 3, integrator=Integrator.BackwardEuler,
+                       iterations=4)
+    assert [r.step for r in reports] == [0, 1, 2]
+    assert reports[-1].time == pytest.approx(3 / 30, rel=1e-12)
+    assert all(r.iterations == 4 for r in reports)
+    assert all(r.branch == stabint.BlendBranch.None_ and r.alpha == 0.0 for r in reports)
+    assert reports[0].energy.total == pytest.approx(
+        reports[0].energy.kinetic + reports[0].energy.elastic + reports[0].energy.external)
+    assert reports[-1].times.total >= 0.0
+    # Reports are copies: the first is not overwritten by later steps.
+    assert reports[0].step == 0 and sim.last_report.step == 2
+    assert sim.energy().total == pytest.approx(reports[-1].energy.total, rel=1e-12)
+
+
+def test_positions_are_copies_and_element_lists_are_views():
+    sim = stabint.Simulator(stabint.cloth_grid(nx=4, ny=4),
+                            stabint.SimulatorOptions(integrator=Integrator.BackwardEuler))
+    x = sim.positions
+    assert x.shape == (16, 3) and x.dtype == np.float64 and x.flags.c_contiguous
+    x[:] = 0.0
+    assert np.abs(sim.positions).max() > 0.5  # the simulator's state is untouched
+    before = sim.positions
+    sim.step()
+    assert not np.array_equal(before, sim.positions)  # the old copy did not follow
+    scene = stabint.cloth_grid(nx=4, ny=4)
+    n = len(scene.springs)
+    scene.springs.append(stabint.Spring(0, 15, 1.0, 10.0))
+    assert len(scene.springs) == n + 1
+
+
+# --- scenes ------------------------------------------------------------------------------------
+def test_scene_from_arrays_free_fall_follows_symplectic_euler():
+    # One free particle: v1 = v0 + h g and x1 = x0 + h v1, exactly (SE has no solve).
+    h = 0.01
+    sim, _ = run(stabint.scene_from_arrays([[0.0, 1.0, 0.0]], 2.0), 1,
+                 integrator=Integrator.SymplecticEuler, time_step=h)
+    np.testing.assert_allclose(sim.velocities, [[0.0, -9.81 * h, 0.0]], rtol=1e-15)
+    np.testing.assert_allclose(sim.positions, [[0.0, 1.0 - 9.81 * h * h, 0.0]], rtol=1e-15)
+
+
+def test_scene_from_arrays_tet_at_rest_stays_at_rest():
+    x = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    scene = stabint.scene_from_arrays(x, 1.0, tets=[[0, 1, 2, 3]], tet_stiffness=1e3,
+                                      springs=[[0, 1]], spring_stiffness=10.0, pinned=[0],
+                                      gravity=(0, 0, 0))
+    assert len(scene.tets) == 1 and len(scene.springs) == 1 and len(scene.pins) == 1
+    sim, reports = run(scene, 5, integrator=Integrator.BackwardEuler)
+    assert reports[-1].energy.elastic < 1e-20  # rest shape: zero elastic energy, no motion
+    np.testing.assert_allclose(sim.positions, x, atol=1e-12)
+
+
+def test_builders_and_loaders():
+    cloth = stabint.cloth_grid(nx=6, ny=5)
+    assert cloth.num_particles == 30
+    np.testing.assert_array_equal(cloth.triangles, stabint.cloth_grid_triangles(6, 5))
+    triangles = stabint.cloth_grid(nx=6, ny=5, model=stabint.ClothModel.Triangles)
+    assert len(triangles.triangle_strains) == 40 and len(triangles.springs) == 0
+    assert stabint.tet_bar(nx=2, ny=1, nz=1).num_particles == 3 * 2 * 2
+    assert stabint.load_scene_file(str(SCENES / "chain.json")).num_particles == 6
+    assert stabint.load_obj_cloth(str(SCENES / "cloth_square.obj")).triangles.shape[1] == 3
+    tetgen = stabint.load_tetgen(str(SCENES / "bar"))
+    medit = stabint.load_medit(str(SCENES / "bar.mesh"))
+    assert len(tetgen.tets) > 0 and len(medit.tets) > 0
+
+
+def test_save_and_load_round_trip(tmp_path):
+    scene = stabint.cloth_grid(nx=5, ny=4)
+    stabint.save_scene_file(scene, str(tmp_path / "cloth.json"))
+    back = stabint.load_scene_file(str(tmp_path / "cloth.json"))
+    np.testing.assert_array_equal(back.positions, scene.positions)
+    np.testing.assert_array_equal(back.masses, scene.masses)
+    assert len(back.springs) == len(scene.springs)
+
+
+# --- OpenCL, where a device exists --------------------------------------------------------------
+@pytest.mark.skipif(not stabint.list_opencl_devices(), reason="no OpenCL device")
+def test_opencl_double_follows_the_cpu_reference():
+    # README: double agrees to 1e-9 relative over 100+ steps (measured 5e-12).
+    scene = stabint.cloth_grid(nx=8, ny=8)
+    cpu, _ = run(scene, 20, integrator=Integrator.EnergyBlend)
+    gpu, _ = run(scene, 20, integrator=Integrator.EnergyBlend, backend=stabint.BackendKind.OpenCL)
+    scale = np.abs(cpu.positions).max()
+    assert np.abs(gpu.positions - cpu.positions).max() < 1e-9 * scale
+    assert math.isfinite(gpu.target)
+
+
+# --- the example -------------------------------------------------------------------------------
+def test_the_matplotlib_example_plots_both_energies(tmp_path):
+    pytest.importorskip("matplotlib")
+    import os
+    import subprocess
+    import sys
+
+    example = pathlib.Path(__file__).resolve().parents[2] / "examples" / "python" / "cloth_energy.py"
+    out = tmp_path / "energy.png"
+    result = subprocess.run([sys.executable, str(example), str(out)], capture_output=True, text=True,
+                            env={**os.environ, "MPLBACKEND": "Agg"}, check=True, timeout=120)
+    final = dict(line.split(": H = ") for line in result.stdout.splitlines())
+    be, blend = (float(final[name].split()[0]) for name in ("BE", "blend"))
+    # The example's cloth starts at H0 = 0.4905 J. Measured after 5 s: BE 0.369 J, blend 0.4905 J
+    # (it tracks H*). Bounds: the blend within 1 % of H0, BE at least 10 % below it.
+    h0 = stabint.Simulator(stabint.cloth_grid(nx=20, ny=20, pinned=[0])).energy().total
+    assert blend == pytest.approx(h0, rel=0.01)
+    assert be < 0.9 * h0
+    assert out.stat().st_size > 10_000  # a PNG with content, not an empty figure

@@ -415,7 +415,7 @@ def motion_table(results):
     motion = read_csv(results, "motion.csv")
     if not motion:
         return []
-    cols = INTEGRATORS + ["reference"]
+    cols = INTEGRATORS + [c for c in ("blend+AA",) if any(r["integrator"] == c for r in motion)] + ["reference"]
     rows = {(r["scene"], r["integrator"]): r for r in motion}
 
     def line(label, scene, key, digits=3, scale=1.0, until=math.inf):

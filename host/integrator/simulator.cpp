@@ -42,6 +42,24 @@ void validateOptions(const SimulatorOptions& o) {
   auto fail = [](const std::string& what) { throw InvalidInputError("simulator options: " + what); };
   if (!std::isfinite(o.time_step) || o.time_step <= 0.0)
     fail("time_step = " + std::to_string(o.time_step) + " must be finite and > 0");
+  // The solves use c = 4/h^2 (IM): h^2 must neither underflow (1e-300) nor overflow.
+  const double h2 = o.time_step * o.time_step;
+  if (!std::isnormal(h2) || !std::isfinite(4.0 / h2)) {
+    std::ostringstream h;
+    h << o.time_step;
+    fail("time_step = " + h.str() + " is out of range: 1/h^2 must be a finite, non-zero number");
+  }
+  // An enum from a config file or a binding can hold any integer; an unknown integrator used to
+  // run no integrator at all and commit a zero state.
+  if (static_cast<int>(o.integrator) < static_cast<int>(Integrator::ForwardEuler) ||
+      static_cast<int>(o.integrator) > static_cast<int>(Integrator::EnergyBlend))
+    fail("integrator = " + std::to_string(static_cast<int>(o.integrator)) + " is not an Integrator value");
+  if (o.backend != BackendKind::CpuReference && o.backend != BackendKind::OpenCL)
+    fail("backend = " + std::to_string(static_cast<int>(o.backend)) + " is not a BackendKind value");
+  if (o.opencl.precision != Precision::Double && o.opencl.precision != Precision::Float)
+    fail("opencl.precision = " + std::to_string(static_cast<int>(o.opencl.precision)) + " is not a Precision value");
+  if (!std::isfinite(o.energy_limit) || o.energy_limit < 0.0)
+    fail("energy_limit must be finite and >= 0 (0: no limit)");
   if (o.iterations < 1) fail("iterations = " + std::to_string(o.iterations) + " must be >= 1");
   if (!std::isfinite(o.tolerance) || o.tolerance < 0.0) fail("tolerance must be finite and >= 0");
   if (o.max_iterations < 1) fail("max_iterations must be >= 1");
@@ -264,8 +282,13 @@ struct Simulator::Impl {
                                  1.0, options.max_velocity_scale);
     } else if (excess() > tau) {
       changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
-      if (excess() > tau && report.branch == BlendBranch::BackwardEuler)
+      if (excess() > tau && report.branch == BlendBranch::BackwardEuler) {
         p_new = lowerPotentialTowardPartner(target_now - kineticEnergy(v_new), p_new, report);
+        // Moving the positions moved the angular momentum about the origin with them.
+        if (momentum_conserved && im_momenta_known)
+          setMomenta(rigidMotion(scene.masses(), x_new, v_new), im_momenta.momentum,
+                     im_momenta.angularMomentumAboutOrigin(), x_new, v_new);
+      }
       if (excess() > tau && !momentum_conserved)
         changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/false, 0.0, 1.0);
     }
@@ -380,6 +403,14 @@ struct Simulator::Impl {
     const double k_new = kineticEnergy(v_new);
     if (!std::isfinite(k_new) || !std::isfinite(p_new.total()) || !std::isfinite(target_now))
       refuse(r, "non-finite energy");
+    // The user's ceiling: an explicit or midpoint run that gains energy is stopped long before it
+    // overflows, by the same refusal (docs: SimulatorOptions::energy_limit).
+    if (options.energy_limit > 0.0 && k_new + p_new.total() - target_now > options.energy_limit * energy_scale) {
+      std::ostringstream what;
+      what << "energy H = " << k_new + p_new.total() << " exceeds the target H* = " << target_now << " by more than "
+           << "energy_limit * E_scale = " << options.energy_limit * energy_scale;
+      refuse(r, what.str(), /*energy_limit=*/true);
+    }
 
     // Commit.
     if (options.integrator == Integrator::BDF2) {
@@ -405,12 +436,13 @@ struct Simulator::Impl {
     return report;
   }
 
-  [[noreturn]] void refuse(const StepReport& r, const std::string& what) {
+  [[noreturn]] void refuse(const StepReport& r, const std::string& what, bool energy_limit = false) {
     // Nothing was committed: the slots kX/kV and the host copies still hold the last finite state.
     std::ostringstream msg;
     msg << "step " << r.step << " (t = " << t << " -> " << r.time << ", integrator "
         << integratorName(options.integrator) << "): " << what
-        << "; the simulation blew up, step refused, state kept at t = " << t;
+        << (energy_limit ? "; step refused" : "; the simulation blew up, step refused") << ", state kept at t = " << t;
+    if (energy_limit) throw EnergyLimitError(msg.str(), r.step);
     throw NonFiniteStateError(msg.str(), r.step);
   }
 
@@ -438,6 +470,8 @@ struct Simulator::Impl {
 Simulator::Simulator(const Scene& scene, const SimulatorOptions& options)
     : impl_(std::make_unique<Impl>(scene, options)) {}
 Simulator::~Simulator() = default;
+Simulator::Simulator(Simulator&&) noexcept = default;
+Simulator& Simulator::operator=(Simulator&&) noexcept = default;
 
 const StepReport& Simulator::step() { return impl_->step(); }
 const Eigen::MatrixX3d& Simulator::positions() const { return impl_->x; }

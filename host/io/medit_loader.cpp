@@ -25,21 +25,22 @@ bool isKeyword(const std::string& token) { return std::isalpha(static_cast<unsig
 
 Eigen::MatrixX3d readVertices(io::TextReader& in) {
   const int count = in.parseCount(in.requireToken("the number of vertices"), "number of vertices");
-  Eigen::MatrixX3d x(count, 3);
+  std::vector<double> xyz;  // row after row; the header's count is not trusted with an allocation
+  xyz.reserve(3 * in.reserveFor(count, 8));  // "x y z ref": a number and a separator each
   for (int i = 0; i < count; ++i) {
     const std::string vertex = "vertex " + std::to_string(i + 1);
     for (int c = 0; c < 3; ++c) {
-      x(i, c) = in.parseReal(in.requireToken(vertex + " of " + std::to_string(count)), vertex + " coordinate " + "xyz"[c]);
+      xyz.push_back(in.parseReal(in.requireToken(vertex + " of " + std::to_string(count)), vertex + " coordinate " + "xyz"[c]));
     }
     in.parseInt(in.requireToken(vertex + " reference"), vertex + " reference");
   }
-  return x;
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(xyz.data(), count, 3);
 }
 
 std::vector<io::TetRecord> readTetrahedra(io::TextReader& in, int num_vertices) {
   const int count = in.parseCount(in.requireToken("the number of tetrahedra"), "number of tetrahedra");
   std::vector<io::TetRecord> tets;
-  tets.reserve(count);
+  tets.reserve(in.reserveFor(count, 10));  // "a b c d ref"
   for (int i = 0; i < count; ++i) {
     io::TetRecord tet{{}, i + 1, 0};
     const std::string name = "tet " + std::to_string(tet.id);
@@ -63,7 +64,7 @@ Scene loadMedit(const std::string& path, const SolidMaterial& material) {
   std::string token;
   bool more = in.nextToken(token);
   while (more) {
-    if (!isKeyword(token)) in.fail("expected a section keyword, got '" + token + "'");
+    if (!isKeyword(token)) in.fail("expected a section keyword, got '" + io::shown(token) + "'");
     if (sameKeyword(token, "End")) break;
     if (sameKeyword(token, "Dimension")) {
       const int dimension = in.parseInt(in.requireToken("the dimension"), "dimension");

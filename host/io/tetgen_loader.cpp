@@ -22,7 +22,8 @@ Nodes readNodes(const std::string& path) {
   if (dimension != 3) in.fail("dimension " + std::to_string(dimension) + " is not supported, expected 3");
 
   Nodes nodes;
-  nodes.positions.resize(count, 3);
+  std::vector<double> xyz;  // row after row; the header's count is not trusted with an allocation
+  xyz.reserve(3 * in.reserveFor(count, 8));  // "i x y z": a number and a separator each
   for (int i = 0; i < count; ++i) {
     const std::string point = "point " + std::to_string(i);
     const auto tokens = in.requireLine(point + " of " + std::to_string(count));
@@ -36,9 +37,10 @@ Nodes readNodes(const std::string& path) {
               " (points must be numbered consecutively)");
     }
     for (int c = 0; c < 3; ++c) {
-      nodes.positions(i, c) = in.parseReal(tokens[1 + c], "point " + std::to_string(id) + " coordinate " + "xyz"[c]);
+      xyz.push_back(in.parseReal(tokens[1 + c], "point " + std::to_string(id) + " coordinate " + "xyz"[c]));
     }
   }
+  nodes.positions = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(xyz.data(), count, 3);
   return nodes;
 }
 
@@ -52,7 +54,7 @@ std::vector<io::TetRecord> readElements(const std::string& path, const Nodes& no
   if (per_tet != 4 && per_tet != 10) in.fail("nodes per tetrahedron " + std::to_string(per_tet) + " must be 4 or 10");
 
   std::vector<io::TetRecord> tets;
-  tets.reserve(count);
+  tets.reserve(in.reserveFor(count, 2 * (1 + per_tet)));  // "i a b c d": a number and a separator each
   for (int i = 0; i < count; ++i) {
     const auto tokens = in.requireLine("tetrahedron " + std::to_string(i) + " of " + std::to_string(count));
     if (static_cast<int>(tokens.size()) < 1 + per_tet) {

@@ -1,13 +1,150 @@
 #include "io/text_reader.hpp"
 
+#include <cerrno>
 #include <charconv>
+#include <climits>
 #include <cmath>
-#include <sstream>
+#include <cstring>
+#include <algorithm>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace stabint::io {
 
-TextReader::TextReader(std::string path, char comment) : path_(std::move(path)), in_(path_), comment_(comment) {
-  if (!in_) throw FileFormatError(path_, 0, "cannot open file");
+namespace {
+
+constexpr std::size_t kChunk = 64 * 1024;
+
+std::string mib(std::size_t bytes) { return std::to_string(bytes >> 20) + " MiB"; }
+
+// Opens `path` for reading if it is a regular file. O_NONBLOCK: opening a FIFO for reading would
+// otherwise wait for a writer forever; the type is checked on the opened descriptor (fstat), so
+// what is checked is what is read.
+int openRegularFile(const std::string& path, long long& size) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw FileFormatError(path, 0, std::string("cannot open file: ") + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    const bool directory = S_ISDIR(st.st_mode);
+    ::close(fd);
+    throw FileFormatError(path, 0, directory ? "cannot open file: is a directory"
+                                             : "cannot open file: not a regular file (a FIFO, device or socket)");
+  }
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+  size = static_cast<long long>(st.st_size);
+  return fd;
+}
+
+// read() that retries when interrupted by a signal; -1 with errno on failure.
+ssize_t readSome(int fd, char* data, std::size_t bytes) {
+  ssize_t got;
+  do {
+    got = ::read(fd, data, bytes);
+  } while (got < 0 && errno == EINTR);
+  return got;
+}
+
+bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
+
+}  // namespace
+
+std::string shown(const std::string& text) {
+  constexpr std::size_t kMaxShown = 64;
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (out.size() >= kMaxShown) {
+      out += "...";
+      break;
+    }
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c >= 0x20 && c < 0x7f && c != '\\') {
+      out += static_cast<char>(c);
+    } else {
+      static const char hex[] = "0123456789abcdef";
+      out += c == '\\' ? std::string("\\\\") : std::string{'\\', 'x', hex[c >> 4], hex[c & 15]};
+    }
+  }
+  return out;
+}
+
+std::string readTextFile(const std::string& path) {
+  long long size = 0;
+  const int fd = openRegularFile(path, size);
+  std::string text;
+  // The size from fstat is a hint only (a file may grow while it is read): the limit is applied
+  // to what is actually read.
+  text.reserve(static_cast<std::size_t>(std::min<long long>(size, kMaxTextFileBytes)) + 1);
+  char chunk[kChunk];
+  for (;;) {
+    const ssize_t got = readSome(fd, chunk, sizeof(chunk));
+    if (got < 0) {
+      const std::string why = std::strerror(errno);
+      ::close(fd);
+      throw FileFormatError(path, 0, "read failed: " + why);
+    }
+    if (got == 0) break;
+    if (text.size() + static_cast<std::size_t>(got) > kMaxTextFileBytes) {
+      ::close(fd);
+      throw FileFormatError(path, 0, "file larger than " + mib(kMaxTextFileBytes) + ", the limit for a scene file");
+    }
+    text.append(chunk, static_cast<std::size_t>(got));
+  }
+  ::close(fd);
+  return text;
+}
+
+TextReader::TextReader(std::string path, char comment) : path_(std::move(path)), comment_(comment) {
+  fd_ = openRegularFile(path_, size_);
+  buffer_.resize(kChunk);
+}
+
+TextReader::~TextReader() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool TextReader::fill() {
+  if (at_end_) return false;
+  if (begin_ > 0) {  // keep the unread part at the front
+    std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
+    end_ -= begin_;
+    begin_ = 0;
+  }
+  if (end_ == buffer_.size()) buffer_.resize(std::min(2 * buffer_.size(), kMaxLineBytes + 1));
+  const ssize_t got = readSome(fd_, buffer_.data() + end_, buffer_.size() - end_);
+  if (got < 0) failAt(line_ + 1, std::string("read failed: ") + std::strerror(errno));
+  if (got == 0) at_end_ = true;
+  end_ += static_cast<std::size_t>(got);
+  return got > 0;
+}
+
+bool TextReader::readLine(std::string& text) {
+  std::size_t scanned = begin_;
+  for (;;) {
+    const void* nl = std::memchr(buffer_.data() + scanned, '\n', end_ - scanned);
+    if (nl) {
+      const std::size_t at = static_cast<std::size_t>(static_cast<const char*>(nl) - buffer_.data());
+      text.assign(buffer_.data() + begin_, at - begin_);
+      begin_ = at + 1;
+      break;
+    }
+    if (end_ - begin_ > kMaxLineBytes) {
+      failAt(line_ + 1, "line longer than " + mib(kMaxLineBytes) + " (is this a text file of this format?)");
+    }
+    scanned = end_;
+    const std::size_t before = begin_;
+    if (!fill()) {
+      if (end_ == begin_) return false;
+      text.assign(buffer_.data() + begin_, end_ - begin_);  // last line without a newline
+      begin_ = end_;
+      break;
+    }
+    scanned -= before - begin_;  // fill() moved the unread part to the front
+  }
+  if (line_ == INT_MAX) fail("more than " + std::to_string(INT_MAX) + " lines");
+  ++line_;
+  return true;
 }
 
 bool TextReader::nextLine(std::vector<std::string>& tokens) {
@@ -16,14 +153,18 @@ bool TextReader::nextLine(std::vector<std::string>& tokens) {
   pending_.clear();
   next_pending_ = 0;
   std::string text;
-  while (std::getline(in_, text)) {
-    ++line_;
+  while (readLine(text)) {
     if (comment_ != 0) {
       const size_t hash = text.find(comment_);
       if (hash != std::string::npos) text.erase(hash);
     }
-    std::istringstream words(text);
-    for (std::string w; words >> w;) tokens.push_back(std::move(w));
+    for (std::size_t i = 0; i < text.size();) {
+      while (i < text.size() && isSpace(text[i])) ++i;
+      std::size_t j = i;
+      while (j < text.size() && !isSpace(text[j])) ++j;
+      if (j > i) tokens.emplace_back(text, i, j - i);
+      i = j;
+    }
     if (!tokens.empty()) return true;
   }
   return false;
@@ -74,7 +215,7 @@ int TextReader::parseInt(const std::string& token, const std::string& what) cons
   int value = 0;
   const char* last = token.data() + token.size();
   const auto [end, ec] = std::from_chars(skipPlus(token), last, value);
-  if (ec != std::errc() || end != last) fail("expected an integer for " + what + ", got '" + token + "'");
+  if (ec != std::errc() || end != last) fail("expected an integer for " + what + ", got '" + shown(token) + "'");
   return value;
 }
 
@@ -82,8 +223,8 @@ double TextReader::parseReal(const std::string& token, const std::string& what) 
   double value = 0.0;
   const char* last = token.data() + token.size();
   const auto [end, ec] = std::from_chars(skipPlus(token), last, value);
-  if (ec != std::errc() || end != last) fail("expected a number for " + what + ", got '" + token + "'");
-  if (!std::isfinite(value)) fail(what + " is not finite ('" + token + "')");
+  if (ec != std::errc() || end != last) fail("expected a number for " + what + ", got '" + shown(token) + "'");
+  if (!std::isfinite(value)) fail(what + " is not finite ('" + shown(token) + "')");
   return value;
 }
 
@@ -91,6 +232,10 @@ int TextReader::parseCount(const std::string& token, const std::string& what) co
   const int count = parseInt(token, what);
   if (count < 0) fail(what + " " + std::to_string(count) + " must be >= 0");
   return count;
+}
+
+std::size_t TextReader::reserveFor(int count, int min_bytes_each) const {
+  return static_cast<std::size_t>(std::min<long long>(count, size_ / min_bytes_each + 1));
 }
 
 }  // namespace stabint::io

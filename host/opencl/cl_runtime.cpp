@@ -152,6 +152,16 @@ bool matches(const std::string& selector, int index, const std::string& name) {
   return lower(name).find(lower(selector)) != std::string::npos;
 }
 
+// Device discovery (clGetPlatformIDs, clGetDeviceIDs, the info queries) is serialized for the
+// whole process: the ICD loader and PoCL initialise themselves on the first call and are not
+// safe against two threads doing that at once (two simulators built at the same moment crashed
+// inside PoCL, or one of them saw no platform and reported NoOpenCLDeviceError). Discovery is
+// cheap after the first call, so one lock costs nothing measurable.
+std::mutex& discoveryMutex() {
+  static std::mutex* m = new std::mutex();  // never destroyed, like the caches below
+  return *m;
+}
+
 std::string selectorFrom(const std::string& option, const char* env_var) {
   if (!option.empty()) return option;
   const char* env = std::getenv(env_var);
@@ -164,6 +174,7 @@ SelectedDevice selectDevice(const OpenCLOptions& options) {
   const std::string platform_sel = selectorFrom(options.platform, "STABINT_OPENCL_PLATFORM");
   const std::string device_sel = selectorFrom(options.device, "STABINT_OPENCL_DEVICE");
 
+  std::lock_guard<std::mutex> lock(discoveryMutex());
   const std::vector<cl::Platform> platforms = platformsOrEmpty();
   if (platforms.empty())
     throw NoOpenCLDeviceError(
@@ -277,6 +288,7 @@ cl::Program cachedProgram(const cl::Context& context, const cl::Device& device,
 
 std::vector<OpenCLDeviceInfo> listOpenCLDevices() {
   std::vector<OpenCLDeviceInfo> list;
+  std::lock_guard<std::mutex> lock(ocl::discoveryMutex());
   const std::vector<cl::Platform> platforms = ocl::platformsOrEmpty();
   for (int pi = 0; pi < static_cast<int>(platforms.size()); ++pi) {
     const std::string pname = ocl::platformName(platforms[pi]);

@@ -49,6 +49,13 @@ class NonFiniteStateError : public Error {
   int step_;
 };
 
+/// A step would have exceeded SimulatorOptions::energy_limit. Refused like a non-finite step (and
+/// a NonFiniteStateError, so that code handling blow-ups handles this early stop too).
+class EnergyLimitError : public NonFiniteStateError {
+ public:
+  using NonFiniteStateError::NonFiniteStateError;
+};
+
 /// Any OpenCL failure; the message names the API call and the OpenCL error code.
 class OpenCLError : public Error {
  public:

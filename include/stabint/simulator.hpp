@@ -86,6 +86,12 @@ struct SimulatorOptions {
   double max_velocity_scale = 2.0;
   int max_root_evaluations = 12;     // energy evaluations of the root find
 
+  /// Energy ceiling, off when 0: a step whose energy H exceeds the tracked target H* by more than
+  /// energy_limit * E_scale (energyScale()) is refused with EnergyLimitError, keeping the last
+  /// accepted state, so that an explicit or midpoint run that gains energy stops long before it
+  /// overflows. Energy lost (damping, BE) is never refused.
+  double energy_limit = 0.0;
+
   BackendKind backend = BackendKind::CpuReference;
   OpenCLOptions opencl;
 };
@@ -146,9 +152,14 @@ class Simulator {
   ~Simulator();
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;
+  /// Movable (e.g. into a std::vector); a moved-from Simulator may only be destroyed or
+  /// assigned to.
+  Simulator(Simulator&&) noexcept;
+  Simulator& operator=(Simulator&&) noexcept;
 
   /// Advances one time step. Throws NonFiniteStateError (state unchanged) when the step would
-  /// produce a non-finite position or velocity.
+  /// produce a non-finite position or velocity, and its subtype EnergyLimitError when the step
+  /// would exceed SimulatorOptions::energy_limit.
   const StepReport& step();
 
   const Eigen::MatrixX3d& positions() const;

@@ -1,5 +1,7 @@
 // stabint-run: one scene, one integrator, N frames; per-frame energies and timings as CSV and the
 // deformed mesh as one OBJ per frame. Options are parsed by hand (no dependency for a CLI).
+#include <nlohmann/json.hpp>
+
 #include <stabint/stabint.hpp>
 
 #include <algorithm>
@@ -7,9 +9,11 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -63,8 +67,12 @@ std::string usage() {
        "  --dt SECONDS              time step (default 0.0333333)\n"
        "  --iterations N            local/global iterations per implicit solve (default 10)\n"
        "  --be-iterations N         iterations of the blend's backward-Euler solve (default 3)\n"
+       "  --acceleration NAME       none (default), chebyshev or anderson: safeguarded acceleration\n"
+       "                            of every local/global solve\n"
        "  --tolerance TOL           solve each step to this relative tolerance instead of a fixed\n"
        "                            iteration budget (default 0: fixed budget)\n"
+       "  --energy-limit L          stop (exit 2) at the first step whose energy exceeds the target\n"
+       "                            H* by more than L * E_scale (default 0: no limit)\n"
        "Backend:\n"
        "  --backend cpu|opencl      default opencl, falling back to cpu when no OpenCL device\n"
        "                            exists; an explicit --backend opencl never falls back\n"
@@ -75,7 +83,8 @@ std::string usage() {
        "Output:\n"
        "  --frames N                number of time steps (default 100)\n"
        "  --csv FILE                per-frame CSV, '-' for standard output: frame, time, kinetic,\n"
-       "                            elastic, external, total, target, branch, alpha, iterations,\n"
+       "                            elastic, external, total, target, branch, alpha,\n"
+       "                            velocity_scale, iterations,\n"
        "                            energy_evaluations, local_s, gather_s, transfer_s, global_s,\n"
        "                            energy_s, bookkeeping_s (frame 0 is the initial state)\n"
        "  --obj-dir DIR             one OBJ per written frame (DIR/frame_00000.obj, ...): vertices,\n"
@@ -93,8 +102,9 @@ std::string usage() {
     s << "\n";
   }
   s << "\n"
-       "Exit status: 0 success; 1 error; 2 the state became non-finite (the CSV keeps the frames\n"
-       "before it).\n";
+       "Exit status: 0 success; 1 error (a failed write included); 2 the state became non-finite or\n"
+       "exceeded --energy-limit (the CSV keeps the frames before it); 130 / 143 interrupted by\n"
+       "SIGINT / SIGTERM (the CSV keeps the frames up to the one reported).\n";
   return s.str();
 }
 
@@ -174,8 +184,12 @@ Options parseArgs(int argc, char** argv) {
         o.sim.iterations = parseInteger(arg, value());
       } else if (arg == "--be-iterations") {
         o.sim.be_iterations = parseInteger(arg, value());
+      } else if (arg == "--acceleration") {
+        o.sim.acceleration = stabint::parseAcceleration(value());
       } else if (arg == "--tolerance") {
         o.sim.tolerance = parseNumber(arg, value());
+      } else if (arg == "--energy-limit") {
+        o.sim.energy_limit = parseNumber(arg, value());
       } else if (arg == "--frames") {
         o.frames = parseInteger(arg, value());
         if (o.frames < 0) throw UsageError("--frames: must be >= 0, got " + std::to_string(o.frames));
@@ -212,34 +226,40 @@ bool isBuiltin(const std::string& name) {
   return false;
 }
 
-// A --param value becomes JSON: numbers and [lists] as written, anything else as a string (the
-// loader then says which parameter wanted a number).
+// A --param value becomes a JSON value: numbers and [lists] as written, anything else as a
+// string (the loader then says which parameter wanted a number). Each value is parsed on its
+// own and must be exactly one number or list, so that a value cannot carry more keys with it
+// (`pinned=[0], "nx": 3` used to set nx too), and the object is built as a value, not as text.
 std::string paramsAsJson(const std::vector<std::pair<std::string, std::string>>& params) {
-  std::string out = "{";
-  for (size_t i = 0; i < params.size(); ++i) {
-    const auto& [key, value] = params[i];
-    out += (i ? ", " : "");
-    std::string quoted = "\"";
-    for (char c : key) {
-      if (c == '"' || c == '\\') quoted += '\\';
-      quoted += c;
-    }
-    out += quoted + "\": ";
+  using nlohmann::json;
+  // Parameters are numbers and flat lists; a deeper value is a mistake, and bounding the depth
+  // keeps the recursive dump below from running out of stack on a hostile value.
+  constexpr int kMaxDepth = 8;
+  json object = json::object();
+  for (const auto& [key, value] : params) {
+    if (object.contains(key)) throw UsageError("--param " + key + ": given twice");
     char* end = nullptr;
     std::strtod(value.c_str(), &end);
     const bool number = !value.empty() && *end == '\0';
-    if (number || (!value.empty() && value.front() == '[')) {
-      out += value;
-    } else {
-      out += '"';
-      for (char c : value) {
-        if (c == '"' || c == '\\') out += '\\';
-        out += c;
-      }
-      out += '"';
+    if (!number && (value.empty() || value.front() != '[')) {
+      object[key] = value;
+      continue;
     }
+    json parsed;
+    try {
+      parsed = json::parse(value, [&](int depth, json::parse_event_t, json&) {
+        if (depth > kMaxDepth) throw UsageError("--param " + key + ": value nested deeper than " + std::to_string(kMaxDepth) + " levels");
+        return true;
+      });
+    } catch (const json::exception&) {
+      throw UsageError("--param " + key + ": expected a number, a [list] or a word, got '" + value + "'");
+    }
+    if (!parsed.is_number() && !parsed.is_array()) {
+      throw UsageError("--param " + key + ": expected a number, a [list] or a word, got '" + value + "'");
+    }
+    object[key] = std::move(parsed);
   }
-  return out + "}";
+  return object.dump();
 }
 
 stabint::Scene loadScene(const Options& o) {
@@ -277,6 +297,9 @@ std::vector<std::array<int, 3>> tetBoundary(const std::vector<stabint::Tet>& tet
 
 // --- output ---------------------------------------------------------------------------------------
 
+// What the system said about the last failed write (e.g. "No space left on device"), if anything.
+std::string writeErrorText() { return errno != 0 ? std::string(": ") + std::strerror(errno) : std::string(); }
+
 class ObjWriter {
  public:
   ObjWriter(std::string dir, const stabint::Scene& scene) : dir_(std::move(dir)) {
@@ -300,7 +323,8 @@ class ObjWriter {
     }
     for (const auto& t : triangles_) out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
     for (const auto& l : lines_) out << "l " << l[0] + 1 << ' ' << l[1] + 1 << '\n';
-    if (!out) throw UsageError("--obj-dir: write failed for " + path);
+    out.close();  // the last buffer is written here: a full disk shows only now
+    if (!out) throw UsageError("--obj-dir: write failed for " + path + writeErrorText());
   }
 
  private:
@@ -309,9 +333,12 @@ class ObjWriter {
   std::vector<std::array<int, 2>> lines_;
 };
 
+// Every write is checked: a full disk (--csv /dev/full) or a closed file must end the run with an
+// error, not exit 0 with nothing written.
 class CsvWriter {
  public:
-  explicit CsvWriter(const std::string& path) {
+  explicit CsvWriter(const std::string& path) : name_(path == "-" ? "standard output" : "'" + path + "'") {
+    errno = 0;
     if (path == "-") {
       out_ = &std::cout;
     } else {
@@ -319,8 +346,9 @@ class CsvWriter {
       if (!file_) throw UsageError("--csv: cannot write '" + path + "'");
       out_ = &file_;
     }
-    *out_ << "frame,time,kinetic,elastic,external,total,target,branch,alpha,iterations,energy_evaluations,"
+    *out_ << "frame,time,kinetic,elastic,external,total,target,branch,alpha,velocity_scale,iterations,energy_evaluations,"
              "local_s,gather_s,transfer_s,global_s,energy_s,bookkeeping_s\n";
+    check();
   }
 
   void row(int frame, const stabint::StepReport& r) {
@@ -328,21 +356,60 @@ class CsvWriter {
     const auto& t = r.times;
     char buf[512];
     std::snprintf(buf, sizeof(buf),
-                  "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame,
+                  "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%.17g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame,
                   r.time, e.kinetic, e.elastic, e.external, e.total(), r.target, stabint::blendBranchName(r.branch),
-                  r.alpha, r.iterations, r.energy_evaluations, t.local, t.gather, t.transfer, t.global, t.energy,
+                  r.alpha, r.velocity_scale, r.iterations, r.energy_evaluations, t.local, t.gather, t.transfer, t.global, t.energy,
                   t.bookkeeping);
     *out_ << buf;
+    check();
   }
 
-  void flush() { out_->flush(); }
+  void flush() {
+    out_->flush();
+    check();
+  }
 
  private:
+  void check() const {
+    if (!*out_) throw UsageError("--csv: write failed for " + name_ + writeErrorText());
+  }
+
+  std::string name_;
   std::ofstream file_;
   std::ostream* out_ = nullptr;
 };
 
 // --- running --------------------------------------------------------------------------------------
+
+// SIGINT / SIGTERM during the frame loop: the handler only records the signal; the loop finishes
+// the current step, writes and flushes what it has and exits with 128 + signal, so an interrupted
+// run keeps its CSV up to the last frame instead of losing the buffered rows. SA_RESETHAND: a
+// second signal terminates at once, as if there were no handler.
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void onStopSignal(int signal) { g_stop_signal = signal; }
+
+class StopSignals {
+ public:
+  StopSignals() {
+    struct sigaction action {};
+    action.sa_handler = onStopSignal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;
+    sigaction(SIGINT, &action, &old_int_);
+    sigaction(SIGTERM, &action, &old_term_);
+  }
+  ~StopSignals() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+ private:
+  struct sigaction old_int_ {};
+  struct sigaction old_term_ {};
+};
 
 std::unique_ptr<stabint::Simulator> makeSimulator(const stabint::Scene& scene, Options& o) {
   if (!o.backend_explicit) o.sim.backend = stabint::BackendKind::OpenCL;
@@ -399,6 +466,7 @@ int run(Options& o) {
   const auto start = Clock::now();
   auto last_progress = start;
   int last_written = 0;
+  const StopSignals stop_signals;
   for (int frame = 1; frame <= o.frames; ++frame) {
     try {
       sim->step();
@@ -407,15 +475,24 @@ int run(Options& o) {
       // Keep the last finite frame even when --every skipped it.
       if (csv && last_written != bad - 1 && bad - 1 > 0) csv->row(bad - 1, sim->lastReport());
       if (csv) csv->flush();
-      std::cerr << kProgram << ": error: the state became non-finite at frame " << bad << " (t = " << sim->time() + o.sim.time_step
+      const bool limit = dynamic_cast<const stabint::EnergyLimitError*>(&e) != nullptr;
+      std::cerr << kProgram << ": error: " << (limit ? "the energy limit was exceeded" : "the state became non-finite")
+                << " at frame " << bad << " (t = " << sim->time() + o.sim.time_step
                 << " s); " << (csv ? "CSV kept up to frame " + std::to_string(bad - 1) + "; " : std::string())
                 << e.what() << "\n";
       return 2;
     }
-    if (frame % o.every == 0 || frame == o.frames) {
+    const int stop_signal = g_stop_signal;
+    if (frame % o.every == 0 || frame == o.frames || stop_signal != 0) {
       if (csv) csv->row(frame, sim->lastReport());
       if (obj) obj->write(frame, sim->positions());
       last_written = frame;
+    }
+    if (stop_signal != 0) {
+      if (csv) csv->flush();
+      std::cerr << kProgram << ": interrupted by " << (stop_signal == SIGINT ? "SIGINT" : "SIGTERM") << " after frame "
+                << frame << (csv ? "; CSV kept up to frame " + std::to_string(frame) : std::string()) << "\n";
+      return 128 + stop_signal;
     }
     const auto now = Clock::now();
     if (!o.quiet && now - last_progress >= std::chrono::seconds(1)) {
@@ -441,12 +518,17 @@ int run(Options& o) {
 int main(int argc, char** argv) {
   try {
     Options o = parseArgs(argc, argv);
+    int status = 0;
+    errno = 0;
     if (o.help) {
       std::cout << usage();
-      return 0;
+    } else {
+      status = o.list_devices ? listDevices() : run(o);
     }
-    if (o.list_devices) return listDevices();
-    return run(o);
+    // Whatever went to standard output (help, device list, --csv -) must have arrived.
+    std::cout.flush();
+    if (!std::cout) throw UsageError("write failed for standard output" + writeErrorText());
+    return status;
   } catch (const std::exception& e) {
     std::cerr << kProgram << ": error: " << e.what() << "\n";
     return 1;

@@ -23,7 +23,7 @@ function(expect_csv_rows file rows)
     message(FATAL_ERROR "${file}: ${n} lines, expected ${want} (header + ${rows} frames)")
   endif()
   list(GET lines 0 header)
-  if(NOT header STREQUAL "frame,time,kinetic,elastic,external,total,target,branch,alpha,iterations,energy_evaluations,local_s,gather_s,transfer_s,global_s,energy_s,bookkeeping_s")
+  if(NOT header STREQUAL "frame,time,kinetic,elastic,external,total,target,branch,alpha,velocity_scale,iterations,energy_evaluations,local_s,gather_s,transfer_s,global_s,energy_s,bookkeeping_s")
     message(FATAL_ERROR "${file}: unexpected header '${header}'")
   endif()
 endfunction()
@@ -79,6 +79,9 @@ elseif(CASE STREQUAL "blow_up")
   if(n LESS 2)
     message(FATAL_ERROR "the CSV should keep the frames before the blow-up")
   endif()
+  # The same run with an energy ceiling stops at once, the same way.
+  expect_run(2 "stabint-run: error: the energy limit was exceeded at frame 2 .*exceeds the target H"
+             --scene chain --backend cpu --integrator FE --frames 2000 --energy-limit 10 --quiet)
 elseif(CASE STREQUAL "opencl_fallback")
   # An empty ICD vendor directory: the loader finds no platform. The default backend falls back to
   # the CPU reference and says so; an explicit --backend opencl fails.
@@ -96,6 +99,46 @@ elseif(CASE STREQUAL "bad_param")
   expect_run(1 "params: unknown field 'nope'" --scene chain --param nope=1)
 elseif(CASE STREQUAL "missing_scene_file")
   expect_run(1 "^stabint-run: error: ${WORK}/missing.json: cannot open file" --scene "${WORK}/missing.json")
+elseif(CASE STREQUAL "output_full")
+  # A full disk is an error, not a silent success with nothing written.
+  expect_run(1 "^stabint-run: error: --csv: write failed for '/dev/full'" --scene chain --backend cpu --frames 3 --quiet
+             --csv /dev/full)
+  execute_process(COMMAND "${RUN}" --scene chain --backend cpu --frames 3 --quiet --csv - OUTPUT_FILE /dev/full
+                  RESULT_VARIABLE rc ERROR_VARIABLE err)
+  if(NOT rc EQUAL 1 OR NOT err MATCHES "^stabint-run: error: --csv: write failed for standard output")
+    message(FATAL_ERROR "--csv - into /dev/full: exit status ${rc} (expected 1), stderr:\n${err}")
+  endif()
+elseif(CASE STREQUAL "param_splice")
+  # A --param value is one JSON value: it cannot smuggle in further keys.
+  expect_run(1 "^stabint-run: error: --param pinned: expected a number, a \\[list\\] or a word"
+             --scene cloth --backend cpu --frames 1 --param "pinned=[0], \"nx\": 3")
+  expect_run(1 "^stabint-run: error: --param nx: given twice" --scene cloth --backend cpu --frames 1
+             --param nx=3 --param nx=4)
+elseif(CASE STREQUAL "sigterm")
+  # SIGTERM in the middle of a long run: the CSV keeps every frame up to the one reported. The run
+  # is signalled once its frame loop has written rows (so the handler is installed), whenever
+  # that is on this machine; the CSV buffer then holds rows that only the handler saves.
+  execute_process(COMMAND sh -c "
+    \"$0\" --scene chain --backend cpu --frames 1000000000 --csv \"$1/sig.csv\" --quiet 2> \"$1/err.txt\" &
+    pid=$!
+    while kill -0 $pid 2>/dev/null && [ \"$(wc -l < \"$1/sig.csv\" 2>/dev/null || echo 0)\" -lt 2 ]; do sleep 0.05; done
+    kill -TERM $pid
+    wait $pid
+    echo $? > \"$1/rc.txt\"" "${RUN}" "${dir}")
+  file(READ "${dir}/rc.txt" rc)
+  file(READ "${dir}/err.txt" err)
+  string(STRIP "${rc}" rc)
+  if(NOT rc STREQUAL "143" OR NOT err MATCHES "^stabint-run: interrupted by SIGTERM after frame ([0-9]+); CSV kept up to frame ([0-9]+)\n$")
+    message(FATAL_ERROR "SIGTERM: exit status ${rc} (expected 143), stderr:\n${err}")
+  endif()
+  set(frame "${CMAKE_MATCH_1}")
+  file(STRINGS "${dir}/sig.csv" lines)
+  list(LENGTH lines n)
+  list(GET lines -1 last)
+  math(EXPR want "${frame} + 2")
+  if(NOT n EQUAL want OR NOT last MATCHES "^${frame},")
+    message(FATAL_ERROR "SIGTERM after frame ${frame}: the CSV has ${n} lines (expected ${want}), last '${last}'")
+  endif()
 elseif(CASE STREQUAL "help")
   expect_run(0 "" --help)
   if(NOT run_stdout MATCHES "Usage: stabint-run --scene")

@@ -1,0 +1,129 @@
+// Hostile input (issue 12): every malformed file, path, size or option is a named stabint::Error
+// of the documented type — never a crash, a hang, a std::bad_alloc or an unexplained error — and
+// leaves the caller's data as it was. One test per class of defect; each failed before its fix.
+#include <stabint/errors.hpp>
+#include <stabint/io.hpp>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "temp_dir_test.hpp"
+
+#include <climits>
+#include <functional>
+#include <string>
+
+#include <sys/stat.h>
+
+namespace stabint {
+namespace {
+
+using ::testing::HasSubstr;
+
+class Hostile : public testing::TempDirTest {};
+
+// The FileFormatError `load` throws, checked for file, line and a part of the message. Anything
+// else escaping (std::bad_alloc, a JSON library exception) fails the test.
+void expectFileError(const std::function<void()>& load, const std::string& file, int line, const std::string& part) {
+  try {
+    load();
+    ADD_FAILURE() << "expected a FileFormatError from " << file;
+  } catch (const FileFormatError& e) {
+    EXPECT_EQ(e.file(), file) << e.what();
+    EXPECT_EQ(e.line(), line) << e.what();
+    EXPECT_THAT(e.what(), HasSubstr(part));
+  }
+}
+
+// Every loader a path can reach, so that one bad path is tried on all of them.
+void expectAllLoadersRefuse(const std::string& path, const std::string& part) {
+  expectFileError([&] { loadObjCloth(path); }, path, 0, part);
+  expectFileError([&] { loadMedit(path); }, path, 0, part);
+  expectFileError([&] { loadTetGen(path + ".node"); }, path + ".node", 0, part);
+}
+
+// --- paths that are not text files ---------------------------------------------------------------
+
+// Opening a FIFO for reading used to wait for a writer forever.
+TEST_F(Hostile, FifoIsRefusedWithoutBlocking) {
+  const std::string fifo = (dir_ / "mesh").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo((fifo + ".node").c_str(), 0600), 0);
+  expectAllLoadersRefuse(fifo, "not a regular file");
+}
+
+// /dev/zero never ends and has no newline: memory grew without bound.
+TEST_F(Hostile, DeviceIsRefused) {
+  expectFileError([] { loadObjCloth("/dev/zero"); }, "/dev/zero", 0, "not a regular file");
+  expectFileError([] { loadMedit("/dev/zero"); }, "/dev/zero", 0, "not a regular file");
+}
+
+// A directory read as an empty file ("no vertices").
+TEST_F(Hostile, DirectoryIsRefused) {
+  const std::string dir = (dir_ / "mesh").string();
+  std::filesystem::create_directories(dir + ".node");
+  std::filesystem::create_directories(dir);
+  expectAllLoadersRefuse(dir, "is a directory");
+}
+
+// A regular file without newlines was read whole into one line; now a line has a limit.
+TEST_F(Hostile, LineWithoutEndIsRefusedAtTheLimit) {
+  const std::string path = write("long.obj", "v 0 0 0\nv " + std::string(5u << 20, '1'));
+  expectFileError([&] { loadObjCloth(path); }, path, 2, "line longer than 4 MiB");
+}
+
+// --- header counts -------------------------------------------------------------------------------
+
+// Counts were reserved before anything was read: std::bad_alloc escaped (no file, no line), or
+// gigabytes were taken. Now room is reserved only as far as the file can hold records, and the
+// short file fails where its records end.
+TEST_F(Hostile, HugeHeaderCountsFailAtEndOfFile) {
+  const std::string count = std::to_string(INT_MAX);
+  const std::string base = (dir_ / "big").string();
+  write("big.node", count + " 3 0 0\n0 0 0 0\n");
+  expectFileError([&] { loadTetGen(base); }, base + ".node", 2, "unexpected end of file, expected point 1 of " + count);
+
+  write("tet.node", "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
+  write("tet.ele", count + " 4 0\n0 0 1 2 3\n");
+  const std::string tet = (dir_ / "tet").string();
+  expectFileError([&] { loadTetGen(tet); }, tet + ".ele", 2, "unexpected end of file, expected tetrahedron 1 of " + count);
+
+  const std::string mesh = write("big.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n" + count + "\n0 0 0 0\n");
+  expectFileError([&] { loadMedit(mesh); }, mesh, 5, "unexpected end of file, expected vertex 2 of " + count);
+  const std::string tets =
+      write("tets.mesh", "Vertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\nTetrahedra\n" + count + "\n1 2 3 4 0\n");
+  expectFileError([&] { loadMedit(tets); }, tets, 9, "unexpected end of file, expected tet 2 of " + count);
+}
+
+// --- what error messages show of a file ------------------------------------------------------------
+
+bool printableAscii(const std::string& s) {
+  for (const unsigned char c : s) {
+    if (c < 0x20 || c >= 0x7f) return false;
+  }
+  return true;
+}
+
+// Binary bytes, control characters and NUL were echoed raw into the message.
+TEST_F(Hostile, MessagesShowFileBytesEscaped) {
+  const std::string obj = write("bin.obj", std::string("v 0 \x01\x1b[2J\0\xff 0\n", 15));
+  try {
+    loadObjCloth(obj);
+    ADD_FAILURE() << "expected a FileFormatError";
+  } catch (const FileFormatError& e) {
+    EXPECT_TRUE(printableAscii(e.what())) << e.what();
+    EXPECT_THAT(e.what(), HasSubstr("got '\\x01\\x1b[2J\\x00\\xff'"));
+  }
+  const std::string mesh = write("bin.mesh", "Vertices 0\n" + std::string(200, '\x07') + "\n");
+  try {
+    loadMedit(mesh);
+    ADD_FAILURE() << "expected a FileFormatError";
+  } catch (const FileFormatError& e) {
+    EXPECT_TRUE(printableAscii(e.what())) << e.what();
+    EXPECT_THAT(e.what(), HasSubstr("\\x07\\x07..."));  // and cut short
+    EXPECT_LT(std::string(e.what()).size(), 400u);
+  }
+}
+
+}  // namespace
+}  // namespace stabint

@@ -16,6 +16,7 @@ packages=(
   libbenchmark-dev
   nlohmann-json3-dev     # scene files
   python3-matplotlib     # charts (used through /usr/bin/python3)
+  clang libclang-rt-14-dev  # sanitizer build and libFuzzer harnesses (scripts/sanitize.sh, fuzz.sh)
 )
 
 missing=()

@@ -18,6 +18,7 @@ packages=(
   python3-matplotlib     # charts (used through /usr/bin/python3)
   python3-pil            # the teaser animation (matplotlib's GIF writer)
   python3-venv python3-dev  # the Python package: .venv and the extension's headers (scripts/python.sh)
+  clang libclang-rt-14-dev  # sanitizer build and libFuzzer harnesses (scripts/sanitize.sh, fuzz.sh)
 )
 
 missing=()

@@ -236,7 +236,9 @@ std::string paramsAsJson(const std::vector<std::pair<std::string, std::string>>&
   // keeps the recursive dump below from running out of stack on a hostile value.
   constexpr int kMaxDepth = 8;
   json object = json::object();
-  for (const auto& [key, value] : params) {
+  for (const auto& param : params) {
+    const std::string& key = param.first;  // a plain reference: lambdas cannot capture bindings in C++17
+    const std::string& value = param.second;
     if (object.contains(key)) throw UsageError("--param " + key + ": given twice");
     char* end = nullptr;
     std::strtod(value.c_str(), &end);

@@ -26,6 +26,12 @@
 extern "C" {
 #endif
 
+/* Every enum below ends with two sentinels that are not values: they make the enum as wide as
+ * int, so that any int an application stores in it (a bad value from a config file or a binding)
+ * is well-defined in C and C++ and is rejected with STABINT_INVALID_INPUT (Vulkan's *_MAX_ENUM
+ * idiom). */
+#define STABINT_ENUM_INT_WIDE_(prefix) prefix##_MIN_ENUM_ = -0x7FFFFFFF - 1, prefix##_MAX_ENUM_ = 0x7FFFFFFF
+
 /* Status codes, one per class of stabint/errors.hpp, plus the failures of the C layer itself.
  * The C++ hierarchy is kept by stabint_status_is(): ENERGY_LIMIT is a NON_FINITE_STATE, the
  * three OpenCL subtypes are OPENCL, and every code except OK is ERROR. */
@@ -42,7 +48,8 @@ typedef enum stabint_status {
   STABINT_UNSUPPORTED_PRECISION = 9,   /* UnsupportedPrecisionError */
   STABINT_INVALID_ARGUMENT = 10,       /* misuse of the C API: NULL handle, buffer too small */
   STABINT_OUT_OF_MEMORY = 11,          /* std::bad_alloc */
-  STABINT_INTERNAL = 12                /* any other exception: a bug in stabint */
+  STABINT_INTERNAL = 12,               /* any other exception: a bug in stabint */
+  STABINT_ENUM_INT_WIDE_(STABINT_STATUS)
 } stabint_status;
 
 /* "OK", "Error", "InvalidInputError", ... (the C++ class name); "unknown" for other values. */
@@ -64,20 +71,31 @@ typedef enum stabint_integrator {
   STABINT_BACKWARD_EULER = 2,
   STABINT_BDF2 = 3,
   STABINT_IMPLICIT_MIDPOINT = 4,
-  STABINT_ENERGY_BLEND = 5
+  STABINT_ENERGY_BLEND = 5,
+  STABINT_ENUM_INT_WIDE_(STABINT_INTEGRATOR)
 } stabint_integrator;
-typedef enum stabint_backend { STABINT_BACKEND_CPU = 0, STABINT_BACKEND_OPENCL = 1 } stabint_backend;
-typedef enum stabint_precision { STABINT_PRECISION_DOUBLE = 0, STABINT_PRECISION_FLOAT = 1 } stabint_precision;
+typedef enum stabint_backend {
+  STABINT_BACKEND_CPU = 0,
+  STABINT_BACKEND_OPENCL = 1,
+  STABINT_ENUM_INT_WIDE_(STABINT_BACKEND)
+} stabint_backend;
+typedef enum stabint_precision {
+  STABINT_PRECISION_DOUBLE = 0,
+  STABINT_PRECISION_FLOAT = 1,
+  STABINT_ENUM_INT_WIDE_(STABINT_PRECISION)
+} stabint_precision;
 typedef enum stabint_acceleration {
   STABINT_ACCELERATION_NONE = 0,
   STABINT_ACCELERATION_CHEBYSHEV = 1,
-  STABINT_ACCELERATION_ANDERSON = 2
+  STABINT_ACCELERATION_ANDERSON = 2,
+  STABINT_ENUM_INT_WIDE_(STABINT_ACCELERATION)
 } stabint_acceleration;
 typedef enum stabint_blend_branch {
   STABINT_BRANCH_NONE = 0,
   STABINT_BRANCH_IMPLICIT_MIDPOINT = 1,
   STABINT_BRANCH_BACKWARD_EULER = 2,
-  STABINT_BRANCH_VELOCITY_SCALE = 3
+  STABINT_BRANCH_VELOCITY_SCALE = 3,
+  STABINT_ENUM_INT_WIDE_(STABINT_BRANCH)
 } stabint_blend_branch;
 
 /* "FE", "SE", "BE", "BDF2", "IM", "blend"; "-", "IM", "BE", "scale"; NULL for a bad value. */

@@ -79,6 +79,8 @@ static void test_defaults_and_names(void) {
   CHECK(strcmp(stabint_integrator_name(STABINT_BDF2), "BDF2") == 0);
   CHECK(strcmp(stabint_blend_branch_name(STABINT_BRANCH_VELOCITY_SCALE), "scale") == 0);
   CHECK(stabint_integrator_name((stabint_integrator)17) == NULL);
+  CHECK(stabint_integrator_name((stabint_integrator)-1) == NULL);
+  CHECK(stabint_blend_branch_name((stabint_blend_branch)4) == NULL);
   CHECK(stabint_status_is(STABINT_ENERGY_LIMIT, STABINT_NON_FINITE_STATE));
   CHECK(stabint_status_is(STABINT_NO_OPENCL_DEVICE, STABINT_OPENCL));
   CHECK(stabint_status_is(STABINT_FILE_FORMAT, STABINT_ERROR));
@@ -105,6 +107,10 @@ static void test_bad_options_are_reported(void) {
   options.integrator = (stabint_integrator)42;
   CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_INVALID_INPUT);
   CHECK(strstr(stabint_last_error_message(), "options.integrator") != NULL);
+  stabint_simulator_options_default(&options);
+  options.backend = (stabint_backend)-3;
+  CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "options.backend") != NULL);
 
   /* A device selector that matches nothing: NoOpenCLDeviceError whether or not OpenCL exists. */
   stabint_simulator_options_default(&options);

@@ -121,7 +121,7 @@ TEST(SceneData, ExternalForcesAddFieldsToGravity) {
     const Eigen::RowVector3d expected(1.0, -10.0 * s.masses[j] + (in_field ? 1.0 : 0.0), in_field ? 2.0 : 0.0);
     EXPECT_TRUE(f.row(j).isApprox(expected, 1e-12)) << "particle " << j << ": " << f.row(j);
   }
-  EXPECT_TRUE(data.hasTimeDependentForceFields());
+  EXPECT_TRUE(data.hasTimeDependentForces());
   EXPECT_FALSE(data.hasMovingPins());
   EXPECT_TRUE(data.hasTimeDependentForcing());
 }
@@ -138,7 +138,7 @@ TEST(SceneData, PinTargetsFollowTheirTimeLaw) {
   EXPECT_TRUE(q.row(0).isZero());
   EXPECT_TRUE(q.row(1).isApprox(Eigen::RowVector3d(3.0, 0.25, 0.5), 1e-12));
   EXPECT_TRUE(data.hasMovingPins());
-  EXPECT_FALSE(data.hasTimeDependentForceFields());
+  EXPECT_FALSE(data.hasTimeDependentForces());
   EXPECT_TRUE(data.hasTimeDependentForcing());
 }
 
@@ -146,7 +146,7 @@ TEST(SceneData, StaticSceneHasNoTimeDependentForcing) {
   const SceneData data(twoTetScene());
   EXPECT_FALSE(data.hasTimeDependentForcing());
   EXPECT_FALSE(data.hasMovingPins());
-  EXPECT_FALSE(data.hasTimeDependentForceFields());
+  EXPECT_FALSE(data.hasTimeDependentForces());
 }
 
 TEST(SceneTimeLaws, OscillationNeedsBothAmplitudeAndFrequency) {

@@ -155,6 +155,7 @@ const char* stabint_status_name(stabint_status status) {
     case STABINT_INVALID_ARGUMENT: return "InvalidArgument";
     case STABINT_OUT_OF_MEMORY: return "OutOfMemory";
     case STABINT_INTERNAL: return "InternalError";
+    default: break;  // the sentinels and any other int
   }
   return "unknown";
 }

@@ -20,11 +20,7 @@ class CpuBackend final : public Backend {
   CpuBackend(const SceneData& scene, int num_slots)
       : scene_(scene),
         slots_(num_slots, Eigen::MatrixX3d::Zero(scene.numParticles(), 3)),
-        params_(scene.blocks().size()) {
-    for (size_t b = 0; b < params_.size(); ++b) {
-      params_[b].time_dependent = scene.blocks()[b].type->timeDependent(scene.scene());
-    }
-  }
+        params_(scene.blocks().size()) {}
 
   void write(int slot, const Eigen::MatrixX3d& host) override { slots_[slot] = host; }
   void read(int slot, Eigen::MatrixX3d& host) override { host = slots_[slot]; }
@@ -85,35 +81,39 @@ class CpuBackend final : public Backend {
   // because the driver asks for the same t many times per step.
   const std::vector<double>& paramsAt(size_t b, double t) {
     const ElementBlock& block = scene_.blocks()[b];
+    if (!block.type->timeDependent(scene_)) return block.params;
     TimedParams& cached = params_[b];
-    if (!cached.time_dependent) return block.params;
-    if (!(t == cached.time)) {
-      block.type->paramsAt(scene_.scene(), t, cached.values);
-      cached.time = t;
+    if (!cached.key.matches(t, scene_.forcingVersion())) {
+      block.type->paramsAt(scene_, t, cached.values);
+      cached.key = {t, scene_.forcingVersion()};
     }
     return cached.values;
   }
 
   // Forcing at time t, cached like the params.
   const Eigen::MatrixX3d& externalForces(double t) {
-    if (!(t == external_time_)) {
+    if (!external_key_.matches(t, scene_.forcingVersion())) {
       scene_.externalForces(t, external_);
-      external_time_ = t;
+      external_key_ = {t, scene_.forcingVersion()};
     }
     return external_;
   }
 
-  struct TimedParams {
-    bool time_dependent = false;
-    std::vector<double> values;
+  struct ForcingKey {
     double time = std::numeric_limits<double>::quiet_NaN();
+    int version = -1;
+    bool matches(double t, int v) const { return t == time && v == version; }
+  };
+  struct TimedParams {
+    std::vector<double> values;
+    ForcingKey key;
   };
 
   const SceneData& scene_;
   std::vector<Eigen::MatrixX3d> slots_;
   std::vector<TimedParams> params_;  // per block
   Eigen::MatrixX3d external_;
-  double external_time_ = std::numeric_limits<double>::quiet_NaN();
+  ForcingKey external_key_;
 };
 
 }  // namespace

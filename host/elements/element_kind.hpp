@@ -15,9 +15,13 @@
 //   static constexpr std::array<double, kRows * kVertices> kCoefficients;  (kSharedCoefficients)
 // or
 //   static void coefficients(const Scene&, const Element&, double* a);    // R by K, row-major
-// plus, to differ from KindDefaults: kTerm, kMayDependOnTime with timeDependent/paramsAt, and
+// plus, to differ from KindDefaults: kTerm, kMayDependOnTime with
+//   static bool timeDependent(const SceneData&);
+//   static void paramsAt(const SceneData&, int element, double t, double* params);
+// and
 // jsonFields() for the generic JSON form.
 #include "elements/element_type.hpp"
+#include "scene/scene_data.hpp"
 #include "scene/validation.hpp"
 
 #include <Eigen/Core>
@@ -121,20 +125,20 @@ class ElementTypeOf final : public ElementType {
     return block;
   }
 
-  bool timeDependent(const Scene& scene) const override {
-    if constexpr (Kind::kMayDependOnTime) return Kind::timeDependent(scene);
-    (void)scene;
+  bool timeDependent(const SceneData& data) const override {
+    if constexpr (Kind::kMayDependOnTime) return Kind::timeDependent(data);
+    (void)data;
     return false;
   }
 
-  void paramsAt(const Scene& scene, double t, std::vector<double>& params) const override {
-    const std::vector<Element>& elements = list(scene);
+  void paramsAt(const SceneData& data, double t, std::vector<double>& params) const override {
+    const std::vector<Element>& elements = list(data.scene());
     params.resize(P * elements.size());
     for (std::size_t e = 0; e < elements.size(); ++e) {
       if constexpr (Kind::kMayDependOnTime) {
-        Kind::paramsAt(scene, elements[e], t, &params[P * e]);
+        Kind::paramsAt(data, static_cast<int>(e), t, &params[P * e]);
       } else {
-        Kind::params(scene, elements[e], &params[P * e]);
+        Kind::params(data.scene(), elements[e], &params[P * e]);
       }
     }
   }

@@ -20,6 +20,8 @@
 
 namespace stabint {
 
+class SceneData;
+
 class ElementType;
 
 /// Which term of the potential an element's energy belongs to: the blend books pins apart
@@ -76,9 +78,11 @@ class ElementType {
   virtual void validate(const Scene& scene) const = 0;
   /// The block of a validated scene at t = 0 (contribution_base left to the caller).
   virtual ElementBlock build(const Scene& scene) const = 0;
-  /// True when the params depend on time (pins with moving targets); then paramsAt gives them.
-  virtual bool timeDependent(const Scene& scene) const = 0;
-  virtual void paramsAt(const Scene& scene, double t, std::vector<double>& params) const = 0;
+  /// True when the params depend on time (pins with moving or user-driven targets); then
+  /// paramsAt gives them. Both read the forcing of `data`, which a running simulation may change
+  /// (SceneData::forcingVersion()).
+  virtual bool timeDependent(const SceneData& data) const = 0;
+  virtual void paramsAt(const SceneData& data, double t, std::vector<double>& params) const = 0;
   /// Appends the elements of `part` to `into`, with vertex indices shifted by `offset`.
   virtual void appendShifted(Scene& into, const Scene& part, int offset) const = 0;
 

@@ -2,7 +2,6 @@
 // A x = x_j (coefficient [1]), w = k, p = q(t): the only element whose params depend on time.
 #include "elements/element_kind.hpp"
 
-#include <algorithm>
 #include <cmath>
 
 namespace stabint {
@@ -34,17 +33,18 @@ struct PinKind : KindDefaults<Pin> {
     }
   }
 
-  static bool timeDependent(const Scene& scene) {
-    return std::any_of(scene.pins.begin(), scene.pins.end(), [](const Pin& p) { return p.target.moving(); });
+  static bool timeDependent(const SceneData& data) { return data.hasMovingPins(); }
+  // The target comes from the forcing (the scene's law, or the user's ramp once one was set).
+  static void paramsAt(const SceneData& data, int pin, double t, double* p) {
+    write(data.scene().pins[pin].stiffness, data.pinTarget(pin, t), p);
   }
-  static void paramsAt(const Scene&, const Pin& pin, double t, double* p) {
-    const Eigen::Vector3d q = pin.target.at(t);
-    p[0] = pin.stiffness;
+  static void params(const Scene&, const Pin& pin, double* p) { write(pin.stiffness, pin.target.at(0.0), p); }
+  static void write(double stiffness, const Eigen::Vector3d& q, double* p) {
+    p[0] = stiffness;
     p[1] = q.x();
     p[2] = q.y();
     p[3] = q.z();
   }
-  static void params(const Scene& scene, const Pin& pin, double* p) { paramsAt(scene, pin, 0.0, p); }
 
   static double project(const double* ax, const double* params, double* p) {
     for (int c = 0; c < 3; ++c) p[c] = params[1 + c];

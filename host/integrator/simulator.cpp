@@ -4,6 +4,7 @@
 
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
+#include "integrator/checkpoint.hpp"
 #include "integrator/damping.hpp"
 #include "integrator/rigid_motion.hpp"
 #include "integrator/root_find.hpp"
@@ -108,7 +109,6 @@ struct Simulator::Impl {
     const double g = s.gravity.norm();
     const double size = x.rows() > 0 ? (x.colwise().maxCoeff() - x.colwise().minCoeff()).norm() : 0.0;
     energy_scale = kinetic + potential.elastic() + s.masses.sum() * g * size;
-    momentum_conserved = s.pins.empty() && s.force_fields.empty();
     backend->times() = PhaseTimes{};
   }
 
@@ -253,6 +253,11 @@ struct Simulator::Impl {
 
   double tolerance() const { return options.energy_tolerance * (kinetic + potential.elastic() + energy_scale); }
 
+  // No pins, no force fields and no user forces: IM keeps linear and angular momentum.
+  bool momentumConserved() const {
+    return scene.scene().pins.empty() && scene.scene().force_fields.empty() && !scene.hasUserForces();
+  }
+
   // The blend's corrections of the accepted state (host copies x_new, v_new; kXNew on the
   // backend), so that the energy it keeps is motion [project rules, docs/method.md]:
   // 1. after a BE blend, the IM candidate's linear and angular momentum are put back with a rigid
@@ -278,18 +283,18 @@ struct Simulator::Impl {
     const double tau = tolerance();
     auto excess = [&] { return kineticEnergy(v_new) + p_new.total() - target_now; };
     if (excess() < -tau) {
-      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/momentum_conserved,
+      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/momentumConserved(),
                                  1.0, options.max_velocity_scale);
     } else if (excess() > tau) {
       changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
       if (excess() > tau && report.branch == BlendBranch::BackwardEuler) {
         p_new = lowerPotentialTowardPartner(target_now - kineticEnergy(v_new), p_new, report);
         // Moving the positions moved the angular momentum about the origin with them.
-        if (momentum_conserved && im_momenta_known)
+        if (momentumConserved() && im_momenta_known)
           setMomenta(rigidMotion(scene.masses(), x_new, v_new), im_momenta.momentum,
                      im_momenta.angularMomentumAboutOrigin(), x_new, v_new);
       }
-      if (excess() > tau && !momentum_conserved)
+      if (excess() > tau && !momentumConserved())
         changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/false, 0.0, 1.0);
     }
     if (k_before > 0.0) report.velocity_scale = std::sqrt(kineticEnergy(v_new) / k_before);
@@ -348,7 +353,7 @@ struct Simulator::Impl {
   // curved handle paths; at x_n it pumped +k/2 |dq|^2 per step.) `x_new` is the step's new
   // positions (the IM candidate for the blend) and `p_new` their potential at t + h.
   double forcingWork(int x_new_slot, const PotentialEnergy& p_new, StepReport& report) {
-    if (!scene.hasTimeDependentForcing()) return 0.0;
+    if (!scene.forcingChangesDuring(t, t + options.time_step)) return 0.0;
     const double tm = t + 0.5 * options.time_step;
     const PotentialEnergy new_at_midtime = backend->potential(x_new_slot, tm);
     const PotentialEnergy old_at_midtime = backend->potential(kX, tm);
@@ -366,6 +371,7 @@ struct Simulator::Impl {
     StepReport r;
     r.step = steps;
     r.time = t1;
+    r.event_energy = pending_event_energy;
     double target_now = target;
 
     PotentialEnergy p_new;
@@ -427,6 +433,7 @@ struct Simulator::Impl {
     kinetic = k_new;
     potential = p_new;
     target = target_now;
+    pending_event_energy = 0.0;
 
     r.energy = EnergyReport{kinetic, potential.elastic(), potential.external};
     r.target = target;
@@ -434,6 +441,94 @@ struct Simulator::Impl {
     r.times.bookkeeping = std::max(0.0, secondsSince(start) - r.times.total());
     report = r;
     return report;
+  }
+
+  // ---- per-frame input (docs/method.md, "Per-frame input") ------------------------------------
+  void checkState(const Eigen::MatrixX3d& m, const char* field) const {
+    if (m.rows() != scene.numParticles())
+      throw InvalidInputError(std::string(field) + ": " + std::to_string(m.rows()) + " rows, expected one per particle (" +
+                              std::to_string(scene.numParticles()) + ")");
+    for (Eigen::Index j = 0; j < m.rows(); ++j)
+      if (!m.row(j).allFinite())
+        throw InvalidInputError(std::string(field) + ": row " + std::to_string(j) + " is not finite");
+  }
+
+  void checkPin(int pin) const {
+    const int pins = static_cast<int>(scene.scene().pins.size());
+    if (pin < 0 || pin >= pins)
+      throw InvalidInputError("pin " + std::to_string(pin) + " out of range (the scene has " + std::to_string(pins) +
+                              " pins)");
+  }
+
+  void setPinTarget(int pin, const Eigen::Vector3d& q) {
+    checkPin(pin);
+    if (!q.allFinite()) throw InvalidInputError("pin " + std::to_string(pin) + ": target is not finite");
+    scene.rampPinTarget(pin, q, t, t + options.time_step);
+  }
+
+  void setExternalForces(const Eigen::MatrixX3d& f) {
+    checkState(f, "external forces");
+    scene.rampUserForces(f, t, t + options.time_step);
+  }
+
+  // A discontinuous event: H* moves by the jump of H (the user's work), BDF2 restarts.
+  void setState(const Eigen::MatrixX3d& x_set, const Eigen::MatrixX3d& v_set) {
+    checkState(x_set, "positions");
+    checkState(v_set, "velocities");
+    const double h_before = kinetic + potential.total();
+    backend->write(kX, x_set);
+    backend->write(kV, v_set);
+    // The slots may hold less precision (OpenCL float): the host copies are what they hold.
+    backend->read(kX, x);
+    backend->read(kV, v);
+    potential = backend->potential(kX, t);
+    kinetic = kineticEnergy(v);
+    const double event = kinetic + potential.total() - h_before;
+    target += event;
+    pending_event_energy += event;
+    has_history = false;
+  }
+
+  CheckpointData checkpointData() const {
+    CheckpointData d;
+    d.scene_fingerprint = sceneFingerprint(scene.scene());
+    d.particles = scene.numParticles();
+    d.pins = static_cast<std::int64_t>(scene.scene().pins.size());
+    d.time = t;
+    d.steps = steps;
+    d.target = target;
+    d.kinetic = kinetic;
+    d.potential = potential;
+    d.pending_event_energy = pending_event_energy;
+    d.has_history = has_history;
+    d.x = x;
+    d.v = v;
+    backend->read(kXPrev, d.x_prev);
+    backend->read(kVPrev, d.v_prev);
+    d.forcing = scene.forcingState();
+    return d;
+  }
+
+  void restore(const CheckpointData& d) {
+    if (d.particles != scene.numParticles() || d.pins != static_cast<std::int64_t>(scene.scene().pins.size()) ||
+        d.scene_fingerprint != sceneFingerprint(scene.scene()))
+      throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
+                              " particles, " + std::to_string(d.pins) + " pins, or other masses or rest shape)");
+    backend->write(kX, d.x);
+    backend->write(kV, d.v);
+    backend->write(kXPrev, d.x_prev);
+    backend->write(kVPrev, d.v_prev);
+    x = d.x;
+    v = d.v;
+    t = d.time;
+    steps = static_cast<int>(d.steps);
+    target = d.target;
+    kinetic = d.kinetic;
+    potential = d.potential;
+    pending_event_energy = d.pending_event_energy;
+    has_history = d.has_history;
+    scene.setForcingState(d.forcing);
+    report = StepReport{};
   }
 
   [[noreturn]] void refuse(const StepReport& r, const std::string& what, bool energy_limit = false) {
@@ -460,10 +555,10 @@ struct Simulator::Impl {
   PotentialEnergy potential;       // of the accepted state at time t
   double target = 0.0;
   double energy_scale = 0.0;
-  bool momentum_conserved = false;  // no pins and no force fields: IM keeps P and L
   RigidMotion im_momenta;           // of the IM candidate, when the blend took a BE partner
   bool im_momenta_known = false;
   Eigen::MatrixX3d x_im, v_im;      // host copies of that candidate
+  double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
   StepReport report;
 };
 
@@ -487,5 +582,33 @@ const Scene& Simulator::scene() const { return impl_->scene.scene(); }
 const SimulatorOptions& Simulator::options() const { return impl_->options; }
 const StepReport& Simulator::lastReport() const { return impl_->report; }
 std::string Simulator::backendDescription() const { return impl_->backend->description(); }
+
+void Simulator::setPinTarget(int pin, const Eigen::Vector3d& target) { impl_->setPinTarget(pin, target); }
+Eigen::Vector3d Simulator::pinTarget(int pin) const {
+  impl_->checkPin(pin);
+  return impl_->scene.pinTarget(pin, impl_->t);
+}
+void Simulator::setExternalForces(const Eigen::MatrixX3d& forces) { impl_->setExternalForces(forces); }
+void Simulator::setState(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+  impl_->setState(positions, velocities);
+}
+void Simulator::setPositions(const Eigen::MatrixX3d& positions) { impl_->setState(positions, impl_->v); }
+void Simulator::setVelocities(const Eigen::MatrixX3d& velocities) { impl_->setState(impl_->x, velocities); }
+void Simulator::setIterations(int iterations) {
+  if (iterations < 1) throw InvalidInputError("iterations = " + std::to_string(iterations) + " must be >= 1");
+  impl_->options.iterations = iterations;
+}
+
+Checkpoint Simulator::checkpoint() const {
+  Checkpoint c;
+  c.bytes_ = serializeCheckpoint(impl_->checkpointData());
+  c.time_ = impl_->t;
+  c.step_count_ = impl_->steps;
+  return c;
+}
+
+void Simulator::restore(const Checkpoint& checkpoint) {
+  impl_->restore(parseCheckpoint(checkpoint.bytes(), "checkpoint"));
+}
 
 }  // namespace stabint

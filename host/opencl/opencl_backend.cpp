@@ -81,17 +81,13 @@ class OpenCLBackend final : public Backend {
     for (const ElementBlock& block : scene.blocks()) {
       DeviceBlock d;
       d.block = &block;
-      d.time_dependent = block.type->timeDependent(scene.scene());
       d.vertices = upload(block.vertices);
       d.coefficients = upload(toReal(block.coefficients.data(), block.coefficients.size()));
-      d.params = d.time_dependent ? zeroBuffer(block.params.size())
-                                  : upload(toReal(block.params.data(), block.params.size()));
+      d.params = zeroBuffer(block.params.size());  // filled by uploadForcing below
       blocks_.push_back(std::move(d));
     }
-    // A step writes x, v and the forcing (f_ext, time-dependent params) between two waits.
-    std::size_t timed = 0;
-    for (const DeviceBlock& d : blocks_) timed += d.time_dependent ? 1 : 0;
-    pending_writes_.resize(3 + timed);
+    // A step writes x, v and the forcing (f_ext, params of any block) between two waits.
+    pending_writes_.resize(3 + blocks_.size());
 
     buildKernels();
 
@@ -218,12 +214,12 @@ class OpenCLBackend final : public Backend {
   static constexpr int kMinTermsPerWorkItem = 4;
 
   // An element block on the device; the params of a time-dependent type are rewritten whenever
-  // the time changes.
+  // the time changes, those of every type whenever the forcing changes (SceneData's version).
   struct DeviceBlock {
     const ElementBlock* block = nullptr;
-    bool time_dependent = false;
     cl::Buffer vertices, coefficients, params;
     double params_time = std::numeric_limits<double>::quiet_NaN();
+    int params_version = -1;
     std::vector<double> host_params;
   };
 
@@ -266,16 +262,25 @@ class OpenCLBackend final : public Backend {
   // and they depend on time (or everything once, at construction).
   void uploadForcing(double t, bool force) {
     const auto start = Clock::now();
-    if (force || (scene_.hasTimeDependentForceFields() && t != fext_time_)) {
+    const int version = scene_.forcingVersion();
+    if (force || version != fext_version_ || (scene_.hasTimeDependentForces() && t != fext_time_)) {
       scene_.externalForces(t, host_fext_);
       writeAsync(fext_, host_fext_.data(), std::size_t(host_fext_.size()));
       fext_time_ = t;
+      fext_version_ = version;
     }
     for (DeviceBlock& d : blocks_) {
-      if (!d.time_dependent || d.block->count == 0 || (!force && t == d.params_time)) continue;
-      d.block->type->paramsAt(scene_.scene(), t, d.host_params);
+      if (d.block->count == 0) continue;
+      const bool timed = d.block->type->timeDependent(scene_);
+      if (!force && version == d.params_version && (!timed || t == d.params_time)) continue;
+      if (timed) {
+        d.block->type->paramsAt(scene_, t, d.host_params);
+      } else {
+        d.host_params = d.block->params;
+      }
       writeAsync(d.params, d.host_params.data(), d.host_params.size());
       d.params_time = t;
+      d.params_version = version;
     }
     times_.transfer += secondsSince(start);
   }
@@ -492,6 +497,7 @@ class OpenCLBackend final : public Backend {
   cl::Event element_event_, gather_event_;
 
   double fext_time_ = std::numeric_limits<double>::quiet_NaN();
+  int fext_version_ = -1;
   Eigen::MatrixX3d host_fext_;
   std::vector<Real> staging_;
   struct PendingWrite {

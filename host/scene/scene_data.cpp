@@ -42,7 +42,16 @@ SceneData::SceneData(const Scene& scene) {
                              [](const Pin& p) { return p.target.moving(); });
   time_dependent_fields_ = std::any_of(scene_.force_fields.begin(), scene_.force_fields.end(),
                                        [](const ForceField& f) { return f.timeDependent(); });
-  time_dependent_forcing_ = moving_pins_ || time_dependent_fields_;
+  pin_ramps_.resize(scene_.pins.size());
+}
+
+Eigen::MatrixX3d SceneData::Ramp::at(double t) const {
+  // s is exactly 0 at t0 and exactly 1 at t1 (t1 - t0 divided by itself), so a step's start and
+  // end see the values the user gave, bit for bit.
+  if (!(t < t1)) return end;
+  if (!(t > t0)) return start;
+  const double s = (t - t0) / (t1 - t0);
+  return (1.0 - s) * start + s * end;
 }
 
 void SceneData::externalForces(double t, Eigen::MatrixX3d& out) const {
@@ -55,11 +64,45 @@ void SceneData::externalForces(double t, Eigen::MatrixX3d& out) const {
       for (int j : field.particles) out.row(j) += f;
     }
   }
+  if (user_forces_.active) out += user_forces_.at(t);
+}
+
+Eigen::Vector3d SceneData::pinTarget(int pin, double t) const {
+  const Ramp& ramp = pin_ramps_[pin];
+  if (ramp.active) return ramp.at(t).row(0).transpose();
+  return scene_.pins[pin].target.at(t);
 }
 
 void SceneData::pinTargets(double t, Eigen::MatrixX3d& out) const {
   out.resize(static_cast<Eigen::Index>(scene_.pins.size()), 3);
-  for (size_t i = 0; i < scene_.pins.size(); ++i) out.row(i) = scene_.pins[i].target.at(t).transpose();
+  for (size_t i = 0; i < scene_.pins.size(); ++i) out.row(i) = pinTarget(static_cast<int>(i), t).transpose();
+}
+
+bool SceneData::forcingChangesDuring(double t0, double t1) const {
+  if (moving_pins_ || time_dependent_fields_) return true;
+  auto changes = [&](const Ramp& r) { return r.active && r.t1 > t0 && r.t0 < t1 && r.start != r.end; };
+  return changes(user_forces_) || std::any_of(pin_ramps_.begin(), pin_ramps_.end(), changes);
+}
+
+void SceneData::rampPinTarget(int pin, const Eigen::Vector3d& target, double t0, double t1) {
+  Ramp& ramp = pin_ramps_[pin];
+  const Eigen::Vector3d start = pinTarget(pin, t0);
+  if (!ramp.active) ++ramped_pins_;
+  ramp = Ramp{t0, t1, start.transpose(), target.transpose(), true};
+  ++forcing_version_;
+}
+
+void SceneData::rampUserForces(const Eigen::MatrixX3d& forces, double t0, double t1) {
+  const Eigen::MatrixX3d start = user_forces_.active ? user_forces_.at(t0) : Eigen::MatrixX3d::Zero(n_, 3);
+  user_forces_ = Ramp{t0, t1, start, forces, true};
+  ++forcing_version_;
+}
+
+void SceneData::setForcingState(const ForcingState& state) {
+  pin_ramps_ = state.pins;
+  ramped_pins_ = static_cast<int>(std::count_if(pin_ramps_.begin(), pin_ramps_.end(), [](const Ramp& r) { return r.active; }));
+  user_forces_ = state.user_forces;
+  ++forcing_version_;
 }
 
 }  // namespace stabint

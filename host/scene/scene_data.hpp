@@ -1,6 +1,8 @@
 #pragma once
 // SceneData: the validated scene in the form both backends consume. Built once per Simulator;
-// everything here is immutable afterwards except through the time-dependent forcing queries.
+// everything here is immutable afterwards except the forcing: pin targets and external forces,
+// which a running simulation's input replaces (docs/method.md, "Per-frame input"). Backends
+// evaluate the forcing through pinTarget/externalForces and key their caches on forcingVersion().
 #include "elements/element_type.hpp"
 
 #include <stabint/scene.hpp>
@@ -33,14 +35,49 @@ class SceneData {
   const std::vector<ElementBlock>& blocks() const { return blocks_; }
   const ContributionCsr& csr() const { return csr_; }
 
-  /// External force m_j g + sum of force fields at time t, `n by 3`.
+  /// External force m_j g + sum of force fields + the user's forces at time t, `n by 3`.
   void externalForces(double t, Eigen::MatrixX3d& out) const;
+  /// Target of pin i at time t: the user's ramp once one was set, else the scene's law q(t).
+  Eigen::Vector3d pinTarget(int pin, double t) const;
   /// Pin targets q(t), `#pins by 3`.
   void pinTargets(double t, Eigen::MatrixX3d& out) const;
   /// True when pins move or force fields change with time (the blend then books forcing).
-  bool hasTimeDependentForcing() const { return time_dependent_forcing_; }
-  bool hasTimeDependentForceFields() const { return time_dependent_fields_; }
-  bool hasMovingPins() const { return moving_pins_; }
+  bool hasTimeDependentForcing() const { return hasMovingPins() || hasTimeDependentForces(); }
+  /// Pin targets or external forces that may change with time: a pin law that moves, a force
+  /// field that varies, or any user ramp (their params are then evaluated per time).
+  bool hasTimeDependentForces() const { return time_dependent_fields_ || user_forces_.active; }
+  bool hasMovingPins() const { return moving_pins_ || ramped_pins_ > 0; }
+  /// setExternalForces was called: the scene no longer conserves momentum.
+  bool hasUserForces() const { return user_forces_.active; }
+  /// True when the forcing differs anywhere between t0 and t1 (so a step over [t0, t1] does work
+  /// through it); false once every ramp has reached its end value and no law moves.
+  bool forcingChangesDuring(double t0, double t1) const;
+
+  // ---- input of a running simulation: linear ramps over the next step ------------------------
+  /// Pin `pin`'s target moves linearly from its value at t0 to `target` at t1 and stays there;
+  /// the scene's law for that pin is no longer used.
+  void rampPinTarget(int pin, const Eigen::Vector3d& target, double t0, double t1);
+  /// The user's per-particle forces move linearly from their value at t0 to `forces` at t1 and
+  /// stay there (zero before the first call).
+  void rampUserForces(const Eigen::MatrixX3d& forces, double t0, double t1);
+  /// Incremented by every change of the forcing (ramps, restore), so cached forcing is refreshed.
+  int forcingVersion() const { return forcing_version_; }
+
+  /// The mutable forcing, for checkpoints: everything the ramps changed.
+  struct Ramp {
+    double t0 = 0.0, t1 = 0.0;
+    Eigen::MatrixX3d start, end;  // values at t0 and t1 (1 by 3 for a pin, n by 3 for forces)
+    bool active = false;
+    /// Exactly `start` at t0 and `end` at and after t1.
+    Eigen::MatrixX3d at(double t) const;
+  };
+  struct ForcingState {
+    std::vector<Ramp> pins;  // one per pin; inactive: the scene's law
+    Ramp user_forces;
+  };
+  ForcingState forcingState() const { return ForcingState{pin_ramps_, user_forces_}; }
+  /// Replaces the forcing with a saved one of the same scene (sizes checked by the caller).
+  void setForcingState(const ForcingState& state);
 
  private:
   Scene scene_;
@@ -49,7 +86,10 @@ class SceneData {
   ContributionCsr csr_;
   bool moving_pins_ = false;
   bool time_dependent_fields_ = false;
-  bool time_dependent_forcing_ = false;
+  std::vector<Ramp> pin_ramps_;
+  int ramped_pins_ = 0;
+  Ramp user_forces_;
+  int forcing_version_ = 0;
 };
 
 }  // namespace stabint

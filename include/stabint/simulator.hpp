@@ -135,12 +135,40 @@ struct StepReport {
   BlendBranch branch = BlendBranch::None;
   double alpha = 0.0;     // blend weight of the BE partner (0 = pure IM)
   double velocity_scale = 1.0;  // factor the blend applied to the velocities (1 = none)
+  /// Energy added to H* by discontinuous input since the previous step (setState, setPositions,
+  /// setVelocities): the jump of H it caused, booked as the user's work (docs/method.md).
+  double event_energy = 0.0;
   int iterations = 0;     // local/global iterations of all solves in this step
   int energy_evaluations = 0;  // element energy passes (root find included)
   PhaseTimes times;
 };
 
 class Backend;  // host/backend.hpp; not part of the public API
+
+/// A snapshot of a running simulation: time, step count, state, BDF2 history, the tracked
+/// target H* and the forcing set by per-frame input (pin targets, external forces). Restoring it
+/// into a Simulator of the same scene continues bit for bit as the original did from that moment
+/// (same options, same backend and precision). Options are not part of it. The serialized form
+/// (bytes(), save()) is a versioned binary format of this library version and this machine's
+/// byte order.
+class Checkpoint {
+ public:
+  double time() const { return time_; }
+  int stepCount() const { return step_count_; }
+  const std::string& bytes() const { return bytes_; }
+  /// Checks the header and sizes; throws FileFormatError naming `origin` and the problem.
+  static Checkpoint fromBytes(std::string bytes, const std::string& origin = "checkpoint");
+  /// Writes bytes() to a file; throws FileFormatError when it cannot be written completely.
+  void save(const std::string& path) const;
+  /// Reads a file written by save(); throws FileFormatError when missing or malformed.
+  static Checkpoint load(const std::string& path);
+
+ private:
+  friend class Simulator;
+  std::string bytes_;
+  double time_ = 0.0;
+  int step_count_ = 0;
+};
 
 /// Steps a scene with one integrator. The scene is validated and copied at construction; the
 /// caller's scene is never modified.
@@ -175,6 +203,36 @@ class Simulator {
   const StepReport& lastReport() const;
   /// Human-readable description of the backend and device in use.
   std::string backendDescription() const;
+
+  // ---- per-frame input (docs/method.md, "Per-frame input") --------------------------------------
+  // Every call validates its arguments first and throws InvalidInputError naming the problem
+  // without changing anything. The energy each one puts in is booked in H*, so the blend never
+  // undoes it.
+
+  /// Pin `pin`'s target moves linearly from its current value to `target` over the next step and
+  /// stays there (its scripted law, if any, is no longer used). Call it every frame with the
+  /// hand's position to drag; the work is booked by the forcing rule, like a scripted pin.
+  void setPinTarget(int pin, const Eigen::Vector3d& target);
+  /// Current target of a pin (its law's or the last set one's value at time()).
+  Eigen::Vector3d pinTarget(int pin) const;
+  /// Per-particle external forces (`n by 3`, newtons, added to gravity and force fields): they
+  /// move linearly from their current value to `forces` over the next step and persist until
+  /// the next call (set zeros to remove them). Booked by the forcing rule.
+  void setExternalForces(const Eigen::MatrixX3d& forces);
+  /// Replaces positions and/or velocities (teleport, reset; `n by 3`, finite). A discontinuous
+  /// event: H* moves by the jump of H it causes (reported in the next step's event_energy), and
+  /// BDF2 restarts from this state, as a fresh simulator would.
+  void setState(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  void setPositions(const Eigen::MatrixX3d& positions);
+  void setVelocities(const Eigen::MatrixX3d& velocities);
+  /// Local/global iteration budget of every later step (>= 1); time, state and H* are kept.
+  void setIterations(int iterations);
+
+  /// Snapshot of the current simulation (see Checkpoint).
+  Checkpoint checkpoint() const;
+  /// Continues from a snapshot of a Simulator of the same scene. Throws InvalidInputError when it
+  /// belongs to another scene (particle or pin count, masses or rest shape differ).
+  void restore(const Checkpoint& checkpoint);
 
  private:
   struct Impl;

@@ -1,0 +1,198 @@
+#include "integrator/checkpoint.hpp"
+
+#include "io/text_reader.hpp"
+
+#include <stabint/simulator.hpp>
+
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <type_traits>
+
+namespace stabint {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'T', 'B', 'C', 'K', 'P', 'T', '\n'};
+constexpr std::uint32_t kVersion = 1;
+
+class Writer {
+ public:
+  template <typename T>
+  void value(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    out_.append(reinterpret_cast<const char*>(&v), sizeof(T));
+  }
+  void flag(bool b) { value(static_cast<std::uint8_t>(b ? 1 : 0)); }
+  // Rows and columns first, then the values row by row.
+  void matrix(const Eigen::MatrixX3d& m) {
+    value(static_cast<std::int64_t>(m.rows()));
+    for (Eigen::Index i = 0; i < m.rows(); ++i)
+      for (int c = 0; c < 3; ++c) value(m(i, c));
+  }
+  void ramp(const SceneData::Ramp& r) {
+    flag(r.active);
+    value(r.t0);
+    value(r.t1);
+    matrix(r.start);
+    matrix(r.end);
+  }
+  std::string take() { return std::move(out_); }
+
+ private:
+  std::string out_;
+};
+
+class Reader {
+ public:
+  Reader(const std::string& bytes, const std::string& origin) : bytes_(bytes), origin_(origin) {}
+
+  template <typename T>
+  T value(const char* what) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if (bytes_.size() - pos_ < sizeof(T)) fail(std::string("truncated at ") + what);
+    T v;
+    std::memcpy(&v, bytes_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+  bool flag(const char* what) {
+    const auto b = value<std::uint8_t>(what);
+    if (b > 1) fail(std::string(what) + ": not a flag");
+    return b == 1;
+  }
+  // A matrix of `expected_rows` rows (checked before anything is allocated).
+  Eigen::MatrixX3d matrix(std::int64_t expected_rows, const char* what) {
+    const auto rows = value<std::int64_t>(what);
+    if (rows != expected_rows)
+      fail(std::string(what) + ": " + std::to_string(rows) + " rows, expected " + std::to_string(expected_rows));
+    Eigen::MatrixX3d m(rows, 3);
+    for (Eigen::Index i = 0; i < rows; ++i)
+      for (int c = 0; c < 3; ++c) m(i, c) = value<double>(what);
+    return m;
+  }
+  SceneData::Ramp ramp(std::int64_t rows, const char* what) {
+    SceneData::Ramp r;
+    r.active = flag(what);
+    r.t0 = value<double>(what);
+    r.t1 = value<double>(what);
+    r.start = matrix(r.active ? rows : 0, what);
+    r.end = matrix(r.active ? rows : 0, what);
+    return r;
+  }
+  void expectEnd() {
+    if (pos_ != bytes_.size()) fail(std::to_string(bytes_.size() - pos_) + " bytes after the end");
+  }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw FileFormatError(origin_, 0, "not a valid stabint checkpoint: " + what);
+  }
+
+ private:
+  const std::string& bytes_;
+  const std::string& origin_;
+  std::size_t pos_ = 0;
+};
+
+// Counts that size allocations come from an untrusted file: at most what the remaining bytes
+// can hold (three doubles a row), checked before anything is allocated.
+void checkCount(Reader& in, std::int64_t count, std::size_t bytes, const char* what) {
+  if (count < 0 || static_cast<std::uint64_t>(count) > bytes / (3 * sizeof(double)))
+    in.fail(std::string(what) + " = " + std::to_string(count) + " does not fit the data");
+}
+
+}  // namespace
+
+std::uint64_t sceneFingerprint(const Scene& scene) {
+  std::uint64_t hash = 1469598103934665603ull;
+  auto mix = [&](const double* data, Eigen::Index count) {
+    const auto* bytes = reinterpret_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < static_cast<std::size_t>(count) * sizeof(double); ++i) {
+      hash ^= bytes[i];
+      hash *= 1099511628211ull;
+    }
+  };
+  mix(scene.masses.data(), scene.masses.size());
+  mix(scene.rest_positions.data(), scene.rest_positions.size());
+  return hash;
+}
+
+std::string serializeCheckpoint(const CheckpointData& d) {
+  Writer out;
+  for (char c : kMagic) out.value(c);
+  out.value(kVersion);
+  out.value(d.scene_fingerprint);
+  out.value(d.particles);
+  out.value(d.pins);
+  out.value(d.time);
+  out.value(d.steps);
+  out.value(d.target);
+  out.value(d.kinetic);
+  out.value(d.potential.internal);
+  out.value(d.potential.pins);
+  out.value(d.potential.external);
+  out.value(d.pending_event_energy);
+  out.flag(d.has_history);
+  out.matrix(d.x);
+  out.matrix(d.v);
+  out.matrix(d.x_prev);
+  out.matrix(d.v_prev);
+  for (const SceneData::Ramp& r : d.forcing.pins) out.ramp(r);
+  out.ramp(d.forcing.user_forces);
+  return out.take();
+}
+
+CheckpointData parseCheckpoint(const std::string& bytes, const std::string& origin) {
+  Reader in(bytes, origin);
+  for (char c : kMagic)
+    if (in.value<char>("the header") != c) in.fail("wrong header");
+  const auto version = in.value<std::uint32_t>("the version");
+  if (version != kVersion) in.fail("format version " + std::to_string(version) + ", expected " + std::to_string(kVersion));
+  CheckpointData d;
+  d.scene_fingerprint = in.value<std::uint64_t>("the scene fingerprint");
+  d.particles = in.value<std::int64_t>("the particle count");
+  d.pins = in.value<std::int64_t>("the pin count");
+  checkCount(in, d.particles, bytes.size(), "particle count");
+  checkCount(in, d.pins, bytes.size(), "pin count");
+  d.time = in.value<double>("the time");
+  d.steps = in.value<std::int64_t>("the step count");
+  if (d.steps < 0 || d.steps > std::numeric_limits<int>::max()) in.fail("step count out of range");
+  d.target = in.value<double>("the target");
+  d.kinetic = in.value<double>("the kinetic energy");
+  d.potential.internal = in.value<double>("the potential energy");
+  d.potential.pins = in.value<double>("the potential energy");
+  d.potential.external = in.value<double>("the potential energy");
+  d.pending_event_energy = in.value<double>("the event energy");
+  d.has_history = in.flag("the history flag");
+  d.x = in.matrix(d.particles, "positions");
+  d.v = in.matrix(d.particles, "velocities");
+  d.x_prev = in.matrix(d.particles, "previous positions");
+  d.v_prev = in.matrix(d.particles, "previous velocities");
+  d.forcing.pins.reserve(static_cast<std::size_t>(d.pins));
+  for (std::int64_t i = 0; i < d.pins; ++i) d.forcing.pins.push_back(in.ramp(1, "a pin target"));
+  d.forcing.user_forces = in.ramp(d.particles, "the external forces");
+  in.expectEnd();
+  return d;
+}
+
+Checkpoint Checkpoint::fromBytes(std::string bytes, const std::string& origin) {
+  const CheckpointData d = parseCheckpoint(bytes, origin);
+  Checkpoint c;
+  c.bytes_ = std::move(bytes);
+  c.time_ = d.time;
+  c.step_count_ = static_cast<int>(d.steps);
+  return c;
+}
+
+void Checkpoint::save(const std::string& path) const {
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  if (!file) throw FileFormatError(path, 0, "cannot open the checkpoint file for writing");
+  file.write(bytes_.data(), static_cast<std::streamsize>(bytes_.size()));
+  file.flush();
+  if (!file) throw FileFormatError(path, 0, "writing the checkpoint failed");
+}
+
+Checkpoint Checkpoint::load(const std::string& path) {
+  // The bounded reader: regular files only, size limited (a FIFO or /dev/zero cannot hang us).
+  return fromBytes(io::readTextFile(path), path);
+}
+
+}  // namespace stabint

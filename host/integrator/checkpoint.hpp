@@ -1,0 +1,35 @@
+#pragma once
+// The contents of a Checkpoint and its binary form: one place that writes and one that reads
+// (with every size checked), shared by the in-memory and the file checkpoints.
+#include "backend.hpp"
+#include "scene/scene_data.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <string>
+
+namespace stabint {
+
+struct CheckpointData {
+  std::uint64_t scene_fingerprint = 0;  // sceneFingerprint() of the scene it belongs to
+  std::int64_t particles = 0, pins = 0;
+  double time = 0.0;
+  std::int64_t steps = 0;
+  double target = 0.0;
+  double kinetic = 0.0;
+  PotentialEnergy potential;  // of the state at `time`
+  double pending_event_energy = 0.0;
+  bool has_history = false;
+  Eigen::MatrixX3d x, v, x_prev, v_prev;
+  SceneData::ForcingState forcing;
+};
+
+/// FNV-1a over the masses and rest positions: tells a checkpoint of another scene apart.
+std::uint64_t sceneFingerprint(const Scene& scene);
+
+std::string serializeCheckpoint(const CheckpointData& data);
+/// Throws FileFormatError(origin, 0, ...) for a wrong header, version, or truncated/oversized data.
+CheckpointData parseCheckpoint(const std::string& bytes, const std::string& origin);
+
+}  // namespace stabint

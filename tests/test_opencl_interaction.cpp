@@ -1,0 +1,93 @@
+// Per-frame input on the OpenCL backend: a driven cloth (user pin, user forces, a teleport)
+// follows the CPU reference within the equivalence tolerances of test_opencl_integrators, and
+// checkpoints continue bit for bit in double and float.
+#include "driven_cloth.hpp"
+#include "test_opencl_support.hpp"
+
+#include <gtest/gtest.h>
+
+namespace stabint {
+namespace {
+
+using testing::DrivenCloth;
+using testing::drivenCloth;
+using testing::relativeError;
+
+struct DrivenRun {
+  std::vector<Eigen::MatrixX3d> x;
+  std::vector<StepReport> reports;
+  double energy_scale = 0.0;
+};
+
+// 30 driven steps; at step 10 the velocities are replaced (a discontinuous event).
+DrivenRun drivenRun(const DrivenCloth& d, BackendKind backend, Precision precision) {
+  SimulatorOptions o = d.options;
+  o.backend = backend;
+  o.opencl.precision = precision;
+  Simulator sim(d.scene, o);
+  DrivenRun run;
+  run.energy_scale = sim.energyScale();
+  for (int i = 0; i < 30; ++i) {
+    if (i == 10) sim.setVelocities(sim.velocities() + Eigen::MatrixX3d::Constant(d.scene.numParticles(), 3, 0.1));
+    d.drive(sim);
+    run.reports.push_back(sim.step());
+    run.x.push_back(sim.positions());
+  }
+  return run;
+}
+
+TEST(OpenCLInteraction, DrivenClothMatchesCpu) {
+  for (Precision precision : {Precision::Double, Precision::Float}) {
+    const std::string skip = testing::openclSkipReason(precision);
+    if (!skip.empty()) {
+      std::printf("  %s skipped: %s\n", testing::precisionName(precision), skip.c_str());
+      continue;
+    }
+    // The blend's branch decisions compare energies against its tolerance; in float they may
+    // differ from the CPU's, so float is checked on the integrators without decisions.
+    const std::vector<Integrator> integrators =
+        precision == Precision::Double
+            ? std::vector<Integrator>{Integrator::BackwardEuler, Integrator::BDF2, Integrator::EnergyBlend}
+            : std::vector<Integrator>{Integrator::BackwardEuler, Integrator::BDF2};
+    // Tolerances of test_opencl_integrators: 1e-9 relative in double, 1e-3 in float.
+    const double tol = precision == Precision::Double ? 1e-9 : 1e-3;
+    for (Integrator integrator : integrators) {
+      const DrivenCloth d = drivenCloth(integrator);
+      const DrivenRun ref = drivenRun(d, BackendKind::CpuReference, Precision::Double);
+      const DrivenRun got = drivenRun(d, BackendKind::OpenCL, precision);
+      ASSERT_EQ(got.x.size(), ref.x.size());
+      for (size_t i = 0; i < ref.x.size(); ++i) {
+        const std::string what = std::string(integratorName(integrator)) + " " + testing::precisionName(precision) +
+                                 " step " + std::to_string(i);
+        EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
+        EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << what;
+        EXPECT_NEAR(got.reports[i].event_energy, ref.reports[i].event_energy, tol * ref.energy_scale) << what;
+        EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << what;
+      }
+      EXPECT_NE(ref.reports[10].event_energy, 0.0);
+    }
+  }
+}
+
+TEST(OpenCLInteraction, CheckpointsContinueBitForBit) {
+  for (Precision precision : {Precision::Double, Precision::Float}) {
+    if (!testing::openclSkipReason(precision).empty()) continue;
+    for (Integrator integrator : {Integrator::EnergyBlend, Integrator::BDF2}) {
+      DrivenCloth d = drivenCloth(integrator);
+      d.options.backend = BackendKind::OpenCL;
+      d.options.opencl.precision = precision;
+      Simulator sim(d.scene, d.options);
+      d.run(sim, 10);
+      const Checkpoint c = sim.checkpoint();
+      const std::vector<Eigen::MatrixX3d> original = d.run(sim, 10);
+      sim.restore(c);
+      EXPECT_EQ(d.run(sim, 10), original) << integratorName(integrator) << " " << testing::precisionName(precision);
+      Simulator other(d.scene, d.options);
+      other.restore(c);
+      EXPECT_EQ(d.run(other, 10), original) << integratorName(integrator) << " " << testing::precisionName(precision);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace stabint

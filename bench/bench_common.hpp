@@ -79,4 +79,5 @@ namespace stabint::bench {
 void registerStepCases();       // bench_steps.cpp
 void registerIterationCases();  // bench_iterations.cpp
 void registerSolverCases();     // bench_solver.cpp
+void registerInteractionCases();  // bench_interaction.cpp
 }  // namespace stabint::bench

@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   bench::registerStepCases();
   bench::registerIterationCases();
   bench::registerSolverCases();
+  bench::registerInteractionCases();
   benchmark::RunSpecifiedBenchmarks();
   bench::releaseAllFixtures();  // OpenCL objects go while the runtime is still loaded
   benchmark::Shutdown();

@@ -1,0 +1,98 @@
+// Per-frame input against plain steps, interleaved in one run (the machine is noisy): on the
+// 50 x 50 cloth with BE, a scripted moving pin, the same motion given by setPinTarget every
+// frame, and per-particle forces set every frame. The counters give each variant's mean step
+// and its ratio to the scripted pin, the work the booking of a moving pin costs anyway.
+#include "bench_common.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <exception>
+
+namespace stabint::bench {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Eigen::Vector3d handleOffset(double t) { return Eigen::Vector3d(0.05 * std::sin(2 * kPi * t), 0.0, 0.0); }
+
+struct InputFixture {
+  Scene scene, scripted_scene;
+  std::unique_ptr<Simulator> scripted, pin_input, force_input;
+  Eigen::MatrixX3d forces;
+};
+
+void runInput(benchmark::State& state, const std::string& key, BackendChoice backend) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  InputFixture* fixture = nullptr;
+  try {
+    fixture = &cachedFixture<InputFixture>(key, [&] {
+      auto f = std::make_unique<InputFixture>();
+      f->scene = clothScene(50);
+      f->scripted_scene = f->scene;
+      f->scripted_scene.pins[0].target.amplitude = Eigen::Vector3d(0.05, 0.0, 0.0);  // = handleOffset(t)
+      f->scripted_scene.pins[0].target.frequency = 1.0;
+      const SimulatorOptions o = optionsFor(backend, Integrator::BackwardEuler);
+      f->scripted = std::make_unique<Simulator>(f->scripted_scene, o);
+      f->pin_input = std::make_unique<Simulator>(f->scene, o);
+      f->force_input = std::make_unique<Simulator>(f->scene, o);
+      f->forces = Eigen::MatrixX3d::Zero(f->scene.numParticles(), 3);
+      for (Simulator* s : {f->scripted.get(), f->pin_input.get(), f->force_input.get()})
+        for (int i = 0; i < 3; ++i) s->step();  // factorizations, first launches
+      return f;
+    });
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  InputFixture& f = *fixture;
+  const Eigen::Vector3d pin0 = f.scene.pins[0].target.position;
+  const double h = f.pin_input->options().time_step;
+  using Clock = std::chrono::steady_clock;
+  auto timed = [](double& sum, auto&& body) {
+    const auto start = Clock::now();
+    body();
+    sum += std::chrono::duration<double>(Clock::now() - start).count();
+  };
+  double scripted = 0, pin_input = 0, force_input = 0;
+  try {
+    for (auto _ : state) {
+      timed(scripted, [&] { f.scripted->step(); });
+      timed(pin_input, [&] {
+        f.pin_input->setPinTarget(0, pin0 + handleOffset(f.pin_input->time() + h));
+        f.pin_input->step();
+      });
+      timed(force_input, [&] {
+        f.forces(7, 2) = 0.01 * std::sin(2 * kPi * (f.force_input->time() + h));
+        f.force_input->setExternalForces(f.forces);
+        f.force_input->step();
+      });
+    }
+  } catch (const NonFiniteStateError& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  using benchmark::Counter;
+  setSizeCounters(state, f.scene);
+  state.counters["scripted_pin_step"] = Counter(scripted, Counter::kAvgIterations);
+  state.counters["pin_input_step"] = Counter(pin_input, Counter::kAvgIterations);
+  state.counters["force_input_step"] = Counter(force_input, Counter::kAvgIterations);
+  state.counters["pin_input_vs_scripted"] = scripted > 0 ? pin_input / scripted : 0.0;
+  state.counters["force_input_vs_scripted"] = scripted > 0 ? force_input / scripted : 0.0;
+  state.SetLabel(f.pin_input->backendDescription());
+}
+
+}  // namespace
+
+void registerInteractionCases() {
+  for (BackendChoice backend : allBackends()) {
+    const std::string name = std::string("input_vs_scripted/cloth50/BE/") + backendLabel(backend);
+    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+      runInput(state, name, backend);
+    })->UseRealTime()->Unit(benchmark::kMillisecond);
+  }
+}
+
+}  // namespace stabint::bench

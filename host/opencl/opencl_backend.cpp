@@ -214,12 +214,13 @@ class OpenCLBackend final : public Backend {
   static constexpr int kMinTermsPerWorkItem = 4;
 
   // An element block on the device; the params of a time-dependent type are rewritten whenever
-  // the time changes, those of every type whenever the forcing changes (SceneData's version).
+  // the time or the forcing (SceneData's version) changes.
   struct DeviceBlock {
     const ElementBlock* block = nullptr;
     cl::Buffer vertices, coefficients, params;
     double params_time = std::numeric_limits<double>::quiet_NaN();
     int params_version = -1;
+    bool params_timed = false;  // the buffer holds paramsAt's values, not the block's own
     std::vector<double> host_params;
   };
 
@@ -272,7 +273,10 @@ class OpenCLBackend final : public Backend {
     for (DeviceBlock& d : blocks_) {
       if (d.block->count == 0) continue;
       const bool timed = d.block->type->timeDependent(scene_);
-      if (!force && version == d.params_version && (!timed || t == d.params_time)) continue;
+      // Constant params are uploaded once, and again only when they replace time-dependent ones
+      // (a restored checkpoint without pin ramps).
+      const bool stale = timed ? (version != d.params_version || t != d.params_time) : d.params_timed;
+      if (!force && !stale) continue;
       if (timed) {
         d.block->type->paramsAt(scene_, t, d.host_params);
       } else {
@@ -281,6 +285,7 @@ class OpenCLBackend final : public Backend {
       writeAsync(d.params, d.host_params.data(), d.host_params.size());
       d.params_time = t;
       d.params_version = version;
+      d.params_timed = timed;
     }
     times_.transfer += secondsSince(start);
   }

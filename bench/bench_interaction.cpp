@@ -1,8 +1,12 @@
-// Per-frame input against plain steps, interleaved in one run (the machine is noisy): on the
+// Per-frame input, grab and release against plain steps, interleaved in one run (the machine
+// is noisy). Input: on the
 // 50 x 50 cloth with BE, a scripted moving pin, the same motion given by setPinTarget every
 // frame, and per-particle forces set every frame. The counters give each variant's mean step
 // and its ratio to the scripted pin, the work the booking of a moving pin costs anyway.
 #include "bench_common.hpp"
+
+#include "scene/scene_data.hpp"
+#include "solver/global_system.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -84,9 +88,96 @@ void runInput(benchmark::State& state, const std::string& key, BackendChoice bac
   state.SetLabel(f.pin_input->backendDescription());
 }
 
+// Grab and release through the public API against plain steps, interleaved: per iteration one
+// simulator grabs a vertex, steps, releases it and steps; its twin only steps twice. The
+// counter `grab_release` is the extra time of the grab and the release together, relative to
+// one plain step (issue 10: at most 0.2).
+struct GrabFixture {
+  std::unique_ptr<Simulator> grabbing, plain;
+};
+
+void runGrab(benchmark::State& state, const std::string& key, BackendChoice backend) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  GrabFixture* fixture = nullptr;
+  try {
+    fixture = &cachedFixture<GrabFixture>(key, [&] {
+      auto f = std::make_unique<GrabFixture>();
+      const SimulatorOptions o = optionsFor(backend, Integrator::BackwardEuler);
+      f->grabbing = std::make_unique<Simulator>(clothScene(50), o);
+      f->plain = std::make_unique<Simulator>(clothScene(50), o);
+      for (Simulator* s : {f->grabbing.get(), f->plain.get()})
+        for (int i = 0; i < 3; ++i) s->step();
+      return f;
+    });
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  GrabFixture& f = *fixture;
+  using Clock = std::chrono::steady_clock;
+  double grabbing = 0, plain = 0;
+  int vertex = 1000;
+  try {
+    for (auto _ : state) {
+      auto start = Clock::now();
+      const int handle = f.grabbing->grab(vertex, 1e4);
+      f.grabbing->step();
+      f.grabbing->release(handle);
+      f.grabbing->step();
+      grabbing += std::chrono::duration<double>(Clock::now() - start).count();
+      start = Clock::now();
+      f.plain->step();
+      f.plain->step();
+      plain += std::chrono::duration<double>(Clock::now() - start).count();
+      vertex = vertex % 2400 + 37;
+    }
+  } catch (const NonFiniteStateError& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  using benchmark::Counter;
+  state.counters["plain_step"] = Counter(plain / 2, Counter::kAvgIterations);
+  state.counters["grab_release"] = plain > 0 ? (grabbing - plain) / (plain / 2) : 0.0;
+  state.SetLabel(f.grabbing->backendDescription());
+}
+
+// The factor change alone: a pin's rank-1 update plus one solve, against dropping the factor and
+// factoring cM + L again before that solve (GlobalSystem::addToDiagonal with `refactor`).
+void runPinChange(benchmark::State& state, bool refactor) {
+  const Scene cloth = clothScene(50);
+  SceneData data(cloth);
+  GlobalSystem system(data);
+  const double c = 900.0;
+  const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(cloth.numParticles(), 3);
+  Eigen::MatrixX3d x;
+  system.solve(c, rhs, x);
+  double sign = 1.0;
+  for (auto _ : state) {
+    system.addToDiagonal(1000, sign * 1e4, refactor);
+    system.solve(c, rhs, x);
+    benchmark::DoNotOptimize(x.data());
+    sign = -sign;
+  }
+  state.SetLabel(refactor ? "refactorization" : "cholmod_updown");
+}
+
 }  // namespace
 
 void registerInteractionCases() {
+  for (BackendChoice backend : allBackends()) {
+    const std::string name = std::string("grab_release_vs_step/cloth50/BE/") + backendLabel(backend);
+    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+      runGrab(state, name, backend);
+    })->UseRealTime()->Unit(benchmark::kMillisecond);
+  }
+  for (bool refactor : {false, true}) {
+    const std::string name = std::string("pin_change_and_solve/cloth50/") + (refactor ? "refactor" : "updown");
+    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) { runPinChange(state, refactor); })
+        ->Unit(benchmark::kMicrosecond);
+  }
   for (BackendChoice backend : allBackends()) {
     const std::string name = std::string("input_vs_scripted/cloth50/BE/") + backendLabel(backend);
     benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {

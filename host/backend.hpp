@@ -47,6 +47,10 @@ class Backend {
   virtual void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
                             PotentialEnergy* energy_at_x = nullptr) = 0;
 
+  /// The scene's element blocks and contribution lists were rebuilt (SceneData::setPins): the
+  /// backend drops what it derived from the old ones.
+  virtual void elementsChanged() {}
+
   /// Phase timers (local, gather, transfer, energy) accumulated since the last reset.
   PhaseTimes& times() { return times_; }
   virtual std::string description() const = 0;

@@ -209,5 +209,37 @@ TEST(GlobalSystem, FactorsOncePerDistinctC) {
   EXPECT_EQ(f.system.factorizations(), 2);
 }
 
+// A pin attached to and detached from a particle by rank-1 updates of the existing factors
+// solves the same systems as fresh factorizations of cM + L (to round-off of the factor), and
+// costs no factorization.
+TEST(GlobalSystem, RankOneUpdatesMatchRefactorization) {
+  const Scene s = clothScene();
+  SceneData data(s);
+  GlobalSystem updated(data), refactored(data);
+  const int n = s.numParticles();
+  const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(n, 3);
+  Eigen::MatrixX3d a, b;
+  for (GlobalSystem* g : {&updated, &refactored}) {
+    g->solve(900.0, rhs, a);
+    g->solve(3600.0, rhs, a);
+  }
+  for (const auto& [vertex, delta] : std::vector<std::pair<int, double>>{{7, 5e3}, {n - 1, 1e5}, {7, -5e3}}) {
+    updated.addToDiagonal(vertex, delta);
+    refactored.addToDiagonal(vertex, delta, /*refactor=*/true);
+    for (double c : {900.0, 3600.0}) {
+      updated.solve(c, rhs, a);
+      refactored.solve(c, rhs, b);
+      EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-12 * b.cwiseAbs().maxCoeff()) << "c = " << c << ", vertex " << vertex;
+    }
+  }
+  EXPECT_EQ(updated.factorizations(), 2);
+  EXPECT_EQ(refactored.factorizations(), 8);
+  // The pin at n - 1 is still there: the matrix differs from the original one.
+  GlobalSystem original(data);
+  original.solve(900.0, rhs, b);
+  updated.solve(900.0, rhs, a);
+  EXPECT_GT((a - b).cwiseAbs().maxCoeff(), 1e-6 * b.cwiseAbs().maxCoeff());
+}
+
 }  // namespace
 }  // namespace stabint

@@ -1,6 +1,6 @@
-// Per-frame input on the OpenCL backend: a driven cloth (user pin, user forces, a teleport)
-// follows the CPU reference within the equivalence tolerances of test_opencl_integrators, and
-// checkpoints continue bit for bit in double and float.
+// Per-frame input on the OpenCL backend: a driven cloth (user pin, user forces, grab and
+// release, a teleport) follows the CPU reference within the equivalence tolerances of
+// test_opencl_integrators, and checkpoints continue bit for bit in double and float.
 #include "driven_cloth.hpp"
 #include "test_opencl_support.hpp"
 
@@ -19,7 +19,8 @@ struct DrivenRun {
   double energy_scale = 0.0;
 };
 
-// 30 driven steps; at step 10 the velocities are replaced (a discontinuous event).
+// 30 driven steps; a handle grabs the bottom corner at step 5 and is released at step 20 (the
+// element set and the factors change), and at step 10 the velocities are replaced.
 DrivenRun drivenRun(const DrivenCloth& d, BackendKind backend, Precision precision) {
   SimulatorOptions o = d.options;
   o.backend = backend;
@@ -27,7 +28,12 @@ DrivenRun drivenRun(const DrivenCloth& d, BackendKind backend, Precision precisi
   Simulator sim(d.scene, o);
   DrivenRun run;
   run.energy_scale = sim.energyScale();
+  const int corner = d.scene.numParticles() - 7;
+  int handle = -1;
   for (int i = 0; i < 30; ++i) {
+    if (i == 5) handle = sim.grab(corner, 5e3);
+    if (i > 5 && i < 20) sim.setPinTarget(handle, d.scene.positions.row(corner).transpose() + Eigen::Vector3d(0, 0, 0.01 * i));
+    if (i == 20) sim.release(handle);
     if (i == 10) sim.setVelocities(sim.velocities() + Eigen::MatrixX3d::Constant(d.scene.numParticles(), 3, 0.1));
     d.drive(sim);
     run.reports.push_back(sim.step());
@@ -65,6 +71,7 @@ TEST(OpenCLInteraction, DrivenClothMatchesCpu) {
         EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << what;
       }
       EXPECT_NE(ref.reports[10].event_energy, 0.0);
+      EXPECT_NE(ref.reports[20].event_energy, 0.0);
     }
   }
 }

@@ -47,6 +47,7 @@ struct ElementBlock {
   std::vector<double> coefficients;
   std::vector<double> params;
   int contribution_base = 0;
+  int revision = 0;  // incremented when the block is rebuilt at run time (SceneData::setPins)
 };
 
 /// Sizes of a type's data, fixed at compile time for each type.
@@ -115,5 +116,7 @@ class ElementType {
 
 /// Every element type, in the order of the contribution numbering and of the kernels' segments.
 const std::vector<const ElementType*>& elementTypes();
+/// The pin type, for what the element set changes at run time (grab and release).
+const ElementType& pinElementType();
 
 }  // namespace stabint

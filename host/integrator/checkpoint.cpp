@@ -29,6 +29,17 @@ class Writer {
     for (Eigen::Index i = 0; i < m.rows(); ++i)
       for (int c = 0; c < 3; ++c) value(m(i, c));
   }
+  void vector(const Eigen::Vector3d& v) {
+    for (int c = 0; c < 3; ++c) value(v[c]);
+  }
+  void pin(const Pin& p) {
+    value(static_cast<std::int64_t>(p.vertex));
+    value(p.stiffness);
+    vector(p.target.position);
+    vector(p.target.velocity);
+    vector(p.target.amplitude);
+    value(p.target.frequency);
+  }
   void ramp(const SceneData::Ramp& r) {
     flag(r.active);
     value(r.t0);
@@ -69,6 +80,24 @@ class Reader {
     for (Eigen::Index i = 0; i < rows; ++i)
       for (int c = 0; c < 3; ++c) m(i, c) = value<double>(what);
     return m;
+  }
+  Eigen::Vector3d vector(const char* what) {
+    Eigen::Vector3d v;
+    for (int c = 0; c < 3; ++c) v[c] = value<double>(what);
+    return v;
+  }
+  // Vertex indices are checked against the scene when the checkpoint is restored.
+  Pin pin() {
+    Pin p;
+    const auto vertex = value<std::int64_t>("a pin");
+    if (vertex < 0 || vertex > std::numeric_limits<int>::max()) fail("pin vertex out of range");
+    p.vertex = static_cast<int>(vertex);
+    p.stiffness = value<double>("a pin");
+    p.target.position = vector("a pin");
+    p.target.velocity = vector("a pin");
+    p.target.amplitude = vector("a pin");
+    p.target.frequency = value<double>("a pin");
+    return p;
   }
   SceneData::Ramp ramp(std::int64_t rows, const char* what) {
     SceneData::Ramp r;
@@ -135,6 +164,7 @@ std::string serializeCheckpoint(const CheckpointData& d) {
   out.matrix(d.v);
   out.matrix(d.x_prev);
   out.matrix(d.v_prev);
+  for (const Pin& p : d.pin_list) out.pin(p);
   for (const SceneData::Ramp& r : d.forcing.pins) out.ramp(r);
   out.ramp(d.forcing.user_forces);
   return out.take();
@@ -166,6 +196,8 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
   d.v = in.matrix(d.particles, "velocities");
   d.x_prev = in.matrix(d.particles, "previous positions");
   d.v_prev = in.matrix(d.particles, "previous velocities");
+  d.pin_list.reserve(static_cast<std::size_t>(d.pins));
+  for (std::int64_t i = 0; i < d.pins; ++i) d.pin_list.push_back(in.pin());
   d.forcing.pins.reserve(static_cast<std::size_t>(d.pins));
   for (std::int64_t i = 0; i < d.pins; ++i) d.forcing.pins.push_back(in.ramp(1, "a pin target"));
   d.forcing.user_forces = in.ramp(d.particles, "the external forces");

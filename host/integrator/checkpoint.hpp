@@ -8,12 +8,14 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace stabint {
 
 struct CheckpointData {
   std::uint64_t scene_fingerprint = 0;  // sceneFingerprint() of the scene it belongs to
   std::int64_t particles = 0, pins = 0;
+  std::vector<Pin> pin_list;  // `pins` of them: the scene's, grabbed and released
   double time = 0.0;
   std::int64_t steps = 0;
   double target = 0.0;

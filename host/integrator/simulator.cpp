@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -255,7 +256,9 @@ struct Simulator::Impl {
 
   // No pins, no force fields and no user forces: IM keeps linear and angular momentum.
   bool momentumConserved() const {
-    return scene.scene().pins.empty() && scene.scene().force_fields.empty() && !scene.hasUserForces();
+    const std::vector<Pin>& pins = scene.scene().pins;
+    const bool pinned = std::any_of(pins.begin(), pins.end(), [](const Pin& p) { return p.stiffness > 0.0; });
+    return !pinned && scene.scene().force_fields.empty() && !scene.hasUserForces();
   }
 
   // The blend's corrections of the accepted state (host copies x_new, v_new; kXNew on the
@@ -489,11 +492,69 @@ struct Simulator::Impl {
     has_history = false;
   }
 
+  static bool samePins(const std::vector<Pin>& a, const std::vector<Pin>& b) {
+    return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const Pin& p, const Pin& q) {
+      return p.vertex == q.vertex && p.stiffness == q.stiffness && p.target.position == q.target.position &&
+             p.target.velocity == q.target.velocity && p.target.amplitude == q.target.amplitude &&
+             p.target.frequency == q.target.frequency;
+    });
+  }
+
+  // A new pin set (validated first: nothing changes when it throws): the element blocks and the
+  // backends follow, and the factors get one rank-1 update per particle whose pin stiffness
+  // changed. The caller books the energy.
+  void changePins(const std::vector<Pin>& pins) {
+    std::map<int, double> delta;
+    for (const Pin& p : scene.scene().pins) delta[p.vertex] -= p.stiffness;
+    for (const Pin& p : pins) delta[p.vertex] += p.stiffness;
+    scene.setPins(pins);
+    backend->elementsChanged();
+    for (const auto& [vertex, k] : delta)
+      if (k != 0.0) system.addToDiagonal(vertex, k);
+  }
+
+  // Grab and release: the pin set changes, and H* moves by the jump of H it causes.
+  void changePinsAsEvent(const std::vector<Pin>& pins) {
+    const double h_before = kinetic + potential.total();
+    changePins(pins);
+    potential = backend->potential(kX, t);
+    const double event = kinetic + potential.total() - h_before;
+    target += event;
+    pending_event_energy += event;
+  }
+
+  int grab(int vertex, double stiffness) {
+    if (vertex < 0 || vertex >= scene.numParticles())
+      throw InvalidInputError("grab: vertex " + std::to_string(vertex) + " out of range (the scene has " +
+                              std::to_string(scene.numParticles()) + " particles)");
+    if (!std::isfinite(stiffness) || !(stiffness > 0.0))
+      throw InvalidInputError("grab: stiffness " + std::to_string(stiffness) + " must be finite and > 0");
+    std::vector<Pin> pins = scene.scene().pins;
+    Pin handle;
+    handle.vertex = vertex;
+    handle.stiffness = stiffness;
+    handle.target.position = x.row(vertex).transpose();
+    pins.push_back(handle);
+    changePinsAsEvent(pins);
+    return static_cast<int>(pins.size()) - 1;
+  }
+
+  void release(int pin) {
+    checkPin(pin);
+    std::vector<Pin> pins = scene.scene().pins;
+    if (pins[pin].stiffness == 0.0) return;
+    pins[pin].stiffness = 0.0;
+    pins[pin].target = PinTarget{};  // a released pin does no work
+    pins[pin].target.position = scene.pinTarget(pin, t);
+    changePinsAsEvent(pins);
+  }
+
   CheckpointData checkpointData() const {
     CheckpointData d;
     d.scene_fingerprint = sceneFingerprint(scene.scene());
     d.particles = scene.numParticles();
     d.pins = static_cast<std::int64_t>(scene.scene().pins.size());
+    d.pin_list = scene.scene().pins;
     d.time = t;
     d.steps = steps;
     d.target = target;
@@ -510,10 +571,10 @@ struct Simulator::Impl {
   }
 
   void restore(const CheckpointData& d) {
-    if (d.particles != scene.numParticles() || d.pins != static_cast<std::int64_t>(scene.scene().pins.size()) ||
-        d.scene_fingerprint != sceneFingerprint(scene.scene()))
+    if (d.particles != scene.numParticles() || d.scene_fingerprint != sceneFingerprint(scene.scene()))
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
-                              " particles, " + std::to_string(d.pins) + " pins, or other masses or rest shape)");
+                              " particles, or other masses or rest shape)");
+    if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
     backend->write(kX, d.x);
     backend->write(kV, d.v);
     backend->write(kXPrev, d.x_prev);
@@ -594,6 +655,8 @@ void Simulator::setState(const Eigen::MatrixX3d& positions, const Eigen::MatrixX
 }
 void Simulator::setPositions(const Eigen::MatrixX3d& positions) { impl_->setState(positions, impl_->v); }
 void Simulator::setVelocities(const Eigen::MatrixX3d& velocities) { impl_->setState(impl_->x, velocities); }
+int Simulator::grab(int vertex, double stiffness) { return impl_->grab(vertex, stiffness); }
+void Simulator::release(int pin) { impl_->release(pin); }
 void Simulator::setIterations(int iterations) {
   if (iterations < 1) throw InvalidInputError("iterations = " + std::to_string(iterations) + " must be >= 1");
   impl_->options.iterations = iterations;

@@ -70,22 +70,11 @@ class OpenCLBackend final : public Backend {
         std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
 
     // --- resident data -----------------------------------------------------------------------
-    const ContributionCsr& csr = scene.csr();
     for (int s = 0; s < num_slots; ++s) slots_.push_back(zeroBuffer(3 * std::size_t(n_)));
     masses_ = upload(toReal(scene.masses().data(), std::size_t(n_)));
     fext_ = zeroBuffer(3 * std::size_t(n_));
     rhs_ = zeroBuffer(3 * std::size_t(n_));
-    contrib_ = zeroBuffer(3 * std::size_t(std::max(csr.numContributions, 1)));
-    offsets_ = upload(csr.offsets);
-    list_ = upload(csr.contributions.empty() ? std::vector<int>{0} : csr.contributions);
-    for (const ElementBlock& block : scene.blocks()) {
-      DeviceBlock d;
-      d.block = &block;
-      d.vertices = upload(block.vertices);
-      d.coefficients = upload(toReal(block.coefficients.data(), block.coefficients.size()));
-      d.params = zeroBuffer(block.params.size());  // filled by uploadForcing below
-      blocks_.push_back(std::move(d));
-    }
+    uploadElements();
     // A step writes x, v and the forcing (f_ext, params of any block) between two waits.
     pending_writes_.resize(3 + blocks_.size());
 
@@ -98,6 +87,14 @@ class OpenCLBackend final : public Backend {
 
   // Pending non-blocking writes read the staging buffers destroyed with us.
   ~OpenCLBackend() override { queue_.finish(); }
+
+  // The element blocks and contribution lists were rebuilt (grab, release): upload them anew and
+  // rebind the kernels (the program stays).
+  void elementsChanged() override {
+    ocl::check(queue_.finish(), "clFinish");
+    uploadElements();
+    buildKernels();
+  }
 
   void write(int slot, const Eigen::MatrixX3d& host) override {
     checkSlot(slot);
@@ -217,10 +214,12 @@ class OpenCLBackend final : public Backend {
   // the time or the forcing (SceneData's version) changes.
   struct DeviceBlock {
     const ElementBlock* block = nullptr;
+    int revision = -1;
     cl::Buffer vertices, coefficients, params;
     double params_time = std::numeric_limits<double>::quiet_NaN();
     int params_version = -1;
     bool params_timed = false;  // the buffer holds paramsAt's values, not the block's own
+    bool params_uploaded = false;
     std::vector<double> host_params;
   };
 
@@ -275,7 +274,8 @@ class OpenCLBackend final : public Backend {
       const bool timed = d.block->type->timeDependent(scene_);
       // Constant params are uploaded once, and again only when they replace time-dependent ones
       // (a restored checkpoint without pin ramps).
-      const bool stale = timed ? (version != d.params_version || t != d.params_time) : d.params_timed;
+      const bool stale =
+          !d.params_uploaded || (timed ? (version != d.params_version || t != d.params_time) : d.params_timed);
       if (!force && !stale) continue;
       if (timed) {
         d.block->type->paramsAt(scene_, t, d.host_params);
@@ -286,6 +286,7 @@ class OpenCLBackend final : public Backend {
       d.params_time = t;
       d.params_version = version;
       d.params_timed = timed;
+      d.params_uploaded = true;
     }
     times_.transfer += secondsSince(start);
   }
@@ -411,8 +412,31 @@ class OpenCLBackend final : public Backend {
     return std::clamp((count + per_group - 1) / per_group, 1, kMaxReduceGroups);
   }
 
+  // Per-element data of the blocks that are new or were rebuilt, and the contribution lists; the
+  // params follow in uploadForcing.
+  void uploadElements() {
+    const ContributionCsr& csr = scene_.csr();
+    contrib_ = zeroBuffer(3 * std::size_t(std::max(csr.numContributions, 1)));
+    offsets_ = upload(csr.offsets);
+    list_ = upload(csr.contributions.empty() ? std::vector<int>{0} : csr.contributions);
+    blocks_.resize(scene_.blocks().size());
+    for (std::size_t b = 0; b < blocks_.size(); ++b) {
+      const ElementBlock& block = scene_.blocks()[b];
+      DeviceBlock& d = blocks_[b];
+      if (d.block == &block && d.revision == block.revision) continue;
+      d = DeviceBlock{};
+      d.block = &block;
+      d.revision = block.revision;
+      d.vertices = upload(block.vertices);
+      d.coefficients = upload(toReal(block.coefficients.data(), block.coefficients.size()));
+      d.params = zeroBuffer(block.params.size());
+    }
+  }
+
   void buildKernels() {
     const cl_int n = n_;
+    element_pass_ = Launch{};
+    mass_dot_ = Launch{};
     // --- the element pass: one work-item per element, one segment of groups per type --------
     element_pass_.kernel = makeKernel("element_pass");
     element_local_ = localSize(element_pass_.kernel, kElementLocalSize);

@@ -31,13 +31,7 @@ SceneData::SceneData(const Scene& scene) {
   validateScene(scene);
   scene_ = scene;
   n_ = scene.numParticles();
-  int base = 0;
-  for (const ElementType* type : elementTypes()) {
-    blocks_.push_back(type->build(scene_));
-    blocks_.back().contribution_base = base;
-    base += static_cast<int>(blocks_.back().vertices.size());
-  }
-  csr_ = buildCsr(n_, blocks_);
+  buildBlocks();
   moving_pins_ = std::any_of(scene_.pins.begin(), scene_.pins.end(),
                              [](const Pin& p) { return p.target.moving(); });
   time_dependent_fields_ = std::any_of(scene_.force_fields.begin(), scene_.force_fields.end(),
@@ -96,6 +90,45 @@ void SceneData::rampUserForces(const Eigen::MatrixX3d& forces, double t0, double
   const Eigen::MatrixX3d start = user_forces_.active ? user_forces_.at(t0) : Eigen::MatrixX3d::Zero(n_, 3);
   user_forces_ = Ramp{t0, t1, start, forces, true};
   ++forcing_version_;
+}
+
+void SceneData::buildBlocks() {
+  for (const ElementType* type : elementTypes()) blocks_.push_back(type->build(scene_));
+  numberContributions();
+}
+
+void SceneData::numberContributions() {
+  int base = 0;
+  for (ElementBlock& block : blocks_) {
+    block.contribution_base = base;
+    base += static_cast<int>(block.vertices.size());
+  }
+  csr_ = buildCsr(n_, blocks_);
+}
+
+void SceneData::setPins(const std::vector<Pin>& pins) {
+  Scene candidate;
+  candidate.positions = scene_.positions;  // sizes for the index checks
+  candidate.pins = pins;
+  pinElementType().validate(candidate);
+  std::vector<Ramp> ramps(pins.size());
+  for (std::size_t i = 0; i < pins.size() && i < scene_.pins.size(); ++i)
+    if (pins[i].vertex == scene_.pins[i].vertex) ramps[i] = pin_ramps_[i];
+  scene_.pins = pins;
+  pin_ramps_ = std::move(ramps);
+  ramped_pins_ = static_cast<int>(std::count_if(pin_ramps_.begin(), pin_ramps_.end(), [](const Ramp& r) { return r.active; }));
+  moving_pins_ = std::any_of(scene_.pins.begin(), scene_.pins.end(), [](const Pin& p) { return p.target.moving(); });
+  // Only the pin block is rebuilt (in place: backends keep pointers to the blocks); the others
+  // keep their data and, pins being last in the table, their contribution numbers.
+  for (ElementBlock& block : blocks_) {
+    if (block.type != &pinElementType()) continue;
+    const int revision = block.revision;
+    block = pinElementType().build(scene_);
+    block.revision = revision + 1;
+  }
+  numberContributions();
+  ++forcing_version_;
+  ++layout_version_;
 }
 
 void SceneData::setForcingState(const ForcingState& state) {

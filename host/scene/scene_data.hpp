@@ -63,6 +63,15 @@ class SceneData {
   /// Incremented by every change of the forcing (ramps, restore), so cached forcing is refreshed.
   int forcingVersion() const { return forcing_version_; }
 
+  // ---- changes of the element set (grab and release) -----------------------------------------
+  /// Replaces the pins (validated like a scene's; InvalidInputError naming the pin, nothing
+  /// changed then) and rebuilds the pin block and the contribution lists. Ramps of pins that keep
+  /// their index and vertex stay; the others are dropped. Backends must then be told
+  /// (Backend::elementsChanged), and the global system updated.
+  void setPins(const std::vector<Pin>& pins);
+  /// Incremented by every setPins.
+  int layoutVersion() const { return layout_version_; }
+
   /// The mutable forcing, for checkpoints: everything the ramps changed.
   struct Ramp {
     double t0 = 0.0, t1 = 0.0;
@@ -80,6 +89,9 @@ class SceneData {
   void setForcingState(const ForcingState& state);
 
  private:
+  void buildBlocks();
+  void numberContributions();
+
   Scene scene_;
   int n_ = 0;
   std::vector<ElementBlock> blocks_;
@@ -90,6 +102,7 @@ class SceneData {
   int ramped_pins_ = 0;
   Ramp user_forces_;
   int forcing_version_ = 0;
+  int layout_version_ = 0;
 };
 
 }  // namespace stabint

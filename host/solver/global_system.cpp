@@ -4,7 +4,9 @@
 
 #include <stabint/errors.hpp>
 
+#include <cmath>
 #include <cstddef>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -54,8 +56,41 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
     if (factor->info() != Eigen::Success)
       throw Error("global system: CHOLMOD factorization of cM + L failed for c = " + std::to_string(c));
     it = factors_.emplace(c, std::move(factor)).first;
+    ++factorizations_;
   }
   x = it->second->solve(rhs);
+}
+
+void GlobalSystem::addToDiagonal(int j, double delta, bool refactor) {
+  laplacian_.coeffRef(j, j) += delta;
+  if (refactor) {
+    factors_.clear();
+    return;
+  }
+  const int n = static_cast<int>(laplacian_.rows());
+  for (auto it = factors_.begin(); it != factors_.end();) {
+    cholmod_factor* factor = it->second->factor();
+    cholmod_common& common = it->second->cholmod();
+    // C = sqrt(|delta|) e_j in the factor's fill-reducing order: row k with Perm[k] = j.
+    int k = j;
+    if (const int* perm = static_cast<const int*>(factor->Perm)) {
+      for (k = 0; k < n && perm[k] != j; ++k) {
+      }
+    }
+    cholmod_sparse* c = cholmod_allocate_sparse(n, 1, 1, /*sorted=*/1, /*packed=*/1, /*stype=*/0, CHOLMOD_REAL, &common);
+    bool updated = false;
+    if (c != nullptr) {
+      static_cast<int*>(c->p)[0] = 0;
+      static_cast<int*>(c->p)[1] = 1;
+      static_cast<int*>(c->i)[0] = k;
+      static_cast<double*>(c->x)[0] = std::sqrt(std::abs(delta));
+      updated = cholmod_updown(delta > 0.0 ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
+      cholmod_free_sparse(&c, &common);
+    }
+    // A failed update (out of memory, or a downdate that lost positive definiteness to
+    // round-off) leaves the factor unusable: factor that c again on its next use.
+    it = updated ? std::next(it) : factors_.erase(it);
+  }
 }
 
 }  // namespace stabint

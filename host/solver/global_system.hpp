@@ -24,12 +24,22 @@ class GlobalSystem {
   /// Lumped masses (the M of c M + L).
   const Eigen::VectorXd& masses() const { return masses_; }
   /// Number of factorizations done so far (one per distinct c).
-  int factorizations() const { return static_cast<int>(factors_.size()); }
+  int factorizations() const { return factorizations_; }
+
+  /// L(j, j) += delta: a pin of stiffness delta attached to (delta > 0) or detached from
+  /// (delta < 0) particle j. Every existing factor is updated with a rank-1 CHOLMOD update or
+  /// downdate (cholmod_updown) instead of a refactorization; with `refactor` they are dropped and
+  /// factored again on their next use instead (for comparison).
+  void addToDiagonal(int j, double delta, bool refactor = false);
 
  private:
   // Simplicial CHOLMOD: with Debian's reference BLAS its triangular solves beat the supernodal
-  // ones by 2-3x on these sparse, low-fill systems, and PD solves every iteration.
-  using Factor = Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower>;
+  // ones by 2-3x on these sparse, low-fill systems, and PD solves every iteration. The subclass
+  // reaches the cholmod_factor that Eigen keeps protected, for the rank-1 updates.
+  struct Factor : Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+    cholmod_factor* factor() { return m_cholmodFactor; }
+  };
+  int factorizations_ = 0;
 
   Eigen::SparseMatrix<double> laplacian_;
   Eigen::VectorXd masses_;

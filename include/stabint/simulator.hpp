@@ -146,9 +146,12 @@ struct StepReport {
 class Backend;  // host/backend.hpp; not part of the public API
 
 /// A snapshot of a running simulation: time, step count, state, BDF2 history, the tracked
-/// target H* and the forcing set by per-frame input (pin targets, external forces). Restoring it
-/// into a Simulator of the same scene continues bit for bit as the original did from that moment
-/// (same options, same backend and precision). Options are not part of it. The serialized form
+/// target H*, the pins (with grabbed and released handles) and the forcing set by per-frame
+/// input (pin targets, external forces). Restoring it into a Simulator of the same scene
+/// continues bit for bit as the original did from that moment (same options, same backend and
+/// precision) when both have the same pins; when the pins differ (a checkpoint taken during a
+/// grab, restored into a fresh simulator) the global factors are updated rather than the same,
+/// and the run agrees to round-off. Options are not part of it. The serialized form
 /// (bytes(), save()) is a versioned binary format of this library version and this machine's
 /// byte order.
 class Checkpoint {
@@ -227,6 +230,15 @@ class Simulator {
   void setVelocities(const Eigen::MatrixX3d& velocities);
   /// Local/global iteration budget of every later step (>= 1); time, state and H* are kept.
   void setIterations(int iterations);
+
+  /// Attaches a handle to particle `vertex`: a new pin of `stiffness` (> 0) whose target is the
+  /// particle's current position (no energy jump), returned as its pin index for setPinTarget
+  /// and release. The global matrix gains the pin's term by a rank-1 update of its factors.
+  int grab(int vertex, double stiffness);
+  /// Detaches pin `pin` (a handle or a scene pin): its stiffness becomes 0 and its index stays
+  /// valid (it can be grabbed again only through grab). A discontinuous event: the pin's energy
+  /// leaves H and H* alike (event_energy); the factors get a rank-1 downdate.
+  void release(int pin);
 
   /// Snapshot of the current simulation (see Checkpoint).
   Checkpoint checkpoint() const;

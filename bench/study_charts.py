@@ -252,6 +252,47 @@ def chart_energy_over_time(results, charts):
     save(fig, charts, "energy_over_time")
 
 
+def chart_interaction(results, charts):
+    rows = read_csv(results, "interaction.csv")
+    if not rows:
+        return
+    shown = [i for i in ("BE", "BDF2", "blend") if any(r["integrator"] == i for r in rows)]
+    fig, axes = plt.subplots(1, len(shown) + 1, figsize=(5.2 * (len(shown) + 1), 4.6))
+    for ax, integ in zip(axes, shown):
+        rs = [r for r in rows if r["integrator"] == integ]
+        t = [num(r, "time") for r in rs]
+        h0 = num(rs[0], "H")
+        for key, label, style in (("H", "H", dict(color=COLORS[integ], lw=1.4)),
+                                  ("H_target", "H* (target)", dict(color="black", lw=1.0, ls="--")),
+                                  ("work", "hand's work (cumulative)", dict(color="#7f7f7f", lw=1.0)),
+                                  ("kinetic", "K", dict(color="#9467bd", lw=0.9))):
+            base = h0 if key in ("H", "H_target") else 0.0
+            ax.plot(t, [num(r, key) - base for r in rs], label=label, **style)
+        held = [num(r, "time") for r in rs if r["held"] == "1"]
+        if held:
+            ax.axvspan(min(held), max(held), color="#ffdd88", alpha=0.35, lw=0, label="corner held")
+        ax.set_title(f"{integ}: energy books of a grab-drag-release", fontsize=10)
+        ax.set_xlabel("time [s]  (h = 1/30 s, 10 iterations)")
+        ax.set_ylabel("energy relative to H(0) [J]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    ax = axes[-1]
+    for integ in shown:
+        rs = [r for r in rows if r["integrator"] == integ]
+        ax.plot([num(r, "time") for r in rs], [num(r, "kinetic") for r in rs], color=COLORS[integ], lw=1.2,
+                label=integ)
+    ax.set_yscale("log")
+    ax.set_title("kinetic energy: does the cloth keep swinging after the release?", fontsize=10)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("K [J]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.suptitle("Interaction (stabint-study interaction): a hand grabs the free corner of a 20 x 20 cloth at 0.5 s, "
+                 "drags it for 1 s, lets go at 2 s", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 0.93))
+    save(fig, charts, "interaction")
+
+
 def chart_cloth_still(results, charts):
     stills = []
     for integ in ("BE", "blend"):
@@ -620,7 +661,9 @@ def write_summary(results):
                        ("energy_over_time", "tet bar free-end height and energy; cloth energy"),
                        ("cloth_still", "the cloth at the same frame with BE and the blend"),
                        ("motion", "centre-of-mass path and kinetic energy of the cloth against the small-step "
-                        "reference, mean K against flicker for every run, the stiff cloth's fall")):
+                        "reference, mean K against flicker for every run, the stiff cloth's fall"),
+                       ("interaction", "energy books of a grab-drag-release of a cloth corner (H, H*, the hand's "
+                        "work, K) with BE, BDF2 and the blend")):
         if os.path.exists(os.path.join(charts, name + ".png")):
             out.append(f"- `charts/{name}.png` (and .svg): {what}")
     path = os.path.join(results, "summary.md")
@@ -638,6 +681,7 @@ def main():
     chart_energy_over_time(results, charts)
     chart_cloth_still(results, charts)
     chart_motion(results, charts)
+    chart_interaction(results, charts)
     write_summary(results)
     table = motion_table(results)
     if table:

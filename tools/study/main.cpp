@@ -29,6 +29,8 @@ void usage(std::FILE* to) {
                "              (printed; motion.csv, motion_series.csv, motion_reference.csv, moving_pin.csv)\n"
                "  teaser      the teaser: a 40 x 40 cloth of triangle strain and bending hinges with BE, BDF2\n"
                "              and the blend (teaser_triangles.csv, teaser_energy.csv, teaser_<integrator>.bin)\n"
+               "  interaction grab, drag and release of a cloth corner through the per-frame input API, BE,\n"
+               "              BDF2 and the blend: H, H*, the hand's work and the events (interaction.csv)\n"
                "  all         all of the above in order\n"
                "options:\n"
                "  --out DIR          output directory (default results)\n"
@@ -84,7 +86,7 @@ int main(int argc, char** argv) {
     };
     const Step steps[] = {{"table", runTable},         {"reference", runReference}, {"sweep", runSweep},
                           {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck},
-                          {"motion", runMotion},       {"teaser", runTeaser}};
+                          {"motion", runMotion},       {"teaser", runTeaser},       {"interaction", runInteraction}};
     bool found = false;
     for (const Step& s : steps) {
       if (command != "all" && command != s.name) continue;

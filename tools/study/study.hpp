@@ -299,6 +299,7 @@ void runEnergy(const StudyOptions& options);
 void runCrosscheck(const StudyOptions& options);
 void runMotion(const StudyOptions& options);
 void runTeaser(const StudyOptions& options);  // cmd_teaser.cpp
+void runInteraction(const StudyOptions& options);  // cmd_interaction.cpp
 
 // ---- small helpers -------------------------------------------------------------------------
 

@@ -1,6 +1,7 @@
 // Hostile input (issue 12): every malformed file, path, size or option is a named stabint::Error
 // of the documented type — never a crash, a hang, a std::bad_alloc or an unexplained error — and
 // leaves the caller's data as it was. One test per class of defect; each failed before its fix.
+#include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
 #include <stabint/io.hpp>
 
@@ -93,6 +94,46 @@ TEST_F(Hostile, HugeHeaderCountsFailAtEndOfFile) {
   const std::string tets =
       write("tets.mesh", "Vertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\nTetrahedra\n" + count + "\n1 2 3 4 0\n");
   expectFileError([&] { loadMedit(tets); }, tets, 9, "unexpected end of file, expected tet 2 of " + count);
+}
+
+// --- sizes of built-in scenes ------------------------------------------------------------------
+
+// The InvalidInputError `build` throws, checked for a part of the message.
+void expectInvalid(const std::function<void()>& build, const std::string& part) {
+  try {
+    build();
+    ADD_FAILURE() << "expected an InvalidInputError (" << part << ")";
+  } catch (const InvalidInputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(part));
+  }
+}
+
+// nx * ny in int wrapped (65536 x 65537 came out as 65536) and the loops wrote past the
+// allocation; sizes that did not wrap took gigabytes or escaped as std::bad_alloc. Now the count
+// is formed in 64 bits and refused past a stated maximum, before anything is allocated.
+TEST_F(Hostile, HugeBuiltinSizesAreRefusedWithTheMaximum) {
+  const std::string maximum = "exceeds the maximum of " + std::to_string(kMaxBuiltinParticles);
+  ClothGridParams cloth;
+  cloth.nx = 65536;
+  cloth.ny = 65537;
+  expectInvalid([&] { makeClothGrid(cloth); }, "cloth nx x ny = 65536 x 65537 particles " + maximum);
+  cloth.nx = cloth.ny = 8000;
+  expectInvalid([&] { makeClothGrid(cloth); }, maximum);
+  expectInvalid([] { clothGridTriangles(65536, 65537); }, maximum);
+  ChainPendulumParams chain;
+  chain.particles = 2000000000;
+  expectInvalid([&] { makeChainPendulum(chain); }, "chain particles = 2000000000 particles " + maximum);
+  TetBarParams bar;
+  bar.nx = INT_MAX;  // nx + 1 overflowed as well
+  expectInvalid([&] { makeTetBar(bar); }, maximum);
+  bar.nx = bar.ny = bar.nz = 2047;  // 2048^3 = 2^33 wrapped to 0
+  expectInvalid([&] { makeTetBar(bar); }, "(nx + 1) x (ny + 1) x (nz + 1) = 2048 x 2048 x 2048 particles " + maximum);
+
+  // The way a scene file or stabint-run --param reaches them: the builder's message, in the file's.
+  expectFileError([] { builtinScene("cloth", R"({"nx": 65536, "ny": 65537})", "scene.json"); }, "scene.json", 0,
+                  maximum);
+  chain.particles = kMaxBuiltinParticles + 1;  // the bound is exact
+  expectInvalid([&] { makeChainPendulum(chain); }, maximum);
 }
 
 // --- what error messages show of a file ------------------------------------------------------------

@@ -38,6 +38,7 @@ void expectFileError(const std::function<void()>& load, const std::string& file,
 
 // Every loader a path can reach, so that one bad path is tried on all of them.
 void expectAllLoadersRefuse(const std::string& path, const std::string& part) {
+  expectFileError([&] { loadSceneFile(path); }, path, 0, part);
   expectFileError([&] { loadObjCloth(path); }, path, 0, part);
   expectFileError([&] { loadMedit(path); }, path, 0, part);
   expectFileError([&] { loadTetGen(path + ".node"); }, path + ".node", 0, part);
@@ -57,6 +58,7 @@ TEST_F(Hostile, FifoIsRefusedWithoutBlocking) {
 TEST_F(Hostile, DeviceIsRefused) {
   expectFileError([] { loadObjCloth("/dev/zero"); }, "/dev/zero", 0, "not a regular file");
   expectFileError([] { loadMedit("/dev/zero"); }, "/dev/zero", 0, "not a regular file");
+  expectFileError([] { loadSceneFile("/dev/zero"); }, "/dev/zero", 0, "not a regular file");
 }
 
 // A directory read as an empty file ("no vertices").

@@ -783,14 +783,6 @@ json parseJson(const std::string& text, const std::string& file) {
   }
 }
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in || fs::is_directory(path)) throw FileFormatError(path, 0, "cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // --- writing --------------------------------------------------------------------------------------
 
 using ordered = nlohmann::ordered_json;
@@ -963,7 +955,7 @@ std::vector<std::string> builtinSceneParameters(const std::string& name) {
   return names;
 }
 
-Scene loadSceneFile(const std::string& path) { return io::sceneFromJson(io::parseJson(io::readText(path), path), path); }
+Scene loadSceneFile(const std::string& path) { return io::sceneFromJson(io::parseJson(io::readTextFile(path), path), path); }
 
 void saveSceneFile(const Scene& scene, const std::string& path) {
   validateScene(scene);

@@ -138,6 +138,32 @@ TEST_F(Hostile, HugeBuiltinSizesAreRefusedWithTheMaximum) {
   expectInvalid([&] { makeChainPendulum(chain); }, maximum);
 }
 
+// --- JSON scene files ----------------------------------------------------------------------------
+
+// A vector nested 70,000 levels deep overflowed the stack while its error message dumped it.
+TEST_F(Hostile, DeepJsonIsRefusedWithItsLine) {
+  const std::string deep = std::string(70000, '[') + "1" + std::string(70000, ']');
+  const std::string path = write("deep.json", "{\"builtin\": {\"name\": \"oscillator\"},\n\"gravity\": " + deep + "}\n");
+  expectFileError([&] { loadSceneFile(path); }, path, 2, "JSON nested deeper than 64 levels");
+  expectFileError([&] { builtinScene("chain", "{\"pinned\": " + deep + "}", "params"); }, "params", 1,
+                  "nested deeper");
+
+  // Within the limit the message shows the start of the value only.
+  const std::string nested = std::string(60, '[') + "1" + std::string(60, ']');
+  const std::string ok = write("nested.json", "{\"builtin\": {\"name\": \"oscillator\"}, \"gravity\": " + nested + "}");
+  expectFileError([&] { loadSceneFile(ok); }, ok, 0, "gravity: expected an array of 3 numbers [x, y, z], got [[[[");
+  try {
+    loadSceneFile(ok);
+  } catch (const FileFormatError& e) {
+    EXPECT_LT(std::string(e.what()).size(), 200u + ok.size()) << e.what();
+  }
+
+  // Brackets inside strings are no nesting.
+  const std::string name = std::string(100, '[') + "\\\"{";
+  const std::string quoted = write("quoted.json", "{\"builtin\": {\"name\": \"oscillator\"}, \"name\": \"" + name + "\"}");
+  EXPECT_EQ(loadSceneFile(quoted).name, std::string(100, '[') + "\"{");
+}
+
 // --- what error messages show of a file ------------------------------------------------------------
 
 bool printableAscii(const std::string& s) {
@@ -166,6 +192,24 @@ TEST_F(Hostile, MessagesShowFileBytesEscaped) {
     EXPECT_THAT(e.what(), HasSubstr("\\x07\\x07..."));  // and cut short
     EXPECT_LT(std::string(e.what()).size(), 400u);
   }
+}
+
+// Names from a scene file (a key, a built-in name, the bytes a malformed file stopped at) were
+// echoed raw into the message.
+TEST_F(Hostile, JsonMessagesShowFileBytesEscaped) {
+  const auto expectEscaped = [](const std::string& path, const std::string& part) {
+    try {
+      loadSceneFile(path);
+      ADD_FAILURE() << "expected a FileFormatError";
+    } catch (const FileFormatError& e) {
+      EXPECT_TRUE(printableAscii(e.what())) << e.what();
+      EXPECT_THAT(e.what(), HasSubstr(part));
+    }
+  };
+  expectEscaped(write("key.json", R"({"builtin": {"name": "oscillator"}, "\u001b[2J\u00ff": 1})"),
+                "unknown field '\\x1b[2J\\xc3\\xbf'");
+  expectEscaped(write("name.json", R"({"builtin": {"name": "\u0007cloth"}})"), "unknown built-in scene '\\x07cloth'");
+  expectEscaped(write("bad.json", "{\"gravity\": \x01\xff}"), "malformed JSON");
 }
 
 }  // namespace

@@ -50,11 +50,10 @@ bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' ||
 
 }  // namespace
 
-std::string shown(const std::string& text) {
-  constexpr std::size_t kMaxShown = 64;
+std::string shown(const std::string& text, std::size_t max_chars) {
   std::string out;
   for (std::size_t i = 0; i < text.size(); ++i) {
-    if (out.size() >= kMaxShown) {
+    if (out.size() >= max_chars) {
       out += "...";
       break;
     }

@@ -20,8 +20,9 @@ constexpr std::size_t kMaxLineBytes = std::size_t(4) << 20;
 constexpr std::size_t kMaxTextFileBytes = std::size_t(256) << 20;
 
 /// `text` as it may appear in an error message: printable ASCII kept, every other byte written
-/// as \xNN, and at most 64 characters of it (then "..."). File bytes are never echoed raw.
-std::string shown(const std::string& text);
+/// as \xNN, and at most `max_chars` characters of it (then "..."). File bytes are never echoed
+/// raw.
+std::string shown(const std::string& text, std::size_t max_chars = 64);
 
 /// The whole content of the regular file `path`, at most kMaxTextFileBytes. FileFormatError(path,
 /// 0, ...) when it cannot be opened, is not a regular file or is larger.

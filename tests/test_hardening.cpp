@@ -11,6 +11,7 @@
 #include "temp_dir_test.hpp"
 
 #include <climits>
+#include <cmath>
 #include <functional>
 #include <string>
 
@@ -136,6 +137,25 @@ TEST_F(Hostile, HugeBuiltinSizesAreRefusedWithTheMaximum) {
                   maximum);
   chain.particles = kMaxBuiltinParticles + 1;  // the bound is exact
   expectInvalid([&] { makeChainPendulum(chain); }, maximum);
+}
+
+// --- time ----------------------------------------------------------------------------------------
+
+// The duplicate-corner check compared every pair of corners of a face: a 200,000-gon took 15 s.
+// Now it sorts; a repeat anywhere in a big polygon is still found and named with both corners.
+TEST_F(Hostile, BigPolygonDuplicateCornerIsNamed) {
+  constexpr int kCorners = 200000;
+  std::string vertices, face = "f";
+  for (int i = 0; i < kCorners; ++i) {
+    const double a = 6.283185307179586 * i / kCorners;
+    vertices += "v " + std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+  }
+  for (int i = 1; i <= kCorners; ++i) face += " " + std::to_string(i == 150000 ? 7 : i);
+  const std::string path = write("gon.obj", vertices + face + "\n");
+  expectFileError([&] { loadObjCloth(path); }, path, kCorners + 1, "face 1: vertex 7 appears twice (corners 7 and 150000)");
+  face.clear();
+  for (int i = 1; i <= kCorners; ++i) face += " " + std::to_string(i);
+  EXPECT_EQ(loadObjCloth(write("gon2.obj", vertices + "f" + face + "\n")).numParticles(), kCorners);
 }
 
 // --- JSON scene files ----------------------------------------------------------------------------

@@ -184,6 +184,29 @@ TEST_F(Hostile, DeepJsonIsRefusedWithItsLine) {
   EXPECT_EQ(loadSceneFile(quoted).name, std::string(100, '[') + "\"{");
 }
 
+// --- saving --------------------------------------------------------------------------------------
+
+// A name that is not UTF-8 (one the OBJ loader itself made from a Latin-1 file name) made
+// saveSceneFile throw the JSON library's exception. Loaders now make names UTF-8, and saving
+// refuses other bytes naming the field.
+TEST_F(Hostile, NamesThatAreNotUtf8AreMadeTextOrRefused) {
+  const Scene cloth = loadObjCloth(write("caf\xe9.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+  EXPECT_EQ(cloth.name, "caf\xef\xbf\xbd");  // U+FFFD
+  const std::string saved = (dir_ / "cloth.json").string();
+  saveSceneFile(cloth, saved);
+  EXPECT_EQ(loadSceneFile(saved).name, cloth.name);
+
+  Scene s = makeLinearOscillator();
+  s.name = "caf\xe9";
+  expectInvalid([&] { saveSceneFile(s, saved); }, "scene name 'caf\\xe9' is not valid UTF-8 (byte 4)");
+  s.name = "ok";
+  s.bodies[0].name = "a\xed\xa0\x80";  // a UTF-16 surrogate, which UTF-8 may not hold
+  expectInvalid([&] { saveSceneFile(s, saved); }, "body 0 name 'a\\xed\\xa0\\x80' is not valid UTF-8 (byte 2)");
+  s.bodies[0].name = "\xe2\x82\xac \xf0\x9f\x98\x80";  // well-formed: saved as it is
+  saveSceneFile(s, saved);
+  EXPECT_EQ(loadSceneFile(saved).bodies[0].name, s.bodies[0].name);
+}
+
 // --- what error messages show of a file ------------------------------------------------------------
 
 bool printableAscii(const std::string& s) {

@@ -1004,6 +1004,16 @@ Scene loadSceneFile(const std::string& path) { return io::sceneFromJson(io::pars
 
 void saveSceneFile(const Scene& scene, const std::string& path) {
   validateScene(scene);
+  // A scene file is UTF-8 text; other bytes in a name made the JSON library throw its own type.
+  const auto requireUtf8 = [](const std::string& name, const std::string& field) {
+    const std::size_t bad = io::invalidUtf8At(name);
+    if (bad != std::string::npos) {
+      throw InvalidInputError(field + " '" + io::shown(name) + "' is not valid UTF-8 (byte " + std::to_string(bad + 1) +
+                              "); a scene file holds UTF-8 text");
+    }
+  };
+  requireUtf8(scene.name, "scene name");
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) requireUtf8(scene.bodies[i].name, "body " + std::to_string(i) + " name");
   std::string text;
   io::pretty(text, io::sceneToJson(scene), 0);
   text += '\n';

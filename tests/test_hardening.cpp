@@ -4,6 +4,7 @@
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
 #include <stabint/io.hpp>
+#include <stabint/simulator.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -182,6 +183,30 @@ TEST_F(Hostile, DeepJsonIsRefusedWithItsLine) {
   const std::string name = std::string(100, '[') + "\\\"{";
   const std::string quoted = write("quoted.json", "{\"builtin\": {\"name\": \"oscillator\"}, \"name\": \"" + name + "\"}");
   EXPECT_EQ(loadSceneFile(quoted).name, std::string(100, '[') + "\"{");
+}
+
+// --- the implicit system ---------------------------------------------------------------------------
+
+// Masses too small for the stiffnesses: CHOLMOD printed on stdout (inside `--csv -` output) and
+// the first step() failed with the base Error naming an internal constant. Now the construction
+// refuses the scene, naming masses and stiffness, and nothing is printed.
+TEST_F(Hostile, SingularImplicitSystemIsRefusedAtConstructionSilently) {
+  ChainPendulumParams p;
+  p.particles = 2;
+  p.total_mass = 1e-300;
+  p.stiffness = 0x1p996;  // about 6.7e299, a power of 4: its Cholesky factor rounds to exactly 0
+  const Scene scene = makeChainPendulum(p);
+  SimulatorOptions o;
+  for (const Integrator integrator :
+       {Integrator::BackwardEuler, Integrator::ImplicitMidpoint, Integrator::BDF2, Integrator::EnergyBlend}) {
+    o.integrator = integrator;
+    ::testing::internal::CaptureStdout();
+    expectInvalid([&] { Simulator sim(scene, o); },
+                  "is not numerically positive definite: c times the smallest mass, ");
+    EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
+  }
+  o.integrator = Integrator::SymplecticEuler;  // explicit: no system to factor
+  EXPECT_NO_THROW(Simulator(scene, o));
 }
 
 // --- saving --------------------------------------------------------------------------------------

@@ -185,6 +185,38 @@ TEST_F(Hostile, DeepJsonIsRefusedWithItsLine) {
   EXPECT_EQ(loadSceneFile(quoted).name, std::string(100, '[') + "\"{");
 }
 
+// --- finite inputs that overflow ------------------------------------------------------------------
+
+// Each of these passed validation and then failed the first step as "the simulation blew up".
+TEST_F(Hostile, FiniteInputsThatOverflowAreRefusedByName) {
+  const Scene chain = makeChainPendulum();  // 10 particles 1/9 m apart, 9 springs, pin 0
+  const auto refused = [&](const std::function<void(Scene&)>& change, const std::string& part) {
+    Scene s = chain;
+    change(s);
+    expectInvalid([&] { validateScene(s); }, part);
+    expectInvalid([&] { Simulator sim(s, SimulatorOptions{}); }, part);
+  };
+  refused([](Scene& s) { s.masses[3] = 1e308, s.velocities.row(3) << 1e10, 0, 0; },
+          "particle 3: kinetic energy 0.5 m |v|^2 of masses[3] = 1e+308 at speed 1e+10 overflows");
+  refused([](Scene& s) { s.springs[2].rest_length = 1e200; }, "spring 2: rest length 1e+200 exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.pins[0].target.frequency = 1e308; },
+          "pin 0: target frequency 1e+308 exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.gravity.y() = -1e308; }, "gravity (0, -1e+308, 0) exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.positions(4, 0) = 1e200; }, "positions row 4 (1e+200, 0, 0) exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.masses.setConstant(1e307), s.gravity.y() = -1e3; },
+          "gravity (0, -1000, 0): the work it can do, total mass 1e+308 x |g| x scene size 1 overflows");
+  refused([](Scene& s) { s.springs[1].stiffness = 1e300, s.springs[1].rest_length = 1e5; },
+          "spring 1: energy k L^2 of stiffness 1e+300 over the larger of rest length and scene size L = 100000 overflows");
+  refused([](Scene& s) { s.pins[0].stiffness = 1e308, s.pins[0].target.position.x() = -1e5; },
+          "pin 0: energy k L^2 of stiffness 1e+308 over the scene size L = 100001 overflows");
+
+  // Values at the bound are accepted.
+  Scene s = chain;
+  s.springs[2].rest_length = 1e150;
+  s.springs[2].stiffness = 1.0;
+  EXPECT_NO_THROW(validateScene(s));
+}
+
 // --- the implicit system ---------------------------------------------------------------------------
 
 // Masses too small for the stiffnesses: CHOLMOD printed on stdout (inside `--csv -` output) and

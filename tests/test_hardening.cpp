@@ -1,8 +1,10 @@
 // Hostile input (issue 12): every malformed file, path, size or option is a named stabint::Error
 // of the documented type — never a crash, a hang, a std::bad_alloc or an unexplained error — and
 // leaves the caller's data as it was. One test per class of defect; each failed before its fix.
+#include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
 #include <stabint/io.hpp>
+#include <stabint/simulator.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -10,6 +12,7 @@
 #include "temp_dir_test.hpp"
 
 #include <climits>
+#include <cmath>
 #include <functional>
 #include <string>
 
@@ -37,6 +40,7 @@ void expectFileError(const std::function<void()>& load, const std::string& file,
 
 // Every loader a path can reach, so that one bad path is tried on all of them.
 void expectAllLoadersRefuse(const std::string& path, const std::string& part) {
+  expectFileError([&] { loadSceneFile(path); }, path, 0, part);
   expectFileError([&] { loadObjCloth(path); }, path, 0, part);
   expectFileError([&] { loadMedit(path); }, path, 0, part);
   expectFileError([&] { loadTetGen(path + ".node"); }, path + ".node", 0, part);
@@ -56,6 +60,7 @@ TEST_F(Hostile, FifoIsRefusedWithoutBlocking) {
 TEST_F(Hostile, DeviceIsRefused) {
   expectFileError([] { loadObjCloth("/dev/zero"); }, "/dev/zero", 0, "not a regular file");
   expectFileError([] { loadMedit("/dev/zero"); }, "/dev/zero", 0, "not a regular file");
+  expectFileError([] { loadSceneFile("/dev/zero"); }, "/dev/zero", 0, "not a regular file");
 }
 
 // A directory read as an empty file ("no vertices").
@@ -95,6 +100,170 @@ TEST_F(Hostile, HugeHeaderCountsFailAtEndOfFile) {
   expectFileError([&] { loadMedit(tets); }, tets, 9, "unexpected end of file, expected tet 2 of " + count);
 }
 
+// --- sizes of built-in scenes ------------------------------------------------------------------
+
+// The InvalidInputError `build` throws, checked for a part of the message.
+void expectInvalid(const std::function<void()>& build, const std::string& part) {
+  try {
+    build();
+    ADD_FAILURE() << "expected an InvalidInputError (" << part << ")";
+  } catch (const InvalidInputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(part));
+  }
+}
+
+// nx * ny in int wrapped (65536 x 65537 came out as 65536) and the loops wrote past the
+// allocation; sizes that did not wrap took gigabytes or escaped as std::bad_alloc. Now the count
+// is formed in 64 bits and refused past a stated maximum, before anything is allocated.
+TEST_F(Hostile, HugeBuiltinSizesAreRefusedWithTheMaximum) {
+  const std::string maximum = "exceeds the maximum of " + std::to_string(kMaxBuiltinParticles);
+  ClothGridParams cloth;
+  cloth.nx = 65536;
+  cloth.ny = 65537;
+  expectInvalid([&] { makeClothGrid(cloth); }, "cloth nx x ny = 65536 x 65537 particles " + maximum);
+  cloth.nx = cloth.ny = 8000;
+  expectInvalid([&] { makeClothGrid(cloth); }, maximum);
+  expectInvalid([] { clothGridTriangles(65536, 65537); }, maximum);
+  ChainPendulumParams chain;
+  chain.particles = 2000000000;
+  expectInvalid([&] { makeChainPendulum(chain); }, "chain particles = 2000000000 particles " + maximum);
+  TetBarParams bar;
+  bar.nx = INT_MAX;  // nx + 1 overflowed as well
+  expectInvalid([&] { makeTetBar(bar); }, maximum);
+  bar.nx = bar.ny = bar.nz = 2047;  // 2048^3 = 2^33 wrapped to 0
+  expectInvalid([&] { makeTetBar(bar); }, "(nx + 1) x (ny + 1) x (nz + 1) = 2048 x 2048 x 2048 particles " + maximum);
+
+  // The way a scene file or stabint-run --param reaches them: the builder's message, in the file's.
+  expectFileError([] { builtinScene("cloth", R"({"nx": 65536, "ny": 65537})", "scene.json"); }, "scene.json", 0,
+                  maximum);
+  chain.particles = kMaxBuiltinParticles + 1;  // the bound is exact
+  expectInvalid([&] { makeChainPendulum(chain); }, maximum);
+}
+
+// --- time ----------------------------------------------------------------------------------------
+
+// The duplicate-corner check compared every pair of corners of a face: a 200,000-gon took 15 s.
+// Now it sorts; a repeat anywhere in a big polygon is still found and named with both corners.
+TEST_F(Hostile, BigPolygonDuplicateCornerIsNamed) {
+  constexpr int kCorners = 200000;
+  std::string vertices, face = "f";
+  for (int i = 0; i < kCorners; ++i) {
+    const double a = 6.283185307179586 * i / kCorners;
+    vertices += "v " + std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+  }
+  for (int i = 1; i <= kCorners; ++i) face += " " + std::to_string(i == 150000 ? 7 : i);
+  const std::string path = write("gon.obj", vertices + face + "\n");
+  expectFileError([&] { loadObjCloth(path); }, path, kCorners + 1, "face 1: vertex 7 appears twice (corners 7 and 150000)");
+  face.clear();
+  for (int i = 1; i <= kCorners; ++i) face += " " + std::to_string(i);
+  EXPECT_EQ(loadObjCloth(write("gon2.obj", vertices + "f" + face + "\n")).numParticles(), kCorners);
+}
+
+// --- JSON scene files ----------------------------------------------------------------------------
+
+// A vector nested 70,000 levels deep overflowed the stack while its error message dumped it.
+TEST_F(Hostile, DeepJsonIsRefusedWithItsLine) {
+  const std::string deep = std::string(70000, '[') + "1" + std::string(70000, ']');
+  const std::string path = write("deep.json", "{\"builtin\": {\"name\": \"oscillator\"},\n\"gravity\": " + deep + "}\n");
+  expectFileError([&] { loadSceneFile(path); }, path, 2, "JSON nested deeper than 64 levels");
+  expectFileError([&] { builtinScene("chain", "{\"pinned\": " + deep + "}", "params"); }, "params", 1,
+                  "nested deeper");
+
+  // Within the limit the message shows the start of the value only.
+  const std::string nested = std::string(60, '[') + "1" + std::string(60, ']');
+  const std::string ok = write("nested.json", "{\"builtin\": {\"name\": \"oscillator\"}, \"gravity\": " + nested + "}");
+  expectFileError([&] { loadSceneFile(ok); }, ok, 0, "gravity: expected an array of 3 numbers [x, y, z], got [[[[");
+  try {
+    loadSceneFile(ok);
+  } catch (const FileFormatError& e) {
+    EXPECT_LT(std::string(e.what()).size(), 200u + ok.size()) << e.what();
+  }
+
+  // Brackets inside strings are no nesting.
+  const std::string name = std::string(100, '[') + "\\\"{";
+  const std::string quoted = write("quoted.json", "{\"builtin\": {\"name\": \"oscillator\"}, \"name\": \"" + name + "\"}");
+  EXPECT_EQ(loadSceneFile(quoted).name, std::string(100, '[') + "\"{");
+}
+
+// --- finite inputs that overflow ------------------------------------------------------------------
+
+// Each of these passed validation and then failed the first step as "the simulation blew up".
+TEST_F(Hostile, FiniteInputsThatOverflowAreRefusedByName) {
+  const Scene chain = makeChainPendulum();  // 10 particles 1/9 m apart, 9 springs, pin 0
+  const auto refused = [&](const std::function<void(Scene&)>& change, const std::string& part) {
+    Scene s = chain;
+    change(s);
+    expectInvalid([&] { validateScene(s); }, part);
+    expectInvalid([&] { Simulator sim(s, SimulatorOptions{}); }, part);
+  };
+  refused([](Scene& s) { s.masses[3] = 1e308, s.velocities.row(3) << 1e10, 0, 0; },
+          "particle 3: kinetic energy 0.5 m |v|^2 of masses[3] = 1e+308 at speed 1e+10 overflows");
+  refused([](Scene& s) { s.springs[2].rest_length = 1e200; }, "spring 2: rest length 1e+200 exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.pins[0].target.frequency = 1e308; },
+          "pin 0: target frequency 1e+308 exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.gravity.y() = -1e308; }, "gravity (0, -1e+308, 0) exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.positions(4, 0) = 1e200; }, "positions row 4 (1e+200, 0, 0) exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.masses.setConstant(1e307), s.gravity.y() = -1e3; },
+          "gravity (0, -1000, 0): the work it can do, total mass 1e+308 x |g| x scene size 1 overflows");
+  refused([](Scene& s) { s.springs[1].stiffness = 1e300, s.springs[1].rest_length = 1e5; },
+          "spring 1: energy k L^2 of stiffness 1e+300 over the larger of rest length and scene size L = 100000 overflows");
+  refused([](Scene& s) { s.pins[0].stiffness = 1e308, s.pins[0].target.position.x() = -1e5; },
+          "pin 0: energy k L^2 of stiffness 1e+308 over the scene size L = 100001 overflows");
+
+  // Values at the bound are accepted.
+  Scene s = chain;
+  s.springs[2].rest_length = 1e150;
+  s.springs[2].stiffness = 1.0;
+  EXPECT_NO_THROW(validateScene(s));
+}
+
+// --- the implicit system ---------------------------------------------------------------------------
+
+// Masses too small for the stiffnesses: CHOLMOD printed on stdout (inside `--csv -` output) and
+// the first step() failed with the base Error naming an internal constant. Now the construction
+// refuses the scene, naming masses and stiffness, and nothing is printed.
+TEST_F(Hostile, SingularImplicitSystemIsRefusedAtConstructionSilently) {
+  ChainPendulumParams p;
+  p.particles = 2;
+  p.total_mass = 1e-300;
+  p.stiffness = 0x1p996;  // about 6.7e299, a power of 4: its Cholesky factor rounds to exactly 0
+  const Scene scene = makeChainPendulum(p);
+  SimulatorOptions o;
+  for (const Integrator integrator :
+       {Integrator::BackwardEuler, Integrator::ImplicitMidpoint, Integrator::BDF2, Integrator::EnergyBlend}) {
+    o.integrator = integrator;
+    ::testing::internal::CaptureStdout();
+    expectInvalid([&] { Simulator sim(scene, o); },
+                  "is not numerically positive definite: c times the smallest mass, ");
+    EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
+  }
+  o.integrator = Integrator::SymplecticEuler;  // explicit: no system to factor
+  EXPECT_NO_THROW(Simulator(scene, o));
+}
+
+// --- saving --------------------------------------------------------------------------------------
+
+// A name that is not UTF-8 (one the OBJ loader itself made from a Latin-1 file name) made
+// saveSceneFile throw the JSON library's exception. Loaders now make names UTF-8, and saving
+// refuses other bytes naming the field.
+TEST_F(Hostile, NamesThatAreNotUtf8AreMadeTextOrRefused) {
+  const Scene cloth = loadObjCloth(write("caf\xe9.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+  EXPECT_EQ(cloth.name, "caf\xef\xbf\xbd");  // U+FFFD
+  const std::string saved = (dir_ / "cloth.json").string();
+  saveSceneFile(cloth, saved);
+  EXPECT_EQ(loadSceneFile(saved).name, cloth.name);
+
+  Scene s = makeLinearOscillator();
+  s.name = "caf\xe9";
+  expectInvalid([&] { saveSceneFile(s, saved); }, "scene name 'caf\\xe9' is not valid UTF-8 (byte 4)");
+  s.name = "ok";
+  s.bodies[0].name = "a\xed\xa0\x80";  // a UTF-16 surrogate, which UTF-8 may not hold
+  expectInvalid([&] { saveSceneFile(s, saved); }, "body 0 name 'a\\xed\\xa0\\x80' is not valid UTF-8 (byte 2)");
+  s.bodies[0].name = "\xe2\x82\xac \xf0\x9f\x98\x80";  // well-formed: saved as it is
+  saveSceneFile(s, saved);
+  EXPECT_EQ(loadSceneFile(saved).bodies[0].name, s.bodies[0].name);
+}
+
 // --- what error messages show of a file ------------------------------------------------------------
 
 bool printableAscii(const std::string& s) {
@@ -123,6 +292,24 @@ TEST_F(Hostile, MessagesShowFileBytesEscaped) {
     EXPECT_THAT(e.what(), HasSubstr("\\x07\\x07..."));  // and cut short
     EXPECT_LT(std::string(e.what()).size(), 400u);
   }
+}
+
+// Names from a scene file (a key, a built-in name, the bytes a malformed file stopped at) were
+// echoed raw into the message.
+TEST_F(Hostile, JsonMessagesShowFileBytesEscaped) {
+  const auto expectEscaped = [](const std::string& path, const std::string& part) {
+    try {
+      loadSceneFile(path);
+      ADD_FAILURE() << "expected a FileFormatError";
+    } catch (const FileFormatError& e) {
+      EXPECT_TRUE(printableAscii(e.what())) << e.what();
+      EXPECT_THAT(e.what(), HasSubstr(part));
+    }
+  };
+  expectEscaped(write("key.json", R"({"builtin": {"name": "oscillator"}, "\u001b[2J\u00ff": 1})"),
+                "unknown field '\\x1b[2J\\xc3\\xbf'");
+  expectEscaped(write("name.json", R"({"builtin": {"name": "\u0007cloth"}})"), "unknown built-in scene '\\x07cloth'");
+  expectEscaped(write("bad.json", "{\"gravity\": \x01\xff}"), "malformed JSON");
 }
 
 }  // namespace

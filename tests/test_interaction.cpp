@@ -259,7 +259,8 @@ TEST(Interaction, GrabDragReleaseOfAFreeCorner) {
         EXPECT_LT(released_energy, 0.0);
       }
       const StepReport& r = sim.step();
-      EXPECT_EQ(r.event_energy, i == 40 ? released_energy : 0.0) << "step " << i;
+      // The event is H's jump; energy().total() sums the same terms in another order.
+      EXPECT_NEAR(r.event_energy, i == 40 ? released_energy : 0.0, 1e-12 * sim.energyScale()) << "step " << i;
       const double gap = std::abs(r.energy.total() - r.target);
       const double band = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
       result.outside_band += gap > 2.0 * band;

@@ -477,7 +477,7 @@ TEST_F(SceneJson, MissingFile) {
   } catch (const FileFormatError& e) {
     EXPECT_EQ(e.file(), path);
     EXPECT_EQ(e.line(), 0);
-    EXPECT_EQ(std::string(e.what()), path + ": cannot open file");
+    EXPECT_EQ(std::string(e.what()), path + ": cannot open file: No such file or directory");
   }
 }
 

@@ -28,9 +28,7 @@ struct PinKind : KindDefaults<Pin> {
     validation::checkFinite(pin.target.position, owner, "target position");
     validation::checkFinite(pin.target.velocity, owner, "target velocity");
     validation::checkFinite(pin.target.amplitude, owner, "target amplitude");
-    if (!std::isfinite(pin.target.frequency)) {
-      invalid(owner, ": target frequency ", pin.target.frequency, " is not finite");
-    }
+    validation::checkFinite(pin.target.frequency, owner, "target frequency");
   }
 
   static bool timeDependent(const SceneData& data) { return data.hasMovingPins(); }

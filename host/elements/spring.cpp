@@ -29,6 +29,7 @@ struct SpringKind : KindDefaults<Spring> {
     if (!(s.rest_length >= 0.0) || !std::isfinite(s.rest_length)) {
       invalid(owner, ": rest length ", s.rest_length, " must be >= 0 and finite");
     }
+    validation::checkFinite(s.rest_length, owner, "rest length");
     validation::checkStiffness(s.stiffness, owner);
   }
 

@@ -98,6 +98,20 @@ struct Simulator::Impl {
         solver(*backend, system, kSolverScratch),
         x(s.positions),
         v(s.velocities) {
+    // The implicit systems are factored now, so that masses too small for the stiffnesses are
+    // refused here, naming them, rather than failing the first step().
+    // The same expressions for c as the integrators below, so that each is factored once.
+    const double h = options.time_step;
+    switch (options.integrator) {
+      case Integrator::BDF2:
+        system.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
+        [[fallthrough]];  // and its first step is BE
+      case Integrator::BackwardEuler: system.factor(1.0 / (h * h), "1/time_step^2"); break;
+      case Integrator::EnergyBlend: system.factor(1.0 / (h * h), "1/time_step^2"); [[fallthrough]];
+      case Integrator::ImplicitMidpoint: system.factor(4.0 / (h * h), "4/time_step^2"); break;
+      case Integrator::ForwardEuler:
+      case Integrator::SymplecticEuler: break;  // explicit: no system
+    }
     backend->write(kX, x);
     backend->write(kV, v);
     potential = backend->potential(kX, 0.0);

@@ -6,7 +6,8 @@
 
 namespace stabint::io {
 
-std::string sceneNameFromPath(const std::string& path) { return std::filesystem::path(path).stem().string(); }
+// A file name is bytes (Latin-1 names exist); the scene name must be text that a scene file can hold.
+std::string sceneNameFromPath(const std::string& path) { return validUtf8(std::filesystem::path(path).stem().string()); }
 
 Scene sceneFromMesh(const std::string& name, const Eigen::MatrixX3d& vertices, Eigen::VectorXd masses) {
   Scene s;

@@ -18,7 +18,8 @@ struct TetRecord {
   int line;                     // 1-based line in `file`
 };
 
-/// Scene name from a path: the file name without directory and extension.
+/// Scene name from a path: the file name without directory and extension, as UTF-8 (a byte that
+/// is not becomes U+FFFD).
 std::string sceneNameFromPath(const std::string& path);
 
 /// Loaded scenes start at rest in their rest shape, under default gravity, as one undamped body.

@@ -5,7 +5,10 @@
 
 #include <stabint/io.hpp>
 
+#include <algorithm>
 #include <array>
+#include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace stabint {
@@ -41,22 +44,40 @@ Face readFace(const io::TextReader& in, const std::vector<std::string>& tokens, 
   return face;
 }
 
+// No vertex twice in one face, in O(k log k) for a k-gon: comparing every pair took 15 s for a
+// 200,000-gon. The corners are sorted by (vertex, position), so each vertex's first two
+// occurrences are adjacent; the repeat reported is the one earliest in the face, as a reader
+// scanning the line would find it.
+void checkDistinctCorners(const std::string& file, const Face& face, const std::string& name) {
+  std::vector<std::pair<long, std::size_t>> corners(face.vertices.size());
+  for (std::size_t k = 0; k < corners.size(); ++k) corners[k] = {face.vertices[k], k};
+  std::sort(corners.begin(), corners.end());
+  std::size_t first = 0, second = corners.size();
+  for (std::size_t k = 1; k < corners.size(); ++k) {
+    if (corners[k].first == corners[k - 1].first && corners[k].second < second &&
+        (k < 2 || corners[k - 2].first != corners[k].first)) {
+      first = corners[k - 1].second;
+      second = corners[k].second;
+    }
+  }
+  if (second < corners.size()) {
+    throw FileFormatError(file, face.line, name + ": vertex " + std::to_string(face.vertices[second]) +
+                                               " appears twice (corners " + std::to_string(first + 1) + " and " +
+                                               std::to_string(second + 1) + ")");
+  }
+}
+
 std::vector<std::array<int, 3>> fanTriangles(const std::string& file, const std::vector<Face>& faces, long num_vertices) {
   std::vector<std::array<int, 3>> triangles;
   for (const Face& face : faces) {
     const std::string name = "face " + std::to_string(face.number);
-    for (size_t k = 0; k < face.vertices.size(); ++k) {
-      const long v = face.vertices[k];
+    for (const long v : face.vertices) {
       if (v > num_vertices) {
         throw FileFormatError(file, face.line, name + ": vertex index " + std::to_string(v) + " out of range [1, " +
                                                    std::to_string(num_vertices) + "]");
       }
-      for (size_t l = 0; l < k; ++l) {
-        if (face.vertices[l] == v) {
-          throw FileFormatError(file, face.line, name + ": vertex " + std::to_string(v) + " appears twice");
-        }
-      }
     }
+    checkDistinctCorners(file, face, name);
     // A fan from the first corner is exact for the convex polygons meshes are made of.
     for (size_t k = 1; k + 1 < face.vertices.size(); ++k) {
       triangles.push_back({static_cast<int>(face.vertices[0] - 1), static_cast<int>(face.vertices[k] - 1),

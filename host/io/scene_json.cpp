@@ -87,7 +87,7 @@ class Field {
       if (!keys.count(item.key())) {
         std::string expected;
         for (const auto& k : keys) expected += (expected.empty() ? "" : ", ") + k;
-        fail("unknown field '" + item.key() + "' (expected one of: " + expected + ")");
+        fail("unknown field '" + shown(item.key()) + "' (expected one of: " + expected + ")");
       }
     }
   }
@@ -150,9 +150,26 @@ class Field {
   }
 
  private:
+  // At most 40 characters of the value, escaped. Only as much of the value is walked as is
+  // shown: dump() of the whole value recursed to its bottom (70,000 levels overflowed the stack)
+  // and copied a million entries to show forty characters.
   std::string shortDump() const {
-    std::string d = value_->dump();
-    return d.size() > 40 ? d.substr(0, 37) + "..." : d;
+    std::string d;
+    brief(*value_, d);
+    return shown(d.size() > 40 ? d.substr(0, 37) + "..." : d);
+  }
+  static void brief(const json& v, std::string& out) {
+    if (!v.is_structured()) {
+      out += v.dump();
+      return;
+    }
+    out += v.is_array() ? '[' : '{';
+    for (auto it = v.begin(); it != v.end() && out.size() <= 40; ++it) {
+      if (it != v.begin()) out += ',';
+      if (v.is_object()) out += json(it.key()).dump() + ':';
+      brief(*it, out);  // each level adds a character: at most about 40 deep
+    }
+    out += v.is_array() ? ']' : '}';
   }
 
   const json* value_;
@@ -215,7 +232,7 @@ ClothModel clothModel(const Field& f) {
   const std::string name = f.string();
   if (name == "springs") return ClothModel::Springs;
   if (name == "triangles") return ClothModel::Triangles;
-  f.fail("unknown cloth model '" + name + "' (expected springs or triangles)");
+  f.fail("unknown cloth model '" + shown(name) + "' (expected springs or triangles)");
 }
 
 struct ParamReader {
@@ -279,7 +296,7 @@ Scene builtinFromField(const std::string& name, const Field& params, const std::
     TetBarParams p;
     out = buildWith(params, extra, p, [](const auto& q) { return makeTetBar(q); });
   } else {
-    name_field.fail("unknown built-in scene '" + name + "' (expected oscillator, chain, cloth or tetbar)");
+    name_field.fail("unknown built-in scene '" + shown(name) + "' (expected oscillator, chain, cloth or tetbar)");
   }
   return out;
 }
@@ -302,14 +319,14 @@ Scene meshFromField(const Field& mesh, const fs::path& dir) {
   if (auto t = mesh.find("type")) {
     type = t->string();
     if (type != "obj" && type != "tetgen" && type != "medit") {
-      t->fail("unknown mesh type '" + type + "' (expected obj, tetgen or medit)");
+      t->fail("unknown mesh type '" + shown(type) + "' (expected obj, tetgen or medit)");
     }
   } else {
     const std::string ext = lowerExtension(path);
     if (ext == ".obj") type = "obj";
     else if (ext == ".mesh") type = "medit";
     else if (ext == ".node" || ext == ".ele") type = "tetgen";
-    else file_field.fail("cannot tell the mesh type from '" + relative.string() + "'; add \"type\": obj, tetgen or medit");
+    else file_field.fail("cannot tell the mesh type from '" + shown(relative.string()) + "'; add \"type\": obj, tetgen or medit");
   }
 
   const std::set<std::string> common = {"file", "type", "translate", "damping", "name"};
@@ -481,7 +498,7 @@ std::vector<int> selectWhere(const Field& where, const Scene& s) {
   if (auto axis = where.find("axis")) {
     where.allowOnly({"axis", "min", "max"});
     const std::string name = axis->string();
-    if (name != "x" && name != "y" && name != "z") axis->fail("expected \"x\", \"y\" or \"z\", got \"" + name + "\"");
+    if (name != "x" && name != "y" && name != "z") axis->fail("expected \"x\", \"y\" or \"z\", got \"" + shown(name) + "\"");
     const int c = name[0] - 'x';
     if (!where.has("min") && !where.has("max")) where.fail("needs min, max or both");
     if (auto f = where.find("min")) lo[c] = f->number();
@@ -688,7 +705,7 @@ Scene sceneFromJson(const json& doc, const std::string& file) {
   for (const ElementType* type : genericTypes()) keys.insert(genericKey(*type));
   root.allowOnly(keys);
   if (auto f = root.find("format")) {
-    if (f->string() != kFormatName) f->fail("expected \"" + std::string(kFormatName) + "\", got \"" + f->string() + "\"");
+    if (f->string() != kFormatName) f->fail("expected \"" + std::string(kFormatName) + "\", got \"" + shown(f->string()) + "\"");
   }
   if (auto f = root.find("version")) {
     if (f->integer() != kFormatVersion) {
@@ -754,7 +771,34 @@ Scene sceneFromJson(const json& doc, const std::string& file) {
   return s;
 }
 
+// Deepest nesting of arrays and objects a scene file may have (a scene needs 4 levels). The
+// parser copes with any depth, but code that walks a value recursively does not: 70,000 levels
+// overflowed the stack. Scanned before parsing, so that the error has a line.
+constexpr int kMaxJsonDepth = 64;
+
+void checkNesting(const std::string& text, const std::string& file) {
+  int depth = 0, line = 1;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') ++line;
+    if (in_string) {
+      if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n') ++i;  // an escaped quote ends nothing
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth) {
+        throw FileFormatError(file, line, "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+      }
+    } else if (c == ']' || c == '}') {
+      --depth;  // unbalanced brackets are the parser's to report
+    }
+  }
+}
+
 json parseJson(const std::string& text, const std::string& file) {
+  checkNesting(text, file);
   try {
     return json::parse(text);
   } catch (const json::parse_error& e) {
@@ -772,23 +816,16 @@ json parseJson(const std::string& text, const std::string& file) {
     const size_t column_at = what.find("column");
     const size_t colon = column_at == std::string::npos ? std::string::npos : what.find(": ", column_at);
     if (colon != std::string::npos) what = what.substr(colon + 2);
+    // The message quotes what was last read, raw bytes included.
     throw FileFormatError(file, line,
-                          "malformed JSON (column " + std::to_string(end - line_start + 1) + "): " + what);
+                          "malformed JSON (column " + std::to_string(end - line_start + 1) + "): " + shown(what, 400));
   } catch (const json::exception& e) {
     // Number overflow ("1e999") comes without a position.
     std::string what = e.what();
     const size_t bracket = what.find("] ");
     if (bracket != std::string::npos) what = what.substr(bracket + 2);
-    throw FileFormatError(file, 0, "malformed JSON: " + what);
+    throw FileFormatError(file, 0, "malformed JSON: " + shown(what, 400));
   }
-}
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in || fs::is_directory(path)) throw FileFormatError(path, 0, "cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 // --- writing --------------------------------------------------------------------------------------
@@ -963,10 +1000,20 @@ std::vector<std::string> builtinSceneParameters(const std::string& name) {
   return names;
 }
 
-Scene loadSceneFile(const std::string& path) { return io::sceneFromJson(io::parseJson(io::readText(path), path), path); }
+Scene loadSceneFile(const std::string& path) { return io::sceneFromJson(io::parseJson(io::readTextFile(path), path), path); }
 
 void saveSceneFile(const Scene& scene, const std::string& path) {
   validateScene(scene);
+  // A scene file is UTF-8 text; other bytes in a name made the JSON library throw its own type.
+  const auto requireUtf8 = [](const std::string& name, const std::string& field) {
+    const std::size_t bad = io::invalidUtf8At(name);
+    if (bad != std::string::npos) {
+      throw InvalidInputError(field + " '" + io::shown(name) + "' is not valid UTF-8 (byte " + std::to_string(bad + 1) +
+                              "); a scene file holds UTF-8 text");
+    }
+  };
+  requireUtf8(scene.name, "scene name");
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) requireUtf8(scene.bodies[i].name, "body " + std::to_string(i) + " name");
   std::string text;
   io::pretty(text, io::sceneToJson(scene), 0);
   text += '\n';

@@ -50,11 +50,10 @@ bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' ||
 
 }  // namespace
 
-std::string shown(const std::string& text) {
-  constexpr std::size_t kMaxShown = 64;
+std::string shown(const std::string& text, std::size_t max_chars) {
   std::string out;
   for (std::size_t i = 0; i < text.size(); ++i) {
-    if (out.size() >= kMaxShown) {
+    if (out.size() >= max_chars) {
       out += "...";
       break;
     }
@@ -67,6 +66,49 @@ std::string shown(const std::string& text) {
     }
   }
   return out;
+}
+
+std::size_t invalidUtf8At(const std::string& text, std::size_t from) {
+  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  for (std::size_t i = from; i < n;) {
+    const unsigned char c = s[i];
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    std::size_t length;
+    unsigned char lo = 0x80, hi = 0xbf;  // allowed range of the second byte (RFC 3629, section 4)
+    if (c >= 0xc2 && c <= 0xdf) {
+      length = 2;
+    } else if (c >= 0xe0 && c <= 0xef) {
+      length = 3;
+      if (c == 0xe0) lo = 0xa0;  // overlong
+      if (c == 0xed) hi = 0x9f;  // surrogates
+    } else if (c >= 0xf0 && c <= 0xf4) {
+      length = 4;
+      if (c == 0xf0) lo = 0x90;  // overlong
+      if (c == 0xf4) hi = 0x8f;  // past U+10FFFF
+    } else {
+      return i;
+    }
+    if (n - i < length || s[i + 1] < lo || s[i + 1] > hi) return i;
+    for (std::size_t k = 2; k < length; ++k) {
+      if (s[i + k] < 0x80 || s[i + k] > 0xbf) return i;
+    }
+    i += length;
+  }
+  return std::string::npos;
+}
+
+std::string validUtf8(const std::string& text) {
+  std::string out;
+  for (std::size_t from = 0;;) {
+    const std::size_t bad = invalidUtf8At(text, from);
+    if (bad == std::string::npos) return out.append(text, from, std::string::npos);
+    out.append(text, from, bad - from).append("\xef\xbf\xbd");
+    from = bad + 1;
+  }
 }
 
 std::string readTextFile(const std::string& path) {

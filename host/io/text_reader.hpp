@@ -20,8 +20,16 @@ constexpr std::size_t kMaxLineBytes = std::size_t(4) << 20;
 constexpr std::size_t kMaxTextFileBytes = std::size_t(256) << 20;
 
 /// `text` as it may appear in an error message: printable ASCII kept, every other byte written
-/// as \xNN, and at most 64 characters of it (then "..."). File bytes are never echoed raw.
-std::string shown(const std::string& text);
+/// as \xNN, and at most `max_chars` characters of it (then "..."). File bytes are never echoed
+/// raw.
+std::string shown(const std::string& text, std::size_t max_chars = 64);
+
+/// Offset of the first byte of `text`, from `from` on, that does not belong to well-formed UTF-8
+/// (no overlong forms, surrogates or code points past U+10FFFF), or std::string::npos.
+std::size_t invalidUtf8At(const std::string& text, std::size_t from = 0);
+
+/// `text` with every byte that does not belong to well-formed UTF-8 replaced by U+FFFD.
+std::string validUtf8(const std::string& text);
 
 /// The whole content of the regular file `path`, at most kMaxTextFileBytes. FileFormatError(path,
 /// 0, ...) when it cannot be opened, is not a regular file or is larger.

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <initializer_list>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +20,23 @@ void requireAtLeast(int value, int minimum, const char* name) {
     throw InvalidInputError(std::string(name) + " = " + std::to_string(value) + " must be >= " +
                             std::to_string(minimum));
   }
+}
+
+// The particle count of a grid of `sizes` (each >= 1), refused past kMaxBuiltinParticles. The
+// product is formed in 64 bits and stops at the limit: in int it wrapped (65536 x 65537 came out
+// as 65536 and the loops wrote past the allocation), and a huge honest count was std::bad_alloc.
+int gridParticles(std::initializer_list<long long> sizes, const char* names) {
+  std::string product;
+  for (const long long n : sizes) product += (product.empty() ? "" : " x ") + std::to_string(n);
+  long long count = 1;
+  for (const long long n : sizes) {
+    count *= n;  // both factors are at most 2^31: no overflow before the check below
+    if (count > kMaxBuiltinParticles) {
+      throw InvalidInputError(std::string(names) + " = " + product + " particles exceeds the maximum of " +
+                              std::to_string(kMaxBuiltinParticles) + " for a built-in scene");
+    }
+  }
+  return static_cast<int>(count);
 }
 
 // Positions double as the rest shape; every built-in scene starts at rest in its rest shape.
@@ -70,6 +88,7 @@ Scene makeLinearOscillator(const LinearOscillatorParams& p) {
 
 Scene makeChainPendulum(const ChainPendulumParams& p) {
   requireAtLeast(p.particles, 2, "chain particles");
+  gridParticles({p.particles}, "chain particles");
   Scene s;
   s.name = "chain";
   const double spacing = p.length / (p.particles - 1);
@@ -84,6 +103,7 @@ Scene makeChainPendulum(const ChainPendulumParams& p) {
 }
 
 std::vector<std::array<int, 3>> clothGridTriangles(int nx, int ny) {
+  if (nx > 0 && ny > 0) gridParticles({nx, ny}, "cloth nx x ny");
   const auto id = [nx](int i, int j) { return j * nx + i; };
   std::vector<std::array<int, 3>> triangles;
   triangles.reserve(2 * std::max(nx - 1, 0) * std::max(ny - 1, 0));
@@ -104,9 +124,10 @@ Scene makeClothGrid(const ClothGridParams& p) {
   Scene s;
   s.name = "cloth";
   const int nx = p.nx, ny = p.ny;
+  const int count = gridParticles({nx, ny}, "cloth nx x ny");
   const auto id = [nx](int i, int j) { return j * nx + i; };
   const double dx = p.width / (nx - 1), dy = p.height / (ny - 1);
-  Eigen::MatrixX3d x(nx * ny, 3);
+  Eigen::MatrixX3d x(count, 3);
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) x.row(id(i, j)) << i * dx, p.height - j * dy, 0.0;
   }
@@ -154,10 +175,11 @@ Scene makeTetBar(const TetBarParams& p) {
   requireAtLeast(p.nz, 1, "tet bar nz");
   Scene s;
   s.name = "tetbar";
+  const int count = gridParticles({p.nx + 1LL, p.ny + 1LL, p.nz + 1LL}, "tet bar (nx + 1) x (ny + 1) x (nz + 1)");
   const int px = p.nx + 1, py = p.ny + 1, pz = p.nz + 1;
   const auto id = [px, py](int i, int j, int k) { return i + px * (j + py * k); };
   const double dx = p.length / p.nx, dy = p.width / p.ny, dz = p.width / p.nz;
-  Eigen::MatrixX3d x(px * py * pz, 3);
+  Eigen::MatrixX3d x(count, 3);
   for (int k = 0; k < pz; ++k) {
     for (int j = 0; j < py; ++j) {
       for (int i = 0; i < px; ++i) x.row(id(i, j, k)) << i * dx, j * dy, k * dz;

@@ -54,6 +54,9 @@ using validation::vec;
 void checkRows(const Eigen::MatrixX3d& m, const char* name) {
   for (Eigen::Index i = 0; i < m.rows(); ++i) {
     if (!m.row(i).allFinite()) invalid(name, " row ", i, " is not finite");
+    if (!(m.row(i).cwiseAbs().maxCoeff() <= validation::kMaxMagnitude)) {
+      invalid(name, " row ", i, " ", vec(m.row(i).transpose()), " exceeds ", validation::kMaxMagnitude, " in magnitude");
+    }
   }
 }
 
@@ -75,6 +78,56 @@ void checkParticles(const Scene& s) {
     if (!(m > 0.0) || !std::isfinite(m)) invalid("masses[", j, "] = ", m, " must be > 0 and finite");
   }
   if (!s.gravity.allFinite()) invalid("gravity ", vec(s.gravity), " is not finite");
+  if (!(s.gravity.cwiseAbs().maxCoeff() <= validation::kMaxMagnitude)) {
+    invalid("gravity ", vec(s.gravity), " exceeds ", validation::kMaxMagnitude, " in magnitude");
+  }
+}
+
+// Diagonal of the box around the positions, rest positions and pin targets: the largest
+// distance a force acts over in the scene.
+double sceneSize(const Scene& s) {
+  Eigen::Vector3d lo = s.positions.colwise().minCoeff().cwiseMin(s.rest_positions.colwise().minCoeff()).transpose();
+  Eigen::Vector3d hi = s.positions.colwise().maxCoeff().cwiseMax(s.rest_positions.colwise().maxCoeff()).transpose();
+  for (const Pin& pin : s.pins) {
+    lo = lo.cwiseMin(pin.target.position - pin.target.amplitude.cwiseAbs());
+    hi = hi.cwiseMax(pin.target.position + pin.target.amplitude.cwiseAbs());
+  }
+  return (hi - lo).norm();
+}
+
+// The energy a scene holds or can exchange must be finite: 0.5 m |v|^2 per particle and in all,
+// the work of gravity M |g| size, and k L^2 of each spring and pin over L = its rest length or
+// the scene's size. Each value may be within kMaxMagnitude and their product still overflow
+// (mass 1e308 at speed 1e10): such a scene failed its first step as a "blow-up".
+void checkEnergyScale(const Scene& s) {
+  double kinetic = 0.0, total_mass = 0.0;
+  for (int j = 0; j < s.numParticles(); ++j) {
+    const double m = s.masses[j], speed = s.velocities.row(j).norm();
+    const double k = 0.5 * m * speed * speed;
+    if (!std::isfinite(k)) {
+      invalid("particle ", j, ": kinetic energy 0.5 m |v|^2 of masses[", j, "] = ", m, " at speed ", speed, " overflows");
+    }
+    kinetic += k;
+    total_mass += m;
+  }
+  if (!std::isfinite(kinetic)) invalid("the total kinetic energy 0.5 sum m |v|^2 of masses and velocities overflows");
+  if (!std::isfinite(total_mass)) invalid("the total of masses overflows");
+  const double size = sceneSize(s);
+  const double g = s.gravity.norm();
+  if (!std::isfinite(total_mass * g * size)) {
+    invalid("gravity ", vec(s.gravity), ": the work it can do, total mass ", total_mass, " x |g| x scene size ", size,
+            " overflows");
+  }
+  const auto checkWork = [](double k, double length, const Owner& owner, const char* length_is) {
+    if (!std::isfinite(k * length * length)) {
+      invalid(owner, ": energy k L^2 of stiffness ", k, " over ", length_is, " L = ", length, " overflows");
+    }
+  };
+  for (size_t i = 0; i < s.springs.size(); ++i) {
+    checkWork(s.springs[i].stiffness, std::max(s.springs[i].rest_length, size), Owner{"spring", i},
+              "the larger of rest length and scene size");
+  }
+  for (size_t i = 0; i < s.pins.size(); ++i) checkWork(s.pins[i].stiffness, size, Owner{"pin", i}, "the scene size");
 }
 
 void checkSurface(const Scene& s) {
@@ -94,7 +147,7 @@ void checkForceFields(const Scene& s) {
     checkFinite(f.force, owner, "force");
     checkFinite(f.rate, owner, "rate");
     checkFinite(f.amplitude, owner, "amplitude");
-    if (!std::isfinite(f.frequency)) invalid(owner, ": frequency ", f.frequency, " is not finite");
+    checkFinite(f.frequency, owner, "frequency");
   }
 }
 
@@ -126,6 +179,7 @@ void validateScene(const Scene& scene) {
   checkSurface(scene);
   checkForceFields(scene);
   checkBodies(scene);
+  checkEnergyScale(scene);
 }
 
 int elementCount(const Scene& scene) {

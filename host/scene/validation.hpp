@@ -58,8 +58,23 @@ inline void checkStiffness(double k, const Owner& owner) {
   if (!(k >= 0.0) || !std::isfinite(k)) invalid(owner, ": stiffness ", k, " must be >= 0");
 }
 
+/// Largest magnitude of a quantity that the simulation squares or multiplies by a time or a
+/// stiffness (coordinates, speeds, gravity, rest lengths, pin and force targets, frequencies), so
+/// that squares and their sums stay finite. Finite inputs beyond it (a rest length of 1e200, a
+/// frequency of 1e308) overflowed in the first step and were reported as a blow-up.
+constexpr double kMaxMagnitude = 1e150;
+
+/// Finite and at most kMaxMagnitude in each component.
 inline void checkFinite(const Eigen::Vector3d& v, const Owner& owner, const char* field) {
   if (!v.allFinite()) invalid(owner, ": ", field, " ", vec(v), " is not finite");
+  if (!(v.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
+    invalid(owner, ": ", field, " ", vec(v), " exceeds ", kMaxMagnitude, " in magnitude");
+  }
+}
+
+inline void checkFinite(double x, const Owner& owner, const char* field) {
+  if (!std::isfinite(x)) invalid(owner, ": ", field, " ", x, " is not finite");
+  if (!(std::abs(x) <= kMaxMagnitude)) invalid(owner, ": ", field, " ", x, " exceeds ", kMaxMagnitude, " in magnitude");
 }
 
 /// Each of `count` vertices `vertices[k]` (field "vertices[k]") in range and no particle twice.

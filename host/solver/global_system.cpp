@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstddef>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -43,22 +44,35 @@ GlobalSystem::GlobalSystem(const SceneData& scene) : masses_(scene.masses()) {
   laplacian_.setFromTriplets(entries.begin(), entries.end());
 }
 
-void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x) {
-  auto it = factors_.find(c);
-  if (it == factors_.end()) {
-    // A particle touched by no element has no diagonal entry in L, so add c M as a matrix.
-    Eigen::SparseMatrix<double> mass(laplacian_.rows(), laplacian_.cols());
-    mass.reserve(Eigen::VectorXi::Ones(laplacian_.cols()));
-    for (Eigen::Index j = 0; j < masses_.size(); ++j) mass.insert(j, j) = c * masses_[j];
-    const Eigen::SparseMatrix<double> k = laplacian_ + mass;
-    auto factor = std::make_unique<Factor>();
-    factor->compute(k);
-    if (factor->info() != Eigen::Success)
-      throw Error("global system: CHOLMOD factorization of cM + L failed for c = " + std::to_string(c));
-    it = factors_.emplace(c, std::move(factor)).first;
-    ++factorizations_;
+void GlobalSystem::factor(double c, const char* c_name) {
+  if (factors_.count(c)) return;
+  // A particle touched by no element has no diagonal entry in L, so add c M as a matrix.
+  Eigen::SparseMatrix<double> mass(laplacian_.rows(), laplacian_.cols());
+  mass.reserve(Eigen::VectorXi::Ones(laplacian_.cols()));
+  for (Eigen::Index j = 0; j < masses_.size(); ++j) mass.insert(j, j) = c * masses_[j];
+  const Eigen::SparseMatrix<double> k = laplacian_ + mass;
+  auto factor = std::make_unique<Factor>();
+  // CHOLMOD reports a failure by printing on stdout (into an application's CSV output); the
+  // failure is reported by the exception below instead.
+  factor->cholmod().print = 0;
+  factor->compute(k);
+  if (factor->info() != Eigen::Success) {
+    const double stiffest = laplacian_.nonZeros() > 0 ? laplacian_.diagonal().maxCoeff() : 0.0;
+    const double lightest = masses_.size() > 0 ? masses_.minCoeff() : 0.0;
+    std::ostringstream what;
+    what << "the implicit system c M + L (c = " << c_name << " = " << c
+         << ") is not numerically positive definite: c times the smallest mass, " << c * lightest
+         << ", is lost against the largest element stiffness (diagonal of L), " << stiffest
+         << ", in double precision; raise the masses, shorten time_step or lower the stiffnesses";
+    throw InvalidInputError(what.str());
   }
-  x = it->second->solve(rhs);
+  factors_.emplace(c, std::move(factor));
+  ++factorizations_;
+}
+
+void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x) {
+  factor(c);
+  x = factors_.find(c)->second->solve(rhs);
 }
 
 void GlobalSystem::addToDiagonal(int j, double delta, bool refactor) {

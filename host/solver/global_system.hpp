@@ -16,6 +16,12 @@ class GlobalSystem {
  public:
   explicit GlobalSystem(const SceneData& scene);
 
+  /// Factors K_c unless it already is. A K_c that is not numerically positive definite (masses
+  /// too small for the stiffnesses at this c, e.g. 5e-324 kg against 1e308 N/m) is an
+  /// InvalidInputError naming the masses, the stiffness and `c_name` (how c follows from the
+  /// options, e.g. "1/time_step^2"). Nothing is printed (CHOLMOD would print on stdout).
+  void factor(double c, const char* c_name = "c");
+
   /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use.
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x);
 

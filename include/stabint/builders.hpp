@@ -4,6 +4,11 @@
 
 namespace stabint {
 
+/// Most particles a built-in scene may have (a 2048 x 2048 cloth). Larger sizes (the product
+/// of the grid sizes, computed in 64 bits) are an InvalidInputError naming the parameters and
+/// this maximum, before anything is allocated.
+constexpr int kMaxBuiltinParticles = 1 << 22;
+
 /// One particle on a zero-rest-length spring (a pin) to the origin, no gravity:
 /// omega^2 = stiffness / mass. Starts at (amplitude, 0, 0) at rest.
 struct LinearOscillatorParams {

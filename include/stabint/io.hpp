@@ -61,7 +61,7 @@ std::vector<std::string> builtinSceneParameters(const std::string& name);
 /// Writes `scene` as a JSON scene file in the explicit form (no builtin or mesh entries), with
 /// every number written so that loadSceneFile reads back exactly the same scene. Throws
 /// FileFormatError when the file cannot be written and InvalidInputError for a scene that does
-/// not validate (JSON cannot hold non-finite numbers).
+/// not validate (JSON cannot hold non-finite numbers) or whose scene or body names are not UTF-8.
 void saveSceneFile(const Scene& scene, const std::string& path);
 
 }  // namespace stabint

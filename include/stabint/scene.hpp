@@ -123,7 +123,11 @@ struct Scene {
 /// Checks a scene: matrix shapes agree, all values finite, masses > 0, indices in range, no
 /// element using a particle twice, stiffness >= 0, rest lengths >= 0, rest volumes > 0, rest
 /// triangles not degenerate, hinges not folded, strain limits around 1, damping in [0, 1].
-/// Throws InvalidInputError naming the offending element or field.
+/// Finite values that would overflow are refused too: coordinates, speeds, gravity, rest
+/// lengths, pin targets, force fields and frequencies may not exceed 1e150 in magnitude, and the
+/// energy terms 0.5 m |v|^2 (per particle and in all), M |g| size (M the total mass, size the
+/// diagonal of the scene's bounding box) and k L^2 of each spring and pin (L its rest length or
+/// the scene size) must be finite. Throws InvalidInputError naming the offending element or field.
 void validateScene(const Scene& scene);
 
 /// Number of elements of all kinds (springs, tets, triangle strains, bending hinges, pins).

@@ -177,8 +177,9 @@ class Checkpoint {
 /// caller's scene is never modified.
 class Simulator {
  public:
-  /// Throws InvalidInputError for a bad scene or options, OpenCLError subtypes for OpenCL
-  /// problems (NoOpenCLDeviceError when no device matches).
+  /// Throws InvalidInputError for a bad scene or options (also for masses too small for the
+  /// stiffnesses at this time step: the implicit integrators' systems are factored here),
+  /// OpenCLError subtypes for OpenCL problems (NoOpenCLDeviceError when no device matches).
   Simulator(const Scene& scene, const SimulatorOptions& options);
   ~Simulator();
   Simulator(const Simulator&) = delete;

@@ -433,7 +433,8 @@ stabint_status stabint_simulator_set_iterations(stabint_simulator* sim, int iter
   });
 }
 
-stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim, stabint_checkpoint** out) {
+stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim,
+                                            stabint_checkpoint** out) {
   return guarded([&] {
     require(sim, "simulator");
     require(out, "out");
@@ -476,7 +477,8 @@ stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size,
   return guarded([&] {
     if (size > 0) require(data, "data");
     require(out, "out");
-    std::string bytes = size > 0 ? std::string(static_cast<const char*>(data), size) : std::string();
+    std::string bytes;
+    if (size > 0) bytes.assign(static_cast<const char*>(data), size);
     *out = new stabint_checkpoint{stabint::Checkpoint::fromBytes(std::move(bytes))};
   });
 }

@@ -251,7 +251,8 @@ stabint_status stabint_simulator_set_iterations(stabint_simulator* sim, int iter
  * library version and byte order. */
 typedef struct stabint_checkpoint stabint_checkpoint;
 
-stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim, stabint_checkpoint** out);
+stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim,
+                                            stabint_checkpoint** out);
 /* INVALID_INPUT when the checkpoint belongs to another scene (particle or pin count, masses, rest
  * shape); the simulator is then unchanged. */
 stabint_status stabint_simulator_restore(stabint_simulator* sim,

@@ -377,7 +377,8 @@ static void test_state_forces_and_iterations(void) {
   CHECK(stabint_simulator_energy(sim, &after) == STABINT_OK);
   jump = after.total - before.total;
   CHECK(jump > 0.0);
-  CHECK(fabs(stabint_simulator_target(sim) - (target_before + jump)) <= 1e-12 * fabs(target_before + jump));
+  CHECK(fabs(stabint_simulator_target(sim) - (target_before + jump)) <=
+        1e-12 * fabs(target_before + jump));
   CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
   CHECK(report.event_energy == jump);
   CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
@@ -503,7 +504,8 @@ static void test_checkpoints_continue_bit_for_bit(void) {
   CHECK(loaded == NULL);
 
   /* Through a file in a fresh temporary path. */
-  snprintf(path, sizeof path, "%s/stabint_c_api_XXXXXX", tmp != NULL && tmp[0] != '\0' ? tmp : "/tmp");
+  if (tmp == NULL || tmp[0] == '\0') tmp = "/tmp";
+  snprintf(path, sizeof path, "%s/stabint_c_api_XXXXXX", tmp);
   fd = mkstemp(path);
   CHECK(fd >= 0);
   if (fd >= 0) close(fd);

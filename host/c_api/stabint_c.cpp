@@ -10,12 +10,16 @@
 #include <limits>
 #include <new>
 #include <string>
+#include <utility>
 
 struct stabint_scene {
   stabint::Scene scene;
 };
 struct stabint_simulator {
   stabint::Simulator sim;
+};
+struct stabint_checkpoint {
+  stabint::Checkpoint checkpoint;
 };
 
 namespace {
@@ -112,6 +116,7 @@ stabint_step_report toC(const stabint::StepReport& r) {
   c.branch = static_cast<stabint_blend_branch>(r.branch);
   c.alpha = r.alpha;
   c.velocity_scale = r.velocity_scale;
+  c.event_energy = r.event_energy;
   c.iterations = r.iterations;
   c.energy_evaluations = r.energy_evaluations;
   const stabint::PhaseTimes& t = r.times;
@@ -132,6 +137,20 @@ stabint_status copyRows(const stabint_simulator* sim, bool positions, T* out, si
       for (int k = 0; k < 3; ++k) out[3 * i + k] = static_cast<T>(m(static_cast<Eigen::Index>(i), k));
     }
   });
+}
+
+// An interleaved x y z array of `count` values as an n by 3 matrix, n = the simulator's particle
+// count; a NULL array or a count other than 3 n is API misuse.
+Eigen::MatrixX3d rowsFrom(const stabint_simulator* sim, const double* values, size_t count,
+                          const char* what) {
+  require(values, what);
+  const size_t n = static_cast<size_t>(sim->sim.positions().rows());
+  if (count != 3 * n) {
+    throw ArgumentError{std::string(what) + ": " + std::to_string(count) + " values, " +
+                        std::to_string(3 * n) + " expected (3 per particle)"};
+  }
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  return Eigen::Map<const RowMajor>(values, static_cast<Eigen::Index>(n), 3);
 }
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -353,6 +372,124 @@ size_t stabint_simulator_backend_description(const stabint_simulator* sim, char*
     out[n] = '\0';
   }
   return text.size();
+}
+
+stabint_status stabint_simulator_set_pin_target(stabint_simulator* sim, int pin,
+                                                const double target[3]) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(target, "target");
+    sim->sim.setPinTarget(pin, Eigen::Vector3d(target[0], target[1], target[2]));
+  });
+}
+
+stabint_status stabint_simulator_pin_target(const stabint_simulator* sim, int pin, double out[3]) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(out, "out");
+    const Eigen::Vector3d q = sim->sim.pinTarget(pin);
+    for (int k = 0; k < 3; ++k) out[k] = q[k];
+  });
+}
+
+stabint_status stabint_simulator_set_external_forces(stabint_simulator* sim, const double* forces,
+                                                     size_t count) {
+  return guarded([&] {
+    require(sim, "simulator");
+    sim->sim.setExternalForces(rowsFrom(sim, forces, count, "forces"));
+  });
+}
+
+stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double* positions,
+                                           const double* velocities, size_t count) {
+  return guarded([&] {
+    require(sim, "simulator");
+    const Eigen::MatrixX3d x = rowsFrom(sim, positions, count, "positions");
+    const Eigen::MatrixX3d v = rowsFrom(sim, velocities, count, "velocities");
+    sim->sim.setState(x, v);
+  });
+}
+
+stabint_status stabint_simulator_set_positions(stabint_simulator* sim, const double* positions,
+                                               size_t count) {
+  return guarded([&] {
+    require(sim, "simulator");
+    sim->sim.setPositions(rowsFrom(sim, positions, count, "positions"));
+  });
+}
+
+stabint_status stabint_simulator_set_velocities(stabint_simulator* sim, const double* velocities,
+                                                size_t count) {
+  return guarded([&] {
+    require(sim, "simulator");
+    sim->sim.setVelocities(rowsFrom(sim, velocities, count, "velocities"));
+  });
+}
+
+stabint_status stabint_simulator_set_iterations(stabint_simulator* sim, int iterations) {
+  return guarded([&] {
+    require(sim, "simulator");
+    sim->sim.setIterations(iterations);
+  });
+}
+
+stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim,
+                                            stabint_checkpoint** out) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(out, "out");
+    *out = new stabint_checkpoint{sim->sim.checkpoint()};
+  });
+}
+
+stabint_status stabint_simulator_restore(stabint_simulator* sim,
+                                         const stabint_checkpoint* checkpoint) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(checkpoint, "checkpoint");
+    sim->sim.restore(checkpoint->checkpoint);
+  });
+}
+
+stabint_status stabint_checkpoint_save(const stabint_checkpoint* checkpoint, const char* path) {
+  return guarded([&] {
+    require(checkpoint, "checkpoint");
+    require(path, "path");
+    checkpoint->checkpoint.save(path);
+  });
+}
+
+stabint_status stabint_checkpoint_load(const char* path, stabint_checkpoint** out) {
+  return guarded([&] {
+    require(path, "path");
+    require(out, "out");
+    *out = new stabint_checkpoint{stabint::Checkpoint::load(path)};
+  });
+}
+
+const void* stabint_checkpoint_data(const stabint_checkpoint* checkpoint, size_t* size) {
+  if (size != nullptr) *size = checkpoint ? checkpoint->checkpoint.bytes().size() : 0;
+  return checkpoint ? checkpoint->checkpoint.bytes().data() : nullptr;
+}
+
+stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size,
+                                             stabint_checkpoint** out) {
+  return guarded([&] {
+    if (size > 0) require(data, "data");
+    require(out, "out");
+    std::string bytes;
+    if (size > 0) bytes.assign(static_cast<const char*>(data), size);
+    *out = new stabint_checkpoint{stabint::Checkpoint::fromBytes(std::move(bytes))};
+  });
+}
+
+void stabint_checkpoint_destroy(stabint_checkpoint* checkpoint) { delete checkpoint; }
+
+double stabint_checkpoint_time(const stabint_checkpoint* checkpoint) {
+  return checkpoint ? checkpoint->checkpoint.time() : kNaN;
+}
+int stabint_checkpoint_step_count(const stabint_checkpoint* checkpoint) {
+  return checkpoint ? checkpoint->checkpoint.stepCount() : -1;
 }
 
 }  // extern "C"

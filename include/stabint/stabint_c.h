@@ -14,8 +14,9 @@
  * with the matching *_destroy function (which accepts NULL). A simulator copies its scene, so a
  * scene may be destroyed as soon as the simulators built from it exist.
  *
- * Not here yet: the per-frame interactive calls (grabbing a vertex, moving pins, editing forces
- * while stepping); they come with the library's interactive API. */
+ * Per-frame input (pin targets, external forces, state replacement, iteration budget) and
+ * checkpoints are the C++ Simulator's (stabint/simulator.hpp, docs/method.md "Per-frame input"):
+ * a call that returns anything but STABINT_OK changed nothing. */
 #ifndef STABINT_STABINT_C_H
 #define STABINT_STABINT_C_H
 
@@ -172,6 +173,7 @@ typedef struct stabint_step_report {
   stabint_blend_branch branch;
   double alpha;
   double velocity_scale;
+  double event_energy; /* jump of H booked in H* by set_state/positions/velocities before it */
   int iterations;
   int energy_evaluations;
   stabint_phase_times times;
@@ -212,6 +214,63 @@ double stabint_simulator_energy_scale(const stabint_simulator* sim); /* E_scale 
  * returns the full length (without NUL), so a call with capacity 0 asks for the size. */
 size_t stabint_simulator_backend_description(const stabint_simulator* sim, char* out,
                                              size_t capacity);
+
+/* ---- per-frame input, between steps (docs/method.md, "Per-frame input") ----
+ * Arrays are interleaved x y z per particle, `count` values in all, which must be exactly
+ * 3 * stabint_simulator_num_particles (else INVALID_ARGUMENT, as for a NULL pointer). Values the
+ * library rejects (a pin index out of range, a non-finite value, iterations < 1) give
+ * INVALID_INPUT with a message naming them. Either way nothing changes. */
+
+/* Pin `pin`'s target (an index into the scene's pins) moves linearly from its current value to
+ * `target` (x y z) over the next step and stays there; its scripted law is no longer used. Call it
+ * every frame with the hand's position to drag. */
+stabint_status stabint_simulator_set_pin_target(stabint_simulator* sim, int pin,
+                                                const double target[3]);
+/* Current target of pin `pin` (its law's or the last set value at the current time) into `out`. */
+stabint_status stabint_simulator_pin_target(const stabint_simulator* sim, int pin, double out[3]);
+/* Per-particle external forces in newtons (on top of gravity and force fields): they ramp from
+ * their current value to `forces` over the next step and persist until the next call (set zeros
+ * to remove them). */
+stabint_status stabint_simulator_set_external_forces(stabint_simulator* sim, const double* forces,
+                                                     size_t count);
+/* Replace positions and velocities (teleport, reset): H* moves by the jump of H, reported as the
+ * next step's event_energy, and BDF2 restarts from the new state. `count` applies to each array. */
+stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double* positions,
+                                           const double* velocities, size_t count);
+stabint_status stabint_simulator_set_positions(stabint_simulator* sim, const double* positions,
+                                               size_t count);
+stabint_status stabint_simulator_set_velocities(stabint_simulator* sim, const double* velocities,
+                                                size_t count);
+/* Local/global iterations per solve of every later step (>= 1); time, state and H* are kept. */
+stabint_status stabint_simulator_set_iterations(stabint_simulator* sim, int iterations);
+
+/* ---- checkpoints ----
+ * A snapshot of a running simulation (time, step count, state, BDF2 history, H*, the per-frame
+ * forcing; not the options). Restoring it into a simulator of the same scene, options and backend
+ * continues bit for bit as the original did. The serialized form is versioned and specific to this
+ * library version and byte order. */
+typedef struct stabint_checkpoint stabint_checkpoint;
+
+stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim,
+                                            stabint_checkpoint** out);
+/* INVALID_INPUT when the checkpoint belongs to another scene (particle or pin count, masses, rest
+ * shape); the simulator is then unchanged. */
+stabint_status stabint_simulator_restore(stabint_simulator* sim,
+                                         const stabint_checkpoint* checkpoint);
+/* FILE_FORMAT when the file cannot be written completely, or (load) is missing or malformed; the
+ * message names the path. */
+stabint_status stabint_checkpoint_save(const stabint_checkpoint* checkpoint, const char* path);
+stabint_status stabint_checkpoint_load(const char* path, stabint_checkpoint** out);
+/* The serialized bytes (what save writes): `size` bytes at the returned pointer, valid while the
+ * checkpoint exists; NULL (and size 0) for a NULL handle. `size` may be NULL. */
+const void* stabint_checkpoint_data(const stabint_checkpoint* checkpoint, size_t* size);
+/* A checkpoint from serialized bytes (e.g. kept in memory or sent over a network); FILE_FORMAT
+ * when they are malformed. */
+stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size,
+                                             stabint_checkpoint** out);
+void stabint_checkpoint_destroy(stabint_checkpoint* checkpoint);
+double stabint_checkpoint_time(const stabint_checkpoint* checkpoint);    /* NaN for NULL */
+int stabint_checkpoint_step_count(const stabint_checkpoint* checkpoint); /* -1 for NULL */
 
 #ifdef __cplusplus
 }

@@ -378,6 +378,9 @@ void bindSimulator(nb::module_& m) {
       .def_ro("branch", &StepReport::branch)
       .def_ro("alpha", &StepReport::alpha, "Blend weight of the BE partner (0 = pure IM).")
       .def_ro("velocity_scale", &StepReport::velocity_scale)
+      .def_ro("event_energy", &StepReport::event_energy,
+              "Energy added to H* by set_state/set_positions/set_velocities since the previous step "
+              "(the jump of H they caused, booked as the user's work).")
       .def_ro("iterations", &StepReport::iterations, "Local/global iterations of all solves of the step.")
       .def_ro("energy_evaluations", &StepReport::energy_evaluations)
       .def_ro("times", &StepReport::times)
@@ -385,6 +388,36 @@ void bindSimulator(nb::module_& m) {
         return "StepReport(step=" + std::to_string(r.step) + ", time=" + std::to_string(r.time) +
                ", H=" + std::to_string(r.energy.total()) + ", target=" + std::to_string(r.target) +
                ", branch='" + blendBranchName(r.branch) + "')";
+      });
+
+  nb::class_<Checkpoint>(m, "Checkpoint",
+                         "A snapshot of a running simulation (Simulator.checkpoint()): time, step count, state, BDF2 "
+                         "history, H* and the per-frame forcing (pin targets, external forces), not the options. "
+                         "Simulator.restore() of it, into a Simulator of the same scene, options and backend, "
+                         "continues bit for bit. Its bytes are a versioned format of this library version and "
+                         "byte order. Immutable; picklable (through its bytes).")
+      .def_prop_ro("time", &Checkpoint::time, "Simulation time of the snapshot.")
+      .def_prop_ro("step_count", &Checkpoint::stepCount, "Steps taken before the snapshot.")
+      .def_prop_ro("bytes", [](const Checkpoint& c) { return nb::bytes(c.bytes().data(), c.bytes().size()); },
+                   "The serialized form (what save() writes), as a new bytes object.")
+      .def_static("from_bytes",
+                  [](nb::bytes data, const std::string& origin) {
+                    return Checkpoint::fromBytes(std::string(data.c_str(), data.size()), origin);
+                  },
+                  "data"_a, "origin"_a = "checkpoint",
+                  "A checkpoint from its bytes. Raises FileFormatError naming `origin` and the problem when "
+                  "they are malformed.")
+      .def("save", &Checkpoint::save, "path"_a, nb::call_guard<nb::gil_scoped_release>(),
+           "Writes the bytes to a file. Raises FileFormatError when it cannot be written completely.")
+      .def_static("load", &Checkpoint::load, "path"_a, nb::call_guard<nb::gil_scoped_release>(),
+                  "Reads a file written by save(). Raises FileFormatError (file) when missing or malformed.")
+      .def("__getstate__", [](const Checkpoint& c) { return nb::bytes(c.bytes().data(), c.bytes().size()); })
+      .def("__setstate__", [](Checkpoint& c, nb::bytes data) {
+        new (&c) Checkpoint(Checkpoint::fromBytes(std::string(data.c_str(), data.size()), "pickled checkpoint"));
+      })
+      .def("__repr__", [](const Checkpoint& c) {
+        return "Checkpoint(step_count=" + std::to_string(c.stepCount()) + ", time=" + std::to_string(c.time()) +
+               ", " + std::to_string(c.bytes().size()) + " bytes)";
       });
 
   nb::class_<Simulator>(m, "Simulator",
@@ -408,7 +441,41 @@ void bindSimulator(nb::module_& m) {
       .def_prop_ro("options", [](const Simulator& s) { return s.options(); }, "A copy of the options.")
       .def_prop_ro("last_report", [](const Simulator& s) { return s.lastReport(); },
                    "Report of the last completed step (a copy; zeros before the first).")
-      .def_prop_ro("backend_description", &Simulator::backendDescription);
+      .def_prop_ro("backend_description", &Simulator::backendDescription)
+      // Per-frame input (docs/method.md, "Per-frame input"): every call validates first and a
+      // rejected one (InvalidInputError naming the problem) changes nothing.
+      .def("set_pin_target", &Simulator::setPinTarget, "pin"_a, "target"_a,
+           "Pin `pin` (an index into scene.pins) moves linearly from its current target to `target` (3,) over the "
+           "next step and stays there; its scripted law is no longer used. Call it every frame with the hand's "
+           "position to drag; the work is booked in H* like a scripted pin's. Raises InvalidInputError for a pin "
+           "out of range or a non-finite target.")
+      .def("set_pin_target",
+           [](Simulator& s, int pin, const std::array<double, 3>& target) {
+             s.setPinTarget(pin, Eigen::Vector3d(target[0], target[1], target[2]));
+           },
+           "pin"_a, "target"_a, "The same with the target as a sequence of three numbers, e.g. (x, y, z).")
+      .def("pin_target", &Simulator::pinTarget, "pin"_a,
+           "(3,) current target of pin `pin` (its law's or the last set value at the current time), a copy.")
+      .def("set_external_forces", &Simulator::setExternalForces, "forces"_a,
+           "(n, 3) per-particle forces in newtons, on top of gravity and force fields: they ramp from their "
+           "current value to `forces` over the next step and persist until the next call (pass zeros to remove "
+           "them). Booked in H* by the forcing rule.")
+      .def("set_state", &Simulator::setState, "positions"_a, "velocities"_a,
+           "Replaces positions and velocities ((n, 3) each, finite): teleport, reset. H* moves by the jump of H "
+           "(the next report's event_energy) and BDF2 restarts from this state, as a fresh simulator would.")
+      .def("set_positions", &Simulator::setPositions, "positions"_a,
+           "Replaces the positions ((n, 3), finite), keeping the velocities; booked as set_state.")
+      .def("set_velocities", &Simulator::setVelocities, "velocities"_a,
+           "Replaces the velocities ((n, 3), finite), keeping the positions; booked as set_state.")
+      .def("set_iterations", &Simulator::setIterations, "iterations"_a,
+           "Local/global iteration budget of every later step (>= 1); time, state and H* are kept, "
+           "options.iterations follows.")
+      .def("checkpoint", &Simulator::checkpoint, nb::call_guard<nb::gil_scoped_release>(),
+           "A Checkpoint of the current simulation (the GIL is released while it is written).")
+      .def("restore", &Simulator::restore, "checkpoint"_a, nb::call_guard<nb::gil_scoped_release>(),
+           "Continues from a Checkpoint of a Simulator of the same scene: time, step count, state, H* and the "
+           "per-frame forcing come back; options stay this simulator's. Raises InvalidInputError (nothing "
+           "changed) when it belongs to another scene (particle or pin count, masses or rest shape differ).");
 }
 
 }  // namespace

@@ -7,6 +7,11 @@ Copies and views: arrays returned by ``Simulator.positions``/``velocities`` and 
 properties of :class:`Scene` are fresh copies the caller owns; step reports are copies; the
 element lists of a scene (``scene.springs``, ``scene.pins``, ...) are views that edit it.
 
+Per-frame input between steps: ``Simulator.set_pin_target``, ``set_external_forces``,
+``set_state``/``set_positions``/``set_velocities``, ``set_iterations``; ``Simulator.checkpoint()``
+returns a :class:`Checkpoint` (``save``/``load``, ``bytes``, picklable) that ``restore`` continues
+from bit for bit.
+
 Example::
 
     import stabint

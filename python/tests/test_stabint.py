@@ -27,7 +27,9 @@ def test_installed_package_is_used_and_has_stubs():
     assert "site-packages" in str(package)  # not the source folder python/stabint
     assert (package / "_stabint.pyi").stat().st_size > 0
     assert (package / "py.typed").exists()
-    assert "class InvalidInputError(Error)" in (package / "_stabint.pyi").read_text()
+    stub = (package / "_stabint.pyi").read_text()
+    assert "class InvalidInputError(Error)" in stub
+    assert "class Checkpoint" in stub and "def set_pin_target(self" in stub
 
 
 # --- closed forms (docs/method.md; tests/test_oscillator.cpp does the same in C++) -----------
@@ -225,6 +227,204 @@ def test_save_and_load_round_trip(tmp_path):
     np.testing.assert_array_equal(back.positions, scene.positions)
     np.testing.assert_array_equal(back.masses, scene.masses)
     assert len(back.springs) == len(scene.springs)
+
+
+# --- per-frame input and checkpoints (docs/method.md "Per-frame input") ---------------------------
+def small_cloth(integrator=Integrator.EnergyBlend, **options):
+    """A 6 x 5 cloth pinned at its two top corners (pins 0 and 1), and its scene."""
+    scene = stabint.cloth_grid(nx=6, ny=5)
+    return stabint.Simulator(scene, stabint.SimulatorOptions(integrator=integrator, **options)), scene
+
+
+def free_particle(scene):
+    """The lowest particle, which no pin holds (the pins hold the top corners)."""
+    low = int(np.argmin(scene.positions[:, 1]))
+    assert low not in {pin.vertex for pin in scene.pins}
+    return low
+
+
+def test_a_pin_target_set_every_frame_drags_the_pin():
+    sim, scene = small_cloth(Integrator.BackwardEuler)
+    corner, other = sim.pin_target(0), sim.pin_target(1)
+    np.testing.assert_array_equal(corner, scene.pins[0].target.position)
+    for frame in range(1, 31):
+        q = corner + [0.01 * frame, 0.0, 0.0]  # the hand moves 0.3 m in 1 s
+        sim.set_pin_target(0, q)
+        sim.step()
+        # The ramp ends on the given value bit for bit.
+        np.testing.assert_array_equal(sim.pin_target(0), q)
+    np.testing.assert_array_equal(sim.pin_target(1), other)
+    # The corner follows its pin (k = 1e5 N/m against the cloth's few newtons: under 1 cm off).
+    np.testing.assert_allclose(sim.positions[scene.pins[0].vertex], q, atol=0.01)
+    # Any sequence of three numbers is a target too.
+    sim.set_pin_target(0, (q[0], q[1], q[2] + 0.01))
+    sim.step()
+    np.testing.assert_array_equal(sim.pin_target(0), [q[0], q[1], q[2] + 0.01])
+    sim.set_pin_target(0, [0, 0, 0])
+    sim.step()
+    np.testing.assert_array_equal(sim.pin_target(0), np.zeros(3))
+
+
+def test_rejected_input_raises_invalid_input_and_changes_nothing():
+    sim, scene = small_cloth()
+    twin, _ = small_cloth()
+    sim.step()
+    twin.step()
+    n = scene.num_particles
+    x = sim.positions
+    x[3, 1] = np.nan
+    with pytest.raises(stabint.InvalidInputError, match="pin 2 out of range"):
+        sim.set_pin_target(2, np.zeros(3))
+    with pytest.raises(stabint.InvalidInputError, match="pin -1 out of range"):
+        sim.pin_target(-1)
+    with pytest.raises(stabint.InvalidInputError, match="pin 0: target is not finite"):
+        sim.set_pin_target(0, np.array([0.0, np.nan, 0.0]))
+    with pytest.raises(stabint.InvalidInputError, match=f"external forces: {n - 1} rows"):
+        sim.set_external_forces(np.zeros((n - 1, 3)))
+    with pytest.raises(stabint.InvalidInputError, match="positions: row 3 is not finite"):
+        sim.set_positions(x)
+    with pytest.raises(stabint.InvalidInputError, match="velocities: row 3 is not finite"):
+        sim.set_state(sim.positions, x)
+    with pytest.raises(stabint.InvalidInputError, match="iterations = 0"):
+        sim.set_iterations(0)
+    with pytest.raises(TypeError):  # not (n, 3): refused by the binding itself
+        sim.set_velocities(np.zeros((n, 2)))
+    assert sim.target == twin.target
+    for _ in range(5):
+        a, b = sim.step(), twin.step()
+        assert a.target == b.target and a.event_energy == 0.0
+    np.testing.assert_array_equal(sim.positions, twin.positions)
+    np.testing.assert_array_equal(sim.velocities, twin.velocities)
+
+
+def test_set_state_books_the_jump_as_event_energy():
+    sim, scene = small_cloth()
+    for _ in range(5):
+        sim.step()
+    x, v = sim.positions, sim.velocities
+    x[:, 2] += 0.01  # pushed out of the pins' plane
+    v[:, 0] = 0.2
+    h_before, target_before = sim.energy().total, sim.target
+    sim.set_state(x, v)
+    np.testing.assert_array_equal(sim.positions, x)
+    np.testing.assert_array_equal(sim.velocities, v)
+    jump = sim.energy().total - h_before
+    assert jump > 0.0
+    assert sim.target == pytest.approx(target_before + jump, rel=1e-12)
+    assert sim.step().event_energy == jump
+    assert sim.step().event_energy == 0.0
+
+    # Velocities alone: zero velocities take the kinetic energy out, a negative event.
+    h_before = sim.energy().total
+    sim.set_velocities(np.zeros_like(v))
+    assert sim.energy().kinetic == 0.0
+    jump = sim.energy().total - h_before
+    assert jump < 0.0 and sim.step().event_energy == jump
+
+    # Positions alone keep the velocities.
+    v = sim.velocities
+    x = sim.positions
+    x[free_particle(scene), 1] += 0.05
+    h_before = sim.energy().total
+    sim.set_positions(x)
+    np.testing.assert_array_equal(sim.velocities, v)
+    jump = sim.energy().total - h_before
+    assert jump != 0.0 and sim.step().event_energy == jump
+
+
+def test_external_forces_push_the_cloth():
+    sim, scene = small_cloth()
+    low = free_particle(scene)
+    for _ in range(3):
+        sim.step()
+    start = sim.checkpoint()
+    for _ in range(10):
+        sim.step()
+    unforced = sim.positions[low, 0]
+    sim.restore(start)
+    forces = np.zeros((scene.num_particles, 3))
+    forces[low, 0] = 1.0  # 1 N along +x for 1/3 s
+    sim.set_external_forces(forces)
+    for _ in range(10):
+        sim.step()
+    assert sim.positions[low, 0] - unforced > 0.01
+
+
+def test_set_iterations_changes_the_budget_of_later_steps():
+    sim, _ = small_cloth(Integrator.BackwardEuler, iterations=4)
+    assert sim.step().iterations == 4
+    time, target = sim.time, sim.target
+    sim.set_iterations(9)
+    assert sim.time == time and sim.target == target
+    assert sim.step().iterations == 9
+    assert sim.options.iterations == 9
+
+
+def drive(sim, corner, frames):
+    """A game loop: pin 0 dragged around `corner` and a force on particle 0, both functions of
+    time only; returns the final positions."""
+    forces = np.zeros((sim.scene.num_particles, 3))
+    for _ in range(frames):
+        t1 = sim.time + sim.options.time_step
+        sim.set_pin_target(0, corner + [0.1 * math.sin(3 * t1), 0.0, 0.05 * t1])
+        forces[0, 2] = 0.5 * math.cos(5 * t1)
+        sim.set_external_forces(forces)
+        sim.step()
+    return sim.positions
+
+
+def test_a_restored_checkpoint_continues_bit_for_bit(tmp_path):
+    import copy
+    import pickle
+
+    for integrator in (Integrator.EnergyBlend, Integrator.BDF2):
+        sim, scene = small_cloth(integrator)
+        corner = sim.pin_target(0)
+        drive(sim, corner, 12)
+        checkpoint = sim.checkpoint()
+        assert checkpoint.step_count == 12 and checkpoint.time == sim.time
+        target = sim.target
+        original = drive(sim, corner, 20)
+
+        sim.restore(checkpoint)
+        assert sim.step_count == 12 and sim.target == target
+        assert np.array_equal(drive(sim, corner, 20), original)
+
+        data = checkpoint.bytes
+        assert isinstance(data, bytes) and len(data) > 0
+        path = tmp_path / "run.ckpt"
+        checkpoint.save(str(path))
+        assert path.read_bytes() == data
+        loaded = stabint.Checkpoint.load(str(path))
+        assert loaded.step_count == 12 and loaded.time == checkpoint.time and loaded.bytes == data
+        for copy_ in (loaded, stabint.Checkpoint.from_bytes(data), pickle.loads(pickle.dumps(checkpoint)),
+                      copy.deepcopy(checkpoint)):
+            other = stabint.Simulator(scene, sim.options)
+            other.restore(copy_)
+            assert np.array_equal(drive(other, corner, 20), original), integrator
+
+
+def test_bad_checkpoints_raise_named_errors(tmp_path):
+    sim, _ = small_cloth()
+    sim.step()
+    data = sim.checkpoint().bytes
+    with pytest.raises(stabint.FileFormatError, match="wrong header"):
+        stabint.Checkpoint.from_bytes(b"not a checkpoint")
+    with pytest.raises(stabint.FileFormatError, match="truncated") as truncated:
+        stabint.Checkpoint.from_bytes(data[:-1], "mine.ckpt")
+    assert truncated.value.file == "mine.ckpt"
+    (tmp_path / "half.ckpt").write_bytes(data[: len(data) // 2])
+    with pytest.raises(stabint.FileFormatError) as half:
+        stabint.Checkpoint.load(str(tmp_path / "half.ckpt"))
+    assert half.value.file.endswith("half.ckpt")
+    with pytest.raises(stabint.FileFormatError):
+        stabint.Checkpoint.load(str(tmp_path / "missing.ckpt"))
+    with pytest.raises(stabint.FileFormatError):
+        sim.checkpoint().save(str(tmp_path / "no" / "such" / "dir.ckpt"))
+    chain = stabint.Simulator(stabint.chain_pendulum())
+    with pytest.raises(stabint.InvalidInputError, match="another scene"):
+        chain.restore(sim.checkpoint())
+    assert chain.step_count == 0
 
 
 # --- OpenCL, where a device exists --------------------------------------------------------------

@@ -1,12 +1,16 @@
 /* The C API (include/stabint/stabint_c.h) from a C program: compiled as C99, no C++ in sight.
  * Each check prints on failure; the program ends with "N passed, N failed" and exits non-zero
  * when any check failed. Run by ctest (label cpu). */
+/* mkstemp and close (POSIX) for the checkpoint file's temporary path. */
+#define _POSIX_C_SOURCE 200809L
+
 #include <stabint/stabint_c.h>
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static int passed = 0;
 static int failed = 0;
@@ -225,6 +229,337 @@ static void test_files(const char* scene_dir) {
   stabint_scene_destroy(scene);
 }
 
+/* A cloth simulator (BE unless told) on a 6 x 5 grid pinned at its two top corners (pins 0, 1). */
+static stabint_simulator* small_cloth(stabint_integrator integrator) {
+  stabint_scene* scene = NULL;
+  stabint_simulator* sim = NULL;
+  stabint_simulator_options options;
+  CHECK(stabint_scene_create_builtin("cloth", "{\"nx\": 6, \"ny\": 5}", &scene) == STABINT_OK);
+  stabint_simulator_options_default(&options);
+  options.integrator = integrator;
+  CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_OK);
+  stabint_scene_destroy(scene);
+  return sim;
+}
+
+static double* new_rows(int n) { return (double*)calloc(3 * (size_t)n, sizeof(double)); }
+
+/* A hand drags pin 0 along x, its target set every frame: the target reads back exactly as set
+ * (the ramp ends on it bit for bit), the pinned corner follows it and the other pin stays. */
+static void test_pin_target_set_every_frame_moves_the_pin(void) {
+  stabint_simulator* sim = small_cloth(STABINT_BACKWARD_EULER);
+  const int n = stabint_simulator_num_particles(sim);
+  double q0[3], q1[3], q[3], back[3];
+  double* x = new_rows(n);
+  int f, i, corner = -1, exact = 1;
+  CHECK(stabint_simulator_pin_target(sim, 0, q0) == STABINT_OK);
+  CHECK(stabint_simulator_pin_target(sim, 1, q1) == STABINT_OK);
+  CHECK(stabint_simulator_copy_positions(sim, x, 3 * (size_t)n) == STABINT_OK);
+  for (i = 0; i < n && corner < 0; ++i) /* the particle that pin 0 holds starts on its target */
+    if (x[3 * i] == q0[0] && x[3 * i + 1] == q0[1] && x[3 * i + 2] == q0[2]) corner = i;
+  CHECK(corner >= 0);
+  if (corner < 0) corner = 0;
+  for (f = 1; f <= 30; ++f) {
+    q[0] = q0[0] + 0.01 * f; /* 0.3 m/s, reached at 1 s */
+    q[1] = q0[1];
+    q[2] = q0[2];
+    CHECK(stabint_simulator_set_pin_target(sim, 0, q) == STABINT_OK);
+    CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
+    CHECK(stabint_simulator_pin_target(sim, 0, back) == STABINT_OK);
+    exact = exact && memcmp(back, q, sizeof q) == 0;
+  }
+  CHECK(exact);
+  CHECK(stabint_simulator_pin_target(sim, 1, back) == STABINT_OK);
+  CHECK(memcmp(back, q1, sizeof q1) == 0);
+  /* The corner follows its pin (k = 1e5 N/m against a few newtons of cloth: under 1 cm off). */
+  CHECK(stabint_simulator_copy_positions(sim, x, 3 * (size_t)n) == STABINT_OK);
+  printf("dragged corner: x moved %.4f m for a pin moved 0.3 m\n", x[3 * corner] - q0[0]);
+  CHECK(fabs(x[3 * corner] - (q0[0] + 0.3)) < 0.01);
+  free(x);
+  stabint_simulator_destroy(sim);
+}
+
+/* Rejected input: INVALID_INPUT naming the value (library rules) or INVALID_ARGUMENT (C misuse:
+ * NULL, wrong array size); neither changes the simulator, which then runs as an untouched twin. */
+static void test_bad_input_is_rejected_and_changes_nothing(void) {
+  stabint_simulator* sim = small_cloth(STABINT_ENERGY_BLEND);
+  stabint_simulator* twin = small_cloth(STABINT_ENERGY_BLEND);
+  const int n = stabint_simulator_num_particles(sim);
+  const size_t count = 3 * (size_t)n;
+  double* x = new_rows(n);
+  double* y = new_rows(n);
+  double q[3] = {0.0, 0.0, 0.0}, q0[3], back[3];
+  stabint_step_report a, b;
+  int f;
+  CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
+  CHECK(stabint_simulator_step(twin, NULL) == STABINT_OK);
+  CHECK(stabint_simulator_pin_target(sim, 0, q0) == STABINT_OK);
+
+  CHECK(stabint_simulator_set_pin_target(sim, 2, q) == STABINT_INVALID_INPUT);
+  CHECK(starts_with(stabint_last_error_message(), "InvalidInputError: "));
+  CHECK(strstr(stabint_last_error_message(), "pin 2 out of range") != NULL);
+  CHECK(stabint_simulator_set_pin_target(sim, -1, q) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "pin -1") != NULL);
+  CHECK(stabint_simulator_pin_target(sim, 5, back) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "pin 5") != NULL);
+  q[1] = NAN;
+  CHECK(stabint_simulator_set_pin_target(sim, 0, q) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "pin 0: target is not finite") != NULL);
+  CHECK(stabint_simulator_set_pin_target(sim, 0, NULL) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_set_iterations(sim, 0) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "iterations = 0") != NULL);
+
+  /* Wrong sizes, one value short and one particle too many, and NULL arrays. */
+  CHECK(stabint_simulator_set_external_forces(sim, x, count - 1) == STABINT_INVALID_ARGUMENT);
+  CHECK(starts_with(stabint_last_error_message(), "InvalidArgument: forces"));
+  CHECK(strstr(stabint_last_error_message(), "expected") != NULL);
+  CHECK(stabint_simulator_set_positions(sim, x, count + 3) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_set_velocities(sim, x, 0) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_set_state(sim, x, y, count - 3) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_set_state(sim, x, NULL, count) == STABINT_INVALID_ARGUMENT);
+  CHECK(strstr(stabint_last_error_message(), "velocities is NULL") != NULL);
+  CHECK(stabint_simulator_set_external_forces(NULL, x, count) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_set_iterations(NULL, 3) == STABINT_INVALID_ARGUMENT);
+
+  /* A non-finite row: the right size, so the library's own check names it. */
+  CHECK(stabint_simulator_copy_positions(sim, x, count) == STABINT_OK);
+  x[3 * 3 + 1] = NAN;
+  CHECK(stabint_simulator_set_positions(sim, x, count) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "positions: row 3 is not finite") != NULL);
+
+  CHECK(stabint_simulator_pin_target(sim, 0, back) == STABINT_OK);
+  CHECK(memcmp(back, q0, sizeof q0) == 0);
+  CHECK(stabint_simulator_target(sim) == stabint_simulator_target(twin));
+  for (f = 0; f < 5; ++f) {
+    CHECK(stabint_simulator_step(sim, &a) == STABINT_OK);
+    CHECK(stabint_simulator_step(twin, &b) == STABINT_OK);
+    CHECK(a.target == b.target && a.iterations == b.iterations);
+    CHECK(a.event_energy == 0.0);
+  }
+  CHECK(stabint_simulator_copy_positions(sim, x, count) == STABINT_OK);
+  CHECK(stabint_simulator_copy_positions(twin, y, count) == STABINT_OK);
+  CHECK(memcmp(x, y, count * sizeof(double)) == 0);
+  free(x);
+  free(y);
+  stabint_simulator_destroy(sim);
+  stabint_simulator_destroy(twin);
+}
+
+/* Setting the state books the jump of H in H* at once and reports it as the next step's
+ * event_energy; external forces push the cloth; the iteration budget reaches the next report. */
+static void test_state_forces_and_iterations(void) {
+  stabint_simulator* sim = small_cloth(STABINT_ENERGY_BLEND);
+  const int n = stabint_simulator_num_particles(sim);
+  const size_t count = 3 * (size_t)n;
+  double* x = new_rows(n);
+  double* v = new_rows(n);
+  double* f = new_rows(n);
+  double* back = new_rows(n);
+  stabint_energy before, after;
+  stabint_step_report report;
+  stabint_checkpoint* ckpt = NULL;
+  double target_before, jump, x_unforced;
+  int i, low = 0;
+  for (i = 0; i < 5; ++i) CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
+  CHECK(stabint_simulator_copy_positions(sim, x, count) == STABINT_OK);
+  CHECK(stabint_simulator_copy_velocities(sim, v, count) == STABINT_OK);
+  for (i = 0; i < n; ++i) {
+    x[3 * i + 2] += 0.01; /* pushed out of the pins' plane */
+    v[3 * i] = 0.2;
+  }
+  CHECK(stabint_simulator_energy(sim, &before) == STABINT_OK);
+  target_before = stabint_simulator_target(sim);
+  CHECK(stabint_simulator_set_state(sim, x, v, count) == STABINT_OK);
+  CHECK(stabint_simulator_copy_positions(sim, back, count) == STABINT_OK);
+  CHECK(memcmp(back, x, count * sizeof(double)) == 0);
+  CHECK(stabint_simulator_copy_velocities(sim, back, count) == STABINT_OK);
+  CHECK(memcmp(back, v, count * sizeof(double)) == 0);
+  CHECK(stabint_simulator_energy(sim, &after) == STABINT_OK);
+  jump = after.total - before.total;
+  CHECK(jump > 0.0);
+  CHECK(fabs(stabint_simulator_target(sim) - (target_before + jump)) <=
+        1e-12 * fabs(target_before + jump));
+  CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
+  CHECK(report.event_energy == jump);
+  CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
+  CHECK(report.event_energy == 0.0);
+
+  /* set_velocities alone: zero velocities remove the kinetic energy, booked as a negative event. */
+  memset(v, 0, count * sizeof(double));
+  CHECK(stabint_simulator_energy(sim, &before) == STABINT_OK);
+  CHECK(stabint_simulator_set_velocities(sim, v, count) == STABINT_OK);
+  CHECK(stabint_simulator_energy(sim, &after) == STABINT_OK);
+  CHECK(after.kinetic == 0.0);
+  CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
+  CHECK(report.event_energy == after.total - before.total && report.event_energy < 0.0);
+
+  /* set_positions alone keeps the velocities. The lowest particle is a free one (the pins hold
+   * the top corners). */
+  CHECK(stabint_simulator_copy_velocities(sim, v, count) == STABINT_OK);
+  CHECK(stabint_simulator_copy_positions(sim, x, count) == STABINT_OK);
+  for (i = 1; i < n; ++i)
+    if (x[3 * i + 1] < x[3 * low + 1]) low = i;
+  x[3 * low + 1] += 0.05;
+  CHECK(stabint_simulator_set_positions(sim, x, count) == STABINT_OK);
+  CHECK(stabint_simulator_copy_velocities(sim, back, count) == STABINT_OK);
+  CHECK(memcmp(back, v, count * sizeof(double)) == 0);
+
+  /* 1 N along +x on that free particle for 10 steps, against the same 10
+   * steps from a checkpoint without it: the corner ends further along +x. */
+  CHECK(stabint_simulator_set_iterations(sim, 7) == STABINT_OK);
+  CHECK(stabint_simulator_checkpoint(sim, &ckpt) == STABINT_OK);
+  for (i = 0; i < 10; ++i) CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
+  CHECK(report.iterations >= 7); /* the blend adds its BE partner's solves to IM's */
+  CHECK(stabint_simulator_copy_positions(sim, x, count) == STABINT_OK);
+  x_unforced = x[3 * low];
+  CHECK(stabint_simulator_restore(sim, ckpt) == STABINT_OK);
+  f[3 * low] = 1.0;
+  CHECK(stabint_simulator_set_external_forces(sim, f, count) == STABINT_OK);
+  for (i = 0; i < 10; ++i) CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
+  CHECK(stabint_simulator_copy_positions(sim, x, count) == STABINT_OK);
+  printf("1 N on a free particle for 1/3 s: x moved %.4f m further\n", x[3 * low] - x_unforced);
+  CHECK(x[3 * low] - x_unforced > 0.01);
+  stabint_checkpoint_destroy(ckpt);
+  free(x);
+  free(v);
+  free(f);
+  free(back);
+  stabint_simulator_destroy(sim);
+}
+
+/* Steps `frames` times with pin 0 dragged around `corner` (its rest target) and a force set, as
+ * in a game loop, both functions of time only; leaves the final positions in `x` (3 n values). */
+static void drive(stabint_simulator* sim, const double corner[3], int frames, double* x) {
+  const int n = stabint_simulator_num_particles(sim);
+  double* f = new_rows(n);
+  double q[3];
+  int i;
+  for (i = 0; i < frames; ++i) {
+    const double t1 = stabint_simulator_time(sim) + 1.0 / 30.0;
+    q[0] = corner[0] + 0.1 * sin(3.0 * t1);
+    q[1] = corner[1];
+    q[2] = corner[2] + 0.05 * t1;
+    f[2] = 0.5 * cos(5.0 * t1); /* particle 0: a free bottom corner */
+    CHECK(stabint_simulator_set_pin_target(sim, 0, q) == STABINT_OK);
+    CHECK(stabint_simulator_set_external_forces(sim, f, 3 * (size_t)n) == STABINT_OK);
+    CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
+  }
+  CHECK(stabint_simulator_copy_positions(sim, x, 3 * (size_t)n) == STABINT_OK);
+  free(f);
+}
+
+/* A checkpoint restored into the same simulator, into a new one, from its bytes and from a file
+ * continues bit for bit; bad files and another scene's checkpoint are refused. */
+static void test_checkpoints_continue_bit_for_bit(void) {
+  stabint_simulator* sim = small_cloth(STABINT_ENERGY_BLEND);
+  stabint_simulator* other = small_cloth(STABINT_ENERGY_BLEND);
+  stabint_simulator* chain = NULL;
+  stabint_scene* chain_scene = NULL;
+  stabint_simulator_options options;
+  stabint_checkpoint *ckpt = NULL, *loaded = NULL, *copy = NULL;
+  const int n = stabint_simulator_num_particles(sim);
+  const size_t bytes = 3 * (size_t)n * sizeof(double);
+  double* original = new_rows(n);
+  double* again = new_rows(n);
+  double target, time, corner[3];
+  const void *data, *loaded_data;
+  size_t size = 0, loaded_size = 0;
+  char path[1024];
+  const char* tmp = getenv("TMPDIR");
+  int fd;
+  FILE* file;
+
+  CHECK(stabint_simulator_pin_target(sim, 0, corner) == STABINT_OK);
+  drive(sim, corner, 12, again);
+  CHECK(stabint_simulator_checkpoint(sim, &ckpt) == STABINT_OK);
+  CHECK(stabint_checkpoint_step_count(ckpt) == 12);
+  CHECK(stabint_checkpoint_time(ckpt) == stabint_simulator_time(sim));
+  target = stabint_simulator_target(sim);
+  time = stabint_simulator_time(sim);
+  drive(sim, corner, 20, original);
+
+  CHECK(stabint_simulator_restore(sim, ckpt) == STABINT_OK);
+  CHECK(stabint_simulator_step_count(sim) == 12);
+  CHECK(stabint_simulator_time(sim) == time);
+  CHECK(stabint_simulator_target(sim) == target);
+  drive(sim, corner, 20, again);
+  CHECK(memcmp(again, original, bytes) == 0);
+
+  CHECK(stabint_simulator_restore(other, ckpt) == STABINT_OK);
+  drive(other, corner, 20, again);
+  CHECK(memcmp(again, original, bytes) == 0);
+
+  /* In memory: the bytes make an equal checkpoint. */
+  data = stabint_checkpoint_data(ckpt, &size);
+  CHECK(data != NULL && size > 0);
+  CHECK(stabint_checkpoint_from_bytes(data, size, &copy) == STABINT_OK);
+  CHECK(stabint_checkpoint_step_count(copy) == 12);
+  CHECK(stabint_simulator_restore(other, copy) == STABINT_OK);
+  drive(other, corner, 20, again);
+  CHECK(memcmp(again, original, bytes) == 0);
+  CHECK(stabint_checkpoint_from_bytes("not a checkpoint", 16, &loaded) == STABINT_FILE_FORMAT);
+  CHECK(strstr(stabint_last_error_message(), "wrong header") != NULL);
+  CHECK(stabint_checkpoint_from_bytes(data, size - 1, &loaded) == STABINT_FILE_FORMAT);
+  CHECK(strstr(stabint_last_error_message(), "truncated") != NULL);
+  CHECK(loaded == NULL);
+
+  /* Through a file in a fresh temporary path. */
+  if (tmp == NULL || tmp[0] == '\0') tmp = "/tmp";
+  snprintf(path, sizeof path, "%s/stabint_c_api_XXXXXX", tmp);
+  fd = mkstemp(path);
+  CHECK(fd >= 0);
+  if (fd >= 0) close(fd);
+  CHECK(stabint_checkpoint_save(ckpt, path) == STABINT_OK);
+  CHECK(stabint_checkpoint_load(path, &loaded) == STABINT_OK);
+  loaded_data = stabint_checkpoint_data(loaded, &loaded_size);
+  CHECK(loaded_size == size && memcmp(loaded_data, data, size) == 0);
+  CHECK(stabint_checkpoint_time(loaded) == time);
+  CHECK(stabint_checkpoint_step_count(loaded) == 12);
+  stabint_simulator_destroy(other);
+  other = small_cloth(STABINT_ENERGY_BLEND);
+  CHECK(stabint_simulator_restore(other, loaded) == STABINT_OK);
+  drive(other, corner, 20, again);
+  CHECK(memcmp(again, original, bytes) == 0);
+  /* The same file cut short is malformed, and names its path. */
+  file = fopen(path, "wb");
+  CHECK(file != NULL);
+  if (file != NULL) {
+    fwrite(data, 1, size / 2, file);
+    fclose(file);
+  }
+  stabint_checkpoint_destroy(loaded);
+  loaded = NULL;
+  CHECK(stabint_checkpoint_load(path, &loaded) == STABINT_FILE_FORMAT);
+  CHECK(strstr(stabint_last_error_message(), path) != NULL);
+  CHECK(loaded == NULL);
+  remove(path);
+  CHECK(stabint_checkpoint_load(path, &loaded) == STABINT_FILE_FORMAT);
+  CHECK(stabint_checkpoint_save(ckpt, "/nonexistent/dir/run.ckpt") == STABINT_FILE_FORMAT);
+  CHECK(stabint_checkpoint_save(NULL, path) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_restore(sim, NULL) == STABINT_INVALID_ARGUMENT);
+
+  /* Another scene's checkpoint: INVALID_INPUT, and the simulator keeps its step count. */
+  CHECK(stabint_scene_create_builtin("chain", NULL, &chain_scene) == STABINT_OK);
+  stabint_simulator_options_default(&options);
+  CHECK(stabint_simulator_create(chain_scene, &options, &chain) == STABINT_OK);
+  stabint_scene_destroy(chain_scene);
+  CHECK(stabint_simulator_restore(chain, ckpt) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "another scene") != NULL);
+  CHECK(stabint_simulator_step_count(chain) == 0);
+
+  CHECK(stabint_checkpoint_time(NULL) != stabint_checkpoint_time(NULL)); /* NaN */
+  CHECK(stabint_checkpoint_step_count(NULL) == -1);
+  CHECK(stabint_checkpoint_data(NULL, &size) == NULL && size == 0);
+  stabint_checkpoint_destroy(NULL);
+  stabint_checkpoint_destroy(ckpt);
+  stabint_checkpoint_destroy(copy);
+  stabint_simulator_destroy(chain);
+  stabint_simulator_destroy(sim);
+  stabint_simulator_destroy(other);
+  free(original);
+  free(again);
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     fprintf(stderr, "usage: %s SCENE_DIR\n", argv[0]);
@@ -236,6 +571,10 @@ int main(int argc, char** argv) {
   test_buffers_and_triangles();
   test_files(argv[1]);
   test_blend_tracks_target_on_chain();
+  test_pin_target_set_every_frame_moves_the_pin();
+  test_bad_input_is_rejected_and_changes_nothing();
+  test_state_forces_and_iterations();
+  test_checkpoints_continue_bit_for_bit();
   printf("%d passed, %d failed\n", passed, failed);
   return failed == 0 ? 0 : 1;
 }

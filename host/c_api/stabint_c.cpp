@@ -433,6 +433,22 @@ stabint_status stabint_simulator_set_iterations(stabint_simulator* sim, int iter
   });
 }
 
+stabint_status stabint_simulator_grab(stabint_simulator* sim, int vertex, double stiffness,
+                                      int* out_pin) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(out_pin, "out_pin");
+    *out_pin = sim->sim.grab(vertex, stiffness);
+  });
+}
+
+stabint_status stabint_simulator_release(stabint_simulator* sim, int pin) {
+  return guarded([&] {
+    require(sim, "simulator");
+    sim->sim.release(pin);
+  });
+}
+
 stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim,
                                             stabint_checkpoint** out) {
   return guarded([&] {

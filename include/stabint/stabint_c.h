@@ -243,6 +243,13 @@ stabint_status stabint_simulator_set_velocities(stabint_simulator* sim, const do
                                                 size_t count);
 /* Local/global iterations per solve of every later step (>= 1); time, state and H* are kept. */
 stabint_status stabint_simulator_set_iterations(stabint_simulator* sim, int iterations);
+/* Attaches a handle to particle `vertex`: a new pin of `stiffness` (> 0) whose target is the
+ * particle's current position; its pin index goes to `out_pin` (for set_pin_target and release).
+ * The global factors get a rank-1 update, no refactorization. */
+stabint_status stabint_simulator_grab(stabint_simulator* sim, int vertex, double stiffness,
+                                      int* out_pin);
+/* Detaches pin `pin` (stiffness 0, index kept); the pin's energy leaves H and H* (event_energy). */
+stabint_status stabint_simulator_release(stabint_simulator* sim, int pin);
 
 /* ---- checkpoints ----
  * A snapshot of a running simulation (time, step count, state, BDF2 history, H*, the per-frame

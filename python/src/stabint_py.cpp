@@ -470,6 +470,13 @@ void bindSimulator(nb::module_& m) {
       .def("set_iterations", &Simulator::setIterations, "iterations"_a,
            "Local/global iteration budget of every later step (>= 1); time, state and H* are kept, "
            "options.iterations follows.")
+      .def("grab", &Simulator::grab, "vertex"_a, "stiffness"_a,
+           "Attaches a handle to particle `vertex`: a new pin of `stiffness` (> 0) whose target is the particle's "
+           "current position (no energy jump). Returns its pin index, for set_pin_target and release. The global "
+           "factors get a rank-1 update instead of a refactorization.")
+      .def("release", &Simulator::release, "pin"_a,
+           "Detaches pin `pin` (a handle or a scene pin): its stiffness becomes 0 and its index stays valid; the "
+           "pin's energy leaves H and H* alike (the next report's event_energy).")
       .def("checkpoint", &Simulator::checkpoint, nb::call_guard<nb::gil_scoped_release>(),
            "A Checkpoint of the current simulation (the GIL is released while it is written).")
       .def("restore", &Simulator::restore, "checkpoint"_a, nb::call_guard<nb::gil_scoped_release>(),

@@ -458,3 +458,26 @@ def test_the_matplotlib_example_plots_both_energies(tmp_path):
     assert blend == pytest.approx(h0, rel=0.01)
     assert be < 0.9 * h0
     assert out.stat().st_size > 10_000  # a PNG with content, not an empty figure
+
+
+def test_grab_drag_and_release_book_their_energy():
+    sim, scene = small_cloth()
+    low = free_particle(scene)
+    start = scene.positions[low].copy()
+    target_before = sim.target
+    handle = sim.grab(low, 1e4)
+    assert handle == len(scene.pins)
+    assert sim.target == target_before  # the handle starts where the particle is
+    for frame in range(1, 11):
+        sim.set_pin_target(handle, start + [0.0, 0.01 * frame, 0.02 * frame])
+        sim.step()
+    before = sim.energy().total
+    sim.release(handle)
+    released = sim.energy().total - before
+    assert released < 0.0
+    assert sim.scene.pins[handle].stiffness == 0.0
+    assert sim.step().event_energy == pytest.approx(released, abs=1e-12)
+    with pytest.raises(stabint.InvalidInputError, match="vertex"):
+        sim.grab(scene.positions.shape[0], 1e4)
+    with pytest.raises(stabint.InvalidInputError):
+        sim.release(len(scene.pins) + 1)

@@ -69,3 +69,18 @@ TEST(OpenCLNoDevice, SimulatorWithOpenCLBackendThrowsCatchableError) {
 
 }  // namespace
 }  // namespace stabint
+
+namespace stabint {
+namespace {
+
+// Auto needs no device: it runs on the CPU reference and says why.
+TEST(OpenCLNoDevice, AutoFallsBackToTheCpuReferenceAndSaysWhy) {
+  SimulatorOptions o;
+  o.backend = BackendKind::Auto;
+  Simulator sim(makeTetBar({}), o);
+  EXPECT_EQ(sim.backendDescription(), "CPU reference (double) [auto: no OpenCL device with fp64]");
+  EXPECT_NO_THROW(sim.step());
+}
+
+}  // namespace
+}  // namespace stabint

@@ -289,7 +289,7 @@ stabint_status stabint_simulator_create(const stabint_scene* scene,
     o.max_velocity_scale = options->max_velocity_scale;
     o.max_root_evaluations = options->max_root_evaluations;
     o.energy_limit = options->energy_limit;
-    o.backend = checkedEnum<stabint::BackendKind>(options->backend, 2, "backend");
+    o.backend = checkedEnum<stabint::BackendKind>(options->backend, 3, "backend");
     o.opencl.platform = options->opencl_platform ? options->opencl_platform : "";
     o.opencl.device = options->opencl_device ? options->opencl_device : "";
     o.opencl.precision =

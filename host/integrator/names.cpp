@@ -36,13 +36,18 @@ Integrator parseIntegrator(const std::string& name) {
 }
 
 const char* backendName(BackendKind kind) {
-  return kind == BackendKind::OpenCL ? "opencl" : "cpu";
+  switch (kind) {
+    case BackendKind::OpenCL: return "opencl";
+    case BackendKind::Auto: return "auto";
+    default: return "cpu";
+  }
 }
 
 BackendKind parseBackend(const std::string& name) {
   if (lower(name) == "cpu") return BackendKind::CpuReference;
   if (lower(name) == "opencl") return BackendKind::OpenCL;
-  throw InvalidInputError("unknown backend '" + name + "' (expected cpu or opencl)");
+  if (lower(name) == "auto") return BackendKind::Auto;
+  throw InvalidInputError("unknown backend '" + name + "' (expected cpu, opencl or auto)");
 }
 
 const char* blendBranchName(BlendBranch branch) {

@@ -56,7 +56,7 @@ void validateOptions(const SimulatorOptions& o) {
   if (static_cast<int>(o.integrator) < static_cast<int>(Integrator::ForwardEuler) ||
       static_cast<int>(o.integrator) > static_cast<int>(Integrator::EnergyBlend))
     fail("integrator = " + std::to_string(static_cast<int>(o.integrator)) + " is not an Integrator value");
-  if (o.backend != BackendKind::CpuReference && o.backend != BackendKind::OpenCL)
+  if (o.backend != BackendKind::CpuReference && o.backend != BackendKind::OpenCL && o.backend != BackendKind::Auto)
     fail("backend = " + std::to_string(static_cast<int>(o.backend)) + " is not a BackendKind value");
   if (o.opencl.precision != Precision::Double && o.opencl.precision != Precision::Float)
     fail("opencl.precision = " + std::to_string(static_cast<int>(o.opencl.precision)) + " is not a Precision value");
@@ -80,6 +80,48 @@ void validateOptions(const SimulatorOptions& o) {
   if (o.max_root_evaluations < 1) fail("max_root_evaluations must be >= 1");
 }
 
+// BackendKind::Auto [project rule, docs/method.md "Backend choice"]: a GPU wins on any scene; a
+// CPU OpenCL device (PoCL) beats the CPU reference only where the local step dominates, i.e. with
+// many rotation elements (tets, triangle strain: a 3x3 or 3x2 SVD each). On the 2-core VM PoCL is
+// 1.4-2x slower per iteration on every spring cloth (100 to 10,000 particles) and 2.7x faster on
+// the 24k-tet bar; the device's fixed cost per iteration (launches, transfers, a slower host solve
+// while its threads spin) is 0.1-1 ms, which about 2,000 rotation elements pay for.
+constexpr int kAutoMinRotationElements = 2000;
+
+struct BackendChoice {
+  BackendKind kind;
+  OpenCLOptions opencl;
+  std::string reason;  // for backendDescription(); empty unless Auto chose
+};
+
+BackendChoice chooseBackend(const Scene& scene, const SimulatorOptions& o) {
+  if (o.backend != BackendKind::Auto) return {o.backend, o.opencl, ""};
+  const bool need_fp64 = o.opencl.precision == Precision::Double;
+  const std::vector<OpenCLDeviceInfo> devices = listOpenCLDevices();
+  const OpenCLDeviceInfo* cpu_device = nullptr;
+  for (const OpenCLDeviceInfo& d : devices) {
+    if (need_fp64 && !d.fp64) continue;
+    OpenCLOptions chosen = o.opencl;
+    chosen.platform = std::to_string(d.platform_index);
+    chosen.device = std::to_string(d.device_index);
+    if (d.gpu) return {BackendKind::OpenCL, chosen, "auto: a GPU"};
+    if (!cpu_device) cpu_device = &d;
+  }
+  if (!cpu_device) return {BackendKind::CpuReference, o.opencl, "auto: no OpenCL device" + std::string(need_fp64 ? " with fp64" : "")};
+  const int rotations = static_cast<int>(scene.tets.size() + scene.triangle_strains.size());
+  if (rotations >= kAutoMinRotationElements) {
+    OpenCLOptions chosen = o.opencl;
+    chosen.platform = std::to_string(cpu_device->platform_index);
+    chosen.device = std::to_string(cpu_device->device_index);
+    return {BackendKind::OpenCL, chosen,
+            "auto: no GPU; " + std::to_string(rotations) + " rotation elements (at least " +
+                std::to_string(kAutoMinRotationElements) + ") pay for the OpenCL CPU device"};
+  }
+  return {BackendKind::CpuReference, o.opencl,
+          "auto: no GPU; " + std::to_string(rotations) + " rotation elements (fewer than " +
+              std::to_string(kAutoMinRotationElements) + ") run faster on the CPU reference"};
+}
+
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -92,8 +134,9 @@ struct Simulator::Impl {
   Impl(const Scene& s, const SimulatorOptions& o)
       : options((validateOptions(o), o)),
         scene(s),
-        backend(options.backend == BackendKind::OpenCL ? makeOpenCLBackend(scene, kNumSlots, options.opencl)
-                                                       : makeCpuBackend(scene, kNumSlots)),
+        choice(chooseBackend(scene.scene(), options)),
+        backend(choice.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, kNumSlots, choice.opencl)
+                                                   : makeCpuBackend(scene, kNumSlots)),
         system(scene),
         solver(*backend, system, kSolverScratch),
         x(s.positions),
@@ -618,6 +661,7 @@ struct Simulator::Impl {
 
   SimulatorOptions options;
   SceneData scene;
+  BackendChoice choice;
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   LocalGlobalSolver solver;
@@ -656,7 +700,10 @@ double Simulator::energyScale() const { return impl_->energy_scale; }
 const Scene& Simulator::scene() const { return impl_->scene.scene(); }
 const SimulatorOptions& Simulator::options() const { return impl_->options; }
 const StepReport& Simulator::lastReport() const { return impl_->report; }
-std::string Simulator::backendDescription() const { return impl_->backend->description(); }
+std::string Simulator::backendDescription() const {
+  const std::string& reason = impl_->choice.reason;
+  return impl_->backend->description() + (reason.empty() ? "" : " [" + reason + "]");
+}
 
 void Simulator::setPinTarget(int pin, const Eigen::Vector3d& target) { impl_->setPinTarget(pin, target); }
 Eigen::Vector3d Simulator::pinTarget(int pin) const {

@@ -300,6 +300,8 @@ std::vector<OpenCLDeviceInfo> listOpenCLDevices() {
       info.platform_name = pname;
       info.device_name = ocl::deviceName(devices[di]);
       info.fp64 = ocl::deviceHasFp64(devices[di]);
+      cl_device_type type = 0;
+      info.gpu = devices[di].getInfo(CL_DEVICE_TYPE, &type) == CL_SUCCESS && (type & CL_DEVICE_TYPE_GPU) != 0;
       list.push_back(std::move(info));
     }
   }

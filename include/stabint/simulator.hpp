@@ -23,8 +23,12 @@ const char* integratorName(Integrator integrator);  // "FE", "SE", "BE", "BDF2",
 Integrator parseIntegrator(const std::string& name);
 std::vector<Integrator> allIntegrators();
 
-enum class BackendKind { CpuReference, OpenCL };
-const char* backendName(BackendKind kind);  // "cpu", "opencl"
+/// Where the local step and the energies run. Auto: an OpenCL GPU when there is one; otherwise
+/// the OpenCL CPU device (e.g. PoCL) only for scenes with enough rotation elements (tets and
+/// triangle strain, whose per-element SVD pays for the device's overhead), else the CPU
+/// reference; backendDescription() says which and why (docs/method.md, "Backend choice").
+enum class BackendKind { CpuReference, OpenCL, Auto };
+const char* backendName(BackendKind kind);  // "cpu", "opencl", "auto"
 BackendKind parseBackend(const std::string& name);
 
 enum class Precision { Double, Float };
@@ -56,6 +60,7 @@ struct OpenCLDeviceInfo {
   std::string platform_name;
   std::string device_name;
   bool fp64 = false;
+  bool gpu = false;  // CL_DEVICE_TYPE_GPU
 };
 /// All devices of all platforms; empty when no OpenCL platform is installed (never throws for
 /// a missing platform).

@@ -78,6 +78,7 @@ typedef enum stabint_integrator {
 typedef enum stabint_backend {
   STABINT_BACKEND_CPU = 0,
   STABINT_BACKEND_OPENCL = 1,
+  STABINT_BACKEND_AUTO = 2, /* a GPU, else the OpenCL CPU device or the CPU reference by scene size */
   STABINT_ENUM_INT_WIDE_(STABINT_BACKEND)
 } stabint_backend;
 typedef enum stabint_precision {

@@ -151,7 +151,8 @@ void bindEnums(nb::module_& m) {
       .value("EnergyBlend", Integrator::EnergyBlend, "The energy-tracking blend of IM with BE.");
   nb::enum_<BackendKind>(m, "BackendKind")
       .value("CpuReference", BackendKind::CpuReference)
-      .value("OpenCL", BackendKind::OpenCL);
+      .value("OpenCL", BackendKind::OpenCL)
+      .value("Auto", BackendKind::Auto);
   nb::enum_<Precision>(m, "Precision").value("Double", Precision::Double).value("Float", Precision::Float);
   nb::enum_<Acceleration>(m, "Acceleration")
       .value("None_", Acceleration::None, "Plain local/global iterations ('None' is a Python keyword).")

@@ -41,7 +41,6 @@ struct Options {
   std::string scene;
   std::vector<std::pair<std::string, std::string>> params;
   stabint::SimulatorOptions sim;
-  bool backend_explicit = false;
   bool precision_explicit = false;
   int frames = 100;
   int every = 1;
@@ -74,8 +73,9 @@ std::string usage() {
        "  --energy-limit L          stop (exit 2) at the first step whose energy exceeds the target\n"
        "                            H* by more than L * E_scale (default 0: no limit)\n"
        "Backend:\n"
-       "  --backend cpu|opencl      default opencl, falling back to cpu when no OpenCL device\n"
-       "                            exists; an explicit --backend opencl never falls back\n"
+       "  --backend cpu|opencl|auto default auto: a GPU when there is one, else the CPU reference\n"
+       "                            or, for scenes with many tets, the OpenCL CPU device (the\n"
+       "                            choice and its reason are printed); opencl never falls back\n"
        "  --precision double|float  OpenCL arithmetic (the CPU reference always runs in double)\n"
        "  --platform SEL            OpenCL platform: index or name substring\n"
        "  --device SEL              OpenCL device: index or name substring\n"
@@ -132,6 +132,7 @@ int parseInteger(const std::string& option, const std::string& text) {
 
 Options parseArgs(int argc, char** argv) {
   Options o;
+  o.sim.backend = stabint::BackendKind::Auto;
   for (int i = 1; i < argc; ++i) {
     std::string arg = argv[i];
     std::optional<std::string> inline_value;
@@ -167,7 +168,6 @@ Options parseArgs(int argc, char** argv) {
         o.sim.integrator = stabint::parseIntegrator(value());
       } else if (arg == "--backend") {
         o.sim.backend = stabint::parseBackend(value());
-        o.backend_explicit = true;
       } else if (arg == "--precision") {
         const std::string p = value();
         if (p == "double") o.sim.opencl.precision = stabint::Precision::Double;
@@ -413,18 +413,6 @@ class StopSignals {
   struct sigaction old_term_ {};
 };
 
-std::unique_ptr<stabint::Simulator> makeSimulator(const stabint::Scene& scene, Options& o) {
-  if (!o.backend_explicit) o.sim.backend = stabint::BackendKind::OpenCL;
-  try {
-    return std::make_unique<stabint::Simulator>(scene, o.sim);
-  } catch (const stabint::NoOpenCLDeviceError& e) {
-    if (o.backend_explicit) throw;
-    std::cerr << kProgram << ": no OpenCL device (" << e.what()
-              << "); falling back to the CPU reference backend\n";
-    o.sim.backend = stabint::BackendKind::CpuReference;
-    return std::make_unique<stabint::Simulator>(scene, o.sim);
-  }
-}
 
 int listDevices() {
   const auto devices = stabint::listOpenCLDevices();
@@ -441,8 +429,8 @@ int listDevices() {
 
 int run(Options& o) {
   const stabint::Scene scene = loadScene(o);
-  auto sim = makeSimulator(scene, o);
-  if (o.precision_explicit && o.sim.backend == stabint::BackendKind::CpuReference &&
+  auto sim = std::make_unique<stabint::Simulator>(scene, o.sim);
+  if (o.precision_explicit && sim->backendDescription().rfind("CPU reference", 0) == 0 &&
       o.sim.opencl.precision == stabint::Precision::Float && !o.quiet) {
     std::cerr << kProgram << ": note: --precision float applies to OpenCL only; the CPU reference runs in double\n";
   }

@@ -83,11 +83,11 @@ elseif(CASE STREQUAL "blow_up")
   expect_run(2 "stabint-run: error: the energy limit was exceeded at frame 2 .*exceeds the target H"
              --scene chain --backend cpu --integrator FE --frames 2000 --energy-limit 10 --quiet)
 elseif(CASE STREQUAL "opencl_fallback")
-  # An empty ICD vendor directory: the loader finds no platform. The default backend falls back to
-  # the CPU reference and says so; an explicit --backend opencl fails.
+  # An empty ICD vendor directory: the loader finds no platform. The default backend (auto) runs
+  # on the CPU reference and says why; an explicit --backend opencl fails.
   file(MAKE_DIRECTORY "${dir}/no_vendors")
   set(ENV{OCL_ICD_VENDORS} "${dir}/no_vendors")
-  expect_run(0 "falling back to the CPU reference backend.*on CPU reference" --scene oscillator --frames 2)
+  expect_run(0 "on CPU reference \\(double\\) \\[auto: no OpenCL device" --scene oscillator --frames 2)
   expect_run(1 "^stabint-run: error: .*no OpenCL platform" --scene oscillator --frames 2 --backend opencl)
 elseif(CASE STREQUAL "bad_option")
   expect_run(1 "^stabint-run: error: unknown option '--no-such-option'" --scene chain --no-such-option)

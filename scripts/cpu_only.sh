@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 
 bash scripts/install-deps.sh
 build=build-cpu-only
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DSTABINT_WITH_OPENCL=OFF -DSTABINT_BUILD_BENCHMARKS=OFF
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DSTABINT_WITH_OPENCL=OFF -DSTABINT_BUILD_BENCHMARKS=OFF -DSTABINT_WERROR=ON
 cmake --build "$build" -j"$(nproc)" --target stabint stabint-run test_interaction test_oscillator test_c_api
 
 if nm "$build/libstabint.a" | grep -q " U cl[A-Z]"; then

@@ -15,7 +15,7 @@ build=build-asan
 if [ -f "$build/CMakeCache.txt" ] && ! grep -q "^CMAKE_CXX_COMPILER:.*clang++" "$build/CMakeCache.txt"; then
   rm -rf "$build"
 fi
-CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTABINT_SANITIZE=address,undefined \
+CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTABINT_SANITIZE=address,undefined -DSTABINT_WERROR=ON \
   -DSTABINT_BUILD_BENCHMARKS=OFF
 cmake --build "$build" -j"$(nproc)"
 

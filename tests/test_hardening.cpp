@@ -271,6 +271,19 @@ TEST_F(Hostile, DerivedVolumesAndMassesThatOverflowAreNamedWithTheirLine) {
   const std::vector<Tet> tets{Tet{{0, 1, 2, 3}, 1.0}, Tet{{0, 2, 1, 4}, 1.0}};  // volumes 1e9 / 6 each
   expectInvalid([&] { lumpMassesFromTets(x, tets, 2.4e300); },  // a share of 1e308 each
                 "tet 1: the lumped mass of particle 0 overflows when its share 1e+308 is added to 1e+308");
+
+  // Validation, on coordinates at its bound of 1e150: a tet's volume of 1e450 / 6 passed as
+  // positive (and blew up the first step), a triangle's area was called degenerate.
+  Scene s;
+  s.rest_positions = x.topRows(4) * 1e147;
+  s.positions = s.rest_positions;
+  s.velocities = Eigen::MatrixX3d::Zero(4, 3);
+  s.masses = Eigen::VectorXd::Ones(4);
+  s.tets.push_back(Tet{{0, 1, 2, 3}, 1.0});
+  expectInvalid([&] { validateScene(s); }, "tet 0: rest volume overflows (longest edge 1.41421e+150)");
+  s.tets.clear();
+  s.triangle_strains.push_back(TriangleStrain{{0, 1, 2}, 1.0, 1.0, 1.0});
+  expectInvalid([&] { validateScene(s); }, "triangle strain 0: rest triangle (0, 1, 2): rest area overflows (longest edge 1.41421e+150)");
 }
 
 // --- silent acceptances ---------------------------------------------------------------------------

@@ -13,8 +13,10 @@
 
 #include <climits>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <sys/stat.h>
 
@@ -149,7 +151,11 @@ TEST_F(Hostile, BigPolygonDuplicateCornerIsNamed) {
   std::string vertices, face = "f";
   for (int i = 0; i < kCorners; ++i) {
     const double a = 6.283185307179586 * i / kCorners;
-    vertices += "v " + std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+    // All digits: std::to_string's six decimals put the first corners on one line (a flat fan
+    // triangle, refused since zero-area faces are).
+    char v[64];
+    std::snprintf(v, sizeof v, "v %.17g %.17g 0\n", std::cos(a), std::sin(a));
+    vertices += v;
   }
   for (int i = 1; i <= kCorners; ++i) face += " " + std::to_string(i == 150000 ? 7 : i);
   const std::string path = write("gon.obj", vertices + face + "\n");
@@ -215,6 +221,142 @@ TEST_F(Hostile, FiniteInputsThatOverflowAreRefusedByName) {
   s.springs[2].rest_length = 1e150;
   s.springs[2].stiffness = 1.0;
   EXPECT_NO_THROW(validateScene(s));
+}
+
+// --- what loaders derive ----------------------------------------------------------------------------
+
+// A volume or mass that overflows although every number in the file is finite: an overflowing
+// volume was called "zero volume", and a density times a volume came back as an infinite mass.
+// Each is now named at its element's line with what overflowed.
+TEST_F(Hostile, DerivedVolumesAndMassesThatOverflowAreNamedWithTheirLine) {
+  // The corner tet scaled by s: volume s^3 / 6. s = 1e103 overflows, s = 4000 is 1.07e10.
+  const auto tetgen = [&](const std::string& name, const std::string& s) {
+    write(name + ".node", "4 3 0 0\n1 0 0 0\n2 " + s + " 0 0\n3 0 " + s + " 0\n4 0 0 " + s + "\n");
+    write(name + ".ele", "# one tet\n1 4 0\n1 1 2 3 4\n");
+    return (dir_ / name).string();
+  };
+  const std::string huge = tetgen("huge", "1e103");
+  expectFileError([&] { loadTetGen(huge); }, huge + ".ele", 3, "tet 1: rest volume overflows (longest edge 1.41421e+103)");
+  const std::string big = tetgen("big", "4000");
+  expectFileError([&] { loadTetGen(big, SolidMaterial{1e300, 1e5}); }, big + ".ele", 3,
+                  "tet 1: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
+  // The same through a scene file's mesh entry: the mesh's own file and line, inside the field.
+  const std::string scene = write("big.json", R"({"mesh": {"file": "big.node", "density": 1e300}})");
+  expectFileError([&] { loadSceneFile(scene); }, scene, 0,
+                  "mesh.file: " + big + ".ele:3: tet 1: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
+  const std::string medit = write("big.mesh", "Vertices 4\n0 0 0 0\n4000 0 0 0\n0 4000 0 0\n0 0 4000 0\n"
+                                              "Tetrahedra 1\n1 2 3 4 0\n");
+  expectFileError([&] { loadMedit(medit, SolidMaterial{1e300, 1e5}); }, medit, 7, "tet 1: mass share density 1e+300");
+
+  // OBJ: an area that overflows, a mass that does, and a coordinate past validation's bound
+  // (refused where its line is known rather than at construction).
+  std::string obj = write("huge.obj", "v 0 0 0\nv 1e150 0 0\nv 0 1e150 0\nf 1 2 3\n");
+  expectFileError([&] { loadObjCloth(obj); }, obj, 4, "face 1: rest area overflows (longest edge 1.41421e+150)");
+  obj = write("big.obj", "v 0 0 0\nv 1e10 0 0\nv 0 1e10 0\nf 1 2 3\n");
+  ClothMaterial heavy;
+  heavy.areal_density = 1e300;
+  expectFileError([&] { loadObjCloth(obj, heavy); }, obj, 4, "face 1: mass share areal_density 1e+300 x area 5e+19 / 3 is not finite");
+  obj = write("far.obj", "v 0 0 0\nv 1e151 0 0\nv 0 1 0\nf 1 2 3\n");
+  expectFileError([&] { loadObjCloth(obj); }, obj, 2, "vertex 2 coordinate x 1e151 exceeds 1e+150 in magnitude");
+
+  // JSON densities name the tet or triangle by its path (this was "masses[0] = inf" before).
+  const std::string json = write("dense.json", R"({"particles": {"positions": [[0,0,0],[4000,0,0],[0,4000,0],[0,0,4000]],
+                                                   "density": 1e300}, "tets": [{"vertices": [0, 1, 2, 3], "stiffness": 1}]})");
+  expectFileError([&] { loadSceneFile(json); }, json, 0, "tets[0]: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
+
+  // Through the API: finite shares whose sum at a shared vertex overflows.
+  Eigen::MatrixX3d x(5, 3);
+  x << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1;
+  x *= 1000.0;
+  const std::vector<Tet> tets{Tet{{0, 1, 2, 3}, 1.0}, Tet{{0, 2, 1, 4}, 1.0}};  // volumes 1e9 / 6 each
+  expectInvalid([&] { lumpMassesFromTets(x, tets, 2.4e300); },  // a share of 1e308 each
+                "tet 1: the lumped mass of particle 0 overflows when its share 1e+308 is added to 1e+308");
+
+  // Validation, on coordinates at its bound of 1e150: a tet's volume of 1e450 / 6 passed as
+  // positive (and blew up the first step), a triangle's area was called degenerate.
+  Scene s;
+  s.rest_positions = x.topRows(4) * 1e147;
+  s.positions = s.rest_positions;
+  s.velocities = Eigen::MatrixX3d::Zero(4, 3);
+  s.masses = Eigen::VectorXd::Ones(4);
+  s.tets.push_back(Tet{{0, 1, 2, 3}, 1.0});
+  expectInvalid([&] { validateScene(s); }, "tet 0: rest volume overflows (longest edge 1.41421e+150)");
+  s.tets.clear();
+  s.triangle_strains.push_back(TriangleStrain{{0, 1, 2}, 1.0, 1.0, 1.0});
+  expectInvalid([&] { validateScene(s); }, "triangle strain 0: rest triangle (0, 1, 2): rest area overflows (longest edge 1.41421e+150)");
+}
+
+// --- silent acceptances ---------------------------------------------------------------------------
+
+// The JSON library keeps the last of two equal keys: a scene ran with a value its reader may not
+// have seen, although every key is promised to be checked.
+TEST_F(Hostile, DuplicateJsonKeysAreRefusedWithTheirLine) {
+  std::string path = write("dup.json", "{\"builtin\": {\"name\": \"oscillator\", \"mass\": 1,\n"
+                                       "                         \"mass\": 2}}");
+  expectFileError([&] { loadSceneFile(path); }, path, 2, "duplicate key 'mass' (first on line 1)");
+  path = write("escaped.json", "{\"gravity\": [0, 0, 0],\n\n\"grav\\u0069ty\": [0, 1, 0], \"builtin\": {\"name\": \"chain\"}}");
+  expectFileError([&] { loadSceneFile(path); }, path, 3, "duplicate key 'gravity' (first on line 1)");
+  // Equal keys in different objects, and keys that equal a string value, are fine.
+  path = write("fine.json", R"({"builtin": [{"name": "oscillator", "translate": [0, 0, 0]}, {"name": "oscillator"}],
+                              "name": "name", "bodies": [{"name": "a"}]})");
+  EXPECT_EQ(loadSceneFile(path).name, "name");
+  expectFileError([&] { builtinScene("cloth", R"({"nx": 3, "nx": 40})", "params"); }, "params", 1,
+                  "duplicate key 'nx' (first on line 1)");
+}
+
+// Zero-area faces, vertices in no face or tet, and a zero density each silently got the 1e-6 kg
+// mass floor: a scene the file did not describe.
+TEST_F(Hostile, ZeroAreaFacesUnusedVerticesAndZeroDensityAreRefused) {
+  std::string obj = write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 4\nf 1 2 3\n");
+  expectFileError([&] { loadObjCloth(obj); }, obj, 6, "face 2: zero rest area 0 for its longest edge L = 2 (degenerate: at most 1e-12 L^2)");
+  obj = write("quad.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3 4\n");
+  expectFileError([&] { loadObjCloth(obj); }, obj, 5, "face 1 (the fan triangle of corners 1, 2, 3): zero rest area 0");
+  obj = write("stray.obj", "v 0 0 0\nv 1 0 0\n# a stray vertex\nv 5 5 5\nv 0 1 0\nf 1 2 4\n");
+  expectFileError([&] { loadObjCloth(obj); }, obj, 4, "vertex 3 is in no face, so it would have no mass; remove it from the file");
+  const std::string mesh = write("stray.mesh", "Vertices 5\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n9 9 9 0\nTetrahedra 1\n1 2 3 4 0\n");
+  expectFileError([&] { loadMedit(mesh); }, mesh, 6, "vertex 5 is in no tetrahedron, so it would have no mass");
+
+  obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  ClothMaterial weightless;
+  weightless.areal_density = 0.0;
+  expectInvalid([&] { loadObjCloth(obj, weightless); }, "ClothMaterial areal_density 0 must be > 0 and finite");
+  expectInvalid([&] { loadMedit(mesh, SolidMaterial{0.0, 1e5}); }, "SolidMaterial density 0 must be > 0 and finite");
+  ClothGridParams cloth;
+  cloth.areal_density = 0.0;
+  expectInvalid([&] { makeClothGrid(cloth); }, "areal_density 0 must be > 0 and finite");
+  TetBarParams bar;
+  bar.density = -1.0;
+  expectInvalid([&] { makeTetBar(bar); }, "density -1 must be > 0 and finite");
+}
+
+// A sliver tet (volume 1e-13 of its size) passed the API's and JSON's `volume > 0` although the
+// mesh loaders refused it with a relative test; all now use the relative test.
+TEST_F(Hostile, SliverTetsAreRefusedEverywhereByTheSameTest) {
+  const auto oneTet = [](double apex) {
+    Scene s;
+    s.rest_positions.resize(4, 3);
+    s.rest_positions << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, apex;
+    s.positions = s.rest_positions;
+    s.velocities = Eigen::MatrixX3d::Zero(4, 3);
+    s.masses = Eigen::VectorXd::Ones(4);
+    s.tets.push_back(Tet{{0, 1, 2, 3}, 1e3});
+    return s;
+  };
+  // Volume 1e-13 / 6 against the longest edge sqrt(2): 1.2e-14 L^3, below 1e-12 L^3.
+  const std::string sliver = "zero rest volume 1.66667e-14 for its longest edge L = 1.41421 (degenerate: at most 1e-12 L^3)";
+  expectInvalid([&] { validateScene(oneTet(1e-13)); }, "tet 0: " + sliver);
+  expectInvalid([&] { Simulator sim(oneTet(1e-13), SimulatorOptions{}); }, "tet 0: " + sliver);
+  const std::string json = write("sliver.json", R"({"particles": {"positions": [[0,0,0],[1,0,0],[0,1,0],[0,0,1e-13]], "masses": 1},
+                                                    "tets": [{"vertices": [0, 1, 2, 3], "stiffness": 1}]})");
+  expectFileError([&] { loadSceneFile(json); }, json, 0, "tets[0].vertices: " + sliver);
+  write("sliver.node", "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1e-13\n");
+  write("sliver.ele", "1 4 0\n1 1 2 3 4\n");
+  expectFileError([&] { loadTetGen((dir_ / "sliver").string()); }, (dir_ / "sliver.ele").string(), 2, "tet 1: " + sliver);
+  // The test is relative: a small tet of good shape is a tet.
+  Scene small = oneTet(1e-5);
+  small.rest_positions.topRows(3) *= 1e-5;
+  small.positions = small.rest_positions;
+  EXPECT_NO_THROW(validateScene(small));
 }
 
 // --- the implicit system ---------------------------------------------------------------------------

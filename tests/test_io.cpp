@@ -143,18 +143,18 @@ TEST_F(MeshFiles, ObjErrorsNameFileLineAndProblem) {
 
 // --- TetGen ---------------------------------------------------------------------------------------
 
-// Points 1..4 are the unit corner tet, 5 = (1,1,1) caps the face (2,3,4), 6 = (1,1,0) lies in
-// the plane of (1,2,3). Attributes and boundary markers present, to be ignored.
-const char* const kNodesOneBased =
-    "# six points\n"
-    "6 3 1 1\n"
+// Points 1..4 are the unit corner tet, 5 = (1,1,1) caps the face (2,3,4). Attributes and
+// boundary markers present, to be ignored.
+const char* const kPoints =
     "1 0 0 0  7.5 1\n"
     "2 1 0 0  7.5 1\n"
     "\n"
     "3 0 1 0  7.5 1   # trailing comment\n"
     "4 0 0 1  7.5 1\n"
-    "5 1 1 1  7.5 0\n"
-    "6 1 1 0  7.5 0\n";
+    "5 1 1 1  7.5 0\n";
+const std::string kNodesOneBased = std::string("# five points\n5 3 1 1\n") + kPoints;
+// And 6 = (1,1,0), in the plane of (1,2,3), on line 9.
+const std::string kNodesWithPlanarPoint = std::string("# six points\n6 3 1 1\n") + kPoints + "6 1 1 0  7.5 0\n";
 
 std::string zeroBased(const std::string& one_based_nodes) {
   std::string out;
@@ -173,15 +173,14 @@ TEST_F(MeshFiles, TetGenOneBased) {
   const SolidMaterial material{300.0, 2e4};
   const Scene s = loadTetGen((dir_ / "two").string(), material);
   EXPECT_EQ(s.name, "two");
-  ASSERT_EQ(s.numParticles(), 6);
+  ASSERT_EQ(s.numParticles(), 5);
   EXPECT_TRUE(s.positions.row(4).isApprox(Eigen::RowVector3d(1, 1, 1)));
   ASSERT_EQ(s.tets.size(), 2u);
   EXPECT_EQ(s.tets[0].vertices, (std::array<int, 4>{0, 1, 2, 3}));
   EXPECT_EQ(s.tets[1].vertices, (std::array<int, 4>{4, 1, 3, 2}));
   EXPECT_EQ(s.tets[1].stiffness, 2e4);
-  EXPECT_NEAR(s.masses.head(5).sum(), 300.0 * (1.0 / 6 + 1.0 / 3), 1e-12);
+  EXPECT_NEAR(s.masses.sum(), 300.0 * (1.0 / 6 + 1.0 / 3), 1e-12);
   EXPECT_NEAR(s.masses[0], 300.0 / 24, 1e-12);
-  EXPECT_GT(s.masses[5], 0.0);  // untouched point still has a (tiny) mass
   EXPECT_TRUE(s.velocities.isZero());
   EXPECT_EQ(s.bodies.size(), 1u);
   EXPECT_NO_THROW(validateScene(s));
@@ -203,18 +202,23 @@ TEST_F(MeshFiles, TetGenMeshWideNegativeOrientationIsReoriented) {
   write("neg.ele", "2 4 0\n1 1 3 2 4\n2 5 4 2 3\n");
   const Scene s = loadTetGen((dir_ / "neg").string());
   for (const Tet& t : s.tets) EXPECT_GT(signedVolume(s.rest_positions, t.vertices), 0.0);
-  EXPECT_NEAR(s.masses.head(5).sum(), 1000.0 * 0.5, 1e-9);
+  EXPECT_NEAR(s.masses.sum(), 1000.0 * 0.5, 1e-9);
   EXPECT_NO_THROW(validateScene(s));
 }
 
 TEST_F(MeshFiles, TetGenErrors) {
-  write("m.node", kNodesOneBased);
+  const std::string node6 = write("m.node", kNodesWithPlanarPoint);
   std::string ele = write("m.ele", "# mixed\n2 4 0\n1 1 2 3 4\n2 5 4 2 3\n");
   const std::string base = (dir_ / "m").string();
   expectError([&] { loadTetGen(base); }, ele, 4, "tet 2: mixed orientation");
 
   ele = write("m.ele", "2 4 0\n1 1 2 3 4\n\n7 1 2 3 6\n");
-  expectError([&] { loadTetGen(base); }, ele, 4, "tet 7: zero volume");
+  expectError([&] { loadTetGen(base); }, ele, 4,
+              "tet 7: zero rest volume 0 for its longest edge L = 1.41421 (degenerate: at most 1e-12 L^3)");
+
+  // A point in no tet would have no mass; it used to get a made-up one (1e-6 kg).
+  write("m.ele", "1 4 0\n1 1 2 3 4\n");
+  expectError([&] { loadTetGen(base); }, node6, 8, "point 5 is in no tetrahedron, so it would have no mass");
 
   ele = write("m.ele", "2 4 0\n1 1 2 3 4\n2 5 2 4 9\n");
   expectError([&] { loadTetGen(base); }, ele, 3, "tet 2: vertex index 9 out of range [1, 7)");

@@ -128,10 +128,10 @@ TEST(SceneValidation, TetRules) {
               HasSubstr("tet 0: stiffness -3 must be >= 0"));
   // Swapping two vertices inverts the tet: volume -1/6.
   EXPECT_THAT(messageAfter([](Scene& s) { s.tets[0].vertices = {0, 2, 1, 3}; }),
-              HasSubstr("tet 0: non-positive rest volume -0.166667 (degenerate or inverted)"));
+              HasSubstr("tet 0: negative rest volume -0.166667 (inverted: list two vertices in the other order)"));
   // A flat tet: the apex moved into the base plane.
   EXPECT_THAT(messageAfter([](Scene& s) { s.rest_positions.row(3) << 0.3, 0.3, 0.0; }),
-              HasSubstr("tet 0: non-positive rest volume 0 (degenerate or inverted)"));
+              HasSubstr("tet 0: zero rest volume 0 for its longest edge L = 1.41421 (degenerate: at most 1e-12 L^3)"));
 }
 
 TEST(SceneValidation, TetVolumeUsesRestPositionsNotPositions) {

@@ -10,8 +10,6 @@
 namespace stabint {
 namespace {
 
-using validation::invalid;
-
 Eigen::Matrix3d restEdges(const Scene& scene, const Tet& tet) {
   const auto& x = scene.rest_positions;
   const auto& v = tet.vertices;
@@ -34,12 +32,11 @@ struct TetKind : KindDefaults<Tet> {
   static void check(const Scene& scene, const Tet& tet, const validation::Owner& owner) {
     validation::checkVertexList(tet.vertices, scene.numParticles(), owner);
     validation::checkStiffness(tet.stiffness, owner);
-    const double volume = signedVolume(scene.rest_positions, tet.vertices);
-    if (!(volume > 0.0)) invalid(owner, ": non-positive rest volume ", volume, " (degenerate or inverted)");
+    validation::checkRestTet(scene.rest_positions, tet.vertices, owner);
   }
 
   static void coefficients(const Scene& scene, const Tet& tet, double* a) {
-    // check() has guaranteed det(Dm) > 0, so the inverse exists.
+    // check() has guaranteed det(Dm) > 0 and not flat, so the inverse exists.
     simplexCoefficients<3>(restEdges(scene, tet).inverse(), a);
   }
 

@@ -2,6 +2,7 @@
 // a keyword and its count may share a line or not, so it is read as a token stream.
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
+#include "scene/validation.hpp"
 
 #include <stabint/io.hpp>
 
@@ -23,14 +24,16 @@ bool sameKeyword(const std::string& a, const char* b) {
 // Keywords start with a letter; everything in a section's body is a number.
 bool isKeyword(const std::string& token) { return std::isalpha(static_cast<unsigned char>(token[0])) != 0; }
 
-Eigen::MatrixX3d readVertices(io::TextReader& in) {
+Eigen::MatrixX3d readVertices(io::TextReader& in, io::VertexLines& lines) {
   const int count = in.parseCount(in.requireToken("the number of vertices"), "number of vertices");
   std::vector<double> xyz;  // row after row; the header's count is not trusted with an allocation
   xyz.reserve(3 * in.reserveFor(count, 8));  // "x y z ref": a number and a separator each
   for (int i = 0; i < count; ++i) {
     const std::string vertex = "vertex " + std::to_string(i + 1);
     for (int c = 0; c < 3; ++c) {
-      xyz.push_back(in.parseReal(in.requireToken(vertex + " of " + std::to_string(count)), vertex + " coordinate " + "xyz"[c]));
+      const std::string token = in.requireToken(vertex + " of " + std::to_string(count));
+      if (c == 0) lines.lines.push_back(in.line());
+      xyz.push_back(in.parseCoordinate(token, vertex + " coordinate " + "xyz"[c]));
     }
     in.parseInt(in.requireToken(vertex + " reference"), vertex + " reference");
   }
@@ -58,7 +61,9 @@ std::vector<io::TetRecord> readTetrahedra(io::TextReader& in, int num_vertices) 
 }  // namespace
 
 Scene loadMedit(const std::string& path, const SolidMaterial& material) {
+  validation::checkDensity(material.density, "SolidMaterial density");
   io::TextReader in(path);
+  io::VertexLines lines{path, "vertex", 1, {}};
   std::optional<Eigen::MatrixX3d> vertices;
   std::optional<std::vector<io::TetRecord>> tets;
   std::string token;
@@ -71,7 +76,7 @@ Scene loadMedit(const std::string& path, const SolidMaterial& material) {
       if (dimension != 3) in.fail("dimension " + std::to_string(dimension) + " is not supported, expected 3");
     } else if (sameKeyword(token, "Vertices")) {
       if (vertices) in.fail("second Vertices section");
-      vertices = readVertices(in);
+      vertices = readVertices(in, lines);
     } else if (sameKeyword(token, "Tetrahedra")) {
       if (!vertices) in.fail("Tetrahedra section before the Vertices section");
       if (tets) in.fail("second Tetrahedra section");
@@ -87,7 +92,7 @@ Scene loadMedit(const std::string& path, const SolidMaterial& material) {
   }
   if (!vertices) in.fail("no Vertices section");
   if (!tets) in.fail("no Tetrahedra section");
-  return io::solidSceneFromMesh(io::sceneNameFromPath(path), path, *vertices, std::move(*tets), material);
+  return io::solidSceneFromMesh(io::sceneNameFromPath(path), path, lines, *vertices, std::move(*tets), material);
 }
 
 }  // namespace stabint

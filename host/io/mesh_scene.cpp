@@ -1,4 +1,6 @@
 #include "io/mesh_scene.hpp"
+#include "scene/lumping.hpp"
+#include "scene/validation.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -35,16 +37,6 @@ int parseVertexIndex(const TextReader& reader, const std::string& token, int bas
 
 namespace {
 
-// "Zero" relative to the tet's own size, so round-off on a flat tet does not pass as a sliver
-// with a random sign.
-bool isFlat(const Eigen::MatrixX3d& x, const std::array<int, 4>& v, double volume) {
-  double longest = 0.0;
-  for (int a = 0; a < 4; ++a) {
-    for (int b = a + 1; b < 4; ++b) longest = std::max(longest, (x.row(v[a]) - x.row(v[b])).norm());
-  }
-  return std::abs(volume) <= 1e-12 * longest * longest * longest;
-}
-
 std::string tetName(const TetRecord& t) { return "tet " + std::to_string(t.id); }
 
 }  // namespace
@@ -54,11 +46,9 @@ void orientTets(const std::string& file, const Eigen::MatrixX3d& vertices, std::
   const TetRecord* first_negative = nullptr;
   size_t negatives = 0;
   for (const TetRecord& t : tets) {
-    const double volume = signedVolume(vertices, t.vertices);
-    if (isFlat(vertices, t.vertices, volume)) {
-      throw FileFormatError(file, t.line, tetName(t) + ": zero volume (degenerate element)");
-    }
-    if (volume > 0.0) {
+    const validation::RestShape shape = validation::restTet(vertices, t.vertices);
+    if (!shape.fine()) throw FileFormatError(file, t.line, tetName(t) + ": " + validation::restShapeProblem(shape));
+    if (shape.measure > 0.0) {
       if (!first_positive) first_positive = &t;
     } else {
       if (!first_negative) first_negative = &t;
@@ -80,14 +70,30 @@ void orientTets(const std::string& file, const Eigen::MatrixX3d& vertices, std::
   }
 }
 
-Scene solidSceneFromMesh(const std::string& name, const std::string& element_file,
+void requireEveryVertexUsed(const Eigen::VectorXd& masses, const VertexLines& where, const std::string& element) {
+  for (Eigen::Index k = 0; k < masses.size(); ++k) {
+    if (masses[k] == 0.0) {
+      throw FileFormatError(where.file, where.lines[k],
+                            where.noun + " " + std::to_string(k + where.first_number) + " is in no " + element +
+                                ", so it would have no mass; remove it from the file");
+    }
+  }
+}
+
+Scene solidSceneFromMesh(const std::string& name, const std::string& element_file, const VertexLines& vertex_lines,
                          const Eigen::MatrixX3d& vertices, std::vector<TetRecord> tets,
                          const SolidMaterial& material) {
   orientTets(element_file, vertices, tets);
   std::vector<Tet> elements;
   elements.reserve(tets.size());
   for (const TetRecord& t : tets) elements.push_back(Tet{t.vertices, material.stiffness});
-  Scene s = sceneFromMesh(name, vertices, lumpMassesFromTets(vertices, elements, material.density));
+  Eigen::VectorXd masses = Eigen::VectorXd::Zero(vertices.rows());
+  if (const auto failure = lumping::addTets(vertices, elements, material.density, "density", masses)) {
+    const TetRecord& t = tets[failure->element];
+    throw FileFormatError(element_file, t.line, tetName(t) + ": " + failure->what);
+  }
+  requireEveryVertexUsed(masses, vertex_lines, "tetrahedron");
+  Scene s = sceneFromMesh(name, vertices, std::move(masses));
   s.tets = std::move(elements);
   return s;
 }

@@ -2,6 +2,8 @@
 // and materials are skipped.
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
+#include "scene/lumping.hpp"
+#include "scene/validation.hpp"
 
 #include <stabint/io.hpp>
 
@@ -67,9 +69,20 @@ void checkDistinctCorners(const std::string& file, const Face& face, const std::
   }
 }
 
-std::vector<std::array<int, 3>> fanTriangles(const std::string& file, const std::vector<Face>& faces, long num_vertices) {
+// The fan triangles of every face, and for each the face it came from. A fan triangle that is
+// flat (zero area for its size: collinear or coincident corners) or whose area overflows is an
+// error naming the face and its corners: it would get no mass (or an infinite one), and as
+// triangle strain it is refused anyway.
+struct Fan {
   std::vector<std::array<int, 3>> triangles;
-  for (const Face& face : faces) {
+  std::vector<std::size_t> face;  // index into the faces, per triangle
+};
+
+Fan fanTriangles(const std::string& file, const std::vector<Face>& faces, const Eigen::MatrixX3d& x) {
+  const long num_vertices = static_cast<long>(x.rows());
+  Fan fan;
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const Face& face = faces[f];
     const std::string name = "face " + std::to_string(face.number);
     for (const long v : face.vertices) {
       if (v > num_vertices) {
@@ -80,25 +93,37 @@ std::vector<std::array<int, 3>> fanTriangles(const std::string& file, const std:
     checkDistinctCorners(file, face, name);
     // A fan from the first corner is exact for the convex polygons meshes are made of.
     for (size_t k = 1; k + 1 < face.vertices.size(); ++k) {
-      triangles.push_back({static_cast<int>(face.vertices[0] - 1), static_cast<int>(face.vertices[k] - 1),
-                           static_cast<int>(face.vertices[k + 1] - 1)});
+      const std::array<int, 3> t{static_cast<int>(face.vertices[0] - 1), static_cast<int>(face.vertices[k] - 1),
+                                 static_cast<int>(face.vertices[k + 1] - 1)};
+      const validation::RestShape shape = validation::restTriangle(x, t);
+      if (!shape.fine()) {
+        const std::string corners = face.vertices.size() == 3 ? std::string()
+                                                              : " (the fan triangle of corners 1, " + std::to_string(k + 1) +
+                                                                    ", " + std::to_string(k + 2) + ")";
+        throw FileFormatError(file, face.line, name + corners + ": " + validation::restShapeProblem(shape));
+      }
+      fan.triangles.push_back(t);
+      fan.face.push_back(f);
     }
   }
-  return triangles;
+  return fan;
 }
 
 }  // namespace
 
 Scene loadObjCloth(const std::string& path, const ClothMaterial& material) {
+  validation::checkDensity(material.areal_density, "ClothMaterial areal_density");
   io::TextReader in(path);
+  io::VertexLines lines{path, "vertex", 1, {}};
   std::vector<Eigen::Vector3d> positions;
   std::vector<Face> faces;
   for (std::vector<std::string> tokens; in.nextLine(tokens);) {
     if (tokens[0] == "v") {
       const std::string name = "vertex " + std::to_string(positions.size() + 1);
       if (tokens.size() < 4) in.fail(name + ": expected 'v <x> <y> <z>', got " + std::to_string(tokens.size() - 1) + " values");
+      lines.lines.push_back(in.line());
       Eigen::Vector3d x;
-      for (int c = 0; c < 3; ++c) x[c] = in.parseReal(tokens[1 + c], name + " coordinate " + "xyz"[c]);
+      for (int c = 0; c < 3; ++c) x[c] = in.parseCoordinate(tokens[1 + c], name + " coordinate " + "xyz"[c]);
       positions.push_back(x);
     } else if (tokens[0] == "f") {
       faces.push_back(readFace(in, tokens, static_cast<int>(faces.size()) + 1, static_cast<long>(positions.size())));
@@ -109,9 +134,15 @@ Scene loadObjCloth(const std::string& path, const ClothMaterial& material) {
 
   Eigen::MatrixX3d x(positions.size(), 3);
   for (size_t i = 0; i < positions.size(); ++i) x.row(i) = positions[i].transpose();
-  auto triangles = fanTriangles(path, faces, static_cast<long>(positions.size()));
-  Scene s = io::sceneFromMesh(io::sceneNameFromPath(path), x, lumpMassesFromTriangles(x, triangles, material.areal_density));
-  s.triangles = std::move(triangles);
+  Fan fan = fanTriangles(path, faces, x);
+  Eigen::VectorXd masses = Eigen::VectorXd::Zero(x.rows());
+  if (const auto failure = lumping::addTriangles(x, fan.triangles, material.areal_density, "areal_density", masses)) {
+    const Face& face = faces[fan.face[failure->element]];
+    throw FileFormatError(path, face.line, "face " + std::to_string(face.number) + ": " + failure->what);
+  }
+  io::requireEveryVertexUsed(masses, lines, "face");
+  Scene s = io::sceneFromMesh(io::sceneNameFromPath(path), x, std::move(masses));
+  s.triangles = std::move(fan.triangles);
   if (material.model == ClothModel::Triangles) {
     addTriangleClothElements(s, material.strain_stiffness, material.strain_min, material.strain_max,
                              material.hinge_stiffness);

@@ -4,6 +4,8 @@
 #include "elements/element_type.hpp"
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
+#include "scene/lumping.hpp"
+#include "scene/validation.hpp"
 
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
@@ -15,14 +17,17 @@
 #include <cctype>
 #include <climits>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 namespace stabint::io {
 
@@ -459,7 +464,9 @@ void readParticles(const Field& block, Scene& s) {
   appendRows(s.velocities, sameRows("velocities"));
 }
 
-void readMasses(const Field& block, Scene& s, int first, const std::vector<std::array<int, 3>>& triangles) {
+// `first` is the first explicit particle; the top-level tets are s.tets from `first_tet` on.
+void readMasses(const Field& root, const Field& block, Scene& s, int first, std::size_t first_tet,
+                const std::vector<std::array<int, 3>>& triangles) {
   const int count = s.numParticles() - first;
   s.masses.conservativeResize(s.numParticles());
   const bool by_density = block.has("density") || block.has("areal_density");
@@ -476,10 +483,19 @@ void readMasses(const Field& block, Scene& s, int first, const std::vector<std::
     return;
   }
   if (!by_density) block.fail("needs masses, or density (tets) / areal_density (triangles) to lump them");
+  // Only the top-level tets and triangles can reach explicit particles; a share that overflows
+  // is named by its element's path.
   Eigen::VectorXd lumped = Eigen::VectorXd::Zero(s.numParticles());
-  if (auto f = block.find("density")) lumped += lumpMassesFromTets(s.rest_positions, s.tets, f->positive(), 0.0);
+  if (auto f = block.find("density")) {
+    const std::vector<Tet> tets(s.tets.begin() + static_cast<std::ptrdiff_t>(first_tet), s.tets.end());
+    if (const auto failure = lumping::addTets(s.rest_positions, tets, f->positive(), "density", lumped)) {
+      root.member("tets")[failure->element].fail(failure->what);
+    }
+  }
   if (auto f = block.find("areal_density")) {
-    lumped += lumpMassesFromTriangles(s.rest_positions, triangles, f->positive(), 0.0);
+    if (const auto failure = lumping::addTriangles(s.rest_positions, triangles, f->positive(), "areal_density", lumped)) {
+      root.member("triangles")[failure->element].fail(failure->what);
+    }
   }
   for (int i = 0; i < count; ++i) {
     if (!(lumped[first + i] > 0.0)) {
@@ -565,9 +581,11 @@ void readTets(const Field& list, Scene& s) {
     Tet tet;
     for (int k = 0; k < 4; ++k) tet.vertices[k] = v[k].particle(n);
     tet.stiffness = e.member("stiffness").nonNegative();
-    const double volume = signedVolume(s.rest_positions, tet.vertices);
-    if (!(volume > 0.0)) {
-      v.fail("rest volume " + Field::text(volume) + " is not positive (degenerate, or list the vertices in the other order)");
+    // The test validation applies to every tet, here to name the field.
+    const validation::RestShape shape = validation::restTet(s.rest_positions, tet.vertices);
+    if (!shape.fine()) v.fail(validation::restShapeProblem(shape));
+    if (shape.measure < 0.0) {
+      v.fail("rest volume " + Field::text(shape.measure) + " is not positive (inverted: list two vertices in the other order)");
     }
     s.tets.push_back(tet);
   }
@@ -742,8 +760,9 @@ Scene sceneFromJson(const json& doc, const std::string& file) {
 
   std::vector<std::array<int, 3>> explicit_triangles;
   if (auto f = root.find("triangles")) explicit_triangles = readTriangles(*f, s.numParticles());
+  const std::size_t first_tet = s.tets.size();
   if (auto f = root.find("tets")) readTets(*f, s);
-  if (block) readMasses(*block, s, first_explicit, explicit_triangles);
+  if (block) readMasses(root, *block, s, first_explicit, first_tet, explicit_triangles);
   s.triangles.insert(s.triangles.end(), explicit_triangles.begin(), explicit_triangles.end());
   if (auto f = root.find("springs")) readSprings(*f, s);
   for (const ElementType* type : genericTypes()) {
@@ -797,10 +816,56 @@ void checkNesting(const std::string& text, const std::string& file) {
   }
 }
 
+// A key given twice in one object: the JSON library keeps the last one silently, so a scene
+// would run with a value the reader of the file may not have seen, although every key is
+// promised to be checked. Scanned after a successful parse, when the text is known to be valid
+// JSON: a string right after '{' or after ',' in an object is a key. Keys are compared decoded
+// ("a" and "\u0061" are the same key).
+void checkDuplicateKeys(const std::string& text, const std::string& file) {
+  struct Container {
+    bool object;
+    std::map<std::string, int> keys;  // key -> line of its first occurrence
+  };
+  std::vector<Container> open;
+  bool expect_key = false;
+  int line = 1;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+    } else if (c == '{' || c == '[') {
+      open.push_back({c == '{', {}});
+      expect_key = c == '{';
+    } else if (c == '}' || c == ']') {
+      open.pop_back();
+      expect_key = false;
+    } else if (c == ',') {
+      expect_key = open.back().object;
+    } else if (c == '"') {
+      const std::size_t start = i;
+      bool escaped = false;
+      for (++i; text[i] != '"'; ++i) {
+        if (text[i] == '\\') escaped = true, ++i;  // valid JSON: the escape is complete
+      }
+      if (!expect_key) continue;
+      expect_key = false;
+      std::string key = text.substr(start + 1, i - start - 1);
+      if (escaped) key = json::parse(text.substr(start, i - start + 1)).get<std::string>();
+      const auto [first, inserted] = open.back().keys.emplace(key, line);
+      if (!inserted) {
+        throw FileFormatError(file, line, "duplicate key '" + shown(key) + "' (first on line " +
+                                              std::to_string(first->second) + "): one of them would be ignored");
+      }
+    }
+  }
+}
+
 json parseJson(const std::string& text, const std::string& file) {
   checkNesting(text, file);
   try {
-    return json::parse(text);
+    json doc = json::parse(text);
+    checkDuplicateKeys(text, file);
+    return doc;
   } catch (const json::parse_error& e) {
     // e.byte is the 1-based offset of the offending character; report line and column.
     const size_t end = std::min<size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size());

@@ -1,6 +1,7 @@
 // TetGen .node/.ele reader (https://wias-berlin.de/software/tetgen/fformats.html).
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
+#include "scene/validation.hpp"
 
 #include <stabint/io.hpp>
 
@@ -11,6 +12,7 @@ namespace {
 struct Nodes {
   Eigen::MatrixX3d positions;
   int base = 0;  // TetGen numbers from 0 or 1, and .ele follows .node's choice
+  io::VertexLines lines;
 };
 
 Nodes readNodes(const std::string& path) {
@@ -22,6 +24,8 @@ Nodes readNodes(const std::string& path) {
   if (dimension != 3) in.fail("dimension " + std::to_string(dimension) + " is not supported, expected 3");
 
   Nodes nodes;
+  nodes.lines.file = path;
+  nodes.lines.noun = "point";
   std::vector<double> xyz;  // row after row; the header's count is not trusted with an allocation
   xyz.reserve(3 * in.reserveFor(count, 8));  // "i x y z": a number and a separator each
   for (int i = 0; i < count; ++i) {
@@ -32,12 +36,14 @@ Nodes readNodes(const std::string& path) {
     if (i == 0) {
       if (id != 0 && id != 1) in.fail("first point is numbered " + std::to_string(id) + ", expected 0 or 1");
       nodes.base = id;
+      nodes.lines.first_number = id;
     } else if (id != nodes.base + i) {
       in.fail("point numbered " + std::to_string(id) + ", expected " + std::to_string(nodes.base + i) +
               " (points must be numbered consecutively)");
     }
+    nodes.lines.lines.push_back(in.line());
     for (int c = 0; c < 3; ++c) {
-      xyz.push_back(in.parseReal(tokens[1 + c], "point " + std::to_string(id) + " coordinate " + "xyz"[c]));
+      xyz.push_back(in.parseCoordinate(tokens[1 + c], "point " + std::to_string(id) + " coordinate " + "xyz"[c]));
     }
   }
   nodes.positions = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(xyz.data(), count, 3);
@@ -85,10 +91,11 @@ std::string stripTetGenExtension(const std::string& path) {
 }  // namespace
 
 Scene loadTetGen(const std::string& base_path, const SolidMaterial& material) {
+  validation::checkDensity(material.density, "SolidMaterial density");
   const std::string base = stripTetGenExtension(base_path);
   const Nodes nodes = readNodes(base + ".node");
   const std::string ele = base + ".ele";
-  return io::solidSceneFromMesh(io::sceneNameFromPath(base), ele, nodes.positions, readElements(ele, nodes), material);
+  return io::solidSceneFromMesh(io::sceneNameFromPath(base), ele, nodes.lines, nodes.positions, readElements(ele, nodes), material);
 }
 
 }  // namespace stabint

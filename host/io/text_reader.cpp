@@ -1,4 +1,5 @@
 #include "io/text_reader.hpp"
+#include "scene/validation.hpp"
 
 #include <cerrno>
 #include <charconv>
@@ -267,6 +268,14 @@ double TextReader::parseReal(const std::string& token, const std::string& what) 
   const auto [end, ec] = std::from_chars(skipPlus(token), last, value);
   if (ec != std::errc() || end != last) fail("expected a number for " + what + ", got '" + shown(token) + "'");
   if (!std::isfinite(value)) fail(what + " is not finite ('" + shown(token) + "')");
+  return value;
+}
+
+double TextReader::parseCoordinate(const std::string& token, const std::string& what) const {
+  const double value = parseReal(token, what);
+  if (!(std::abs(value) <= validation::kMaxMagnitude)) {
+    fail(what + " " + shown(token) + " exceeds " + validation::cat(validation::kMaxMagnitude) + " in magnitude");
+  }
   return value;
 }
 

@@ -66,6 +66,9 @@ class TextReader {
   int parseInt(const std::string& token, const std::string& what) const;
   /// Also rejects nan and inf: coordinates must be finite.
   double parseReal(const std::string& token, const std::string& what) const;
+  /// parseReal, and at most validation::kMaxMagnitude in magnitude, as validateScene requires of
+  /// positions: the file's line is known here and not there.
+  double parseCoordinate(const std::string& token, const std::string& what) const;
   /// Count of a section or header: an integer >= 0.
   int parseCount(const std::string& token, const std::string& what) const;
   /// How many of `count` announced records, each at least `min_bytes_each` bytes of the file,

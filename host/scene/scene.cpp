@@ -4,12 +4,15 @@
 #include <stabint/scene.hpp>
 
 #include "elements/element_type.hpp"
+#include "scene/lumping.hpp"
 #include "scene/validation.hpp"
 
 #include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -226,17 +229,67 @@ Eigen::VectorXd withMinimumMass(Eigen::VectorXd masses, double min_mass) {
   return masses;
 }
 
+// Adds density |measure(e)| / K of each element e to its K vertices.
+template <std::size_t K, typename Vertices, typename Measure>
+std::optional<lumping::Failure> addShares(std::size_t count, Vertices vertices, Measure measure, double density,
+                                          const char* density_name, const char* measured,
+                                          Eigen::VectorXd& masses) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::array<int, K>& v = vertices(i);
+    // Mass is a property of the shape, not of its vertex order: |V|, so that an inverted tet is
+    // reported by validation as inverted rather than as a negative mass.
+    const double size = std::abs(measure(v));
+    const double share = density * (size / static_cast<double>(K));  // divided first: no overflow on the way
+    const auto failure = [&](const std::string& happened) {
+      return lumping::Failure{i, validation::cat("mass share ", density_name, " ", density, " x ", measured, " ", size,
+                                                 " / ", K, " ", happened)};
+    };
+    if (!std::isfinite(share)) return failure("is not finite");
+    if (share == 0.0 && size != 0.0) return failure("underflows to 0");
+    for (const int j : v) {
+      if (!std::isfinite(masses[j] + share)) {
+        return lumping::Failure{i, validation::cat("the lumped mass of particle ", j, " overflows when its share ",
+                                                   share, " is added to ", masses[j])};
+      }
+      masses[j] += share;
+    }
+  }
+  return std::nullopt;
+}
+
+double triangleArea(const Eigen::MatrixX3d& x, const std::array<int, 3>& t) {
+  const Eigen::Vector3d e1 = (x.row(t[1]) - x.row(t[0])).transpose();
+  const Eigen::Vector3d e2 = (x.row(t[2]) - x.row(t[0])).transpose();
+  return 0.5 * e1.cross(e2).norm();
+}
+
 }  // namespace
+
+std::optional<lumping::Failure> lumping::addTets(const Eigen::MatrixX3d& rest_positions, const std::vector<Tet>& tets,
+                                                 double density, const char* density_name, Eigen::VectorXd& masses) {
+  return addShares<4>(
+      tets.size(), [&](std::size_t i) -> const std::array<int, 4>& { return tets[i].vertices; },
+      [&](const std::array<int, 4>& v) { return signedVolume(rest_positions, v); }, density, density_name, "volume",
+      masses);
+}
+
+std::optional<lumping::Failure> lumping::addTriangles(const Eigen::MatrixX3d& rest_positions,
+                                                      const std::vector<std::array<int, 3>>& triangles,
+                                                      double areal_density, const char* density_name,
+                                                      Eigen::VectorXd& masses) {
+  return addShares<3>(
+      triangles.size(), [&](std::size_t i) -> const std::array<int, 3>& { return triangles[i]; },
+      [&](const std::array<int, 3>& t) { return triangleArea(rest_positions, t); }, areal_density, density_name,
+      "area", masses);
+}
 
 Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const std::vector<Tet>& tets,
                                    double density, double min_mass) {
+  for (size_t i = 0; i < tets.size(); ++i) checkElementIndices(tets[i].vertices, rest_positions.rows(), "tet", i);
+  validation::checkDensity(density, "density");
   Eigen::VectorXd masses = Eigen::VectorXd::Zero(rest_positions.rows());
-  for (size_t i = 0; i < tets.size(); ++i) {
-    checkElementIndices(tets[i].vertices, rest_positions.rows(), "tet", i);
-    // Mass is a property of the shape, not of its vertex order: use |V| so an inverted tet is
-    // reported by validation as inverted rather than as a negative mass.
-    const double share = density * std::abs(signedVolume(rest_positions, tets[i].vertices)) / 4.0;
-    for (int v : tets[i].vertices) masses[v] += share;
+  if (const auto failure = lumping::addTets(rest_positions, tets, density, "density", masses)) {
+    invalid("tet ", failure->element, ": ", failure->what);
   }
   return withMinimumMass(std::move(masses), min_mass);
 }
@@ -244,14 +297,11 @@ Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const
 Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
                                         const std::vector<std::array<int, 3>>& triangles,
                                         double areal_density, double min_mass) {
+  for (size_t i = 0; i < triangles.size(); ++i) checkElementIndices(triangles[i], rest_positions.rows(), "triangle", i);
+  validation::checkDensity(areal_density, "areal_density");
   Eigen::VectorXd masses = Eigen::VectorXd::Zero(rest_positions.rows());
-  for (size_t i = 0; i < triangles.size(); ++i) {
-    const auto& t = triangles[i];
-    checkElementIndices(t, rest_positions.rows(), "triangle", i);
-    const Eigen::Vector3d e1 = (rest_positions.row(t[1]) - rest_positions.row(t[0])).transpose();
-    const Eigen::Vector3d e2 = (rest_positions.row(t[2]) - rest_positions.row(t[0])).transpose();
-    const double share = areal_density * 0.5 * e1.cross(e2).norm() / 3.0;
-    for (int v : t) masses[v] += share;
+  if (const auto failure = lumping::addTriangles(rest_positions, triangles, areal_density, "areal_density", masses)) {
+    invalid("triangle ", failure->element, ": ", failure->what);
   }
   return withMinimumMass(std::move(masses), min_mass);
 }

@@ -2,12 +2,13 @@
 // The checks validateScene and the element types share, each throwing InvalidInputError with a
 // message that names the element or field ("spring 12: stiffness -1 must be >= 0").
 #include <stabint/errors.hpp>
+#include <stabint/scene.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
 #include <algorithm>
-
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <ostream>
@@ -91,16 +92,84 @@ void checkVertexList(const Vertices& vertices, int n, const Owner& owner) {
   }
 }
 
-/// The rest triangle (a, b, c) of `x` is not degenerate: its area is above 1e-12 times its
-/// longest edge squared (round-off on collinear points does not pass as a sliver).
-inline void checkRestTriangle(const Eigen::MatrixX3d& x, int a, int b, int c, const Owner& owner) {
-  const Eigen::Vector3d e1 = (x.row(b) - x.row(a)).transpose();
-  const Eigen::Vector3d e2 = (x.row(c) - x.row(a)).transpose();
-  const double twice_area = e1.cross(e2).norm();
-  const double longest = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
-  if (!(twice_area > 1e-12 * longest)) {
-    invalid(owner, ": degenerate rest triangle (", a, ", ", b, ", ", c, "), area ", 0.5 * twice_area);
+// --- rest shapes ------------------------------------------------------------------------------
+// One test of a rest tet or triangle for every place that reads one (validation of tets,
+// triangle strain and bending hinges, the mesh loaders, JSON tets, OBJ faces), so that a shape
+// the loaders refuse is refused through the API too, with the same words.
+
+/// "Zero" relative to the element's own size: |V| <= kFlatness L^3 (tet) or A <= kFlatness L^2
+/// (triangle), L its longest edge. Round-off on a flat element does not then pass as a sliver with
+/// a random sign, and the test does not depend on units.
+constexpr double kFlatness = 1e-12;
+
+/// A rest tet's or triangle's measure and what is wrong with it, if anything.
+struct RestShape {
+  enum Kind { Fine, Flat, Overflow } kind;
+  double measure;  // signed volume (tet) or area (triangle)
+  double longest;  // longest edge
+  const char* measured;  // "volume" or "area"
+  int power;             // of L in the flatness test: 3 or 2
+  bool fine() const { return kind == Fine; }
+};
+
+namespace detail {
+template <std::size_t K>
+double longestEdge(const Eigen::MatrixX3d& x, const std::array<int, K>& v) {
+  double longest = 0.0;
+  for (std::size_t a = 0; a < K; ++a) {
+    for (std::size_t b = a + 1; b < K; ++b) longest = std::max(longest, (x.row(v[a]) - x.row(v[b])).norm());
   }
+  return longest;
+}
+// measure / L^power > kFlatness, divided step by step: L^3 overflows long before V does. A
+// zero L gives NaN, which is flat.
+inline RestShape classify(double measure, double longest, const char* measured, int power) {
+  if (!std::isfinite(measure)) return {RestShape::Overflow, measure, longest, measured, power};
+  double relative = std::abs(measure);
+  for (int k = 0; k < power; ++k) relative /= longest;
+  return {relative > kFlatness ? RestShape::Fine : RestShape::Flat, measure, longest, measured, power};
+}
+}  // namespace detail
+
+/// The rest tet `v` of `x`: Overflow when its volume is not finite although the coordinates are
+/// (edges beyond about 1e102), Flat when it is zero relative to its size, else Fine with its
+/// signed volume (negative: inverted).
+inline RestShape restTet(const Eigen::MatrixX3d& x, const std::array<int, 4>& v) {
+  return detail::classify(signedVolume(x, v), detail::longestEdge(x, v), "volume", 3);
+}
+
+/// The rest triangle `v` of `x`, as restTet with its (unsigned) area.
+inline RestShape restTriangle(const Eigen::MatrixX3d& x, const std::array<int, 3>& v) {
+  const Eigen::Vector3d e1 = (x.row(v[1]) - x.row(v[0])).transpose();
+  const Eigen::Vector3d e2 = (x.row(v[2]) - x.row(v[0])).transpose();
+  return detail::classify(0.5 * e1.cross(e2).norm(), detail::longestEdge(x, v), "area", 2);
+}
+
+/// What is wrong with a rest shape that is not fine, for a message after its name ("tet 3: ...").
+inline std::string restShapeProblem(const RestShape& r) {
+  if (r.kind == RestShape::Overflow) return cat("rest ", r.measured, " overflows (longest edge ", r.longest, ")");
+  return cat("zero rest ", r.measured, " ", r.measure, " for its longest edge L = ", r.longest, " (degenerate: at most ",
+             kFlatness, " L^", r.power, ")");
+}
+
+/// The rest tet is neither flat nor overflowing, and positive.
+inline void checkRestTet(const Eigen::MatrixX3d& x, const std::array<int, 4>& v, const Owner& owner) {
+  const RestShape r = restTet(x, v);
+  if (!r.fine()) invalid(owner, ": ", restShapeProblem(r));
+  if (r.measure < 0.0) invalid(owner, ": negative rest volume ", r.measure, " (inverted: list two vertices in the other order)");
+}
+
+/// The rest triangle (a, b, c) of `x` is neither flat nor overflowing.
+inline void checkRestTriangle(const Eigen::MatrixX3d& x, int a, int b, int c, const Owner& owner) {
+  const RestShape r = restTriangle(x, {a, b, c});
+  if (r.kind == RestShape::Flat) invalid(owner, ": degenerate rest triangle (", a, ", ", b, ", ", c, "), area ", r.measure);
+  if (!r.fine()) invalid(owner, ": rest triangle (", a, ", ", b, ", ", c, "): ", restShapeProblem(r));
+}
+
+/// A density that lumps masses: positive and finite (zero would leave every particle without
+/// mass). `name` is the field, e.g. "density" or "areal_density".
+inline void checkDensity(double density, const char* name) {
+  if (!(density > 0.0) || !std::isfinite(density)) invalid(name, " ", density, " must be > 0 and finite");
 }
 
 }  // namespace stabint::validation

@@ -1,5 +1,9 @@
 #pragma once
-// Mesh loaders. Every error is a FileFormatError that names the file and the line.
+// Mesh loaders. Every error in a file is a FileFormatError that names the file and the line; a
+// material whose density is not > 0 and finite is an InvalidInputError. What a loader derives is
+// checked where it is derived: a coordinate beyond 1e150 in magnitude, an element that is flat
+// (the relative test of validateScene) or whose volume, area or mass share overflows, and a vertex
+// in no element (it would have no mass) are errors at their line.
 #include <stabint/scene.hpp>
 
 #include <string>
@@ -27,13 +31,13 @@ struct SolidMaterial {
 /// fanned into triangles, `v/vt/vn` forms accepted, negative indices allowed) into
 /// Scene::triangles; the elements of `material.model` (springs along edges and bending springs
 /// across interior edges, or triangle strain and bending hinges); masses from the area. No pins,
-/// no damping.
+/// no damping. Every vertex must be in a face, and no fan triangle may have zero area.
 Scene loadObjCloth(const std::string& path, const ClothMaterial& material = {});
 
 /// Loads a TetGen mesh from `<base>.node` and `<base>.ele` (0- or 1-based, attributes and
 /// boundary markers ignored). Tets with negative signed volume are reoriented only when every
 /// tet of the mesh has that orientation (a mesh-wide convention); mixed or zero volumes are an
-/// error naming the element.
+/// error naming the element. Every point must be in a tet (TetGen's -j drops those that are not).
 Scene loadTetGen(const std::string& base_path, const SolidMaterial& material = {});
 
 /// Loads a Medit `.mesh` file (sections Vertices and Tetrahedra; other sections are skipped),

@@ -122,7 +122,9 @@ struct Scene {
 
 /// Checks a scene: matrix shapes agree, all values finite, masses > 0, indices in range, no
 /// element using a particle twice, stiffness >= 0, rest lengths >= 0, rest volumes > 0, rest
-/// triangles not degenerate, hinges not folded, strain limits around 1, damping in [0, 1].
+/// tets and triangles not degenerate (zero relative to their size: |V| <= 1e-12 L^3 and
+/// A <= 1e-12 L^2 for the longest edge L, the test the mesh loaders apply too; slivers included)
+/// and their volume or area finite, hinges not folded, strain limits around 1, damping in [0, 1].
 /// Finite values that would overflow are refused too: coordinates, speeds, gravity, rest
 /// lengths, pin targets, force fields and frequencies may not exceed 1e150 in magnitude, and the
 /// energy terms 0.5 m |v|^2 (per particle and in all), M |g| size (M the total mass, size the
@@ -139,13 +141,15 @@ std::string elementSummary(const Scene& scene);
 double signedVolume(const Eigen::MatrixX3d& rest_positions, const std::array<int, 4>& vertices);
 
 /// Lumped masses from a tet mesh: each tet gives density * volume / 4 to each of its vertices.
-/// Particles touched by no tet get `min_mass`.
+/// Particles touched by no tet get `min_mass`. Throws InvalidInputError for an index out of
+/// range, a density that is not > 0 and finite, or a tet whose share, or a vertex's sum, is not
+/// finite (naming the tet).
 Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions,
                                    const std::vector<Tet>& tets, double density,
                                    double min_mass = 1e-6);
 
 /// Lumped masses from a triangle surface: each triangle gives areal_density * area / 3 to each
-/// of its vertices. Particles touched by no triangle get `min_mass`.
+/// of its vertices. Particles touched by no triangle get `min_mass`. Throws as lumpMassesFromTets.
 Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
                                         const std::vector<std::array<int, 3>>& triangles,
                                         double areal_density, double min_mass = 1e-6);

@@ -2,17 +2,24 @@
 // backend and the prefactored GlobalSystem (as tests/test_local_global.cpp does). One iteration
 // is local projections + gather of the right-hand side + its transfer to the host + the CHOLMOD
 // solve + the transfer of the new positions back.
+//   rotation/<scene>/<method>   the nearest rotation of every tet's F at the same state, alone:
+//                               the library's (newton-polar) and Eigen's Jacobi SVD (jacobi-svd,
+//                               the method it replaced), per tet (items_per_second).
 #include "bench_common.hpp"
 
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
+#include "elements/projections.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 
+#include <Eigen/LU>
+
 #include <cmath>
 #include <exception>
+#include <vector>
 
 namespace stabint::bench {
 namespace {
@@ -36,19 +43,24 @@ double solveConstant(Integrator integrator) {
   }
 }
 
+/// Inertial target: one step of free fall from the rest shape, with a smooth perturbation of
+/// about 1 % of the body size so that every element projects non-trivially.
+Eigen::MatrixX3d inertialTarget(const Scene& s) {
+  Eigen::MatrixX3d y = s.positions;
+  for (Eigen::Index j = 0; j < y.rows(); ++j) {
+    const Eigen::Vector3d p = s.positions.row(j).transpose();
+    y.row(j) += (kTimeStep * kTimeStep * s.gravity).transpose();
+    y(j, 0) += 0.01 * std::sin(7.0 * p.y() + 3.0 * p.z());
+    y(j, 2) += 0.01 * std::cos(5.0 * p.x() + 2.0 * p.y());
+  }
+  return y;
+}
+
 struct IterationFixture {
   IterationFixture(const Scene& s, BackendChoice choice, double c_)
       : scene(s), data(s), backend(makeBackend(data, choice)), system(data),
         solver(*backend, system, kScratch), c(c_) {
-    // Inertial target: one step of free fall from the rest shape, with a smooth perturbation of
-    // about 1 % of the body size so that every element projects non-trivially.
-    Eigen::MatrixX3d y = s.positions;
-    for (Eigen::Index j = 0; j < y.rows(); ++j) {
-      const Eigen::Vector3d p = s.positions.row(j).transpose();
-      y.row(j) += (kTimeStep * kTimeStep * s.gravity).transpose();
-      y(j, 0) += 0.01 * std::sin(7.0 * p.y() + 3.0 * p.z());
-      y(j, 2) += 0.01 * std::cos(5.0 * p.x() + 2.0 * p.y());
-    }
+    const Eigen::MatrixX3d y = inertialTarget(s);
     backend->write(kY, y);
     backend->write(kX, y);
     // First solves: the factorization of K_c and the first kernel launches.
@@ -88,9 +100,56 @@ void runIteration(benchmark::State& state, const std::string& key, const std::fu
   state.SetLabel(f.backend->description());
 }
 
+/// F = Ds Dm^-1 of every tet of `s` at the positions of inertialTarget(s).
+std::vector<Eigen::Matrix3d> tetDeformations(const Scene& s) {
+  const Eigen::MatrixX3d y = inertialTarget(s);
+  std::vector<Eigen::Matrix3d> out;
+  out.reserve(s.tets.size());
+  for (const Tet& tet : s.tets) {
+    Eigen::Matrix3d ds, dm;
+    for (int k = 0; k < 3; ++k) {
+      ds.col(k) = (y.row(tet.vertices[k + 1]) - y.row(tet.vertices[0])).transpose();
+      dm.col(k) = (s.rest_positions.row(tet.vertices[k + 1]) - s.rest_positions.row(tet.vertices[0])).transpose();
+    }
+    out.push_back(ds * dm.inverse());
+  }
+  return out;
+}
+
+void runRotations(benchmark::State& state, const std::vector<Eigen::Matrix3d>& deformations, bool svd) {
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d r;
+  for (auto _ : state) {
+    for (const Eigen::Matrix3d& f : deformations) {
+      if (svd) {
+        r = projections::nearestRotationBySvd(f);
+      } else {
+        projections::nearestRotation(f.data(), r.data());
+      }
+      sum += r;
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(deformations.size()));
+}
+
 }  // namespace
 
 void registerIterationCases() {
+  for (const SceneCase& scene : referenceScenes()) {
+    if (scene.make().tets.empty()) continue;
+    for (const bool svd : {false, true}) {
+      const std::string name = "rotation/" + scene.name + "/" + (svd ? "jacobi-svd" : "newton-polar");
+      const SceneCase c = scene;
+      benchmark::RegisterBenchmark(name.c_str(), [c, svd](benchmark::State& state) {
+        using Deformations = std::vector<Eigen::Matrix3d>;
+        const Deformations& deformations = cachedFixture<Deformations>(
+            "rotation/" + c.name, [&] { return std::make_unique<Deformations>(tetDeformations(c.make())); });
+        runRotations(state, deformations, svd);
+      })->UseRealTime()->Unit(benchmark::kMicrosecond);
+    }
+  }
+
   for (const SceneCase& scene : referenceScenes())
     for (Integrator integrator : {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint})
       for (BackendChoice backend : allBackends()) {

@@ -257,6 +257,40 @@ TEST(Elements, TriangleStrainProjectionIsIdempotentAndNearestWithinTheLimits) {
   }
 }
 
+// Triangle strain against Eigen's Jacobi SVD of F (3 by 2): P = U clamp(S) V^T to round-off
+// wherever P is unique (s1 clear of s2), down to nearly collapsed triangles; with no lower limit
+// the small singular value survives unclamped and must keep its digits (a square root of an
+// eigenvalue of F^T F would lose half of them: 1e-8 absolute). 1e-13 is a factor 20 over the
+// ~5e-15 measured for these O(1) matrices.
+TEST(Elements, TriangleStrainProjectionMatchesTheSvdOracle) {
+  const ElementType& type = *elementTypes()[typeIndex("triangle strain")];
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (const auto& limits : {std::array<double, 2>{1.0, 1.0}, std::array<double, 2>{0.0, 1.05},
+                             std::array<double, 2>{0.9, 2.0}}) {
+    const double params[3] = {1.0, limits[0], limits[1]};
+    for (int trial = 0; trial < 1000; ++trial) {
+      double s1 = 0.5 + u(rng), s2 = 0.5 + u(rng);
+      if (s1 < s2) std::swap(s1, s2);
+      if (trial % 4 == 0) s2 = s1 * std::pow(10.0, -10.0 * u(rng));  // nearly collapsed
+      if (s1 - s2 < 1e-3 * s1) continue;  // nearly equal: V is not unique (P is, but not V)
+      const Eigen::Matrix3d Q = randomRotation(rng);
+      const Eigen::Matrix2d V = Eigen::Rotation2Dd(6.283185307179586 * u(rng)).toRotationMatrix();
+      const Eigen::Matrix<double, 3, 2> F = Q.leftCols<2>() * Eigen::Vector2d(s1, s2).asDiagonal() * V.transpose();
+      Eigen::Matrix<double, 3, 2> P;
+      type.project(F.data(), params, P.data());
+      Eigen::JacobiSVD<Eigen::Matrix<double, 3, 2>> svd(F, Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const Eigen::Vector2d clamped = svd.singularValues().cwiseMax(limits[0]).cwiseMin(limits[1]);
+      const Eigen::Matrix<double, 3, 2> expected = svd.matrixU() * clamped.asDiagonal() * svd.matrixV().transpose();
+      // A clamped s2 keeps the direction u2 of F v2, which rounding F by epsilon s1 turns by
+      // epsilon s1/s2 for every method (the oracle too): the tolerance grows with that.
+      const bool s2_clamped = s2 < limits[0] || s2 > limits[1];
+      const double tolerance = 1e-13 + (s2_clamped ? 1e-14 * s1 / s2 : 0.0);
+      EXPECT_NEAR((P - expected).norm(), 0.0, tolerance) << "s = " << s1 << ", " << s2;
+    }
+  }
+}
+
 // Bending hinge: p has the rest length and the direction of A x; projecting again changes nothing.
 TEST(Elements, BendingHingeProjectionKeepsTheRestCurvatureMagnitude) {
   const ElementType& type = *elementTypes()[typeIndex("bending hinge")];

@@ -101,15 +101,6 @@ void jacobiRotate(double* A, double* V, int p, int q) {
   }
 }
 
-Eigen::Vector3d anyOrthogonal(const Eigen::Vector3d& u) {
-  const Eigen::Vector3d a = std::abs(u.x()) <= std::abs(u.y()) && std::abs(u.x()) <= std::abs(u.z())
-                                ? Eigen::Vector3d::UnitX()
-                            : std::abs(u.y()) <= std::abs(u.z()) ? Eigen::Vector3d::UnitY()
-                                                                 : Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d w = u.cross(a);
-  return w / std::sqrt(w.dot(w));
-}
-
 /// R = U V^T from F = U S V^T with det U = det V = +1 (so the sign of det F lands on the
 /// smallest singular value: the flip). V and S^2 come from a cyclic Jacobi eigen-decomposition
 /// of F^T F (sorted descending); U from Gram-Schmidt on F V with u3 = u1 x u2, which stays

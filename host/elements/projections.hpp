@@ -3,6 +3,7 @@
 // are in kernels/projections.cl and follow the same algorithms step by step, so that the two
 // backends agree to round-off.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +23,17 @@ inline double ontoSphere(const double* v, const double* params, double* p) {
   for (int c = 0; c < 3; ++c) p[c] = degenerate ? r * params[2 + c] : (r / len) * v[c];
   const double stretch = len - r;
   return 0.5 * params[0] * stretch * stretch;
+}
+
+/// A unit vector orthogonal to the unit vector u (crossed with the axis u is least aligned to):
+/// the completion of a basis where the data give no direction.
+inline Eigen::Vector3d anyOrthogonal(const Eigen::Vector3d& u) {
+  const Eigen::Vector3d a = std::abs(u.x()) <= std::abs(u.y()) && std::abs(u.x()) <= std::abs(u.z())
+                                ? Eigen::Vector3d::UnitX()
+                            : std::abs(u.y()) <= std::abs(u.z()) ? Eigen::Vector3d::UnitY()
+                                                                 : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d w = u.cross(a);
+  return w / std::sqrt(w.dot(w));
 }
 
 /// Nearest proper rotation r of the 3 x 3 matrix m in the Frobenius norm, both as 9 reals

@@ -2,9 +2,13 @@
 // backend and the prefactored GlobalSystem (as tests/test_local_global.cpp does). One iteration
 // is local projections + gather of the right-hand side + its transfer to the host + the CHOLMOD
 // solve + the transfer of the new positions back.
-//   rotation/<scene>/<method>   the nearest rotation of every tet's F at the same state, alone:
-//                               the library's (newton-polar) and Eigen's Jacobi SVD (jacobi-svd,
-//                               the method it replaced), per tet (items_per_second).
+//   rotation/<scene>/<method>   the nearest rotation of every tet's F at the same state, alone,
+//                               per tet (items_per_second): the library's (newton-polar), Eigen's
+//                               Jacobi SVD (jacobi-svd, the method it replaced) and one
+//                               warm-started quaternion step (warm-quaternion-1, Mueller et al.
+//                               2016, from each tet's rotation at the rest shape; the
+//                               alternative docs/elements.md weighs), with its largest error
+//                               against the exact rotation as the counter max_error.
 #include "bench_common.hpp"
 
 #include "backend.hpp"
@@ -15,10 +19,13 @@
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
+#include <utility>
 #include <vector>
 
 namespace stabint::bench {
@@ -100,37 +107,67 @@ void runIteration(benchmark::State& state, const std::string& key, const std::fu
   state.SetLabel(f.backend->description());
 }
 
-/// F = Ds Dm^-1 of every tet of `s` at the positions of inertialTarget(s).
-std::vector<Eigen::Matrix3d> tetDeformations(const Scene& s) {
+/// The rotations' inputs: F = Ds Dm^-1 of every tet of `s` at the positions of
+/// inertialTarget(s), and each tet's rotation at the rest shape (a warm start's previous state).
+struct TetDeformations {
+  std::vector<Eigen::Matrix3d> f;
+  std::vector<Eigen::Quaterniond> previous;
+};
+
+TetDeformations tetDeformations(const Scene& s) {
   const Eigen::MatrixX3d y = inertialTarget(s);
-  std::vector<Eigen::Matrix3d> out;
-  out.reserve(s.tets.size());
+  TetDeformations out;
   for (const Tet& tet : s.tets) {
-    Eigen::Matrix3d ds, dm;
+    Eigen::Matrix3d ds, ds_rest, dm;
     for (int k = 0; k < 3; ++k) {
       ds.col(k) = (y.row(tet.vertices[k + 1]) - y.row(tet.vertices[0])).transpose();
+      ds_rest.col(k) = (s.positions.row(tet.vertices[k + 1]) - s.positions.row(tet.vertices[0])).transpose();
       dm.col(k) = (s.rest_positions.row(tet.vertices[k + 1]) - s.rest_positions.row(tet.vertices[0])).transpose();
     }
-    out.push_back(ds * dm.inverse());
+    out.f.push_back(ds * dm.inverse());
+    out.previous.emplace_back(projections::nearestRotation(Eigen::Matrix3d(ds_rest * dm.inverse())));
   }
   return out;
 }
 
-void runRotations(benchmark::State& state, const std::vector<Eigen::Matrix3d>& deformations, bool svd) {
+enum class RotationMethod { NewtonPolar, JacobiSvd, WarmQuaternion };
+
+/// One step of Mueller et al. 2016 ("A robust method to extract the rotational part of
+/// deformations") from q: q <- exp(w) q with w = sum_i r_i x f_i / |sum_i r_i . f_i|.
+Eigen::Quaterniond quaternionStep(const Eigen::Matrix3d& f, const Eigen::Quaterniond& q) {
+  const Eigen::Matrix3d r = q.toRotationMatrix();
+  const Eigen::Vector3d w = (r.col(0).cross(f.col(0)) + r.col(1).cross(f.col(1)) + r.col(2).cross(f.col(2))) /
+                            (std::abs(r.col(0).dot(f.col(0)) + r.col(1).dot(f.col(1)) + r.col(2).dot(f.col(2))) + 1e-9);
+  const double angle = w.norm();
+  if (angle < 1e-15) return q;
+  return (Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle)) * q).normalized();
+}
+
+void runRotations(benchmark::State& state, const TetDeformations& input, RotationMethod method) {
+  const std::size_t count = input.f.size();
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d r;
   for (auto _ : state) {
-    for (const Eigen::Matrix3d& f : deformations) {
-      if (svd) {
-        r = projections::nearestRotationBySvd(f);
-      } else {
-        projections::nearestRotation(f.data(), r.data());
+    for (std::size_t e = 0; e < count; ++e) {
+      switch (method) {
+        case RotationMethod::NewtonPolar: projections::nearestRotation(input.f[e].data(), r.data()); break;
+        case RotationMethod::JacobiSvd: r = projections::nearestRotationBySvd(input.f[e]); break;
+        case RotationMethod::WarmQuaternion: r = quaternionStep(input.f[e], input.previous[e]).toRotationMatrix(); break;
       }
       sum += r;
     }
     benchmark::DoNotOptimize(sum);
   }
-  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(deformations.size()));
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(count));
+  double max_error = 0.0;
+  for (std::size_t e = 0; e < count; ++e) {
+    const Eigen::Matrix3d exact = projections::nearestRotationBySvd(input.f[e]);
+    if (method == RotationMethod::NewtonPolar) projections::nearestRotation(input.f[e].data(), r.data());
+    if (method == RotationMethod::JacobiSvd) r = exact;
+    if (method == RotationMethod::WarmQuaternion) r = quaternionStep(input.f[e], input.previous[e]).toRotationMatrix();
+    max_error = std::max(max_error, (r - exact).norm());
+  }
+  state.counters["max_error"] = max_error;
 }
 
 }  // namespace
@@ -138,18 +175,19 @@ void runRotations(benchmark::State& state, const std::vector<Eigen::Matrix3d>& d
 void registerIterationCases() {
   for (const SceneCase& scene : referenceScenes()) {
     if (scene.make().tets.empty()) continue;
-    for (const bool svd : {false, true}) {
-      const std::string name = "rotation/" + scene.name + "/" + (svd ? "jacobi-svd" : "newton-polar");
+    for (const auto& [label, method] : {std::pair{"newton-polar", RotationMethod::NewtonPolar},
+                                        std::pair{"jacobi-svd", RotationMethod::JacobiSvd},
+                                        std::pair{"warm-quaternion-1", RotationMethod::WarmQuaternion}}) {
+      const std::string name = "rotation/" + scene.name + "/" + label;
       const SceneCase c = scene;
-      benchmark::RegisterBenchmark(name.c_str(), [c, svd](benchmark::State& state) {
-        using Deformations = std::vector<Eigen::Matrix3d>;
-        const Deformations& deformations = cachedFixture<Deformations>(
-            "rotation/" + c.name, [&] { return std::make_unique<Deformations>(tetDeformations(c.make())); });
-        runRotations(state, deformations, svd);
+      const RotationMethod m = method;
+      benchmark::RegisterBenchmark(name.c_str(), [c, m](benchmark::State& state) {
+        const TetDeformations& input = cachedFixture<TetDeformations>(
+            "rotation/" + c.name, [&] { return std::make_unique<TetDeformations>(tetDeformations(c.make())); });
+        runRotations(state, input, m);
       })->UseRealTime()->Unit(benchmark::kMicrosecond);
     }
   }
-
   for (const SceneCase& scene : referenceScenes())
     for (Integrator integrator : {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint})
       for (BackendChoice backend : allBackends()) {

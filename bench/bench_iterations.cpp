@@ -7,8 +7,8 @@
 //                               Jacobi SVD (jacobi-svd, the method it replaced) and one
 //                               warm-started quaternion step (warm-quaternion-1, Mueller et al.
 //                               2016, from each tet's rotation at the rest shape; the
-//                               alternative docs/elements.md weighs), with its largest error
-//                               against the exact rotation as the counter max_error.
+//                               alternative docs/elements.md weighs); the counter max_error is
+//                               each method's largest distance from the Jacobi SVD's rotation.
 #include "bench_common.hpp"
 
 #include "backend.hpp"

@@ -2,17 +2,31 @@
 // backend and the prefactored GlobalSystem (as tests/test_local_global.cpp does). One iteration
 // is local projections + gather of the right-hand side + its transfer to the host + the CHOLMOD
 // solve + the transfer of the new positions back.
+//   rotation/<scene>/<method>   the nearest rotation of every tet's F at the same state, alone,
+//                               per tet (items_per_second): the library's (newton-polar), Eigen's
+//                               Jacobi SVD (jacobi-svd, the method it replaced) and one
+//                               warm-started quaternion step (warm-quaternion-1, Mueller et al.
+//                               2016, from each tet's rotation at the rest shape; the
+//                               alternative docs/elements.md weighs); the counter max_error is
+//                               each method's largest distance from the Jacobi SVD's rotation.
 #include "bench_common.hpp"
 
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
+#include "elements/projections.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+#include <algorithm>
 #include <cmath>
 #include <exception>
+#include <utility>
+#include <vector>
 
 namespace stabint::bench {
 namespace {
@@ -36,19 +50,24 @@ double solveConstant(Integrator integrator) {
   }
 }
 
+/// Inertial target: one step of free fall from the rest shape, with a smooth perturbation of
+/// about 1 % of the body size so that every element projects non-trivially.
+Eigen::MatrixX3d inertialTarget(const Scene& s) {
+  Eigen::MatrixX3d y = s.positions;
+  for (Eigen::Index j = 0; j < y.rows(); ++j) {
+    const Eigen::Vector3d p = s.positions.row(j).transpose();
+    y.row(j) += (kTimeStep * kTimeStep * s.gravity).transpose();
+    y(j, 0) += 0.01 * std::sin(7.0 * p.y() + 3.0 * p.z());
+    y(j, 2) += 0.01 * std::cos(5.0 * p.x() + 2.0 * p.y());
+  }
+  return y;
+}
+
 struct IterationFixture {
   IterationFixture(const Scene& s, BackendChoice choice, double c_)
       : scene(s), data(s), backend(makeBackend(data, choice)), system(data),
         solver(*backend, system, kScratch), c(c_) {
-    // Inertial target: one step of free fall from the rest shape, with a smooth perturbation of
-    // about 1 % of the body size so that every element projects non-trivially.
-    Eigen::MatrixX3d y = s.positions;
-    for (Eigen::Index j = 0; j < y.rows(); ++j) {
-      const Eigen::Vector3d p = s.positions.row(j).transpose();
-      y.row(j) += (kTimeStep * kTimeStep * s.gravity).transpose();
-      y(j, 0) += 0.01 * std::sin(7.0 * p.y() + 3.0 * p.z());
-      y(j, 2) += 0.01 * std::cos(5.0 * p.x() + 2.0 * p.y());
-    }
+    const Eigen::MatrixX3d y = inertialTarget(s);
     backend->write(kY, y);
     backend->write(kX, y);
     // First solves: the factorization of K_c and the first kernel launches.
@@ -88,9 +107,87 @@ void runIteration(benchmark::State& state, const std::string& key, const std::fu
   state.SetLabel(f.backend->description());
 }
 
+/// The rotations' inputs: F = Ds Dm^-1 of every tet of `s` at the positions of
+/// inertialTarget(s), and each tet's rotation at the rest shape (a warm start's previous state).
+struct TetDeformations {
+  std::vector<Eigen::Matrix3d> f;
+  std::vector<Eigen::Quaterniond> previous;
+};
+
+TetDeformations tetDeformations(const Scene& s) {
+  const Eigen::MatrixX3d y = inertialTarget(s);
+  TetDeformations out;
+  for (const Tet& tet : s.tets) {
+    Eigen::Matrix3d ds, ds_rest, dm;
+    for (int k = 0; k < 3; ++k) {
+      ds.col(k) = (y.row(tet.vertices[k + 1]) - y.row(tet.vertices[0])).transpose();
+      ds_rest.col(k) = (s.positions.row(tet.vertices[k + 1]) - s.positions.row(tet.vertices[0])).transpose();
+      dm.col(k) = (s.rest_positions.row(tet.vertices[k + 1]) - s.rest_positions.row(tet.vertices[0])).transpose();
+    }
+    out.f.push_back(ds * dm.inverse());
+    out.previous.emplace_back(projections::nearestRotation(Eigen::Matrix3d(ds_rest * dm.inverse())));
+  }
+  return out;
+}
+
+enum class RotationMethod { NewtonPolar, JacobiSvd, WarmQuaternion };
+
+/// One step of Mueller et al. 2016 ("A robust method to extract the rotational part of
+/// deformations") from q: q <- exp(w) q with w = sum_i r_i x f_i / |sum_i r_i . f_i|.
+Eigen::Quaterniond quaternionStep(const Eigen::Matrix3d& f, const Eigen::Quaterniond& q) {
+  const Eigen::Matrix3d r = q.toRotationMatrix();
+  const Eigen::Vector3d w = (r.col(0).cross(f.col(0)) + r.col(1).cross(f.col(1)) + r.col(2).cross(f.col(2))) /
+                            (std::abs(r.col(0).dot(f.col(0)) + r.col(1).dot(f.col(1)) + r.col(2).dot(f.col(2))) + 1e-9);
+  const double angle = w.norm();
+  if (angle < 1e-15) return q;
+  return (Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle)) * q).normalized();
+}
+
+void runRotations(benchmark::State& state, const TetDeformations& input, RotationMethod method) {
+  const std::size_t count = input.f.size();
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d r;
+  for (auto _ : state) {
+    for (std::size_t e = 0; e < count; ++e) {
+      switch (method) {
+        case RotationMethod::NewtonPolar: projections::nearestRotation(input.f[e].data(), r.data()); break;
+        case RotationMethod::JacobiSvd: r = projections::nearestRotationBySvd(input.f[e]); break;
+        case RotationMethod::WarmQuaternion: r = quaternionStep(input.f[e], input.previous[e]).toRotationMatrix(); break;
+      }
+      sum += r;
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(count));
+  double max_error = 0.0;
+  for (std::size_t e = 0; e < count; ++e) {
+    const Eigen::Matrix3d exact = projections::nearestRotationBySvd(input.f[e]);
+    if (method == RotationMethod::NewtonPolar) projections::nearestRotation(input.f[e].data(), r.data());
+    if (method == RotationMethod::JacobiSvd) r = exact;
+    if (method == RotationMethod::WarmQuaternion) r = quaternionStep(input.f[e], input.previous[e]).toRotationMatrix();
+    max_error = std::max(max_error, (r - exact).norm());
+  }
+  state.counters["max_error"] = max_error;
+}
+
 }  // namespace
 
 void registerIterationCases() {
+  for (const SceneCase& scene : referenceScenes()) {
+    if (scene.make().tets.empty()) continue;
+    for (const auto& [label, method] : {std::pair{"newton-polar", RotationMethod::NewtonPolar},
+                                        std::pair{"jacobi-svd", RotationMethod::JacobiSvd},
+                                        std::pair{"warm-quaternion-1", RotationMethod::WarmQuaternion}}) {
+      const std::string name = "rotation/" + scene.name + "/" + label;
+      const SceneCase c = scene;
+      const RotationMethod m = method;
+      benchmark::RegisterBenchmark(name.c_str(), [c, m](benchmark::State& state) {
+        const TetDeformations& input = cachedFixture<TetDeformations>(
+            "rotation/" + c.name, [&] { return std::make_unique<TetDeformations>(tetDeformations(c.make())); });
+        runRotations(state, input, m);
+      })->UseRealTime()->Unit(benchmark::kMicrosecond);
+    }
+  }
   for (const SceneCase& scene : referenceScenes())
     for (Integrator integrator : {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint})
       for (BackendChoice backend : allBackends()) {

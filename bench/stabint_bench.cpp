@@ -2,6 +2,7 @@
 //   step/<scene>/<integrator>/<backend>               one Simulator::step()
 //   blend_vs_be/<scene>/<backend>                     one BE step and one blend step, alternated
 //   iteration/<scene>/<integrator>/<backend>          one local/global iteration
+//   rotation/<scene>/<method>                         the tets' nearest rotations alone
 //   scaling_step/cloth/<integrator>/<backend>/side:N  step on an N x N cloth
 //   scaling_iteration/cloth/BE/<backend>/side:N       iteration on an N x N cloth
 // with counters particles, elements, iterations and the phase times (seconds per benchmark

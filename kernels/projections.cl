@@ -26,6 +26,69 @@ inline real halfWeightedSquaredDistance(real w, const real* a, const real* b, in
 }
 
 #define MAX_JACOBI_SWEEPS 20
+// Newton's polar iteration needs det M > 0; below this fraction of ||M||_F^3 the element counts as
+// flat and takes rotationByEigen. The iteration bound is never reached in practice.
+#define FLAT_VOLUME ((real)1e-6)
+#define MAX_NEWTON_ITERATIONS 16
+
+/// c = det(X) X^-T (rows a, b, c of X give the rows b x c, c x a, a x b; the same for columns,
+/// so the layout does not matter); returns det X.
+inline real cofactor3(const real* x, real* c) {
+  c[0] = x[4] * x[8] - x[5] * x[7];
+  c[1] = x[5] * x[6] - x[3] * x[8];
+  c[2] = x[3] * x[7] - x[4] * x[6];
+  c[3] = x[7] * x[2] - x[8] * x[1];
+  c[4] = x[8] * x[0] - x[6] * x[2];
+  c[5] = x[6] * x[1] - x[7] * x[0];
+  c[6] = x[1] * x[5] - x[2] * x[4];
+  c[7] = x[2] * x[3] - x[0] * x[5];
+  c[8] = x[0] * x[4] - x[1] * x[3];
+  return x[0] * c[0] + x[1] * c[1] + x[2] * c[2];
+}
+
+/// The orthogonal polar factor of m by Newton's iteration X <- (g X + X^-T / g)/2 with Higham's
+/// Frobenius-norm scaling while the updates are large; done once an update d has
+/// d^2 < epsilon (the error squares each step). False (r untouched) when det m is not safely
+/// positive or the iteration did not settle.
+inline bool polarByNewton(const real* m, real* r) {
+  real x[9], c[9];
+  real m2 = 0;
+#pragma unroll
+  for (int i = 0; i < 9; ++i) m2 += m[i] * m[i];
+#pragma unroll
+  for (int i = 0; i < 9; ++i) x[i] = m[i];
+  real det = cofactor3(x, c);
+  if (!(det > FLAT_VOLUME * m2 * sqrt(m2))) return false;
+  bool scale = true;
+  for (int iteration = 0; iteration < MAX_NEWTON_ITERATIONS; ++iteration) {
+    real g = 1;
+    if (scale) {
+      real x2 = 0, c2 = 0;
+#pragma unroll
+      for (int i = 0; i < 9; ++i) x2 += x[i] * x[i];
+#pragma unroll
+      for (int i = 0; i < 9; ++i) c2 += c[i] * c[i];
+      g = sqrt(sqrt(c2 / x2) / det);
+    }
+    const real a = (real)0.5 * g, b = (real)0.5 / (g * det);
+    real update2 = 0;
+#pragma unroll
+    for (int i = 0; i < 9; ++i) {
+      const real next = a * x[i] + b * c[i];
+      update2 += (next - x[i]) * (next - x[i]);
+      x[i] = next;
+    }
+    if (update2 < REAL_EPSILON) {
+#pragma unroll
+      for (int i = 0; i < 9; ++i) r[i] = x[i];
+      return true;
+    }
+    scale = update2 > (real)1e-4;
+    det = cofactor3(x, c);
+    if (!(det > 0)) return false;
+  }
+  return false;
+}
 
 /// One Jacobi rotation zeroing A[p][q] of the symmetric A: A <- J^T A J, V <- V J
 /// (Golub & Van Loan, sym.schur2).
@@ -84,11 +147,11 @@ inline real3 anyOrthogonal(real3 u) {
   return w / norm3(w);
 }
 
-/// Nearest rotation R = U V^T of F (SVD F = U S V^T with det U = det V = +1, so the sign of
-/// det F lands on the smallest singular value: the "flip" of docs/elements.md). V and S^2 come from a
-/// cyclic Jacobi eigen-decomposition of F^T F (sorted descending); U from Gram-Schmidt on F V
-/// with u3 = u1 x u2, which stays defined for near-degenerate and inverted F.
-inline void nearestRotation(const real* F, real* R) {
+/// R = U V^T from F = U S V^T with det U = det V = +1 (so the sign of det F lands on the
+/// smallest singular value: the "flip" of docs/elements.md). V and S^2 come from a cyclic Jacobi
+/// eigen-decomposition of F^T F (sorted descending); U from Gram-Schmidt on F V with
+/// u3 = u1 x u2, which stays defined for near-degenerate and inverted F.
+inline void rotationByEigen(const real* F, real* R) {
   real A[9], V[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
@@ -129,4 +192,11 @@ inline void nearestRotation(const real* F, real* R) {
   const real3 u3 = cross(u1, u2);
   // R = U V^T = u1 v1^T + u2 v2^T + u3 v3^T.
   sumOfOuterProducts(u1, v1, u2, v2, u3, v3, R);
+}
+
+/// Nearest proper rotation r of the 3 x 3 m, both row-major (or both column-major: the nearest
+/// rotation of M^T is R^T): Newton's polar factor when det m > 0, else rotationByEigen. The same
+/// steps as projections::nearestRotation of the CPU reference.
+inline void nearestRotation(const real* m, real* r) {
+  if (!polarByNewton(m, r)) rotationByEigen(m, r);
 }

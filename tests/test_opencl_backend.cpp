@@ -4,9 +4,9 @@
 // Tolerances (relative to the largest entry of the reference result, see relativeError):
 //   double: 1e-12. Both sides compute the same formulas in IEEE double; they differ only in
 //           rounding order (per-vertex gather vs. scattered adds, tree vs. sequential energy
-//           sums, FMA contraction in the kernel compiler) and in the nearest-rotation algorithm
-//           (Jacobi on F^T F + Gram-Schmidt vs. Eigen's two-sided Jacobi SVD), each worth a few
-//           ulps times small condition numbers of the well-shaped test elements.
+//           sums, FMA contraction in the kernel compiler; the nearest rotation is the same
+//           Newton/eigen algorithm on both), each worth a few ulps times small condition numbers
+//           of the well-shaped test elements.
 //   float:  1e-4 (rhs, forces, dot products) and 1e-3 (energies). Positions are rounded to
 //           float (relative 6e-8 of |x| ~ 1) and spring vectors x_a - x_b of length ~0.05 lose
 //           about log10(1/0.05) more digits; energies square the stretch |d| - r, which for the

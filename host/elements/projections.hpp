@@ -1,7 +1,9 @@
 #pragma once
 // Projections shared by several element types (reference, double precision). Their OpenCL twins
-// are in kernels/projections.cl.
+// are in kernels/projections.cl and follow the same algorithms step by step, so that the two
+// backends agree to round-off.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -23,9 +25,35 @@ inline double ontoSphere(const double* v, const double* params, double* p) {
   return 0.5 * params[0] * stretch * stretch;
 }
 
-/// Nearest rotation R of F in the Frobenius norm: F = U S V^T, R = U V^T, with the column of
-/// the smallest singular value flipped when det(U V^T) < 0 (inverted elements get a proper
-/// rotation, never a reflection).
-Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& F);
+/// A unit vector orthogonal to the unit vector u (crossed with the axis u is least aligned to):
+/// the completion of a basis where the data give no direction.
+inline Eigen::Vector3d anyOrthogonal(const Eigen::Vector3d& u) {
+  const Eigen::Vector3d a = std::abs(u.x()) <= std::abs(u.y()) && std::abs(u.x()) <= std::abs(u.z())
+                                ? Eigen::Vector3d::UnitX()
+                            : std::abs(u.y()) <= std::abs(u.z()) ? Eigen::Vector3d::UnitY()
+                                                                 : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d w = u.cross(a);
+  return w / std::sqrt(w.dot(w));
+}
+
+/// Nearest proper rotation r of the 3 x 3 matrix m in the Frobenius norm, both as 9 reals
+/// row-major (m[3 i + j] = M_ij). The nearest rotation of M^T is R^T, so a column-major M gives a
+/// column-major R (the tet passes its F^T as it is stored). For det M > 0 it is the orthogonal
+/// polar factor of M, found by scaled Newton iterations (docs/elements.md, "Rotations"); inverted
+/// and nearly flat M (det M <= 1e-6 ||M||^3) take a Jacobi eigen-decomposition of M^T M instead,
+/// where the column of the smallest singular value flips (a proper rotation, never a
+/// reflection).
+void nearestRotation(const double* m, double* r);
+
+inline Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& m) {
+  Eigen::Matrix3d r;
+  nearestRotation(m.data(), r.data());
+  return r;
+}
+
+/// The same rotation from Eigen's two-sided Jacobi SVD, M = U S V^T, R = U V^T with the column of
+/// the smallest singular value flipped when det(U V^T) < 0: an independent oracle for the tests
+/// and the benchmark (the method the tet used before; about ten times slower).
+Eigen::Matrix3d nearestRotationBySvd(const Eigen::Matrix3d& m);
 
 }  // namespace stabint::projections

@@ -45,10 +45,8 @@ struct TetKind : KindDefaults<Tet> {
   }
 
   static double project(const double* ax, const double* params, double* p) {
-    // ax holds F^T row-major, i.e. F column-major; p = R^T row-major is R column-major.
-    const Eigen::Map<const Eigen::Matrix3d> F(ax);
-    Eigen::Map<Eigen::Matrix3d> rotation(p);
-    rotation = projections::nearestRotation(F);
+    // ax holds F^T row-major; the nearest rotation of F^T is R^T, which is p.
+    projections::nearestRotation(ax, p);
     return halfWeightedSquaredDistance(params[0], ax, p, 9);
   }
 };

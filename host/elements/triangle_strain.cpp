@@ -3,13 +3,14 @@
 // A x = F^T = G^T X with the 3 by 2 G = [[-1,-1],[1,0],[0,1]] Dm^-1, w = k A,
 // params (k A, s_min, s_max).
 #include "elements/element_kind.hpp"
+#include "elements/projections.hpp"
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
-#include <Eigen/SVD>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace stabint {
 namespace {
@@ -26,34 +27,6 @@ Eigen::Matrix2d restEdges2d(const Scene& scene, const TriangleStrain& t) {
   Eigen::Matrix2d dm;
   dm << e1.dot(t1), e2.dot(t1), 0.0, e2.dot(t2);
   return dm;
-}
-
-struct Svd2 {
-  Eigen::Matrix2d U, V;
-  Eigen::Vector2d s;
-};
-
-Eigen::Matrix2d rotation2(double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  Eigen::Matrix2d r;
-  r << c, -s, s, c;
-  return r;
-}
-
-// M = U diag(s) V^T in closed form for det M >= 0 (Blinn, "Consider the lowly 2x2 matrix"):
-// M = [[E + F, G - H], [G + H, E - F]] is a rotation by (a2 + a1)/2 after diag(s1, s2) after a
-// rotation by (a2 - a1)/2, with s = sqrt(E^2 + H^2) +- sqrt(F^2 + G^2), a1 = atan2(G, F),
-// a2 = atan2(H, E).
-Svd2 svd2(const Eigen::Matrix2d& m) {
-  const double e = 0.5 * (m(0, 0) + m(1, 1)), f = 0.5 * (m(0, 0) - m(1, 1));
-  const double g = 0.5 * (m(1, 0) + m(0, 1)), h = 0.5 * (m(1, 0) - m(0, 1));
-  const double q = std::hypot(e, h), r = std::hypot(f, g);
-  const double a1 = std::atan2(g, f), a2 = std::atan2(h, e);
-  Svd2 out;
-  out.s = Eigen::Vector2d(q + r, q - r);
-  out.U = rotation2(0.5 * (a2 + a1));
-  out.V = rotation2(0.5 * (a2 - a1)).transpose();
-  return out;
 }
 
 struct TriangleStrainKind : KindDefaults<TriangleStrain> {
@@ -89,24 +62,34 @@ struct TriangleStrainKind : KindDefaults<TriangleStrain> {
   }
 
   static double project(const double* ax, const double* params, double* p) {
-    // ax holds F^T row-major, i.e. F (3 by 2) column-major; so does p for P.
-    const Eigen::Map<const Eigen::Matrix<double, 3, 2>> F(ax);
-    // F = Q R (Gram-Schmidt, twice for orthogonality), then the closed-form SVD of the 2 by 2
-    // R: no squared singular values, independent of the kernel's method (eigenvectors of
-    // F^T F), and a fraction of the cost of an iterative 3 by 2 SVD.
-    Eigen::Matrix<double, 3, 2> Q;
-    Eigen::Matrix2d R = Eigen::Matrix2d::Zero();
-    R(0, 0) = F.col(0).norm();
-    Q.col(0) = R(0, 0) > 0.0 ? Eigen::Vector3d(F.col(0) / R(0, 0)) : Eigen::Vector3d::UnitX();
-    Eigen::Vector3d w = F.col(1) - Q.col(0).dot(F.col(1)) * Q.col(0);
-    w -= Q.col(0).dot(w) * Q.col(0);
-    R(0, 1) = Q.col(0).dot(F.col(1));
-    R(1, 1) = w.norm();
-    Q.col(1) = R(1, 1) > 1e-300 ? Eigen::Vector3d(w / R(1, 1)) : Q.col(0).unitOrthogonal();
-    const Svd2 svd = svd2(R);
-    const Eigen::Vector2d s = svd.s.cwiseMax(params[1]).cwiseMin(params[2]);
-    Eigen::Map<Eigen::Matrix<double, 3, 2>> projection(p);
-    projection = Q * svd.U * s.asDiagonal() * svd.V.transpose();
+    // ax holds F^T row-major: its rows are the columns f0, f1 of F (3 by 2); so does p for P.
+    // V from the 2 by 2 F^T F = [[a, b], [b, c]] in closed form (no trigonometry), U and S from
+    // Gram-Schmidt on F V: the singular values are lengths, not square roots of eigenvalues, so
+    // a small one keeps its digits. The kernel (kernels/triangle_strain.cl) takes the same steps.
+    const Eigen::Vector3d f0(ax[0], ax[1], ax[2]), f1(ax[3], ax[4], ax[5]);
+    const double a = f0.dot(f0), b = f0.dot(f1), c = f1.dot(f1);
+    // v1 = (cs, sn), the eigenvector of the larger eigenvalue l = (a + c)/2 + r, is parallel to
+    // (l - c, b) and to (b, l - a); the one whose first term adds two non-negative numbers is
+    // free of cancellation. Equal eigenvalues (F a scaled isometry) take v1 = (1, 0).
+    const double half_difference = 0.5 * (a - c);
+    const double r = std::sqrt(half_difference * half_difference + b * b);
+    const double x = half_difference >= 0.0 ? half_difference + r : b;
+    const double y = half_difference >= 0.0 ? b : r - half_difference;
+    const double length = std::sqrt(x * x + y * y);
+    const double cs = length > 0.0 ? x / length : 1.0, sn = length > 0.0 ? y / length : 0.0;
+    const Eigen::Vector3d b1 = cs * f0 + sn * f1, b2 = cs * f1 - sn * f0;  // F v1, F v2 (v2 = (-sn, cs))
+    const double s1 = std::sqrt(b1.dot(b1));
+    const Eigen::Vector3d u1 = s1 > 0.0 ? Eigen::Vector3d(b1 / s1) : Eigen::Vector3d::UnitX();
+    // Gram-Schmidt twice keeps u2 orthogonal to u1 when b2 is much shorter than b1.
+    Eigen::Vector3d w = b2 - u1.dot(b2) * u1;
+    w -= u1.dot(w) * u1;
+    const double s2 = std::sqrt(w.dot(w));
+    const Eigen::Vector3d u2 =
+        s2 > std::numeric_limits<double>::epsilon() * s1 ? Eigen::Vector3d(w / s2) : projections::anyOrthogonal(u1);
+    const double t1 = std::clamp(s1, params[1], params[2]), t2 = std::clamp(s2, params[1], params[2]);
+    // Row k of P^T = sum_i t_i v_i[k] u_i.
+    const Eigen::Vector3d p0 = t1 * cs * u1 - t2 * sn * u2, p1 = t1 * sn * u1 + t2 * cs * u2;
+    for (int k = 0; k < 3; ++k) p[k] = p0[k], p[3 + k] = p1[k];
     return halfWeightedSquaredDistance(params[0], ax, p, 6);
   }
 

@@ -2,13 +2,16 @@
 #   find_package(stabint)  +  target_link_libraries(app PRIVATE stabint::stabint)
 #
 # Layout under the prefix (GNUInstallDirs):
-#   lib/libstabint.a, include/stabint/*.hpp, bin/stabint-run,
-#   lib/cmake/stabint/{stabintConfig,stabintConfigVersion,stabintTargets*,FindCHOLMOD}.cmake
+#   lib/libstabint.a (or lib/libstabint.so* with BUILD_SHARED_LIBS), include/stabint/*.hpp,
+#   bin/stabint-run, lib/cmake/stabint/{stabintConfig,stabintConfigVersion,stabintTargets*,
+#   FindCHOLMOD}.cmake
 #
-# libstabint is static, so its private dependencies (CHOLMOD, OpenCL) end up on the consumer's
-# link line as $<LINK_ONLY:...>: the config file finds them again, with the FindCHOLMOD module
-# installed next to it (Debian's SuiteSparse has no CMake config). nlohmann_json is header-only
-# and used only inside the library's sources, so it is a build-tree dependency only.
+# A static libstabint's private dependencies (CHOLMOD, OpenCL) end up on the consumer's link line
+# as $<LINK_ONLY:...>: the config file finds them again, with the FindCHOLMOD module installed
+# next to it (Debian's SuiteSparse has no CMake config). A shared libstabint carries them itself
+# (its DT_NEEDED entries), so the consumer needs neither their headers nor their CMake modules.
+# nlohmann_json is header-only and used only inside the library's sources, so it is a
+# build-tree dependency only.
 include(CMakePackageConfigHelpers)
 
 set(STABINT_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/stabint" CACHE STRING

@@ -148,8 +148,6 @@ struct StepReport {
   PhaseTimes times;
 };
 
-class Backend;  // host/backend.hpp; not part of the public API
-
 /// A snapshot of a running simulation: time, step count, state, BDF2 history, the tracked
 /// target H*, the pins (with grabbed and released handles) and the forcing set by per-frame
 /// input (pin targets, external forces). Restoring it into a Simulator of the same scene

@@ -1,5 +1,6 @@
 # Installs ${BUILD_DIR} into a prefix, moves the prefix, then configures, builds and runs
-# ${EXAMPLE_DIR} against the moved prefix. Fails with the failing step's output.
+# ${EXAMPLE_DIR} against the moved prefix (and the installed stabint-run, WITH_TOOL), with a
+# static or (SHARED) a shared libstabint. Fails with the failing step's output.
 function(step what)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
@@ -27,7 +28,17 @@ foreach(f ${expected})
 endforeach()
 file(GLOB_RECURSE configs "${prefix}/*/stabintConfig.cmake")
 file(GLOB_RECURSE finders "${prefix}/*/cmake/stabint/FindCHOLMOD.cmake")
-file(GLOB_RECURSE libs "${prefix}/*/libstabint.a")
+# The library of the build's kind (SHARED: BUILD_SHARED_LIBS), not a stale one of the other.
+if(SHARED)
+  file(GLOB_RECURSE libs "${prefix}/*/libstabint.so")
+  file(GLOB_RECURSE other "${prefix}/*/libstabint.a")
+else()
+  file(GLOB_RECURSE libs "${prefix}/*/libstabint.a")
+  file(GLOB_RECURSE other "${prefix}/*/libstabint.so*")
+endif()
+if(other)
+  message(FATAL_ERROR "installed a library of the other kind: ${other}")
+endif()
 if(NOT configs OR NOT finders OR NOT libs)
   message(FATAL_ERROR "package incomplete: config '${configs}', FindCHOLMOD '${finders}', library '${libs}'")
 endif()
@@ -38,6 +49,15 @@ foreach(f ${package_files})
   string(FIND "${text}" "${BUILD_DIR}" at)
   if(NOT at EQUAL -1)
     message(FATAL_ERROR "${f} refers to the build tree ${BUILD_DIR}")
+  endif()
+endforeach()
+
+# The installed headers name no internal: no host/ path, no internal type, no detail namespace.
+file(GLOB headers "${prefix}/include/stabint/*")
+foreach(h ${headers})
+  file(READ "${h}" text)
+  if(text MATCHES "host/|SceneData|class Backend[ ;]|namespace detail|opencl/|cpu/")
+    message(FATAL_ERROR "${h} names an internal of the library: '${CMAKE_MATCH_0}'")
   endif()
 endforeach()
 

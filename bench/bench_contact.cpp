@@ -1,0 +1,109 @@
+// Colliders against no colliders, interleaved in one run (the machine is noisy): a 50 x 50
+// cloth dropped flat onto a sphere and the ground (friction 0.5), stepped next to the same cloth
+// without colliders. Both restart from their first state every 90 steps (3 s: the fall, the
+// landing and the settling), so the timed steps mix all three. The counter `contact_vs_none` is
+// the colliders' step time over the plain one (issue 10: at most 1.15).
+#include "bench_common.hpp"
+
+#include <chrono>
+#include <exception>
+
+namespace stabint::bench {
+namespace {
+
+// The 50 x 50 spring cloth (1 m) lying flat at y = 0.5 without its pins.
+Scene flatCloth() {
+  Scene s = clothScene(50);
+  s.pins.clear();
+  for (Eigen::MatrixX3d* m : {&s.positions, &s.rest_positions}) {
+    Eigen::MatrixX3d r(m->rows(), 3);
+    r.col(0) = m->col(0).array() - m->col(0).mean();
+    r.col(1).setConstant(0.5);
+    r.col(2) = m->col(1).array() - m->col(1).mean();
+    *m = r;
+  }
+  return s;
+}
+
+Scene clothOnSphereAndGround() {
+  Scene s = flatCloth();
+  Collider sphere;
+  sphere.shape = ColliderShape::Sphere;
+  sphere.center = Eigen::Vector3d(0.0, -0.1, 0.0);
+  sphere.radius = 0.25;
+  sphere.friction = 0.5;
+  Collider ground;
+  ground.shape = ColliderShape::Plane;
+  ground.friction = 0.5;
+  s.colliders = {sphere, ground};
+  return s;
+}
+
+struct ContactFixture {
+  std::unique_ptr<Simulator> contact, none;
+  Checkpoint contact_start, none_start;
+};
+
+void runContact(benchmark::State& state, const std::string& key, BackendChoice backend, Integrator integrator) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  ContactFixture* fixture = nullptr;
+  try {
+    fixture = &cachedFixture<ContactFixture>(key, [&] {
+      auto f = std::make_unique<ContactFixture>();
+      const SimulatorOptions o = optionsFor(backend, integrator);
+      f->contact = std::make_unique<Simulator>(clothOnSphereAndGround(), o);
+      f->none = std::make_unique<Simulator>(flatCloth(), o);
+      f->contact_start = f->contact->checkpoint();
+      f->none_start = f->none->checkpoint();
+      return f;
+    });
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  ContactFixture& f = *fixture;
+  using Clock = std::chrono::steady_clock;
+  double contact = 0, none = 0;
+  auto timed = [](double& sum, Simulator& sim) {
+    const auto start = Clock::now();
+    sim.step();
+    sum += std::chrono::duration<double>(Clock::now() - start).count();
+  };
+  try {
+    for (auto _ : state) {
+      if (f.contact->stepCount() >= 90) {
+        f.contact->restore(f.contact_start);
+        f.none->restore(f.none_start);
+      }
+      timed(contact, *f.contact);
+      timed(none, *f.none);
+    }
+  } catch (const NonFiniteStateError& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  using benchmark::Counter;
+  state.counters["contact_step"] = Counter(contact, Counter::kAvgIterations);
+  state.counters["none_step"] = Counter(none, Counter::kAvgIterations);
+  state.counters["contact_vs_none"] = none > 0 ? contact / none : 0.0;
+  state.SetLabel(f.contact->backendDescription());
+}
+
+}  // namespace
+
+void registerContactCases() {
+  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+    for (BackendChoice backend : allBackends()) {
+      const std::string name = std::string("contact_vs_none/cloth50/") + integratorName(integrator) + "/" +
+                               backendLabel(backend);
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+        runContact(state, name, backend, integrator);
+      })->UseRealTime()->Unit(benchmark::kMillisecond);
+    }
+  }
+}
+
+}  // namespace stabint::bench

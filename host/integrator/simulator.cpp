@@ -324,7 +324,7 @@ struct Simulator::Impl {
 
   // Contact after the solve (docs/method.md, "Contact"), on the accepted state: friction takes
   // kinetic energy out and H* with it, like damping; the final projection moves the positions out
-  // of the colliders and H* by the change of H it causes, like a teleport. Returns true when the
+  // of the colliders and takes the energy that removes out of H*. Returns true when the
   // velocities changed; p_new follows the positions.
   bool resolveContact(double t1, double& target_now, PotentialEnergy& p_new, StepReport& report) {
     const bool rubbed = applyFriction(scene, t1, options.time_step, x_new, v_new, report.friction) > 0;

@@ -150,7 +150,8 @@ struct StepReport {
   double event_energy = 0.0;
   /// Contact (docs/method.md, "Contact"): kinetic energy removed by friction this step (taken
   /// from H* like damping; negative when a moving collider drags particles along), and the
-  /// change of H by the final projection out of the colliders (added to H*, like a teleport).
+  /// energy the final projection out of the colliders removed (<= 0, added to H*; energy it adds
+  /// is not booked: the blend takes it out).
   double friction = 0.0;
   double contact_projection = 0.0;
   int iterations = 0;     // local/global iterations of all solves in this step

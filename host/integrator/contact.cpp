@@ -76,11 +76,4 @@ int projectOutOfColliders(const SceneData& scene, double t, double tolerance, Ei
   return moves;
 }
 
-double deepestPenetration(const SceneData& scene, double t, const Eigen::MatrixX3d& x) {
-  double deepest = 0.0;
-  forEachContact(scene, t, x,
-                 [&](std::size_t, Eigen::Index, const Eigen::Vector3d&, double depth) { deepest = std::max(deepest, depth); });
-  return deepest;
-}
-
 }  // namespace stabint

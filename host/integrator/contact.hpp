@@ -23,7 +23,4 @@ int applyFriction(const SceneData& scene, double t, double h, const Eigen::Matri
 /// moves.
 int projectOutOfColliders(const SceneData& scene, double t, double tolerance, Eigen::MatrixX3d& x);
 
-/// Deepest penetration of any particle into any collider at time t (0 when none is inside).
-double deepestPenetration(const SceneData& scene, double t, const Eigen::MatrixX3d& x);
-
 }  // namespace stabint

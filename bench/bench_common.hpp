@@ -80,4 +80,5 @@ void registerStepCases();       // bench_steps.cpp
 void registerIterationCases();  // bench_iterations.cpp
 void registerSolverCases();     // bench_solver.cpp
 void registerInteractionCases();  // bench_interaction.cpp
+void registerContactCases();      // bench_contact.cpp
 }  // namespace stabint::bench

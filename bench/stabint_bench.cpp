@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   bench::registerIterationCases();
   bench::registerSolverCases();
   bench::registerInteractionCases();
+  bench::registerContactCases();
   benchmark::RunSpecifiedBenchmarks();
   bench::releaseAllFixtures();  // OpenCL objects go while the runtime is still loaded
   benchmark::Shutdown();

@@ -56,7 +56,24 @@ Eigen::MatrixX3d inertialTarget(const Scene& s) {
   return y;
 }
 
-enum class SceneKind { Springs, Tets, Triangles };
+// The spring cloth cut by a plane and a moving sphere (docs/method.md, "Contact"): about half of
+// its particles start inside one of them.
+Scene contactScene() {
+  Scene s = clothScene();
+  const Eigen::Vector3d middle = s.positions.colwise().mean().transpose();
+  Collider plane;
+  plane.center = middle;
+  plane.normal = Eigen::Vector3d(0.0, 1.0, 0.3);
+  Collider sphere;
+  sphere.shape = ColliderShape::Sphere;
+  sphere.center = middle + Eigen::Vector3d(0.2, 0.0, 0.1);
+  sphere.radius = 0.3;
+  sphere.velocity = Eigen::Vector3d(0.0, 0.0, 0.5);
+  s.colliders = {plane, sphere};
+  return s;
+}
+
+enum class SceneKind { Springs, Tets, Triangles, Contact };
 
 class LocalGlobalTest : public ::testing::TestWithParam<SceneKind> {
  protected:
@@ -64,6 +81,7 @@ class LocalGlobalTest : public ::testing::TestWithParam<SceneKind> {
     switch (GetParam()) {
       case SceneKind::Tets: return tetScene();
       case SceneKind::Triangles: return testing::triangleCloth(6, 5);
+      case SceneKind::Contact: return contactScene();
       default: return clothScene();
     }
   }
@@ -125,7 +143,7 @@ TEST_P(LocalGlobalTest, ConvergedSolutionHasVanishingGradient) {
 // Accelerated iterations (Chebyshev, Anderson) keep the objective monotone (the safeguard
 // replaces any iterate that would raise it by the plain one; rises within 1e-12 relative are
 // round-off) and get closer to the minimum than plain ones in the same number of iterations.
-void checkAcceleration(const Scene& s, bool tets, Acceleration acceleration) {
+void checkAcceleration(const Scene& s, double max_gap_ratio, Acceleration acceleration) {
   SCOPED_TRACE(accelerationName(acceleration));
   Fixture f(s);
   const Eigen::MatrixX3d y = inertialTarget(s);
@@ -151,12 +169,9 @@ void checkAcceleration(const Scene& s, bool tets, Acceleration acceleration) {
   // The cloth contracts slowly per plain iteration (the regime acceleration is for); the small
   // tet bar is all but converged after 10 plain iterations, where it must not be worse.
   // Measured: cloth 2.77 plain, 0.96 Chebyshev, 0.90 Anderson; tets 1.4e-6 plain and Chebyshev,
-  // 1.6e-10 Anderson.
-  if (!tets) {
-    EXPECT_LT(gap_fast, 0.5 * gap_plain);
-  } else {
-    EXPECT_LE(gap_fast, 1.01 * gap_plain);
-  }
+  // 1.6e-10 Anderson. Contact switching on and off between iterates (the cloth cut by
+  // colliders) breaks the extrapolation's model: 11.1 plain, 7.6 Chebyshev, 7.1 Anderson.
+  EXPECT_LE(gap_fast, max_gap_ratio * gap_plain);
   // Iterated to a tolerance it finds the same minimum.
   const std::vector<double> fast_converged = run(acceleration, 0, 1e-15);
   EXPECT_NEAR(fast_converged.back(), minimum, 1e-9 * std::abs(minimum));
@@ -167,15 +182,20 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
   // minima, and plain and accelerated iterations may settle in different ones (measured: 4e-4
   // apart relative). The triangle cloth without limits has one.
   const Scene s = GetParam() == SceneKind::Triangles ? testing::triangleCloth(6, 5, false) : scene();
+  const double max_gap_ratio = GetParam() == SceneKind::Tets      ? 1.01
+                              : GetParam() == SceneKind::Contact ? 0.75
+                                                                 : 0.5;
   for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson})
-    checkAcceleration(s, GetParam() == SceneKind::Tets, acceleration);
+    checkAcceleration(s, max_gap_ratio, acceleration);
 }
 
 INSTANTIATE_TEST_SUITE_P(Elements, LocalGlobalTest,
-                         ::testing::Values(SceneKind::Springs, SceneKind::Tets, SceneKind::Triangles),
+                         ::testing::Values(SceneKind::Springs, SceneKind::Tets, SceneKind::Triangles,
+                                           SceneKind::Contact),
                          [](const auto& info) {
                            return info.param == SceneKind::Tets        ? "Tets"
                                   : info.param == SceneKind::Triangles ? "TrianglesAndHinges"
+                                  : info.param == SceneKind::Contact   ? "SpringsAndColliders"
                                                                        : "Springs";
                          });
 

@@ -69,13 +69,70 @@ struct KindDefaults {
   static std::vector<KindField<Element>> jsonFields() { return {}; }
 };
 
+/// ElementType::pass of a Kind (ElementTypeOf's, and that of types whose elements are not a
+/// Scene list, such as contact). Plain arrays with compile-time bounds, the same loops as
+/// kernels/element_pass.cl: the compiler unrolls them and keeps A_e x and p_e in registers.
+template <class Kind>
+double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
+                Eigen::MatrixX3d* out) {
+  constexpr int K = Kind::kVertices;
+  constexpr int R = Kind::kRows;
+  constexpr int P = Kind::kParams;
+  constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
+  const bool write = (flags & (kPassProjection | kPassForce)) != 0;
+  const bool force = (flags & kPassForce) != 0;
+  const Eigen::Index n = x.rows();
+  const double* xs = x.data();
+  double* os = write ? out->data() : nullptr;
+  double shared[R * K];
+  if constexpr (Kind::kSharedCoefficients) {
+    for (int i = 0; i < R * K; ++i) shared[i] = Kind::kCoefficients[i];
+  }
+  double energy = 0.0;
+  for (int e = 0; e < block.count; ++e) {
+    const int* v = block.vertices.data() + K * e;
+    const double* a = Kind::kSharedCoefficients ? shared : block.coefficients.data() + kStride * e;
+    const double* prm = params.data() + P * e;
+    // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
+    // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
+    // exactly x_a - x_b or x_j.
+    double ax[3 * R];
+    for (int k = 0; k < K; ++k) {
+      const double x0 = xs[v[k]], x1 = xs[n + v[k]], x2 = xs[2 * n + v[k]];
+      for (int r = 0; r < R; ++r) {
+        const double c = a[K * r + k];
+        ax[3 * r] = k == 0 ? c * x0 : ax[3 * r] + c * x0;
+        ax[3 * r + 1] = k == 0 ? c * x1 : ax[3 * r + 1] + c * x1;
+        ax[3 * r + 2] = k == 0 ? c * x2 : ax[3 * r + 2] + c * x2;
+      }
+    }
+    double p[3 * R];
+    const double element_energy = Kind::project(ax, prm, p);
+    if (flags & kPassEnergy) energy += element_energy;
+    if (!write) continue;
+    const double w = prm[0];
+    for (int i = 0; i < 3 * R; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
+    for (int k = 0; k < K; ++k) {
+      double c0 = a[k] * p[0], c1 = a[k] * p[1], c2 = a[k] * p[2];
+      for (int r = 1; r < R; ++r) {
+        c0 += a[K * r + k] * p[3 * r];
+        c1 += a[K * r + k] * p[3 * r + 1];
+        c2 += a[K * r + k] * p[3 * r + 2];
+      }
+      os[v[k]] += c0;
+      os[n + v[k]] += c1;
+      os[2 * n + v[k]] += c2;
+    }
+  }
+  return energy;
+}
+
 template <class Kind>
 class ElementTypeOf final : public ElementType {
   using Element = typename Kind::Element;
   static constexpr int K = Kind::kVertices;
   static constexpr int R = Kind::kRows;
   static constexpr int P = Kind::kParams;
-  static constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
 
   static std::array<int, K> vertexTuple(const Element& element) {
     Element copy = element;
@@ -155,56 +212,9 @@ class ElementTypeOf final : public ElementType {
     return Kind::project(ax, params, p);
   }
 
-  // Plain arrays with compile-time bounds, the same loops as kernels/element_pass.cl: the
-  // compiler unrolls them and keeps A_e x and p_e in registers.
   double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
               int flags, Eigen::MatrixX3d* out) const override {
-    const bool write = (flags & (kPassProjection | kPassForce)) != 0;
-    const bool force = (flags & kPassForce) != 0;
-    const Eigen::Index n = x.rows();
-    const double* xs = x.data();
-    double* os = write ? out->data() : nullptr;
-    double shared[R * K];
-    if constexpr (Kind::kSharedCoefficients) {
-      for (int i = 0; i < R * K; ++i) shared[i] = Kind::kCoefficients[i];
-    }
-    double energy = 0.0;
-    for (int e = 0; e < block.count; ++e) {
-      const int* v = block.vertices.data() + K * e;
-      const double* a = Kind::kSharedCoefficients ? shared : block.coefficients.data() + kStride * e;
-      const double* prm = params.data() + P * e;
-      // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
-      // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
-      // exactly x_a - x_b or x_j.
-      double ax[3 * R];
-      for (int k = 0; k < K; ++k) {
-        const double x0 = xs[v[k]], x1 = xs[n + v[k]], x2 = xs[2 * n + v[k]];
-        for (int r = 0; r < R; ++r) {
-          const double c = a[K * r + k];
-          ax[3 * r] = k == 0 ? c * x0 : ax[3 * r] + c * x0;
-          ax[3 * r + 1] = k == 0 ? c * x1 : ax[3 * r + 1] + c * x1;
-          ax[3 * r + 2] = k == 0 ? c * x2 : ax[3 * r + 2] + c * x2;
-        }
-      }
-      double p[3 * R];
-      const double element_energy = Kind::project(ax, prm, p);
-      if (flags & kPassEnergy) energy += element_energy;
-      if (!write) continue;
-      const double w = prm[0];
-      for (int i = 0; i < 3 * R; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
-      for (int k = 0; k < K; ++k) {
-        double c0 = a[k] * p[0], c1 = a[k] * p[1], c2 = a[k] * p[2];
-        for (int r = 1; r < R; ++r) {
-          c0 += a[K * r + k] * p[3 * r];
-          c1 += a[K * r + k] * p[3 * r + 1];
-          c2 += a[K * r + k] * p[3 * r + 2];
-        }
-        os[v[k]] += c0;
-        os[n + v[k]] += c1;
-        os[2 * n + v[k]] += c2;
-      }
-    }
-    return energy;
+    return kindPass<Kind>(block, params, x, flags, out);
   }
 
   std::vector<Field> jsonFields() const override {

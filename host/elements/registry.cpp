@@ -8,6 +8,7 @@ const ElementType& springElementType();
 const ElementType& tetElementType();
 const ElementType& triangleStrainElementType();
 const ElementType& bendingHingeElementType();
+const ElementType& contactElementType();
 const ElementType& pinElementType();
 
 const std::vector<const ElementType*>& elementTypes() {
@@ -16,6 +17,8 @@ const std::vector<const ElementType*>& elementTypes() {
       &tetElementType(),
       &triangleStrainElementType(),
       &bendingHingeElementType(),
+      // Contact before pins: grab and release rebuild only the last block (pins).
+      &contactElementType(),
       &pinElementType(),
   };
   return types;

@@ -5,6 +5,7 @@
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "integrator/checkpoint.hpp"
+#include "integrator/contact.hpp"
 #include "integrator/damping.hpp"
 #include "integrator/rigid_motion.hpp"
 #include "integrator/root_find.hpp"
@@ -78,6 +79,8 @@ void validateOptions(const SimulatorOptions& o) {
   if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
     fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
   if (o.max_root_evaluations < 1) fail("max_root_evaluations must be >= 1");
+  if (!std::isfinite(o.contact_tolerance) || !(o.contact_tolerance >= 0.0))
+    fail("contact_tolerance must be finite and >= 0");
 }
 
 // BackendKind::Auto [project rule, docs/method.md "Backend choice"]: a GPU wins on any scene; a
@@ -311,11 +314,35 @@ struct Simulator::Impl {
 
   double tolerance() const { return options.energy_tolerance * (kinetic + potential.elastic() + energy_scale); }
 
-  // No pins, no force fields and no user forces: IM keeps linear and angular momentum.
+  // No pins, no force fields, no user forces and no colliders: IM keeps linear and angular
+  // momentum.
   bool momentumConserved() const {
     const std::vector<Pin>& pins = scene.scene().pins;
     const bool pinned = std::any_of(pins.begin(), pins.end(), [](const Pin& p) { return p.stiffness > 0.0; });
-    return !pinned && scene.scene().force_fields.empty() && !scene.hasUserForces();
+    return !pinned && scene.scene().force_fields.empty() && !scene.hasUserForces() && scene.scene().colliders.empty();
+  }
+
+  // Contact after the solve (docs/method.md, "Contact"), on the accepted state: friction takes
+  // kinetic energy out and H* with it, like damping; the final projection moves the positions out
+  // of the colliders and takes the energy that removes out of H*. Returns true when the
+  // velocities changed; p_new follows the positions.
+  bool resolveContact(double t1, double& target_now, PotentialEnergy& p_new, StepReport& report) {
+    const bool rubbed = applyFriction(scene, t1, options.time_step, x_new, v_new, report.friction) > 0;
+    target_now -= report.friction;
+    if (projectOutOfColliders(scene, t1, options.contact_tolerance, x_new) > 0) {
+      backend->write(kXNew, x_new);
+      backend->read(kXNew, x_new);  // what the slot holds (OpenCL float rounds)
+      const PotentialEnergy projected = backend->potential(kXNew, t1);
+      ++report.energy_evaluations;
+      // [project rule] Only the energy the projection removes is booked (an inelastic correction,
+      // like a hard impact); energy it adds, by lifting particles against gravity or stretching
+      // their elements, is the solver's residual and is left to the blend to take out: booked,
+      // it let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
+      report.contact_projection = std::min(0.0, projected.total() - p_new.total());
+      target_now += report.contact_projection;
+      p_new = projected;
+    }
+    return rubbed;
   }
 
   // The blend's corrections of the accepted state (host copies x_new, v_new; kXNew on the
@@ -458,6 +485,7 @@ struct Simulator::Impl {
     backend->read(kVNew, v_new);
     if (!allFinite(x_new) || !allFinite(v_new)) refuse(r, "non-finite position or velocity");
     bool velocities_changed = correctBlendState(target_now, p_new, r);
+    if (!scene.scene().colliders.empty()) velocities_changed |= resolveContact(t1, target_now, p_new, r);
 
     // Damping acts on the accepted velocities; the energy it removes leaves the target too, so
     // the blend never undoes physical damping.

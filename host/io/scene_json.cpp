@@ -715,11 +715,40 @@ void readBodies(const Field& list, Scene& s) {
   }
 }
 
+// Colliders (docs/scene-format.md): {"shape": "plane" | "sphere" | "box" | "capsule", "center",
+// the shape's own fields (normal; radius; half_extents; end, radius), and optionally velocity,
+// friction and stiffness}; the values are checked by validateScene.
+const char* const kColliderShapes[] = {"plane", "sphere", "box", "capsule"};
+
+void readColliders(const Field& list, Scene& s) {
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field e = list[i];
+    e.allowOnly({"shape", "center", "normal", "radius", "half_extents", "end", "velocity", "friction", "stiffness"});
+    Collider c;
+    const Field shape = e.member("shape");
+    const std::string name = shape.string();
+    const auto* found = std::find(std::begin(kColliderShapes), std::end(kColliderShapes), name);
+    if (found == std::end(kColliderShapes))
+      shape.fail("unknown collider shape \"" + shown(name) + "\" (plane, sphere, box or capsule)");
+    c.shape = static_cast<ColliderShape>(found - std::begin(kColliderShapes));
+    c.center = vectorOr(e, "center");
+    if (auto f = e.find("normal")) c.normal = f->vector3();
+    if (auto f = e.find("radius")) c.radius = f->number();
+    if (auto f = e.find("half_extents")) c.half_extents = f->vector3();
+    if (auto f = e.find("end")) c.end = f->vector3();
+    c.velocity = vectorOr(e, "velocity");
+    if (auto f = e.find("friction")) c.friction = f->number();
+    if (auto f = e.find("stiffness")) c.stiffness = f->number();
+    s.colliders.push_back(c);
+  }
+}
+
 Scene sceneFromJson(const json& doc, const std::string& file) {
   const Field root(doc, "", file);
   root.requireObject();
   std::set<std::string> keys = {"format", "version", "name",  "gravity", "builtin",      "mesh",  "particles",
-                                "triangles", "springs", "tets", "pins",    "force_fields", "bodies"};
+                                "triangles", "springs", "tets", "pins",    "force_fields", "bodies",
+                                "colliders"};
   for (const ElementType* type : genericTypes()) keys.insert(genericKey(*type));
   root.allowOnly(keys);
   if (auto f = root.find("format")) {
@@ -771,6 +800,7 @@ Scene sceneFromJson(const json& doc, const std::string& file) {
   if (auto f = root.find("pins")) readPins(*f, s);
   if (auto f = root.find("force_fields")) readForceFields(*f, s);
   if (auto f = root.find("bodies")) readBodies(*f, s);
+  if (auto f = root.find("colliders")) readColliders(*f, s);
 
   if (auto f = root.find("gravity")) {
     s.gravity = f->vector3();
@@ -1010,6 +1040,23 @@ ordered sceneToJson(const Scene& s) {
       a.push_back(std::move(e));
     }
     doc["force_fields"] = std::move(a);
+  }
+  if (!s.colliders.empty()) {
+    ordered a = ordered::array();
+    for (const Collider& c : s.colliders) {
+      ordered e;
+      e["shape"] = kColliderShapes[static_cast<int>(c.shape)];  // validated by saveSceneFile
+      e["center"] = vec(c.center);
+      if (c.shape == ColliderShape::Plane) e["normal"] = vec(c.normal);
+      if (c.shape == ColliderShape::Box) e["half_extents"] = vec(c.half_extents);
+      if (c.shape == ColliderShape::Capsule) e["end"] = vec(c.end);
+      if (c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule) e["radius"] = c.radius;
+      if (c.moving()) e["velocity"] = vec(c.velocity);
+      e["friction"] = c.friction;
+      e["stiffness"] = c.stiffness;
+      a.push_back(std::move(e));
+    }
+    doc["colliders"] = std::move(a);
   }
   if (!s.bodies.empty()) {
     ordered a = ordered::array();

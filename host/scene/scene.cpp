@@ -131,6 +131,11 @@ void checkEnergyScale(const Scene& s) {
               "the larger of rest length and scene size");
   }
   for (size_t i = 0; i < s.pins.size(); ++i) checkWork(s.pins[i].stiffness, size, Owner{"pin", i}, "the scene size");
+  // A collider's weight is stiffness m_j (1/s^2 times kg): the heaviest particle's, as deep as
+  // the scene is large.
+  const double heaviest = s.numParticles() > 0 ? s.masses.maxCoeff() : 0.0;
+  for (size_t i = 0; i < s.colliders.size(); ++i)
+    checkWork(s.colliders[i].stiffness * heaviest, size, Owner{"collider", i}, "the scene size");
 }
 
 void checkSurface(const Scene& s) {

@@ -36,6 +36,8 @@ SceneData::SceneData(const Scene& scene) {
                              [](const Pin& p) { return p.target.moving(); });
   time_dependent_fields_ = std::any_of(scene_.force_fields.begin(), scene_.force_fields.end(),
                                        [](const ForceField& f) { return f.timeDependent(); });
+  moving_colliders_ = std::any_of(scene_.colliders.begin(), scene_.colliders.end(),
+                                  [](const Collider& c) { return c.moving(); });
   pin_ramps_.resize(scene_.pins.size());
 }
 
@@ -73,7 +75,7 @@ void SceneData::pinTargets(double t, Eigen::MatrixX3d& out) const {
 }
 
 bool SceneData::forcingChangesDuring(double t0, double t1) const {
-  if (moving_pins_ || time_dependent_fields_) return true;
+  if (moving_pins_ || time_dependent_fields_ || moving_colliders_) return true;
   auto changes = [&](const Ramp& r) { return r.active && r.t1 > t0 && r.t0 < t1 && r.start != r.end; };
   return changes(user_forces_) || std::any_of(pin_ramps_.begin(), pin_ramps_.end(), changes);
 }

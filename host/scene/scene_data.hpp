@@ -42,7 +42,11 @@ class SceneData {
   /// Pin targets q(t), `#pins by 3`.
   void pinTargets(double t, Eigen::MatrixX3d& out) const;
   /// True when pins move or force fields change with time (the blend then books forcing).
-  bool hasTimeDependentForcing() const { return hasMovingPins() || hasTimeDependentForces(); }
+  bool hasTimeDependentForcing() const {
+    return hasMovingPins() || hasTimeDependentForces() || hasMovingColliders();
+  }
+  /// A collider moves: the contact params depend on time and the collider does work.
+  bool hasMovingColliders() const { return moving_colliders_; }
   /// Pin targets or external forces that may change with time: a pin law that moves, a force
   /// field that varies, or any user ramp (their params are then evaluated per time).
   bool hasTimeDependentForces() const { return time_dependent_fields_ || user_forces_.active; }
@@ -97,6 +101,7 @@ class SceneData {
   std::vector<ElementBlock> blocks_;
   ContributionCsr csr_;
   bool moving_pins_ = false;
+  bool moving_colliders_ = false;
   bool time_dependent_fields_ = false;
   std::vector<Ramp> pin_ramps_;
   int ramped_pins_ = 0;

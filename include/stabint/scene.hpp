@@ -87,6 +87,31 @@ struct ForceField {
   bool timeDependent() const;
 };
 
+/// Shape of a Collider.
+enum class ColliderShape { Plane, Sphere, Box, Capsule };
+
+/// A rigid obstacle that no particle may enter (docs/method.md, "Contact"). Every particle of
+/// the scene collides with every collider through the contact energy
+/// E = w_j/2 |x_j - p_j|^2, p_j the closest point of the collider's outside (x_j itself out of
+/// contact, so E = 0 there), w_j = stiffness * m_j. The collider translates with `velocity`
+/// (0: static): its geometry at time t is that at t = 0 moved by velocity * t.
+struct Collider {
+  ColliderShape shape = ColliderShape::Plane;
+  /// Plane: a point of the plane; sphere and box: the center; capsule: one end of its axis.
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  // plane: the outward normal (length > 0)
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  // box (axis-aligned): half sizes, > 0
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();  // capsule: the other end of its axis
+  double radius = 0.0;  // sphere and capsule, > 0
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s
+  double friction = 0.0;  // Coulomb coefficient mu >= 0 (0: frictionless)
+  /// Contact weight per unit of particle mass, 1/s^2 (> 0): a particle at rest on a collider
+  /// under gravity g sinks about |g| / stiffness into it.
+  double stiffness = 1e4;
+
+  bool moving() const { return !velocity.isZero(0.0); }
+};
+
 /// A group of particles damped together by momentum-preserving velocity damping (docs/method.md
 /// section 6): each velocity moves toward the body's rigid velocity by the factor `damping` in
 /// [0, 1] per step. 0 disables it.
@@ -113,6 +138,7 @@ struct Scene {
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, -9.81, 0.0);  // m/s^2
   std::vector<ForceField> force_fields;
   std::vector<Body> bodies;
+  std::vector<Collider> colliders;
   /// The surface, for renderers, OBJ output and mass lumping (cloth grids and OBJ meshes fill
   /// it); it exerts no force of its own. May be empty.
   std::vector<std::array<int, 3>> triangles;

@@ -97,11 +97,16 @@ struct SimulatorOptions {
   /// overflows. Energy lost (damping, BE) is never refused.
   double energy_limit = 0.0;
 
+  /// Contact (docs/method.md, "Contact"): after every step, no particle stays deeper than this
+  /// inside a collider (m, >= 0); the final projection that moves it out is booked in H*.
+  double contact_tolerance = 1e-2;
+
   BackendKind backend = BackendKind::CpuReference;
   OpenCLOptions opencl;
 };
 
-/// Energies of a state (docs/method.md section 1). `elastic` includes springs, tets and pins;
+/// Energies of a state (docs/method.md section 1). `elastic` includes every element's energy
+/// (springs, tets, triangle strain, hinges, pins and contact);
 /// `external` is gravity plus force fields, -sum (m g + f(t)).x.
 struct EnergyReport {
   double kinetic = 0.0;
@@ -143,6 +148,12 @@ struct StepReport {
   /// Energy added to H* by discontinuous input since the previous step (setState, setPositions,
   /// setVelocities): the jump of H it caused, booked as the user's work (docs/method.md).
   double event_energy = 0.0;
+  /// Contact (docs/method.md, "Contact"): kinetic energy removed by friction this step (taken
+  /// from H* like damping; negative when a moving collider drags particles along), and the
+  /// energy the final projection out of the colliders removed (<= 0, added to H*; energy it adds
+  /// is not booked: the blend takes it out).
+  double friction = 0.0;
+  double contact_projection = 0.0;
   int iterations = 0;     // local/global iterations of all solves in this step
   int energy_evaluations = 0;  // element energy passes (root find included)
   PhaseTimes times;

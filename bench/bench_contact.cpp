@@ -1,0 +1,137 @@
+// Colliders against no colliders, interleaved in one run (the machine is noisy): a 50 x 50
+// cloth dropped flat onto a sphere and the ground (friction 0.5), stepped next to the same cloth
+// without colliders. Both restart from their first state every 90 steps (3 s: the fall, the
+// landing and the settling), so the timed steps mix all three. The counter `contact_vs_none` is
+// the colliders' step time over the plain one (issue 10: at most 1.15).
+#include "bench_common.hpp"
+
+#include "scene/scene_data.hpp"
+#include "solver/global_system.hpp"
+
+#include <chrono>
+#include <exception>
+
+namespace stabint::bench {
+namespace {
+
+// The 50 x 50 spring cloth (1 m) lying flat at y = 0.5 without its pins.
+Scene flatCloth() {
+  Scene s = clothScene(50);
+  s.pins.clear();
+  for (Eigen::MatrixX3d* m : {&s.positions, &s.rest_positions}) {
+    Eigen::MatrixX3d r(m->rows(), 3);
+    r.col(0) = m->col(0).array() - m->col(0).mean();
+    r.col(1).setConstant(0.5);
+    r.col(2) = m->col(1).array() - m->col(1).mean();
+    *m = r;
+  }
+  return s;
+}
+
+Scene clothOnSphereAndGround() {
+  Scene s = flatCloth();
+  Collider sphere;
+  sphere.shape = ColliderShape::Sphere;
+  sphere.center = Eigen::Vector3d(0.0, -0.1, 0.0);
+  sphere.radius = 0.25;
+  sphere.friction = 0.5;
+  Collider ground;
+  ground.shape = ColliderShape::Plane;
+  ground.friction = 0.5;
+  s.colliders = {sphere, ground};
+  return s;
+}
+
+struct ContactFixture {
+  std::unique_ptr<Simulator> contact, none;
+  Checkpoint contact_start, none_start;
+};
+
+void runContact(benchmark::State& state, const std::string& key, BackendChoice backend, Integrator integrator) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  ContactFixture* fixture = nullptr;
+  try {
+    fixture = &cachedFixture<ContactFixture>(key, [&] {
+      auto f = std::make_unique<ContactFixture>();
+      const SimulatorOptions o = optionsFor(backend, integrator);
+      f->contact = std::make_unique<Simulator>(clothOnSphereAndGround(), o);
+      f->none = std::make_unique<Simulator>(flatCloth(), o);
+      f->contact_start = f->contact->checkpoint();
+      f->none_start = f->none->checkpoint();
+      return f;
+    });
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  ContactFixture& f = *fixture;
+  using Clock = std::chrono::steady_clock;
+  double contact = 0, none = 0;
+  auto timed = [](double& sum, Simulator& sim) {
+    const auto start = Clock::now();
+    sim.step();
+    sum += std::chrono::duration<double>(Clock::now() - start).count();
+  };
+  try {
+    for (auto _ : state) {
+      if (f.contact->stepCount() >= 90) {
+        f.contact->restore(f.contact_start);
+        f.none->restore(f.none_start);
+      }
+      timed(contact, *f.contact);
+      timed(none, *f.none);
+    }
+  } catch (const NonFiniteStateError& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  using benchmark::Counter;
+  state.counters["contact_step"] = Counter(contact, Counter::kAvgIterations);
+  state.counters["none_step"] = Counter(none, Counter::kAvgIterations);
+  state.counters["contact_vs_none"] = none > 0 ? contact / none : 0.0;
+  state.SetLabel(f.contact->backendDescription());
+}
+
+// The alternative to the constant matrix (docs/method.md, "Contact"): the contact weight in L
+// only while a particle is in contact, each change of the contact set a rank-1 update of the
+// blend's two factors (c = 1/h^2 and 4/h^2). One iteration is one particle entering contact and
+// one leaving; the dropped 50 x 50 cloth changes 118 contacts per step on average.
+void runActiveSetUpdates(benchmark::State& state) {
+  const Scene cloth = clothOnSphereAndGround();
+  SceneData data(cloth);
+  GlobalSystem system(data);
+  const double h = 1.0 / 30.0;
+  system.factor(1.0 / (h * h));
+  system.factor(4.0 / (h * h));
+  const double w = Collider{}.stiffness * cloth.masses[1000];
+  int vertex = 100;
+  for (auto _ : state) {
+    system.addToDiagonal(vertex, w);
+    system.addToDiagonal(vertex, -w);
+    vertex = vertex % 2400 + 37;
+  }
+  state.counters["update"] = benchmark::Counter(2.0 * state.iterations(), benchmark::Counter::kIsRate |
+                                                                              benchmark::Counter::kInvert);
+  state.SetLabel("rank-1 update of both blend factors");
+}
+
+}  // namespace
+
+void registerContactCases() {
+  benchmark::RegisterBenchmark("contact_active_set_updates/cloth50", runActiveSetUpdates)
+      ->Unit(benchmark::kMicrosecond);
+  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+    for (BackendChoice backend : allBackends()) {
+      const std::string name = std::string("contact_vs_none/cloth50/") + integratorName(integrator) + "/" +
+                               backendLabel(backend);
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+        runContact(state, name, backend, integrator);
+      })->UseRealTime()->Unit(benchmark::kMillisecond);
+    }
+  }
+}
+
+}  // namespace stabint::bench

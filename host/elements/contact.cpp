@@ -1,0 +1,169 @@
+// Contact (docs/method.md, "Contact"): one element per (collider, particle) pair,
+//   E = w_j/2 |x_j - p_j|^2,   p_j = the closest point of the collider's outside to x_j,
+// so E = 0 and p_j = x_j out of contact. A x = x_j (coefficient [1]), w_j = stiffness * m_j is
+// constant: the global matrix gains a constant diagonal and is never refactored as contacts come
+// and go. The elements are not a Scene list: they are every particle against every collider, so
+// this type implements ElementType itself, with the generic pass (kindPass) for the math. Its
+// params depend on time when a collider moves, like a pin's target, and its energy is booked
+// with the pins' (EnergyTerm::Pins) so that the forcing rule books a moving collider's work.
+#include "elements/contact.hpp"
+
+#include "elements/element_kind.hpp"
+
+#include <cmath>
+
+namespace stabint {
+
+void colliderGeometryAt(const Collider& collider, double t, double* g) {
+  g[0] = static_cast<double>(static_cast<int>(collider.shape));
+  const Eigen::Vector3d center = collider.center + t * collider.velocity;
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
+  switch (collider.shape) {
+    case ColliderShape::Plane: a = collider.normal.normalized(); break;
+    case ColliderShape::Box: a = collider.half_extents; break;
+    case ColliderShape::Capsule: a = collider.end + t * collider.velocity; break;
+    case ColliderShape::Sphere: break;
+  }
+  for (int c = 0; c < 3; ++c) g[1 + c] = center[c], g[4 + c] = a[c];
+  g[7] = collider.radius;
+}
+
+namespace {
+
+using validation::invalid;
+
+struct ContactKind {
+  static constexpr int kVertices = 1, kRows = 1;
+  static constexpr int kParams = 1 + kColliderGeometry;  // w_j, the collider's geometry
+  static constexpr bool kSharedCoefficients = true;
+  static constexpr std::array<double, 1> kCoefficients{1.0};
+
+  static double project(const double* ax, const double* params, double* p) {
+    closestPointOutside(params + 1, ax, p);
+    return halfWeightedSquaredDistance(params[0], ax, p, 3);
+  }
+};
+
+const char* shapeName(ColliderShape shape) {
+  switch (shape) {
+    case ColliderShape::Plane: return "plane";
+    case ColliderShape::Sphere: return "sphere";
+    case ColliderShape::Box: return "box";
+    case ColliderShape::Capsule: return "capsule";
+  }
+  return "?";
+}
+
+void checkCollider(const Scene& scene, const Collider& c, const validation::Owner& owner) {
+  const int shape = static_cast<int>(c.shape);
+  if (shape < static_cast<int>(ColliderShape::Plane) || shape > static_cast<int>(ColliderShape::Capsule))
+    invalid(owner, ": shape ", shape, " is not a ColliderShape value");
+  validation::checkFinite(c.center, owner, "center");
+  validation::checkFinite(c.velocity, owner, "velocity");
+  if (!std::isfinite(c.friction) || !(c.friction >= 0.0) || !(c.friction <= validation::kMaxMagnitude))
+    invalid(owner, ": friction ", c.friction, " must be finite and >= 0");
+  if (!std::isfinite(c.stiffness) || !(c.stiffness > 0.0) || !(c.stiffness <= validation::kMaxMagnitude))
+    invalid(owner, ": stiffness ", c.stiffness, " must be finite and > 0");
+  // w_j = stiffness m_j enters the global matrix: it must be a finite number for every particle.
+  if (scene.masses.size() > 0 && !std::isfinite(c.stiffness * scene.masses.maxCoeff()))
+    invalid(owner, ": stiffness ", c.stiffness, " times the largest mass is not finite");
+  switch (c.shape) {
+    case ColliderShape::Plane:
+      validation::checkFinite(c.normal, owner, "normal");
+      if (!(c.normal.norm() > 0.0)) invalid(owner, ": normal ", validation::vec(c.normal), " of the plane is zero");
+      break;
+    case ColliderShape::Box:
+      validation::checkFinite(c.half_extents, owner, "half_extents");
+      if (!(c.half_extents.minCoeff() > 0.0))
+        invalid(owner, ": half_extents ", validation::vec(c.half_extents), " of the box must be > 0");
+      break;
+    case ColliderShape::Capsule:
+      validation::checkFinite(c.end, owner, "end");
+      [[fallthrough]];
+    case ColliderShape::Sphere:
+      validation::checkFinite(c.radius, owner, "radius");
+      if (!(c.radius > 0.0)) invalid(owner, ": radius ", c.radius, " of the ", shapeName(c.shape), " must be > 0");
+      break;
+  }
+}
+
+class ContactElementType final : public ElementType {
+  static constexpr int P = ContactKind::kParams;
+
+ public:
+  const char* name() const override { return "contact"; }
+  const char* identifier() const override { return "contact"; }
+  ElementShape shape() const override { return {1, 1, P, true}; }
+  std::vector<double> sharedCoefficients() const override { return {1.0}; }
+  EnergyTerm term() const override { return EnergyTerm::Pins; }
+
+  int count(const Scene& scene) const override {
+    return static_cast<int>(scene.colliders.size()) * scene.numParticles();
+  }
+
+  void validate(const Scene& scene) const override {
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i)
+      checkCollider(scene, scene.colliders[i], validation::Owner{"collider", i});
+  }
+
+  // Element e = c n + j: particle j against collider c.
+  ElementBlock build(const Scene& scene) const override {
+    const int n = scene.numParticles();
+    ElementBlock block;
+    block.type = this;
+    block.count = count(scene);
+    block.coefficients = {1.0};
+    block.vertices.reserve(block.count);
+    for (std::size_t c = 0; c < scene.colliders.size(); ++c)
+      for (int j = 0; j < n; ++j) block.vertices.push_back(j);
+    writeParams(scene, 0.0, block.params);
+    return block;
+  }
+
+  bool timeDependent(const SceneData& data) const override { return data.hasMovingColliders(); }
+  void paramsAt(const SceneData& data, double t, std::vector<double>& params) const override {
+    writeParams(data.scene(), t, params);
+  }
+
+  // Colliders are the scene's, not a part's particles': a part's colliders are appended as they are.
+  void appendShifted(Scene& into, const Scene& part, int) const override {
+    into.colliders.insert(into.colliders.end(), part.colliders.begin(), part.colliders.end());
+  }
+
+  double project(const double* ax, const double* params, double* p) const override {
+    return ContactKind::project(ax, params, p);
+  }
+  double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
+              Eigen::MatrixX3d* out) const override {
+    return kindPass<ContactKind>(block, params, x, flags, out);
+  }
+
+  // Colliders have their own JSON form (host/io/scene_json.cpp).
+  std::vector<Field> jsonFields() const override { return {}; }
+  void record(const Scene&, int, std::vector<int>&, std::vector<double>&) const override {}
+  void appendRecord(Scene&, const std::vector<int>&, const std::vector<double>&) const override {}
+
+ private:
+  static void writeParams(const Scene& scene, double t, std::vector<double>& params) {
+    const int n = scene.numParticles();
+    params.resize(std::size_t(P) * scene.colliders.size() * std::size_t(n));
+    double* out = params.data();
+    for (const Collider& collider : scene.colliders) {
+      double geometry[kColliderGeometry];
+      colliderGeometryAt(collider, t, geometry);
+      for (int j = 0; j < n; ++j, out += P) {
+        out[0] = collider.stiffness * scene.masses[j];
+        for (int i = 0; i < kColliderGeometry; ++i) out[1 + i] = geometry[i];
+      }
+    }
+  }
+};
+
+}  // namespace
+
+const ElementType& contactElementType() {
+  static const ContactElementType type;
+  return type;
+}
+
+}  // namespace stabint

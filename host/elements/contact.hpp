@@ -1,0 +1,71 @@
+#pragma once
+// Collider geometry, in the one form the contact element (host/elements/contact.cpp,
+// kernels/contact.cl) and the step's friction and final projection (host/integrator/contact.cpp)
+// share: a collider at time t is kColliderGeometry reals,
+//   shape, center (3), a (3), radius
+// with `a` the unit normal of a plane, the half extents of a box, the other end of a capsule's
+// axis (unused by spheres). docs/method.md, "Contact", has the rules.
+#include <stabint/scene.hpp>
+
+#include <cmath>
+
+namespace stabint {
+
+constexpr int kColliderGeometry = 8;
+
+/// The geometry of `collider` at time t (it translates with its velocity).
+void colliderGeometryAt(const Collider& collider, double t, double* geometry);
+
+/// p = the closest point of the collider's outside to x; returns false (and p = x) when x is
+/// not inside. Points on the surface are outside. A point at the exact center of a sphere or on
+/// a capsule's axis is pushed out along +y; a point equally deep below two faces of a box goes
+/// out through the first of them (x before y before z).
+inline bool closestPointOutside(const double* g, const double* x, double* p) {
+  for (int c = 0; c < 3; ++c) p[c] = x[c];
+  const int shape = static_cast<int>(g[0]);
+  const double* center = g + 1;
+  const double* a = g + 4;
+  const double radius = g[7];
+  if (shape == static_cast<int>(ColliderShape::Plane)) {
+    const double d = (x[0] - center[0]) * a[0] + (x[1] - center[1]) * a[1] + (x[2] - center[2]) * a[2];
+    if (!(d < 0.0)) return false;
+    for (int c = 0; c < 3; ++c) p[c] = x[c] - d * a[c];
+    return true;
+  }
+  if (shape == static_cast<int>(ColliderShape::Box)) {
+    int axis = -1;
+    double depth = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      const double q = x[c] - center[c];
+      const double dc = a[c] - (q < 0.0 ? -q : q);
+      if (!(dc > 0.0)) return false;
+      if (axis < 0 || dc < depth) axis = c, depth = dc;
+    }
+    p[axis] = x[axis] - center[axis] < 0.0 ? center[axis] - a[axis] : center[axis] + a[axis];
+    return true;
+  }
+  // Sphere, or a capsule: the sphere about the closest point of its axis.
+  double s[3] = {center[0], center[1], center[2]};
+  if (shape == static_cast<int>(ColliderShape::Capsule)) {
+    double ab[3], along = 0.0, length2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      ab[c] = a[c] - center[c];
+      along += (x[c] - center[c]) * ab[c];
+      length2 += ab[c] * ab[c];
+    }
+    const double u = length2 > 0.0 ? (along <= 0.0 ? 0.0 : (along >= length2 ? 1.0 : along / length2)) : 0.0;
+    for (int c = 0; c < 3; ++c) s[c] = center[c] + u * ab[c];
+  }
+  const double r[3] = {x[0] - s[0], x[1] - s[1], x[2] - s[2]};
+  const double l2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+  if (!(l2 < radius * radius)) return false;
+  if (l2 > 0.0) {
+    const double scale = radius / std::sqrt(l2);
+    for (int c = 0; c < 3; ++c) p[c] = s[c] + scale * r[c];
+  } else {
+    p[0] = s[0], p[1] = s[1] + radius, p[2] = s[2];
+  }
+  return true;
+}
+
+}  // namespace stabint

@@ -1,6 +1,7 @@
 #include "bench_common.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 
 namespace stabint::bench {
@@ -69,6 +70,33 @@ std::vector<int> scalingSides() {
   std::vector<int> sides{10, 16, 25, 35, 50, 71, 100, 141, 180, 224};
   if (quickMode()) sides.erase(std::remove_if(sides.begin(), sides.end(), [](int s) { return s > 71; }), sides.end());
   return sides;
+}
+
+std::vector<SceneCase> autoRuleScenes() {
+  std::vector<SceneCase> scenes;
+  const std::vector<int> sides = quickMode() ? std::vector<int>{20, 35, 50} : std::vector<int>{20, 35, 50, 71, 100};
+  for (ClothModel model : {ClothModel::Springs, ClothModel::Triangles})
+    for (int side : sides) {
+      const std::string size = std::to_string(side) + "x" + std::to_string(side);
+      scenes.push_back({(model == ClothModel::Springs ? "springs" : "triangles") + size, [side, model] {
+                          ClothGridParams p;
+                          p.nx = p.ny = side;
+                          p.model = model;
+                          return makeClothGrid(p);
+                        }});
+    }
+  std::vector<std::array<int, 3>> bars{{8, 2, 2}, {16, 4, 4}, {25, 5, 5}, {35, 7, 7}, {49, 9, 9}, {80, 16, 16}};
+  if (quickMode()) bars.resize(4);
+  for (const auto& cells : bars)
+    scenes.push_back({"tetbar" + std::to_string(cells[0]) + "x" + std::to_string(cells[1]) + "x" + std::to_string(cells[2]),
+                      [cells] {
+                        TetBarParams p;
+                        p.nx = cells[0];
+                        p.ny = cells[1];
+                        p.nz = cells[2];
+                        return makeTetBar(p);
+                      }});
+  return scenes;
 }
 
 namespace {

@@ -37,6 +37,12 @@ Scene clothScene(int side);
 std::vector<int> scalingSides();
 bool quickMode();
 
+/// The scenes behind BackendKind::Auto's rule (docs/method.md "Backend choice"): spring cloths
+/// ("springs<side>"), triangle cloths ("triangles<side>", ClothModel::Triangles) from 20x20 to
+/// 100x100 particles and tet bars ("tetbar<cells>") from 8x2x2 to 80x16x16 cells (192 to 122,880
+/// tets). With STABINT_BENCH_QUICK set, only up to 50x50 and 35x7x7.
+std::vector<SceneCase> autoRuleScenes();
+
 void registerFixtureRelease(std::function<void()> release);
 /// Drops every cached fixture (called before building a new one and at the end of main, while
 /// the OpenCL runtime is still loaded).

@@ -2,6 +2,8 @@
 // backend and the prefactored GlobalSystem (as tests/test_local_global.cpp does). One iteration
 // is local projections + gather of the right-hand side + its transfer to the host + the CHOLMOD
 // solve + the transfer of the new positions back.
+//   auto_iteration/<scene>/BE/<backend>  one BE iteration on the scenes of autoRuleScenes(), the
+//                               figures behind BackendKind::Auto's rule.
 //   rotation/<scene>/<method>   the nearest rotation of every tet's F at the same state, alone,
 //                               per tet (items_per_second): the library's (newton-polar), Eigen's
 //                               Jacobi SVD (jacobi-svd, the method it replaced) and one
@@ -208,6 +210,17 @@ void registerIterationCases() {
     for (int side : scalingSides()) b->Arg(side);
     b->ArgName("side")->UseRealTime()->Unit(benchmark::kMicrosecond);
   }
+
+  // BackendKind::Auto's rule: one BE iteration per backend on spring and triangle cloths and tet
+  // bars of growing size (run with --benchmark_enable_random_interleaving so the backends of a
+  // scene see the same load; docs/bench_summary.md "Auto backend rule").
+  for (const SceneCase& scene : autoRuleScenes())
+    for (BackendChoice backend : allBackends()) {
+      const std::string name = "auto_iteration/" + scene.name + "/BE/" + backendLabel(backend);
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+        runIteration(state, name, scene.make, backend, Integrator::BackwardEuler);
+      })->UseRealTime()->Unit(benchmark::kMicrosecond);
+    }
 }
 
 }  // namespace stabint::bench

@@ -212,6 +212,16 @@ void registerStepCases() {
       for (int side : scalingSides()) b->Arg(side);
       b->ArgName("side")->UseRealTime()->Unit(benchmark::kMicrosecond);
     }
+
+  // BackendKind::Auto's rule: a BE and a blend step (10 iterations each, stepped alternately as in
+  // blend_vs_be) per backend on the scenes of autoRuleScenes().
+  for (const SceneCase& scene : autoRuleScenes())
+    for (BackendChoice backend : allBackends()) {
+      const std::string name = "auto_step/" + scene.name + "/" + backendLabel(backend);
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+        runPair(state, name, scene.make, backend);
+      })->UseRealTime()->Unit(benchmark::kMillisecond);
+    }
 }
 
 }  // namespace stabint::bench

@@ -1,7 +1,7 @@
 // A hanging cloth stepped with the paper's energy-tracking blend; prints the energy per frame.
 //   cloth_energy [frames] [cpu|opencl|auto]
-// The default backend is auto: a GPU when there is one, else the faster of the others for the
-// scene (the description says which).
+// The default backend is auto: a GPU when there is one, else the CPU reference (the description
+// says which).
 #include <stabint/stabint.hpp>
 
 #include <cstdio>

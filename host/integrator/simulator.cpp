@@ -4,6 +4,7 @@
 
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
+#include "integrator/backend_choice.hpp"
 #include "integrator/checkpoint.hpp"
 #include "integrator/contact.hpp"
 #include "integrator/damping.hpp"
@@ -83,48 +84,6 @@ void validateOptions(const SimulatorOptions& o) {
     fail("contact_tolerance must be finite and >= 0");
 }
 
-// BackendKind::Auto [project rule, docs/method.md "Backend choice"]: a GPU wins on any scene; a
-// CPU OpenCL device (PoCL) beats the CPU reference only where the local step dominates, i.e. with
-// many rotation elements (tets, triangle strain: a 3x3 or 3x2 SVD each). On the 2-core VM PoCL is
-// 1.4-2x slower per iteration on every spring cloth (100 to 10,000 particles) and 2.7x faster on
-// the 24k-tet bar; the device's fixed cost per iteration (launches, transfers, a slower host solve
-// while its threads spin) is 0.1-1 ms, which about 2,000 rotation elements pay for.
-constexpr int kAutoMinRotationElements = 2000;
-
-struct BackendChoice {
-  BackendKind kind;
-  OpenCLOptions opencl;
-  std::string reason;  // for backendDescription(); empty unless Auto chose
-};
-
-BackendChoice chooseBackend(const Scene& scene, const SimulatorOptions& o) {
-  if (o.backend != BackendKind::Auto) return {o.backend, o.opencl, ""};
-  const bool need_fp64 = o.opencl.precision == Precision::Double;
-  const std::vector<OpenCLDeviceInfo> devices = listOpenCLDevices();
-  const OpenCLDeviceInfo* cpu_device = nullptr;
-  for (const OpenCLDeviceInfo& d : devices) {
-    if (need_fp64 && !d.fp64) continue;
-    OpenCLOptions chosen = o.opencl;
-    chosen.platform = std::to_string(d.platform_index);
-    chosen.device = std::to_string(d.device_index);
-    if (d.gpu) return {BackendKind::OpenCL, chosen, "auto: a GPU"};
-    if (!cpu_device) cpu_device = &d;
-  }
-  if (!cpu_device) return {BackendKind::CpuReference, o.opencl, "auto: no OpenCL device" + std::string(need_fp64 ? " with fp64" : "")};
-  const int rotations = static_cast<int>(scene.tets.size() + scene.triangle_strains.size());
-  if (rotations >= kAutoMinRotationElements) {
-    OpenCLOptions chosen = o.opencl;
-    chosen.platform = std::to_string(cpu_device->platform_index);
-    chosen.device = std::to_string(cpu_device->device_index);
-    return {BackendKind::OpenCL, chosen,
-            "auto: no GPU; " + std::to_string(rotations) + " rotation elements (at least " +
-                std::to_string(kAutoMinRotationElements) + ") pay for the OpenCL CPU device"};
-  }
-  return {BackendKind::CpuReference, o.opencl,
-          "auto: no GPU; " + std::to_string(rotations) + " rotation elements (fewer than " +
-              std::to_string(kAutoMinRotationElements) + ") run faster on the CPU reference"};
-}
-
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -137,7 +96,8 @@ struct Simulator::Impl {
   Impl(const Scene& s, const SimulatorOptions& o)
       : options((validateOptions(o), o)),
         scene(s),
-        choice(chooseBackend(scene.scene(), options)),
+        choice(chooseBackend(options, options.backend == BackendKind::Auto ? listOpenCLDevices()
+                                                                         : std::vector<OpenCLDeviceInfo>{})),
         backend(choice.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, kNumSlots, choice.opencl)
                                                    : makeCpuBackend(scene, kNumSlots)),
         system(scene),
@@ -689,7 +649,7 @@ struct Simulator::Impl {
 
   SimulatorOptions options;
   SceneData scene;
-  BackendChoice choice;
+  BackendSelection choice;
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   LocalGlobalSolver solver;

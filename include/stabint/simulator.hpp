@@ -23,10 +23,9 @@ const char* integratorName(Integrator integrator);  // "FE", "SE", "BE", "BDF2",
 Integrator parseIntegrator(const std::string& name);
 std::vector<Integrator> allIntegrators();
 
-/// Where the local step and the energies run. Auto: an OpenCL GPU when there is one; otherwise
-/// the OpenCL CPU device (e.g. PoCL) only for scenes with enough rotation elements (tets and
-/// triangle strain, whose per-element SVD pays for the device's overhead), else the CPU
-/// reference; backendDescription() says which and why (docs/method.md, "Backend choice").
+/// Where the local step and the energies run. Auto: an OpenCL GPU when there is one, else the
+/// CPU reference (an OpenCL CPU device such as PoCL is not faster than it; take one with
+/// OpenCL); backendDescription() says which and why (docs/method.md, "Backend choice").
 enum class BackendKind { CpuReference, OpenCL, Auto };
 const char* backendName(BackendKind kind);  // "cpu", "opencl", "auto"
 BackendKind parseBackend(const std::string& name);

@@ -256,8 +256,11 @@ def chart_interaction(results, charts):
     rows = read_csv(results, "interaction.csv")
     if not rows:
         return
+    bounce = read_csv(results, "bounce.csv")
     shown = [i for i in ("BE", "BDF2", "blend") if any(r["integrator"] == i for r in rows)]
-    fig, axes = plt.subplots(1, len(shown) + 1, figsize=(5.2 * (len(shown) + 1), 4.6))
+    n_rows = 2 if bounce else 1
+    fig, grid = plt.subplots(n_rows, len(shown) + 1, figsize=(5.2 * (len(shown) + 1), 4.6 * n_rows), squeeze=False)
+    axes = grid[0]
     for ax, integ in zip(axes, shown):
         rs = [r for r in rows if r["integrator"] == integ]
         t = [num(r, "time") for r in rs]
@@ -287,9 +290,43 @@ def chart_interaction(results, charts):
     ax.set_ylabel("K [J]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    fig.suptitle("Interaction (stabint-study interaction): a hand grabs the free corner of a 20 x 20 cloth at 0.5 s, "
-                 "drags it for 1 s, lets go at 2 s", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1, 0.93))
+    title = ("Interaction (stabint-study interaction). Top: a hand grabs the free corner of a 20 x 20 cloth at "
+             "0.5 s, drags it for 1 s, lets go at 2 s.")
+    if bounce:
+        axes = grid[1]
+        for ax, integ in zip(axes, shown):
+            rs = [r for r in bounce if r["integrator"] == integ]
+            t = [num(r, "time") for r in rs]
+            h0 = num(rs[0], "H")
+            # H* = H0 - friction + projection: both terms drawn with the sign they enter H* with.
+            for key, label, sign, style in (
+                    ("H", "H", 1.0, dict(color=COLORS[integ], lw=1.4)),
+                    ("H_target", "H* (target)", 1.0, dict(color="black", lw=1.0, ls="--")),
+                    ("friction", "- friction (cumulative)", -1.0, dict(color="#7f7f7f", lw=1.0)),
+                    ("projection", "final projection (cumulative)", 1.0, dict(color="#d62728", lw=0.9, ls=":")),
+                    ("kinetic", "K", 1.0, dict(color="#9467bd", lw=0.9))):
+                base = h0 if key in ("H", "H_target") else 0.0
+                ax.plot(t, [sign * (num(r, key) - base) for r in rs], label=label, **style)
+            ax.set_title(f"{integ}: energy books of a bounce on the ground", fontsize=10)
+            ax.set_xlabel("time [s]  (h = 1/30 s, 10 iterations)")
+            ax.set_ylabel("energy relative to H(0) [J]")
+            ax.grid(True, alpha=0.3)
+            ax.legend(fontsize=7)
+        ax = axes[-1]
+        for integ in shown:
+            rs = [r for r in bounce if r["integrator"] == integ]
+            ax.plot([num(r, "time") for r in rs], [num(r, "height") for r in rs], color=COLORS[integ], lw=1.2,
+                    label=integ)
+        ax.axhline(0.5, color="black", lw=0.6, ls="--", label="drop height")
+        ax.set_title("bar centre above its resting height", fontsize=10)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("height [m]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+        title += ("\nBottom: a free tet bar (62.5 kg) dropped from 0.5 m onto the ground (contact stiffness 3e5/s^2, "
+                  "friction 0.3, tolerance 3 cm).")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 0.95 if bounce else 0.93))
     save(fig, charts, "interaction")
 
 
@@ -653,6 +690,29 @@ def write_summary(results):
             out.extend("| " + " | ".join(r[key] if digits is None else fmt(num(r, key), digits)
                                          for _, key, digits in columns) + " |" for r in refs)
             out.append("")
+    bounce = read_csv(results, "bounce.csv")
+    if bounce:
+        drop = 0.5  # cmd_interaction.cpp: the bar's bottom starts 0.5 m above the ground, at rest
+        out.append("## Bounce on the ground (`stabint-study interaction`, bounce.csv)\n")
+        out.append("A free tet bar (62.5 kg) dropped from 0.5 m onto the ground (contact stiffness 3e5/s^2, friction "
+                   "0.3, contact tolerance 3 cm), h = 1/30 s, 10 iterations, 4 s. Lands: when the bar's centre first "
+                   "reaches its resting height (free fall: 0.32 s). Rebound: the highest the centre gets after that, "
+                   "as a fraction of the drop. Friction and final projection: the energy they took out of H* over "
+                   "the run.\n")
+        out.append("| integrator | lands at [s] | rebound [drop] | friction [J] | final projection [J] | "
+                   "max abs(H - H*) [E_scale] |")
+        out.append("|---|---:|---:|---:|---:|---:|")
+        for integ in ("BE", "BDF2", "blend"):
+            rs = [r for r in bounce if r["integrator"] == integ]
+            if not rs:
+                continue
+            landed = next((i for i, r in enumerate(rs) if num(r, "height") <= 0.0), None)
+            rebound = max(num(r, "height") for r in rs[landed:]) / drop if landed is not None else float("nan")
+            gap = max(abs(num(r, "H") - num(r, "H_target")) / num(r, "E_scale") for r in rs)
+            out.append(f"| {integ} | {fmt(num(rs[landed], 'time')) if landed is not None else 'never'} | "
+                       f"{fmt(rebound, 2)} | {fmt(num(rs[-1], 'friction'))} | "
+                       f"{fmt(0.0 - num(rs[-1], 'projection') + 0.0)} | {fmt(gap)} |")
+        out.append("")
     charts = os.path.join(results, "charts")
     out.append("## Charts\n")
     for name, what in (("speed_vs_accuracy", "time per frame against position error and energy drift, Pareto "
@@ -663,7 +723,8 @@ def write_summary(results):
                        ("motion", "centre-of-mass path and kinetic energy of the cloth against the small-step "
                         "reference, mean K against flicker for every run, the stiff cloth's fall"),
                        ("interaction", "energy books of a grab-drag-release of a cloth corner (H, H*, the hand's "
-                        "work, K) with BE, BDF2 and the blend")):
+                        "work, K) and of a tet bar bouncing on the ground (H, H*, friction, final projection, K, "
+                        "height) with BE, BDF2 and the blend")):
         if os.path.exists(os.path.join(charts, name + ".png")):
             out.append(f"- `charts/{name}.png` (and .svg): {what}")
     path = os.path.join(results, "summary.md")

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace stabint {
@@ -256,6 +257,51 @@ TEST(Contact, MovingColliderWorkIsBookedAndCheckpointsContinue) {
   other.restore(mid);
   for (int i = 16; i < 30; ++i) other.step();
   EXPECT_EQ(other.positions(), final_x);
+}
+
+// A checkpoint belongs to its colliders as much as to its masses: a simulator whose colliders
+// differ in any one field (shape, geometry, velocity, friction, stiffness), or that has none,
+// refuses it and keeps its own state; the same colliders accept it.
+TEST(Contact, CheckpointOfOtherCollidersIsRefused) {
+  Scene s = freeBar(0.1);
+  s.colliders.push_back(groundPlane(0.0, 1e4, 0.3));
+  s.colliders.push_back(sphereCollider(Eigen::Vector3d(0.0, 0.5, 0.0), 0.1, 1e4));
+  SimulatorOptions o;
+  Simulator source(s, o);
+  for (int i = 0; i < 5; ++i) source.step();
+  const Checkpoint cp = source.checkpoint();
+
+  std::vector<std::pair<std::string, Scene>> others;
+  auto vary = [&](const std::string& what, auto&& change) {
+    Scene t = s;
+    change(t);
+    others.emplace_back(what, t);
+  };
+  vary("no colliders", [](Scene& t) { t.colliders.clear(); });
+  vary("one collider fewer", [](Scene& t) { t.colliders.pop_back(); });
+  vary("shape", [](Scene& t) {
+    t.colliders[1].shape = ColliderShape::Capsule;
+    t.colliders[1].end = Eigen::Vector3d(0.2, 0.5, 0.0);
+  });
+  vary("center", [](Scene& t) { t.colliders[0].center.y() = -0.01; });
+  vary("normal", [](Scene& t) { t.colliders[0].normal = Eigen::Vector3d(0.1, 1.0, 0.0); });
+  vary("radius", [](Scene& t) { t.colliders[1].radius = 0.11; });
+  vary("velocity", [](Scene& t) { t.colliders[1].velocity.x() = 0.1; });
+  vary("friction", [](Scene& t) { t.colliders[0].friction = 0.31; });
+  vary("stiffness", [](Scene& t) { t.colliders[0].stiffness = 2e4; });
+  vary("order", [](Scene& t) { std::swap(t.colliders[0], t.colliders[1]); });
+  for (const auto& [what, other_scene] : others) {
+    Simulator other(other_scene, o);
+    other.step();
+    const Eigen::MatrixX3d x = other.positions();
+    const double time = other.time();
+    EXPECT_THROW(other.restore(cp), InvalidInputError) << what;
+    EXPECT_EQ(other.positions(), x) << what;
+    EXPECT_EQ(other.time(), time) << what;
+  }
+  Simulator same(s, o);
+  same.restore(cp);
+  EXPECT_EQ(same.positions(), source.positions());
 }
 
 // Bad colliders are refused, naming the collider and the field.

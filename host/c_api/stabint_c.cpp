@@ -117,6 +117,8 @@ stabint_step_report toC(const stabint::StepReport& r) {
   c.alpha = r.alpha;
   c.velocity_scale = r.velocity_scale;
   c.event_energy = r.event_energy;
+  c.friction = r.friction;
+  c.contact_projection = r.contact_projection;
   c.iterations = r.iterations;
   c.energy_evaluations = r.energy_evaluations;
   const stabint::PhaseTimes& t = r.times;
@@ -262,6 +264,7 @@ void stabint_simulator_options_default(stabint_simulator_options* options) {
   options->max_velocity_scale = d.max_velocity_scale;
   options->max_root_evaluations = d.max_root_evaluations;
   options->energy_limit = d.energy_limit;
+  options->contact_tolerance = d.contact_tolerance;
   options->backend = static_cast<stabint_backend>(d.backend);
   options->opencl_platform = nullptr;
   options->opencl_device = nullptr;
@@ -289,6 +292,7 @@ stabint_status stabint_simulator_create(const stabint_scene* scene,
     o.max_velocity_scale = options->max_velocity_scale;
     o.max_root_evaluations = options->max_root_evaluations;
     o.energy_limit = options->energy_limit;
+    o.contact_tolerance = options->contact_tolerance;
     o.backend = checkedEnum<stabint::BackendKind>(options->backend, 3, "backend");
     o.opencl.platform = options->opencl_platform ? options->opencl_platform : "";
     o.opencl.device = options->opencl_device ? options->opencl_device : "";

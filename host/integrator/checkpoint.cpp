@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <type_traits>
 
@@ -141,6 +142,19 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
   };
   mix(scene.masses.data(), scene.masses.size());
   mix(scene.rest_positions.data(), scene.rest_positions.size());
+  // The colliders shape the motion as much as the masses do. A scene without colliders mixes
+  // nothing here, so checkpoints of such scenes written before colliders existed still match.
+  for (const Collider& c : scene.colliders) {
+    const double fields[] = {static_cast<double>(c.shape),
+                             c.center.x(), c.center.y(), c.center.z(),
+                             c.normal.x(), c.normal.y(), c.normal.z(),
+                             c.half_extents.x(), c.half_extents.y(), c.half_extents.z(),
+                             c.end.x(), c.end.y(), c.end.z(),
+                             c.radius,
+                             c.velocity.x(), c.velocity.y(), c.velocity.z(),
+                             c.friction, c.stiffness};
+    mix(fields, static_cast<Eigen::Index>(std::size(fields)));
+  }
   return hash;
 }
 

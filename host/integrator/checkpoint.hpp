@@ -27,7 +27,8 @@ struct CheckpointData {
   SceneData::ForcingState forcing;
 };
 
-/// FNV-1a over the masses and rest positions: tells a checkpoint of another scene apart.
+/// FNV-1a over the masses, rest positions and colliders (every field): tells a checkpoint of
+/// another scene apart.
 std::uint64_t sceneFingerprint(const Scene& scene);
 
 std::string serializeCheckpoint(const CheckpointData& data);

@@ -618,7 +618,7 @@ struct Simulator::Impl {
   void restore(const CheckpointData& d) {
     if (d.particles != scene.numParticles() || d.scene_fingerprint != sceneFingerprint(scene.scene()))
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
-                              " particles, or other masses or rest shape)");
+                              " particles, or other masses, rest shape or colliders)");
     if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
     backend->write(kX, d.x);
     backend->write(kV, d.v);

@@ -143,6 +143,7 @@ typedef struct stabint_simulator_options {
   double max_velocity_scale;
   int max_root_evaluations;
   double energy_limit;
+  double contact_tolerance; /* m: deepest a particle may stay inside a collider after a step */
   stabint_backend backend;
   const char* opencl_platform; /* NULL or "": environment variable, then the first */
   const char* opencl_device;   /* NULL or "": environment variable, then the first */
@@ -175,6 +176,11 @@ typedef struct stabint_step_report {
   double alpha;
   double velocity_scale;
   double event_energy; /* jump of H booked in H* by set_state/positions/velocities before it */
+  /* Colliders (scene files' "colliders"): kinetic energy friction removed (taken from H*;
+   * negative when a moving collider drags particles along), and the energy the final
+   * projection out of the colliders removed (<= 0, added to H*). */
+  double friction;
+  double contact_projection;
   int iterations;
   int energy_evaluations;
   stabint_phase_times times;

@@ -30,6 +30,7 @@ NB_MAKE_OPAQUE(std::vector<BendingHinge>)
 NB_MAKE_OPAQUE(std::vector<Pin>)
 NB_MAKE_OPAQUE(std::vector<ForceField>)
 NB_MAKE_OPAQUE(std::vector<Body>)
+NB_MAKE_OPAQUE(std::vector<Collider>)
 
 namespace {
 
@@ -163,6 +164,11 @@ void bindEnums(nb::module_& m) {
       .value("ImplicitMidpoint", BlendBranch::ImplicitMidpoint)
       .value("BackwardEuler", BlendBranch::BackwardEuler)
       .value("VelocityScale", BlendBranch::VelocityScale);
+  nb::enum_<ColliderShape>(m, "ColliderShape")
+      .value("Plane", ColliderShape::Plane)
+      .value("Sphere", ColliderShape::Sphere)
+      .value("Box", ColliderShape::Box)
+      .value("Capsule", ColliderShape::Capsule);
   nb::enum_<ClothModel>(m, "ClothModel").value("Springs", ClothModel::Springs).value("Triangles", ClothModel::Triangles);
 
   m.def("integrator_name", &integratorName, "'FE', 'SE', 'BE', 'BDF2', 'IM' or 'blend'.");
@@ -220,6 +226,20 @@ void bindElements(nb::module_& m) {
   nb::class_<Body>(m, "Body", "Particles damped together (momentum-preserving), damping in [0, 1].")
       .def(nb::init<>())
       .def_rw("name", &Body::name).def_rw("particles", &Body::particles).def_rw("damping", &Body::damping);
+  nb::class_<Collider>(m, "Collider",
+                       "A rigid obstacle every particle collides with (docs/method.md, 'Contact'); the fields "
+                       "are documented in stabint/scene.hpp.")
+      .def(nb::init<>())
+      .def_rw("shape", &Collider::shape)
+      .def_rw("center", &Collider::center, "Plane: a point of it; sphere and box: the center; capsule: one end.")
+      .def_rw("normal", &Collider::normal, "Plane: the outward normal.")
+      .def_rw("half_extents", &Collider::half_extents, "Box (axis-aligned): half sizes.")
+      .def_rw("end", &Collider::end, "Capsule: the other end of its axis.")
+      .def_rw("radius", &Collider::radius, "Sphere and capsule.")
+      .def_rw("velocity", &Collider::velocity, "Translation in m/s (0: static).")
+      .def_rw("friction", &Collider::friction, "Coulomb coefficient mu >= 0.")
+      .def_rw("stiffness", &Collider::stiffness, "Contact weight per unit of particle mass, 1/s^2 (> 0).")
+      .def("moving", &Collider::moving);
 
   nb::bind_vector<std::vector<Spring>>(m, "SpringList");
   nb::bind_vector<std::vector<Tet>>(m, "TetList");
@@ -228,6 +248,7 @@ void bindElements(nb::module_& m) {
   nb::bind_vector<std::vector<Pin>>(m, "PinList");
   nb::bind_vector<std::vector<ForceField>>(m, "ForceFieldList");
   nb::bind_vector<std::vector<Body>>(m, "BodyList");
+  nb::bind_vector<std::vector<Collider>>(m, "ColliderList");
 }
 
 // Matrix properties of a Scene: get a copy, set from any (n, 3) array.
@@ -267,6 +288,7 @@ void bindScene(nb::module_& m) {
       .def_rw("pins", &Scene::pins)
       .def_rw("force_fields", &Scene::force_fields)
       .def_rw("bodies", &Scene::bodies)
+      .def_rw("colliders", &Scene::colliders)
       .def_prop_ro("num_particles", &Scene::numParticles)
       .def("validate", [](const Scene& s) { validateScene(s); },
            "Raises InvalidInputError naming the first offending element or field.");
@@ -326,18 +348,18 @@ void bindSimulator(nb::module_& m) {
            [](SimulatorOptions* o, Integrator integrator, double time_step, int iterations, double tolerance,
               int max_iterations, Acceleration acceleration, double chebyshev_rho, int anderson_window,
               int be_iterations, double energy_tolerance, double max_velocity_scale, int max_root_evaluations,
-              double energy_limit, BackendKind backend, const OpenCLOptions& opencl) {
+              double energy_limit, double contact_tolerance, BackendKind backend, const OpenCLOptions& opencl) {
              new (o) SimulatorOptions{integrator, time_step, iterations, tolerance, max_iterations,
                                       acceleration, chebyshev_rho, anderson_window, be_iterations,
                                       energy_tolerance, max_velocity_scale, max_root_evaluations,
-                                      energy_limit, backend, opencl};
+                                      energy_limit, contact_tolerance, backend, opencl};
            },
            nb::kw_only(), "integrator"_a = d.integrator, "time_step"_a = d.time_step, "iterations"_a = d.iterations,
            "tolerance"_a = d.tolerance, "max_iterations"_a = d.max_iterations, "acceleration"_a = d.acceleration,
            "chebyshev_rho"_a = d.chebyshev_rho, "anderson_window"_a = d.anderson_window,
            "be_iterations"_a = d.be_iterations, "energy_tolerance"_a = d.energy_tolerance,
            "max_velocity_scale"_a = d.max_velocity_scale, "max_root_evaluations"_a = d.max_root_evaluations,
-           "energy_limit"_a = d.energy_limit, "backend"_a = d.backend, "opencl"_a = d.opencl,
+           "energy_limit"_a = d.energy_limit, "contact_tolerance"_a = d.contact_tolerance, "backend"_a = d.backend, "opencl"_a = d.opencl,
            "Keyword arguments set the fields of the same names; values are checked when a Simulator is built.")
       .def_rw("integrator", &SimulatorOptions::integrator)
       .def_rw("time_step", &SimulatorOptions::time_step)
@@ -352,6 +374,7 @@ void bindSimulator(nb::module_& m) {
       .def_rw("max_velocity_scale", &SimulatorOptions::max_velocity_scale)
       .def_rw("max_root_evaluations", &SimulatorOptions::max_root_evaluations)
       .def_rw("energy_limit", &SimulatorOptions::energy_limit)
+      .def_rw("contact_tolerance", &SimulatorOptions::contact_tolerance)
       .def_rw("backend", &SimulatorOptions::backend)
       .def_rw("opencl", &SimulatorOptions::opencl);
 
@@ -382,6 +405,11 @@ void bindSimulator(nb::module_& m) {
       .def_ro("event_energy", &StepReport::event_energy,
               "Energy added to H* by set_state/set_positions/set_velocities since the previous step "
               "(the jump of H they caused, booked as the user's work).")
+      .def_ro("friction", &StepReport::friction,
+              "Kinetic energy friction removed (taken from H*; negative when a moving collider drags "
+              "particles along).")
+      .def_ro("contact_projection", &StepReport::contact_projection,
+              "Energy the final projection out of the colliders removed (<= 0, added to H*).")
       .def_ro("iterations", &StepReport::iterations, "Local/global iterations of all solves of the step.")
       .def_ro("energy_evaluations", &StepReport::energy_evaluations)
       .def_ro("times", &StepReport::times)

@@ -1,7 +1,7 @@
 /* The C API (include/stabint/stabint_c.h) from a C program: compiled as C99, no C++ in sight.
  * Each check prints on failure; the program ends with "N passed, N failed" and exits non-zero
  * when any check failed. Run by ctest (label cpu). */
-/* mkstemp and close (POSIX) for the checkpoint file's temporary path. */
+/* mkstemp, fdopen and close (POSIX) for temporary files (a checkpoint, a scene). */
 #define _POSIX_C_SOURCE 200809L
 
 #include <stabint/stabint_c.h>
@@ -599,6 +599,58 @@ static void test_checkpoints_continue_bit_for_bit(void) {
   free(again);
 }
 
+/* Colliders come from scene files; the report books what they do. A 6 x 5 cloth hangs through a
+ * sphere (friction 0.5) that cuts 5 cm into it: pushed out, it slides along the sphere. With the
+ * blend and static pins, H* moves by exactly the reported friction and projection (round-off of
+ * 30 terms of size up to H0). contact_tolerance reaches the simulator and is checked. */
+static void test_colliders_from_a_scene_file(void) {
+  const char* tmp = getenv("TMPDIR");
+  char path[1024];
+  FILE* file;
+  int fd, f;
+  stabint_scene* scene = NULL;
+  stabint_simulator* sim = NULL;
+  stabint_simulator_options options;
+  stabint_step_report report;
+  stabint_energy start;
+  double friction = 0.0, projection = 0.0;
+  if (tmp == NULL || tmp[0] == '\0') tmp = "/tmp";
+  snprintf(path, sizeof path, "%s/stabint_c_api_XXXXXX", tmp);
+  fd = mkstemp(path);
+  CHECK(fd >= 0);
+  if (fd < 0) return;
+  file = fdopen(fd, "w");
+  CHECK(file != NULL);
+  if (file == NULL) return;
+  fputs("{\"builtin\": {\"name\": \"cloth\", \"nx\": 6, \"ny\": 5},\n"
+        " \"colliders\": [{\"shape\": \"sphere\", \"center\": [0.5, 0.5, 0.1], \"radius\": 0.15, "
+        "\"friction\": 0.5}]}\n", file);
+  fclose(file);
+  CHECK(stabint_scene_load(path, &scene) == STABINT_OK);
+  unlink(path);
+
+  stabint_simulator_options_default(&options);
+  CHECK(options.contact_tolerance == 1e-2); /* the C++ default */
+  options.contact_tolerance = -1.0;
+  CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "contact_tolerance") != NULL);
+  options.contact_tolerance = 0.02;
+  CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_OK);
+  stabint_scene_destroy(scene);
+  if (sim == NULL) return;
+  CHECK(stabint_simulator_energy(sim, &start) == STABINT_OK);
+  for (f = 0; f < 30; ++f) {
+    CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
+    CHECK(report.contact_projection <= 0.0);
+    friction += report.friction;
+    projection += report.contact_projection;
+  }
+  CHECK(friction > 0.0);
+  CHECK(fabs(stabint_simulator_target(sim) - (start.total - friction + projection)) <=
+        1e-12 * 30 * fabs(start.total));
+  stabint_simulator_destroy(sim);
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     fprintf(stderr, "usage: %s SCENE_DIR\n", argv[0]);
@@ -615,6 +667,7 @@ int main(int argc, char** argv) {
   test_state_forces_and_iterations();
   test_checkpoints_continue_bit_for_bit();
   test_grab_and_release();
+  test_colliders_from_a_scene_file();
   printf("%d passed, %d failed\n", passed, failed);
   return failed == 0 ? 0 : 1;
 }

@@ -124,7 +124,7 @@ const MotionReference& motionReference(const StudyScene& scene, const StudyOptio
   const int frames = horizonFrames(scene, options);
   std::ostringstream d;
   d.precision(17);
-  d << scene.params << " | motion reference " << methodName(scene, scene.reference_substeps) << " check h/"
+  d << cacheDescription(scene) << " | motion reference " << methodName(scene, scene.reference_substeps) << " check h/"
     << scene.reference_substeps / 2 << " frame_step=" << scene.frame_step << " frames=" << frames
     << " damping per step rescaled, maxit=" << kMaxIterations << " format=1";
   const std::string description = d.str();

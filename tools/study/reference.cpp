@@ -56,7 +56,7 @@ std::vector<double> toPayload(const Reference& ref) {
 
 Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& options) {
   std::ostringstream d;
-  d << scene.params << " | reference IM h=1/30/" << kReferenceSubsteps << " tol=" << kTolerance
+  d << cacheDescription(scene) << " | reference IM h=1/30/" << kReferenceSubsteps << " tol=" << kTolerance
     << " maxit=" << kMaxIterations << " frames=" << kReferenceFrames << " self-check h/"
     << kReferenceSubsteps / 2 << " format=2";
   const std::string description = d.str();

@@ -30,7 +30,7 @@ struct StudyOptions {
 /// A scene of the study with its canonical parameter text (the cache key of its reference).
 struct StudyScene {
   std::string key;     // "chain", "cloth", "tetbar"
-  std::string params;  // every parameter that changes the trajectory, as text
+  std::string params;  // every parameter that changes the trajectory, as text (colliders aside)
   Scene scene;
   int grid_nx = 0, grid_ny = 0;  // cloth grid dimensions (row-major j*nx + i), 0 otherwise
   int free_end_first = -1;       // tet bar: particles of the free end x = length are
@@ -87,6 +87,10 @@ double equilibriumPotential(const Scene& scene, const Eigen::MatrixX3d& start = 
 /// Available energy of an unforced, undamped scene released from its initial state:
 /// H_0 - (equilibrium potential). All energy metrics of the study are relative to it.
 double availableEnergy(const StudyScene& scene);
+
+/// The text that keys a cached reference of `scene`: its params and every field of its
+/// colliders (none: params alone, so the keys of collider-free scenes are unchanged).
+std::string cacheDescription(const StudyScene& scene);
 
 // ---- a recorded run ------------------------------------------------------------------------
 

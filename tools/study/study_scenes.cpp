@@ -21,7 +21,8 @@ std::string fmt(double v) {
 }
 
 // A hash of every number of a scene loaded from a file: the cache key of its reference changes
-// whenever the file (or the mesh it names) does.
+// whenever the file (or the mesh it names) does. Its colliders go into the key through
+// cacheDescription(), as every scene's do.
 std::string fingerprint(const Scene& sc) {
   std::ostringstream t;
   t.precision(17);
@@ -214,6 +215,24 @@ StudyScene tetBarScene(double stiffness) {
   s.reference_substeps = 16;
   s.reference_tolerance = 1e-10;
   return s;
+}
+
+std::string cacheDescription(const StudyScene& scene) {
+  std::ostringstream t;
+  t.precision(17);
+  t << scene.params;
+  auto put = [&t](const Eigen::Vector3d& v) { t << ' ' << v.x() << ' ' << v.y() << ' ' << v.z(); };
+  for (const stabint::Collider& c : scene.scene.colliders) {
+    t << " collider shape=" << static_cast<int>(c.shape);
+    put(c.center);
+    put(c.normal);
+    put(c.half_extents);
+    put(c.end);
+    t << ' ' << c.radius;
+    put(c.velocity);
+    t << " mu=" << c.friction << " k=" << c.stiffness;
+  }
+  return t.str();
 }
 
 double equilibriumPotential(const Scene& original, const Eigen::MatrixX3d& start) {

@@ -140,6 +140,36 @@ TEST(Cache, RoundTripAndDescriptionCheck) {
   std::filesystem::remove_all(dir);
 }
 
+// A cached reference is keyed by the scene's colliders too: no colliders leaves the key as it
+// was (the params alone), and a change of any one collider field changes it.
+TEST(Cache, DescriptionCoversEveryColliderField) {
+  StudyScene s;
+  s.params = "bar";
+  EXPECT_EQ(cacheDescription(s), "bar");
+  stabint::Collider c;
+  c.shape = stabint::ColliderShape::Capsule;
+  c.end = Eigen::Vector3d(1.0, 0.0, 0.0);
+  c.radius = 0.1;
+  s.scene.colliders.push_back(c);
+  const std::string base = cacheDescription(s);
+  EXPECT_NE(base, "bar");
+  const std::vector<void (*)(stabint::Collider&)> changes = {
+      [](stabint::Collider& k) { k.shape = stabint::ColliderShape::Sphere; },
+      [](stabint::Collider& k) { k.center.y() += 1e-9; },
+      [](stabint::Collider& k) { k.normal.x() = 0.5; },
+      [](stabint::Collider& k) { k.half_extents.z() = 0.5; },
+      [](stabint::Collider& k) { k.end.z() = 1e-12; },
+      [](stabint::Collider& k) { k.radius = 0.1 + 1e-15; },
+      [](stabint::Collider& k) { k.velocity.x() = 1.0; },
+      [](stabint::Collider& k) { k.friction = 0.5; },
+      [](stabint::Collider& k) { k.stiffness = 3e5; }};
+  for (size_t i = 0; i < changes.size(); ++i) {
+    StudyScene t = s;
+    changes[i](t.scene.colliders[0]);
+    EXPECT_NE(cacheDescription(t), base) << "change " << i;
+  }
+}
+
 TEST(EnergyMetrics, ExplodedAtIsTheFirstFrameBeyondTheThreshold) {
   // H_0 = 1, E_avail = 1: H exceeds H_0 + 10 E_avail first at t = 0.3 s.
   RunResult run;

@@ -126,7 +126,7 @@ TEST_F(EventsTest, ImpulsesBookTheirKineticEnergyJump) {
 TEST_F(EventsTest, EventsRoundTripExactly) {
   const SceneFile file = loadSceneFileWithEvents(sceneWith(kDragEvents));
   const std::string path = (dir_ / "saved.json").string();
-  saveSceneFile(file.scene, file.events, path);
+  saveSceneFileWithEvents(file.scene, file.events, path);
   const SceneFile again = loadSceneFileWithEvents(path);
   const auto& a = file.events.events();
   const auto& b = again.events.events();
@@ -151,7 +151,7 @@ TEST_F(EventsTest, EventsRoundTripExactly) {
   EXPECT_EQ(std::get<ElementEvent>(b[4].action).kind, ElementKind::Pin);
   EXPECT_EQ(std::get<ElementEvent>(b[4].action).enabled, false);
   const std::string path2 = (dir_ / "saved2.json").string();
-  saveSceneFile(again.scene, again.events, path2);
+  saveSceneFileWithEvents(again.scene, again.events, path2);
   std::ifstream f1(path), f2(path2);
   EXPECT_EQ(std::string(std::istreambuf_iterator<char>(f1), {}), std::string(std::istreambuf_iterator<char>(f2), {}));
   // A scene file without events loads as before, and with events loadSceneFile still accepts it.

@@ -1270,7 +1270,7 @@ SceneFile loadSceneFileWithEvents(const std::string& path) {
   return file;
 }
 
-void saveSceneFile(const Scene& scene, const EventScript& events, const std::string& path) {
+void saveSceneFileWithEvents(const Scene& scene, const EventScript& events, const std::string& path) {
   std::string text;
   saveSceneText(scene, &events, text);
   writeSceneText(text, path);

@@ -111,6 +111,6 @@ struct SceneFile {
 SceneFile loadSceneFileWithEvents(const std::string& path);
 /// Writes a scene file with events; loadSceneFileWithEvents reads back the same scene and
 /// events exactly.
-void saveSceneFile(const Scene& scene, const EventScript& events, const std::string& path);
+void saveSceneFileWithEvents(const Scene& scene, const EventScript& events, const std::string& path);
 
 }  // namespace stabint

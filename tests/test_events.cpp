@@ -160,6 +160,8 @@ TEST_F(EventsTest, EventsRoundTripExactly) {
 
 TEST_F(EventsTest, BadEventsNameTheirPath) {
   expectError(R"([{"frame": 1, "grab": {"vertex": 36, "stiffness": 1}}])", "events[0].grab.vertex: particle index 36");
+  EXPECT_THROW(loadSceneFile(sceneWith(R"([{"frame": 1, "release": "nobody"}])")), FileFormatError)
+      << "loadSceneFile checks the events too";
   expectError(R"([{"frame": 1, "grab": {"vertex": 3, "stiffness": 0}}])", "events[0].grab.stiffness: must be > 0");
   expectError(R"([{"frame": 4, "grab": {"vertex": 3, "stiffness": 1, "path": [[6, 0, 0, 0], [6, 1, 0, 0]]}}])",
               "events[0].grab.path[1][0]: keyframe frame 6 must be after 6");

@@ -1259,7 +1259,8 @@ void writeSceneText(const std::string& text, const std::string& path) {
 
 }  // namespace
 
-Scene loadSceneFile(const std::string& path) { return io::sceneFromJson(io::parseJson(io::readTextFile(path), path), path); }
+// The events are read and checked too (an error in them is an error in the file), then dropped.
+Scene loadSceneFile(const std::string& path) { return loadSceneFileWithEvents(path).scene; }
 
 SceneFile loadSceneFileWithEvents(const std::string& path) {
   const json doc = io::parseJson(io::readTextFile(path), path);

@@ -132,6 +132,43 @@ TEST(OpenCLInteraction, ElementChangesMatchCpu) {
   }
 }
 
+// A scripted grab-drag-release with an impulse and an element change (EventScript) on OpenCL
+// follows the CPU reference within the tolerances above.
+TEST(OpenCLInteraction, ScriptedEventsMatchCpu) {
+  ClothGridParams p;
+  p.nx = p.ny = 8;
+  const Scene cloth = makeClothGrid(p);
+  const std::vector<ScriptedEvent> events = {
+      {3, GrabEvent{"hand", 56, 3e3, {{8, Eigen::Vector3d(0.1, 0.2, 0.3)}, {12, Eigen::Vector3d(0.0, 0.3, 0.2)}}}},
+      {14, ReleaseEvent{"hand", -1}},
+      {16, ImpulseEvent{{56, 57, 58}, Eigen::Vector3d(0.0, 0.0, 0.5)}},
+      {18, ElementEvent{ElementKind::Spring, {0, 1, 2, 3}, 20.0, std::nullopt}},
+  };
+  for (Precision precision : {Precision::Double, Precision::Float}) {
+    if (!testing::openclSkipReason(precision).empty()) continue;
+    const double tol = precision == Precision::Double ? 1e-9 : 1e-3;
+    auto run = [&](BackendKind backend, Precision prec) {
+      SimulatorOptions o;
+      o.integrator = Integrator::BDF2;
+      o.backend = backend;
+      o.opencl.precision = prec;
+      Simulator sim(cloth, o);
+      EventScript script(events);
+      std::vector<Eigen::MatrixX3d> xs;
+      for (int i = 0; i < 25; ++i) {
+        script.apply(sim);
+        sim.step();
+        xs.push_back(sim.positions());
+      }
+      return xs;
+    };
+    const auto ref = run(BackendKind::CpuReference, Precision::Double);
+    const auto got = run(BackendKind::OpenCL, precision);
+    for (std::size_t i = 0; i < ref.size(); ++i)
+      EXPECT_LT(relativeError(got[i], ref[i]), tol) << testing::precisionName(precision) << " step " << i;
+  }
+}
+
 TEST(OpenCLInteraction, CheckpointsContinueBitForBit) {
   for (Precision precision : {Precision::Double, Precision::Float}) {
     if (!testing::openclSkipReason(precision).empty()) continue;

@@ -49,7 +49,7 @@ TEST(ElementChanges, ChangesMatchScenesBuiltThatWay) {
     o.integrator = Integrator::BDF2;
     o.iterations = 20;
     Simulator changed(scene, o);
-    changed.setElementStiffness(kind, std::vector<int>{0, 3, 4}, 0.0 + 3.0 * (scene.*member)[3].stiffness);
+    changed.setElementStiffness(kind, std::vector<int>{0, 3, 4, 3}, 3.0 * (scene.*member)[3].stiffness);
     changed.setElementEnabled(kind, 7, false);
     changed.setElementEnabled(kind, 4, false);
     changed.setElementEnabled(kind, 4, true);
@@ -85,6 +85,7 @@ TEST(ElementChanges, LargeListsRefactorAndMatchTheBuiltScene) {
   Simulator changed(cloth, o);
   std::vector<int> many;
   for (int e = 0; e < 100; ++e) many.push_back(2 * e);
+  many.push_back(2);  // listed twice: changed once
   changed.setElementStiffness(ElementKind::Spring, many, 7.0);
   changed.setElementEnabled(ElementKind::Spring, std::vector<int>(many.begin(), many.begin() + 80), false);
   Scene built = cloth;

@@ -646,11 +646,14 @@ struct Simulator::Impl {
 
   // setElementStiffness (`stiffness` given) or setElementEnabled: everything is validated before
   // L changes; then a discontinuous event whose jump of H moves H* alike.
-  void changeElements(ElementKind kind, const std::vector<int>& indices, const double* stiffness, bool enabled) {
+  void changeElements(ElementKind kind, std::vector<int> indices, const double* stiffness, bool enabled) {
     const char* call = stiffness ? "setElementStiffness" : "setElementEnabled";
     const int block = elementBlock(kind);
     const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
     for (int e : indices) checkElement(block, e, call);
+    // An index listed twice is changed once (its term would otherwise enter L twice).
+    std::sort(indices.begin(), indices.end());
+    indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
     if (stiffness && !b.type->hasStiffness())
       throw InvalidInputError(std::string(call) + ": a " + b.type->name() + " has no stiffness");
     if (stiffness && (!std::isfinite(*stiffness) || !(*stiffness >= 0.0)))

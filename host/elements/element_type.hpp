@@ -91,12 +91,14 @@ class ElementType {
   virtual void appendShifted(Scene& into, const Scene& part, int offset) const = 0;
 
   // ---- run-time changes (Simulator::setElementStiffness) -----------------------------------------
+  // ElementTypeOf implements them for every Kind; a type written by hand without them (one that
+  // no ElementKind names) has no stiffness to change, and its elements stay enabled.
   /// False for a type whose elements carry no `stiffness` (the calls then refuse it).
-  virtual bool hasStiffness() const = 0;
-  virtual double stiffness(const Scene& scene, int element) const = 0;
-  virtual void setStiffness(Scene& scene, int element, double stiffness) const = 0;
+  virtual bool hasStiffness() const { return false; }
+  virtual double stiffness(const Scene& /*scene*/, int /*element*/) const { return 0.0; }
+  virtual void setStiffness(Scene& /*scene*/, int /*element*/, double /*stiffness*/) const {}
   /// The P params of one element of a validated scene at t = 0, as build() writes them.
-  virtual void elementParams(const Scene& scene, int element, double* params) const = 0;
+  virtual void elementParams(const Scene& /*scene*/, int /*element*/, double* /*params*/) const {}
 
   // ---- the math (reference, double) ------------------------------------------------------------
   /// p = projection of `ax` (R by 3, row-major) for an element with these params; returns the

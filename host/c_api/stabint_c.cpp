@@ -11,6 +11,7 @@
 #include <new>
 #include <string>
 #include <utility>
+#include <vector>
 
 struct stabint_scene {
   stabint::Scene scene;
@@ -450,6 +451,32 @@ stabint_status stabint_simulator_release(stabint_simulator* sim, int pin) {
   return guarded([&] {
     require(sim, "simulator");
     sim->sim.release(pin);
+  });
+}
+
+namespace {
+std::vector<int> indexList(const int* indices, size_t count) {
+  if (count > 0) require(indices, "indices");
+  return count > 0 ? std::vector<int>(indices, indices + count) : std::vector<int>{};
+}
+}  // namespace
+
+stabint_status stabint_simulator_set_element_stiffness(stabint_simulator* sim, const char* kind,
+                                                       const int* indices, size_t count,
+                                                       double stiffness) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(kind, "kind");
+    sim->sim.setElementStiffness(stabint::parseElementKind(kind), indexList(indices, count), stiffness);
+  });
+}
+
+stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, const char* kind,
+                                                     const int* indices, size_t count, int enabled) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(kind, "kind");
+    sim->sim.setElementEnabled(stabint::parseElementKind(kind), indexList(indices, count), enabled != 0);
   });
 }
 

@@ -28,6 +28,7 @@
 
 #include <array>
 #include <cstddef>
+#include <type_traits>
 #include <vector>
 
 namespace stabint {
@@ -59,6 +60,14 @@ struct KindField {
   double default_value;
   bool required;
 };
+
+/// Whether an element struct has a `double stiffness` member (every type so far; a type without
+/// one refuses run-time stiffness changes).
+template <class Element, class = void>
+struct HasStiffness : std::false_type {};
+template <class Element>
+struct HasStiffness<Element, std::void_t<decltype(std::declval<Element&>().stiffness)>>
+    : std::is_same<decltype(std::declval<Element&>().stiffness), double> {};
 
 template <class ElementStruct>
 struct KindDefaults {
@@ -191,13 +200,30 @@ class ElementTypeOf final : public ElementType {
   void paramsAt(const SceneData& data, double t, std::vector<double>& params) const override {
     const std::vector<Element>& elements = list(data.scene());
     params.resize(P * elements.size());
+    const int block = data.blockIndex(*this);
     for (std::size_t e = 0; e < elements.size(); ++e) {
       if constexpr (Kind::kMayDependOnTime) {
         Kind::paramsAt(data, static_cast<int>(e), t, &params[P * e]);
       } else {
         Kind::params(data.scene(), elements[e], &params[P * e]);
       }
+      // A disabled element has weight 0 (SceneData::setElementEnabled).
+      if (!data.elementEnabled(block, static_cast<int>(e))) params[P * e] = 0.0;
     }
+  }
+
+  bool hasStiffness() const override { return HasStiffness<Element>::value; }
+  double stiffness(const Scene& scene, int element) const override {
+    if constexpr (HasStiffness<Element>::value) return list(scene)[element].stiffness;
+    (void)scene, (void)element;
+    return 0.0;
+  }
+  void setStiffness(Scene& scene, int element, double stiffness) const override {
+    if constexpr (HasStiffness<Element>::value) (scene.*Kind::kList)[element].stiffness = stiffness;
+    (void)scene, (void)element, (void)stiffness;
+  }
+  void elementParams(const Scene& scene, int element, double* params) const override {
+    Kind::params(scene, list(scene)[element], params);
   }
 
   void appendShifted(Scene& into, const Scene& part, int offset) const override {

@@ -48,6 +48,9 @@ struct ElementBlock {
   std::vector<double> params;
   int contribution_base = 0;
   int revision = 0;  // incremented when the block is rebuilt at run time (SceneData::setPins)
+  /// Incremented when params change in place at run time (a stiffness change, an element
+  /// enabled or disabled: SceneData::setElementStiffness), so device copies are refreshed.
+  int params_revision = 0;
 };
 
 /// Sizes of a type's data, fixed at compile time for each type.
@@ -86,6 +89,16 @@ class ElementType {
   virtual void paramsAt(const SceneData& data, double t, std::vector<double>& params) const = 0;
   /// Appends the elements of `part` to `into`, with vertex indices shifted by `offset`.
   virtual void appendShifted(Scene& into, const Scene& part, int offset) const = 0;
+
+  // ---- run-time changes (Simulator::setElementStiffness) -----------------------------------------
+  // ElementTypeOf implements them for every Kind; a type written by hand without them (one that
+  // no ElementKind names) has no stiffness to change, and its elements stay enabled.
+  /// False for a type whose elements carry no `stiffness` (the calls then refuse it).
+  virtual bool hasStiffness() const { return false; }
+  virtual double stiffness(const Scene& /*scene*/, int /*element*/) const { return 0.0; }
+  virtual void setStiffness(Scene& /*scene*/, int /*element*/, double /*stiffness*/) const {}
+  /// The P params of one element of a validated scene at t = 0, as build() writes them.
+  virtual void elementParams(const Scene& /*scene*/, int /*element*/, double* /*params*/) const {}
 
   // ---- the math (reference, double) ------------------------------------------------------------
   /// p = projection of `ax` (R by 3, row-major) for an element with these params; returns the

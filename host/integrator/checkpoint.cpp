@@ -4,6 +4,7 @@
 
 #include <stabint/simulator.hpp>
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -14,7 +15,7 @@ namespace stabint {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'T', 'B', 'C', 'K', 'P', 'T', '\n'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 2: element stiffnesses and enabled flags
 
 class Writer {
  public:
@@ -181,6 +182,12 @@ std::string serializeCheckpoint(const CheckpointData& d) {
   for (const Pin& p : d.pin_list) out.pin(p);
   for (const SceneData::Ramp& r : d.forcing.pins) out.ramp(r);
   out.ramp(d.forcing.user_forces);
+  out.value(static_cast<std::int64_t>(d.stiffness.size()));
+  for (std::size_t b = 0; b < d.stiffness.size(); ++b) {
+    out.value(static_cast<std::int64_t>(d.stiffness[b].size()));
+    for (double k : d.stiffness[b]) out.value(k);
+    for (std::uint8_t e : d.enabled[b]) out.flag(e != 0);
+  }
   return out.take();
 }
 
@@ -215,6 +222,24 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
   d.forcing.pins.reserve(static_cast<std::size_t>(d.pins));
   for (std::int64_t i = 0; i < d.pins; ++i) d.forcing.pins.push_back(in.ramp(1, "a pin target"));
   d.forcing.user_forces = in.ramp(d.particles, "the external forces");
+  // Element counts are checked against the scene when restored; here only against the data
+  // (a stiffness and a flag each: 9 bytes).
+  const auto blocks = in.value<std::int64_t>("the element block count");
+  if (blocks < 0 || blocks > 64) in.fail("element block count " + std::to_string(blocks) + " out of range");
+  for (std::int64_t b = 0; b < blocks; ++b) {
+    const auto count = in.value<std::int64_t>("an element count");
+    if (count < 0 || static_cast<std::uint64_t>(count) > bytes.size() / 9)
+      in.fail("element count " + std::to_string(count) + " does not fit the data");
+    std::vector<double> stiffness(static_cast<std::size_t>(count));
+    for (double& k : stiffness) {
+      k = in.value<double>("an element stiffness");
+      if (!std::isfinite(k) || !(k >= 0.0)) in.fail("an element stiffness is not finite and >= 0");
+    }
+    std::vector<std::uint8_t> enabled(static_cast<std::size_t>(count));
+    for (std::uint8_t& e : enabled) e = in.flag("an element flag") ? 1 : 0;
+    d.stiffness.push_back(std::move(stiffness));
+    d.enabled.push_back(std::move(enabled));
+  }
   in.expectEnd();
   return d;
 }

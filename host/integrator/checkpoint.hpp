@@ -25,6 +25,10 @@ struct CheckpointData {
   bool has_history = false;
   Eigen::MatrixX3d x, v, x_prev, v_prev;
   SceneData::ForcingState forcing;
+  /// Per element block (in the order of elementTypes()): each element's stiffness (0 for a type
+  /// without one) and enabled flag, as run-time changes left them.
+  std::vector<std::vector<double>> stiffness;
+  std::vector<std::vector<std::uint8_t>> enabled;
 };
 
 /// FNV-1a over the masses, rest positions and colliders (every field): tells a checkpoint of

@@ -85,4 +85,29 @@ PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
   return *this;
 }
 
+const char* elementKindName(ElementKind kind) {
+  switch (kind) {
+    case ElementKind::Spring: return "spring";
+    case ElementKind::Tet: return "tet";
+    case ElementKind::TriangleStrain: return "triangle_strain";
+    case ElementKind::BendingHinge: return "bending_hinge";
+    case ElementKind::Pin: return "pin";
+  }
+  return "?";
+}
+
+std::vector<ElementKind> allElementKinds() {
+  return {ElementKind::Spring, ElementKind::Tet, ElementKind::TriangleStrain, ElementKind::BendingHinge,
+          ElementKind::Pin};
+}
+
+ElementKind parseElementKind(const std::string& name) {
+  for (ElementKind k : allElementKinds()) {
+    const std::string singular = elementKindName(k);
+    if (lower(name) == singular || lower(name) == singular + "s") return k;
+  }
+  throw InvalidInputError("unknown element kind '" + name +
+                          "' (expected spring, tet, triangle_strain, bending_hinge or pin, or their plurals)");
+}
+
 }  // namespace stabint

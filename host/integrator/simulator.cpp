@@ -594,6 +594,89 @@ struct Simulator::Impl {
     changePinsAsEvent(pins);
   }
 
+  // ---- element changes (docs/method.md, "Per-frame input") ----------------------------------
+  // The block of an element kind, by the type's identifier (the names agree by construction).
+  int elementBlock(ElementKind kind) const {
+    if (static_cast<int>(kind) < static_cast<int>(ElementKind::Spring) ||
+        static_cast<int>(kind) > static_cast<int>(ElementKind::Pin))
+      throw InvalidInputError("element kind " + std::to_string(static_cast<int>(kind)) + " is not an ElementKind value");
+    for (std::size_t b = 0; b < scene.blocks().size(); ++b)
+      if (std::string(scene.blocks()[b].type->identifier()) == elementKindName(kind)) return static_cast<int>(b);
+    throw InvalidInputError(std::string("element kind ") + elementKindName(kind) + " has no element type");
+  }
+
+  void checkElement(int block, int index, const char* call) const {
+    const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
+    if (index < 0 || index >= b.count)
+      throw InvalidInputError(std::string(call) + ": " + b.type->name() + " " + std::to_string(index) +
+                              " out of range (the scene has " + std::to_string(b.count) + ")");
+  }
+
+  // L and its factors follow a change of element e's weight from w_old to its current one by
+  // the element's term (w - w_old) A^T A: a rank-R update or downdate, or (`how` Deferred) a
+  // change of L whose factors the caller refactors.
+  void updateSystem(int block, int e, double w_old,
+                    GlobalSystem::FactorChange how = GlobalSystem::FactorChange::RankUpdate) {
+    const double w_new = scene.elementWeight(block, e);
+    if (w_new == w_old) return;
+    const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
+    const ElementShape shape = b.type->shape();
+    const std::size_t stride = shape.shared_coefficients ? 0 : std::size_t(shape.rows * shape.vertices);
+    system.addElementTerm(&b.vertices[std::size_t(shape.vertices) * std::size_t(e)], shape.vertices,
+                          b.coefficients.data() + stride * std::size_t(e), shape.rows, w_new - w_old, how);
+  }
+
+  // [project rule] A change of more than this many rank-1 columns (elements times rows of A_e)
+  // refactors instead of updating: an update costs 1/28 (spring of the 50 x 50 cloth) to 1/15
+  // (tet of a 3,264-particle bar) of a refactorization (docs/method.md, "Per-frame input"), so
+  // a few tens of columns break even.
+  static constexpr int kMaxUpdateColumns = 64;
+
+  // setElementStiffness (`stiffness` given) or setElementEnabled: everything is validated before
+  // L changes; then a discontinuous event whose jump of H moves H* alike.
+  void changeElements(ElementKind kind, std::vector<int> indices, const double* stiffness, bool enabled) {
+    const char* call = stiffness ? "setElementStiffness" : "setElementEnabled";
+    const int block = elementBlock(kind);
+    const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
+    for (int e : indices) checkElement(block, e, call);
+    // An index listed twice is changed once (its term would otherwise enter L twice).
+    std::sort(indices.begin(), indices.end());
+    indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
+    if (stiffness && !b.type->hasStiffness())
+      throw InvalidInputError(std::string(call) + ": a " + b.type->name() + " has no stiffness");
+    if (stiffness && (!std::isfinite(*stiffness) || !(*stiffness >= 0.0)))
+      throw InvalidInputError(std::string(call) + ": " + b.type->name() + " stiffness " + std::to_string(*stiffness) +
+                              " must be finite and >= 0");
+    std::vector<double> w_old, k_old;
+    for (int e : indices) {
+      w_old.push_back(scene.elementWeight(block, e));
+      k_old.push_back(b.type->stiffness(scene.scene(), e));
+    }
+    if (stiffness) {
+      for (int e : indices) scene.setElementStiffness(block, e, *stiffness);
+      // The weight is k times a rest volume, area or inverse area: it must stay finite too. A
+      // refusal puts the old stiffnesses back (their params are recomputed bit for bit).
+      for (std::size_t i = 0; i < indices.size(); ++i) {
+        if (std::isfinite(scene.elementWeight(block, indices[i]))) continue;
+        const int bad = indices[i];
+        for (std::size_t j = indices.size(); j-- > 0;) scene.setElementStiffness(block, indices[j], k_old[j]);
+        throw InvalidInputError(std::string(call) + ": " + b.type->name() + " " + std::to_string(bad) + ": stiffness " +
+                                std::to_string(*stiffness) + " gives a weight that is not finite");
+      }
+    } else {
+      for (int e : indices) scene.setElementEnabled(block, e, enabled);
+    }
+    const double h_before = kinetic + potential.total();
+    const bool refactor = indices.size() * std::size_t(b.type->shape().rows) > std::size_t(kMaxUpdateColumns);
+    const auto how = refactor ? GlobalSystem::FactorChange::Deferred : GlobalSystem::FactorChange::RankUpdate;
+    for (std::size_t i = 0; i < indices.size(); ++i) updateSystem(block, indices[i], w_old[i], how);
+    if (refactor) system.refactorAll();
+    potential = backend->potential(kX, t);
+    const double event = kinetic + potential.total() - h_before;
+    target += event;
+    pending_event_energy += event;
+  }
+
   CheckpointData checkpointData() const {
     CheckpointData d;
     d.scene_fingerprint = sceneFingerprint(scene.scene());
@@ -612,6 +695,15 @@ struct Simulator::Impl {
     backend->read(kXPrev, d.x_prev);
     backend->read(kVPrev, d.v_prev);
     d.forcing = scene.forcingState();
+    for (std::size_t b = 0; b < scene.blocks().size(); ++b) {
+      const ElementBlock& block = scene.blocks()[b];
+      d.stiffness.emplace_back();
+      d.enabled.emplace_back();
+      for (int e = 0; e < block.count; ++e) {
+        d.stiffness.back().push_back(block.type->stiffness(scene.scene(), e));
+        d.enabled.back().push_back(scene.elementEnabled(static_cast<int>(b), e) ? 1 : 0);
+      }
+    }
     return d;
   }
 
@@ -619,7 +711,18 @@ struct Simulator::Impl {
     if (d.particles != scene.numParticles() || d.scene_fingerprint != sceneFingerprint(scene.scene()))
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
                               " particles, or other masses, rest shape or colliders)");
+    const std::size_t num_blocks = scene.blocks().size();
+    bool same_elements = d.stiffness.size() == num_blocks;
+    for (std::size_t b = 0; same_elements && b < num_blocks; ++b) {
+      const ElementBlock& block = scene.blocks()[b];
+      const std::size_t count =
+          block.type == &pinElementType() ? d.pin_list.size() : static_cast<std::size_t>(block.count);
+      same_elements = d.stiffness[b].size() == count;
+    }
+    if (!same_elements)
+      throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
     if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
+    restoreElements(d);
     backend->write(kX, d.x);
     backend->write(kV, d.v);
     backend->write(kXPrev, d.x_prev);
@@ -635,6 +738,25 @@ struct Simulator::Impl {
     has_history = d.has_history;
     scene.setForcingState(d.forcing);
     report = StepReport{};
+  }
+
+  // The stiffnesses and enabled flags of a checkpoint (counts checked by restore): elements that
+  // differ are changed as setElementStiffness would, without an event (H* is restored).
+  void restoreElements(const CheckpointData& d) {
+    for (std::size_t b = 0; b < scene.blocks().size(); ++b) {
+      const ElementBlock& block = scene.blocks()[b];
+      const int bi = static_cast<int>(b);
+      for (int e = 0; e < block.count; ++e) {
+        const double k = d.stiffness[b][static_cast<std::size_t>(e)];
+        const bool on = d.enabled[b][static_cast<std::size_t>(e)] != 0;
+        const bool k_differs = block.type->hasStiffness() && block.type->stiffness(scene.scene(), e) != k;
+        if (!k_differs && scene.elementEnabled(bi, e) == on) continue;
+        const double w_old = scene.elementWeight(bi, e);
+        if (k_differs) scene.setElementStiffness(bi, e, k);
+        if (scene.elementEnabled(bi, e) != on) scene.setElementEnabled(bi, e, on);
+        updateSystem(bi, e, w_old);
+      }
+    }
   }
 
   [[noreturn]] void refuse(const StepReport& r, const std::string& what, bool energy_limit = false) {
@@ -668,6 +790,24 @@ struct Simulator::Impl {
   double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
   StepReport report;
 };
+
+void Simulator::setElementStiffness(ElementKind kind, int index, double stiffness) {
+  impl_->changeElements(kind, {index}, &stiffness, true);
+}
+void Simulator::setElementStiffness(ElementKind kind, const std::vector<int>& indices, double stiffness) {
+  impl_->changeElements(kind, indices, &stiffness, true);
+}
+void Simulator::setElementEnabled(ElementKind kind, int index, bool enabled) {
+  impl_->changeElements(kind, {index}, nullptr, enabled);
+}
+void Simulator::setElementEnabled(ElementKind kind, const std::vector<int>& indices, bool enabled) {
+  impl_->changeElements(kind, indices, nullptr, enabled);
+}
+bool Simulator::elementEnabled(ElementKind kind, int index) const {
+  const int block = impl_->elementBlock(kind);
+  impl_->checkElement(block, index, "elementEnabled");
+  return impl_->scene.elementEnabled(block, index);
+}
 
 Simulator::Simulator(const Scene& scene, const SimulatorOptions& options)
     : impl_(std::make_unique<Impl>(scene, options)) {}

@@ -9,6 +9,7 @@
 
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
+#include <stabint/events.hpp>
 #include <stabint/io.hpp>
 
 #include <nlohmann/json.hpp>
@@ -27,6 +28,7 @@
 #include <set>
 #include <sstream>
 #include <utility>
+#include <variant>
 #include <vector>
 
 namespace stabint::io {
@@ -748,7 +750,7 @@ Scene sceneFromJson(const json& doc, const std::string& file) {
   root.requireObject();
   std::set<std::string> keys = {"format", "version", "name",  "gravity", "builtin",      "mesh",  "particles",
                                 "triangles", "springs", "tets", "pins",    "force_fields", "bodies",
-                                "colliders"};
+                                "colliders", "events"};
   for (const ElementType* type : genericTypes()) keys.insert(genericKey(*type));
   root.allowOnly(keys);
   if (auto f = root.find("format")) {
@@ -1073,6 +1075,154 @@ ordered sceneToJson(const Scene& s) {
   return doc;
 }
 
+// --- scripted events (include/stabint/events.hpp) --------------------------------------------------
+// {"frame": f, "<kind>": {...}}: one action per event. A new kind of event (moving a collider)
+// adds a key here, in eventToJson, and a case in EventScript::apply.
+
+// An element list index of `kind` in scene `s`.
+int elementCount(const Scene& s, ElementKind kind) {
+  switch (kind) {
+    case ElementKind::Spring: return static_cast<int>(s.springs.size());
+    case ElementKind::Tet: return static_cast<int>(s.tets.size());
+    case ElementKind::TriangleStrain: return static_cast<int>(s.triangle_strains.size());
+    case ElementKind::BendingHinge: return static_cast<int>(s.bending_hinges.size());
+    case ElementKind::Pin: return static_cast<int>(s.pins.size());
+  }
+  return 0;
+}
+
+GrabEvent readGrab(const Field& f, const Scene& s, int frame) {
+  f.allowOnly({"id", "vertex", "stiffness", "path"});
+  GrabEvent g;
+  if (auto id = f.find("id")) g.id = id->string();
+  g.vertex = f.member("vertex").particle(s.numParticles());
+  g.stiffness = f.member("stiffness").positive();
+  if (auto path = f.find("path")) {
+    int last = frame;
+    for (size_t i = 0; i < path->size(); ++i) {
+      const Field key = (*path)[i];
+      if (!key.value().is_array() || key.size() != 4) key.fail("expected a keyframe [frame, x, y, z]");
+      PathKey k;
+      k.frame = key[0].integer();
+      if (k.frame <= last)
+        key[0].fail("keyframe frame " + std::to_string(k.frame) + " must be after " + std::to_string(last) +
+                    (i == 0 ? " (the grab's frame)" : " (the previous keyframe's)"));
+      last = k.frame;
+      k.position = Eigen::Vector3d(key[1].number(), key[2].number(), key[3].number());
+      g.path.push_back(k);
+    }
+  }
+  return g;
+}
+
+ReleaseEvent readRelease(const Field& f, const Scene& s) {
+  ReleaseEvent r;
+  if (f.value().is_string()) {
+    r.id = f.string();
+  } else if (f.value().is_number()) {
+    r.vertex = f.particle(s.numParticles());
+  } else {
+    f.fail(std::string("expected a grab's id (string) or a vertex (integer), got ") + f.value().type_name());
+  }
+  return r;
+}
+
+ImpulseEvent readImpulse(const Field& f, const Scene& s) {
+  f.allowOnly({"vertices", "where", "velocity"});
+  ImpulseEvent im;
+  auto list = f.find("vertices");
+  auto where = f.find("where");
+  if (list && where) where->fail("give either vertices or where, not both");
+  if (!list && !where) f.fail("needs vertices or where");
+  im.vertices = list ? list->particles(s.numParticles()) : selectWhere(*where, s);
+  if (im.vertices.empty()) list->fail("lists no vertex");
+  im.velocity = f.member("velocity").vector3();
+  return im;
+}
+
+ElementEvent readElements(const Field& f, const Scene& s) {
+  f.allowOnly({"kind", "indices", "stiffness", "enabled"});
+  ElementEvent e;
+  const Field kind = f.member("kind");
+  try {
+    e.kind = parseElementKind(kind.string());
+  } catch (const InvalidInputError& error) {
+    kind.fail(error.what());
+  }
+  const Field indices = f.member("indices");
+  const int count = elementCount(s, e.kind);
+  for (size_t i = 0; i < indices.size(); ++i) {
+    const int index = indices[i].integer();
+    if (index < 0 || index >= count)
+      indices[i].fail(std::string(elementKindName(e.kind)) + " " + std::to_string(index) + " out of range [0, " +
+                      std::to_string(count) + ")");
+    e.indices.push_back(index);
+  }
+  if (e.indices.empty()) indices.fail("lists no element");
+  if (auto k = f.find("stiffness")) e.stiffness = k->nonNegative();
+  if (auto on = f.find("enabled")) {
+    if (!on->value().is_boolean()) on->fail(std::string("expected true or false, got ") + on->value().type_name());
+    e.enabled = on->value().get<bool>();
+  }
+  if (!e.stiffness && !e.enabled) f.fail("needs stiffness, enabled or both");
+  return e;
+}
+
+// The "events" list of a scene file, against its scene `s` (indices in range, "where" selected
+// on its rest shape); the ordering rules are EventScript's, reported at the event's path.
+EventScript readEvents(const Field& list, const Scene& s) {
+  std::vector<ScriptedEvent> events;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Field entry = list[i];
+    entry.allowOnly({"frame", "grab", "release", "impulse", "elements"});
+    ScriptedEvent ev;
+    const Field frame = entry.member("frame");
+    ev.frame = frame.integer();
+    if (ev.frame < 0) frame.fail("must be >= 0, got " + std::to_string(ev.frame));
+    int actions = 0;
+    if (auto f = entry.find("grab")) ev.action = readGrab(*f, s, ev.frame), ++actions;
+    if (auto f = entry.find("release")) ev.action = readRelease(*f, s), ++actions;
+    if (auto f = entry.find("impulse")) ev.action = readImpulse(*f, s), ++actions;
+    if (auto f = entry.find("elements")) ev.action = readElements(*f, s), ++actions;
+    if (actions != 1) entry.fail("needs exactly one of grab, release, impulse, elements");
+    events.push_back(std::move(ev));
+  }
+  try {
+    return EventScript(std::move(events));
+  } catch (const InvalidInputError& e) {
+    list.fail(e.what());
+  }
+}
+
+ordered eventToJson(const ScriptedEvent& ev) {
+  ordered e;
+  e["frame"] = ev.frame;
+  if (const auto* g = std::get_if<GrabEvent>(&ev.action)) {
+    ordered grab;
+    if (!g->id.empty()) grab["id"] = g->id;
+    grab["vertex"] = g->vertex;
+    grab["stiffness"] = g->stiffness;
+    if (!g->path.empty()) {
+      ordered path = ordered::array();
+      for (const PathKey& k : g->path) path.push_back(ordered::array({ordered(k.frame), ordered(k.position.x()), ordered(k.position.y()), ordered(k.position.z())}));
+      grab["path"] = std::move(path);
+    }
+    e["grab"] = std::move(grab);
+  } else if (const auto* r = std::get_if<ReleaseEvent>(&ev.action)) {
+    e["release"] = r->id.empty() ? ordered(r->vertex) : ordered(r->id);
+  } else if (const auto* im = std::get_if<ImpulseEvent>(&ev.action)) {
+    e["impulse"] = {{"vertices", im->vertices}, {"velocity", vec(im->velocity)}};
+  } else if (const auto* el = std::get_if<ElementEvent>(&ev.action)) {
+    ordered elements;
+    elements["kind"] = elementKindName(el->kind);
+    elements["indices"] = el->indices;
+    if (el->stiffness) elements["stiffness"] = *el->stiffness;
+    if (el->enabled) elements["enabled"] = *el->enabled;
+    e["elements"] = std::move(elements);
+  }
+  return e;
+}
+
 }  // namespace
 
 }  // namespace stabint::io
@@ -1112,9 +1262,11 @@ std::vector<std::string> builtinSceneParameters(const std::string& name) {
   return names;
 }
 
-Scene loadSceneFile(const std::string& path) { return io::sceneFromJson(io::parseJson(io::readTextFile(path), path), path); }
+namespace {
 
-void saveSceneFile(const Scene& scene, const std::string& path) {
+// The text of a scene file: the scene's explicit form, then the events (validated by
+// EventScript; here only against the scene's ranges, as the reader checks them).
+void saveSceneText(const Scene& scene, const EventScript* events, std::string& text) {
   validateScene(scene);
   // A scene file is UTF-8 text; other bytes in a name made the JSON library throw its own type.
   const auto requireUtf8 = [](const std::string& name, const std::string& field) {
@@ -1126,14 +1278,56 @@ void saveSceneFile(const Scene& scene, const std::string& path) {
   };
   requireUtf8(scene.name, "scene name");
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) requireUtf8(scene.bodies[i].name, "body " + std::to_string(i) + " name");
-  std::string text;
-  io::pretty(text, io::sceneToJson(scene), 0);
+  io::ordered doc = io::sceneToJson(scene);
+  if (events && !events->empty()) {
+    // Written, then read back against the scene: what the file holds is what a load accepts.
+    io::ordered list = io::ordered::array();
+    for (const ScriptedEvent& ev : events->events()) list.push_back(io::eventToJson(ev));
+    const json as_read = json::parse(list.dump());
+    const std::string origin = "events";
+    try {
+      io::readEvents(Field(as_read, "events", origin), scene);
+    } catch (const FileFormatError& e) {
+      throw InvalidInputError(std::string("events do not fit the scene: ") + e.what());
+    }
+    doc["events"] = std::move(list);
+  }
+  io::pretty(text, doc, 0);
   text += '\n';
+}
+
+void writeSceneText(const std::string& text, const std::string& path) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) throw FileFormatError(path, 0, "cannot open file for writing");
   out << text;
   out.flush();
   if (!out) throw FileFormatError(path, 0, "write failed");
+}
+
+}  // namespace
+
+// The events are read and checked too (an error in them is an error in the file), then dropped.
+Scene loadSceneFile(const std::string& path) { return loadSceneFileWithEvents(path).scene; }
+
+SceneFile loadSceneFileWithEvents(const std::string& path) {
+  const json doc = io::parseJson(io::readTextFile(path), path);
+  SceneFile file;
+  file.scene = io::sceneFromJson(doc, path);
+  const Field root(doc, "", path);
+  if (auto events = root.find("events")) file.events = io::readEvents(*events, file.scene);
+  return file;
+}
+
+void saveSceneFileWithEvents(const Scene& scene, const EventScript& events, const std::string& path) {
+  std::string text;
+  saveSceneText(scene, &events, text);
+  writeSceneText(text, path);
+}
+
+void saveSceneFile(const Scene& scene, const std::string& path) {
+  std::string text;
+  saveSceneText(scene, nullptr, text);
+  writeSceneText(text, path);
 }
 
 }  // namespace stabint

@@ -220,6 +220,7 @@ class OpenCLBackend final : public Backend {
     int params_version = -1;
     bool params_timed = false;  // the buffer holds paramsAt's values, not the block's own
     bool params_uploaded = false;
+    int params_revision = 0;  // ElementBlock::params_revision of the uploaded params
     std::vector<double> host_params;
   };
 
@@ -273,9 +274,9 @@ class OpenCLBackend final : public Backend {
       if (d.block->count == 0) continue;
       const bool timed = d.block->type->timeDependent(scene_);
       // Constant params are uploaded once, and again only when they replace time-dependent ones
-      // (a restored checkpoint without pin ramps).
-      const bool stale =
-          !d.params_uploaded || (timed ? (version != d.params_version || t != d.params_time) : d.params_timed);
+      // (a restored checkpoint without pin ramps) or changed in place (a stiffness change).
+      const bool stale = !d.params_uploaded || d.params_revision != d.block->params_revision ||
+                         (timed ? (version != d.params_version || t != d.params_time) : d.params_timed);
       if (!force && !stale) continue;
       if (timed) {
         d.block->type->paramsAt(scene_, t, d.host_params);
@@ -287,6 +288,7 @@ class OpenCLBackend final : public Backend {
       d.params_version = version;
       d.params_timed = timed;
       d.params_uploaded = true;
+      d.params_revision = d.block->params_revision;
     }
     times_.transfer += secondsSince(start);
   }

@@ -96,7 +96,47 @@ void SceneData::rampUserForces(const Eigen::MatrixX3d& forces, double t0, double
 
 void SceneData::buildBlocks() {
   for (const ElementType* type : elementTypes()) blocks_.push_back(type->build(scene_));
+  enabled_.resize(blocks_.size());
   numberContributions();
+}
+
+int SceneData::blockIndex(const ElementType& type) const {
+  for (std::size_t b = 0; b < blocks_.size(); ++b)
+    if (blocks_[b].type == &type) return static_cast<int>(b);
+  return -1;  // not reached: every type of elementTypes() has a block
+}
+
+void SceneData::applyEnabled(std::size_t block) {
+  ElementBlock& b = blocks_[block];
+  const std::vector<std::uint8_t>& flags = enabled_[block];
+  const std::size_t p = static_cast<std::size_t>(b.type->shape().params);
+  for (std::size_t e = 0; e < flags.size(); ++e)
+    if (!flags[e]) b.params[p * e] = 0.0;
+}
+
+void SceneData::setElementStiffness(int block, int element, double stiffness) {
+  ElementBlock& b = blocks_[static_cast<std::size_t>(block)];
+  b.type->setStiffness(scene_, element, stiffness);
+  const std::size_t p = static_cast<std::size_t>(b.type->shape().params);
+  b.type->elementParams(scene_, element, &b.params[p * static_cast<std::size_t>(element)]);
+  if (!elementEnabled(block, element)) b.params[p * static_cast<std::size_t>(element)] = 0.0;
+  ++b.params_revision;
+  ++forcing_version_;  // cached time-dependent params (pins) carry the weight too
+}
+
+void SceneData::setElementEnabled(int block, int element, bool enabled) {
+  ElementBlock& b = blocks_[static_cast<std::size_t>(block)];
+  std::vector<std::uint8_t>& flags = enabled_[static_cast<std::size_t>(block)];
+  if (flags.empty()) flags.assign(static_cast<std::size_t>(b.count), 1);
+  flags[static_cast<std::size_t>(element)] = enabled ? 1 : 0;
+  const std::size_t p = static_cast<std::size_t>(b.type->shape().params);
+  if (enabled) {
+    b.type->elementParams(scene_, element, &b.params[p * static_cast<std::size_t>(element)]);
+  } else {
+    b.params[p * static_cast<std::size_t>(element)] = 0.0;
+  }
+  ++b.params_revision;
+  ++forcing_version_;
 }
 
 void SceneData::numberContributions() {
@@ -122,11 +162,15 @@ void SceneData::setPins(const std::vector<Pin>& pins) {
   moving_pins_ = std::any_of(scene_.pins.begin(), scene_.pins.end(), [](const Pin& p) { return p.target.moving(); });
   // Only the pin block is rebuilt (in place: backends keep pointers to the blocks); the others
   // keep their data and, pins being last in the table, their contribution numbers.
-  for (ElementBlock& block : blocks_) {
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    ElementBlock& block = blocks_[b];
     if (block.type != &pinElementType()) continue;
     const int revision = block.revision;
     block = pinElementType().build(scene_);
     block.revision = revision + 1;
+    // Grabbed pins are enabled; the others keep their flags.
+    if (!enabled_[b].empty()) enabled_[b].resize(pins.size(), 1);
+    applyEnabled(b);
   }
   numberContributions();
   ++forcing_version_;

@@ -9,6 +9,8 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace stabint {
@@ -76,6 +78,25 @@ class SceneData {
   /// Incremented by every setPins.
   int layoutVersion() const { return layout_version_; }
 
+  // ---- element stiffness and enabled flags (Simulator::setElementStiffness, setElementEnabled) --
+  /// Index of `type`'s block in blocks().
+  int blockIndex(const ElementType& type) const;
+  /// Sets element `element` of block `block`'s stiffness in the scene and its params (checked by
+  /// the caller). Its weight stays 0 while it is disabled.
+  void setElementStiffness(int block, int element, double stiffness);
+  /// A disabled element keeps its stiffness and has weight 0.
+  void setElementEnabled(int block, int element, bool enabled);
+  bool elementEnabled(int block, int element) const {
+    const std::vector<std::uint8_t>& flags = enabled_[static_cast<std::size_t>(block)];
+    return flags.empty() || flags[static_cast<std::size_t>(element)] != 0;
+  }
+  bool elementEnabled(const ElementType& type, int element) const { return elementEnabled(blockIndex(type), element); }
+  /// w_e as the global matrix has it: params[P e] (0 for a disabled element).
+  double elementWeight(int block, int element) const {
+    const ElementBlock& b = blocks_[static_cast<std::size_t>(block)];
+    return b.params[static_cast<std::size_t>(b.type->shape().params) * static_cast<std::size_t>(element)];
+  }
+
   /// The mutable forcing, for checkpoints: everything the ramps changed.
   struct Ramp {
     double t0 = 0.0, t1 = 0.0;
@@ -95,6 +116,8 @@ class SceneData {
  private:
   void buildBlocks();
   void numberContributions();
+  // Zeroes the weights of the disabled elements of a freshly built block.
+  void applyEnabled(std::size_t block);
 
   Scene scene_;
   int n_ = 0;
@@ -108,6 +131,7 @@ class SceneData {
   Ramp user_forces_;
   int forcing_version_ = 0;
   int layout_version_ = 0;
+  std::vector<std::vector<std::uint8_t>> enabled_;  // per block; empty: all enabled
 };
 
 }  // namespace stabint

@@ -4,11 +4,13 @@
 
 #include <stabint/errors.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <iterator>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace stabint {
@@ -76,28 +78,63 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
 }
 
 void GlobalSystem::addToDiagonal(int j, double delta, bool refactor) {
-  laplacian_.coeffRef(j, j) += delta;
-  if (refactor) {
+  const double one = 1.0;
+  addElementTerm(&j, 1, &one, 1, delta, refactor ? FactorChange::Drop : FactorChange::RankUpdate);
+}
+
+void GlobalSystem::refactorAll() {
+  std::vector<double> cs;
+  for (const auto& entry : factors_) cs.push_back(entry.first);
+  factors_.clear();
+  for (double c : cs) factor(c);
+}
+
+void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, int R, double delta, FactorChange how) {
+  for (int i = 0; i < K; ++i) {
+    for (int j = 0; j < K; ++j) {
+      double sum = 0.0;
+      for (int r = 0; r < R; ++r) sum += a[K * r + i] * a[K * r + j];
+      if (sum != 0.0) laplacian_.coeffRef(vertices[i], vertices[j]) += delta * sum;
+    }
+  }
+  if (how == FactorChange::Deferred) return;
+  if (how == FactorChange::Drop) {
     factors_.clear();
     return;
   }
   const int n = static_cast<int>(laplacian_.rows());
+  const double scale = std::sqrt(std::abs(delta));
   for (auto it = factors_.begin(); it != factors_.end();) {
     cholmod_factor* factor = it->second->factor();
     cholmod_common& common = it->second->cholmod();
-    // C = sqrt(|delta|) e_j in the factor's fill-reducing order: row k with Perm[k] = j.
-    int k = j;
-    if (const int* perm = static_cast<const int*>(factor->Perm)) {
-      for (k = 0; k < n && perm[k] != j; ++k) {
+    // C = sqrt(|delta|) A^T in the factor's fill-reducing order: vertex v is row k with
+    // Perm[k] = v. Each column lists its rows in ascending order, as CHOLMOD requires.
+    std::vector<std::pair<int, int>> rows(static_cast<std::size_t>(K));  // (permuted row, k)
+    const int* perm = static_cast<const int*>(factor->Perm);
+    for (int k = 0; k < K; ++k) {
+      int row = vertices[k];
+      if (perm) {
+        for (row = 0; row < n && perm[row] != vertices[k]; ++row) {
+        }
       }
+      rows[static_cast<std::size_t>(k)] = {row, k};
     }
-    cholmod_sparse* c = cholmod_allocate_sparse(n, 1, 1, /*sorted=*/1, /*packed=*/1, /*stype=*/0, CHOLMOD_REAL, &common);
+    std::sort(rows.begin(), rows.end());
+    cholmod_sparse* c = cholmod_allocate_sparse(n, R, static_cast<std::size_t>(K * R), /*sorted=*/1, /*packed=*/1,
+                                                /*stype=*/0, CHOLMOD_REAL, &common);
     bool updated = false;
     if (c != nullptr) {
-      static_cast<int*>(c->p)[0] = 0;
-      static_cast<int*>(c->p)[1] = 1;
-      static_cast<int*>(c->i)[0] = k;
-      static_cast<double*>(c->x)[0] = std::sqrt(std::abs(delta));
+      int* cp = static_cast<int*>(c->p);
+      int* ci = static_cast<int*>(c->i);
+      double* cx = static_cast<double*>(c->x);
+      for (int r = 0; r < R; ++r) {
+        cp[r] = K * r;
+        for (int k = 0; k < K; ++k) {
+          ci[K * r + k] = rows[static_cast<std::size_t>(k)].first;
+          cx[K * r + k] = scale * a[K * r + rows[static_cast<std::size_t>(k)].second];
+        }
+      }
+      cp[R] = K * R;
       updated = cholmod_updown(delta > 0.0 ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }

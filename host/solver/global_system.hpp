@@ -38,6 +38,21 @@ class GlobalSystem {
   /// factored again on their next use instead (for comparison).
   void addToDiagonal(int j, double delta, bool refactor = false);
 
+  /// How addElementTerm treats the existing factors.
+  enum class FactorChange {
+    RankUpdate,  // a rank-R cholmod_updown of each
+    Drop,        // dropped, factored again on their next use (as addToDiagonal's `refactor`)
+    Deferred,    // left stale: the caller calls refactorAll() before the next solve
+  };
+  /// L += delta A^T A over `vertices` (K of them) with A the R by K row-major `coefficients`: an
+  /// element's weight changed by delta (a stiffness change, an element enabled or disabled). By
+  /// default the factors get a rank-R update or downdate (C = sqrt|delta| A^T, in their permuted
+  /// order).
+  void addElementTerm(const int* vertices, int K, const double* coefficients, int R, double delta,
+                      FactorChange how = FactorChange::RankUpdate);
+  /// Factors every c factored so far again from the current L (after Deferred changes).
+  void refactorAll();
+
  private:
   // Simplicial CHOLMOD: with Debian's reference BLAS its triangular solves beat the supernodal
   // ones by 2-3x on these sparse, low-fill systems, and PD solves every iteration. The subclass

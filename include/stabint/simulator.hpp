@@ -43,6 +43,16 @@ const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev"
 /// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
 Acceleration parseAcceleration(const std::string& name);
 
+/// The element types of a Scene, one per element list, for the run-time element changes
+/// (Simulator::setElementStiffness, setElementEnabled).
+enum class ElementKind { Spring, Tet, TriangleStrain, BendingHinge, Pin };
+/// "spring", "tet", "triangle_strain", "bending_hinge", "pin" (the JSON names, singular).
+const char* elementKindName(ElementKind kind);
+/// Parses a name as printed by elementKindName, or the scene file's list name ("springs",
+/// "tets", "triangle_strains", "bending_hinges", "pins"); throws InvalidInputError.
+ElementKind parseElementKind(const std::string& name);
+std::vector<ElementKind> allElementKinds();
+
 /// Which OpenCL device to use. Empty strings fall back to the environment variables
 /// STABINT_OPENCL_PLATFORM and STABINT_OPENCL_DEVICE, then to the first platform and device.
 /// Each selector is either an index ("0") or a case-insensitive substring of the name.
@@ -159,12 +169,12 @@ struct StepReport {
 };
 
 /// A snapshot of a running simulation: time, step count, state, BDF2 history, the tracked
-/// target H*, the pins (with grabbed and released handles) and the forcing set by per-frame
-/// input (pin targets, external forces). Restoring it into a Simulator of the same scene
+/// target H*, the pins (with grabbed and released handles), every element's stiffness and
+/// enabled flag, and the forcing set by per-frame input (pin targets, external forces). Restoring it into a Simulator of the same scene
 /// continues bit for bit as the original did from that moment (same options, same backend and
-/// precision) when both have the same pins; when the pins differ (a checkpoint taken during a
-/// grab, restored into a fresh simulator) the global factors are updated rather than the same,
-/// and the run agrees to round-off. Options are not part of it. The serialized form
+/// precision) when both have the same pins and element stiffnesses; when they differ (a checkpoint
+/// taken during a grab or after a stiffness change, restored into a fresh simulator) the global
+/// factors are updated rather than the same, and the run agrees to round-off. Options are not part of it. The serialized form
 /// (bytes(), save()) is a versioned binary format of this library version and this machine's
 /// byte order.
 class Checkpoint {
@@ -254,10 +264,27 @@ class Simulator {
   /// leaves H and H* alike (event_energy); the factors get a rank-1 downdate.
   void release(int pin);
 
+  /// Element `index` of `kind` (its index in the scene's list of that kind; pins include grabbed
+  /// ones) gets `stiffness` (finite, >= 0), in the same units as the scene's. A disabled element
+  /// keeps the new stiffness for when it is enabled again. A discontinuous event: the element's
+  /// energy jump enters H and H* alike (event_energy); the global matrix changes by the element's
+  /// term, a rank-R update or downdate of the factors (R = rows of its A_e: 1 for springs, hinges
+  /// and pins, 2 for triangle strain, 3 for tets). Time, state, BDF2 history and H* are kept.
+  /// scene() shows the new stiffness. The list form changes several elements at once (all
+  /// validated before any changes).
+  void setElementStiffness(ElementKind kind, int index, double stiffness);
+  void setElementStiffness(ElementKind kind, const std::vector<int>& indices, double stiffness);
+  /// Disables (weight 0: the element exerts no force and has no energy) or enables an element,
+  /// keeping its stiffness; booked and applied as setElementStiffness. A released pin has
+  /// stiffness 0, so enabling it does nothing (grab again instead).
+  void setElementEnabled(ElementKind kind, int index, bool enabled);
+  void setElementEnabled(ElementKind kind, const std::vector<int>& indices, bool enabled);
+  bool elementEnabled(ElementKind kind, int index) const;
+
   /// Snapshot of the current simulation (see Checkpoint).
   Checkpoint checkpoint() const;
   /// Continues from a snapshot of a Simulator of the same scene. Throws InvalidInputError when it
-  /// belongs to another scene (particle or pin count, masses or rest shape differ).
+  /// belongs to another scene (particle, pin or element counts, masses or rest shape differ).
   void restore(const Checkpoint& checkpoint);
 
  private:

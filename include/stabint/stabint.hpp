@@ -2,6 +2,7 @@
 // Umbrella header.
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
+#include <stabint/events.hpp>
 #include <stabint/io.hpp>
 #include <stabint/scene.hpp>
 #include <stabint/simulator.hpp>

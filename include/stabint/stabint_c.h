@@ -257,6 +257,16 @@ stabint_status stabint_simulator_grab(stabint_simulator* sim, int vertex, double
                                       int* out_pin);
 /* Detaches pin `pin` (stiffness 0, index kept); the pin's energy leaves H and H* (event_energy). */
 stabint_status stabint_simulator_release(stabint_simulator* sim, int pin);
+/* Element changes (Simulator::setElementStiffness, setElementEnabled): `kind` names an element
+ * list ("spring", "tet", "triangle_strain", "bending_hinge", "pin", or the plural); `count`
+ * indices into it get `stiffness` (finite, >= 0) or are enabled (`enabled` != 0) or disabled
+ * (weight 0, stiffness kept). The energy jump is booked in H and H* (event_energy); the global
+ * factors get rank updates. All indices are checked first: INVALID_INPUT changes nothing. */
+stabint_status stabint_simulator_set_element_stiffness(stabint_simulator* sim, const char* kind,
+                                                       const int* indices, size_t count,
+                                                       double stiffness);
+stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, const char* kind,
+                                                     const int* indices, size_t count, int enabled);
 
 /* ---- checkpoints ----
  * A snapshot of a running simulation (time, step count, state, BDF2 history, H*, the per-frame

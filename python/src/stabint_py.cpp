@@ -170,6 +170,12 @@ void bindEnums(nb::module_& m) {
       .value("Box", ColliderShape::Box)
       .value("Capsule", ColliderShape::Capsule);
   nb::enum_<ClothModel>(m, "ClothModel").value("Springs", ClothModel::Springs).value("Triangles", ClothModel::Triangles);
+  nb::enum_<ElementKind>(m, "ElementKind", "An element list of a Scene, for set_element_stiffness and set_element_enabled.")
+      .value("Spring", ElementKind::Spring)
+      .value("Tet", ElementKind::Tet)
+      .value("TriangleStrain", ElementKind::TriangleStrain)
+      .value("BendingHinge", ElementKind::BendingHinge)
+      .value("Pin", ElementKind::Pin);
 
   m.def("integrator_name", &integratorName, "'FE', 'SE', 'BE', 'BDF2', 'IM' or 'blend'.");
   m.def("parse_integrator", &parseIntegrator, "name"_a, "Integrator from a name as integrator_name prints it (any case).");
@@ -506,6 +512,22 @@ void bindSimulator(nb::module_& m) {
       .def("release", &Simulator::release, "pin"_a,
            "Detaches pin `pin` (a handle or a scene pin): its stiffness becomes 0 and its index stays valid; the "
            "pin's energy leaves H and H* alike (the next report's event_energy).")
+      .def("set_element_stiffness",
+           nb::overload_cast<ElementKind, const std::vector<int>&, double>(&Simulator::setElementStiffness), "kind"_a,
+           "indices"_a, "stiffness"_a,
+           "Elements `indices` of `kind` get `stiffness` (finite, >= 0; kept by disabled elements). A discontinuous "
+           "event: the energy jump enters H and H* alike (the next report's event_energy); the global factors get "
+           "rank updates. All indices are checked first: InvalidInputError changes nothing.")
+      .def("set_element_stiffness", nb::overload_cast<ElementKind, int, double>(&Simulator::setElementStiffness),
+           "kind"_a, "index"_a, "stiffness"_a, "One element; see the list form.")
+      .def("set_element_enabled",
+           nb::overload_cast<ElementKind, const std::vector<int>&, bool>(&Simulator::setElementEnabled), "kind"_a,
+           "indices"_a, "enabled"_a,
+           "Disables (weight 0, stiffness kept) or enables elements `indices` of `kind`; booked as "
+           "set_element_stiffness.")
+      .def("set_element_enabled", nb::overload_cast<ElementKind, int, bool>(&Simulator::setElementEnabled), "kind"_a,
+           "index"_a, "enabled"_a, "One element; see the list form.")
+      .def("element_enabled", &Simulator::elementEnabled, "kind"_a, "index"_a)
       .def("checkpoint", &Simulator::checkpoint, nb::call_guard<nb::gil_scoped_release>(),
            "A Checkpoint of the current simulation (the GIL is released while it is written).")
       .def("restore", &Simulator::restore, "checkpoint"_a, nb::call_guard<nb::gil_scoped_release>(),

@@ -461,6 +461,28 @@ def test_the_matplotlib_example_plots_both_energies(tmp_path):
     assert out.stat().st_size > 10_000  # a PNG with content, not an empty figure
 
 
+def test_element_changes_book_their_energy():
+    sim, scene = small_cloth()
+    for _ in range(5):
+        sim.step()
+    h0, target0 = sim.energy().total, sim.target
+    sim.set_element_stiffness(stabint.ElementKind.Spring, [0, 1, 2], 5e3)
+    sim.set_element_enabled(stabint.ElementKind.Spring, 2, False)
+    jump = sim.energy().total - h0
+    assert jump != 0.0
+    # H* moved by the same jump: round-off of sums of energies of about 1 J.
+    assert sim.target - target0 == pytest.approx(jump, abs=1e-12)
+    assert sim.scene.springs[1].stiffness == 5e3
+    assert sim.scene.springs[2].stiffness == 5e3  # disabling keeps the stiffness
+    assert not sim.element_enabled(stabint.ElementKind.Spring, 2)
+    with pytest.raises(stabint.InvalidInputError, match="spring 100000 out of range"):
+        sim.set_element_stiffness(stabint.ElementKind.Spring, [0, 100000], 1.0)
+    with pytest.raises(stabint.InvalidInputError, match="stiffness"):
+        sim.set_element_stiffness(stabint.ElementKind.Spring, 0, -1.0)
+    assert sim.scene.springs[0].stiffness == 5e3
+    assert sim.step().event_energy == pytest.approx(jump, abs=1e-12)
+
+
 def test_grab_drag_and_release_book_their_energy():
     sim, scene = small_cloth()
     low = free_particle(scene)

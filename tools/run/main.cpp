@@ -264,15 +264,17 @@ std::string paramsAsJson(const std::vector<std::pair<std::string, std::string>>&
   return object.dump();
 }
 
-stabint::Scene loadScene(const Options& o) {
+// A scene file's events (docs/scene-format.md, "Events") replay as the frames run; a built-in
+// scene has none.
+stabint::SceneFile loadScene(const Options& o) {
   if (isBuiltin(o.scene)) {
-    return stabint::builtinScene(o.scene, paramsAsJson(o.params), "builtin scene '" + o.scene + "'");
+    return {stabint::builtinScene(o.scene, paramsAsJson(o.params), "builtin scene '" + o.scene + "'"), {}};
   }
   if (!o.params.empty()) throw UsageError("--param applies to built-in scenes only, not to '" + o.scene + "'");
   if (fs::path(o.scene).extension() != ".json" && !fs::exists(o.scene)) {
     throw UsageError("--scene: unknown scene '" + o.scene + "' (expected oscillator, chain, cloth, tetbar or a .json file)");
   }
-  return stabint::loadSceneFile(o.scene);
+  return stabint::loadSceneFileWithEvents(o.scene);
 }
 
 // Faces for the OBJ frames of a tet mesh: the triangles that belong to exactly one tet, wound
@@ -428,7 +430,9 @@ int listDevices() {
 }
 
 int run(Options& o) {
-  const stabint::Scene scene = loadScene(o);
+  stabint::SceneFile file = loadScene(o);
+  const stabint::Scene& scene = file.scene;
+  stabint::EventScript& events = file.events;
   auto sim = std::make_unique<stabint::Simulator>(scene, o.sim);
   if (o.precision_explicit && sim->backendDescription().rfind("CPU reference", 0) == 0 &&
       o.sim.opencl.precision == stabint::Precision::Float && !o.quiet) {
@@ -437,7 +441,8 @@ int run(Options& o) {
   if (!o.quiet) {
     std::cerr << kProgram << ": scene '" << scene.name << "' (" << scene.numParticles() << " particles, "
               << stabint::elementSummary(scene) << "), " << stabint::integratorName(o.sim.integrator) << ", dt " << o.sim.time_step << ", "
-              << o.frames << " frames on " << sim->backendDescription() << "\n";
+              << o.frames << " frames on " << sim->backendDescription()
+              << (events.empty() ? std::string() : ", " + std::to_string(events.events().size()) + " scripted events") << "\n";
   }
 
   std::optional<CsvWriter> csv;
@@ -459,6 +464,7 @@ int run(Options& o) {
   const StopSignals stop_signals;
   for (int frame = 1; frame <= o.frames; ++frame) {
     try {
+      events.apply(*sim);  // the events due before this step, and the dragged handles' targets
       sim->step();
     } catch (const stabint::NonFiniteStateError& e) {
       const int bad = e.step() + 1;

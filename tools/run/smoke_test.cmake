@@ -58,6 +58,37 @@ elseif(CASE STREQUAL "scene_files")
       message(FATAL_ERROR "${scene}.json: expected 3 CSV rows on stdout, got ${n}:\n${run_stdout}")
     endif()
   endforeach()
+elseif(CASE STREQUAL "events")
+  # scenes/cloth_drag.json replays its scripted events (the grab at frame 30 first): its energies
+  # equal those of the same cloth without events up to frame 30 and differ from frame 31 on.
+  expect_run(0 "4 scripted events" --scene "${SCENES}/cloth_drag.json" --backend cpu --frames 40 --csv "${dir}/drag.csv")
+  expect_csv_rows("${dir}/drag.csv" 41)
+  file(WRITE "${dir}/plain.json"
+       "{\"format\": \"stabint-scene\", \"version\": 1, \"builtin\": {\"name\": \"cloth\", \"nx\": 20, \"ny\": 20}}")
+  expect_run(0 "40 frames in" --scene "${dir}/plain.json" --backend cpu --frames 40 --csv "${dir}/plain.csv")
+  file(STRINGS "${dir}/drag.csv" drag)
+  file(STRINGS "${dir}/plain.csv" plain)
+  foreach(row 31 32)  # frames 30 and 31 (row 0 is the header)
+    list(GET drag ${row} d)
+    list(GET plain ${row} p)
+    # frame, time and the energies: the columns before the timings.
+    set(columns "^[^,]*,[^,]*,[^,]*,[^,]*,[^,]*,[^,]*,[^,]*,")  # CMake's regex has no {7}
+    string(REGEX MATCH "${columns}" d "${d}")
+    string(REGEX MATCH "${columns}" p "${p}")
+    if(d STREQUAL "" OR p STREQUAL "")
+      message(FATAL_ERROR "row ${row}: no CSV columns found")
+    endif()
+    if(row EQUAL 31 AND NOT d STREQUAL p)
+      message(FATAL_ERROR "frame 30 should be untouched by the events:\n${d}\n${p}")
+    elseif(row EQUAL 32 AND d STREQUAL p)
+      message(FATAL_ERROR "frame 31 should follow the grab:\n${d}")
+    endif()
+  endforeach()
+  # A bad event is an error naming its JSON path.
+  file(WRITE "${dir}/bad.json"
+       "{\"format\": \"stabint-scene\", \"builtin\": {\"name\": \"cloth\", \"nx\": 4, \"ny\": 4}, "
+       "\"events\": [{\"frame\": 2, \"grab\": {\"vertex\": 16, \"stiffness\": 1e3}}]}")
+  expect_run(1 "bad.json: events\\[0\\]\\.grab\\.vertex: particle index 16 out of range" --scene "${dir}/bad.json" --frames 3)
 elseif(CASE STREQUAL "triangle_cloth")
   # The cloth grid built from triangle strain and bending hinges; its OBJ frames carry the
   # grid's faces (Scene::triangles).

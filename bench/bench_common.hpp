@@ -82,9 +82,9 @@ void setSizeCounters(benchmark::State& state, const Scene& scene);
 
 namespace stabint::bench {
 // Case registration, one function per file.
-void registerStepCases();       // bench_steps.cpp
-void registerIterationCases();  // bench_iterations.cpp
-void registerSolverCases();     // bench_solver.cpp
+void registerStepCases();         // bench_steps.cpp
+void registerIterationCases();    // bench_iterations.cpp
+void registerSolverCases();       // bench_solver.cpp
 void registerInteractionCases();  // bench_interaction.cpp
 void registerContactCases();      // bench_contact.cpp
 }  // namespace stabint::bench

@@ -113,8 +113,8 @@ void runActiveSetUpdates(benchmark::State& state) {
     system.addToDiagonal(vertex, -w);
     vertex = vertex % 2400 + 37;
   }
-  state.counters["update"] = benchmark::Counter(2.0 * state.iterations(), benchmark::Counter::kIsRate |
-                                                                              benchmark::Counter::kInvert);
+  state.counters["update"] =
+      benchmark::Counter(2.0 * state.iterations(), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.SetLabel("rank-1 update of both blend factors");
 }
 
@@ -125,11 +125,12 @@ void registerContactCases() {
       ->Unit(benchmark::kMicrosecond);
   for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
     for (BackendChoice backend : allBackends()) {
-      const std::string name = std::string("contact_vs_none/cloth50/") + integratorName(integrator) + "/" +
-                               backendLabel(backend);
-      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-        runContact(state, name, backend, integrator);
-      })->UseRealTime()->Unit(benchmark::kMillisecond);
+      const std::string name =
+          std::string("contact_vs_none/cloth50/") + integratorName(integrator) + "/" + backendLabel(backend);
+      benchmark::RegisterBenchmark(name.c_str(),
+                                   [=](benchmark::State& state) { runContact(state, name, backend, integrator); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond);
     }
   }
 }

@@ -186,7 +186,8 @@ void runElementChange(benchmark::State& state, bool tets, bool refactor) {
   double sign = 1.0;
   for (auto _ : state) {
     system.addElementTerm(&block.vertices[std::size_t(shape.vertices) * std::size_t(e)], shape.vertices, a, shape.rows,
-                          sign * w, refactor ? GlobalSystem::FactorChange::Drop : GlobalSystem::FactorChange::RankUpdate);
+                          sign * w,
+                          refactor ? GlobalSystem::FactorChange::Drop : GlobalSystem::FactorChange::RankUpdate);
     system.solve(c, rhs, x);
     benchmark::DoNotOptimize(x.data());
     sign = -sign;
@@ -201,26 +202,28 @@ void registerInteractionCases() {
     for (bool refactor : {false, true}) {
       const std::string name = std::string("element_change_and_solve/") + (tets ? "tetbar40/tet" : "cloth50/spring") +
                                "/" + (refactor ? "refactor" : "updown");
-      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) { runElementChange(state, tets, refactor); })
-          ->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+        runElementChange(state, tets, refactor);
+      })->Unit(benchmark::kMicrosecond);
     }
   }
   for (BackendChoice backend : allBackends()) {
     const std::string name = std::string("grab_release_vs_step/cloth50/BE/") + backendLabel(backend);
-    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-      runGrab(state, name, backend);
-    })->UseRealTime()->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) { runGrab(state, name, backend); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond);
   }
   for (bool refactor : {false, true}) {
     const std::string name = std::string("pin_change_and_solve/cloth50/") + (refactor ? "refactor" : "updown");
-    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) { runPinChange(state, refactor); })
-        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+      runPinChange(state, refactor);
+    })->Unit(benchmark::kMicrosecond);
   }
   for (BackendChoice backend : allBackends()) {
     const std::string name = std::string("input_vs_scripted/cloth50/BE/") + backendLabel(backend);
-    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-      runInput(state, name, backend);
-    })->UseRealTime()->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) { runInput(state, name, backend); })
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond);
   }
 }
 

@@ -67,8 +67,7 @@ Eigen::MatrixX3d inertialTarget(const Scene& s) {
 
 struct IterationFixture {
   IterationFixture(const Scene& s, BackendChoice choice, double c_)
-      : scene(s), data(s), backend(makeBackend(data, choice)), system(data),
-        solver(*backend, system, kScratch), c(c_) {
+      : scene(s), data(s), backend(makeBackend(data, choice)), system(data), solver(*backend, system, kScratch), c(c_) {
     const Eigen::MatrixX3d y = inertialTarget(s);
     backend->write(kY, y);
     backend->write(kX, y);
@@ -154,7 +153,9 @@ void runRotations(benchmark::State& state, const TetDeformations& input, Rotatio
       switch (method) {
         case RotationMethod::NewtonPolar: projections::nearestRotation(input.f[e].data(), r.data()); break;
         case RotationMethod::JacobiSvd: r = projections::nearestRotationBySvd(input.f[e]); break;
-        case RotationMethod::WarmQuaternion: r = quaternionStep(input.f[e], input.previous[e]).toRotationMatrix(); break;
+        case RotationMethod::WarmQuaternion:
+          r = quaternionStep(input.f[e], input.previous[e]).toRotationMatrix();
+          break;
       }
       sum += r;
     }
@@ -177,17 +178,21 @@ void runRotations(benchmark::State& state, const TetDeformations& input, Rotatio
 void registerIterationCases() {
   for (const SceneCase& scene : referenceScenes()) {
     if (scene.make().tets.empty()) continue;
-    for (const auto& [label, method] : {std::pair{"newton-polar", RotationMethod::NewtonPolar},
-                                        std::pair{"jacobi-svd", RotationMethod::JacobiSvd},
-                                        std::pair{"warm-quaternion-1", RotationMethod::WarmQuaternion}}) {
+    for (const auto& [label, method] :
+         {std::pair{"newton-polar", RotationMethod::NewtonPolar}, std::pair{"jacobi-svd", RotationMethod::JacobiSvd},
+          std::pair{"warm-quaternion-1", RotationMethod::WarmQuaternion}}) {
       const std::string name = "rotation/" + scene.name + "/" + label;
       const SceneCase c = scene;
       const RotationMethod m = method;
-      benchmark::RegisterBenchmark(name.c_str(), [c, m](benchmark::State& state) {
-        const TetDeformations& input = cachedFixture<TetDeformations>(
-            "rotation/" + c.name, [&] { return std::make_unique<TetDeformations>(tetDeformations(c.make())); });
-        runRotations(state, input, m);
-      })->UseRealTime()->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(name.c_str(),
+                                   [c, m](benchmark::State& state) {
+                                     const TetDeformations& input = cachedFixture<TetDeformations>(
+                                         "rotation/" + c.name,
+                                         [&] { return std::make_unique<TetDeformations>(tetDeformations(c.make())); });
+                                     runRotations(state, input, m);
+                                   })
+          ->UseRealTime()
+          ->Unit(benchmark::kMicrosecond);
     }
   }
   for (const SceneCase& scene : referenceScenes())
@@ -195,17 +200,19 @@ void registerIterationCases() {
       for (BackendChoice backend : allBackends()) {
         const std::string name =
             "iteration/" + scene.name + "/" + integratorName(integrator) + "/" + backendLabel(backend);
-        benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-          runIteration(state, name, scene.make, backend, integrator);
-        })->UseRealTime()->Unit(benchmark::kMicrosecond);
+        benchmark::RegisterBenchmark(
+            name.c_str(), [=](benchmark::State& state) { runIteration(state, name, scene.make, backend, integrator); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
       }
 
   for (BackendChoice backend : allBackends()) {
     const std::string name = std::string("scaling_iteration/cloth/BE/") + backendLabel(backend);
     auto* b = benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
       const int side = static_cast<int>(state.range(0));
-      runIteration(state, name + "/" + std::to_string(side), [side] { return clothScene(side); }, backend,
-                   Integrator::BackwardEuler);
+      runIteration(
+          state, name + "/" + std::to_string(side), [side] { return clothScene(side); }, backend,
+          Integrator::BackwardEuler);
     });
     for (int side : scalingSides()) b->Arg(side);
     b->ArgName("side")->UseRealTime()->Unit(benchmark::kMicrosecond);
@@ -217,9 +224,11 @@ void registerIterationCases() {
   for (const SceneCase& scene : autoRuleScenes())
     for (BackendChoice backend : allBackends()) {
       const std::string name = "auto_iteration/" + scene.name + "/BE/" + backendLabel(backend);
-      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-        runIteration(state, name, scene.make, backend, Integrator::BackwardEuler);
-      })->UseRealTime()->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(
+          name.c_str(),
+          [=](benchmark::State& state) { runIteration(state, name, scene.make, backend, Integrator::BackwardEuler); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMicrosecond);
     }
 }
 

@@ -46,8 +46,8 @@ class RawCholmod {
     cholmod_start(&common_);
     common_.supernodal = CHOLMOD_SIMPLICIAL;
     common_.final_ll = ll ? 1 : 0;
-    cholmod_sparse a = Eigen::viewAsCholmod(
-        Eigen::Ref<Eigen::SparseMatrix<double>>(const_cast<Eigen::SparseMatrix<double>&>(k)));
+    cholmod_sparse a =
+        Eigen::viewAsCholmod(Eigen::Ref<Eigen::SparseMatrix<double>>(const_cast<Eigen::SparseMatrix<double>&>(k)));
     a.stype = -1;  // lower triangle stored (the matrix is full; CHOLMOD reads the lower half)
     factor_ = cholmod_analyze(&a, &common_);
     cholmod_factorize(&a, factor_, &common_);
@@ -220,9 +220,9 @@ void registerSolverCases() {
     for (const char* variant : {"library", "eigen-simplicial-llt", "eigen-simplicial-ldlt", "eigen-supernodal-llt",
                                 "cholmod-solve2-llt", "cholmod-solve2-ldlt", "interleaved-llt"}) {
       const std::string name = "global_solve/" + scene.name + "/" + variant;
-      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-        runVariant(state, scene, variant);
-      })->UseRealTime()->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) { runVariant(state, scene, variant); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMicrosecond);
     }
 }
 

@@ -99,8 +99,7 @@ void runSteps(benchmark::State& state, const std::string& key, const std::functi
   state.counters["energy_evaluations"] = Counter(energy_evaluations, Counter::kAvgIterations);
   // Time of one local/global iteration inside the step: the phases the iterations run in.
   if (iterations > 0)
-    state.counters["iteration_time"] =
-        (summed.local + summed.gather + summed.transfer + summed.global) / iterations;
+    state.counters["iteration_time"] = (summed.local + summed.gather + summed.transfer + summed.global) / iterations;
   if (integrator == Integrator::EnergyBlend) {
     state.counters["branch_IM"] = Counter(branch_im, Counter::kAvgIterations);
     state.counters["branch_BE"] = Counter(branch_be, Counter::kAvgIterations);
@@ -184,30 +183,32 @@ void registerStepCases() {
   for (const SceneCase& scene : referenceScenes())
     for (BackendChoice backend : allBackends()) {
       const std::string name = "blend_vs_be/" + scene.name + "/" + backendLabel(backend);
-      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-        runPair(state, name, scene.make, backend);
-      })->UseRealTime()->Unit(benchmark::kMillisecond);
+      benchmark::RegisterBenchmark(name.c_str(),
+                                   [=](benchmark::State& state) { runPair(state, name, scene.make, backend); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond);
     }
 
   for (const SceneCase& scene : referenceScenes())
     for (Integrator integrator : allIntegrators())
       for (BackendChoice backend : allBackends()) {
-        const std::string name =
-            "step/" + scene.name + "/" + integratorName(integrator) + "/" + backendLabel(backend);
-        benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-          runSteps(state, name, scene.make, backend, integrator, 3, 20);
-        })->UseRealTime()->Unit(benchmark::kMicrosecond);
+        const std::string name = "step/" + scene.name + "/" + integratorName(integrator) + "/" + backendLabel(backend);
+        benchmark::RegisterBenchmark(
+            name.c_str(),
+            [=](benchmark::State& state) { runSteps(state, name, scene.make, backend, integrator, 3, 20); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
       }
 
   // Scaling: BE and blend steps on growing cloths, cpu and OpenCL double.
   for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend})
     for (BackendChoice backend : {BackendChoice::Cpu, BackendChoice::OpenCLDouble}) {
-      const std::string name = std::string("scaling_step/cloth/") + integratorName(integrator) + "/" +
-                               backendLabel(backend);
+      const std::string name =
+          std::string("scaling_step/cloth/") + integratorName(integrator) + "/" + backendLabel(backend);
       auto* b = benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
         const int side = static_cast<int>(state.range(0));
-        runSteps(state, name + "/" + std::to_string(side), [side] { return clothScene(side); }, backend,
-                 integrator, 2, 8);
+        runSteps(
+            state, name + "/" + std::to_string(side), [side] { return clothScene(side); }, backend, integrator, 2, 8);
       });
       for (int side : scalingSides()) b->Arg(side);
       b->ArgName("side")->UseRealTime()->Unit(benchmark::kMicrosecond);
@@ -218,9 +219,10 @@ void registerStepCases() {
   for (const SceneCase& scene : autoRuleScenes())
     for (BackendChoice backend : allBackends()) {
       const std::string name = "auto_step/" + scene.name + "/" + backendLabel(backend);
-      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-        runPair(state, name, scene.make, backend);
-      })->UseRealTime()->Unit(benchmark::kMillisecond);
+      benchmark::RegisterBenchmark(name.c_str(),
+                                   [=](benchmark::State& state) { runPair(state, name, scene.make, backend); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond);
     }
 }
 

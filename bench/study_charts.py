@@ -252,6 +252,21 @@ def chart_energy_over_time(results, charts):
     save(fig, charts, "energy_over_time")
 
 
+def energy_books(ax, rs, title, series):
+    """One integrator's energy terms over time: H and H* relative to H(0), the others as they are,
+    each (key, label, sign, style) drawn with the sign it enters H* with."""
+    t = [num(r, "time") for r in rs]
+    h0 = num(rs[0], "H")
+    for key, label, sign, style in series:
+        base = h0 if key in ("H", "H_target") else 0.0
+        ax.plot(t, [sign * (num(r, key) - base) for r in rs], label=label, **style)
+    ax.set_title(title, fontsize=10)
+    ax.set_xlabel("time [s]  (h = 1/30 s, 10 iterations)")
+    ax.set_ylabel("energy relative to H(0) [J]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+
+
 def chart_interaction(results, charts):
     rows = read_csv(results, "interaction.csv")
     if not rows:
@@ -263,22 +278,15 @@ def chart_interaction(results, charts):
     axes = grid[0]
     for ax, integ in zip(axes, shown):
         rs = [r for r in rows if r["integrator"] == integ]
-        t = [num(r, "time") for r in rs]
-        h0 = num(rs[0], "H")
-        for key, label, style in (("H", "H", dict(color=COLORS[integ], lw=1.4)),
-                                  ("H_target", "H* (target)", dict(color="black", lw=1.0, ls="--")),
-                                  ("work", "hand's work (cumulative)", dict(color="#7f7f7f", lw=1.0)),
-                                  ("kinetic", "K", dict(color="#9467bd", lw=0.9))):
-            base = h0 if key in ("H", "H_target") else 0.0
-            ax.plot(t, [num(r, key) - base for r in rs], label=label, **style)
+        energy_books(ax, rs, f"{integ}: energy books of a grab-drag-release",
+                     (("H", "H", 1.0, dict(color=COLORS[integ], lw=1.4)),
+                      ("H_target", "H* (target)", 1.0, dict(color="black", lw=1.0, ls="--")),
+                      ("work", "hand's work (cumulative)", 1.0, dict(color="#7f7f7f", lw=1.0)),
+                      ("kinetic", "K", 1.0, dict(color="#9467bd", lw=0.9))))
         held = [num(r, "time") for r in rs if r["held"] == "1"]
         if held:
             ax.axvspan(min(held), max(held), color="#ffdd88", alpha=0.35, lw=0, label="corner held")
-        ax.set_title(f"{integ}: energy books of a grab-drag-release", fontsize=10)
-        ax.set_xlabel("time [s]  (h = 1/30 s, 10 iterations)")
-        ax.set_ylabel("energy relative to H(0) [J]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
+            ax.legend(fontsize=7)
     ax = axes[-1]
     for integ in shown:
         rs = [r for r in rows if r["integrator"] == integ]
@@ -296,22 +304,14 @@ def chart_interaction(results, charts):
         axes = grid[1]
         for ax, integ in zip(axes, shown):
             rs = [r for r in bounce if r["integrator"] == integ]
-            t = [num(r, "time") for r in rs]
-            h0 = num(rs[0], "H")
             # H* = H0 - friction + projection: both terms drawn with the sign they enter H* with.
-            for key, label, sign, style in (
-                    ("H", "H", 1.0, dict(color=COLORS[integ], lw=1.4)),
-                    ("H_target", "H* (target)", 1.0, dict(color="black", lw=1.0, ls="--")),
-                    ("friction", "- friction (cumulative)", -1.0, dict(color="#7f7f7f", lw=1.0)),
-                    ("projection", "final projection (cumulative)", 1.0, dict(color="#d62728", lw=0.9, ls=":")),
-                    ("kinetic", "K", 1.0, dict(color="#9467bd", lw=0.9))):
-                base = h0 if key in ("H", "H_target") else 0.0
-                ax.plot(t, [sign * (num(r, key) - base) for r in rs], label=label, **style)
-            ax.set_title(f"{integ}: energy books of a bounce on the ground", fontsize=10)
-            ax.set_xlabel("time [s]  (h = 1/30 s, 10 iterations)")
-            ax.set_ylabel("energy relative to H(0) [J]")
-            ax.grid(True, alpha=0.3)
-            ax.legend(fontsize=7)
+            energy_books(ax, rs, f"{integ}: energy books of a bounce on the ground",
+                         (("H", "H", 1.0, dict(color=COLORS[integ], lw=1.4)),
+                          ("H_target", "H* (target)", 1.0, dict(color="black", lw=1.0, ls="--")),
+                          ("friction", "- friction (cumulative)", -1.0, dict(color="#7f7f7f", lw=1.0)),
+                          ("projection", "final projection (cumulative)", 1.0,
+                           dict(color="#d62728", lw=0.9, ls=":")),
+                          ("kinetic", "K", 1.0, dict(color="#9467bd", lw=0.9))))
         ax = axes[-1]
         for integ in shown:
             rs = [r for r in bounce if r["integrator"] == integ]

@@ -16,9 +16,9 @@ class SceneData;
 /// Potential energy split by the way the blend books it: the internal energy of the elements
 /// never depends on time, pins and external forces may.
 struct PotentialEnergy {
-  double internal = 0.0;   // every element type of EnergyTerm::Internal (all but pins)
-  double pins = 0.0;       // pins and contact at time t (the elements whose params may move)
-  double external = 0.0;   // -sum (m g + f(t)).x
+  double internal = 0.0;  // every element type of EnergyTerm::Internal (all but pins)
+  double pins = 0.0;      // pins and contact at time t (the elements whose params may move)
+  double external = 0.0;  // -sum (m g + f(t)).x
   double elastic() const { return internal + pins; }
   double total() const { return internal + pins + external; }
 };

@@ -59,19 +59,16 @@ class BackendTest : public ::testing::TestWithParam<BackendUnderTest> {
 };
 
 struct BackendParamName {
-  std::string operator()(const ::testing::TestParamInfo<BackendUnderTest>& info) const {
-    return info.param.name();
-  }
+  std::string operator()(const ::testing::TestParamInfo<BackendUnderTest>& info) const { return info.param.name(); }
 };
 
 }  // namespace stabint::testing
 
 /// Instantiates `suite` (a BackendTest) as Cpu/<suite>.<test>/cpu and
 /// OpenCL/<suite>.<test>/{double,float}.
-#define STABINT_ON_EVERY_BACKEND(suite)                                                             \
-  INSTANTIATE_TEST_SUITE_P(Cpu, suite, ::testing::Values(::stabint::testing::kCpuReference),       \
-                           ::stabint::testing::BackendParamName());                                \
-  INSTANTIATE_TEST_SUITE_P(OpenCL, suite,                                                          \
-                           ::testing::Values(::stabint::testing::kOpenCLDouble,                     \
-                                             ::stabint::testing::kOpenCLFloat),                     \
+#define STABINT_ON_EVERY_BACKEND(suite)                                                                            \
+  INSTANTIATE_TEST_SUITE_P(Cpu, suite, ::testing::Values(::stabint::testing::kCpuReference),                       \
+                           ::stabint::testing::BackendParamName());                                                \
+  INSTANTIATE_TEST_SUITE_P(OpenCL, suite,                                                                          \
+                           ::testing::Values(::stabint::testing::kOpenCLDouble, ::stabint::testing::kOpenCLFloat), \
                            ::stabint::testing::BackendParamName())

@@ -42,8 +42,7 @@ inline Collider groundPlane(double y, double stiffness, double friction = 0.0) {
   return c;
 }
 
-inline Collider sphereCollider(const Eigen::Vector3d& center, double radius, double stiffness,
-                               double friction = 0.0) {
+inline Collider sphereCollider(const Eigen::Vector3d& center, double radius, double stiffness, double friction = 0.0) {
   Collider c;
   c.shape = ColliderShape::Sphere;
   c.center = center;

@@ -60,8 +60,8 @@ TEST_P(BDF2, IsSecondOrderOnTheOscillator) {
   const std::vector<int> steps = backend().isFloat() ? std::vector<int>{50, 100} : std::vector<int>{200, 400, 800};
   const double upper = backend().isFloat() ? 4.6 : 4.4;
   for (int n : steps) {
-    const double ratio = errorAtTimeOne(backend(), Integrator::BDF2, n) /
-                         errorAtTimeOne(backend(), Integrator::BDF2, 2 * n);
+    const double ratio =
+        errorAtTimeOne(backend(), Integrator::BDF2, n) / errorAtTimeOne(backend(), Integrator::BDF2, 2 * n);
     EXPECT_GT(ratio, 3.6) << n;
     EXPECT_LT(ratio, upper) << n;
   }

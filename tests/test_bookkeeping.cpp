@@ -39,7 +39,8 @@ TEST_P(Bookkeeping, UndampedUnforcedSceneKeepsItsTargetConstant) {
     o.integrator = integrator;
     // FE and SE gain energy by about (omega h)^2 per step in the cloth's stiffest mode (omega
     // about 1.5e4 rad/s): at h = 5e-5 they stay finite over the 30 steps, in float too.
-    o.time_step = integrator == Integrator::ForwardEuler || integrator == Integrator::SymplecticEuler ? 5e-5 : 1.0 / 30.0;
+    o.time_step =
+        integrator == Integrator::ForwardEuler || integrator == Integrator::SymplecticEuler ? 5e-5 : 1.0 / 30.0;
     Simulator sim(smallCloth(0.0), o);
     const double h0 = sim.energy().total();
     EXPECT_EQ(sim.target(), h0);
@@ -113,8 +114,7 @@ double forcedPotential(const Scene& s, const Eigen::MatrixX3d& x, double t) {
   return u;
 }
 
-double expectedForcing(const Scene& s, const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& x1, double t0,
-                       double t1) {
+double expectedForcing(const Scene& s, const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& x1, double t0, double t1) {
   const double tm = 0.5 * (t0 + t1);
   return (forcedPotential(s, x1, t1) - forcedPotential(s, x1, tm)) +
          (forcedPotential(s, x0, tm) - forcedPotential(s, x0, t0));
@@ -139,11 +139,9 @@ double forcedTermSize(const Scene& s, const Eigen::MatrixX3d& x, double t) {
 }
 
 /// The same for the rule's four evaluations.
-double forcingTermSize(const Scene& s, const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& x1, double t0,
-                       double t1) {
+double forcingTermSize(const Scene& s, const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& x1, double t0, double t1) {
   const double tm = 0.5 * (t0 + t1);
-  return forcedTermSize(s, x1, t1) + forcedTermSize(s, x1, tm) + forcedTermSize(s, x0, tm) +
-         forcedTermSize(s, x0, t0);
+  return forcedTermSize(s, x1, t1) + forcedTermSize(s, x1, tm) + forcedTermSize(s, x0, tm) + forcedTermSize(s, x0, t0);
 }
 
 // Returns how many steps were checked. Tolerance of the forcing: double 1e-9 of its size, float
@@ -209,8 +207,8 @@ TEST_P(Bookkeeping, SinusoidalPinTargetEqualsImplicitMidpointEnergy) {
         max_energy = std::max(max_energy, std::abs(r.energy.total()));
       }
       // Round-off of energies of size max_energy summed over 120 steps.
-      const double tol = backend().isFloat() ? 2.0 * backend().unitRoundoff() * booked_size
-                                             : 1e-10 * std::max(1.0, max_energy);
+      const double tol =
+          backend().isFloat() ? 2.0 * backend().unitRoundoff() * booked_size : 1e-10 * std::max(1.0, max_energy);
       EXPECT_LT(max_dev, tol) << "k = " << k << " " << integratorName(integrator);
     }
   }

@@ -28,7 +28,8 @@ std::vector<Eigen::MatrixX3d> runSteps(Simulator& sim, int steps) {
 
 double maxDifference(const std::vector<Eigen::MatrixX3d>& a, const std::vector<Eigen::MatrixX3d>& b) {
   double worst = 0.0;
-  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) worst = std::max(worst, (a[i] - b[i]).cwiseAbs().maxCoeff());
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i)
+    worst = std::max(worst, (a[i] - b[i]).cwiseAbs().maxCoeff());
   return a.size() == b.size() ? worst : INFINITY;
 }
 
@@ -147,7 +148,8 @@ TEST(ElementChanges, BadCallsAreNamedAndChangeNothing) {
   const int hinges = static_cast<int>(cloth.bending_hinges.size());
   expectRefused([&] { sim.setElementStiffness(ElementKind::BendingHinge, hinges, 1.0); },
                 "bending hinge " + std::to_string(hinges) + " out of range");
-  expectRefused([&] { sim.setElementEnabled(ElementKind::TriangleStrain, -1, false); }, "triangle strain -1 out of range");
+  expectRefused([&] { sim.setElementEnabled(ElementKind::TriangleStrain, -1, false); },
+                "triangle strain -1 out of range");
   expectRefused([&] { sim.setElementStiffness(ElementKind::Spring, 0, 1.0); }, "spring 0 out of range");
   expectRefused([&] { sim.setElementStiffness(ElementKind::BendingHinge, {0, 1, hinges + 3}, 1.0); }, "out of range");
   expectRefused([&] { sim.setElementStiffness(ElementKind::TriangleStrain, 2, -1.0); }, "stiffness -1");

@@ -44,8 +44,7 @@ TEST(Elements, NearestRotationIsProperAndOrthonormalForAnyF) {
     EXPECT_NEAR((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-12) << F;
     EXPECT_NEAR(R.determinant(), 1.0, 1e-12) << F;
     // Nearest among proper rotations: no random rotation is closer.
-    for (int k = 0; k < 20; ++k)
-      EXPECT_LE((F - R).norm(), (F - randomRotation(rng)).norm() + 1e-12);
+    for (int k = 0; k < 20; ++k) EXPECT_LE((F - R).norm(), (F - randomRotation(rng)).norm() + 1e-12);
   }
 }
 
@@ -266,14 +265,14 @@ TEST(Elements, TriangleStrainProjectionMatchesTheSvdOracle) {
   const ElementType& type = *elementTypes()[typeIndex("triangle strain")];
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  for (const auto& limits : {std::array<double, 2>{1.0, 1.0}, std::array<double, 2>{0.0, 1.05},
-                             std::array<double, 2>{0.9, 2.0}}) {
+  for (const auto& limits :
+       {std::array<double, 2>{1.0, 1.0}, std::array<double, 2>{0.0, 1.05}, std::array<double, 2>{0.9, 2.0}}) {
     const double params[3] = {1.0, limits[0], limits[1]};
     for (int trial = 0; trial < 1000; ++trial) {
       double s1 = 0.5 + u(rng), s2 = 0.5 + u(rng);
       if (s1 < s2) std::swap(s1, s2);
       if (trial % 4 == 0) s2 = s1 * std::pow(10.0, -10.0 * u(rng));  // nearly collapsed
-      if (s1 - s2 < 1e-3 * s1) continue;  // nearly equal: V is not unique (P is, but not V)
+      if (s1 - s2 < 1e-3 * s1) continue;                             // nearly equal: V is not unique (P is, but not V)
       const Eigen::Matrix3d Q = randomRotation(rng);
       const Eigen::Matrix2d V = Eigen::Rotation2Dd(6.283185307179586 * u(rng)).toRotationMatrix();
       const Eigen::Matrix<double, 3, 2> F = Q.leftCols<2>() * Eigen::Vector2d(s1, s2).asDiagonal() * V.transpose();

@@ -23,7 +23,8 @@ class EventsTest : public testing::TempDirTest {
   // with `events` (the text of a JSON list).
   std::string sceneWith(const std::string& events) const {
     return write("scene.json", R"({"format": "stabint-scene", "version": 1,
-      "builtin": {"name": "cloth", "nx": 6, "ny": 6}, "events": )" + events + "}");
+      "builtin": {"name": "cloth", "nx": 6, "ny": 6}, "events": )" +
+                                   events + "}");
   }
 
   void expectError(const std::string& events, const std::string& names) const {
@@ -171,7 +172,8 @@ TEST_F(EventsTest, BadEventsNameTheirPath) {
   expectError(R"([{"frame": 1, "release": 4}])", "release of vertex 4: no handle is held there");
   expectError(R"([{"frame": 5, "impulse": {"vertices": [1], "velocity": [0, 0, 1]}}, {"frame": 2, "release": 1}])",
               "frames must not decrease");
-  expectError(R"([{"frame": -1, "impulse": {"vertices": [1], "velocity": [0, 0, 1]}}])", "events[0].frame: must be >= 0");
+  expectError(R"([{"frame": -1, "impulse": {"vertices": [1], "velocity": [0, 0, 1]}}])",
+              "events[0].frame: must be >= 0");
   expectError(R"([{"frame": 1, "impulse": {"velocity": [0, 0, 1]}}])", "events[0].impulse: needs vertices or where");
   expectError(R"([{"frame": 1, "elements": {"kind": "tets", "indices": [0], "stiffness": 1}}])",
               "events[0].elements.indices[0]: tet 0 out of range [0, 0)");
@@ -181,7 +183,8 @@ TEST_F(EventsTest, BadEventsNameTheirPath) {
   expectError(R"([{"frame": 1, "grab": {"vertex": 1, "stiffness": 1}, "release": 1}])", "exactly one of");
   expectError(R"([{"frame": 1, "teleport": {}}])", "events[0]: unknown field 'teleport'");
   expectError(R"([{"frame": 1, "grab": {"id": "a", "vertex": 1, "stiffness": 1}},
-                  {"frame": 2, "grab": {"id": "a", "vertex": 2, "stiffness": 1}}])", "grab id 'a' is used twice");
+                  {"frame": 2, "grab": {"id": "a", "vertex": 2, "stiffness": 1}}])",
+              "grab id 'a' is used twice");
   // The player refuses what the simulator refuses, naming the event; the script itself too.
   EXPECT_THROW(EventScript({ScriptedEvent{0, GrabEvent{"", 1, -1.0, {}}}}), InvalidInputError);
   EventScript far({ScriptedEvent{0, ImpulseEvent{{1000}, Eigen::Vector3d::UnitX()}}});
@@ -190,7 +193,8 @@ TEST_F(EventsTest, BadEventsNameTheirPath) {
     far.apply(sim);
     ADD_FAILURE() << "applied an impulse on particle 1000";
   } catch (const InvalidInputError& e) {
-    EXPECT_NE(std::string(e.what()).find("event 0 (frame 0): impulse vertex 1000 out of range"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("event 0 (frame 0): impulse vertex 1000 out of range"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -93,7 +93,8 @@ TEST_F(Hostile, HugeHeaderCountsFailAtEndOfFile) {
   write("tet.node", "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
   write("tet.ele", count + " 4 0\n0 0 1 2 3\n");
   const std::string tet = (dir_ / "tet").string();
-  expectFileError([&] { loadTetGen(tet); }, tet + ".ele", 2, "unexpected end of file, expected tetrahedron 1 of " + count);
+  expectFileError([&] { loadTetGen(tet); }, tet + ".ele", 2,
+                  "unexpected end of file, expected tetrahedron 1 of " + count);
 
   const std::string mesh = write("big.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n" + count + "\n0 0 0 0\n");
   expectFileError([&] { loadMedit(mesh); }, mesh, 5, "unexpected end of file, expected vertex 2 of " + count);
@@ -159,7 +160,8 @@ TEST_F(Hostile, BigPolygonDuplicateCornerIsNamed) {
   }
   for (int i = 1; i <= kCorners; ++i) face += " " + std::to_string(i == 150000 ? 7 : i);
   const std::string path = write("gon.obj", vertices + face + "\n");
-  expectFileError([&] { loadObjCloth(path); }, path, kCorners + 1, "face 1: vertex 7 appears twice (corners 7 and 150000)");
+  expectFileError([&] { loadObjCloth(path); }, path, kCorners + 1,
+                  "face 1: vertex 7 appears twice (corners 7 and 150000)");
   face.clear();
   for (int i = 1; i <= kCorners; ++i) face += " " + std::to_string(i);
   EXPECT_EQ(loadObjCloth(write("gon2.obj", vertices + "f" + face + "\n")).numParticles(), kCorners);
@@ -170,10 +172,10 @@ TEST_F(Hostile, BigPolygonDuplicateCornerIsNamed) {
 // A vector nested 70,000 levels deep overflowed the stack while its error message dumped it.
 TEST_F(Hostile, DeepJsonIsRefusedWithItsLine) {
   const std::string deep = std::string(70000, '[') + "1" + std::string(70000, ']');
-  const std::string path = write("deep.json", "{\"builtin\": {\"name\": \"oscillator\"},\n\"gravity\": " + deep + "}\n");
+  const std::string path =
+      write("deep.json", "{\"builtin\": {\"name\": \"oscillator\"},\n\"gravity\": " + deep + "}\n");
   expectFileError([&] { loadSceneFile(path); }, path, 2, "JSON nested deeper than 64 levels");
-  expectFileError([&] { builtinScene("chain", "{\"pinned\": " + deep + "}", "params"); }, "params", 1,
-                  "nested deeper");
+  expectFileError([&] { builtinScene("chain", "{\"pinned\": " + deep + "}", "params"); }, "params", 1, "nested deeper");
 
   // Within the limit the message shows the start of the value only.
   const std::string nested = std::string(60, '[') + "1" + std::string(60, ']');
@@ -187,7 +189,8 @@ TEST_F(Hostile, DeepJsonIsRefusedWithItsLine) {
 
   // Brackets inside strings are no nesting.
   const std::string name = std::string(100, '[') + "\\\"{";
-  const std::string quoted = write("quoted.json", "{\"builtin\": {\"name\": \"oscillator\"}, \"name\": \"" + name + "\"}");
+  const std::string quoted =
+      write("quoted.json", "{\"builtin\": {\"name\": \"oscillator\"}, \"name\": \"" + name + "\"}");
   EXPECT_EQ(loadSceneFile(quoted).name, std::string(100, '[') + "\"{");
 }
 
@@ -204,15 +207,17 @@ TEST_F(Hostile, FiniteInputsThatOverflowAreRefusedByName) {
   };
   refused([](Scene& s) { s.masses[3] = 1e308, s.velocities.row(3) << 1e10, 0, 0; },
           "particle 3: kinetic energy 0.5 m |v|^2 of masses[3] = 1e+308 at speed 1e+10 overflows");
-  refused([](Scene& s) { s.springs[2].rest_length = 1e200; }, "spring 2: rest length 1e+200 exceeds 1e+150 in magnitude");
+  refused([](Scene& s) { s.springs[2].rest_length = 1e200; },
+          "spring 2: rest length 1e+200 exceeds 1e+150 in magnitude");
   refused([](Scene& s) { s.pins[0].target.frequency = 1e308; },
           "pin 0: target frequency 1e+308 exceeds 1e+150 in magnitude");
   refused([](Scene& s) { s.gravity.y() = -1e308; }, "gravity (0, -1e+308, 0) exceeds 1e+150 in magnitude");
   refused([](Scene& s) { s.positions(4, 0) = 1e200; }, "positions row 4 (1e+200, 0, 0) exceeds 1e+150 in magnitude");
   refused([](Scene& s) { s.masses.setConstant(1e307), s.gravity.y() = -1e3; },
           "gravity (0, -1000, 0): the work it can do, total mass 1e+308 x |g| x scene size 1 overflows");
-  refused([](Scene& s) { s.springs[1].stiffness = 1e300, s.springs[1].rest_length = 1e5; },
-          "spring 1: energy k L^2 of stiffness 1e+300 over the larger of rest length and scene size L = 100000 overflows");
+  refused(
+      [](Scene& s) { s.springs[1].stiffness = 1e300, s.springs[1].rest_length = 1e5; },
+      "spring 1: energy k L^2 of stiffness 1e+300 over the larger of rest length and scene size L = 100000 overflows");
   refused([](Scene& s) { s.pins[0].stiffness = 1e308, s.pins[0].target.position.x() = -1e5; },
           "pin 0: energy k L^2 of stiffness 1e+308 over the scene size L = 100001 overflows");
 
@@ -236,16 +241,22 @@ TEST_F(Hostile, DerivedVolumesAndMassesThatOverflowAreNamedWithTheirLine) {
     return (dir_ / name).string();
   };
   const std::string huge = tetgen("huge", "1e103");
-  expectFileError([&] { loadTetGen(huge); }, huge + ".ele", 3, "tet 1: rest volume overflows (longest edge 1.41421e+103)");
+  expectFileError([&] { loadTetGen(huge); }, huge + ".ele", 3,
+                  "tet 1: rest volume overflows (longest edge 1.41421e+103)");
   const std::string big = tetgen("big", "4000");
-  expectFileError([&] { loadTetGen(big, SolidMaterial{1e300, 1e5}); }, big + ".ele", 3,
-                  "tet 1: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
+  expectFileError(
+      [&] {
+        loadTetGen(big, SolidMaterial{1e300, 1e5});
+      },
+      big + ".ele", 3, "tet 1: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
   // The same through a scene file's mesh entry: the mesh's own file and line, inside the field.
   const std::string scene = write("big.json", R"({"mesh": {"file": "big.node", "density": 1e300}})");
-  expectFileError([&] { loadSceneFile(scene); }, scene, 0,
-                  "mesh.file: " + big + ".ele:3: tet 1: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
-  const std::string medit = write("big.mesh", "Vertices 4\n0 0 0 0\n4000 0 0 0\n0 4000 0 0\n0 0 4000 0\n"
-                                              "Tetrahedra 1\n1 2 3 4 0\n");
+  expectFileError(
+      [&] { loadSceneFile(scene); }, scene, 0,
+      "mesh.file: " + big + ".ele:3: tet 1: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
+  const std::string medit = write("big.mesh",
+                                  "Vertices 4\n0 0 0 0\n4000 0 0 0\n0 4000 0 0\n0 0 4000 0\n"
+                                  "Tetrahedra 1\n1 2 3 4 0\n");
   expectFileError([&] { loadMedit(medit, SolidMaterial{1e300, 1e5}); }, medit, 7, "tet 1: mass share density 1e+300");
 
   // OBJ: an area that overflows, a mass that does, and a coordinate past validation's bound
@@ -255,21 +266,24 @@ TEST_F(Hostile, DerivedVolumesAndMassesThatOverflowAreNamedWithTheirLine) {
   obj = write("big.obj", "v 0 0 0\nv 1e10 0 0\nv 0 1e10 0\nf 1 2 3\n");
   ClothMaterial heavy;
   heavy.areal_density = 1e300;
-  expectFileError([&] { loadObjCloth(obj, heavy); }, obj, 4, "face 1: mass share areal_density 1e+300 x area 5e+19 / 3 is not finite");
+  expectFileError([&] { loadObjCloth(obj, heavy); }, obj, 4,
+                  "face 1: mass share areal_density 1e+300 x area 5e+19 / 3 is not finite");
   obj = write("far.obj", "v 0 0 0\nv 1e151 0 0\nv 0 1 0\nf 1 2 3\n");
   expectFileError([&] { loadObjCloth(obj); }, obj, 2, "vertex 2 coordinate x 1e151 exceeds 1e+150 in magnitude");
 
   // JSON densities name the tet or triangle by its path (this was "masses[0] = inf" before).
-  const std::string json = write("dense.json", R"({"particles": {"positions": [[0,0,0],[4000,0,0],[0,4000,0],[0,0,4000]],
+  const std::string json =
+      write("dense.json", R"({"particles": {"positions": [[0,0,0],[4000,0,0],[0,4000,0],[0,0,4000]],
                                                    "density": 1e300}, "tets": [{"vertices": [0, 1, 2, 3], "stiffness": 1}]})");
-  expectFileError([&] { loadSceneFile(json); }, json, 0, "tets[0]: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
+  expectFileError([&] { loadSceneFile(json); }, json, 0,
+                  "tets[0]: mass share density 1e+300 x volume 1.06667e+10 / 4 is not finite");
 
   // Through the API: finite shares whose sum at a shared vertex overflows.
   Eigen::MatrixX3d x(5, 3);
   x << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1;
   x *= 1000.0;
   const std::vector<Tet> tets{Tet{{0, 1, 2, 3}, 1.0}, Tet{{0, 2, 1, 4}, 1.0}};  // volumes 1e9 / 6 each
-  expectInvalid([&] { lumpMassesFromTets(x, tets, 2.4e300); },  // a share of 1e308 each
+  expectInvalid([&] { lumpMassesFromTets(x, tets, 2.4e300); },                  // a share of 1e308 each
                 "tet 1: the lumped mass of particle 0 overflows when its share 1e+308 is added to 1e+308");
 
   // Validation, on coordinates at its bound of 1e150: a tet's volume of 1e450 / 6 passed as
@@ -283,7 +297,8 @@ TEST_F(Hostile, DerivedVolumesAndMassesThatOverflowAreNamedWithTheirLine) {
   expectInvalid([&] { validateScene(s); }, "tet 0: rest volume overflows (longest edge 1.41421e+150)");
   s.tets.clear();
   s.triangle_strains.push_back(TriangleStrain{{0, 1, 2}, 1.0, 1.0, 1.0});
-  expectInvalid([&] { validateScene(s); }, "triangle strain 0: rest triangle (0, 1, 2): rest area overflows (longest edge 1.41421e+150)");
+  expectInvalid([&] { validateScene(s); },
+                "triangle strain 0: rest triangle (0, 1, 2): rest area overflows (longest edge 1.41421e+150)");
 }
 
 // --- silent acceptances ---------------------------------------------------------------------------
@@ -291,10 +306,12 @@ TEST_F(Hostile, DerivedVolumesAndMassesThatOverflowAreNamedWithTheirLine) {
 // The JSON library keeps the last of two equal keys: a scene ran with a value its reader may not
 // have seen, although every key is promised to be checked.
 TEST_F(Hostile, DuplicateJsonKeysAreRefusedWithTheirLine) {
-  std::string path = write("dup.json", "{\"builtin\": {\"name\": \"oscillator\", \"mass\": 1,\n"
-                                       "                         \"mass\": 2}}");
+  std::string path = write("dup.json",
+                           "{\"builtin\": {\"name\": \"oscillator\", \"mass\": 1,\n"
+                           "                         \"mass\": 2}}");
   expectFileError([&] { loadSceneFile(path); }, path, 2, "duplicate key 'mass' (first on line 1)");
-  path = write("escaped.json", "{\"gravity\": [0, 0, 0],\n\n\"grav\\u0069ty\": [0, 1, 0], \"builtin\": {\"name\": \"chain\"}}");
+  path = write("escaped.json",
+               "{\"gravity\": [0, 0, 0],\n\n\"grav\\u0069ty\": [0, 1, 0], \"builtin\": {\"name\": \"chain\"}}");
   expectFileError([&] { loadSceneFile(path); }, path, 3, "duplicate key 'gravity' (first on line 1)");
   // Equal keys in different objects, and keys that equal a string value, are fine.
   path = write("fine.json", R"({"builtin": [{"name": "oscillator", "translate": [0, 0, 0]}, {"name": "oscillator"}],
@@ -308,12 +325,15 @@ TEST_F(Hostile, DuplicateJsonKeysAreRefusedWithTheirLine) {
 // mass floor: a scene the file did not describe.
 TEST_F(Hostile, ZeroAreaFacesUnusedVerticesAndZeroDensityAreRefused) {
   std::string obj = write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 4\nf 1 2 3\n");
-  expectFileError([&] { loadObjCloth(obj); }, obj, 6, "face 2: zero rest area 0 for its longest edge L = 2 (degenerate: at most 1e-12 L^2)");
+  expectFileError([&] { loadObjCloth(obj); }, obj, 6,
+                  "face 2: zero rest area 0 for its longest edge L = 2 (degenerate: at most 1e-12 L^2)");
   obj = write("quad.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3 4\n");
   expectFileError([&] { loadObjCloth(obj); }, obj, 5, "face 1 (the fan triangle of corners 1, 2, 3): zero rest area 0");
   obj = write("stray.obj", "v 0 0 0\nv 1 0 0\n# a stray vertex\nv 5 5 5\nv 0 1 0\nf 1 2 4\n");
-  expectFileError([&] { loadObjCloth(obj); }, obj, 4, "vertex 3 is in no face, so it would have no mass; remove it from the file");
-  const std::string mesh = write("stray.mesh", "Vertices 5\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n9 9 9 0\nTetrahedra 1\n1 2 3 4 0\n");
+  expectFileError([&] { loadObjCloth(obj); }, obj, 4,
+                  "vertex 3 is in no face, so it would have no mass; remove it from the file");
+  const std::string mesh =
+      write("stray.mesh", "Vertices 5\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n9 9 9 0\nTetrahedra 1\n1 2 3 4 0\n");
   expectFileError([&] { loadMedit(mesh); }, mesh, 6, "vertex 5 is in no tetrahedron, so it would have no mass");
 
   obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
@@ -343,15 +363,18 @@ TEST_F(Hostile, SliverTetsAreRefusedEverywhereByTheSameTest) {
     return s;
   };
   // Volume 1e-13 / 6 against the longest edge sqrt(2): 1.2e-14 L^3, below 1e-12 L^3.
-  const std::string sliver = "zero rest volume 1.66667e-14 for its longest edge L = 1.41421 (degenerate: at most 1e-12 L^3)";
+  const std::string sliver =
+      "zero rest volume 1.66667e-14 for its longest edge L = 1.41421 (degenerate: at most 1e-12 L^3)";
   expectInvalid([&] { validateScene(oneTet(1e-13)); }, "tet 0: " + sliver);
   expectInvalid([&] { Simulator sim(oneTet(1e-13), SimulatorOptions{}); }, "tet 0: " + sliver);
-  const std::string json = write("sliver.json", R"({"particles": {"positions": [[0,0,0],[1,0,0],[0,1,0],[0,0,1e-13]], "masses": 1},
+  const std::string json =
+      write("sliver.json", R"({"particles": {"positions": [[0,0,0],[1,0,0],[0,1,0],[0,0,1e-13]], "masses": 1},
                                                     "tets": [{"vertices": [0, 1, 2, 3], "stiffness": 1}]})");
   expectFileError([&] { loadSceneFile(json); }, json, 0, "tets[0].vertices: " + sliver);
   write("sliver.node", "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1e-13\n");
   write("sliver.ele", "1 4 0\n1 1 2 3 4\n");
-  expectFileError([&] { loadTetGen((dir_ / "sliver").string()); }, (dir_ / "sliver.ele").string(), 2, "tet 1: " + sliver);
+  expectFileError([&] { loadTetGen((dir_ / "sliver").string()); }, (dir_ / "sliver.ele").string(), 2,
+                  "tet 1: " + sliver);
   // The test is relative: a small tet of good shape is a tet.
   Scene small = oneTet(1e-5);
   small.rest_positions.topRows(3) *= 1e-5;

@@ -204,7 +204,8 @@ TEST(Interaction, DraggedClothKeepsSwingingWithTheBlend) {
     for (int i = 0; i < 150; ++i) {
       const double t1 = (i + 1) * o.time_step;
       if (t1 <= 1.0)
-        sim.setPinTarget(0, corner + Eigen::Vector3d(0.15 * (1 - std::cos(kPi * t1)), 0.0, 0.1 * (1 - std::cos(2 * kPi * t1))));
+        sim.setPinTarget(
+            0, corner + Eigen::Vector3d(0.15 * (1 - std::cos(kPi * t1)), 0.0, 0.1 * (1 - std::cos(2 * kPi * t1))));
       const StepReport& r = sim.step();
       worst_gap = std::max(worst_gap, std::abs(r.energy.total() - r.target) / sim.energyScale());
       if (i >= 120) late_kinetic += r.energy.kinetic / 30.0;
@@ -251,7 +252,8 @@ TEST(Interaction, GrabDragReleaseOfAFreeCorner) {
     for (int i = 0; i < 120; ++i) {
       const double t1 = (i + 1) * o.time_step;
       if (t1 <= 1.0)
-        sim.setPinTarget(handle, start + Eigen::Vector3d(0.1 * (1 - std::cos(kPi * t1)), 0.0, 0.3 * std::sin(0.5 * kPi * t1)));
+        sim.setPinTarget(handle,
+                         start + Eigen::Vector3d(0.1 * (1 - std::cos(kPi * t1)), 0.0, 0.3 * std::sin(0.5 * kPi * t1)));
       if (i == 40) {
         const double e_before = sim.energy().total();
         sim.release(handle);
@@ -278,7 +280,8 @@ TEST(Interaction, GrabDragReleaseOfAFreeCorner) {
   EXPECT_LE(blend.outside_band, 6);
   EXPECT_LT(blend.worst_gap, 0.1);
   EXPECT_GT(be.worst_gap, 0.2);
-  EXPECT_GT(blend.late_kinetic, 20.0 * be.late_kinetic) << "blend " << blend.late_kinetic << " J, BE " << be.late_kinetic << " J";
+  EXPECT_GT(blend.late_kinetic, 20.0 * be.late_kinetic)
+      << "blend " << blend.late_kinetic << " J, BE " << be.late_kinetic << " J";
 }
 
 // Grabbing before the first step is the scene with that pin from the start, and releasing a
@@ -361,7 +364,6 @@ TEST_F(CheckpointTest, CheckpointsCarryGrabbedHandles) {
   EXPECT_EQ(sim.scene().pins.size(), 2u);
   EXPECT_EQ(sim.stepCount(), 5);
 }
-
 
 TEST_F(CheckpointTest, RestoredRunsContinueBitForBit) {
   for (Integrator integrator : {Integrator::EnergyBlend, Integrator::BDF2}) {

@@ -100,8 +100,7 @@ TEST_F(MeshFiles, ObjNegativeIndicesAndPolygons) {
   ASSERT_EQ(quad.springs.size(), 6u);
   EXPECT_NEAR(quad.masses.sum(), 0.1, 1e-15);
   // A pentagon: three triangles, seven edges, two hinges.
-  const Scene penta =
-      loadObjCloth(write("penta.obj", "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n"));
+  const Scene penta = loadObjCloth(write("penta.obj", "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n"));
   EXPECT_EQ(penta.springs.size(), 7u + 2u);
   EXPECT_NEAR(penta.masses.sum(), 0.1 * 3.0, 1e-15);
 }
@@ -243,7 +242,8 @@ TEST_F(MeshFiles, TetGenErrors) {
   expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 1, "dimension 2 is not supported");
 
   write("n.node", "two 3 0 0\n");
-  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 1, "expected an integer for number of points, got 'two'");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 1,
+              "expected an integer for number of points, got 'two'");
 
   write("n.node", "2 3 0 0\n1 0 0 0\n3 1 0 0\n");
   expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 3, "point numbered 3, expected 2");
@@ -283,7 +283,8 @@ TEST_F(MeshFiles, MeditWithSkippedSectionsAndFreeLayout) {
 }
 
 TEST_F(MeshFiles, MeditNegativeOrientationAndErrors) {
-  const std::string head = "MeshVersionFormatted 1\nDimension 3\nVertices\n5\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n1 1 1 0\n";
+  const std::string head =
+      "MeshVersionFormatted 1\nDimension 3\nVertices\n5\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n1 1 1 0\n";
   // Lines 1-9 are the head; the tetrahedra start at line 12.
   std::string path = write("neg.mesh", head + "Tetrahedra\n2\n1 3 2 4 0\n5 4 2 3 0\nEnd\n");
   const Scene s = loadMedit(path);

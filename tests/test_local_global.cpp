@@ -35,8 +35,8 @@ Scene tetScene() {
 }
 
 struct Fixture {
-  explicit Fixture(const Scene& s) : data(s), backend(makeCpuBackend(data, kSlots)), system(data),
-                                     solver(*backend, system, kScratch) {}
+  explicit Fixture(const Scene& s)
+      : data(s), backend(makeCpuBackend(data, kSlots)), system(data), solver(*backend, system, kScratch) {}
   SceneData data;
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
@@ -164,8 +164,8 @@ void checkAcceleration(const Scene& s, double max_gap_ratio, Acceleration accele
   for (size_t k = 1; k < fast.size(); ++k)
     EXPECT_LE(fast[k], fast[k - 1] + 1e-12 * std::abs(fast[k - 1])) << "iteration " << k;
   const double gap_plain = plain.back() - minimum, gap_fast = fast.back() - minimum;
-  std::printf("  objective gap after 10 iterations: plain %.3g, %s %.3g\n", gap_plain,
-              accelerationName(acceleration), gap_fast);
+  std::printf("  objective gap after 10 iterations: plain %.3g, %s %.3g\n", gap_plain, accelerationName(acceleration),
+              gap_fast);
   // The cloth contracts slowly per plain iteration (the regime acceleration is for); the small
   // tet bar is all but converged after 10 plain iterations, where it must not be worse.
   // Measured: cloth 2.77 plain, 0.96 Chebyshev, 0.90 Anderson; tets 1.4e-6 plain and Chebyshev,
@@ -182,9 +182,7 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
   // minima, and plain and accelerated iterations may settle in different ones (measured: 4e-4
   // apart relative). The triangle cloth without limits has one.
   const Scene s = GetParam() == SceneKind::Triangles ? testing::triangleCloth(6, 5, false) : scene();
-  const double max_gap_ratio = GetParam() == SceneKind::Tets      ? 1.01
-                              : GetParam() == SceneKind::Contact ? 0.75
-                                                                 : 0.5;
+  const double max_gap_ratio = GetParam() == SceneKind::Tets ? 1.01 : GetParam() == SceneKind::Contact ? 0.75 : 0.5;
   for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson})
     checkAcceleration(s, max_gap_ratio, acceleration);
 }

@@ -104,8 +104,9 @@ TEST(AutoBackend, ChoosesByDeviceOnThisMachine) {
       EXPECT_EQ(d.rfind("OpenCL: ", 0), 0u) << d;
       EXPECT_NE(d.find("[auto: a GPU]"), std::string::npos) << d;
     } else {
-      EXPECT_EQ(d, "CPU reference (double) [auto: no GPU; the OpenCL CPU device is no faster than the CPU "
-                   "reference]");
+      EXPECT_EQ(d,
+                "CPU reference (double) [auto: no GPU; the OpenCL CPU device is no faster than the CPU "
+                "reference]");
     }
   }
 }

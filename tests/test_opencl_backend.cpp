@@ -138,8 +138,7 @@ TEST_P(OpenCLBackendTest, PotentialMatchesCpu) {
       p.cpu->read(0, x);
       const double external_scale = f.cwiseAbs().cwiseProduct(x.cwiseAbs()).sum();
       EXPECT_LE(std::abs(got.internal - ref.internal), energyTol() * std::abs(ref.internal)) << "t = " << t;
-      EXPECT_LE(std::abs(got.pins - ref.pins), energyTol() * std::max(std::abs(ref.pins), 1e-300))
-          << "t = " << t;
+      EXPECT_LE(std::abs(got.pins - ref.pins), energyTol() * std::max(std::abs(ref.pins), 1e-300)) << "t = " << t;
       EXPECT_LE(std::abs(got.external - ref.external), energyTol() * external_scale) << "t = " << t;
     }
   }
@@ -239,8 +238,7 @@ TEST_P(OpenCLBackendTest, LargeReductionMatchesCompensatedSum) {
   std::vector<double> terms;
   for (int j = 0; j < x.rows(); ++j) terms.push_back(scene.masses[j] * x.row(j).squaredNorm());
   const double ref_dot = testing::compensatedSum(terms);
-  EXPECT_LE(std::abs(ocl->massDot(0, 0) - ref_dot),
-            (precision() == Precision::Double ? 1e-13 : 1e-5) * ref_dot);
+  EXPECT_LE(std::abs(ocl->massDot(0, 0) - ref_dot), (precision() == Precision::Double ? 1e-13 : 1e-5) * ref_dot);
 }
 
 TEST_P(OpenCLBackendTest, DescriptionNamesDeviceAndPrecision) {
@@ -269,8 +267,7 @@ TEST_P(OpenCLBackendTest, PhaseTimersAccumulate) {
   EXPECT_EQ(t.global, 0.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Precisions, OpenCLBackendTest,
-                         ::testing::Values(Precision::Double, Precision::Float),
+INSTANTIATE_TEST_SUITE_P(Precisions, OpenCLBackendTest, ::testing::Values(Precision::Double, Precision::Float),
                          [](const ::testing::TestParamInfo<Precision>& info) {
                            return std::string(testing::precisionName(info.param));
                          });

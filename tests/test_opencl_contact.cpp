@@ -82,7 +82,8 @@ TEST(OpenCLContact, CheckpointsContinueBitForBit) {
     for (int i = 0; i < 10; ++i) original.push_back((sim.step(), sim.positions()));
     Simulator other(scene, o);
     other.restore(c);
-    for (int i = 0; i < 10; ++i) EXPECT_EQ((other.step(), other.positions()), original[i]) << testing::precisionName(precision);
+    for (int i = 0; i < 10; ++i)
+      EXPECT_EQ((other.step(), other.positions()), original[i]) << testing::precisionName(precision);
   }
 }
 

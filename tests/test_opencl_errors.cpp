@@ -27,8 +27,10 @@ class ScopedEnv {
     ::setenv(name, value, 1);
   }
   ~ScopedEnv() {
-    if (old_) ::setenv(name_, old_->c_str(), 1);
-    else ::unsetenv(name_);
+    if (old_)
+      ::setenv(name_, old_->c_str(), 1);
+    else
+      ::unsetenv(name_);
   }
 
  private:
@@ -82,8 +84,7 @@ TEST_F(OpenCLErrorsTest, EnvironmentVariablesSelectTheDevice) {
   }
   {
     ScopedEnv device("STABINT_OPENCL_DEVICE", "no-such-device-xyz");
-    EXPECT_THROW(makeOpenCLBackend(data, 1, testing::openclOptions(Precision::Float)),
-                 NoOpenCLDeviceError);
+    EXPECT_THROW(makeOpenCLBackend(data, 1, testing::openclOptions(Precision::Float)), NoOpenCLDeviceError);
     // Options take precedence over the environment.
     OpenCLOptions options = testing::openclOptions(Precision::Float);
     options.device = std::to_string(first.device_index);

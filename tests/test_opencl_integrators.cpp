@@ -59,9 +59,7 @@ Trajectory simulate(const Scene& scene, SimulatorOptions options, int steps) {
   return run;
 }
 
-bool isExplicit(Integrator i) {
-  return i == Integrator::ForwardEuler || i == Integrator::SymplecticEuler;
-}
+bool isExplicit(Integrator i) { return i == Integrator::ForwardEuler || i == Integrator::SymplecticEuler; }
 
 struct Worst {
   double x = 0.0, v = 0.0;
@@ -71,8 +69,7 @@ struct Worst {
 // Both must refuse the same step as non-finite (none is expected here), except in float, whose
 // range (3e38) an exploding explicit simulation would leave many steps before double's (1e308):
 // there only the steps both completed are compared.
-Worst compareRuns(const Scene& scene, SimulatorOptions options, Precision precision, int steps,
-                  double tol) {
+Worst compareRuns(const Scene& scene, SimulatorOptions options, Precision precision, int steps, double tol) {
   options.backend = BackendKind::CpuReference;
   const Trajectory ref = simulate(scene, options, steps);
   options.backend = BackendKind::OpenCL;
@@ -88,14 +85,12 @@ Worst compareRuns(const Scene& scene, SimulatorOptions options, Precision precis
   const std::size_t n = std::min(ref.x.size(), got.x.size());
   for (std::size_t i = 0; i < n; ++i) {
     const double ex = relativeError(got.x[i], ref.x[i]);
-    const double v_scale = std::max(ref.v[i].cwiseAbs().maxCoeff(),
-                                    ref.x[i].cwiseAbs().maxCoeff() / options.time_step);
+    const double v_scale = std::max(ref.v[i].cwiseAbs().maxCoeff(), ref.x[i].cwiseAbs().maxCoeff() / options.time_step);
     const double ev = (got.v[i] - ref.v[i]).cwiseAbs().maxCoeff() / v_scale;
     worst.x = std::max(worst.x, ex);
     worst.v = std::max(worst.v, ev);
     if (ex > tol || ev > tol) {
-      ADD_FAILURE() << "step " << i << ": positions " << ex << ", velocities " << ev
-                    << " relative error > " << tol;
+      ADD_FAILURE() << "step " << i << ": positions " << ex << ", velocities " << ev << " relative error > " << tol;
       break;
     }
   }
@@ -190,8 +185,8 @@ INSTANTIATE_TEST_SUITE_P(AllIntegrators, OpenCLIntegratorTest, ::testing::Values
 TEST(OpenCLAcceleration, AcceleratedSolvesMatchCpu) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
   for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson}) {
-    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint,
-                                  Integrator::EnergyBlend}) {
+    for (Integrator integrator :
+         {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {
       SimulatorOptions o;
       o.integrator = integrator;
       o.acceleration = acceleration;

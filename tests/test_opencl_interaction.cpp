@@ -33,7 +33,8 @@ DrivenRun drivenRun(const DrivenCloth& d, BackendKind backend, Precision precisi
   int handle = -1;
   for (int i = 0; i < 30; ++i) {
     if (i == 5) handle = sim.grab(corner, 5e3);
-    if (i > 5 && i < 20) sim.setPinTarget(handle, d.scene.positions.row(corner).transpose() + Eigen::Vector3d(0, 0, 0.01 * i));
+    if (i > 5 && i < 20)
+      sim.setPinTarget(handle, d.scene.positions.row(corner).transpose() + Eigen::Vector3d(0, 0, 0.01 * i));
     if (i == 20) sim.release(handle);
     if (i == 10) sim.setVelocities(sim.velocities() + Eigen::MatrixX3d::Constant(d.scene.numParticles(), 3, 0.1));
     d.drive(sim);
@@ -124,7 +125,8 @@ TEST(OpenCLInteraction, ElementChangesMatchCpu) {
       // Re-enabling the stiff pin after the corner fell books 700 J (500 E_scale): float's
       // error is relative to that energy, not to E_scale.
       EXPECT_NEAR(got_reports[i].event_energy, ref_reports[i].event_energy,
-                  tol * std::max(scale, std::abs(ref_reports[i].event_energy))) << what;
+                  tol * std::max(scale, std::abs(ref_reports[i].event_energy)))
+          << what;
     }
     EXPECT_NE(ref_reports[3].event_energy, 0.0);
     EXPECT_NE(ref_reports[6].event_energy, 0.0);

@@ -26,10 +26,10 @@ inline std::string openclSkipReason(Precision precision) {
   return "";
 }
 
-#define STABINT_SKIP_WITHOUT_OPENCL(precision)                          \
-  do {                                                                  \
+#define STABINT_SKIP_WITHOUT_OPENCL(precision)                                  \
+  do {                                                                          \
     const std::string reason = ::stabint::testing::openclSkipReason(precision); \
-    if (!reason.empty()) GTEST_SKIP() << reason;                        \
+    if (!reason.empty()) GTEST_SKIP() << reason;                                \
   } while (0)
 
 inline OpenCLOptions openclOptions(Precision precision) {
@@ -70,8 +70,7 @@ inline Scene randomScene(unsigned seed, int n, int springs, int tets, int pins) 
     Tet t;
     for (int& v : t.vertices) v = vertex(rng);
     const auto& v = t.vertices;
-    if (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3])
-      continue;
+    if (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3]) continue;
     double vol = signedVolume(s.rest_positions, t.vertices);
     if (std::abs(vol) < 1e-3) continue;  // keep rest shapes well conditioned
     if (vol < 0) std::swap(t.vertices[2], t.vertices[3]);

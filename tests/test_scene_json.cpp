@@ -22,7 +22,6 @@
 #include <string>
 #include <unistd.h>
 
-
 namespace stabint {
 namespace {
 
@@ -34,7 +33,6 @@ const std::string kScenesDir = (fs::path(__FILE__).parent_path().parent_path() /
 
 class SceneJson : public testing::TempDirTest {
  protected:
-
   // Loads `text` as a scene file; the error it must raise is "<file>: <message>" with line 0
   // unless a line is given.
   void expectError(const std::string& text, const std::string& message, int line = 0) const {
@@ -201,7 +199,8 @@ TEST_F(SceneJson, MassesLumpedFromDensities) {
 // --- conveniences ----------------------------------------------------------------------------------
 
 TEST_F(SceneJson, BuiltinMatchesTheBuilder) {
-  const Scene s = loadSceneFile(write("b.json", R"({"builtin": {"name": "cloth", "nx": 5, "ny": 4, "damping": 0.1, "pinned": [0]}})"));
+  const Scene s = loadSceneFile(
+      write("b.json", R"({"builtin": {"name": "cloth", "nx": 5, "ny": 4, "damping": 0.1, "pinned": [0]}})"));
   ClothGridParams p;
   p.nx = 5;
   p.ny = 4;
@@ -217,7 +216,8 @@ TEST_F(SceneJson, BuiltinMatchesTheBuilder) {
   expectSameScene(chain, makeChainPendulum(cp));
   expectSameScene(loadSceneFile(write("o.json", R"({"builtin": {"name": "oscillator", "mass": 2}})")),
                   makeLinearOscillator({2.0, 1.0, 1.0}));
-  EXPECT_EQ(loadSceneFile(write("t.json", R"({"builtin": {"name": "tetbar", "nx": 2, "ny": 1, "nz": 1}})")).tets.size(), 12u);
+  EXPECT_EQ(loadSceneFile(write("t.json", R"({"builtin": {"name": "tetbar", "nx": 2, "ny": 1, "nz": 1}})")).tets.size(),
+            12u);
 }
 
 TEST_F(SceneJson, PartsAreConcatenatedAndExplicitIndicesAreGlobal) {
@@ -227,10 +227,10 @@ TEST_F(SceneJson, PartsAreConcatenatedAndExplicitIndicesAreGlobal) {
     "springs": [{"a": 3, "b": 1, "stiffness": 1}]
   })"));
   ASSERT_EQ(s.numParticles(), 5);
-  EXPECT_EQ(s.name, "parts");  // several parts: the file stem
-  EXPECT_EQ(s.gravity, Eigen::Vector3d::Zero());  // the first builtin's gravity
+  EXPECT_EQ(s.name, "parts");                                  // several parts: the file stem
+  EXPECT_EQ(s.gravity, Eigen::Vector3d::Zero());               // the first builtin's gravity
   EXPECT_EQ(s.positions.row(1), Eigen::RowVector3d(0, 5, 0));  // chain translated
-  EXPECT_EQ(s.pins[1].vertex, 1);                               // the chain's pin, shifted
+  EXPECT_EQ(s.pins[1].vertex, 1);                              // the chain's pin, shifted
   EXPECT_EQ(s.pins[1].target.position, Eigen::Vector3d(0, 5, 0));
   EXPECT_EQ(s.springs[0].a, 1);  // the chain's own springs, shifted
   EXPECT_EQ(s.springs.back().a, 3);
@@ -482,7 +482,8 @@ TEST_F(SceneJson, MissingFile) {
 }
 
 TEST_F(SceneJson, MalformedJsonNamesTheLine) {
-  expectError("{\n  \"particles\": {\n    \"positions\": [[0,0,0],]\n  }\n}\n", "malformed JSON (column 27): syntax error while parsing value - unexpected ']'", 3);
+  expectError("{\n  \"particles\": {\n    \"positions\": [[0,0,0],]\n  }\n}\n",
+              "malformed JSON (column 27): syntax error while parsing value - unexpected ']'", 3);
   expectError("", "malformed JSON", 1);
   expectError("{\"name\": \"x\"} trailing", "malformed JSON", 1);
 }
@@ -494,7 +495,8 @@ TEST_F(SceneJson, TopLevelErrors) {
   expectError(twoParticles(R"(, "format": "other")"), "format: expected \"stabint-scene\", got \"other\"");
   expectError(twoParticles(R"(, "version": 2)"), "version: unsupported version 2");
   expectError(twoParticles(R"(, "name": 5)"), "name: expected a string, got number");
-  expectError(twoParticles(R"(, "gravity": [0, -9.81])"), "gravity: expected an array of 3 numbers [x, y, z], got [0,-9.81]");
+  expectError(twoParticles(R"(, "gravity": [0, -9.81])"),
+              "gravity: expected an array of 3 numbers [x, y, z], got [0,-9.81]");
   expectError(twoParticles(R"(, "gravity": [0, "down", 0])"), "gravity[1]: expected a number, got string");
   expectError(twoParticles(R"(, "gravity": [0, 1e999, 0])"), "malformed JSON: number overflow parsing '1e999'");
 }
@@ -516,7 +518,8 @@ TEST_F(SceneJson, ParticleErrors) {
               "particles.velocities: has 0 rows, expected 1 (one per position)");
   expectError(R"({"particles": {"positions": [[0,0,0], [0,0]], "masses": 1}})",
               "particles.positions[1]: expected an array of 3 numbers");
-  expectError(R"({"particles": {"positions": [[0,0,"z"]], "masses": 1}})", "particles.positions[0][2]: expected a number, got string");
+  expectError(R"({"particles": {"positions": [[0,0,"z"]], "masses": 1}})",
+              "particles.positions[0][2]: expected a number, got string");
   expectError(R"({"particles": {"positions": [[0,0,0]], "rest_positions": [[0,0,true]], "masses": 1}})",
               "particles.rest_positions[0][2]: expected a number, got boolean");
 }
@@ -528,13 +531,18 @@ TEST_F(SceneJson, ElementErrors) {
   expectError(twoParticles(R"(, "springs": [{"a": 0, "b": 1}])"), "springs[0]: missing field 'stiffness'");
   expectError(twoParticles(R"(, "springs": [{"a": 0, "b": 2, "stiffness": 1}])"),
               "springs[0].b: particle index 2 out of range [0, 2)");
-  expectError(twoParticles(R"(, "springs": [{"a": 0.5, "b": 1, "stiffness": 1}])"), "springs[0].a: expected an integer, got 0.5");
-  expectError(twoParticles(R"(, "springs": [{"a": 1, "b": 1, "stiffness": 1}])"), "springs[0].b: spring joins particle 1 to itself");
-  expectError(twoParticles(R"(, "springs": [{"a": 0, "b": 1, "stiffness": -1}])"), "springs[0].stiffness: must be >= 0, got -1");
+  expectError(twoParticles(R"(, "springs": [{"a": 0.5, "b": 1, "stiffness": 1}])"),
+              "springs[0].a: expected an integer, got 0.5");
+  expectError(twoParticles(R"(, "springs": [{"a": 1, "b": 1, "stiffness": 1}])"),
+              "springs[0].b: spring joins particle 1 to itself");
+  expectError(twoParticles(R"(, "springs": [{"a": 0, "b": 1, "stiffness": -1}])"),
+              "springs[0].stiffness: must be >= 0, got -1");
   expectError(twoParticles(R"(, "springs": [{"a": 0, "b": 1, "stiffness": 1, "rest_length": -2}])"),
               "springs[0].rest_length: must be >= 0, got -2");
-  expectError(twoParticles(R"(, "springs": [{"a": 0, "b": 1, "stiffness": 1, "k": 2}])"), "springs[0]: unknown field 'k'");
-  expectError(twoParticles(R"(, "springs": [{"a": 99999999999, "b": 1, "stiffness": 1}])"), "springs[0].a: integer out of range");
+  expectError(twoParticles(R"(, "springs": [{"a": 0, "b": 1, "stiffness": 1, "k": 2}])"),
+              "springs[0]: unknown field 'k'");
+  expectError(twoParticles(R"(, "springs": [{"a": 99999999999, "b": 1, "stiffness": 1}])"),
+              "springs[0].a: integer out of range");
   expectError(twoParticles(R"(, "tets": [{"vertices": [0, 1, 0], "stiffness": 1}])"),
               "tets[0].vertices: expected 4 particle indices, got 3");
   expectError(R"({"particles": {"positions": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]], "masses": 1},
@@ -553,14 +561,18 @@ TEST_F(SceneJson, PinErrors) {
               "pins[0].target: unknown field 'speed'");
   expectError(twoParticles(R"(, "pins": [{"vertex": 0, "stiffness": 1, "target": {"frequency": "fast"}}])"),
               "pins[0].target.frequency: expected a number, got string");
-  expectError(twoParticles(R"(, "pins": [{"pin_where": {"axis": "x", "max": 1}, "stiffness": 1, "target": {"position": [0,0,0]}}])"),
-              "pins[0].target.position: not allowed with pin_where");
+  expectError(
+      twoParticles(
+          R"(, "pins": [{"pin_where": {"axis": "x", "max": 1}, "stiffness": 1, "target": {"position": [0,0,0]}}])"),
+      "pins[0].target.position: not allowed with pin_where");
   expectError(twoParticles(R"(, "pins": [{"pin_where": {"axis": "w", "max": 1}, "stiffness": 1}])"),
               "pins[0].pin_where.axis: expected \"x\", \"y\" or \"z\", got \"w\"");
-  expectError(twoParticles(R"(, "pins": [{"pin_where": {"axis": "x"}, "stiffness": 1}])"), "pins[0].pin_where: needs min, max or both");
+  expectError(twoParticles(R"(, "pins": [{"pin_where": {"axis": "x"}, "stiffness": 1}])"),
+              "pins[0].pin_where: needs min, max or both");
   expectError(twoParticles(R"(, "pins": [{"pin_where": {"axis": "x", "min": 5}, "stiffness": 1}])"),
               "pins[0].pin_where: selects no particle");
-  expectError(twoParticles(R"(, "pins": [{"pin_where": {}, "stiffness": 1}])"), "pins[0].pin_where: needs \"axis\" with min/max");
+  expectError(twoParticles(R"(, "pins": [{"pin_where": {}, "stiffness": 1}])"),
+              "pins[0].pin_where: needs \"axis\" with min/max");
   expectError(twoParticles(R"(, "pins": [{"pin_where": {"min": [0, 0]}, "stiffness": 1}])"),
               "pins[0].pin_where.min: expected an array of 3 numbers");
   expectError(twoParticles(R"(, "pins": [{"pin_where": {"axis": "x", "max": 1, "min": [0,0,0]}, "stiffness": 1}])"),
@@ -568,7 +580,8 @@ TEST_F(SceneJson, PinErrors) {
 }
 
 TEST_F(SceneJson, ForceFieldAndBodyErrors) {
-  expectError(twoParticles(R"(, "force_fields": [{"force": [1, 0]}])"), "force_fields[0].force: expected an array of 3 numbers");
+  expectError(twoParticles(R"(, "force_fields": [{"force": [1, 0]}])"),
+              "force_fields[0].force: expected an array of 3 numbers");
   expectError(twoParticles(R"(, "force_fields": [{"particles": [0, 7]}])"),
               "force_fields[0].particles[1]: particle index 7 out of range [0, 2)");
   expectError(twoParticles(R"(, "force_fields": [{"particles": [0], "where": {"axis": "x", "max": 1}}])"),
@@ -589,12 +602,15 @@ TEST_F(SceneJson, BuiltinAndMeshErrors) {
   expectError(R"({"mesh": {"type": "obj"}})", "mesh: missing field 'file'");
   expectError(R"({"mesh": {"file": "x.stl"}})", "mesh.file: cannot tell the mesh type from 'x.stl'");
   expectError(R"({"mesh": {"file": "x.stl", "type": "stl"}})", "mesh.type: unknown mesh type 'stl'");
-  expectError(R"({"mesh": {"file": "absent.obj"}})", "mesh.file: " + (dir_ / "absent.obj").string() + ": cannot open file");
+  expectError(R"({"mesh": {"file": "absent.obj"}})",
+              "mesh.file: " + (dir_ / "absent.obj").string() + ": cannot open file");
   write("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n");
-  expectError(R"({"mesh": {"file": "bad.obj"}})", "mesh.file: " + (dir_ / "bad.obj").string() + ":3: face 1: vertex index 3 out of range");
+  expectError(R"({"mesh": {"file": "bad.obj"}})",
+              "mesh.file: " + (dir_ / "bad.obj").string() + ":3: face 1: vertex index 3 out of range");
   write("ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   expectError(R"({"mesh": {"file": "ok.obj", "density": 3}})", "mesh: unknown field 'density'");
-  expectError(R"({"mesh": [{"file": "ok.obj"}, {"file": "ok.obj", "damping": 2}]})", "mesh[1].damping: must be in [0, 1], got 2");
+  expectError(R"({"mesh": [{"file": "ok.obj"}, {"file": "ok.obj", "damping": 2}]})",
+              "mesh[1].damping: must be in [0, 1], got 2");
 }
 
 TEST_F(SceneJson, BuiltinSceneFromParameterText) {

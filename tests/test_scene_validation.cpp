@@ -90,8 +90,7 @@ TEST(SceneValidation, NonFiniteParticleDataNamesTheRow) {
   EXPECT_THAT(messageAfter([](Scene& s) { s.positions(3, 1) = kNaN; }), HasSubstr("positions row 3 is not finite"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.rest_positions(2, 0) = kInf; }),
               HasSubstr("rest_positions row 2 is not finite"));
-  EXPECT_THAT(messageAfter([](Scene& s) { s.velocities(4, 2) = -kInf; }),
-              HasSubstr("velocities row 4 is not finite"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.velocities(4, 2) = -kInf; }), HasSubstr("velocities row 4 is not finite"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.gravity.y() = kNaN; }), HasSubstr("gravity (0, nan, 0) is not finite"));
 }
 
@@ -107,12 +106,13 @@ TEST(SceneValidation, SpringRules) {
               HasSubstr("spring 1: index b = 57 out of range [0, 5)"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.springs[0].a = -1; }),
               HasSubstr("spring 0: index a = -1 out of range [0, 5)"));
-  EXPECT_THAT(messageAfter([](Scene& s) { s.springs[1] = Spring{3, 3, 0.0, 1.0}; }),
+  EXPECT_THAT(messageAfter([](Scene& s) {
+                s.springs[1] = Spring{3, 3, 0.0, 1.0};
+              }),
               HasSubstr("spring 1 joins particle 3 to itself"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.springs[0].rest_length = -0.5; }),
               HasSubstr("spring 0: rest length -0.5 must be >= 0"));
-  EXPECT_THAT(messageAfter([](Scene& s) { s.springs[0].rest_length = kNaN; }),
-              HasSubstr("spring 0: rest length nan"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.springs[0].rest_length = kNaN; }), HasSubstr("spring 0: rest length nan"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.springs[1].stiffness = -1.0; }),
               HasSubstr("spring 1: stiffness -1 must be >= 0"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.springs[1].stiffness = kInf; }),
@@ -122,12 +122,16 @@ TEST(SceneValidation, SpringRules) {
 TEST(SceneValidation, TetRules) {
   EXPECT_THAT(messageAfter([](Scene& s) { s.tets[0].vertices[2] = 9; }),
               HasSubstr("tet 0: index vertices[2] = 9 out of range [0, 5)"));
-  EXPECT_THAT(messageAfter([](Scene& s) { s.tets[0].vertices = {0, 1, 2, 1}; }),
+  EXPECT_THAT(messageAfter([](Scene& s) {
+                s.tets[0].vertices = {0, 1, 2, 1};
+              }),
               HasSubstr("tet 0: particle 1 appears twice"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.tets[0].stiffness = -3.0; }),
               HasSubstr("tet 0: stiffness -3 must be >= 0"));
   // Swapping two vertices inverts the tet: volume -1/6.
-  EXPECT_THAT(messageAfter([](Scene& s) { s.tets[0].vertices = {0, 2, 1, 3}; }),
+  EXPECT_THAT(messageAfter([](Scene& s) {
+                s.tets[0].vertices = {0, 2, 1, 3};
+              }),
               HasSubstr("tet 0: negative rest volume -0.166667 (inverted: list two vertices in the other order)"));
   // A flat tet: the apex moved into the base plane.
   EXPECT_THAT(messageAfter([](Scene& s) { s.rest_positions.row(3) << 0.3, 0.3, 0.0; }),
@@ -145,12 +149,16 @@ TEST(SceneValidation, TetVolumeUsesRestPositionsNotPositions) {
 TEST(SceneValidation, TriangleStrainRules) {
   EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].vertices[1] = 9; }),
               HasSubstr("triangle strain 0: index vertices[1] = 9 out of range [0, 5)"));
-  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].vertices = {0, 1, 0}; }),
+  EXPECT_THAT(messageAfter([](Scene& s) {
+                s.triangle_strains[0].vertices = {0, 1, 0};
+              }),
               HasSubstr("triangle strain 0: particle 0 appears twice (vertices[0] and vertices[2])"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].stiffness = -2.0; }),
               HasSubstr("triangle strain 0: stiffness -2 must be >= 0"));
   // Particles 0, 1 and 4 lie on the x axis.
-  EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains.push_back(TriangleStrain{{0, 1, 4}, 1.0}); }),
+  EXPECT_THAT(messageAfter([](Scene& s) {
+                s.triangle_strains.push_back(TriangleStrain{{0, 1, 4}, 1.0});
+              }),
               HasSubstr("triangle strain 1: degenerate rest triangle (0, 1, 4), area 0"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.triangle_strains[0].strain_min = 1.2; }),
               HasSubstr("triangle strain 0: strain limits [1.2, 1.1] must satisfy 0 <= strain_min <= 1 <= strain_max"));
@@ -165,26 +173,36 @@ TEST(SceneValidation, TriangleStrainRules) {
 TEST(SceneValidation, BendingHingeRules) {
   EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].vertices[3] = -1; }),
               HasSubstr("bending hinge 0: index vertices[3] = -1 out of range [0, 5)"));
-  EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].vertices = {1, 2, 0, 2}; }),
+  EXPECT_THAT(messageAfter([](Scene& s) {
+                s.bending_hinges[0].vertices = {1, 2, 0, 2};
+              }),
               HasSubstr("bending hinge 0: particle 2 appears twice"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].stiffness = kNaN; }),
               HasSubstr("bending hinge 0: stiffness nan must be >= 0"));
-  EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].vertices = {0, 1, 2, 4}; }),
+  EXPECT_THAT(messageAfter([](Scene& s) {
+                s.bending_hinges[0].vertices = {0, 1, 2, 4};
+              }),
               HasSubstr("bending hinge 0: degenerate rest triangle (1, 0, 4), area 0"));
   // Particle 3 sits above particle 0's side of edge 1-2: the hinge folds past 90 degrees.
-  EXPECT_THAT(messageAfter([](Scene& s) { s.bending_hinges[0].vertices = {1, 2, 0, 3}; }),
-              HasSubstr("bending hinge 0: flipped rest hinge: triangles (1, 2, 0) and (2, 1, 3) are folded onto each other"));
+  EXPECT_THAT(
+      messageAfter([](Scene& s) {
+        s.bending_hinges[0].vertices = {1, 2, 0, 3};
+      }),
+      HasSubstr("bending hinge 0: flipped rest hinge: triangles (1, 2, 0) and (2, 1, 3) are folded onto each other"));
 }
 
 TEST(SceneValidation, SurfaceTriangleIndicesAreInRange) {
-  EXPECT_THAT(messageAfter([](Scene& s) { s.triangles.push_back({0, 4, 7}); }),
+  EXPECT_THAT(messageAfter([](Scene& s) {
+                s.triangles.push_back({0, 4, 7});
+              }),
               HasSubstr("triangle 1: index vertices[2] = 7 out of range [0, 5)"));
 }
 
 TEST(SceneValidation, PinRules) {
   EXPECT_THAT(messageAfter([](Scene& s) { s.pins[0].vertex = 5; }),
               HasSubstr("pin 0: index vertex = 5 out of range [0, 5)"));
-  EXPECT_THAT(messageAfter([](Scene& s) { s.pins[0].stiffness = -1.0; }), HasSubstr("pin 0: stiffness -1 must be >= 0"));
+  EXPECT_THAT(messageAfter([](Scene& s) { s.pins[0].stiffness = -1.0; }),
+              HasSubstr("pin 0: stiffness -1 must be >= 0"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.pins[0].target.position.x() = kNaN; }),
               HasSubstr("pin 0: target position (nan, 0, 0) is not finite"));
   EXPECT_THAT(messageAfter([](Scene& s) { s.pins[0].target.velocity.z() = kInf; }),

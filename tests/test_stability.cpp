@@ -21,7 +21,7 @@ namespace {
 constexpr int kFrames = 300;
 
 struct ChainRun {
-  double initial = 0.0;   // H(x_0, v_0)
+  double initial = 0.0;  // H(x_0, v_0)
   double max_energy = -1e300;
   double final_energy = 0.0;
   double final_target = 0.0;
@@ -123,7 +123,7 @@ namespace {
 // blend's -0.002 m after -0.78 m. Thresholds: BE stays below 40 % of its drop, the blend comes
 // back within 10 % of its drop.
 struct BarRun {
-  double lowest = 0.0;     // lowest free-end height relative to the start, whole run
+  double lowest = 0.0;        // lowest free-end height relative to the start, whole run
   double late_high = -1e300;  // highest free-end height relative to the start, frames 200-300
 };
 

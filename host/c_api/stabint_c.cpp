@@ -32,8 +32,7 @@ struct LastError {
 };
 thread_local LastError last_error;
 
-stabint_status fail(stabint_status status, const char* class_name, const std::string& text,
-                    int step = -1) {
+stabint_status fail(stabint_status status, const char* class_name, const std::string& text, int step = -1) {
   last_error.status = status;
   last_error.message = std::string(class_name) + ": " + text;
   last_error.step = step;
@@ -87,8 +86,8 @@ void require(const T* pointer, const char* what) {
 
 void requireCapacity(size_t capacity, size_t needed, const char* what) {
   if (capacity < needed) {
-    throw ArgumentError{std::string(what) + ": buffer holds " + std::to_string(capacity) +
-                        " values, " + std::to_string(needed) + " needed"};
+    throw ArgumentError{std::string(what) + ": buffer holds " + std::to_string(capacity) + " values, " +
+                        std::to_string(needed) + " needed"};
   }
 }
 
@@ -96,15 +95,12 @@ void requireCapacity(size_t capacity, size_t needed, const char* what) {
 template <class Enum>
 Enum checkedEnum(int value, int count, const char* field) {
   if (value < 0 || value >= count) {
-    throw stabint::InvalidInputError(std::string("options.") + field + ": invalid value " +
-                                     std::to_string(value));
+    throw stabint::InvalidInputError(std::string("options.") + field + ": invalid value " + std::to_string(value));
   }
   return static_cast<Enum>(value);
 }
 
-stabint_energy toC(const stabint::EnergyReport& e) {
-  return {e.kinetic, e.elastic, e.external, e.total()};
-}
+stabint_energy toC(const stabint::EnergyReport& e) { return {e.kinetic, e.elastic, e.external, e.total()}; }
 
 stabint_step_report toC(const stabint::StepReport& r) {
   stabint_step_report c{};
@@ -144,13 +140,12 @@ stabint_status copyRows(const stabint_simulator* sim, bool positions, T* out, si
 
 // An interleaved x y z array of `count` values as an n by 3 matrix, n = the simulator's particle
 // count; a NULL array or a count other than 3 n is API misuse.
-Eigen::MatrixX3d rowsFrom(const stabint_simulator* sim, const double* values, size_t count,
-                          const char* what) {
+Eigen::MatrixX3d rowsFrom(const stabint_simulator* sim, const double* values, size_t count, const char* what) {
   require(values, what);
   const size_t n = static_cast<size_t>(sim->sim.positions().rows());
   if (count != 3 * n) {
-    throw ArgumentError{std::string(what) + ": " + std::to_string(count) + " values, " +
-                        std::to_string(3 * n) + " expected (3 per particle)"};
+    throw ArgumentError{std::string(what) + ": " + std::to_string(count) + " values, " + std::to_string(3 * n) +
+                        " expected (3 per particle)"};
   }
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
   return Eigen::Map<const RowMajor>(values, static_cast<Eigen::Index>(n), 3);
@@ -209,8 +204,7 @@ const char* stabint_blend_branch_name(stabint_blend_branch branch) {
   return stabint::blendBranchName(static_cast<stabint::BlendBranch>(branch));
 }
 
-stabint_status stabint_scene_create_builtin(const char* name, const char* params_json,
-                                            stabint_scene** out) {
+stabint_status stabint_scene_create_builtin(const char* name, const char* params_json, stabint_scene** out) {
   return guarded([&] {
     require(name, "name");
     require(out, "out");
@@ -228,16 +222,13 @@ stabint_status stabint_scene_load(const char* path, stabint_scene** out) {
 
 void stabint_scene_destroy(stabint_scene* scene) { delete scene; }
 
-int stabint_scene_num_particles(const stabint_scene* scene) {
-  return scene ? scene->scene.numParticles() : -1;
-}
+int stabint_scene_num_particles(const stabint_scene* scene) { return scene ? scene->scene.numParticles() : -1; }
 
 int stabint_scene_num_triangles(const stabint_scene* scene) {
   return scene ? static_cast<int>(scene->scene.triangles.size()) : -1;
 }
 
-stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t* out,
-                                            size_t capacity) {
+stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t* out, size_t capacity) {
   return guarded([&] {
     require(scene, "scene");
     const auto& triangles = scene->scene.triangles;
@@ -272,8 +263,7 @@ void stabint_simulator_options_default(stabint_simulator_options* options) {
   options->opencl_precision = static_cast<stabint_precision>(d.opencl.precision);
 }
 
-stabint_status stabint_simulator_create(const stabint_scene* scene,
-                                        const stabint_simulator_options* options,
+stabint_status stabint_simulator_create(const stabint_scene* scene, const stabint_simulator_options* options,
                                         stabint_simulator** out) {
   return guarded([&] {
     require(scene, "scene");
@@ -297,8 +287,7 @@ stabint_status stabint_simulator_create(const stabint_scene* scene,
     o.backend = checkedEnum<stabint::BackendKind>(options->backend, 3, "backend");
     o.opencl.platform = options->opencl_platform ? options->opencl_platform : "";
     o.opencl.device = options->opencl_device ? options->opencl_device : "";
-    o.opencl.precision =
-        checkedEnum<stabint::Precision>(options->opencl_precision, 2, "opencl_precision");
+    o.opencl.precision = checkedEnum<stabint::Precision>(options->opencl_precision, 2, "opencl_precision");
     *out = new stabint_simulator{stabint::Simulator(scene->scene, o)};
   });
 }
@@ -317,20 +306,16 @@ int stabint_simulator_num_particles(const stabint_simulator* sim) {
   return sim ? static_cast<int>(sim->sim.positions().rows()) : -1;
 }
 
-stabint_status stabint_simulator_copy_positions(const stabint_simulator* sim, double* out,
-                                                size_t capacity) {
+stabint_status stabint_simulator_copy_positions(const stabint_simulator* sim, double* out, size_t capacity) {
   return copyRows(sim, true, out, capacity);
 }
-stabint_status stabint_simulator_copy_positions_float(const stabint_simulator* sim, float* out,
-                                                      size_t capacity) {
+stabint_status stabint_simulator_copy_positions_float(const stabint_simulator* sim, float* out, size_t capacity) {
   return copyRows(sim, true, out, capacity);
 }
-stabint_status stabint_simulator_copy_velocities(const stabint_simulator* sim, double* out,
-                                                 size_t capacity) {
+stabint_status stabint_simulator_copy_velocities(const stabint_simulator* sim, double* out, size_t capacity) {
   return copyRows(sim, false, out, capacity);
 }
-stabint_status stabint_simulator_copy_velocities_float(const stabint_simulator* sim, float* out,
-                                                       size_t capacity) {
+stabint_status stabint_simulator_copy_velocities_float(const stabint_simulator* sim, float* out, size_t capacity) {
   return copyRows(sim, false, out, capacity);
 }
 
@@ -342,8 +327,7 @@ stabint_status stabint_simulator_energy(const stabint_simulator* sim, stabint_en
   });
 }
 
-stabint_status stabint_simulator_last_report(const stabint_simulator* sim,
-                                             stabint_step_report* out) {
+stabint_status stabint_simulator_last_report(const stabint_simulator* sim, stabint_step_report* out) {
   return guarded([&] {
     require(sim, "simulator");
     require(out, "out");
@@ -352,18 +336,11 @@ stabint_status stabint_simulator_last_report(const stabint_simulator* sim,
 }
 
 double stabint_simulator_time(const stabint_simulator* sim) { return sim ? sim->sim.time() : kNaN; }
-int stabint_simulator_step_count(const stabint_simulator* sim) {
-  return sim ? sim->sim.stepCount() : -1;
-}
-double stabint_simulator_target(const stabint_simulator* sim) {
-  return sim ? sim->sim.target() : kNaN;
-}
-double stabint_simulator_energy_scale(const stabint_simulator* sim) {
-  return sim ? sim->sim.energyScale() : kNaN;
-}
+int stabint_simulator_step_count(const stabint_simulator* sim) { return sim ? sim->sim.stepCount() : -1; }
+double stabint_simulator_target(const stabint_simulator* sim) { return sim ? sim->sim.target() : kNaN; }
+double stabint_simulator_energy_scale(const stabint_simulator* sim) { return sim ? sim->sim.energyScale() : kNaN; }
 
-size_t stabint_simulator_backend_description(const stabint_simulator* sim, char* out,
-                                             size_t capacity) {
+size_t stabint_simulator_backend_description(const stabint_simulator* sim, char* out, size_t capacity) {
   if (sim == nullptr) return 0;
   std::string text;
   try {
@@ -379,8 +356,7 @@ size_t stabint_simulator_backend_description(const stabint_simulator* sim, char*
   return text.size();
 }
 
-stabint_status stabint_simulator_set_pin_target(stabint_simulator* sim, int pin,
-                                                const double target[3]) {
+stabint_status stabint_simulator_set_pin_target(stabint_simulator* sim, int pin, const double target[3]) {
   return guarded([&] {
     require(sim, "simulator");
     require(target, "target");
@@ -397,16 +373,15 @@ stabint_status stabint_simulator_pin_target(const stabint_simulator* sim, int pi
   });
 }
 
-stabint_status stabint_simulator_set_external_forces(stabint_simulator* sim, const double* forces,
-                                                     size_t count) {
+stabint_status stabint_simulator_set_external_forces(stabint_simulator* sim, const double* forces, size_t count) {
   return guarded([&] {
     require(sim, "simulator");
     sim->sim.setExternalForces(rowsFrom(sim, forces, count, "forces"));
   });
 }
 
-stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double* positions,
-                                           const double* velocities, size_t count) {
+stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double* positions, const double* velocities,
+                                           size_t count) {
   return guarded([&] {
     require(sim, "simulator");
     const Eigen::MatrixX3d x = rowsFrom(sim, positions, count, "positions");
@@ -415,16 +390,14 @@ stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double*
   });
 }
 
-stabint_status stabint_simulator_set_positions(stabint_simulator* sim, const double* positions,
-                                               size_t count) {
+stabint_status stabint_simulator_set_positions(stabint_simulator* sim, const double* positions, size_t count) {
   return guarded([&] {
     require(sim, "simulator");
     sim->sim.setPositions(rowsFrom(sim, positions, count, "positions"));
   });
 }
 
-stabint_status stabint_simulator_set_velocities(stabint_simulator* sim, const double* velocities,
-                                                size_t count) {
+stabint_status stabint_simulator_set_velocities(stabint_simulator* sim, const double* velocities, size_t count) {
   return guarded([&] {
     require(sim, "simulator");
     sim->sim.setVelocities(rowsFrom(sim, velocities, count, "velocities"));
@@ -438,8 +411,7 @@ stabint_status stabint_simulator_set_iterations(stabint_simulator* sim, int iter
   });
 }
 
-stabint_status stabint_simulator_grab(stabint_simulator* sim, int vertex, double stiffness,
-                                      int* out_pin) {
+stabint_status stabint_simulator_grab(stabint_simulator* sim, int vertex, double stiffness, int* out_pin) {
   return guarded([&] {
     require(sim, "simulator");
     require(out_pin, "out_pin");
@@ -461,9 +433,8 @@ std::vector<int> indexList(const int* indices, size_t count) {
 }
 }  // namespace
 
-stabint_status stabint_simulator_set_element_stiffness(stabint_simulator* sim, const char* kind,
-                                                       const int* indices, size_t count,
-                                                       double stiffness) {
+stabint_status stabint_simulator_set_element_stiffness(stabint_simulator* sim, const char* kind, const int* indices,
+                                                       size_t count, double stiffness) {
   return guarded([&] {
     require(sim, "simulator");
     require(kind, "kind");
@@ -471,8 +442,8 @@ stabint_status stabint_simulator_set_element_stiffness(stabint_simulator* sim, c
   });
 }
 
-stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, const char* kind,
-                                                     const int* indices, size_t count, int enabled) {
+stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, const char* kind, const int* indices,
+                                                     size_t count, int enabled) {
   return guarded([&] {
     require(sim, "simulator");
     require(kind, "kind");
@@ -480,8 +451,7 @@ stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, con
   });
 }
 
-stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim,
-                                            stabint_checkpoint** out) {
+stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim, stabint_checkpoint** out) {
   return guarded([&] {
     require(sim, "simulator");
     require(out, "out");
@@ -489,8 +459,7 @@ stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim,
   });
 }
 
-stabint_status stabint_simulator_restore(stabint_simulator* sim,
-                                         const stabint_checkpoint* checkpoint) {
+stabint_status stabint_simulator_restore(stabint_simulator* sim, const stabint_checkpoint* checkpoint) {
   return guarded([&] {
     require(sim, "simulator");
     require(checkpoint, "checkpoint");
@@ -519,8 +488,7 @@ const void* stabint_checkpoint_data(const stabint_checkpoint* checkpoint, size_t
   return checkpoint ? checkpoint->checkpoint.bytes().data() : nullptr;
 }
 
-stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size,
-                                             stabint_checkpoint** out) {
+stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size, stabint_checkpoint** out) {
   return guarded([&] {
     if (size > 0) require(data, "data");
     require(out, "out");

@@ -11,9 +11,7 @@ namespace stabint {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 class CpuBackend final : public Backend {
  public:
@@ -25,9 +23,7 @@ class CpuBackend final : public Backend {
   void write(int slot, const Eigen::MatrixX3d& host) override { slots_[slot] = host; }
   void read(int slot, Eigen::MatrixX3d& host) override { host = slots_[slot]; }
   void copy(int dst, int src) override { slots_[dst] = slots_[src]; }
-  void combine(int dst, double a, int x, double b, int y) override {
-    slots_[dst] = a * slots_[x] + b * slots_[y];
-  }
+  void combine(int dst, double a, int x, double b, int y) override { slots_[dst] = a * slots_[x] + b * slots_[y]; }
   double massDot(int a, int b) override {
     return (slots_[a].cwiseProduct(slots_[b]).rowwise().sum().array() * scene_.masses().array()).sum();
   }

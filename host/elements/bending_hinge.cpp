@@ -53,8 +53,8 @@ struct BendingHingeKind : KindDefaults<BendingHinge> {
     const Eigen::Vector3d n0 = (x1 - x0).cross(restPoint(scene, v[2]) - x0);
     const Eigen::Vector3d n1 = (x0 - x1).cross(restPoint(scene, v[3]) - x1);
     if (!(n0.dot(n1) > 0.0)) {
-      invalid(owner, ": flipped rest hinge: triangles (", v[0], ", ", v[1], ", ", v[2], ") and (", v[1], ", ",
-              v[0], ", ", v[3], ") are folded onto each other (rest dihedral angle beyond 90 degrees)");
+      invalid(owner, ": flipped rest hinge: triangles (", v[0], ", ", v[1], ", ", v[2], ") and (", v[1], ", ", v[0],
+              ", ", v[3], ") are folded onto each other (rest dihedral angle beyond 90 degrees)");
     }
   }
 

@@ -77,9 +77,7 @@ void checkCollider(const Scene& scene, const Collider& c, const validation::Owne
       if (!(c.half_extents.minCoeff() > 0.0))
         invalid(owner, ": half_extents ", validation::vec(c.half_extents), " of the box must be > 0");
       break;
-    case ColliderShape::Capsule:
-      validation::checkFinite(c.end, owner, "end");
-      [[fallthrough]];
+    case ColliderShape::Capsule: validation::checkFinite(c.end, owner, "end"); [[fallthrough]];
     case ColliderShape::Sphere:
       validation::checkFinite(c.radius, owner, "radius");
       if (!(c.radius > 0.0)) invalid(owner, ": radius ", c.radius, " of the ", shapeName(c.shape), " must be > 0");

@@ -238,8 +238,8 @@ class ElementTypeOf final : public ElementType {
     return Kind::project(ax, params, p);
   }
 
-  double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
-              int flags, Eigen::MatrixX3d* out) const override {
+  double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
+              Eigen::MatrixX3d* out) const override {
     return kindPass<Kind>(block, params, x, flags, out);
   }
 

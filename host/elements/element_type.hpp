@@ -108,8 +108,8 @@ class ElementType {
   /// paramsAt's for a time-dependent type): adds the contributions of `flags` (kPassProjection or
   /// kPassForce) into `out` (`n by 3`, may be null without them) in element order, and returns
   /// the summed energy when kPassEnergy is set (else 0).
-  virtual double pass(const ElementBlock& block, const std::vector<double>& params,
-                      const Eigen::MatrixX3d& x, int flags, Eigen::MatrixX3d* out) const = 0;
+  virtual double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
+                      int flags, Eigen::MatrixX3d* out) const = 0;
 
   // ---- the generic JSON form (types that have one) ---------------------------------------------
   /// Names of the numeric fields of an element in its JSON object, besides "vertices"; an empty
@@ -121,8 +121,7 @@ class ElementType {
   };
   virtual std::vector<Field> jsonFields() const = 0;
   /// Element i as its vertices and field values (in jsonFields order).
-  virtual void record(const Scene& scene, int i, std::vector<int>& vertices,
-                      std::vector<double>& values) const = 0;
+  virtual void record(const Scene& scene, int i, std::vector<int>& vertices, std::vector<double>& values) const = 0;
   virtual void appendRecord(Scene& scene, const std::vector<int>& vertices,
                             const std::vector<double>& values) const = 0;
 };

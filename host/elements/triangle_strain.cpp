@@ -36,9 +36,7 @@ struct TriangleStrainKind : KindDefaults<TriangleStrain> {
   static constexpr int kVertices = 3, kRows = 2;
   static constexpr int kParams = 3;  // k A, s_min, s_max
 
-  static std::array<int*, 3> vertexRefs(TriangleStrain& t) {
-    return {&t.vertices[0], &t.vertices[1], &t.vertices[2]};
-  }
+  static std::array<int*, 3> vertexRefs(TriangleStrain& t) { return {&t.vertices[0], &t.vertices[1], &t.vertices[2]}; }
 
   static void check(const Scene& scene, const TriangleStrain& t, const validation::Owner& owner) {
     validation::checkVertexList(t.vertices, scene.numParticles(), owner);

@@ -23,9 +23,9 @@ BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<Open
     cpu_device = true;
   }
   if (!cpu_device)
-    return {BackendKind::CpuReference, o.opencl,
-            "auto: no OpenCL device" + std::string(need_fp64 ? " with fp64" : "")};
-  return {BackendKind::CpuReference, o.opencl, "auto: no GPU; the OpenCL CPU device is no faster than the CPU reference"};
+    return {BackendKind::CpuReference, o.opencl, "auto: no OpenCL device" + std::string(need_fp64 ? " with fp64" : "")};
+  return {BackendKind::CpuReference, o.opencl,
+          "auto: no GPU; the OpenCL CPU device is no faster than the CPU reference"};
 }
 
 }  // namespace stabint

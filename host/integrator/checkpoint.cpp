@@ -147,13 +147,24 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
   // nothing here, so checkpoints of such scenes written before colliders existed still match.
   for (const Collider& c : scene.colliders) {
     const double fields[] = {static_cast<double>(c.shape),
-                             c.center.x(), c.center.y(), c.center.z(),
-                             c.normal.x(), c.normal.y(), c.normal.z(),
-                             c.half_extents.x(), c.half_extents.y(), c.half_extents.z(),
-                             c.end.x(), c.end.y(), c.end.z(),
+                             c.center.x(),
+                             c.center.y(),
+                             c.center.z(),
+                             c.normal.x(),
+                             c.normal.y(),
+                             c.normal.z(),
+                             c.half_extents.x(),
+                             c.half_extents.y(),
+                             c.half_extents.z(),
+                             c.end.x(),
+                             c.end.y(),
+                             c.end.z(),
                              c.radius,
-                             c.velocity.x(), c.velocity.y(), c.velocity.z(),
-                             c.friction, c.stiffness};
+                             c.velocity.x(),
+                             c.velocity.y(),
+                             c.velocity.z(),
+                             c.friction,
+                             c.stiffness};
     mix(fields, static_cast<Eigen::Index>(std::size(fields)));
   }
   return hash;
@@ -196,7 +207,8 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
   for (char c : kMagic)
     if (in.value<char>("the header") != c) in.fail("wrong header");
   const auto version = in.value<std::uint32_t>("the version");
-  if (version != kVersion) in.fail("format version " + std::to_string(version) + ", expected " + std::to_string(kVersion));
+  if (version != kVersion)
+    in.fail("format version " + std::to_string(version) + ", expected " + std::to_string(kVersion));
   CheckpointData d;
   d.scene_fingerprint = in.value<std::uint64_t>("the scene fingerprint");
   d.particles = in.value<std::int64_t>("the particle count");

@@ -32,55 +32,58 @@ EventScript::EventScript(std::vector<ScriptedEvent> events) : events_(std::move(
     const ScriptedEvent& e = events_[i];
     auto fail = [&](const std::string& what) { throw InvalidInputError(eventName(i, e) + ": " + what); };
     if (e.frame < 0) fail("frame must be >= 0");
-    if (e.frame < previous_frame) fail("frames must not decrease (the previous event is at frame " + std::to_string(previous_frame) + ")");
+    if (e.frame < previous_frame)
+      fail("frames must not decrease (the previous event is at frame " + std::to_string(previous_frame) + ")");
     previous_frame = e.frame;
-    std::visit(Overloaded{
-                   [&](const GrabEvent& g) {
-                     if (!std::isfinite(g.stiffness) || !(g.stiffness > 0.0)) fail("grab stiffness must be finite and > 0");
-                     if (g.vertex < 0) fail("grab vertex " + std::to_string(g.vertex) + " must be >= 0");
-                     int last = e.frame;
-                     for (std::size_t k = 0; k < g.path.size(); ++k) {
-                       if (g.path[k].frame <= last) fail("grab path keyframe " + std::to_string(k) + " must come after frame " + std::to_string(last));
-                       if (!g.path[k].position.allFinite()) fail("grab path keyframe " + std::to_string(k) + " is not finite");
-                       last = g.path[k].frame;
-                     }
-                     if (!g.id.empty())
-                       for (const auto& seen : grabs)
-                         if (seen.first == g.id) fail("grab id '" + g.id + "' is used twice");
-                     grabs.emplace_back(g.id, true);
-                     held_vertices.push_back(g.vertex);
-                   },
-                   [&](const ReleaseEvent& r) {
-                     if (!r.id.empty()) {
-                       for (std::size_t k = 0; k < grabs.size(); ++k) {
-                         if (grabs[k].first != r.id) continue;
-                         if (!grabs[k].second) fail("grab '" + r.id + "' is already released");
-                         grabs[k].second = false;
-                         held_vertices[k] = -1;
-                         return;
-                       }
-                       fail("release of '" + r.id + "': no earlier grab has that id");
-                     }
-                     for (std::size_t k = held_vertices.size(); k-- > 0;) {
-                       if (held_vertices[k] != r.vertex) continue;
-                       grabs[k].second = false;
-                       held_vertices[k] = -1;
-                       return;
-                     }
-                     fail("release of vertex " + std::to_string(r.vertex) + ": no handle is held there");
-                   },
-                   [&](const ImpulseEvent& im) {
-                     if (im.vertices.empty()) fail("impulse lists no vertex");
-                     if (!im.velocity.allFinite()) fail("impulse velocity is not finite");
-                   },
-                   [&](const ElementEvent& el) {
-                     if (el.indices.empty()) fail("elements event lists no element");
-                     if (!el.stiffness && !el.enabled) fail("elements event needs a stiffness, an enabled flag or both");
-                     if (el.stiffness && (!std::isfinite(*el.stiffness) || !(*el.stiffness >= 0.0)))
-                       fail("elements event stiffness must be finite and >= 0");
-                   },
-               },
-               e.action);
+    std::visit(
+        Overloaded{
+            [&](const GrabEvent& g) {
+              if (!std::isfinite(g.stiffness) || !(g.stiffness > 0.0)) fail("grab stiffness must be finite and > 0");
+              if (g.vertex < 0) fail("grab vertex " + std::to_string(g.vertex) + " must be >= 0");
+              int last = e.frame;
+              for (std::size_t k = 0; k < g.path.size(); ++k) {
+                if (g.path[k].frame <= last)
+                  fail("grab path keyframe " + std::to_string(k) + " must come after frame " + std::to_string(last));
+                if (!g.path[k].position.allFinite()) fail("grab path keyframe " + std::to_string(k) + " is not finite");
+                last = g.path[k].frame;
+              }
+              if (!g.id.empty())
+                for (const auto& seen : grabs)
+                  if (seen.first == g.id) fail("grab id '" + g.id + "' is used twice");
+              grabs.emplace_back(g.id, true);
+              held_vertices.push_back(g.vertex);
+            },
+            [&](const ReleaseEvent& r) {
+              if (!r.id.empty()) {
+                for (std::size_t k = 0; k < grabs.size(); ++k) {
+                  if (grabs[k].first != r.id) continue;
+                  if (!grabs[k].second) fail("grab '" + r.id + "' is already released");
+                  grabs[k].second = false;
+                  held_vertices[k] = -1;
+                  return;
+                }
+                fail("release of '" + r.id + "': no earlier grab has that id");
+              }
+              for (std::size_t k = held_vertices.size(); k-- > 0;) {
+                if (held_vertices[k] != r.vertex) continue;
+                grabs[k].second = false;
+                held_vertices[k] = -1;
+                return;
+              }
+              fail("release of vertex " + std::to_string(r.vertex) + ": no handle is held there");
+            },
+            [&](const ImpulseEvent& im) {
+              if (im.vertices.empty()) fail("impulse lists no vertex");
+              if (!im.velocity.allFinite()) fail("impulse velocity is not finite");
+            },
+            [&](const ElementEvent& el) {
+              if (el.indices.empty()) fail("elements event lists no element");
+              if (!el.stiffness && !el.enabled) fail("elements event needs a stiffness, an enabled flag or both");
+              if (el.stiffness && (!std::isfinite(*el.stiffness) || !(*el.stiffness >= 0.0)))
+                fail("elements event stiffness must be finite and >= 0");
+            },
+        },
+        e.action);
   }
 }
 
@@ -117,8 +120,9 @@ void EventScript::apply(Simulator& sim) {
                        Eigen::MatrixX3d v = sim.velocities();
                        for (int j : im.vertices) {
                          if (j < 0 || j >= v.rows())
-                           throw InvalidInputError("impulse vertex " + std::to_string(j) + " out of range (the scene has " +
-                                                   std::to_string(v.rows()) + " particles)");
+                           throw InvalidInputError("impulse vertex " + std::to_string(j) +
+                                                   " out of range (the scene has " + std::to_string(v.rows()) +
+                                                   " particles)");
                        }
                        for (int j : im.vertices) v.row(j) += im.velocity.transpose();
                        sim.setVelocities(v);

@@ -25,7 +25,7 @@ const char* integratorName(Integrator integrator) {
 }
 
 std::vector<Integrator> allIntegrators() {
-  return {Integrator::ForwardEuler, Integrator::SymplecticEuler, Integrator::BackwardEuler,
+  return {Integrator::ForwardEuler, Integrator::SymplecticEuler,  Integrator::BackwardEuler,
           Integrator::BDF2,         Integrator::ImplicitMidpoint, Integrator::EnergyBlend};
 }
 

@@ -35,8 +35,7 @@ RigidMotion rigidMotion(const Eigen::VectorXd& masses, const Eigen::MatrixX3d& p
 /// Adds the rigid velocity field that changes the momenta of all particles from `current` to the
 /// linear momentum `momentum` and the angular momentum about the origin `angular_momentum`.
 /// `current` must be rigidMotion() of the same positions and velocities.
-void setMomenta(const RigidMotion& current, const Eigen::Vector3d& momentum,
-                const Eigen::Vector3d& angular_momentum, const Eigen::MatrixX3d& positions,
-                Eigen::MatrixX3d& velocities);
+void setMomenta(const RigidMotion& current, const Eigen::Vector3d& momentum, const Eigen::Vector3d& angular_momentum,
+                const Eigen::MatrixX3d& positions, Eigen::MatrixX3d& velocities);
 
 }  // namespace stabint

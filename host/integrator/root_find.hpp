@@ -20,8 +20,8 @@ struct KineticQuadratic {
 };
 
 struct RootResult {
-  double x = 0.0;   // best point found (smallest |H - H*|)
-  double g = 0.0;   // H - H* there
+  double x = 0.0;  // best point found (smallest |H - H*|)
+  double g = 0.0;  // H - H* there
   int evaluations = 0;
 };
 
@@ -49,8 +49,8 @@ inline double quadraticRootInBracket(double c2, double c1, double c0, double a, 
 /// P(b) = pb with K + P - target of opposite signs at a and b, using at most `max_evaluations`
 /// calls of `potential(alpha) -> double`.
 template <class Potential>
-RootResult findBlendWeight(const KineticQuadratic& kinetic, Potential&& potential, double target, double a,
-                           double pa, double b, double pb, double tol, int max_evaluations) {
+RootResult findBlendWeight(const KineticQuadratic& kinetic, Potential&& potential, double target, double a, double pa,
+                           double b, double pb, double tol, int max_evaluations) {
   double ga = kinetic.at(a) + pa - target;
   double gb = kinetic.at(b) + pb - target;
   RootResult best{std::abs(ga) <= std::abs(gb) ? a : b, std::abs(ga) <= std::abs(gb) ? ga : gb, 0};

@@ -27,17 +27,17 @@ namespace {
 
 // Backend state slots used by the driver.
 enum Slot : int {
-  kX,          // x_n
-  kV,          // v_n
-  kXPrev,      // x_{n-1} (BDF2)
-  kVPrev,      // v_{n-1} (BDF2)
-  kY,          // inertial target y of the current solve
-  kXNew,       // candidate x_{n+1} (for the blend: the IM candidate, later the blended state)
-  kVNew,       // candidate v_{n+1}
-  kXPartner,   // BE or FE partner of the blend
+  kX,         // x_n
+  kV,         // v_n
+  kXPrev,     // x_{n-1} (BDF2)
+  kVPrev,     // v_{n-1} (BDF2)
+  kY,         // inertial target y of the current solve
+  kXNew,      // candidate x_{n+1} (for the blend: the IM candidate, later the blended state)
+  kVNew,      // candidate v_{n+1}
+  kXPartner,  // BE or FE partner of the blend
   kVPartner,
-  kXTrial,     // blended positions during the root find
-  kScratch,    // driver scratch
+  kXTrial,   // blended positions during the root find
+  kScratch,  // driver scratch
   kSolverScratch,
   kNumSlots
 };
@@ -68,8 +68,7 @@ void validateOptions(const SimulatorOptions& o) {
   if (!std::isfinite(o.tolerance) || o.tolerance < 0.0) fail("tolerance must be finite and >= 0");
   if (o.max_iterations < 1) fail("max_iterations must be >= 1");
   if (o.be_iterations < 1) fail("be_iterations = " + std::to_string(o.be_iterations) + " must be >= 1");
-  if (!std::isfinite(o.energy_tolerance) || o.energy_tolerance <= 0.0)
-    fail("energy_tolerance must be finite and > 0");
+  if (!std::isfinite(o.energy_tolerance) || o.energy_tolerance <= 0.0) fail("energy_tolerance must be finite and > 0");
   if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
     fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
   if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
@@ -96,8 +95,8 @@ struct Simulator::Impl {
   Impl(const Scene& s, const SimulatorOptions& o)
       : options((validateOptions(o), o)),
         scene(s),
-        choice(chooseBackend(options, options.backend == BackendKind::Auto ? listOpenCLDevices()
-                                                                         : std::vector<OpenCLDeviceInfo>{})),
+        choice(chooseBackend(
+            options, options.backend == BackendKind::Auto ? listOpenCLDevices() : std::vector<OpenCLDeviceInfo>{})),
         backend(choice.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, kNumSlots, choice.opencl)
                                                    : makeCpuBackend(scene, kNumSlots)),
         system(scene),
@@ -138,7 +137,7 @@ struct Simulator::Impl {
   }
 
   IterationControl control(int iterations) const {
-    return IterationControl{iterations,   options.tolerance,    options.max_iterations, energy_scale,
+    return IterationControl{iterations,           options.tolerance,     options.max_iterations, energy_scale,
                             options.acceleration, options.chebyshev_rho, options.anderson_window};
   }
 
@@ -330,8 +329,8 @@ struct Simulator::Impl {
     const double tau = tolerance();
     auto excess = [&] { return kineticEnergy(v_new) + p_new.total() - target_now; };
     if (excess() < -tau) {
-      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/momentumConserved(),
-                                 1.0, options.max_velocity_scale);
+      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/momentumConserved(), 1.0,
+                                 options.max_velocity_scale);
     } else if (excess() > tau) {
       changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
       if (excess() > tau && report.branch == BlendBranch::BackwardEuler) {
@@ -425,9 +424,7 @@ struct Simulator::Impl {
     switch (options.integrator) {
       case Integrator::ForwardEuler: explicitEuler(kXNew, kVNew, false); break;
       case Integrator::SymplecticEuler: explicitEuler(kXNew, kVNew, true); break;
-      case Integrator::BackwardEuler:
-        r.iterations = backwardEuler(kXNew, kVNew, options.iterations, false);
-        break;
+      case Integrator::BackwardEuler: r.iterations = backwardEuler(kXNew, kVNew, options.iterations, false); break;
       case Integrator::BDF2:
         // The first step has no history: BE.
         r.iterations = has_history ? bdf2(kXNew, kVNew) : backwardEuler(kXNew, kVNew, options.iterations, false);
@@ -494,8 +491,8 @@ struct Simulator::Impl {
   // ---- per-frame input (docs/method.md, "Per-frame input") ------------------------------------
   void checkState(const Eigen::MatrixX3d& m, const char* field) const {
     if (m.rows() != scene.numParticles())
-      throw InvalidInputError(std::string(field) + ": " + std::to_string(m.rows()) + " rows, expected one per particle (" +
-                              std::to_string(scene.numParticles()) + ")");
+      throw InvalidInputError(std::string(field) + ": " + std::to_string(m.rows()) +
+                              " rows, expected one per particle (" + std::to_string(scene.numParticles()) + ")");
     for (Eigen::Index j = 0; j < m.rows(); ++j)
       if (!m.row(j).allFinite())
         throw InvalidInputError(std::string(field) + ": row " + std::to_string(j) + " is not finite");
@@ -599,7 +596,8 @@ struct Simulator::Impl {
   int elementBlock(ElementKind kind) const {
     if (static_cast<int>(kind) < static_cast<int>(ElementKind::Spring) ||
         static_cast<int>(kind) > static_cast<int>(ElementKind::Pin))
-      throw InvalidInputError("element kind " + std::to_string(static_cast<int>(kind)) + " is not an ElementKind value");
+      throw InvalidInputError("element kind " + std::to_string(static_cast<int>(kind)) +
+                              " is not an ElementKind value");
     for (std::size_t b = 0; b < scene.blocks().size(); ++b)
       if (std::string(scene.blocks()[b].type->identifier()) == elementKindName(kind)) return static_cast<int>(b);
     throw InvalidInputError(std::string("element kind ") + elementKindName(kind) + " has no element type");
@@ -719,8 +717,7 @@ struct Simulator::Impl {
           block.type == &pinElementType() ? d.pin_list.size() : static_cast<std::size_t>(block.count);
       same_elements = d.stiffness[b].size() == count;
     }
-    if (!same_elements)
-      throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
+    if (!same_elements) throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
     if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
     restoreElements(d);
     backend->write(kX, d.x);
@@ -775,18 +772,18 @@ struct Simulator::Impl {
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   LocalGlobalSolver solver;
-  Eigen::MatrixX3d x, v;           // accepted state on the host
-  Eigen::MatrixX3d x_new, v_new;   // staging for the candidate
+  Eigen::MatrixX3d x, v;          // accepted state on the host
+  Eigen::MatrixX3d x_new, v_new;  // staging for the candidate
   double t = 0.0;
   int steps = 0;
   bool has_history = false;
   double kinetic = 0.0;
-  PotentialEnergy potential;       // of the accepted state at time t
+  PotentialEnergy potential;  // of the accepted state at time t
   double target = 0.0;
   double energy_scale = 0.0;
-  RigidMotion im_momenta;           // of the IM candidate, when the blend took a BE partner
+  RigidMotion im_momenta;  // of the IM candidate, when the blend took a BE partner
   bool im_momenta_known = false;
-  Eigen::MatrixX3d x_im, v_im;      // host copies of that candidate
+  Eigen::MatrixX3d x_im, v_im;        // host copies of that candidate
   double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
   StepReport report;
 };

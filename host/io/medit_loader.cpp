@@ -26,7 +26,7 @@ bool isKeyword(const std::string& token) { return std::isalpha(static_cast<unsig
 
 Eigen::MatrixX3d readVertices(io::TextReader& in, io::VertexLines& lines) {
   const int count = in.parseCount(in.requireToken("the number of vertices"), "number of vertices");
-  std::vector<double> xyz;  // row after row; the header's count is not trusted with an allocation
+  std::vector<double> xyz;                   // row after row; the header's count is not trusted with an allocation
   xyz.reserve(3 * in.reserveFor(count, 8));  // "x y z ref": a number and a separator each
   for (int i = 0; i < count; ++i) {
     const std::string vertex = "vertex " + std::to_string(i + 1);

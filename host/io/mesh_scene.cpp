@@ -9,7 +9,9 @@
 namespace stabint::io {
 
 // A file name is bytes (Latin-1 names exist); the scene name must be text that a scene file can hold.
-std::string sceneNameFromPath(const std::string& path) { return validUtf8(std::filesystem::path(path).stem().string()); }
+std::string sceneNameFromPath(const std::string& path) {
+  return validUtf8(std::filesystem::path(path).stem().string());
+}
 
 Scene sceneFromMesh(const std::string& name, const Eigen::MatrixX3d& vertices, Eigen::VectorXd masses) {
   Scene s;
@@ -62,8 +64,8 @@ void orientTets(const std::string& file, const Eigen::MatrixX3d& vertices, std::
     const TetRecord& other = blame_negative ? *first_positive : *first_negative;
     throw FileFormatError(file, bad.line,
                           tetName(bad) + ": mixed orientation, its signed volume is " +
-                              (blame_negative ? "negative" : "positive") + " but " + tetName(other) +
-                              " (line " + std::to_string(other.line) + ") has the opposite sign");
+                              (blame_negative ? "negative" : "positive") + " but " + tetName(other) + " (line " +
+                              std::to_string(other.line) + ") has the opposite sign");
   }
   if (first_negative) {
     for (TetRecord& t : tets) std::swap(t.vertices[1], t.vertices[2]);
@@ -81,8 +83,7 @@ void requireEveryVertexUsed(const Eigen::VectorXd& masses, const VertexLines& wh
 }
 
 Scene solidSceneFromMesh(const std::string& name, const std::string& element_file, const VertexLines& vertex_lines,
-                         const Eigen::MatrixX3d& vertices, std::vector<TetRecord> tets,
-                         const SolidMaterial& material) {
+                         const Eigen::MatrixX3d& vertices, std::vector<TetRecord> tets, const SolidMaterial& material) {
   orientTets(element_file, vertices, tets);
   std::vector<Tet> elements;
   elements.reserve(tets.size());

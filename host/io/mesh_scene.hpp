@@ -54,7 +54,6 @@ void requireEveryVertexUsed(const Eigen::VectorXd& masses, const VertexLines& wh
 /// its density; a mass share that overflows is an error at its tet's line, a vertex in no tet
 /// one at the vertex's line.
 Scene solidSceneFromMesh(const std::string& name, const std::string& element_file, const VertexLines& vertex_lines,
-                         const Eigen::MatrixX3d& vertices, std::vector<TetRecord> tets,
-                         const SolidMaterial& material);
+                         const Eigen::MatrixX3d& vertices, std::vector<TetRecord> tets, const SolidMaterial& material);
 
 }  // namespace stabint::io

@@ -63,9 +63,9 @@ void checkDistinctCorners(const std::string& file, const Face& face, const std::
     }
   }
   if (second < corners.size()) {
-    throw FileFormatError(file, face.line, name + ": vertex " + std::to_string(face.vertices[second]) +
-                                               " appears twice (corners " + std::to_string(first + 1) + " and " +
-                                               std::to_string(second + 1) + ")");
+    throw FileFormatError(file, face.line,
+                          name + ": vertex " + std::to_string(face.vertices[second]) + " appears twice (corners " +
+                              std::to_string(first + 1) + " and " + std::to_string(second + 1) + ")");
   }
 }
 
@@ -86,8 +86,9 @@ Fan fanTriangles(const std::string& file, const std::vector<Face>& faces, const 
     const std::string name = "face " + std::to_string(face.number);
     for (const long v : face.vertices) {
       if (v > num_vertices) {
-        throw FileFormatError(file, face.line, name + ": vertex index " + std::to_string(v) + " out of range [1, " +
-                                                   std::to_string(num_vertices) + "]");
+        throw FileFormatError(
+            file, face.line,
+            name + ": vertex index " + std::to_string(v) + " out of range [1, " + std::to_string(num_vertices) + "]");
       }
     }
     checkDistinctCorners(file, face, name);
@@ -97,9 +98,10 @@ Fan fanTriangles(const std::string& file, const std::vector<Face>& faces, const 
                                  static_cast<int>(face.vertices[k + 1] - 1)};
       const validation::RestShape shape = validation::restTriangle(x, t);
       if (!shape.fine()) {
-        const std::string corners = face.vertices.size() == 3 ? std::string()
-                                                              : " (the fan triangle of corners 1, " + std::to_string(k + 1) +
-                                                                    ", " + std::to_string(k + 2) + ")";
+        const std::string corners =
+            face.vertices.size() == 3
+                ? std::string()
+                : " (the fan triangle of corners 1, " + std::to_string(k + 1) + ", " + std::to_string(k + 2) + ")";
         throw FileFormatError(file, face.line, name + corners + ": " + validation::restShapeProblem(shape));
       }
       fan.triangles.push_back(t);
@@ -120,7 +122,8 @@ Scene loadObjCloth(const std::string& path, const ClothMaterial& material) {
   for (std::vector<std::string> tokens; in.nextLine(tokens);) {
     if (tokens[0] == "v") {
       const std::string name = "vertex " + std::to_string(positions.size() + 1);
-      if (tokens.size() < 4) in.fail(name + ": expected 'v <x> <y> <z>', got " + std::to_string(tokens.size() - 1) + " values");
+      if (tokens.size() < 4)
+        in.fail(name + ": expected 'v <x> <y> <z>', got " + std::to_string(tokens.size() - 1) + " values");
       lines.lines.push_back(in.line());
       Eigen::Vector3d x;
       for (int c = 0; c < 3; ++c) x[c] = in.parseCoordinate(tokens[1 + c], name + " coordinate " + "xyz"[c]);

@@ -47,7 +47,8 @@ constexpr int kFormatVersion = 1;
 // name the field. Keys starting with '_' are comments and are ignored everywhere.
 class Field {
  public:
-  Field(const json& value, std::string path, const std::string& file) : value_(&value), path_(std::move(path)), file_(&file) {}
+  Field(const json& value, std::string path, const std::string& file)
+      : value_(&value), path_(std::move(path)), file_(&file) {}
 
   const json& value() const { return *value_; }
   const std::string& path() const { return path_; }
@@ -141,7 +142,8 @@ class Field {
     return value_->get<std::string>();
   }
   Eigen::Vector3d vector3() const {
-    if (!value_->is_array() || value_->size() != 3) fail("expected an array of 3 numbers [x, y, z], got " + shortDump());
+    if (!value_->is_array() || value_->size() != 3)
+      fail("expected an array of 3 numbers [x, y, z], got " + shortDump());
     return Eigen::Vector3d((*this)[0].number(), (*this)[1].number(), (*this)[2].number());
   }
   std::vector<int> particles(int n) const {
@@ -330,10 +332,15 @@ Scene meshFromField(const Field& mesh, const fs::path& dir) {
     }
   } else {
     const std::string ext = lowerExtension(path);
-    if (ext == ".obj") type = "obj";
-    else if (ext == ".mesh") type = "medit";
-    else if (ext == ".node" || ext == ".ele") type = "tetgen";
-    else file_field.fail("cannot tell the mesh type from '" + shown(relative.string()) + "'; add \"type\": obj, tetgen or medit");
+    if (ext == ".obj")
+      type = "obj";
+    else if (ext == ".mesh")
+      type = "medit";
+    else if (ext == ".node" || ext == ".ele")
+      type = "tetgen";
+    else
+      file_field.fail("cannot tell the mesh type from '" + shown(relative.string()) +
+                      "'; add \"type\": obj, tetgen or medit");
   }
 
   const std::set<std::string> common = {"file", "type", "translate", "damping", "name"};
@@ -457,7 +464,8 @@ void readParticles(const Field& block, Scene& s) {
     if (!f) return key == std::string("velocities") ? Eigen::MatrixX3d::Zero(x.rows(), 3) : x;
     Eigen::MatrixX3d m = readRows(*f);
     if (m.rows() != x.rows()) {
-      f->fail("has " + std::to_string(m.rows()) + " rows, expected " + std::to_string(x.rows()) + " (one per position)");
+      f->fail("has " + std::to_string(m.rows()) + " rows, expected " + std::to_string(x.rows()) +
+              " (one per position)");
     }
     return m;
   };
@@ -478,7 +486,8 @@ void readMasses(const Field& root, const Field& block, Scene& s, int first, std:
       s.masses.tail(count).setConstant(f->positive());
     } else {
       if (static_cast<int>(f->size()) != count) {
-        f->fail("has " + std::to_string(f->size()) + " entries, expected " + std::to_string(count) + " (one per position)");
+        f->fail("has " + std::to_string(f->size()) + " entries, expected " + std::to_string(count) +
+                " (one per position)");
       }
       for (int i = 0; i < count; ++i) s.masses[first + i] = (*f)[i].positive();
     }
@@ -495,7 +504,8 @@ void readMasses(const Field& root, const Field& block, Scene& s, int first, std:
     }
   }
   if (auto f = block.find("areal_density")) {
-    if (const auto failure = lumping::addTriangles(s.rest_positions, triangles, f->positive(), "areal_density", lumped)) {
+    if (const auto failure =
+            lumping::addTriangles(s.rest_positions, triangles, f->positive(), "areal_density", lumped)) {
       root.member("triangles")[failure->element].fail(failure->what);
     }
   }
@@ -516,7 +526,8 @@ std::vector<int> selectWhere(const Field& where, const Scene& s) {
   if (auto axis = where.find("axis")) {
     where.allowOnly({"axis", "min", "max"});
     const std::string name = axis->string();
-    if (name != "x" && name != "y" && name != "z") axis->fail("expected \"x\", \"y\" or \"z\", got \"" + shown(name) + "\"");
+    if (name != "x" && name != "y" && name != "z")
+      axis->fail("expected \"x\", \"y\" or \"z\", got \"" + shown(name) + "\"");
     const int c = name[0] - 'x';
     if (!where.has("min") && !where.has("max")) where.fail("needs min, max or both");
     if (auto f = where.find("min")) lo[c] = f->number();
@@ -587,7 +598,8 @@ void readTets(const Field& list, Scene& s) {
     const validation::RestShape shape = validation::restTet(s.rest_positions, tet.vertices);
     if (!shape.fine()) v.fail(validation::restShapeProblem(shape));
     if (shape.measure < 0.0) {
-      v.fail("rest volume " + Field::text(shape.measure) + " is not positive (inverted: list two vertices in the other order)");
+      v.fail("rest volume " + Field::text(shape.measure) +
+             " is not positive (inverted: list two vertices in the other order)");
     }
     s.tets.push_back(tet);
   }
@@ -748,13 +760,14 @@ void readColliders(const Field& list, Scene& s) {
 Scene sceneFromJson(const json& doc, const std::string& file) {
   const Field root(doc, "", file);
   root.requireObject();
-  std::set<std::string> keys = {"format", "version", "name",  "gravity", "builtin",      "mesh",  "particles",
-                                "triangles", "springs", "tets", "pins",    "force_fields", "bodies",
-                                "colliders", "events"};
+  std::set<std::string> keys = {"format", "version",      "name",      "gravity",   "builtin",
+                                "mesh",   "particles",    "triangles", "springs",   "tets",
+                                "pins",   "force_fields", "bodies",    "colliders", "events"};
   for (const ElementType* type : genericTypes()) keys.insert(genericKey(*type));
   root.allowOnly(keys);
   if (auto f = root.find("format")) {
-    if (f->string() != kFormatName) f->fail("expected \"" + std::string(kFormatName) + "\", got \"" + shown(f->string()) + "\"");
+    if (f->string() != kFormatName)
+      f->fail("expected \"" + std::string(kFormatName) + "\", got \"" + shown(f->string()) + "\"");
   }
   if (auto f = root.find("version")) {
     if (f->integer() != kFormatVersion) {
@@ -834,8 +847,10 @@ void checkNesting(const std::string& text, const std::string& file) {
     const char c = text[i];
     if (c == '\n') ++line;
     if (in_string) {
-      if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n') ++i;  // an escaped quote ends nothing
-      else if (c == '"') in_string = false;
+      if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n')
+        ++i;  // an escaped quote ends nothing
+      else if (c == '"')
+        in_string = false;
     } else if (c == '"') {
       in_string = true;
     } else if (c == '[' || c == '{') {
@@ -885,8 +900,9 @@ void checkDuplicateKeys(const std::string& text, const std::string& file) {
       if (escaped) key = json::parse(text.substr(start, i - start + 1)).get<std::string>();
       const auto [first, inserted] = open.back().keys.emplace(key, line);
       if (!inserted) {
-        throw FileFormatError(file, line, "duplicate key '" + shown(key) + "' (first on line " +
-                                              std::to_string(first->second) + "): one of them would be ignored");
+        throw FileFormatError(file, line,
+                              "duplicate key '" + shown(key) + "' (first on line " + std::to_string(first->second) +
+                                  "): one of them would be ignored");
       }
     }
   }
@@ -998,7 +1014,8 @@ ordered sceneToJson(const Scene& s) {
   if (!s.tets.empty()) {
     ordered a = ordered::array();
     for (const Tet& t : s.tets) {
-      a.push_back({{"vertices", ordered(std::vector<int>(t.vertices.begin(), t.vertices.end()))}, {"stiffness", t.stiffness}});
+      a.push_back(
+          {{"vertices", ordered(std::vector<int>(t.vertices.begin(), t.vertices.end()))}, {"stiffness", t.stiffness}});
     }
     doc["tets"] = std::move(a);
   }
@@ -1204,7 +1221,9 @@ ordered eventToJson(const ScriptedEvent& ev) {
     grab["stiffness"] = g->stiffness;
     if (!g->path.empty()) {
       ordered path = ordered::array();
-      for (const PathKey& k : g->path) path.push_back(ordered::array({ordered(k.frame), ordered(k.position.x()), ordered(k.position.y()), ordered(k.position.z())}));
+      for (const PathKey& k : g->path)
+        path.push_back(ordered::array(
+            {ordered(k.frame), ordered(k.position.x()), ordered(k.position.y()), ordered(k.position.z())}));
       grab["path"] = std::move(path);
     }
     e["grab"] = std::move(grab);
@@ -1277,7 +1296,8 @@ void saveSceneText(const Scene& scene, const EventScript* events, std::string& t
     }
   };
   requireUtf8(scene.name, "scene name");
-  for (std::size_t i = 0; i < scene.bodies.size(); ++i) requireUtf8(scene.bodies[i].name, "body " + std::to_string(i) + " name");
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i)
+    requireUtf8(scene.bodies[i].name, "body " + std::to_string(i) + " name");
   io::ordered doc = io::sceneToJson(scene);
   if (events && !events->empty()) {
     // Written, then read back against the scene: what the file holds is what a load accepts.

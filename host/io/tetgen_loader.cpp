@@ -26,12 +26,13 @@ Nodes readNodes(const std::string& path) {
   Nodes nodes;
   nodes.lines.file = path;
   nodes.lines.noun = "point";
-  std::vector<double> xyz;  // row after row; the header's count is not trusted with an allocation
+  std::vector<double> xyz;                   // row after row; the header's count is not trusted with an allocation
   xyz.reserve(3 * in.reserveFor(count, 8));  // "i x y z": a number and a separator each
   for (int i = 0; i < count; ++i) {
     const std::string point = "point " + std::to_string(i);
     const auto tokens = in.requireLine(point + " of " + std::to_string(count));
-    if (tokens.size() < 4) in.fail(point + ": expected '<index> <x> <y> <z>', got " + std::to_string(tokens.size()) + " fields");
+    if (tokens.size() < 4)
+      in.fail(point + ": expected '<index> <x> <y> <z>', got " + std::to_string(tokens.size()) + " fields");
     const int id = in.parseInt(tokens[0], point + " number");
     if (i == 0) {
       if (id != 0 && id != 1) in.fail("first point is numbered " + std::to_string(id) + ", expected 0 or 1");
@@ -70,7 +71,8 @@ std::vector<io::TetRecord> readElements(const std::string& path, const Nodes& no
     io::TetRecord tet{{}, in.parseInt(tokens[0], "tetrahedron number"), in.line()};
     const std::string name = "tet " + std::to_string(tet.id);
     for (int k = 0; k < 4; ++k) {
-      tet.vertices[k] = io::parseVertexIndex(in, tokens[1 + k], nodes.base, static_cast<int>(nodes.positions.rows()), name);
+      tet.vertices[k] =
+          io::parseVertexIndex(in, tokens[1 + k], nodes.base, static_cast<int>(nodes.positions.rows()), name);
     }
     tets.push_back(tet);
   }
@@ -95,7 +97,8 @@ Scene loadTetGen(const std::string& base_path, const SolidMaterial& material) {
   const std::string base = stripTetGenExtension(base_path);
   const Nodes nodes = readNodes(base + ".node");
   const std::string ele = base + ".ele";
-  return io::solidSceneFromMesh(io::sceneNameFromPath(base), ele, nodes.lines, nodes.positions, readElements(ele, nodes), material);
+  return io::solidSceneFromMesh(io::sceneNameFromPath(base), ele, nodes.lines, nodes.positions,
+                                readElements(ele, nodes), material);
 }
 
 }  // namespace stabint

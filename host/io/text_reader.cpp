@@ -30,8 +30,9 @@ int openRegularFile(const std::string& path, long long& size) {
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
     const bool directory = S_ISDIR(st.st_mode);
     ::close(fd);
-    throw FileFormatError(path, 0, directory ? "cannot open file: is a directory"
-                                             : "cannot open file: not a regular file (a FIFO, device or socket)");
+    throw FileFormatError(path, 0,
+                          directory ? "cannot open file: is a directory"
+                                    : "cannot open file: not a regular file (a FIFO, device or socket)");
   }
   ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
   size = static_cast<long long>(st.st_size);
@@ -238,9 +239,7 @@ std::string TextReader::requireToken(const std::string& expected) {
 
 void TextReader::fail(const std::string& message) const { failAt(line_, message); }
 
-void TextReader::failAt(int line, const std::string& message) const {
-  throw FileFormatError(path_, line, message);
-}
+void TextReader::failAt(int line, const std::string& message) const { throw FileFormatError(path_, line, message); }
 
 namespace {
 

@@ -15,8 +15,7 @@ namespace ocl {
 const char* errorName(cl_int code) {
   switch (code) {
 #define STABINT_CL_ERROR(name) \
-  case name:                   \
-    return #name;
+  case name: return #name;
     STABINT_CL_ERROR(CL_SUCCESS)
     STABINT_CL_ERROR(CL_DEVICE_NOT_FOUND)
     STABINT_CL_ERROR(CL_DEVICE_NOT_AVAILABLE)
@@ -77,10 +76,8 @@ const char* errorName(cl_int code) {
     STABINT_CL_ERROR(CL_INVALID_LINKER_OPTIONS)
     STABINT_CL_ERROR(CL_INVALID_DEVICE_PARTITION_COUNT)
 #undef STABINT_CL_ERROR
-    case -1001:
-      return "CL_PLATFORM_NOT_FOUND_KHR";
-    default:
-      return "CL_UNKNOWN_ERROR";
+    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR";
+    default: return "CL_UNKNOWN_ERROR";
   }
 }
 
@@ -93,8 +90,7 @@ void throwError(cl_int code, const char* call) {
 namespace {
 
 std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
 }
 
@@ -187,8 +183,7 @@ SelectedDevice selectDevice(const OpenCLOptions& options) {
     const std::vector<cl::Device> devices = devicesOrEmpty(platforms[pi]);
     for (int di = 0; di < static_cast<int>(devices.size()); ++di) {
       const std::string dname = deviceName(devices[di]);
-      available << "\n  platform " << pi << " '" << pname << "', device " << di << " '" << dname
-                << "'";
+      available << "\n  platform " << pi << " '" << pname << "', device " << di << " '" << dname << "'";
       if (!matches(platform_sel, pi, pname) || !matches(device_sel, di, dname)) continue;
       SelectedDevice s;
       s.platform = platforms[pi];
@@ -202,16 +197,14 @@ SelectedDevice selectDevice(const OpenCLOptions& options) {
     }
   }
   std::ostringstream msg;
-  msg << "OpenCL: no device matches platform selector '" << platform_sel
-      << "' and device selector '" << device_sel
+  msg << "OpenCL: no device matches platform selector '" << platform_sel << "' and device selector '" << device_sel
       << "' (from OpenCLOptions or STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE); available:";
   const std::string list = available.str();
   msg << (list.empty() ? std::string(" none") : list);
   throw NoOpenCLDeviceError(msg.str());
 }
 
-void checkPrecisionSupported(Precision precision, bool device_has_fp64,
-                             const std::string& device_name) {
+void checkPrecisionSupported(Precision precision, bool device_has_fp64, const std::string& device_name) {
   if (precision == Precision::Double && !device_has_fp64)
     throw UnsupportedPrecisionError("OpenCL: device '" + device_name +
                                     "' does not support double precision (no cl_khr_fp64); "
@@ -247,8 +240,8 @@ cl::Context sharedContext(const cl::Device& device) {
   return context;
 }
 
-cl::Program buildProgram(const cl::Context& context, const cl::Device& device,
-                         const std::string& source, const std::string& options) {
+cl::Program buildProgram(const cl::Context& context, const cl::Device& device, const std::string& source,
+                         const std::string& options) {
   cl_int err = CL_SUCCESS;
   cl::Program program(context, source, false, &err);
   check(err, "clCreateProgramWithSource");
@@ -259,8 +252,7 @@ cl::Program buildProgram(const cl::Context& context, const cl::Device& device,
     log = std::string(log.c_str());
     if (err == CL_BUILD_PROGRAM_FAILURE || err == CL_INVALID_BUILD_OPTIONS) {
       std::ostringstream msg;
-      msg << "OpenCL: clBuildProgram failed: " << errorName(err) << " (" << err
-          << ") with options '" << options << "'";
+      msg << "OpenCL: clBuildProgram failed: " << errorName(err) << " (" << err << ") with options '" << options << "'";
       throw KernelBuildError(msg.str(), log);
     }
     throwError(err, "clBuildProgram");
@@ -268,8 +260,8 @@ cl::Program buildProgram(const cl::Context& context, const cl::Device& device,
   return program;
 }
 
-cl::Program cachedProgram(const cl::Context& context, const cl::Device& device,
-                          const std::string& source, const std::string& options) {
+cl::Program cachedProgram(const cl::Context& context, const cl::Device& device, const std::string& source,
+                          const std::string& options) {
   Caches& c = caches();
   auto key = std::make_tuple(context(), device(), options, source);
   {

@@ -41,19 +41,18 @@ struct SelectedDevice {
 SelectedDevice selectDevice(const OpenCLOptions& options);
 
 /// Throws UnsupportedPrecisionError when `precision` is Double and the device lacks cl_khr_fp64.
-void checkPrecisionSupported(Precision precision, bool device_has_fp64,
-                             const std::string& device_name);
+void checkPrecisionSupported(Precision precision, bool device_has_fp64, const std::string& device_name);
 
 /// One context per device for the whole process, so that programs built for it are shared by
 /// every backend (the cache below is keyed by context).
 cl::Context sharedContext(const cl::Device& device);
 
 /// Compiles `source` for `device` (uncached). Throws KernelBuildError carrying the build log.
-cl::Program buildProgram(const cl::Context& context, const cl::Device& device,
-                         const std::string& source, const std::string& options);
+cl::Program buildProgram(const cl::Context& context, const cl::Device& device, const std::string& source,
+                         const std::string& options);
 
 /// buildProgram through an in-process cache keyed by (context, device, options, source).
-cl::Program cachedProgram(const cl::Context& context, const cl::Device& device,
-                          const std::string& source, const std::string& options);
+cl::Program cachedProgram(const cl::Context& context, const cl::Device& device, const std::string& source,
+                          const std::string& options);
 
 }  // namespace stabint::ocl

@@ -51,21 +51,32 @@ std::string dispatcher(const std::vector<const ElementType*>& types) {
   for (const ElementType* type : types) {
     const std::string id = type->identifier();
     args += ",\n                           const int4 " + id + "_segment, __global const int* " + id +
-            "_vertices,\n                           __global const real* " + id + "_coefficients, __global const real* " +
-            id + "_params";
-    branches += "  if (group < " + id + "_segment.y) {\n"
-                "    const int e = (group - " + id + "_segment.x) * local_size + lid;\n"
-                "    if (e < " + id + "_segment.z)\n"
-                "      energy = " + id + "_element(x, n, e, flags, " + id + "_segment.w, " + id + "_vertices, " + id +
-                "_coefficients,\n                               " + id + "_params, contrib);\n"
+            "_vertices,\n                           __global const real* " + id +
+            "_coefficients, __global const real* " + id + "_params";
+    branches += "  if (group < " + id +
+                "_segment.y) {\n"
+                "    const int e = (group - " +
+                id +
+                "_segment.x) * local_size + lid;\n"
+                "    if (e < " +
+                id +
+                "_segment.z)\n"
+                "      energy = " +
+                id + "_element(x, n, e, flags, " + id + "_segment.w, " + id + "_vertices, " + id +
+                "_coefficients,\n                               " + id +
+                "_params, contrib);\n"
                 "  } else ";
   }
   return "__kernel void element_pass(__global const real* x, const int n, const int flags,\n"
          "                           __global const real* fext, __global real* contrib,\n"
          "                           __global real* partials, __local real* scratch,\n"
-         "                           const int vertex_first_group" + args + ") {\n"
+         "                           const int vertex_first_group" +
+         args +
+         ") {\n"
          "  const int group = get_group_id(0), lid = get_local_id(0), local_size = get_local_size(0);\n"
-         "  real energy = 0;\n" + branches + "{\n"
+         "  real energy = 0;\n" +
+         branches +
+         "{\n"
          "    const int j = (group - vertex_first_group) * local_size + lid;\n"
          "    if (j < n && (flags & PASS_ENERGY)) energy = externalEnergyAt(n, x, fext, j);\n"
          "  }\n"

@@ -18,9 +18,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // A kernel with its launch geometry. Arguments are appended in the order of the kernel's
 // signature (add, addSlot); those that change between calls keep the index add returned and are
@@ -59,15 +57,13 @@ class OpenCLBackend final : public Backend {
   OpenCLBackend(const SceneData& scene, int num_slots, const OpenCLOptions& options)
       : scene_(scene), n_(scene.numParticles()) {
     device_ = ocl::selectDevice(options);
-    ocl::checkPrecisionSupported(kDouble ? Precision::Double : Precision::Float, device_.fp64,
-                                 device_.device_name);
+    ocl::checkPrecisionSupported(kDouble ? Precision::Double : Precision::Float, device_.fp64, device_.device_name);
     context_ = ocl::sharedContext(device_.device);
     cl_int err = CL_SUCCESS;
     queue_ = cl::CommandQueue(context_, device_.device, CL_QUEUE_PROFILING_ENABLE, &err);
     ocl::check(err, "clCreateCommandQueue");
-    program_ = ocl::cachedProgram(
-        context_, device_.device, ocl::elementProgramSource(),
-        std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
+    program_ = ocl::cachedProgram(context_, device_.device, ocl::elementProgramSource(),
+                                  std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
 
     // --- resident data -----------------------------------------------------------------------
     for (int s = 0; s < num_slots; ++s) slots_.push_back(zeroBuffer(3 * std::size_t(n_)));
@@ -98,9 +94,9 @@ class OpenCLBackend final : public Backend {
 
   void write(int slot, const Eigen::MatrixX3d& host) override {
     checkSlot(slot);
-    if (host.rows() != n_) throw InvalidInputError("OpenCL backend: write of a matrix with " +
-                                                   std::to_string(host.rows()) + " rows, expected " +
-                                                   std::to_string(n_));
+    if (host.rows() != n_)
+      throw InvalidInputError("OpenCL backend: write of a matrix with " + std::to_string(host.rows()) +
+                              " rows, expected " + std::to_string(n_));
     const auto start = Clock::now();
     writeAsync(slots_[slot], host.data(), std::size_t(host.size()));
     times_.transfer += secondsSince(start);
@@ -117,8 +113,7 @@ class OpenCLBackend final : public Backend {
     checkSlot(dst);
     checkSlot(src);
     if (dst == src) return;
-    ocl::check(queue_.enqueueCopyBuffer(slots_[src], slots_[dst], 0, 0, bytes(3 * n_)),
-               "clEnqueueCopyBuffer");
+    ocl::check(queue_.enqueueCopyBuffer(slots_[src], slots_[dst], 0, 0, bytes(3 * n_)), "clEnqueueCopyBuffer");
   }
 
   void combine(int dst, double a, int x, double b, int y) override {
@@ -176,8 +171,7 @@ class OpenCLBackend final : public Backend {
     times_.local += std::max(0.0, wall - gather);
   }
 
-  void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
-                    PotentialEnergy* energy_at_x) override {
+  void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs, PotentialEnergy* energy_at_x) override {
     checkSlot(x);
     checkSlot(y);
     if (energy_at_x) *energy_at_x = potential(x, t);
@@ -199,8 +193,7 @@ class OpenCLBackend final : public Backend {
   }
 
   std::string description() const override {
-    return "OpenCL: " + device_.platform_name + " / " + device_.device_name +
-           (kDouble ? " (double)" : " (float)");
+    return "OpenCL: " + device_.platform_name + " / " + device_.device_name + (kDouble ? " (double)" : " (float)");
   }
 
  private:
@@ -232,8 +225,8 @@ class OpenCLBackend final : public Backend {
 
   void checkSlot(int slot) const {
     if (slot < 0 || slot >= static_cast<int>(slots_.size()))
-      throw InvalidInputError("OpenCL backend: slot " + std::to_string(slot) +
-                              " out of range (have " + std::to_string(slots_.size()) + ")");
+      throw InvalidInputError("OpenCL backend: slot " + std::to_string(slot) + " out of range (have " +
+                              std::to_string(slots_.size()) + ")");
   }
 
   template <typename T>
@@ -243,16 +236,14 @@ class OpenCLBackend final : public Backend {
     const T* src = data.empty() ? &placeholder : data.data();
     cl_int err = CL_SUCCESS;
     cl::Buffer buffer(context_, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                      std::max<std::size_t>(data.size(), 1) * sizeof(T), const_cast<T*>(src),
-                      &err);
+                      std::max<std::size_t>(data.size(), 1) * sizeof(T), const_cast<T*>(src), &err);
     ocl::check(err, "clCreateBuffer");
     return buffer;
   }
 
   cl::Buffer zeroBuffer(std::size_t count) {
     cl_int err = CL_SUCCESS;
-    cl::Buffer buffer(context_, CL_MEM_READ_WRITE, bytes(std::max<std::size_t>(count, 1)),
-                      nullptr, &err);
+    cl::Buffer buffer(context_, CL_MEM_READ_WRITE, bytes(std::max<std::size_t>(count, 1)), nullptr, &err);
     ocl::check(err, "clCreateBuffer");
     ocl::check(queue_.enqueueFillBuffer(buffer, Real(0), 0, bytes(std::max<std::size_t>(count, 1))),
                "clEnqueueFillBuffer");
@@ -304,8 +295,7 @@ class OpenCLBackend final : public Backend {
     next_write_ = (next_write_ + 1) % pending_writes_.size();
     if (w.done()) ocl::check(w.done.wait(), "clWaitForEvents");
     w.data.assign(host, host + count);
-    ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, 0, bytes(count), w.data.data(), nullptr,
-                                         &w.done),
+    ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, 0, bytes(count), w.data.data(), nullptr, &w.done),
                "clEnqueueWriteBuffer");
   }
 
@@ -314,12 +304,10 @@ class OpenCLBackend final : public Backend {
     const std::size_t count = 3 * std::size_t(n_);
     if (count == 0) return;
     if (kDouble) {
-      ocl::check(queue_.enqueueReadBuffer(buffer, CL_TRUE, 0, bytes(count), host.data()),
-                 "clEnqueueReadBuffer");
+      ocl::check(queue_.enqueueReadBuffer(buffer, CL_TRUE, 0, bytes(count), host.data()), "clEnqueueReadBuffer");
     } else {
       staging_.resize(count);
-      ocl::check(queue_.enqueueReadBuffer(buffer, CL_TRUE, 0, bytes(count), staging_.data()),
-                 "clEnqueueReadBuffer");
+      ocl::check(queue_.enqueueReadBuffer(buffer, CL_TRUE, 0, bytes(count), staging_.data()), "clEnqueueReadBuffer");
       std::copy(staging_.begin(), staging_.begin() + count, host.data());
     }
   }
@@ -327,8 +315,8 @@ class OpenCLBackend final : public Backend {
   // The first `count` per-group partials to the host: the only wait of an energy pass (or none,
   // when a blocking read queued after it waits).
   void readPartials(int count, bool blocking = true) {
-    ocl::check(queue_.enqueueReadBuffer(partials_, blocking ? CL_TRUE : CL_FALSE, 0,
-                                        bytes(std::size_t(count)), host_partials_.data()),
+    ocl::check(queue_.enqueueReadBuffer(partials_, blocking ? CL_TRUE : CL_FALSE, 0, bytes(std::size_t(count)),
+                                        host_partials_.data()),
                "clEnqueueReadBuffer");
   }
 
@@ -351,8 +339,7 @@ class OpenCLBackend final : public Backend {
   }
 
   void enqueue(const Launch& launch, cl::Event* event = nullptr) {
-    ocl::check(queue_.enqueueNDRangeKernel(launch.kernel, cl::NullRange, launch.global, launch.local,
-                                           nullptr, event),
+    ocl::check(queue_.enqueueNDRangeKernel(launch.kernel, cl::NullRange, launch.global, launch.local, nullptr, event),
                "clEnqueueNDRangeKernel");
   }
 
@@ -373,8 +360,8 @@ class OpenCLBackend final : public Backend {
     element_pass_.bindSlot(element_args_.x, x, slots_);
     element_pass_.set(element_args_.flags, cl_int(flags));
     ocl::check(queue_.enqueueNDRangeKernel(element_pass_.kernel, cl::NullRange,
-                                           cl::NDRange(element_local_ * std::size_t(groups)),
-                                           element_pass_.local, nullptr, &element_event_),
+                                           cl::NDRange(element_local_ * std::size_t(groups)), element_pass_.local,
+                                           nullptr, &element_event_),
                "clEnqueueNDRangeKernel");
     return true;
   }
@@ -389,8 +376,7 @@ class OpenCLBackend final : public Backend {
   // Largest power of two <= min(wanted, what the device allows for this kernel).
   std::size_t localSize(const cl::Kernel& kernel, std::size_t wanted) {
     std::size_t limit = 0;
-    ocl::check(kernel.getWorkGroupInfo(device_.device, CL_KERNEL_WORK_GROUP_SIZE, &limit),
-               "clGetKernelWorkGroupInfo");
+    ocl::check(kernel.getWorkGroupInfo(device_.device, CL_KERNEL_WORK_GROUP_SIZE, &limit), "clGetKernelWorkGroupInfo");
     std::size_t size = 1;
     while (size * 2 <= std::min(wanted, limit)) size *= 2;
     return size;
@@ -468,8 +454,8 @@ class OpenCLBackend final : public Backend {
     element_pass_.add(cl_int(segment_groups_.back()));
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
       const DeviceBlock& d = blocks_[b];
-      element_pass_.add(cl_int4{{segment_groups_[b], segment_groups_[b + 1], d.block->count,
-                                 d.block->contribution_base}});
+      element_pass_.add(
+          cl_int4{{segment_groups_[b], segment_groups_[b + 1], d.block->count, d.block->contribution_base}});
       element_pass_.add(d.vertices);
       element_pass_.add(d.coefficients);
       element_pass_.add(d.params);
@@ -520,10 +506,18 @@ class OpenCLBackend final : public Backend {
   cl::Buffer partials_;
 
   Launch element_pass_, mass_dot_, combine_, gather_rhs_, gather_accel_;
-  struct { cl_uint x, flags; } element_args_{};
-  struct { cl_uint a, x, b, y, dst; } combine_args_{};
-  struct { cl_uint y, c; } gather_rhs_args_{};
-  struct { cl_uint a, b; } mass_dot_args_{};
+  struct {
+    cl_uint x, flags;
+  } element_args_{};
+  struct {
+    cl_uint a, x, b, y, dst;
+  } combine_args_{};
+  struct {
+    cl_uint y, c;
+  } gather_rhs_args_{};
+  struct {
+    cl_uint a, b;
+  } mass_dot_args_{};
   cl_uint gather_accel_dst_ = 0;
   cl::Event element_event_, gather_event_;
 
@@ -542,10 +536,8 @@ class OpenCLBackend final : public Backend {
 
 }  // namespace
 
-std::unique_ptr<Backend> makeOpenCLBackend(const SceneData& scene, int num_slots,
-                                           const OpenCLOptions& options) {
-  if (options.precision == Precision::Float)
-    return std::make_unique<OpenCLBackend<float>>(scene, num_slots, options);
+std::unique_ptr<Backend> makeOpenCLBackend(const SceneData& scene, int num_slots, const OpenCLOptions& options) {
+  if (options.precision == Precision::Float) return std::make_unique<OpenCLBackend<float>>(scene, num_slots, options);
   return std::make_unique<OpenCLBackend<double>>(scene, num_slots, options);
 }
 

@@ -9,8 +9,9 @@
 namespace stabint {
 
 std::unique_ptr<Backend> makeOpenCLBackend(const SceneData&, int, const OpenCLOptions&) {
-  throw NoOpenCLDeviceError("this stabint was built without OpenCL (STABINT_WITH_OPENCL=OFF): "
-                            "use BackendKind::CpuReference or Auto");
+  throw NoOpenCLDeviceError(
+      "this stabint was built without OpenCL (STABINT_WITH_OPENCL=OFF): "
+      "use BackendKind::CpuReference or Auto");
 }
 
 std::vector<OpenCLDeviceInfo> listOpenCLDevices() { return {}; }

@@ -17,8 +17,8 @@ namespace {
 
 void requireAtLeast(int value, int minimum, const char* name) {
   if (value < minimum) {
-    throw InvalidInputError(std::string(name) + " = " + std::to_string(value) + " must be >= " +
-                            std::to_string(minimum));
+    throw InvalidInputError(std::string(name) + " = " + std::to_string(value) +
+                            " must be >= " + std::to_string(minimum));
   }
 }
 

@@ -26,9 +26,7 @@ constexpr double kTwoPi = 6.283185307179586476925286766559;
 bool isZero(const Eigen::Vector3d& v) { return (v.array() == 0.0).all(); }
 
 // Oscillation with a zero amplitude or a zero frequency contributes nothing at any t.
-bool oscillates(const Eigen::Vector3d& amplitude, double frequency) {
-  return frequency != 0.0 && !isZero(amplitude);
-}
+bool oscillates(const Eigen::Vector3d& amplitude, double frequency) { return frequency != 0.0 && !isZero(amplitude); }
 
 }  // namespace
 
@@ -58,7 +56,8 @@ void checkRows(const Eigen::MatrixX3d& m, const char* name) {
   for (Eigen::Index i = 0; i < m.rows(); ++i) {
     if (!m.row(i).allFinite()) invalid(name, " row ", i, " is not finite");
     if (!(m.row(i).cwiseAbs().maxCoeff() <= validation::kMaxMagnitude)) {
-      invalid(name, " row ", i, " ", vec(m.row(i).transpose()), " exceeds ", validation::kMaxMagnitude, " in magnitude");
+      invalid(name, " row ", i, " ", vec(m.row(i).transpose()), " exceeds ", validation::kMaxMagnitude,
+              " in magnitude");
     }
   }
 }
@@ -108,7 +107,8 @@ void checkEnergyScale(const Scene& s) {
     const double m = s.masses[j], speed = s.velocities.row(j).norm();
     const double k = 0.5 * m * speed * speed;
     if (!std::isfinite(k)) {
-      invalid("particle ", j, ": kinetic energy 0.5 m |v|^2 of masses[", j, "] = ", m, " at speed ", speed, " overflows");
+      invalid("particle ", j, ": kinetic energy 0.5 m |v|^2 of masses[", j, "] = ", m, " at speed ", speed,
+              " overflows");
     }
     kinetic += k;
     total_mass += m;
@@ -237,8 +237,7 @@ Eigen::VectorXd withMinimumMass(Eigen::VectorXd masses, double min_mass) {
 // Adds density |measure(e)| / K of each element e to its K vertices.
 template <std::size_t K, typename Vertices, typename Measure>
 std::optional<lumping::Failure> addShares(std::size_t count, Vertices vertices, Measure measure, double density,
-                                          const char* density_name, const char* measured,
-                                          Eigen::VectorXd& masses) {
+                                          const char* density_name, const char* measured, Eigen::VectorXd& masses) {
   for (std::size_t i = 0; i < count; ++i) {
     const std::array<int, K>& v = vertices(i);
     // Mass is a property of the shape, not of its vertex order: |V|, so that an inverted tet is
@@ -284,12 +283,12 @@ std::optional<lumping::Failure> lumping::addTriangles(const Eigen::MatrixX3d& re
                                                       Eigen::VectorXd& masses) {
   return addShares<3>(
       triangles.size(), [&](std::size_t i) -> const std::array<int, 3>& { return triangles[i]; },
-      [&](const std::array<int, 3>& t) { return triangleArea(rest_positions, t); }, areal_density, density_name,
-      "area", masses);
+      [&](const std::array<int, 3>& t) { return triangleArea(rest_positions, t); }, areal_density, density_name, "area",
+      masses);
 }
 
-Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const std::vector<Tet>& tets,
-                                   double density, double min_mass) {
+Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const std::vector<Tet>& tets, double density,
+                                   double min_mass) {
   for (size_t i = 0; i < tets.size(); ++i) checkElementIndices(tets[i].vertices, rest_positions.rows(), "tet", i);
   validation::checkDensity(density, "density");
   Eigen::VectorXd masses = Eigen::VectorXd::Zero(rest_positions.rows());
@@ -300,8 +299,8 @@ Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const
 }
 
 Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
-                                        const std::vector<std::array<int, 3>>& triangles,
-                                        double areal_density, double min_mass) {
+                                        const std::vector<std::array<int, 3>>& triangles, double areal_density,
+                                        double min_mass) {
   for (size_t i = 0; i < triangles.size(); ++i) checkElementIndices(triangles[i], rest_positions.rows(), "triangle", i);
   validation::checkDensity(areal_density, "areal_density");
   Eigen::VectorXd masses = Eigen::VectorXd::Zero(rest_positions.rows());
@@ -340,7 +339,8 @@ template <typename Visit>
 void forEachEdge(const std::vector<Incidence>& incidences, Visit visit) {
   for (size_t i = 0; i < incidences.size();) {
     size_t end = i;
-    while (end < incidences.size() && incidences[end].lo == incidences[i].lo && incidences[end].hi == incidences[i].hi) {
+    while (end < incidences.size() && incidences[end].lo == incidences[i].lo &&
+           incidences[end].hi == incidences[i].hi) {
       ++end;
     }
     visit(&incidences[i], end - i);
@@ -388,10 +388,12 @@ std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_posit
 
 void addTriangleClothElements(Scene& scene, double strain_stiffness, double strain_min, double strain_max,
                               double hinge_stiffness) {
-  for (const TriangleStrain& t : triangleStrainsFromTriangles(scene.triangles, strain_stiffness, strain_min, strain_max)) {
+  for (const TriangleStrain& t :
+       triangleStrainsFromTriangles(scene.triangles, strain_stiffness, strain_min, strain_max)) {
     scene.triangle_strains.push_back(t);
   }
-  for (const BendingHinge& h : bendingHingesFromTriangles(scene.triangles, hinge_stiffness)) scene.bending_hinges.push_back(h);
+  for (const BendingHinge& h : bendingHingesFromTriangles(scene.triangles, hinge_stiffness))
+    scene.bending_hinges.push_back(h);
 }
 
 std::vector<TriangleStrain> triangleStrainsFromTriangles(const std::vector<std::array<int, 3>>& triangles,
@@ -406,7 +408,8 @@ std::vector<BendingHinge> bendingHingesFromTriangles(const std::vector<std::arra
                                                      double stiffness) {
   std::vector<BendingHinge> hinges;
   forEachEdge(edgeIncidences(triangles), [&](const Incidence* edge, size_t count) {
-    if (isHinge(edge, count)) hinges.push_back(BendingHinge{{edge->lo, edge->hi, edge[0].opposite, edge[1].opposite}, stiffness});
+    if (isHinge(edge, count))
+      hinges.push_back(BendingHinge{{edge->lo, edge->hi, edge[0].opposite, edge[1].opposite}, stiffness});
   });
   return hinges;
 }

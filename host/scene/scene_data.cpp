@@ -32,12 +32,11 @@ SceneData::SceneData(const Scene& scene) {
   scene_ = scene;
   n_ = scene.numParticles();
   buildBlocks();
-  moving_pins_ = std::any_of(scene_.pins.begin(), scene_.pins.end(),
-                             [](const Pin& p) { return p.target.moving(); });
+  moving_pins_ = std::any_of(scene_.pins.begin(), scene_.pins.end(), [](const Pin& p) { return p.target.moving(); });
   time_dependent_fields_ = std::any_of(scene_.force_fields.begin(), scene_.force_fields.end(),
                                        [](const ForceField& f) { return f.timeDependent(); });
-  moving_colliders_ = std::any_of(scene_.colliders.begin(), scene_.colliders.end(),
-                                  [](const Collider& c) { return c.moving(); });
+  moving_colliders_ =
+      std::any_of(scene_.colliders.begin(), scene_.colliders.end(), [](const Collider& c) { return c.moving(); });
   pin_ramps_.resize(scene_.pins.size());
 }
 
@@ -158,7 +157,8 @@ void SceneData::setPins(const std::vector<Pin>& pins) {
     if (pins[i].vertex == scene_.pins[i].vertex) ramps[i] = pin_ramps_[i];
   scene_.pins = pins;
   pin_ramps_ = std::move(ramps);
-  ramped_pins_ = static_cast<int>(std::count_if(pin_ramps_.begin(), pin_ramps_.end(), [](const Ramp& r) { return r.active; }));
+  ramped_pins_ =
+      static_cast<int>(std::count_if(pin_ramps_.begin(), pin_ramps_.end(), [](const Ramp& r) { return r.active; }));
   moving_pins_ = std::any_of(scene_.pins.begin(), scene_.pins.end(), [](const Pin& p) { return p.target.moving(); });
   // Only the pin block is rebuilt (in place: backends keep pointers to the blocks); the others
   // keep their data and, pins being last in the table, their contribution numbers.
@@ -179,7 +179,8 @@ void SceneData::setPins(const std::vector<Pin>& pins) {
 
 void SceneData::setForcingState(const ForcingState& state) {
   pin_ramps_ = state.pins;
-  ramped_pins_ = static_cast<int>(std::count_if(pin_ramps_.begin(), pin_ramps_.end(), [](const Ramp& r) { return r.active; }));
+  ramped_pins_ =
+      static_cast<int>(std::count_if(pin_ramps_.begin(), pin_ramps_.end(), [](const Ramp& r) { return r.active; }));
   user_forces_ = state.user_forces;
   ++forcing_version_;
 }

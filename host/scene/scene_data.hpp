@@ -44,9 +44,7 @@ class SceneData {
   /// Pin targets q(t), `#pins by 3`.
   void pinTargets(double t, Eigen::MatrixX3d& out) const;
   /// True when pins move or force fields change with time (the blend then books forcing).
-  bool hasTimeDependentForcing() const {
-    return hasMovingPins() || hasTimeDependentForces() || hasMovingColliders();
-  }
+  bool hasTimeDependentForcing() const { return hasMovingPins() || hasTimeDependentForces() || hasMovingColliders(); }
   /// A collider moves: the contact params depend on time and the collider does work.
   bool hasMovingColliders() const { return moving_colliders_; }
   /// Pin targets or external forces that may change with time: a pin law that moves, a force

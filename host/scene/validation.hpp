@@ -105,8 +105,8 @@ constexpr double kFlatness = 1e-12;
 /// A rest tet's or triangle's measure and what is wrong with it, if anything.
 struct RestShape {
   enum Kind { Fine, Flat, Overflow } kind;
-  double measure;  // signed volume (tet) or area (triangle)
-  double longest;  // longest edge
+  double measure;        // signed volume (tet) or area (triangle)
+  double longest;        // longest edge
   const char* measured;  // "volume" or "area"
   int power;             // of L in the flatness test: 3 or 2
   bool fine() const { return kind == Fine; }
@@ -148,21 +148,23 @@ inline RestShape restTriangle(const Eigen::MatrixX3d& x, const std::array<int, 3
 /// What is wrong with a rest shape that is not fine, for a message after its name ("tet 3: ...").
 inline std::string restShapeProblem(const RestShape& r) {
   if (r.kind == RestShape::Overflow) return cat("rest ", r.measured, " overflows (longest edge ", r.longest, ")");
-  return cat("zero rest ", r.measured, " ", r.measure, " for its longest edge L = ", r.longest, " (degenerate: at most ",
-             kFlatness, " L^", r.power, ")");
+  return cat("zero rest ", r.measured, " ", r.measure, " for its longest edge L = ", r.longest,
+             " (degenerate: at most ", kFlatness, " L^", r.power, ")");
 }
 
 /// The rest tet is neither flat nor overflowing, and positive.
 inline void checkRestTet(const Eigen::MatrixX3d& x, const std::array<int, 4>& v, const Owner& owner) {
   const RestShape r = restTet(x, v);
   if (!r.fine()) invalid(owner, ": ", restShapeProblem(r));
-  if (r.measure < 0.0) invalid(owner, ": negative rest volume ", r.measure, " (inverted: list two vertices in the other order)");
+  if (r.measure < 0.0)
+    invalid(owner, ": negative rest volume ", r.measure, " (inverted: list two vertices in the other order)");
 }
 
 /// The rest triangle (a, b, c) of `x` is neither flat nor overflowing.
 inline void checkRestTriangle(const Eigen::MatrixX3d& x, int a, int b, int c, const Owner& owner) {
   const RestShape r = restTriangle(x, {a, b, c});
-  if (r.kind == RestShape::Flat) invalid(owner, ": degenerate rest triangle (", a, ", ", b, ", ", c, "), area ", r.measure);
+  if (r.kind == RestShape::Flat)
+    invalid(owner, ": degenerate rest triangle (", a, ", ", b, ", ", c, "), area ", r.measure);
   if (!r.fine()) invalid(owner, ": rest triangle (", a, ", ", b, ", ", c, "): ", restShapeProblem(r));
 }
 

@@ -163,7 +163,7 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
   Chebyshev chebyshev(control.chebyshev_rho);
   Anderson anderson(control.anderson_window);
   Extrapolation& rule = control.acceleration == Acceleration::Anderson ? static_cast<Extrapolation&>(anderson)
-                                                                        : static_cast<Extrapolation&>(chebyshev);
+                                                                       : static_cast<Extrapolation&>(chebyshev);
   const bool to_tolerance = control.tolerance > 0.0;
   const int limit = to_tolerance ? control.max_iterations : control.iterations;
   backend_.read(y, y_host_);
@@ -173,7 +173,7 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
 
   double accepted_objective = 0.0;  // objective of the last accepted iterate
   bool have_accepted = false;
-  bool extrapolated = false;        // x_cur_ is an extrapolated (not plain) iterate
+  bool extrapolated = false;  // x_cur_ is an extrapolated (not plain) iterate
   int done = 0;
   PotentialEnergy potential;
   while (true) {

@@ -33,13 +33,13 @@ Scene makeChainPendulum(const ChainPendulumParams& p = {});
 /// A rectangular cloth of `nx` by `ny` particles in the x-y plane (hanging under gravity along
 /// -y), triangulated into Scene::triangles (two triangles per cell), with the elements of
 /// `model` (springs with the stretch/shear/bend stiffnesses, or triangle strain and bending
-/// hinges with the strain and hinge parameters); masses lumped from the areal density. The particles listed in `pinned` (row-major
-/// index j*nx + i) are pinned in place; by default the two top corners.
+/// hinges with the strain and hinge parameters); masses lumped from the areal density. The particles listed in `pinned`
+/// (row-major index j*nx + i) are pinned in place; by default the two top corners.
 struct ClothGridParams {
   int nx = 20;
   int ny = 20;
-  double width = 1.0;   // m, along x
-  double height = 1.0;  // m, along y
+  double width = 1.0;          // m, along x
+  double height = 1.0;         // m, along y
   double areal_density = 0.1;  // kg/m^2
   double stretch_stiffness = 1e3;
   double shear_stiffness = 1e2;
@@ -65,8 +65,8 @@ struct TetBarParams {
   int nx = 8;
   int ny = 2;
   int nz = 2;
-  double length = 1.0;  // m, along x
-  double width = 0.25;  // m, along y and z
+  double length = 1.0;      // m, along x
+  double width = 0.25;      // m, along y and z
   double density = 1000.0;  // kg/m^3
   double stiffness = 1e5;   // tet strain stiffness (Pa)
   double pin_stiffness = 1e7;

@@ -25,9 +25,7 @@ class InvalidInputError : public Error {
 class FileFormatError : public Error {
  public:
   FileFormatError(const std::string& file, int line, const std::string& what)
-      : Error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + what),
-        file_(file),
-        line_(line) {}
+      : Error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + what), file_(file), line_(line) {}
   const std::string& file() const { return file_; }
   /// 1-based line number, 0 when the error is not tied to a line (e.g. missing file).
   int line() const { return line_; }

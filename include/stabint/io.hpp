@@ -13,14 +13,14 @@ namespace stabint {
 
 /// Material parameters applied to a loaded mesh.
 struct ClothMaterial {
-  double areal_density = 0.1;  // kg/m^2
+  double areal_density = 0.1;      // kg/m^2
   double stretch_stiffness = 1e3;  // springs along edges (model Springs)
   double bend_stiffness = 1e1;     // springs across interior edges (model Springs)
   ClothModel model = ClothModel::Springs;
-  double strain_stiffness = 1e3;   // triangle strain k, N/m (model Triangles)
+  double strain_stiffness = 1e3;  // triangle strain k, N/m (model Triangles)
   double strain_min = 1.0;
   double strain_max = 1.0;
-  double hinge_stiffness = 1e-3;   // bending hinge k, J (model Triangles)
+  double hinge_stiffness = 1e-3;  // bending hinge k, J (model Triangles)
 };
 struct SolidMaterial {
   double density = 1000.0;  // kg/m^3

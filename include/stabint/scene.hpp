@@ -99,12 +99,12 @@ struct Collider {
   ColliderShape shape = ColliderShape::Plane;
   /// Plane: a point of the plane; sphere and box: the center; capsule: one end of its axis.
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  // plane: the outward normal (length > 0)
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();       // plane: the outward normal (length > 0)
   Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  // box (axis-aligned): half sizes, > 0
-  Eigen::Vector3d end = Eigen::Vector3d::Zero();  // capsule: the other end of its axis
-  double radius = 0.0;  // sphere and capsule, > 0
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s
-  double friction = 0.0;  // Coulomb coefficient mu >= 0 (0: frictionless)
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();           // capsule: the other end of its axis
+  double radius = 0.0;                                     // sphere and capsule, > 0
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      // m/s
+  double friction = 0.0;                                   // Coulomb coefficient mu >= 0 (0: frictionless)
   /// Contact weight per unit of particle mass, 1/s^2 (> 0): a particle at rest on a collider
   /// under gravity g sinks about |g| / stiffness into it.
   double stiffness = 1e4;
@@ -170,15 +170,14 @@ double signedVolume(const Eigen::MatrixX3d& rest_positions, const std::array<int
 /// Particles touched by no tet get `min_mass`. Throws InvalidInputError for an index out of
 /// range, a density that is not > 0 and finite, or a tet whose share, or a vertex's sum, is not
 /// finite (naming the tet).
-Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions,
-                                   const std::vector<Tet>& tets, double density,
+Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const std::vector<Tet>& tets, double density,
                                    double min_mass = 1e-6);
 
 /// Lumped masses from a triangle surface: each triangle gives areal_density * area / 3 to each
 /// of its vertices. Particles touched by no triangle get `min_mass`. Throws as lumpMassesFromTets.
 Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
-                                        const std::vector<std::array<int, 3>>& triangles,
-                                        double areal_density, double min_mass = 1e-6);
+                                        const std::vector<std::array<int, 3>>& triangles, double areal_density,
+                                        double min_mass = 1e-6);
 
 /// Springs of a cloth from a triangle mesh: one structural spring per edge, and one bending
 /// spring across each interior edge joining the two opposite vertices. Rest lengths from

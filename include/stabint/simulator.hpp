@@ -93,12 +93,12 @@ struct SimulatorOptions {
   int anderson_window = 5;
 
   /// Energy-tracking blend (docs/method.md, "The blend").
-  int be_iterations = 3;             // budget of the BE partner solve, warm-started at x_n
-  double energy_tolerance = 1e-3;    // tau = energy_tolerance * (K + E_int + E_scale)
+  int be_iterations = 3;           // budget of the BE partner solve, warm-started at x_n
+  double energy_tolerance = 1e-3;  // tau = energy_tolerance * (K + E_int + E_scale)
   /// Largest factor by which one step may scale the velocities up to restore missing energy:
   /// energy comes back over a few steps, never as a kinetic jump of a nearly resting body.
   double max_velocity_scale = 2.0;
-  int max_root_evaluations = 12;     // energy evaluations of the root find
+  int max_root_evaluations = 12;  // energy evaluations of the root find
 
   /// Energy ceiling, off when 0: a step whose energy H exceeds the tracked target H* by more than
   /// energy_limit * E_scale (energyScale()) is refused with EnergyLimitError, keeping the last
@@ -145,14 +145,14 @@ enum class BlendBranch { None, ImplicitMidpoint, BackwardEuler, VelocityScale };
 const char* blendBranchName(BlendBranch branch);  // "-", "IM", "BE", "scale"
 
 struct StepReport {
-  int step = 0;           // index of this step (0 = first)
-  double time = 0.0;      // time at the end of the step
-  EnergyReport energy;    // H(x_{n+1}, v_{n+1}, t_{n+1}) split by term
-  double target = 0.0;    // tracked target H* after the step (all integrators track it)
-  double forcing = 0.0;   // energy added to H* by time-dependent potentials this step
-  double damping = 0.0;   // kinetic energy removed by damping this step (>= 0)
+  int step = 0;          // index of this step (0 = first)
+  double time = 0.0;     // time at the end of the step
+  EnergyReport energy;   // H(x_{n+1}, v_{n+1}, t_{n+1}) split by term
+  double target = 0.0;   // tracked target H* after the step (all integrators track it)
+  double forcing = 0.0;  // energy added to H* by time-dependent potentials this step
+  double damping = 0.0;  // kinetic energy removed by damping this step (>= 0)
   BlendBranch branch = BlendBranch::None;
-  double alpha = 0.0;     // blend weight of the BE partner (0 = pure IM)
+  double alpha = 0.0;           // blend weight of the BE partner (0 = pure IM)
   double velocity_scale = 1.0;  // factor the blend applied to the velocities (1 = none)
   /// Energy added to H* by discontinuous input since the previous step (setState, setPositions,
   /// setVelocities): the jump of H it caused, booked as the user's work (docs/method.md).
@@ -163,20 +163,20 @@ struct StepReport {
   /// is not booked: the blend takes it out).
   double friction = 0.0;
   double contact_projection = 0.0;
-  int iterations = 0;     // local/global iterations of all solves in this step
+  int iterations = 0;          // local/global iterations of all solves in this step
   int energy_evaluations = 0;  // element energy passes (root find included)
   PhaseTimes times;
 };
 
 /// A snapshot of a running simulation: time, step count, state, BDF2 history, the tracked
 /// target H*, the pins (with grabbed and released handles), every element's stiffness and
-/// enabled flag, and the forcing set by per-frame input (pin targets, external forces). Restoring it into a Simulator of the same scene
-/// continues bit for bit as the original did from that moment (same options, same backend and
+/// enabled flag, and the forcing set by per-frame input (pin targets, external forces). Restoring it into a Simulator
+/// of the same scene continues bit for bit as the original did from that moment (same options, same backend and
 /// precision) when both have the same pins and element stiffnesses; when they differ (a checkpoint
 /// taken during a grab or after a stiffness change, restored into a fresh simulator) the global
-/// factors are updated rather than the same, and the run agrees to round-off. Options are not part of it. The serialized form
-/// (bytes(), save()) is a versioned binary format of this library version and this machine's
-/// byte order.
+/// factors are updated rather than the same, and the run agrees to round-off. Options are not part of it. The
+/// serialized form (bytes(), save()) is a versioned binary format of this library version and this machine's byte
+/// order.
 class Checkpoint {
  public:
   double time() const { return time_; }
@@ -221,7 +221,7 @@ class Simulator {
   const Eigen::MatrixX3d& velocities() const;
   double time() const;
   int stepCount() const;
-  double target() const;     // H*
+  double target() const;        // H*
   EnergyReport energy() const;  // of the current state
   double energyScale() const;   // E_scale used by the blend tolerance
   const Scene& scene() const;

@@ -38,18 +38,18 @@ extern "C" {
  * three OpenCL subtypes are OPENCL, and every code except OK is ERROR. */
 typedef enum stabint_status {
   STABINT_OK = 0,
-  STABINT_ERROR = 1,                   /* stabint::Error of no more specific class */
-  STABINT_INVALID_INPUT = 2,           /* InvalidInputError: scene or option failed validation */
-  STABINT_FILE_FORMAT = 3,             /* FileFormatError: file missing or malformed */
-  STABINT_NON_FINITE_STATE = 4,        /* NonFiniteStateError: step refused, last state kept */
-  STABINT_ENERGY_LIMIT = 5,            /* EnergyLimitError: step over options.energy_limit */
-  STABINT_OPENCL = 6,                  /* OpenCLError */
-  STABINT_NO_OPENCL_DEVICE = 7,        /* NoOpenCLDeviceError: fall back to STABINT_BACKEND_CPU */
-  STABINT_KERNEL_BUILD = 8,            /* KernelBuildError (message carries the build log) */
-  STABINT_UNSUPPORTED_PRECISION = 9,   /* UnsupportedPrecisionError */
-  STABINT_INVALID_ARGUMENT = 10,       /* misuse of the C API: NULL handle, buffer too small */
-  STABINT_OUT_OF_MEMORY = 11,          /* std::bad_alloc */
-  STABINT_INTERNAL = 12,               /* any other exception: a bug in stabint */
+  STABINT_ERROR = 1,                 /* stabint::Error of no more specific class */
+  STABINT_INVALID_INPUT = 2,         /* InvalidInputError: scene or option failed validation */
+  STABINT_FILE_FORMAT = 3,           /* FileFormatError: file missing or malformed */
+  STABINT_NON_FINITE_STATE = 4,      /* NonFiniteStateError: step refused, last state kept */
+  STABINT_ENERGY_LIMIT = 5,          /* EnergyLimitError: step over options.energy_limit */
+  STABINT_OPENCL = 6,                /* OpenCLError */
+  STABINT_NO_OPENCL_DEVICE = 7,      /* NoOpenCLDeviceError: fall back to STABINT_BACKEND_CPU */
+  STABINT_KERNEL_BUILD = 8,          /* KernelBuildError (message carries the build log) */
+  STABINT_UNSUPPORTED_PRECISION = 9, /* UnsupportedPrecisionError */
+  STABINT_INVALID_ARGUMENT = 10,     /* misuse of the C API: NULL handle, buffer too small */
+  STABINT_OUT_OF_MEMORY = 11,        /* std::bad_alloc */
+  STABINT_INTERNAL = 12,             /* any other exception: a bug in stabint */
   STABINT_ENUM_INT_WIDE_(STABINT_STATUS)
 } stabint_status;
 
@@ -111,8 +111,7 @@ typedef struct stabint_scene stabint_scene;
  * the text of a JSON object (NULL or "{}" for the defaults), e.g. "{\"nx\": 30}" for a 30 x 30
  * cloth; the keys are the fields of the builder's parameter struct (stabint/builders.hpp).
  * Unknown names or parameters: STABINT_FILE_FORMAT naming the key. */
-stabint_status stabint_scene_create_builtin(const char* name, const char* params_json,
-                                            stabint_scene** out);
+stabint_status stabint_scene_create_builtin(const char* name, const char* params_json, stabint_scene** out);
 /* A JSON scene file (docs/scene-format.md), which may itself load OBJ, TetGen or Medit meshes. */
 stabint_status stabint_scene_load(const char* path, stabint_scene** out);
 void stabint_scene_destroy(stabint_scene* scene);
@@ -121,8 +120,7 @@ int stabint_scene_num_particles(const stabint_scene* scene);
 int stabint_scene_num_triangles(const stabint_scene* scene);
 /* Copies the surface triangles, 3 particle indices each, into `out` (capacity in int32 entries,
  * at least 3 * stabint_scene_num_triangles). */
-stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t* out,
-                                            size_t capacity);
+stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t* out, size_t capacity);
 
 /* ---- simulators ---- */
 typedef struct stabint_simulator stabint_simulator;
@@ -169,7 +167,7 @@ typedef struct stabint_step_report {
   int step;
   double time;
   stabint_energy energy;
-  double target;  /* H* after the step */
+  double target; /* H* after the step */
   double forcing;
   double damping;
   stabint_blend_branch branch;
@@ -188,8 +186,7 @@ typedef struct stabint_step_report {
 
 /* Validates and copies the scene. INVALID_INPUT for a bad scene or option (the message names
  * the field), OPENCL subtypes for the OpenCL backend (NO_OPENCL_DEVICE when none matches). */
-stabint_status stabint_simulator_create(const stabint_scene* scene,
-                                        const stabint_simulator_options* options,
+stabint_status stabint_simulator_create(const stabint_scene* scene, const stabint_simulator_options* options,
                                         stabint_simulator** out);
 void stabint_simulator_destroy(stabint_simulator* sim);
 
@@ -200,27 +197,21 @@ stabint_status stabint_simulator_step(stabint_simulator* sim, stabint_step_repor
 int stabint_simulator_num_particles(const stabint_simulator* sim);
 /* Current state copied interleaved, x y z per particle (ready for a vertex buffer), into `out`
  * with room for `capacity` values (at least 3 * stabint_simulator_num_particles). */
-stabint_status stabint_simulator_copy_positions(const stabint_simulator* sim, double* out,
-                                                size_t capacity);
-stabint_status stabint_simulator_copy_positions_float(const stabint_simulator* sim, float* out,
-                                                      size_t capacity);
-stabint_status stabint_simulator_copy_velocities(const stabint_simulator* sim, double* out,
-                                                 size_t capacity);
-stabint_status stabint_simulator_copy_velocities_float(const stabint_simulator* sim, float* out,
-                                                       size_t capacity);
+stabint_status stabint_simulator_copy_positions(const stabint_simulator* sim, double* out, size_t capacity);
+stabint_status stabint_simulator_copy_positions_float(const stabint_simulator* sim, float* out, size_t capacity);
+stabint_status stabint_simulator_copy_velocities(const stabint_simulator* sim, double* out, size_t capacity);
+stabint_status stabint_simulator_copy_velocities_float(const stabint_simulator* sim, float* out, size_t capacity);
 
 /* Energies of the current state; the report of the last completed step (zeros before the first). */
 stabint_status stabint_simulator_energy(const stabint_simulator* sim, stabint_energy* out);
-stabint_status stabint_simulator_last_report(const stabint_simulator* sim,
-                                             stabint_step_report* out);
+stabint_status stabint_simulator_last_report(const stabint_simulator* sim, stabint_step_report* out);
 double stabint_simulator_time(const stabint_simulator* sim);
 int stabint_simulator_step_count(const stabint_simulator* sim);
 double stabint_simulator_target(const stabint_simulator* sim);       /* H* */
 double stabint_simulator_energy_scale(const stabint_simulator* sim); /* E_scale of the blend */
 /* The backend and device description, truncated to `capacity` bytes with a terminating NUL;
  * returns the full length (without NUL), so a call with capacity 0 asks for the size. */
-size_t stabint_simulator_backend_description(const stabint_simulator* sim, char* out,
-                                             size_t capacity);
+size_t stabint_simulator_backend_description(const stabint_simulator* sim, char* out, size_t capacity);
 
 /* ---- per-frame input, between steps (docs/method.md, "Per-frame input") ----
  * Arrays are interleaved x y z per particle, `count` values in all, which must be exactly
@@ -231,30 +222,25 @@ size_t stabint_simulator_backend_description(const stabint_simulator* sim, char*
 /* Pin `pin`'s target (an index into the scene's pins) moves linearly from its current value to
  * `target` (x y z) over the next step and stays there; its scripted law is no longer used. Call it
  * every frame with the hand's position to drag. */
-stabint_status stabint_simulator_set_pin_target(stabint_simulator* sim, int pin,
-                                                const double target[3]);
+stabint_status stabint_simulator_set_pin_target(stabint_simulator* sim, int pin, const double target[3]);
 /* Current target of pin `pin` (its law's or the last set value at the current time) into `out`. */
 stabint_status stabint_simulator_pin_target(const stabint_simulator* sim, int pin, double out[3]);
 /* Per-particle external forces in newtons (on top of gravity and force fields): they ramp from
  * their current value to `forces` over the next step and persist until the next call (set zeros
  * to remove them). */
-stabint_status stabint_simulator_set_external_forces(stabint_simulator* sim, const double* forces,
-                                                     size_t count);
+stabint_status stabint_simulator_set_external_forces(stabint_simulator* sim, const double* forces, size_t count);
 /* Replace positions and velocities (teleport, reset): H* moves by the jump of H, reported as the
  * next step's event_energy, and BDF2 restarts from the new state. `count` applies to each array. */
-stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double* positions,
-                                           const double* velocities, size_t count);
-stabint_status stabint_simulator_set_positions(stabint_simulator* sim, const double* positions,
-                                               size_t count);
-stabint_status stabint_simulator_set_velocities(stabint_simulator* sim, const double* velocities,
-                                                size_t count);
+stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double* positions, const double* velocities,
+                                           size_t count);
+stabint_status stabint_simulator_set_positions(stabint_simulator* sim, const double* positions, size_t count);
+stabint_status stabint_simulator_set_velocities(stabint_simulator* sim, const double* velocities, size_t count);
 /* Local/global iterations per solve of every later step (>= 1); time, state and H* are kept. */
 stabint_status stabint_simulator_set_iterations(stabint_simulator* sim, int iterations);
 /* Attaches a handle to particle `vertex`: a new pin of `stiffness` (> 0) whose target is the
  * particle's current position; its pin index goes to `out_pin` (for set_pin_target and release).
  * The global factors get a rank-1 update, no refactorization. */
-stabint_status stabint_simulator_grab(stabint_simulator* sim, int vertex, double stiffness,
-                                      int* out_pin);
+stabint_status stabint_simulator_grab(stabint_simulator* sim, int vertex, double stiffness, int* out_pin);
 /* Detaches pin `pin` (stiffness 0, index kept); the pin's energy leaves H and H* (event_energy). */
 stabint_status stabint_simulator_release(stabint_simulator* sim, int pin);
 /* Element changes (Simulator::setElementStiffness, setElementEnabled): `kind` names an element
@@ -262,11 +248,10 @@ stabint_status stabint_simulator_release(stabint_simulator* sim, int pin);
  * indices into it get `stiffness` (finite, >= 0) or are enabled (`enabled` != 0) or disabled
  * (weight 0, stiffness kept). The energy jump is booked in H and H* (event_energy); the global
  * factors get rank updates. All indices are checked first: INVALID_INPUT changes nothing. */
-stabint_status stabint_simulator_set_element_stiffness(stabint_simulator* sim, const char* kind,
-                                                       const int* indices, size_t count,
-                                                       double stiffness);
-stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, const char* kind,
-                                                     const int* indices, size_t count, int enabled);
+stabint_status stabint_simulator_set_element_stiffness(stabint_simulator* sim, const char* kind, const int* indices,
+                                                       size_t count, double stiffness);
+stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, const char* kind, const int* indices,
+                                                     size_t count, int enabled);
 
 /* ---- checkpoints ----
  * A snapshot of a running simulation (time, step count, state, BDF2 history, H*, the per-frame
@@ -275,12 +260,10 @@ stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, con
  * library version and byte order. */
 typedef struct stabint_checkpoint stabint_checkpoint;
 
-stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim,
-                                            stabint_checkpoint** out);
+stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim, stabint_checkpoint** out);
 /* INVALID_INPUT when the checkpoint belongs to another scene (particle or pin count, masses, rest
  * shape); the simulator is then unchanged. */
-stabint_status stabint_simulator_restore(stabint_simulator* sim,
-                                         const stabint_checkpoint* checkpoint);
+stabint_status stabint_simulator_restore(stabint_simulator* sim, const stabint_checkpoint* checkpoint);
 /* FILE_FORMAT when the file cannot be written completely, or (load) is missing or malformed; the
  * message names the path. */
 stabint_status stabint_checkpoint_save(const stabint_checkpoint* checkpoint, const char* path);
@@ -290,8 +273,7 @@ stabint_status stabint_checkpoint_load(const char* path, stabint_checkpoint** ou
 const void* stabint_checkpoint_data(const stabint_checkpoint* checkpoint, size_t* size);
 /* A checkpoint from serialized bytes (e.g. kept in memory or sent over a network); FILE_FORMAT
  * when they are malformed. */
-stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size,
-                                             stabint_checkpoint** out);
+stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size, stabint_checkpoint** out);
 void stabint_checkpoint_destroy(stabint_checkpoint* checkpoint);
 double stabint_checkpoint_time(const stabint_checkpoint* checkpoint);    /* NaN for NULL */
 int stabint_checkpoint_step_count(const stabint_checkpoint* checkpoint); /* -1 for NULL */

@@ -121,8 +121,8 @@ void translate(const std::exception_ptr& p, void*) {
 }
 
 void bindErrors(nb::module_& m) {
-  errors.error = newErrorType(m, "Error", PyExc_RuntimeError,
-                              "Base of every error stabint raises (C++ stabint::Error).");
+  errors.error =
+      newErrorType(m, "Error", PyExc_RuntimeError, "Base of every error stabint raises (C++ stabint::Error).");
   errors.invalid_input = newErrorType(m, "InvalidInputError", errors.error,
                                       "A scene or an option failed validation; the message names the field.");
   errors.file_format = newErrorType(m, "FileFormatError", errors.error,
@@ -135,10 +135,10 @@ void bindErrors(nb::module_& m) {
   errors.opencl = newErrorType(m, "OpenCLError", errors.error, "Any OpenCL failure.");
   errors.no_opencl_device = newErrorType(m, "NoOpenCLDeviceError", errors.opencl,
                                          "No OpenCL device matches: fall back to BackendKind.CpuReference.");
-  errors.kernel_build = newErrorType(m, "KernelBuildError", errors.opencl,
-                                     "A kernel failed to compile. Attribute: build_log.");
-  errors.unsupported_precision = newErrorType(m, "UnsupportedPrecisionError", errors.opencl,
-                                              "Double precision on a device without cl_khr_fp64.");
+  errors.kernel_build =
+      newErrorType(m, "KernelBuildError", errors.opencl, "A kernel failed to compile. Attribute: build_log.");
+  errors.unsupported_precision =
+      newErrorType(m, "UnsupportedPrecisionError", errors.opencl, "Double precision on a device without cl_khr_fp64.");
   nb::register_exception_translator(translate);
 }
 
@@ -169,8 +169,11 @@ void bindEnums(nb::module_& m) {
       .value("Sphere", ColliderShape::Sphere)
       .value("Box", ColliderShape::Box)
       .value("Capsule", ColliderShape::Capsule);
-  nb::enum_<ClothModel>(m, "ClothModel").value("Springs", ClothModel::Springs).value("Triangles", ClothModel::Triangles);
-  nb::enum_<ElementKind>(m, "ElementKind", "An element list of a Scene, for set_element_stiffness and set_element_enabled.")
+  nb::enum_<ClothModel>(m, "ClothModel")
+      .value("Springs", ClothModel::Springs)
+      .value("Triangles", ClothModel::Triangles);
+  nb::enum_<ElementKind>(m, "ElementKind",
+                         "An element list of a Scene, for set_element_stiffness and set_element_enabled.")
       .value("Spring", ElementKind::Spring)
       .value("Tet", ElementKind::Tet)
       .value("TriangleStrain", ElementKind::TriangleStrain)
@@ -178,7 +181,8 @@ void bindEnums(nb::module_& m) {
       .value("Pin", ElementKind::Pin);
 
   m.def("integrator_name", &integratorName, "'FE', 'SE', 'BE', 'BDF2', 'IM' or 'blend'.");
-  m.def("parse_integrator", &parseIntegrator, "name"_a, "Integrator from a name as integrator_name prints it (any case).");
+  m.def("parse_integrator", &parseIntegrator, "name"_a,
+        "Integrator from a name as integrator_name prints it (any case).");
   m.def("backend_name", &backendName);
   m.def("parse_backend", &parseBackend, "name"_a);
   m.def("acceleration_name", &accelerationName);
@@ -190,48 +194,83 @@ void bindEnums(nb::module_& m) {
 void bindElements(nb::module_& m) {
   nb::class_<Spring>(m, "Spring", "E = k/2 (|x_a - x_b| - rest_length)^2.")
       .def(nb::init<>())
-      .def("__init__", [](Spring* s, int a, int b, double rest_length, double stiffness) {
-        new (s) Spring{a, b, rest_length, stiffness};
-      }, "a"_a, "b"_a, "rest_length"_a, "stiffness"_a)
-      .def_rw("a", &Spring::a).def_rw("b", &Spring::b)
-      .def_rw("rest_length", &Spring::rest_length).def_rw("stiffness", &Spring::stiffness);
+      .def(
+          "__init__",
+          [](Spring* s, int a, int b, double rest_length, double stiffness) {
+            new (s) Spring{a, b, rest_length, stiffness};
+          },
+          "a"_a, "b"_a, "rest_length"_a, "stiffness"_a)
+      .def_rw("a", &Spring::a)
+      .def_rw("b", &Spring::b)
+      .def_rw("rest_length", &Spring::rest_length)
+      .def_rw("stiffness", &Spring::stiffness);
   nb::class_<Tet>(m, "Tet", "Co-rotated strain of a tetrahedron against the scene's rest positions.")
       .def(nb::init<>())
-      .def("__init__", [](Tet* t, std::array<int, 4> v, double k) { new (t) Tet{v, k}; },
-           "vertices"_a, "stiffness"_a)
-      .def_rw("vertices", &Tet::vertices).def_rw("stiffness", &Tet::stiffness);
-  nb::class_<TriangleStrain>(m, "TriangleStrain", "Membrane strain of a triangle, singular values kept in [strain_min, strain_max].")
+      .def(
+          "__init__",
+          [](Tet* t, std::array<int, 4> v, double k) {
+            new (t) Tet{v, k};
+          },
+          "vertices"_a, "stiffness"_a)
+      .def_rw("vertices", &Tet::vertices)
+      .def_rw("stiffness", &Tet::stiffness);
+  nb::class_<TriangleStrain>(m, "TriangleStrain",
+                             "Membrane strain of a triangle, singular values kept in [strain_min, strain_max].")
       .def(nb::init<>())
-      .def("__init__", [](TriangleStrain* t, std::array<int, 3> v, double k, double lo, double hi) {
-        new (t) TriangleStrain{v, k, lo, hi};
-      }, "vertices"_a, "stiffness"_a, "strain_min"_a = 1.0, "strain_max"_a = 1.0)
-      .def_rw("vertices", &TriangleStrain::vertices).def_rw("stiffness", &TriangleStrain::stiffness)
-      .def_rw("strain_min", &TriangleStrain::strain_min).def_rw("strain_max", &TriangleStrain::strain_max);
+      .def(
+          "__init__",
+          [](TriangleStrain* t, std::array<int, 3> v, double k, double lo, double hi) {
+            new (t) TriangleStrain{v, k, lo, hi};
+          },
+          "vertices"_a, "stiffness"_a, "strain_min"_a = 1.0, "strain_max"_a = 1.0)
+      .def_rw("vertices", &TriangleStrain::vertices)
+      .def_rw("stiffness", &TriangleStrain::stiffness)
+      .def_rw("strain_min", &TriangleStrain::strain_min)
+      .def_rw("strain_max", &TriangleStrain::strain_max);
   nb::class_<BendingHinge>(m, "BendingHinge", "Bending across the edge (vertices[0], vertices[1]).")
       .def(nb::init<>())
-      .def("__init__", [](BendingHinge* h, std::array<int, 4> v, double k) { new (h) BendingHinge{v, k}; },
-           "vertices"_a, "stiffness"_a)
-      .def_rw("vertices", &BendingHinge::vertices).def_rw("stiffness", &BendingHinge::stiffness);
+      .def(
+          "__init__",
+          [](BendingHinge* h, std::array<int, 4> v, double k) {
+            new (h) BendingHinge{v, k};
+          },
+          "vertices"_a, "stiffness"_a)
+      .def_rw("vertices", &BendingHinge::vertices)
+      .def_rw("stiffness", &BendingHinge::stiffness);
   nb::class_<PinTarget>(m, "PinTarget", "q(t) = position + velocity t + amplitude sin(2 pi frequency t).")
       .def(nb::init<>())
-      .def_rw("position", &PinTarget::position).def_rw("velocity", &PinTarget::velocity)
-      .def_rw("amplitude", &PinTarget::amplitude).def_rw("frequency", &PinTarget::frequency)
-      .def("at", &PinTarget::at, "t"_a).def("moving", &PinTarget::moving);
+      .def_rw("position", &PinTarget::position)
+      .def_rw("velocity", &PinTarget::velocity)
+      .def_rw("amplitude", &PinTarget::amplitude)
+      .def_rw("frequency", &PinTarget::frequency)
+      .def("at", &PinTarget::at, "t"_a)
+      .def("moving", &PinTarget::moving);
   nb::class_<Pin>(m, "Pin", "Zero-rest-length spring from a particle to a target: E = k/2 |x - q(t)|^2.")
       .def(nb::init<>())
-      .def("__init__", [](Pin* p, int vertex, double k, const Eigen::Vector3d& position) {
-        new (p) Pin{vertex, k, PinTarget{}};
-        p->target.position = position;
-      }, "vertex"_a, "stiffness"_a, "position"_a, "A static pin at `position`.")
-      .def_rw("vertex", &Pin::vertex).def_rw("stiffness", &Pin::stiffness).def_rw("target", &Pin::target);
-  nb::class_<ForceField>(m, "ForceField", "f(t) = force + rate t + amplitude sin(2 pi frequency t) on `particles` (all when empty).")
+      .def(
+          "__init__",
+          [](Pin* p, int vertex, double k, const Eigen::Vector3d& position) {
+            new (p) Pin{vertex, k, PinTarget{}};
+            p->target.position = position;
+          },
+          "vertex"_a, "stiffness"_a, "position"_a, "A static pin at `position`.")
+      .def_rw("vertex", &Pin::vertex)
+      .def_rw("stiffness", &Pin::stiffness)
+      .def_rw("target", &Pin::target);
+  nb::class_<ForceField>(m, "ForceField",
+                         "f(t) = force + rate t + amplitude sin(2 pi frequency t) on `particles` (all when empty).")
       .def(nb::init<>())
-      .def_rw("particles", &ForceField::particles).def_rw("force", &ForceField::force)
-      .def_rw("rate", &ForceField::rate).def_rw("amplitude", &ForceField::amplitude)
-      .def_rw("frequency", &ForceField::frequency).def("at", &ForceField::at, "t"_a);
+      .def_rw("particles", &ForceField::particles)
+      .def_rw("force", &ForceField::force)
+      .def_rw("rate", &ForceField::rate)
+      .def_rw("amplitude", &ForceField::amplitude)
+      .def_rw("frequency", &ForceField::frequency)
+      .def("at", &ForceField::at, "t"_a);
   nb::class_<Body>(m, "Body", "Particles damped together (momentum-preserving), damping in [0, 1].")
       .def(nb::init<>())
-      .def_rw("name", &Body::name).def_rw("particles", &Body::particles).def_rw("damping", &Body::damping);
+      .def_rw("name", &Body::name)
+      .def_rw("particles", &Body::particles)
+      .def_rw("damping", &Body::damping);
   nb::class_<Collider>(m, "Collider",
                        "A rigid obstacle every particle collides with (docs/method.md, 'Contact'); the fields "
                        "are documented in stabint/scene.hpp.")
@@ -262,8 +301,7 @@ template <Eigen::MatrixX3d Scene::*field>
 void rowsProperty(nb::class_<Scene>& c, const char* name, const char* doc) {
   c.def_prop_rw(
       name, [](const Scene& s) { return rowsCopy(s.*field); },
-      [](Scene& s, const Eigen::MatrixX3d& value) { s.*field = value; }, nb::for_getter(nb::rv_policy::move),
-      doc);
+      [](Scene& s, const Eigen::MatrixX3d& value) { s.*field = value; }, nb::for_getter(nb::rv_policy::move), doc);
 }
 
 void bindScene(nb::module_& m) {
@@ -272,7 +310,8 @@ void bindScene(nb::module_& m) {
                           "element lists (springs, tets, pins, ...) are views: append to edit the scene.");
   scene.def(nb::init<>()).def(nb::init<const Scene&>(), "other"_a, "A deep copy.");
   scene.def_rw("name", &Scene::name);
-  rowsProperty<&Scene::rest_positions>(scene, "rest_positions", "(n, 3) rest shape used by tets, triangles and hinges (copy).");
+  rowsProperty<&Scene::rest_positions>(scene, "rest_positions",
+                                       "(n, 3) rest shape used by tets, triangles and hinges (copy).");
   rowsProperty<&Scene::positions>(scene, "positions", "(n, 3) initial positions (copy).");
   rowsProperty<&Scene::velocities>(scene, "velocities", "(n, 3) initial velocities (copy).");
   scene.def_prop_rw(
@@ -296,8 +335,9 @@ void bindScene(nb::module_& m) {
       .def_rw("bodies", &Scene::bodies)
       .def_rw("colliders", &Scene::colliders)
       .def_prop_ro("num_particles", &Scene::numParticles)
-      .def("validate", [](const Scene& s) { validateScene(s); },
-           "Raises InvalidInputError naming the first offending element or field.");
+      .def(
+          "validate", [](const Scene& s) { validateScene(s); },
+          "Raises InvalidInputError naming the first offending element or field.");
 
   m.def("builtin_scene", &builtinScene, "name"_a, "params_json"_a = "{}", "label"_a = "builtin scene",
         "A built-in scene ('oscillator', 'chain', 'cloth', 'tetbar') with its builder's parameters as a "
@@ -305,8 +345,9 @@ void bindScene(nb::module_& m) {
         "unknown name or parameter.");
   m.def("builtin_scene_names", &builtinSceneNames);
   m.def("builtin_scene_parameters", &builtinSceneParameters, "name"_a);
-  m.def("cloth_grid_triangles", [](int nx, int ny) { return trianglesCopy(clothGridTriangles(nx, ny)); },
-        "nx"_a, "ny"_a, "The (m, 3) triangles of cloth_grid's nx by ny grid.");
+  m.def(
+      "cloth_grid_triangles", [](int nx, int ny) { return trianglesCopy(clothGridTriangles(nx, ny)); }, "nx"_a, "ny"_a,
+      "The (m, 3) triangles of cloth_grid's nx by ny grid.");
 
   nb::class_<ClothMaterial>(m, "ClothMaterial", "Material of a loaded cloth mesh.")
       .def(nb::init<>())
@@ -334,7 +375,8 @@ void bindScene(nb::module_& m) {
 
 void bindSimulator(nb::module_& m) {
   const SimulatorOptions d;  // the defaults of every keyword come from the C++ struct
-  nb::class_<OpenCLOptions>(m, "OpenCLOptions", "OpenCL device choice: index or name substring; empty: "
+  nb::class_<OpenCLOptions>(m, "OpenCLOptions",
+                            "OpenCL device choice: index or name substring; empty: "
                             "STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE, then the first.")
       .def(nb::init<>())
       .def_rw("platform", &OpenCLOptions::platform)
@@ -350,23 +392,37 @@ void bindSimulator(nb::module_& m) {
 
   nb::class_<SimulatorOptions>(m, "SimulatorOptions",
                                "Options of a Simulator; every field is documented in stabint/simulator.hpp.")
-      .def("__init__",
-           [](SimulatorOptions* o, Integrator integrator, double time_step, int iterations, double tolerance,
-              int max_iterations, Acceleration acceleration, double chebyshev_rho, int anderson_window,
-              int be_iterations, double energy_tolerance, double max_velocity_scale, int max_root_evaluations,
-              double energy_limit, double contact_tolerance, BackendKind backend, const OpenCLOptions& opencl) {
-             new (o) SimulatorOptions{integrator, time_step, iterations, tolerance, max_iterations,
-                                      acceleration, chebyshev_rho, anderson_window, be_iterations,
-                                      energy_tolerance, max_velocity_scale, max_root_evaluations,
-                                      energy_limit, contact_tolerance, backend, opencl};
-           },
-           nb::kw_only(), "integrator"_a = d.integrator, "time_step"_a = d.time_step, "iterations"_a = d.iterations,
-           "tolerance"_a = d.tolerance, "max_iterations"_a = d.max_iterations, "acceleration"_a = d.acceleration,
-           "chebyshev_rho"_a = d.chebyshev_rho, "anderson_window"_a = d.anderson_window,
-           "be_iterations"_a = d.be_iterations, "energy_tolerance"_a = d.energy_tolerance,
-           "max_velocity_scale"_a = d.max_velocity_scale, "max_root_evaluations"_a = d.max_root_evaluations,
-           "energy_limit"_a = d.energy_limit, "contact_tolerance"_a = d.contact_tolerance, "backend"_a = d.backend, "opencl"_a = d.opencl,
-           "Keyword arguments set the fields of the same names; values are checked when a Simulator is built.")
+      .def(
+          "__init__",
+          [](SimulatorOptions* o, Integrator integrator, double time_step, int iterations, double tolerance,
+             int max_iterations, Acceleration acceleration, double chebyshev_rho, int anderson_window,
+             int be_iterations, double energy_tolerance, double max_velocity_scale, int max_root_evaluations,
+             double energy_limit, double contact_tolerance, BackendKind backend, const OpenCLOptions& opencl) {
+            new (o) SimulatorOptions{integrator,
+                                     time_step,
+                                     iterations,
+                                     tolerance,
+                                     max_iterations,
+                                     acceleration,
+                                     chebyshev_rho,
+                                     anderson_window,
+                                     be_iterations,
+                                     energy_tolerance,
+                                     max_velocity_scale,
+                                     max_root_evaluations,
+                                     energy_limit,
+                                     contact_tolerance,
+                                     backend,
+                                     opencl};
+          },
+          nb::kw_only(), "integrator"_a = d.integrator, "time_step"_a = d.time_step, "iterations"_a = d.iterations,
+          "tolerance"_a = d.tolerance, "max_iterations"_a = d.max_iterations, "acceleration"_a = d.acceleration,
+          "chebyshev_rho"_a = d.chebyshev_rho, "anderson_window"_a = d.anderson_window,
+          "be_iterations"_a = d.be_iterations, "energy_tolerance"_a = d.energy_tolerance,
+          "max_velocity_scale"_a = d.max_velocity_scale, "max_root_evaluations"_a = d.max_root_evaluations,
+          "energy_limit"_a = d.energy_limit, "contact_tolerance"_a = d.contact_tolerance, "backend"_a = d.backend,
+          "opencl"_a = d.opencl,
+          "Keyword arguments set the fields of the same names; values are checked when a Simulator is built.")
       .def_rw("integrator", &SimulatorOptions::integrator)
       .def_rw("time_step", &SimulatorOptions::time_step)
       .def_rw("iterations", &SimulatorOptions::iterations)
@@ -394,9 +450,12 @@ void bindSimulator(nb::module_& m) {
                ", external=" + std::to_string(e.external) + ")";
       });
   nb::class_<PhaseTimes>(m, "PhaseTimes", "Wall-clock seconds per phase of a step.")
-      .def_ro("local", &PhaseTimes::local).def_ro("gather", &PhaseTimes::gather)
-      .def_ro("transfer", &PhaseTimes::transfer).def_ro("global_", &PhaseTimes::global, "'global' is a Python keyword.")
-      .def_ro("energy", &PhaseTimes::energy).def_ro("bookkeeping", &PhaseTimes::bookkeeping)
+      .def_ro("local", &PhaseTimes::local)
+      .def_ro("gather", &PhaseTimes::gather)
+      .def_ro("transfer", &PhaseTimes::transfer)
+      .def_ro("global_", &PhaseTimes::global, "'global' is a Python keyword.")
+      .def_ro("energy", &PhaseTimes::energy)
+      .def_ro("bookkeeping", &PhaseTimes::bookkeeping)
       .def_prop_ro("total", &PhaseTimes::total);
   nb::class_<StepReport>(m, "StepReport", "What one step did (a copy: later steps do not change it).")
       .def_ro("step", &StepReport::step, "Index of the step (0 = first).")
@@ -421,8 +480,8 @@ void bindSimulator(nb::module_& m) {
       .def_ro("times", &StepReport::times)
       .def("__repr__", [](const StepReport& r) {
         return "StepReport(step=" + std::to_string(r.step) + ", time=" + std::to_string(r.time) +
-               ", H=" + std::to_string(r.energy.total()) + ", target=" + std::to_string(r.target) +
-               ", branch='" + blendBranchName(r.branch) + "')";
+               ", H=" + std::to_string(r.energy.total()) + ", target=" + std::to_string(r.target) + ", branch='" +
+               blendBranchName(r.branch) + "')";
       });
 
   nb::class_<Checkpoint>(m, "Checkpoint",
@@ -433,49 +492,58 @@ void bindSimulator(nb::module_& m) {
                          "byte order. Immutable; picklable (through its bytes).")
       .def_prop_ro("time", &Checkpoint::time, "Simulation time of the snapshot.")
       .def_prop_ro("step_count", &Checkpoint::stepCount, "Steps taken before the snapshot.")
-      .def_prop_ro("bytes", [](const Checkpoint& c) { return nb::bytes(c.bytes().data(), c.bytes().size()); },
-                   "The serialized form (what save() writes), as a new bytes object.")
-      .def_static("from_bytes",
-                  [](nb::bytes data, const std::string& origin) {
-                    return Checkpoint::fromBytes(std::string(data.c_str(), data.size()), origin);
-                  },
-                  "data"_a, "origin"_a = "checkpoint",
-                  "A checkpoint from its bytes. Raises FileFormatError naming `origin` and the problem when "
-                  "they are malformed.")
+      .def_prop_ro(
+          "bytes", [](const Checkpoint& c) { return nb::bytes(c.bytes().data(), c.bytes().size()); },
+          "The serialized form (what save() writes), as a new bytes object.")
+      .def_static(
+          "from_bytes",
+          [](nb::bytes data, const std::string& origin) {
+            return Checkpoint::fromBytes(std::string(data.c_str(), data.size()), origin);
+          },
+          "data"_a, "origin"_a = "checkpoint",
+          "A checkpoint from its bytes. Raises FileFormatError naming `origin` and the problem when "
+          "they are malformed.")
       .def("save", &Checkpoint::save, "path"_a, nb::call_guard<nb::gil_scoped_release>(),
            "Writes the bytes to a file. Raises FileFormatError when it cannot be written completely.")
       .def_static("load", &Checkpoint::load, "path"_a, nb::call_guard<nb::gil_scoped_release>(),
                   "Reads a file written by save(). Raises FileFormatError (file) when missing or malformed.")
       .def("__getstate__", [](const Checkpoint& c) { return nb::bytes(c.bytes().data(), c.bytes().size()); })
-      .def("__setstate__", [](Checkpoint& c, nb::bytes data) {
-        new (&c) Checkpoint(Checkpoint::fromBytes(std::string(data.c_str(), data.size()), "pickled checkpoint"));
-      })
+      .def("__setstate__",
+           [](Checkpoint& c, nb::bytes data) {
+             new (&c) Checkpoint(Checkpoint::fromBytes(std::string(data.c_str(), data.size()), "pickled checkpoint"));
+           })
       .def("__repr__", [](const Checkpoint& c) {
-        return "Checkpoint(step_count=" + std::to_string(c.stepCount()) + ", time=" + std::to_string(c.time()) +
-               ", " + std::to_string(c.bytes().size()) + " bytes)";
+        return "Checkpoint(step_count=" + std::to_string(c.stepCount()) + ", time=" + std::to_string(c.time()) + ", " +
+               std::to_string(c.bytes().size()) + " bytes)";
       });
 
   nb::class_<Simulator>(m, "Simulator",
                         "Steps a scene with one integrator. The scene is validated and copied at construction.")
       .def(nb::init<const Scene&, const SimulatorOptions&>(), "scene"_a, "options"_a = SimulatorOptions(),
            "Raises InvalidInputError for a bad scene or option, OpenCLError subtypes for the OpenCL backend.")
-      .def("step", [](Simulator& s) { return s.step(); }, nb::call_guard<nb::gil_scoped_release>(),
-           "Advances one step and returns its report. Raises NonFiniteStateError (EnergyLimitError) when the "
-           "step is refused; the simulator then keeps the last accepted state. The GIL is released while it "
-           "runs, so simulators may step in parallel threads; one Simulator must not be used by two threads at once.")
-      .def_prop_ro("positions", [](const Simulator& s) { return rowsCopy(s.positions()); }, nb::rv_policy::move,
-                   "(n, 3) current positions, a C-contiguous float64 copy (x y z per particle).")
-      .def_prop_ro("velocities", [](const Simulator& s) { return rowsCopy(s.velocities()); }, nb::rv_policy::move,
-                   "(n, 3) current velocities, a C-contiguous float64 copy.")
+      .def(
+          "step", [](Simulator& s) { return s.step(); }, nb::call_guard<nb::gil_scoped_release>(),
+          "Advances one step and returns its report. Raises NonFiniteStateError (EnergyLimitError) when the "
+          "step is refused; the simulator then keeps the last accepted state. The GIL is released while it "
+          "runs, so simulators may step in parallel threads; one Simulator must not be used by two threads at once.")
+      .def_prop_ro(
+          "positions", [](const Simulator& s) { return rowsCopy(s.positions()); }, nb::rv_policy::move,
+          "(n, 3) current positions, a C-contiguous float64 copy (x y z per particle).")
+      .def_prop_ro(
+          "velocities", [](const Simulator& s) { return rowsCopy(s.velocities()); }, nb::rv_policy::move,
+          "(n, 3) current velocities, a C-contiguous float64 copy.")
       .def_prop_ro("time", &Simulator::time)
       .def_prop_ro("step_count", &Simulator::stepCount)
       .def_prop_ro("target", &Simulator::target, "H*, the energy the blend tracks.")
       .def("energy", &Simulator::energy, "Energies of the current state.")
       .def_prop_ro("energy_scale", &Simulator::energyScale, "E_scale of the blend tolerance.")
-      .def_prop_ro("scene", [](const Simulator& s) { return s.scene(); }, "A copy of the simulated scene.")
-      .def_prop_ro("options", [](const Simulator& s) { return s.options(); }, "A copy of the options.")
-      .def_prop_ro("last_report", [](const Simulator& s) { return s.lastReport(); },
-                   "Report of the last completed step (a copy; zeros before the first).")
+      .def_prop_ro(
+          "scene", [](const Simulator& s) { return s.scene(); }, "A copy of the simulated scene.")
+      .def_prop_ro(
+          "options", [](const Simulator& s) { return s.options(); }, "A copy of the options.")
+      .def_prop_ro(
+          "last_report", [](const Simulator& s) { return s.lastReport(); },
+          "Report of the last completed step (a copy; zeros before the first).")
       .def_prop_ro("backend_description", &Simulator::backendDescription)
       // Per-frame input (docs/method.md, "Per-frame input"): every call validates first and a
       // rejected one (InvalidInputError naming the problem) changes nothing.
@@ -484,11 +552,12 @@ void bindSimulator(nb::module_& m) {
            "next step and stays there; its scripted law is no longer used. Call it every frame with the hand's "
            "position to drag; the work is booked in H* like a scripted pin's. Raises InvalidInputError for a pin "
            "out of range or a non-finite target.")
-      .def("set_pin_target",
-           [](Simulator& s, int pin, const std::array<double, 3>& target) {
-             s.setPinTarget(pin, Eigen::Vector3d(target[0], target[1], target[2]));
-           },
-           "pin"_a, "target"_a, "The same with the target as a sequence of three numbers, e.g. (x, y, z).")
+      .def(
+          "set_pin_target",
+          [](Simulator& s, int pin, const std::array<double, 3>& target) {
+            s.setPinTarget(pin, Eigen::Vector3d(target[0], target[1], target[2]));
+          },
+          "pin"_a, "target"_a, "The same with the target as a sequence of three numbers, e.g. (x, y, z).")
       .def("pin_target", &Simulator::pinTarget, "pin"_a,
            "(3,) current target of pin `pin` (its law's or the last set value at the current time), a copy.")
       .def("set_external_forces", &Simulator::setExternalForces, "forces"_a,

@@ -15,20 +15,18 @@
 static int passed = 0;
 static int failed = 0;
 
-#define CHECK(cond)                                                                \
-  do {                                                                             \
-    if (cond) {                                                                    \
-      ++passed;                                                                    \
-    } else {                                                                       \
-      ++failed;                                                                    \
-      fprintf(stderr, "%s:%d: CHECK(%s) failed; last error: %s\n", __FILE__,      \
-              __LINE__, #cond, stabint_last_error_message());                      \
-    }                                                                              \
+#define CHECK(cond)                                                                           \
+  do {                                                                                        \
+    if (cond) {                                                                               \
+      ++passed;                                                                               \
+    } else {                                                                                  \
+      ++failed;                                                                               \
+      fprintf(stderr, "%s:%d: CHECK(%s) failed; last error: %s\n", __FILE__, __LINE__, #cond, \
+              stabint_last_error_message());                                                  \
+    }                                                                                         \
   } while (0)
 
-static int starts_with(const char* text, const char* prefix) {
-  return strncmp(text, prefix, strlen(prefix)) == 0;
-}
+static int starts_with(const char* text, const char* prefix) { return strncmp(text, prefix, strlen(prefix)) == 0; }
 
 /* The chain's swing energy m g L / 2 with the builder's defaults (0.1 kg, 9.81, 1 m): the
  * energy the pendulum turns into motion, the unit of tests/test_stability.cpp. */
@@ -53,8 +51,7 @@ static double chain_max_deviation(stabint_integrator integrator, int frames) {
       max_dev = -1.0;
       break;
     }
-    if (fabs(report.energy.total - report.target) > max_dev)
-      max_dev = fabs(report.energy.total - report.target);
+    if (fabs(report.energy.total - report.target) > max_dev) max_dev = fabs(report.energy.total - report.target);
   }
   stabint_simulator_destroy(sim);
   return max_dev;
@@ -67,8 +64,7 @@ static double chain_max_deviation(stabint_integrator integrator, int frames) {
 static void test_blend_tracks_target_on_chain(void) {
   const double blend = chain_max_deviation(STABINT_ENERGY_BLEND, 300);
   const double im = chain_max_deviation(STABINT_IMPLICIT_MIDPOINT, 300);
-  printf("chain, 300 frames: max |H - H*| blend %.3g J, IM %.3g J (swing energy %.3g J)\n", blend,
-         im, kSwingEnergy);
+  printf("chain, 300 frames: max |H - H*| blend %.3g J, IM %.3g J (swing energy %.3g J)\n", blend, im, kSwingEnergy);
   CHECK(blend >= 0.0 && blend < 0.05 * kSwingEnergy);
   CHECK(im > 100.0 * kSwingEnergy);
 }
@@ -220,8 +216,7 @@ static void test_files(const char* scene_dir) {
   CHECK(stabint_scene_load("/nonexistent/scene.json", &scene) == STABINT_FILE_FORMAT);
   CHECK(scene == NULL);
   CHECK(strstr(stabint_last_error_message(), "/nonexistent/scene.json") != NULL);
-  CHECK(stabint_scene_create_builtin("cloth", "{\"no_such_param\": 1}", &scene) ==
-        STABINT_FILE_FORMAT);
+  CHECK(stabint_scene_create_builtin("cloth", "{\"no_such_param\": 1}", &scene) == STABINT_FILE_FORMAT);
   CHECK(strstr(stabint_last_error_message(), "no_such_param") != NULL);
   snprintf(path, sizeof path, "%s/chain.json", scene_dir);
   CHECK(stabint_scene_load(path, &scene) == STABINT_OK);
@@ -377,8 +372,7 @@ static void test_state_forces_and_iterations(void) {
   CHECK(stabint_simulator_energy(sim, &after) == STABINT_OK);
   jump = after.total - before.total;
   CHECK(jump > 0.0);
-  CHECK(fabs(stabint_simulator_target(sim) - (target_before + jump)) <=
-        1e-12 * fabs(target_before + jump));
+  CHECK(fabs(stabint_simulator_target(sim) - (target_before + jump)) <= 1e-12 * fabs(target_before + jump));
   CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
   CHECK(report.event_energy == jump);
   CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
@@ -656,9 +650,11 @@ static void test_colliders_from_a_scene_file(void) {
   file = fdopen(fd, "w");
   CHECK(file != NULL);
   if (file == NULL) return;
-  fputs("{\"builtin\": {\"name\": \"cloth\", \"nx\": 6, \"ny\": 5},\n"
-        " \"colliders\": [{\"shape\": \"sphere\", \"center\": [0.5, 0.5, 0.1], \"radius\": 0.15, "
-        "\"friction\": 0.5}]}\n", file);
+  fputs(
+      "{\"builtin\": {\"name\": \"cloth\", \"nx\": 6, \"ny\": 5},\n"
+      " \"colliders\": [{\"shape\": \"sphere\", \"center\": [0.5, 0.5, 0.1], \"radius\": 0.15, "
+      "\"friction\": 0.5}]}\n",
+      file);
   fclose(file);
   CHECK(stabint_scene_load(path, &scene) == STABINT_OK);
   unlink(path);
@@ -680,8 +676,7 @@ static void test_colliders_from_a_scene_file(void) {
     projection += report.contact_projection;
   }
   CHECK(friction > 0.0);
-  CHECK(fabs(stabint_simulator_target(sim) - (start.total - friction + projection)) <=
-        1e-12 * 30 * fabs(start.total));
+  CHECK(fabs(stabint_simulator_target(sim) - (start.total - friction + projection)) <= 1e-12 * 30 * fabs(start.total));
   stabint_simulator_destroy(sim);
 }
 

@@ -170,9 +170,12 @@ Options parseArgs(int argc, char** argv) {
         o.sim.backend = stabint::parseBackend(value());
       } else if (arg == "--precision") {
         const std::string p = value();
-        if (p == "double") o.sim.opencl.precision = stabint::Precision::Double;
-        else if (p == "float") o.sim.opencl.precision = stabint::Precision::Float;
-        else throw UsageError("--precision: expected double or float, got '" + p + "'");
+        if (p == "double")
+          o.sim.opencl.precision = stabint::Precision::Double;
+        else if (p == "float")
+          o.sim.opencl.precision = stabint::Precision::Float;
+        else
+          throw UsageError("--precision: expected double or float, got '" + p + "'");
         o.precision_explicit = true;
       } else if (arg == "--platform") {
         o.sim.opencl.platform = value();
@@ -250,7 +253,8 @@ std::string paramsAsJson(const std::vector<std::pair<std::string, std::string>>&
     json parsed;
     try {
       parsed = json::parse(value, [&](int depth, json::parse_event_t, json&) {
-        if (depth > kMaxDepth) throw UsageError("--param " + key + ": value nested deeper than " + std::to_string(kMaxDepth) + " levels");
+        if (depth > kMaxDepth)
+          throw UsageError("--param " + key + ": value nested deeper than " + std::to_string(kMaxDepth) + " levels");
         return true;
       });
     } catch (const json::exception&) {
@@ -272,7 +276,8 @@ stabint::SceneFile loadScene(const Options& o) {
   }
   if (!o.params.empty()) throw UsageError("--param applies to built-in scenes only, not to '" + o.scene + "'");
   if (fs::path(o.scene).extension() != ".json" && !fs::exists(o.scene)) {
-    throw UsageError("--scene: unknown scene '" + o.scene + "' (expected oscillator, chain, cloth, tetbar or a .json file)");
+    throw UsageError("--scene: unknown scene '" + o.scene +
+                     "' (expected oscillator, chain, cloth, tetbar or a .json file)");
   }
   return stabint::loadSceneFileWithEvents(o.scene);
 }
@@ -283,7 +288,8 @@ std::vector<std::array<int, 3>> tetBoundary(const std::vector<stabint::Tet>& tet
   std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> faces;
   for (const stabint::Tet& t : tets) {
     const auto& v = t.vertices;
-    const std::array<std::array<int, 3>, 4> local = {{{v[0], v[2], v[1]}, {v[0], v[1], v[3]}, {v[0], v[3], v[2]}, {v[1], v[2], v[3]}}};
+    const std::array<std::array<int, 3>, 4> local = {
+        {{v[0], v[2], v[1]}, {v[0], v[1], v[3]}, {v[0], v[3], v[2]}, {v[1], v[2], v[3]}}};
     for (const auto& f : local) {
       std::array<int, 3> key = f;
       std::sort(key.begin(), key.end());
@@ -350,8 +356,9 @@ class CsvWriter {
       if (!file_) throw UsageError("--csv: cannot write '" + path + "'");
       out_ = &file_;
     }
-    *out_ << "frame,time,kinetic,elastic,external,total,target,branch,alpha,velocity_scale,iterations,energy_evaluations,"
-             "local_s,gather_s,transfer_s,global_s,energy_s,bookkeeping_s\n";
+    *out_
+        << "frame,time,kinetic,elastic,external,total,target,branch,alpha,velocity_scale,iterations,energy_evaluations,"
+           "local_s,gather_s,transfer_s,global_s,energy_s,bookkeeping_s\n";
     check();
   }
 
@@ -362,8 +369,8 @@ class CsvWriter {
     std::snprintf(buf, sizeof(buf),
                   "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%.17g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame,
                   r.time, e.kinetic, e.elastic, e.external, e.total(), r.target, stabint::blendBranchName(r.branch),
-                  r.alpha, r.velocity_scale, r.iterations, r.energy_evaluations, t.local, t.gather, t.transfer, t.global, t.energy,
-                  t.bookkeeping);
+                  r.alpha, r.velocity_scale, r.iterations, r.energy_evaluations, t.local, t.gather, t.transfer,
+                  t.global, t.energy, t.bookkeeping);
     *out_ << buf;
     check();
   }
@@ -415,7 +422,6 @@ class StopSignals {
   struct sigaction old_term_ {};
 };
 
-
 int listDevices() {
   const auto devices = stabint::listOpenCLDevices();
   if (devices.empty()) {
@@ -440,9 +446,10 @@ int run(Options& o) {
   }
   if (!o.quiet) {
     std::cerr << kProgram << ": scene '" << scene.name << "' (" << scene.numParticles() << " particles, "
-              << stabint::elementSummary(scene) << "), " << stabint::integratorName(o.sim.integrator) << ", dt " << o.sim.time_step << ", "
-              << o.frames << " frames on " << sim->backendDescription()
-              << (events.empty() ? std::string() : ", " + std::to_string(events.events().size()) + " scripted events") << "\n";
+              << stabint::elementSummary(scene) << "), " << stabint::integratorName(o.sim.integrator) << ", dt "
+              << o.sim.time_step << ", " << o.frames << " frames on " << sim->backendDescription()
+              << (events.empty() ? std::string() : ", " + std::to_string(events.events().size()) + " scripted events")
+              << "\n";
   }
 
   std::optional<CsvWriter> csv;
@@ -473,9 +480,8 @@ int run(Options& o) {
       if (csv) csv->flush();
       const bool limit = dynamic_cast<const stabint::EnergyLimitError*>(&e) != nullptr;
       std::cerr << kProgram << ": error: " << (limit ? "the energy limit was exceeded" : "the state became non-finite")
-                << " at frame " << bad << " (t = " << sim->time() + o.sim.time_step
-                << " s); " << (csv ? "CSV kept up to frame " + std::to_string(bad - 1) + "; " : std::string())
-                << e.what() << "\n";
+                << " at frame " << bad << " (t = " << sim->time() + o.sim.time_step << " s); "
+                << (csv ? "CSV kept up to frame " + std::to_string(bad - 1) + "; " : std::string()) << e.what() << "\n";
       return 2;
     }
     const int stop_signal = g_stop_signal;
@@ -493,8 +499,7 @@ int run(Options& o) {
     const auto now = Clock::now();
     if (!o.quiet && now - last_progress >= std::chrono::seconds(1)) {
       const double elapsed = std::chrono::duration<double>(now - start).count();
-      std::cerr << kProgram << ": frame " << frame << "/" << o.frames << ", " << 1e3 * elapsed / frame
-                << " ms/frame\n";
+      std::cerr << kProgram << ": frame " << frame << "/" << o.frames << ", " << 1e3 * elapsed / frame << " ms/frame\n";
       last_progress = now;
     }
   }

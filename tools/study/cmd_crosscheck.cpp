@@ -12,8 +12,8 @@ void runCrosscheck(const StudyOptions& options) {
   ensureDirectory(options.out);
   const int frames = options.quick ? 10 : 30;
   CsvWriter csv(joinPath(options.out, "backend_check.csv"),
-                {"scene", "integrator", "frames", "compared_frames", "max_position_diff_m", "max_energy_diff_rel", "max_relative_position_diff", "opencl_device",
-                 "status"});
+                {"scene", "integrator", "frames", "compared_frames", "max_position_diff_m", "max_energy_diff_rel",
+                 "max_relative_position_diff", "opencl_device", "status"});
   std::string device;
   for (const StudyScene& s : {chainScene(), clothScene(), tetBarScene()}) {
     const double available = availableEnergy(s);
@@ -30,7 +30,11 @@ void runCrosscheck(const StudyOptions& options) {
           if (frame == 1) device = sim.backendDescription();
         });
       } catch (const stabint::OpenCLError& e) {
-        csv << s.key << stabint::integratorName(i) << frames << 0 << "nan" << "nan" << "nan" << "none" << "skipped";
+        csv << s.key << stabint::integratorName(i) << frames << 0 << "nan"
+            << "nan"
+            << "nan"
+            << "none"
+            << "skipped";
         csv.endRow();
         std::printf("  crosscheck skipped: %s\n", e.what());
         return;
@@ -61,9 +65,11 @@ void runCrosscheck(const StudyOptions& options) {
       csv << s.key << stabint::integratorName(i) << frames << static_cast<int>(compared) - 1 << dx << de << rel << label
           << (same_length ? "compared" : "different-blow-up");
       csv.endRow();
-      std::printf("  crosscheck %-6s %-5s %2d frames: max |x_cpu - x_ocl| = %.3g m, max |H_cpu - H_ocl| = %.3g E_avail; relative, all frames %.2g%s\n",
-                  s.key.c_str(), stabint::integratorName(i), static_cast<int>(compared) - 1, dx, de, rel,
-                  same_length ? "" : " (blew up at a different frame)");
+      std::printf(
+          "  crosscheck %-6s %-5s %2d frames: max |x_cpu - x_ocl| = %.3g m, max |H_cpu - H_ocl| = %.3g E_avail; "
+          "relative, all frames %.2g%s\n",
+          s.key.c_str(), stabint::integratorName(i), static_cast<int>(compared) - 1, dx, de, rel,
+          same_length ? "" : " (blew up at a different frame)");
     }
   }
   std::fflush(stdout);

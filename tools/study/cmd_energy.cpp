@@ -10,8 +10,8 @@ namespace study {
 
 namespace {
 
-const std::vector<Integrator> kIntegrators = {Integrator::BackwardEuler, Integrator::BDF2,
-                                              Integrator::ImplicitMidpoint, Integrator::EnergyBlend};
+const std::vector<Integrator> kIntegrators = {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint,
+                                              Integrator::EnergyBlend};
 constexpr int kStillFrame = 60;  // 2 s: the cloth has swung down once and folds are visible
 
 double freeEndHeight(const StudyScene& s, const Eigen::MatrixX3d& x) {
@@ -61,11 +61,12 @@ void runEnergy(const StudyOptions& options) {
         csv.endRow();
       }
       const Metrics& m = j.energy;
-      std::printf("  energy %-6s %-5s drift %+8.3f E_avail, max |H - H*| %.3g E_avail, mean K %.3g x reference's, "
-                  "flicker %.3g: %s%s\n",
-                  s.key.c_str(), stabint::integratorName(i), m.drift, m.max_target_dev, j.motion.mean_k_ratio,
-                  j.motion.flicker, j.motion.verdict.c_str(),
-                  run.blew_up_frame >= 0 ? (", blew up at frame " + std::to_string(run.blew_up_frame)).c_str() : "");
+      std::printf(
+          "  energy %-6s %-5s drift %+8.3f E_avail, max |H - H*| %.3g E_avail, mean K %.3g x reference's, "
+          "flicker %.3g: %s%s\n",
+          s.key.c_str(), stabint::integratorName(i), m.drift, m.max_target_dev, j.motion.mean_k_ratio, j.motion.flicker,
+          j.motion.verdict.c_str(),
+          run.blew_up_frame >= 0 ? (", blew up at frame " + std::to_string(run.blew_up_frame)).c_str() : "");
       std::fflush(stdout);
     }
     progress("energy " + s.key + " done");

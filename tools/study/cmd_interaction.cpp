@@ -70,9 +70,10 @@ void runBounce(const StudyOptions& options) {
           << sim.energyScale();
       csv.endRow();
     }
-    std::printf("  bounce      %-5s lands at %.3g s, rebounds to %.2f of the drop, friction %.4g J, "
-                "projection %.4g J, max |H - H*| %.3g E_scale\n",
-                stabint::integratorName(integrator), landed_at, rebound, friction, projection, worst_gap);
+    std::printf(
+        "  bounce      %-5s lands at %.3g s, rebounds to %.2f of the drop, friction %.4g J, "
+        "projection %.4g J, max |H - H*| %.3g E_scale\n",
+        stabint::integratorName(integrator), landed_at, rebound, friction, projection, worst_gap);
     std::fflush(stdout);
   }
 }
@@ -120,14 +121,15 @@ void runInteraction(const StudyOptions& options) {
         ++late_frames;
       }
       csv << stabint::integratorName(integrator) << stabint::backendName(options.backend) << f + 1 << r.time
-          << r.energy.total() << r.target << r.energy.kinetic << r.energy.elastic << r.energy.external << work
-          << events << sim.energyScale() << (held && t1 <= kReleaseAt ? 1 : 0);
+          << r.energy.total() << r.target << r.energy.kinetic << r.energy.elastic << r.energy.external << work << events
+          << sim.energyScale() << (held && t1 <= kReleaseAt ? 1 : 0);
       csv.endRow();
     }
-    std::printf("  interaction %-5s hand's work %.4g J, release %.4g J, max |H - H*| %.3g E_scale, "
-                "mean K from 2 s after the release %.3g J\n",
-                stabint::integratorName(integrator), work, events, worst_gap,
-                late_frames > 0 ? late_kinetic / late_frames : 0.0);
+    std::printf(
+        "  interaction %-5s hand's work %.4g J, release %.4g J, max |H - H*| %.3g E_scale, "
+        "mean K from 2 s after the release %.3g J\n",
+        stabint::integratorName(integrator), work, events, worst_gap,
+        late_frames > 0 ? late_kinetic / late_frames : 0.0);
     std::fflush(stdout);
   }
   runBounce(options);

@@ -41,18 +41,45 @@ struct MotionRow {
 class MotionTable {
  public:
   explicit MotionTable(const StudyOptions& options)
-      : csv_(joinPath(options.out, "motion.csv"),
-             {"scene", "integrator", "backend", "h", "iterations", "frames", "frames_done", "ms_per_frame",
-              "ms_per_frame_median", "exploded_at_s", "E_avail",
-              "rms_0_0.5s_m", "rms_0_1s_m", "k_window_from_s", "k_window_to_s", "mean_K_J", "mean_K_ref_J",
-              "mean_K_ratio", "flicker", "flicker_ref", "max_dev_target_rel", "com_drop_1s_m", "com_drop_1s_ref_m",
-              "L_kept", "L_error", "H_end_over_H0", "partner_whole_steps", "partner_whole_by_branch", "steps", "branches", "blew_up_frame",
-              "energy_verdict", "verdict"}),
+      : csv_(joinPath(options.out, "motion.csv"), {"scene",
+                                                   "integrator",
+                                                   "backend",
+                                                   "h",
+                                                   "iterations",
+                                                   "frames",
+                                                   "frames_done",
+                                                   "ms_per_frame",
+                                                   "ms_per_frame_median",
+                                                   "exploded_at_s",
+                                                   "E_avail",
+                                                   "rms_0_0.5s_m",
+                                                   "rms_0_1s_m",
+                                                   "k_window_from_s",
+                                                   "k_window_to_s",
+                                                   "mean_K_J",
+                                                   "mean_K_ref_J",
+                                                   "mean_K_ratio",
+                                                   "flicker",
+                                                   "flicker_ref",
+                                                   "max_dev_target_rel",
+                                                   "com_drop_1s_m",
+                                                   "com_drop_1s_ref_m",
+                                                   "L_kept",
+                                                   "L_error",
+                                                   "H_end_over_H0",
+                                                   "partner_whole_steps",
+                                                   "partner_whole_by_branch",
+                                                   "steps",
+                                                   "branches",
+                                                   "blew_up_frame",
+                                                   "energy_verdict",
+                                                   "verdict"}),
         backend_(stabint::backendName(options.backend)) {
-    std::printf("\nMotion table (issue 8), backend %s: trajectory error against the small-step reference, mean K over\n"
-                "the K window relative to the reference's, flicker = median over frames of max(K_i+1/K_i, K_i/K_i+1);\n"
-                "frozen: mean K < %g x reference; jittery: flicker > %g.\n",
-                backend_.c_str(), kFrozenFraction, kJitteryFlicker);
+    std::printf(
+        "\nMotion table (issue 8), backend %s: trajectory error against the small-step reference, mean K over\n"
+        "the K window relative to the reference's, flicker = median over frames of max(K_i+1/K_i, K_i/K_i+1);\n"
+        "frozen: mean K < %g x reference; jittery: flicker > %g.\n",
+        backend_.c_str(), kFrozenFraction, kJitteryFlicker);
     std::printf("%-15s %-6s %7s %9s %9s %9s %7s %8s %9s %8s %8s %7s %9s  %s\n", "scene", "integ", "ms/fr*", "rms0-.5s",
                 "rms0-1s", "meanK", "K/Kref", "flicker", "max|H-H*|", "drop1s", "L kept", "whole", "branches",
                 "verdict");
@@ -63,10 +90,12 @@ class MotionTable {
     const TimeWindow w = kineticWindow(ref.horizon());
     const double mean_k = meanOverWindow(ref.kinetic, ref.frame_step, w.from, w.to);
     const double flicker = kineticFlicker(ref.kinetic, kFlickerFloor * ref.available);
-    csv_ << s.key << "reference" << "cpu" << ref.frame_step / ref.substeps << 0 << ref.positions.size() - 1
-         << ref.positions.size() - 1 << kNaN << kNaN << kNaN << ref.available << 0.0 << 0.0 << w.from << w.to << mean_k << mean_k
-         << 1.0 << flicker << flicker << ref.energy_error << com_drop << com_drop << kNaN << kNaN << kNaN << 0
-         << "-" << 0 << "-" << -1 << "reference" << "reference";
+    csv_ << s.key << "reference"
+         << "cpu" << ref.frame_step / ref.substeps << 0 << ref.positions.size() - 1 << ref.positions.size() - 1 << kNaN
+         << kNaN << kNaN << ref.available << 0.0 << 0.0 << w.from << w.to << mean_k << mean_k << 1.0 << flicker
+         << flicker << ref.energy_error << com_drop << com_drop << kNaN << kNaN << kNaN << 0 << "-" << 0 << "-" << -1
+         << "reference"
+         << "reference";
     csv_.endRow();
     std::printf("%-15s %-6s %7s %9s %9s %9.3g %7s %8.3g %9.2g %8.3g %8s %7s %9s  %s\n", s.key.c_str(), "ref", "-", "-",
                 "-", mean_k, "1", flicker, ref.energy_error, com_drop, "-", "-", "-", ref.method.c_str());
@@ -77,9 +106,10 @@ class MotionTable {
     const Metrics& e = r.judged->energy;
     const MotionMetrics& m = r.judged->motion;
     csv_ << r.scene << r.integrator << backend_ << h << iterations << frames << run.frames_done << run.ms_per_frame()
-         << run.medianMsPerFrame() << e.exploded_at << e.available << m.rms_short << m.rms_long << m.k_window.from << m.k_window.to << m.mean_k << m.mean_k_ref
-         << m.mean_k_ratio << m.flicker << m.flicker_ref << e.max_target_dev << r.com_drop << r.com_drop_ref
-         << r.l_kept << r.l_error << r.energy_kept << run.partner_whole << run.partnerWholeSummary() << run.steps_tried << run.branchSummary()
+         << run.medianMsPerFrame() << e.exploded_at << e.available << m.rms_short << m.rms_long << m.k_window.from
+         << m.k_window.to << m.mean_k << m.mean_k_ref << m.mean_k_ratio << m.flicker << m.flicker_ref
+         << e.max_target_dev << r.com_drop << r.com_drop_ref << r.l_kept << r.l_error << r.energy_kept
+         << run.partner_whole << run.partnerWholeSummary() << run.steps_tried << run.branchSummary()
          << run.blew_up_frame << e.verdict << m.verdict;
     csv_.endRow();
     char whole[16] = "-";
@@ -210,12 +240,13 @@ void spinningBar(bool general, const StudyOptions& options, MotionTable& table) 
 // (U(x, t) = k/2 |x - q(t)|^2, tm the step's midpoint time). The forcing rule books H*; a rule
 // consistent with IM keeps H* = H_IM to round-off.
 void movingPin(const StudyOptions& options) {
-  CsvWriter csv(joinPath(options.out, "moving_pin.csv"),
-                {"stiffness", "h", "steps", "max_abs_target_minus_H_IM_J", "max_abs_IM_balance_residual_J", "H_IM_max_J"});
-  std::printf("\nOne particle (1 kg) on a pin moving as %g m sin(2 pi %g Hz t), h = 1/30, IM, 10 s:\n"
-              "%10s %18s %22s %12s\n",
-              kMovingPinAmplitude, kMovingPinFrequency, "k [N/m]", "max|H* - H_IM| [J]", "IM balance residual [J]",
-              "max H_IM [J]");
+  CsvWriter csv(joinPath(options.out, "moving_pin.csv"), {"stiffness", "h", "steps", "max_abs_target_minus_H_IM_J",
+                                                          "max_abs_IM_balance_residual_J", "H_IM_max_J"});
+  std::printf(
+      "\nOne particle (1 kg) on a pin moving as %g m sin(2 pi %g Hz t), h = 1/30, IM, 10 s:\n"
+      "%10s %18s %22s %12s\n",
+      kMovingPinAmplitude, kMovingPinFrequency, "k [N/m]", "max|H* - H_IM| [J]", "IM balance residual [J]",
+      "max H_IM [J]");
   for (double k : {1e2, 1e4, 1e6}) {
     const StudyScene s = movingPinScene(k);
     const stabint::Pin& pin = s.scene.pins.at(0);
@@ -265,8 +296,8 @@ JudgedRun judgedRun(const StudyScene& scene, RunSpec spec, const StudyOptions& o
 void runMotion(const StudyOptions& options) {
   ensureDirectory(options.out);
   CsvWriter references(joinPath(options.out, "motion_reference.csv"),
-                       {"scene", "method", "check_substeps", "frames", "horizon_s", "energy_error_rel", "self_rms_0_1s_m",
-                        "self_mean_K_ratio", "compute_s", "cached", "E_avail"});
+                       {"scene", "method", "check_substeps", "frames", "horizon_s", "energy_error_rel",
+                        "self_rms_0_1s_m", "self_mean_K_ratio", "compute_s", "cached", "E_avail"});
   SeriesWriter series(options);
   {
     MotionTable table(options);
@@ -275,11 +306,13 @@ void runMotion(const StudyOptions& options) {
     spinningBar(false, options, table);
     spinningBar(true, options, table);
   }
-  std::printf("ref rows: the small-step reference (method in the last column); their max|H-H*| column is the\n"
-              "reference's own energy error; motion_reference.csv has its check against half the steps per frame.\n");
-  std::printf("ms/fr*: median wall clock per frame; drop1s: largest drop of the centre of mass within 1 s [m];\n"
-              "whole: blend steps that took the partner whole (alpha = 1); L kept: angular momentum after 10 s\n"
-              "along the initial one, L.L0/|L0|^2 (spinning bars).\n");
+  std::printf(
+      "ref rows: the small-step reference (method in the last column); their max|H-H*| column is the\n"
+      "reference's own energy error; motion_reference.csv has its check against half the steps per frame.\n");
+  std::printf(
+      "ms/fr*: median wall clock per frame; drop1s: largest drop of the centre of mass within 1 s [m];\n"
+      "whole: blend steps that took the partner whole (alpha = 1); L kept: angular momentum after 10 s\n"
+      "along the initial one, L.L0/|L0|^2 (spinning bars).\n");
   movingPin(options);
   std::printf("\n");
 }

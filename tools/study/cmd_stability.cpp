@@ -47,9 +47,9 @@ void runStability(const StudyOptions& options) {
           spec.energy_unit = available;
           const RunResult run = simulate(s.scene, spec);
           const Metrics m = energyMetrics(run, available);
-          csv << g.key << stabint::integratorName(i) << stabint::backendName(options.backend) << k
-              << spec.frame_step << steps << run.frames_done << available << m.max_rise << m.damping << m.drift
-              << run.blew_up_frame << m.verdict;
+          csv << g.key << stabint::integratorName(i) << stabint::backendName(options.backend) << k << spec.frame_step
+              << steps << run.frames_done << available << m.max_rise << m.damping << m.drift << run.blew_up_frame
+              << m.verdict;
           csv.endRow();
         }
       }

@@ -49,26 +49,25 @@ Evaluation evaluate(const AccuracyScene& a, RunSpec spec) {
   return e;
 }
 
-bool isExplicit(Integrator i) {
-  return i == Integrator::ForwardEuler || i == Integrator::SymplecticEuler;
-}
+bool isExplicit(Integrator i) { return i == Integrator::ForwardEuler || i == Integrator::SymplecticEuler; }
 
 }  // namespace
 
 void runReference(const StudyOptions& options) {
   ensureDirectory(options.out);
   const std::vector<AccuracyScene> scenes = accuracyScenes(options);
-  CsvWriter refs(joinPath(options.out, "reference.csv"),
-                 {"scene", "frames", "substeps", "self_error_m", "max_energy_dev_rel", "available_energy",
-                  "finite", "cached"});
+  CsvWriter refs(
+      joinPath(options.out, "reference.csv"),
+      {"scene", "frames", "substeps", "self_error_m", "max_energy_dev_rel", "available_energy", "finite", "cached"});
   for (const AccuracyScene& a : scenes) {
     refs << a.scene.key << kReferenceFrames << a.reference.substeps << a.reference.self_error
          << a.reference.max_energy_dev << a.available << 1 << (a.reference.from_cache ? 1 : 0);
     refs.endRow();
-    std::printf("  reference %-6s: IM h/%d converged, finite, max |H - H0| = %.3g %% of E_avail, "
-                "self-error (vs h/%d) %.3g m\n",
-                a.scene.key.c_str(), a.reference.substeps, 100.0 * a.reference.max_energy_dev,
-                a.reference.substeps / 2, a.reference.self_error);
+    std::printf(
+        "  reference %-6s: IM h/%d converged, finite, max |H - H0| = %.3g %% of E_avail, "
+        "self-error (vs h/%d) %.3g m\n",
+        a.scene.key.c_str(), a.reference.substeps, 100.0 * a.reference.max_energy_dev, a.reference.substeps / 2,
+        a.reference.self_error);
   }
 
   CsvWriter acc(joinPath(options.out, "accuracy.csv"),
@@ -84,9 +83,10 @@ void runReference(const StudyOptions& options) {
           << kReferenceFrames << e.run.ms_per_frame() << e.position_error << e.motion.rms_short << e.motion.rms_long
           << e.metrics.drift << e.metrics.damping << e.metrics.max_rise << e.metrics.verdict << e.run.blew_up_frame;
       acc.endRow();
-      std::printf("  %-6s %-5s err %9.3g m  (0-1 s vs small-step reference %9.3g m)  drift %+9.3g  damping %+9.3g  %s\n",
-                  a.scene.key.c_str(), stabint::integratorName(i), e.position_error, e.motion.rms_long,
-                  e.metrics.drift, e.metrics.damping, e.metrics.verdict.c_str());
+      std::printf(
+          "  %-6s %-5s err %9.3g m  (0-1 s vs small-step reference %9.3g m)  drift %+9.3g  damping %+9.3g  %s\n",
+          a.scene.key.c_str(), stabint::integratorName(i), e.position_error, e.motion.rms_long, e.metrics.drift,
+          e.metrics.damping, e.metrics.verdict.c_str());
     }
   }
   std::fflush(stdout);
@@ -104,8 +104,8 @@ void runSweep(const StudyOptions& options) {
   const int max_substeps = options.quick ? 64 : 2048;
   CsvWriter csv(joinPath(options.out, "sweep.csv"),
                 {"scene", "integrator", "backend", "iterations", "substeps", "frames", "ms_per_frame",
-                 "ms_per_frame_median", "position_error_m", "rms_0_0.5s_m", "rms_0_1s_m", "drift_rel", "damping_rel", "max_rise_rel",
-                 "verdict", "blew_up_frame"});
+                 "ms_per_frame_median", "position_error_m", "rms_0_0.5s_m", "rms_0_1s_m", "drift_rel", "damping_rel",
+                 "max_rise_rel", "verdict", "blew_up_frame"});
   // Every integrator with plain iterations, then the blend and BE with Anderson acceleration
   // (labelled "<integrator>+AA"): the shift acceleration gives on the chart.
   struct Series {
@@ -114,12 +114,13 @@ void runSweep(const StudyOptions& options) {
   };
   std::vector<Series> series;
   for (Integrator i : stabint::allIntegrators()) series.push_back({i, stabint::Acceleration::None});
-  for (Integrator i : {Integrator::BackwardEuler, Integrator::EnergyBlend}) series.push_back({i, stabint::Acceleration::Anderson});
+  for (Integrator i : {Integrator::BackwardEuler, Integrator::EnergyBlend})
+    series.push_back({i, stabint::Acceleration::Anderson});
   for (const AccuracyScene& a : scenes) {
     for (const Series& sr : series) {
       const Integrator i = sr.integrator;
-      const std::string label = std::string(stabint::integratorName(i)) +
-                                (sr.acceleration == stabint::Acceleration::Anderson ? "+AA" : "");
+      const std::string label =
+          std::string(stabint::integratorName(i)) + (sr.acceleration == stabint::Acceleration::Anderson ? "+AA" : "");
       const bool explicit_integrator = isExplicit(i);
       std::vector<int> values = budgets;
       if (explicit_integrator) {
@@ -141,11 +142,10 @@ void runSweep(const StudyOptions& options) {
         spec.energy_unit = a.available;
         const Evaluation e = evaluate(a, spec);
         stable_in_a_row = e.metrics.verdict == "exploded" ? 0 : stable_in_a_row + 1;
-        csv << a.scene.key << label << stabint::backendName(options.backend)
-            << (explicit_integrator ? 0 : value) << spec.substeps << kReferenceFrames << e.run.ms_per_frame()
-            << e.run.medianMsPerFrame()
-            << e.position_error << e.motion.rms_short << e.motion.rms_long << e.metrics.drift << e.metrics.damping
-            << e.metrics.max_rise << e.metrics.verdict << e.run.blew_up_frame;
+        csv << a.scene.key << label << stabint::backendName(options.backend) << (explicit_integrator ? 0 : value)
+            << spec.substeps << kReferenceFrames << e.run.ms_per_frame() << e.run.medianMsPerFrame() << e.position_error
+            << e.motion.rms_short << e.motion.rms_long << e.metrics.drift << e.metrics.damping << e.metrics.max_rise
+            << e.metrics.verdict << e.run.blew_up_frame;
         csv.endRow();
       }
       progress("sweep " + a.scene.key + " " + label + " done");

@@ -11,14 +11,15 @@ void runTable(const StudyOptions& options) {
   ensureDirectory(options.out);
   const int frames = options.quick ? 60 : 300;
   CsvWriter csv(joinPath(options.out, "energy_table.csv"),
-                {"scene", "integrator", "backend", "frames", "frames_done", "E_scale_sim", "E_avail", "H0", "H_end",
-                 "H_min", "H_max", "max_dev_target_rel", "drift_rel", "damping_rel", "blew_up_frame", "ms_per_frame",
-                 "branches", "partner_whole_steps", "rms_0_1s_m", "mean_K_ratio", "flicker", "energy_verdict",
-                 "verdict"});
-  std::printf("\nEnergy behaviour, h = 1/30 s, 10 iterations, %d frames, backend %s.\n"
-              "Relative columns are in units of E_avail = H0 - (potential of the static equilibrium):\n"
-              "the energy the scene can turn into motion. E_scale is Simulator::energyScale().\n",
-              frames, stabint::backendName(options.backend));
+                {"scene",      "integrator",   "backend",       "frames",         "frames_done", "E_scale_sim",
+                 "E_avail",    "H0",           "H_end",         "H_min",          "H_max",       "max_dev_target_rel",
+                 "drift_rel",  "damping_rel",  "blew_up_frame", "ms_per_frame",   "branches",    "partner_whole_steps",
+                 "rms_0_1s_m", "mean_K_ratio", "flicker",       "energy_verdict", "verdict"});
+  std::printf(
+      "\nEnergy behaviour, h = 1/30 s, 10 iterations, %d frames, backend %s.\n"
+      "Relative columns are in units of E_avail = H0 - (potential of the static equilibrium):\n"
+      "the energy the scene can turn into motion. E_scale is Simulator::energyScale().\n",
+      frames, stabint::backendName(options.backend));
   std::printf("%-6s %-10s %9s %9s %10s %10s %10s %10s %9s %9s %8s %7s %8s %18s  %s\n", "scene", "integ", "E_scale",
               "E_avail", "H0", "H_end", "H_min", "H_max", "max|H-H*|", "drift", "blow-up", "ms/fr", "damping",
               "branches", "verdict (energy, motion)");
@@ -41,8 +42,8 @@ void runTable(const StudyOptions& options) {
       const Metrics& m = j.energy;
       csv << s.key << label << stabint::backendName(options.backend) << frames << run.frames_done << run.energy_scale
           << m.available << m.h0 << m.h_end << m.h_min << m.h_max << m.max_target_dev << m.drift << m.damping
-          << run.blew_up_frame << run.ms_per_frame() << run.branchSummary() << run.partner_whole
-          << j.motion.rms_long << j.motion.mean_k_ratio << j.motion.flicker << m.verdict << j.motion.verdict;
+          << run.blew_up_frame << run.ms_per_frame() << run.branchSummary() << run.partner_whole << j.motion.rms_long
+          << j.motion.mean_k_ratio << j.motion.flicker << m.verdict << j.motion.verdict;
       csv.endRow();
       char blow[16] = "-";
       if (run.blew_up_frame >= 0) std::snprintf(blow, sizeof blow, "%d", run.blew_up_frame);
@@ -53,10 +54,11 @@ void runTable(const StudyOptions& options) {
       std::fflush(stdout);
     }
   }
-  std::printf("verdict: exploded = blew up or max |H - H0| > %g E_avail; over-damped = lost > %g %% of E_avail "
-              "(mean H of the last 10 %% of frames); else stable.\nMotion (against the small-step reference, see "
-              "`motion`): frozen = mean K over 5-10 s < %g x the reference's; jittery = flicker of K > %g.\n\n",
-              kExplodeFactor, 100.0 * kOverDampedFraction, kFrozenFraction, kJitteryFlicker);
+  std::printf(
+      "verdict: exploded = blew up or max |H - H0| > %g E_avail; over-damped = lost > %g %% of E_avail "
+      "(mean H of the last 10 %% of frames); else stable.\nMotion (against the small-step reference, see "
+      "`motion`): frozen = mean K over 5-10 s < %g x the reference's; jittery = flicker of K > %g.\n\n",
+      kExplodeFactor, 100.0 * kOverDampedFraction, kFrozenFraction, kJitteryFlicker);
 }
 
 }  // namespace study

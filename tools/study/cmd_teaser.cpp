@@ -21,9 +21,9 @@ namespace {
 
 constexpr int kTeaserSide = 40;
 constexpr double kTeaserSeconds = 6.0;
-constexpr double kGather = 0.75;       // the pinned corners start this fraction of the width apart
-constexpr double kRipple = 0.03;       // m: amplitude of the start's folds
-constexpr double kRippleWaves = 3.0;   // across the width
+constexpr double kGather = 0.75;      // the pinned corners start this fraction of the width apart
+constexpr double kRipple = 0.03;      // m: amplitude of the start's folds
+constexpr double kRippleWaves = 3.0;  // across the width
 
 // The main job's tilted cloth, gathered: its width starts compressed to kGather about the middle
 // (free: the membrane may compress to strain_min = kGather - 0.05, as cloth buckles rather than
@@ -97,15 +97,17 @@ void runTeaser(const StudyOptions& options) {
     writePositions(joinPath(options.out, std::string("teaser_") + stabint::integratorName(i) + ".bin"), run.positions);
     for (size_t f = 0; f < run.samples.size(); ++f) {
       const FrameSample& fs = run.samples[f];
-      csv << stabint::integratorName(i) << stabint::backendName(options.backend) << scene.numParticles() << f
-          << fs.time << fs.total() << fs.target << fs.kinetic << fs.elastic << fs.external << run.ms_per_frame();
+      csv << stabint::integratorName(i) << stabint::backendName(options.backend) << scene.numParticles() << f << fs.time
+          << fs.total() << fs.target << fs.kinetic << fs.elastic << fs.external << run.ms_per_frame();
       csv.endRow();
     }
     const FrameSample& start = run.samples.front();
     const FrameSample& end = run.samples.back();
-    std::printf("  teaser %-5s %d frames, %.3g ms/frame, H %.4g J -> %.4g J (H* %.4g J), mean K over the last second %.3g J%s\n",
-                stabint::integratorName(i), run.frames_done, run.ms_per_frame(), start.total(), end.total(), end.target,
-                lastSecondKinetic(run, spec.frame_step), run.blew_up_frame >= 0 ? ", blew up" : "");
+    std::printf(
+        "  teaser %-5s %d frames, %.3g ms/frame, H %.4g J -> %.4g J (H* %.4g J), mean K over the last second %.3g "
+        "J%s\n",
+        stabint::integratorName(i), run.frames_done, run.ms_per_frame(), start.total(), end.total(), end.target,
+        lastSecondKinetic(run, spec.frame_step), run.blew_up_frame >= 0 ? ", blew up" : "");
     std::fflush(stdout);
   }
   progress("teaser: " + std::to_string(scene.numParticles()) + " particles, " + stabint::elementSummary(scene));

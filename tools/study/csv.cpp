@@ -6,8 +6,7 @@
 
 namespace study {
 
-CsvWriter::CsvWriter(const std::string& path, const std::vector<std::string>& columns)
-    : path_(path), file_(path) {
+CsvWriter::CsvWriter(const std::string& path, const std::vector<std::string>& columns) : path_(path), file_(path) {
   if (!file_) throw std::runtime_error("cannot write " + path);
   line_ << std::setprecision(std::numeric_limits<double>::max_digits10 - 2);
   for (const std::string& c : columns) *this << c;

@@ -64,8 +64,7 @@ int main(int argc, char** argv) {
       else if (arg == "--backend") {
         options.backend = stabint::parseBackend(value());
         backend_given = true;
-      }
-      else if (arg == "--quick")
+      } else if (arg == "--quick")
         options.quick = true;
       else
         throw stabint::InvalidInputError("unknown option " + arg);

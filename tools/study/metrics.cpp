@@ -102,8 +102,7 @@ Eigen::Vector3d centreOfMass(const Eigen::MatrixX3d& x, const Eigen::VectorXd& m
 Eigen::Vector3d angularMomentum(const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v, const Eigen::VectorXd& masses) {
   const Eigen::Vector3d c = centreOfMass(x, masses);
   Eigen::Vector3d l = Eigen::Vector3d::Zero();
-  for (Eigen::Index p = 0; p < x.rows(); ++p)
-    l += masses[p] * (x.row(p).transpose() - c).cross(v.row(p).transpose());
+  for (Eigen::Index p = 0; p < x.rows(); ++p) l += masses[p] * (x.row(p).transpose() - c).cross(v.row(p).transpose());
   return l;
 }
 
@@ -129,8 +128,7 @@ std::vector<double> kineticSeries(const RunResult& run) {
   return k;
 }
 
-MotionMetrics motionMetrics(const RunResult& run, int frames, const MotionReference& reference,
-                            const Metrics& energy) {
+MotionMetrics motionMetrics(const RunResult& run, int frames, const MotionReference& reference, const Metrics& energy) {
   MotionMetrics m;
   const double h = reference.frame_step;
   const auto framesOf = [h](double seconds) { return static_cast<int>(std::lround(seconds / h)); };

@@ -71,9 +71,15 @@ std::string methodName(const StudyScene& scene, int substeps) {
 }
 
 std::vector<double> toPayload(const MotionReference& r) {
-  std::vector<double> p = {static_cast<double>(r.positions.size()), static_cast<double>(r.positions.front().rows()),
-                           static_cast<double>(r.substeps), static_cast<double>(r.check_substeps), r.available,
-                           r.energy_error, r.self_rms, r.self_mean_k, r.seconds};
+  std::vector<double> p = {static_cast<double>(r.positions.size()),
+                           static_cast<double>(r.positions.front().rows()),
+                           static_cast<double>(r.substeps),
+                           static_cast<double>(r.check_substeps),
+                           r.available,
+                           r.energy_error,
+                           r.self_rms,
+                           r.self_mean_k,
+                           r.seconds};
   appendFrames(p, r.positions);
   p.insert(p.end(), r.kinetic.begin(), r.kinetic.end());
   p.insert(p.end(), r.energy.begin(), r.energy.end());
@@ -147,8 +153,8 @@ const MotionReference& motionReference(const StudyScene& scene, const StudyOptio
     std::ostringstream done;
     done.precision(3);
     done << "motion reference " << scene.key << ": " << ref->seconds << " s, energy error " << ref->energy_error
-         << " E_avail, check run differs by " << ref->self_rms << " m RMS over 0-1 s, mean K ratio "
-         << ref->self_mean_k << "; wrote " << path;
+         << " E_avail, check run differs by " << ref->self_rms << " m RMS over 0-1 s, mean K ratio " << ref->self_mean_k
+         << "; wrote " << path;
     progress(done.str());
   }
   ref->method = methodName(scene, ref->substeps);

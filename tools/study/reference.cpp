@@ -45,8 +45,8 @@ bool fromPayload(const std::vector<double>& payload, Reference& ref) {
 
 std::vector<double> toPayload(const Reference& ref) {
   std::vector<double> payload = {static_cast<double>(ref.positions.size() - 1),
-                                 static_cast<double>(ref.positions.front().rows()),
-                                 static_cast<double>(ref.substeps), ref.self_error, ref.max_energy_dev};
+                                 static_cast<double>(ref.positions.front().rows()), static_cast<double>(ref.substeps),
+                                 ref.self_error, ref.max_energy_dev};
   appendFrames(payload, ref.positions);
   payload.insert(payload.end(), ref.energy.begin(), ref.energy.end());
   return payload;
@@ -57,8 +57,8 @@ std::vector<double> toPayload(const Reference& ref) {
 Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& options) {
   std::ostringstream d;
   d << cacheDescription(scene) << " | reference IM h=1/30/" << kReferenceSubsteps << " tol=" << kTolerance
-    << " maxit=" << kMaxIterations << " frames=" << kReferenceFrames << " self-check h/"
-    << kReferenceSubsteps / 2 << " format=2";
+    << " maxit=" << kMaxIterations << " frames=" << kReferenceFrames << " self-check h/" << kReferenceSubsteps / 2
+    << " format=2";
   const std::string description = d.str();
   const std::string path = cachePath(joinPath(options.out, "cache"), scene.key, description);
 
@@ -81,7 +81,8 @@ Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& op
   for (const FrameSample& f : fine.samples) ref.energy.push_back(f.total());
   ref.self_error = positionRmsError(coarse, ref.positions);
   const double available = availableEnergy(scene);
-  for (double e : ref.energy) ref.max_energy_dev = std::max(ref.max_energy_dev, std::abs(e - ref.energy.front()) / available);
+  for (double e : ref.energy)
+    ref.max_energy_dev = std::max(ref.max_energy_dev, std::abs(e - ref.energy.front()) / available);
   for (const auto& x : ref.positions)
     if (!x.allFinite()) throw std::runtime_error("reference for " + scene.key + " is not finite");
   writeCache(path, description, toPayload(ref));

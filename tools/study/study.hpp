@@ -98,9 +98,9 @@ struct RunSpec {
   Integrator integrator = Integrator::EnergyBlend;
   stabint::Acceleration acceleration = stabint::Acceleration::None;
   double frame_step = 1.0 / 30.0;
-  int substeps = 1;          // simulator steps per frame (h = frame_step / substeps)
+  int substeps = 1;  // simulator steps per frame (h = frame_step / substeps)
   int iterations = 10;
-  double tolerance = 0.0;    // > 0: iterate to this relative objective change (reference runs)
+  double tolerance = 0.0;  // > 0: iterate to this relative objective change (reference runs)
   int max_iterations = 1000;
   int be_iterations = stabint::SimulatorOptions{}.be_iterations;  // the blend's BE partner budget
   int frames = 300;
@@ -114,23 +114,23 @@ struct RunSpec {
 struct FrameSample {
   double time = 0.0;
   double kinetic = 0.0, elastic = 0.0, external = 0.0;
-  double target = 0.0;  // H*
+  double target = 0.0;                     // H*
   BlendBranch branch = BlendBranch::None;  // of the frame's last step
   double alpha = 0.0;
-  int iterations = 0;   // all solves of all substeps of the frame
-  double seconds = 0.0; // wall clock of the frame's step() calls
+  int iterations = 0;    // all solves of all substeps of the frame
+  double seconds = 0.0;  // wall clock of the frame's step() calls
   double total() const { return kinetic + elastic + external; }
 };
 
 struct RunResult {
-  std::vector<FrameSample> samples;                // [0] is the initial state
-  std::vector<Eigen::MatrixX3d> positions;         // per sample when recorded
-  int blew_up_frame = -1;      // frame (1-based) whose step threw NonFiniteStateError
-  bool stopped_early = false;  // stop_factor exceeded
+  std::vector<FrameSample> samples;         // [0] is the initial state
+  std::vector<Eigen::MatrixX3d> positions;  // per sample when recorded
+  int blew_up_frame = -1;                   // frame (1-based) whose step threw NonFiniteStateError
+  bool stopped_early = false;               // stop_factor exceeded
   std::string blow_up_message;
-  double seconds = 0.0;        // wall clock of all step() calls, the refused one included
+  double seconds = 0.0;  // wall clock of all step() calls, the refused one included
   int frames_done = 0;
-  long steps_tried = 0;        // step() calls, the refused one included
+  long steps_tried = 0;  // step() calls, the refused one included
   /// Blend decisions over all steps, keyed by blendBranchName() (no entry for "-").
   std::map<std::string, int> branches;
   /// Steps whose blend took its partner whole (alpha = 1): the target was out of the partner's
@@ -145,7 +145,7 @@ struct RunResult {
   std::string branchSummary() const;
   /// The same for partner_whole_by_branch ("BE=244").
   std::string partnerWholeSummary() const;
-  double energy_scale = 0.0;   // Simulator::energyScale()
+  double energy_scale = 0.0;  // Simulator::energyScale()
   int substeps = 1;
   /// Wall clock per frame from every step tried, so a run that blew up early still has a cost.
   double ms_per_frame() const { return steps_tried > 0 ? 1e3 * seconds * substeps / steps_tried : 0.0; }
@@ -174,7 +174,7 @@ struct Metrics {
   /// ends before it (the trajectory error over 0-1 s of a run that explodes at 3 s) still mean
   /// something.
   double exploded_at = std::numeric_limits<double>::infinity();
-  std::string verdict;          // "stable", "over-damped", "exploded"
+  std::string verdict;  // "stable", "over-damped", "exploded"
 };
 /// Verdict thresholds: exploded when the run blew up or max |H - H_0| > kExplodeFactor E_avail;
 /// over-damped when it lost more than kOverDampedFraction of E_avail; stable otherwise.
@@ -234,12 +234,12 @@ struct Reference {
   std::vector<Eigen::MatrixX3d> positions;  // frames 0..N
   std::vector<double> energy;               // H per frame
   int substeps = 0;
-  double self_error = 0.0;   // RMS |x_ref(h/s) - x_ref(h/(s/2))|: an upper estimate of its error
+  double self_error = 0.0;      // RMS |x_ref(h/s) - x_ref(h/(s/2))|: an upper estimate of its error
   double max_energy_dev = 0.0;  // max |H - H_0| / E_avail
   bool from_cache = false;
 };
-constexpr int kReferenceFrames = 60;     // 2 s at 30 frames per second
-constexpr int kReferenceSubsteps = 16;   // reference step h/16
+constexpr int kReferenceFrames = 60;    // 2 s at 30 frames per second
+constexpr int kReferenceSubsteps = 16;  // reference step h/16
 /// Implicit midpoint with h/16 and local/global iterations to a 1e-10 relative objective change,
 /// sampled at frame times; cached in <out>/cache/<scene>-<hash>.bin.
 Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& options);
@@ -249,16 +249,16 @@ Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& op
 /// A small-step reference run of a scene (StudyScene::reference_*), sampled at the scene's
 /// frame times, with the checks of its sharpness.
 struct MotionReference {
-  std::string method;                       // e.g. "SE h/2000"
+  std::string method;  // e.g. "SE h/2000"
   double frame_step = 0.0;
   std::vector<Eigen::MatrixX3d> positions;  // frames 0..N
   std::vector<double> kinetic, energy;      // K and H per frame
   double available = 0.0;                   // E_avail of the scene
   int substeps = 0, check_substeps = 0;     // the reference and its check run (half the steps)
-  double energy_error = 0.0;   // max |H - H*| / E_avail (H* books forcing and damping exactly)
-  double self_rms = 0.0;       // RMS |x(substeps) - x(check_substeps)| over 0-1 s [m]
-  double self_mean_k = 0.0;    // mean K of the check run over the K window / the reference's
-  double seconds = 0.0;        // wall clock of both runs (0 when cached)
+  double energy_error = 0.0;                // max |H - H*| / E_avail (H* books forcing and damping exactly)
+  double self_rms = 0.0;                    // RMS |x(substeps) - x(check_substeps)| over 0-1 s [m]
+  double self_mean_k = 0.0;                 // mean K of the check run over the K window / the reference's
+  double seconds = 0.0;                     // wall clock of both runs (0 when cached)
   bool from_cache = false;
   double horizon() const { return frame_step * static_cast<double>(positions.size() - 1); }
 };
@@ -276,8 +276,7 @@ struct MotionMetrics {
 };
 /// `run` must have recorded positions for the trajectory errors; the K window is that of the
 /// shorter of the run's planned horizon (`frames`) and the reference's.
-MotionMetrics motionMetrics(const RunResult& run, int frames, const MotionReference& reference,
-                            const Metrics& energy);
+MotionMetrics motionMetrics(const RunResult& run, int frames, const MotionReference& reference, const Metrics& energy);
 std::vector<double> kineticSeries(const RunResult& run);
 
 /// One run of a study scene judged on energy and motion: the run (positions recorded), its
@@ -302,7 +301,7 @@ void runStability(const StudyOptions& options);
 void runEnergy(const StudyOptions& options);
 void runCrosscheck(const StudyOptions& options);
 void runMotion(const StudyOptions& options);
-void runTeaser(const StudyOptions& options);  // cmd_teaser.cpp
+void runTeaser(const StudyOptions& options);       // cmd_teaser.cpp
 void runInteraction(const StudyOptions& options);  // cmd_interaction.cpp
 
 // ---- small helpers -------------------------------------------------------------------------

@@ -34,7 +34,8 @@ std::string fingerprint(const Scene& sc) {
   put(sc.velocities);
   put(sc.masses);
   put(sc.gravity);
-  for (const stabint::Spring& e : sc.springs) t << e.a << ' ' << e.b << ' ' << e.rest_length << ' ' << e.stiffness << ' ';
+  for (const stabint::Spring& e : sc.springs)
+    t << e.a << ' ' << e.b << ' ' << e.rest_length << ' ' << e.stiffness << ' ';
   for (const stabint::Tet& e : sc.tets) {
     for (int v : e.vertices) t << v << ' ';
     t << e.stiffness << ' ';
@@ -119,8 +120,8 @@ StudyScene clothScene(double stretch_stiffness) {
   StudyScene s = tiltedCloth(p);
   s.key = stretch_stiffness == stabint::ClothGridParams{}.stretch_stiffness ? "cloth" : "cloth_stiff";
   s.params = "cloth nx=20 ny=20 w=" + fmt(p.width) + " h=" + fmt(p.height) + " rho=" + fmt(p.areal_density) +
-             " ks=" + fmt(p.stretch_stiffness) + " kshear=" + fmt(p.shear_stiffness) + " kb=" +
-             fmt(p.bend_stiffness) + " pin=" + fmt(p.pin_stiffness) + " tilt=30deg";
+             " ks=" + fmt(p.stretch_stiffness) + " kshear=" + fmt(p.shear_stiffness) + " kb=" + fmt(p.bend_stiffness) +
+             " pin=" + fmt(p.pin_stiffness) + " tilt=30deg";
   // SE needs omega h < 2 on the corner pins (1e5 N/m on ~6e-5 kg: omega ~ 4e4 /s): h/2000 at
   // 1/30 gives omega h ~ 0.7. Issue 8 runs the stiff cloth (springs 1e6 N/m, highest lattice
   // mode ~ 2.4e5 /s) at h = 1/15 and judges how far it falls in 1 s: h/20000 there.
@@ -170,7 +171,8 @@ StudyScene spinningBarScene(bool general, double omega) {
   // 20 % stretch along the length about the centre: elastic energy that the spin must carry
   // through the tets' non-linear (co-rotated) response.
   if (general)
-    for (Eigen::Index r = 0; r < sc.positions.rows(); ++r) sc.positions(r, 0) = centre.x() + 1.2 * (sc.positions(r, 0) - centre.x());
+    for (Eigen::Index r = 0; r < sc.positions.rows(); ++r)
+      sc.positions(r, 0) = centre.x() + 1.2 * (sc.positions(r, 0) - centre.x());
   const Eigen::Vector3d axis = general ? Eigen::Vector3d(1.0, 2.0, 3.0).normalized() : Eigen::Vector3d::UnitY();
   for (Eigen::Index r = 0; r < sc.positions.rows(); ++r)
     sc.velocities.row(r) = (omega * axis).cross(sc.positions.row(r).transpose() - centre).transpose();

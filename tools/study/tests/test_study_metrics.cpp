@@ -132,7 +132,7 @@ TEST(Cache, RoundTripAndDescriptionCheck) {
   std::vector<Eigen::MatrixX3d> frames_back;
   ASSERT_TRUE(readFrames(in, static_cast<int>(count), static_cast<int>(particles), frames_back));
   EXPECT_TRUE(in.done());
-  EXPECT_EQ(frames_back[1], frames[1]);  // bit for bit
+  EXPECT_EQ(frames_back[1], frames[1]);             // bit for bit
   EXPECT_FALSE(readFrames(in, 1, 4, frames_back));  // nothing left: a short file reads as invalid
 
   EXPECT_FALSE(readCache(path, "description B", back));  // same file name, other settings

@@ -153,6 +153,12 @@ Eigen::MatrixX3d rowsFrom(const stabint_simulator* sim, const double* values, si
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// A C array of element indices (NULL allowed when count is 0) as the C++ API takes them.
+std::vector<int> indexList(const int* indices, size_t count) {
+  if (count > 0) require(indices, "indices");
+  return count > 0 ? std::vector<int>(indices, indices + count) : std::vector<int>{};
+}
+
 }  // namespace
 
 extern "C" {
@@ -425,13 +431,6 @@ stabint_status stabint_simulator_release(stabint_simulator* sim, int pin) {
     sim->sim.release(pin);
   });
 }
-
-namespace {
-std::vector<int> indexList(const int* indices, size_t count) {
-  if (count > 0) require(indices, "indices");
-  return count > 0 ? std::vector<int>(indices, indices + count) : std::vector<int>{};
-}
-}  // namespace
 
 stabint_status stabint_simulator_set_element_stiffness(stabint_simulator* sim, const char* kind, const int* indices,
                                                        size_t count, double stiffness) {

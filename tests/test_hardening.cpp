@@ -321,6 +321,17 @@ TEST_F(Hostile, DuplicateJsonKeysAreRefusedWithTheirLine) {
                   "duplicate key 'nx' (first on line 1)");
 }
 
+// The JSON library stops at a NUL byte and reports success: the text after it was ignored, and
+// the duplicate-key scan read it as JSON (a libFuzzer finding: an empty-stack back()).
+TEST_F(Hostile, JsonWithNulByteIsRefusedWithItsLine) {
+  const std::string path = write("nul.json", std::string("{\"builtin\": {\"name\": \"chain\"}}\n\0\"me\", ]\n}\n", 42));
+  expectFileError([&] { loadSceneFile(path); }, path, 2, "NUL byte at offset 31");
+  // The fuzzer's input: a string, a NUL, then unbalanced brackets.
+  const std::string found =
+      write("found.json", std::string("\"vertex\"\0\"me\", \v\0\"mesh\": {ut.json\", ]\n}\n", 40));
+  expectFileError([&] { loadSceneFile(found); }, found, 1, "NUL byte at offset 8");
+}
+
 // Zero-area faces, vertices in no face or tet, and a zero density each silently got the 1e-6 kg
 // mass floor: a scene the file did not describe.
 TEST_F(Hostile, ZeroAreaFacesUnusedVerticesAndZeroDensityAreRefused) {

@@ -884,17 +884,18 @@ void checkDuplicateKeys(const std::string& text, const std::string& file) {
       open.push_back({c == '{', {}});
       expect_key = c == '{';
     } else if (c == '}' || c == ']') {
-      open.pop_back();
+      if (!open.empty()) open.pop_back();  // valid JSON is balanced; never trust it past that
       expect_key = false;
     } else if (c == ',') {
-      expect_key = open.back().object;
+      expect_key = !open.empty() && open.back().object;
     } else if (c == '"') {
       const std::size_t start = i;
       bool escaped = false;
-      for (++i; text[i] != '"'; ++i) {
+      for (++i; i < text.size() && text[i] != '"'; ++i) {
         if (text[i] == '\\') escaped = true, ++i;  // valid JSON: the escape is complete
       }
-      if (!expect_key) continue;
+      if (i >= text.size()) return;  // an unterminated string: the parser's to report
+      if (!expect_key || open.empty()) continue;
       expect_key = false;
       std::string key = text.substr(start + 1, i - start - 1);
       if (escaped) key = json::parse(text.substr(start, i - start + 1)).get<std::string>();
@@ -908,7 +909,17 @@ void checkDuplicateKeys(const std::string& text, const std::string& file) {
   }
 }
 
+// The JSON library ends its input at a NUL byte and reports success, so whatever follows one
+// would be ignored (and the key scan below would read it as JSON): a NUL is refused.
+void checkNoNul(const std::string& text, const std::string& file) {
+  const std::size_t at = text.find('\0');
+  if (at == std::string::npos) return;
+  const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+  throw FileFormatError(file, line, "NUL byte at offset " + std::to_string(at) + ": not a JSON text");
+}
+
 json parseJson(const std::string& text, const std::string& file) {
+  checkNoNul(text, file);
   checkNesting(text, file);
   try {
     json doc = json::parse(text);

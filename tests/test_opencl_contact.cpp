@@ -42,14 +42,8 @@ TEST(OpenCLContact, ClothOnCollidersMatchesCpu) {
       std::printf("  %s skipped: %s\n", testing::precisionName(precision), skip.c_str());
       continue;
     }
-    // As in test_opencl_interaction: the blend's decisions compare energies against its
-    // tolerance and may differ in float, so float is checked on the integrators without them.
-    const std::vector<Integrator> integrators =
-        precision == Precision::Double
-            ? std::vector<Integrator>{Integrator::BackwardEuler, Integrator::BDF2, Integrator::EnergyBlend}
-            : std::vector<Integrator>{Integrator::BackwardEuler, Integrator::BDF2};
-    // Tolerances of test_opencl_integrators: 1e-9 relative in double, 1e-3 in float.
-    const double tol = precision == Precision::Double ? 1e-9 : 1e-3;
+    const std::vector<Integrator> integrators = testing::crossBackendIntegrators(precision);
+    const double tol = testing::crossBackendTolerance(precision);
     for (Integrator integrator : integrators) {
       const ContactRun ref = run(scene, integrator, BackendKind::CpuReference, Precision::Double, 30);
       const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 30);

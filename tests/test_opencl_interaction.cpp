@@ -51,14 +51,8 @@ TEST(OpenCLInteraction, DrivenClothMatchesCpu) {
       std::printf("  %s skipped: %s\n", testing::precisionName(precision), skip.c_str());
       continue;
     }
-    // The blend's branch decisions compare energies against its tolerance; in float they may
-    // differ from the CPU's, so float is checked on the integrators without decisions.
-    const std::vector<Integrator> integrators =
-        precision == Precision::Double
-            ? std::vector<Integrator>{Integrator::BackwardEuler, Integrator::BDF2, Integrator::EnergyBlend}
-            : std::vector<Integrator>{Integrator::BackwardEuler, Integrator::BDF2};
-    // Tolerances of test_opencl_integrators: 1e-9 relative in double, 1e-3 in float.
-    const double tol = precision == Precision::Double ? 1e-9 : 1e-3;
+    const std::vector<Integrator> integrators = testing::crossBackendIntegrators(precision);
+    const double tol = testing::crossBackendTolerance(precision);
     for (Integrator integrator : integrators) {
       const DrivenCloth d = drivenCloth(integrator);
       const DrivenRun ref = drivenRun(d, BackendKind::CpuReference, Precision::Double);

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <vector>
 
 namespace stabint::testing {
 
@@ -39,6 +40,17 @@ inline OpenCLOptions openclOptions(Precision precision) {
 }
 
 inline const char* precisionName(Precision p) { return p == Precision::Double ? "double" : "float"; }
+
+// The integrators a scene is compared on across backends: the blend's branch decisions compare
+// energies against its tolerance and may differ from the CPU's in float, so float is checked on
+// the integrators without decisions.
+inline std::vector<Integrator> crossBackendIntegrators(Precision p) {
+  if (p == Precision::Double) return {Integrator::BackwardEuler, Integrator::BDF2, Integrator::EnergyBlend};
+  return {Integrator::BackwardEuler, Integrator::BDF2};
+}
+
+// The tolerances of test_opencl_integrators: 1e-9 relative in double, 1e-3 in float.
+inline double crossBackendTolerance(Precision p) { return p == Precision::Double ? 1e-9 : 1e-3; }
 
 /// max |a - b| / max |b|: the error relative to the size of the reference result, so entries
 /// that cancel to near zero are judged against the whole array's scale.

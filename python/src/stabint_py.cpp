@@ -643,6 +643,12 @@ void bindEvents(nb::module_& m) {
             new (k) PathKey{frame, position};
           },
           "frame"_a, "position"_a)
+      .def(
+          "__init__",
+          [](PathKey* k, int frame, const std::array<double, 3>& p) {
+            new (k) PathKey{frame, Eigen::Vector3d(p[0], p[1], p[2])};
+          },
+          "frame"_a, "position"_a, "The same with the position as a sequence of three numbers.")
       .def_rw("frame", &PathKey::frame)
       .def_rw("position", &PathKey::position);
   nb::class_<GrabEvent>(m, "GrabEvent", "Grab particle `vertex` with a handle of `stiffness`, dragged along `path`.")

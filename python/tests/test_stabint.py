@@ -560,9 +560,9 @@ def bar_and_box(box_velocity=(0.0, 0.0, 0.0)):
     ground.shape = stabint.ColliderShape.Plane
     box = stabint.Collider()
     box.shape = stabint.ColliderShape.Box
-    box.center = [-0.3, 0.125, 0.125]
-    box.half_extents = [0.25, 0.1, 0.5]
-    box.velocity = list(box_velocity)
+    box.center = np.array([-0.3, 0.125, 0.125])
+    box.half_extents = np.array([0.25, 0.1, 0.5])
+    box.velocity = np.array(box_velocity, dtype=float)
     scene.colliders.append(ground)
     scene.colliders.append(box)
     return scene
@@ -603,7 +603,7 @@ def test_event_scripts_play_collider_and_grab_events_and_survive_a_checkpoint_as
     scene = stabint.cloth_grid(nx=6, ny=6)
     sphere = stabint.Collider()
     sphere.shape = stabint.ColliderShape.Sphere
-    sphere.center = [0.5, -0.5, -0.3]
+    sphere.center = np.array([0.5, -0.5, -0.3])
     sphere.radius = 0.2
     scene.colliders.append(sphere)
     grab = stabint.GrabEvent()
@@ -616,7 +616,7 @@ def test_event_scripts_play_collider_and_grab_events_and_survive_a_checkpoint_as
     move.path = [stabint.PathKey(6, [0.5, -0.5, 0.1]), stabint.PathKey(10, [0.3, -0.4, 0.2])]
     slide = stabint.ColliderEvent()
     slide.collider = 0
-    slide.velocity = [0.0, 0.5, 0.0]
+    slide.velocity = np.array([0.0, 0.5, 0.0])
     release = stabint.ReleaseEvent()
     release.id = "hand"
     events = [stabint.ScriptedEvent(2, move), stabint.ScriptedEvent(3, grab), stabint.ScriptedEvent(14, slide),

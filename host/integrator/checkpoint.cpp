@@ -169,6 +169,8 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
   mix(scene.rest_positions.data(), scene.rest_positions.size());
   // The colliders shape the motion as much as the masses do. A scene without colliders mixes
   // nothing here, so checkpoints of such scenes written before colliders existed still match.
+  // Where run-time input moved them is state, not identity: it is saved with the forcing and
+  // restored, not compared.
   for (const Collider& c : scene.colliders) {
     const double fields[] = {static_cast<double>(c.shape),
                              c.center.x(),

@@ -31,7 +31,7 @@ double deepestPenetration(const Scene& scene, const Eigen::MatrixX3d& x, double 
   double deepest = 0.0;
   for (const Collider& c : scene.colliders) {
     double g[kColliderGeometry];
-    colliderGeometryAt(c, t, g);
+    colliderGeometryAt(c, c.center + t * c.velocity, g);
     for (Eigen::Index j = 0; j < x.rows(); ++j) {
       const double xj[3] = {x(j, 0), x(j, 1), x(j, 2)};
       double p[3];
@@ -46,7 +46,7 @@ double deepestPenetration(const Scene& scene, const Eigen::MatrixX3d& x, double 
 TEST(Contact, ClosestPointOutsideOfEachShape) {
   auto project = [](const Collider& c, const Eigen::Vector3d& x) {
     double g[kColliderGeometry], p[3];
-    colliderGeometryAt(c, 0.0, g);
+    colliderGeometryAt(c, c.center, g);
     const double xs[3] = {x.x(), x.y(), x.z()};
     const bool inside = closestPointOutside(g, xs, p);
     return std::make_pair(inside, Eigen::Vector3d(p[0], p[1], p[2]));

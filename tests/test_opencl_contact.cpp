@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <functional>
 #include <vector>
 
 namespace stabint {
@@ -19,7 +21,9 @@ struct ContactRun {
   double energy_scale = 0.0;
 };
 
-ContactRun run(const Scene& scene, Integrator integrator, BackendKind backend, Precision precision, int steps) {
+// `input(sim)` runs before each step (run-time collider motion).
+ContactRun run(const Scene& scene, Integrator integrator, BackendKind backend, Precision precision, int steps,
+               const std::function<void(Simulator&)>& input = nullptr) {
   SimulatorOptions o;
   o.integrator = integrator;
   o.backend = backend;
@@ -28,6 +32,7 @@ ContactRun run(const Scene& scene, Integrator integrator, BackendKind backend, P
   ContactRun out;
   out.energy_scale = sim.energyScale();
   for (int i = 0; i < steps; ++i) {
+    if (input) input(sim);
     out.reports.push_back(sim.step());
     out.x.push_back(sim.positions());
   }
@@ -58,6 +63,35 @@ TEST(OpenCLContact, ClothOnCollidersMatchesCpu) {
         friction += ref.reports[i].friction;
       }
       EXPECT_GT(friction, 0.0) << "the cloth must reach the colliders within the run";
+    }
+  }
+}
+
+// Colliders moved at run time (Simulator::setColliderPosition every frame for the box, a velocity
+// set at frame 10 for the sphere): the same tolerances, the forcing they book included.
+TEST(OpenCLContact, CollidersMovedAtRunTimeMatchCpu) {
+  const Scene scene = testing::clothOnColliders();
+  auto input = [](Simulator& sim) {
+    const double t = sim.time() + sim.options().time_step;
+    sim.setColliderPosition(2, Eigen::Vector3d(-0.6 + 0.8 * t, -0.2, 0.15 * std::sin(4.0 * t)));
+    if (sim.stepCount() == 10) sim.setColliderVelocity(0, Eigen::Vector3d(0.0, 0.3, 0.0));
+  };
+  for (Precision precision : {Precision::Double, Precision::Float}) {
+    if (!testing::openclSkipReason(precision).empty()) continue;
+    const double tol = testing::crossBackendTolerance(precision);
+    for (Integrator integrator : testing::crossBackendIntegrators(precision)) {
+      const ContactRun ref = run(scene, integrator, BackendKind::CpuReference, Precision::Double, 30, input);
+      const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 30, input);
+      double forcing = 0.0;
+      for (std::size_t i = 0; i < ref.x.size(); ++i) {
+        const std::string what = std::string(integratorName(integrator)) + " " + testing::precisionName(precision) +
+                                 " step " + std::to_string(i);
+        EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
+        EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << what;
+        EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << what;
+        forcing += std::abs(ref.reports[i].forcing);
+      }
+      EXPECT_GT(forcing, 0.0) << "the moved colliders must do work within the run";
     }
   }
 }

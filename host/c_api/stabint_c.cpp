@@ -379,6 +379,31 @@ stabint_status stabint_simulator_pin_target(const stabint_simulator* sim, int pi
   });
 }
 
+stabint_status stabint_simulator_set_collider_position(stabint_simulator* sim, int collider, const double position[3]) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(position, "position");
+    sim->sim.setColliderPosition(collider, Eigen::Vector3d(position[0], position[1], position[2]));
+  });
+}
+
+stabint_status stabint_simulator_set_collider_velocity(stabint_simulator* sim, int collider, const double velocity[3]) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(velocity, "velocity");
+    sim->sim.setColliderVelocity(collider, Eigen::Vector3d(velocity[0], velocity[1], velocity[2]));
+  });
+}
+
+stabint_status stabint_simulator_collider_position(const stabint_simulator* sim, int collider, double out[3]) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(out, "out");
+    const Eigen::Vector3d p = sim->sim.colliderPosition(collider);
+    for (int k = 0; k < 3; ++k) out[k] = p[k];
+  });
+}
+
 stabint_status stabint_simulator_set_external_forces(stabint_simulator* sim, const double* forces, size_t count) {
   return guarded([&] {
     require(sim, "simulator");

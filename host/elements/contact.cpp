@@ -9,19 +9,20 @@
 #include "elements/contact.hpp"
 
 #include "elements/element_kind.hpp"
+#include "scene/scene_data.hpp"
 
 #include <cmath>
 
 namespace stabint {
 
-void colliderGeometryAt(const Collider& collider, double t, double* g) {
+void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& position, double* g) {
   g[0] = static_cast<double>(static_cast<int>(collider.shape));
-  const Eigen::Vector3d center = collider.center + t * collider.velocity;
+  const Eigen::Vector3d& center = position;
   Eigen::Vector3d a = Eigen::Vector3d::Zero();
   switch (collider.shape) {
     case ColliderShape::Plane: a = collider.normal.normalized(); break;
     case ColliderShape::Box: a = collider.half_extents; break;
-    case ColliderShape::Capsule: a = collider.end + t * collider.velocity; break;
+    case ColliderShape::Capsule: a = collider.end + (position - collider.center); break;
     case ColliderShape::Sphere: break;
   }
   for (int c = 0; c < 3; ++c) g[1 + c] = center[c], g[4 + c] = a[c];
@@ -114,13 +115,13 @@ class ContactElementType final : public ElementType {
     block.vertices.reserve(block.count);
     for (std::size_t c = 0; c < scene.colliders.size(); ++c)
       for (int j = 0; j < n; ++j) block.vertices.push_back(j);
-    writeParams(scene, 0.0, block.params);
+    writeParams(scene, nullptr, 0.0, block.params);
     return block;
   }
 
   bool timeDependent(const SceneData& data) const override { return data.hasMovingColliders(); }
   void paramsAt(const SceneData& data, double t, std::vector<double>& params) const override {
-    writeParams(data.scene(), t, params);
+    writeParams(data.scene(), &data, t, params);
   }
 
   // Colliders are the scene's, not a part's particles': a part's colliders are appended as they are.
@@ -142,13 +143,15 @@ class ContactElementType final : public ElementType {
   void appendRecord(Scene&, const std::vector<int>&, const std::vector<double>&) const override {}
 
  private:
-  static void writeParams(const Scene& scene, double t, std::vector<double>& params) {
+  // The colliders where `data`'s motion has them at t (without it: where the scene puts them).
+  static void writeParams(const Scene& scene, const SceneData* data, double t, std::vector<double>& params) {
     const int n = scene.numParticles();
     params.resize(std::size_t(P) * scene.colliders.size() * std::size_t(n));
     double* out = params.data();
-    for (const Collider& collider : scene.colliders) {
+    for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
+      const Collider& collider = scene.colliders[c];
       double geometry[kColliderGeometry];
-      colliderGeometryAt(collider, t, geometry);
+      colliderGeometryAt(collider, data ? data->colliderPosition(static_cast<int>(c), t) : collider.center, geometry);
       for (int j = 0; j < n; ++j, out += P) {
         out[0] = collider.stiffness * scene.masses[j];
         for (int i = 0; i < kColliderGeometry; ++i) out[1 + i] = geometry[i];

@@ -13,8 +13,9 @@ namespace stabint {
 
 constexpr int kColliderGeometry = 8;
 
-/// The geometry of `collider` at time t (it translates with its velocity).
-void colliderGeometryAt(const Collider& collider, double t, double* geometry);
+/// The geometry of `collider` translated so that its reference point (Collider::center) is at
+/// `position` (SceneData::colliderPosition says where that is at a time).
+void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& position, double* geometry);
 
 /// p = the closest point of the collider's outside to x; returns false (and p = x) when x is
 /// not inside. Points on the surface are outside. A point at the exact center of a sphere or on

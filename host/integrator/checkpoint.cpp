@@ -15,7 +15,10 @@ namespace stabint {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'T', 'B', 'C', 'K', 'P', 'T', '\n'};
-constexpr std::uint32_t kVersion = 2;  // 2: element stiffnesses and enabled flags
+// 2: element stiffnesses and enabled flags; 3: collider motion (a version 2 checkpoint is read
+// with the colliders on their scene laws, which is all they could do then).
+constexpr std::uint32_t kVersion = 3;
+constexpr std::uint32_t kOldestVersion = 2;
 
 class Writer {
  public:
@@ -48,6 +51,14 @@ class Writer {
     value(r.t1);
     matrix(r.start);
     matrix(r.end);
+  }
+  void motion(const SceneData::ColliderMotion& m) {
+    value(m.t0);
+    value(m.t1);
+    vector(m.start);
+    vector(m.end);
+    vector(m.velocity);
+    flag(m.driven);
   }
   std::string take() { return std::move(out_); }
 
@@ -110,6 +121,19 @@ class Reader {
     r.end = matrix(r.active ? rows : 0, what);
     return r;
   }
+  SceneData::ColliderMotion motion() {
+    SceneData::ColliderMotion m;
+    m.t0 = value<double>("a collider's motion");
+    m.t1 = value<double>("a collider's motion");
+    m.start = vector("a collider's motion");
+    m.end = vector("a collider's motion");
+    m.velocity = vector("a collider's motion");
+    m.driven = flag("a collider's motion");
+    if (!std::isfinite(m.t0) || !std::isfinite(m.t1) || !(m.t1 >= m.t0) || !m.start.allFinite() || !m.end.allFinite() ||
+        !m.velocity.allFinite())
+      fail("a collider's motion is not finite or ends before it starts");
+    return m;
+  }
   void expectEnd() {
     if (pos_ != bytes_.size()) fail(std::to_string(bytes_.size() - pos_) + " bytes after the end");
   }
@@ -145,6 +169,8 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
   mix(scene.rest_positions.data(), scene.rest_positions.size());
   // The colliders shape the motion as much as the masses do. A scene without colliders mixes
   // nothing here, so checkpoints of such scenes written before colliders existed still match.
+  // Where run-time input moved them is state, not identity: it is saved with the forcing and
+  // restored, not compared.
   for (const Collider& c : scene.colliders) {
     const double fields[] = {static_cast<double>(c.shape),
                              c.center.x(),
@@ -199,6 +225,8 @@ std::string serializeCheckpoint(const CheckpointData& d) {
     for (double k : d.stiffness[b]) out.value(k);
     for (std::uint8_t e : d.enabled[b]) out.flag(e != 0);
   }
+  out.value(static_cast<std::int64_t>(d.forcing.colliders.size()));
+  for (const SceneData::ColliderMotion& m : d.forcing.colliders) out.motion(m);
   return out.take();
 }
 
@@ -207,8 +235,9 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
   for (char c : kMagic)
     if (in.value<char>("the header") != c) in.fail("wrong header");
   const auto version = in.value<std::uint32_t>("the version");
-  if (version != kVersion)
-    in.fail("format version " + std::to_string(version) + ", expected " + std::to_string(kVersion));
+  if (version < kOldestVersion || version > kVersion)
+    in.fail("format version " + std::to_string(version) + ", expected " + std::to_string(kOldestVersion) + " to " +
+            std::to_string(kVersion));
   CheckpointData d;
   d.scene_fingerprint = in.value<std::uint64_t>("the scene fingerprint");
   d.particles = in.value<std::int64_t>("the particle count");
@@ -251,6 +280,14 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
     for (std::uint8_t& e : enabled) e = in.flag("an element flag") ? 1 : 0;
     d.stiffness.push_back(std::move(stiffness));
     d.enabled.push_back(std::move(enabled));
+  }
+  if (version >= 3) {
+    // Checked against the scene's collider count when restored (the fingerprint covers them).
+    const auto colliders = in.value<std::int64_t>("the collider count");
+    constexpr std::size_t kMotionBytes = 11 * sizeof(double) + 1;
+    if (colliders < 0 || static_cast<std::uint64_t>(colliders) > bytes.size() / kMotionBytes)
+      in.fail("collider count " + std::to_string(colliders) + " does not fit the data");
+    for (std::int64_t c = 0; c < colliders; ++c) d.forcing.colliders.push_back(in.motion());
   }
   in.expectEnd();
   return d;

@@ -17,7 +17,7 @@ void forEachContact(const SceneData& scene, double t, const Eigen::MatrixX3d& x,
   const std::vector<Collider>& colliders = scene.scene().colliders;
   for (std::size_t c = 0; c < colliders.size(); ++c) {
     double g[kColliderGeometry];
-    colliderGeometryAt(colliders[c], t, g);
+    scene.colliderGeometry(static_cast<int>(c), t, g);
     for (Eigen::Index j = 0; j < x.rows(); ++j) {
       const double xj[3] = {x(j, 0), x(j, 1), x(j, 2)};
       double p[3];
@@ -42,7 +42,7 @@ int applyFriction(const SceneData& scene, double t, double h, const Eigen::Matri
     if (collider.friction == 0.0) return;
     const Eigen::Vector3d normal = (p - x.row(j).transpose()) / depth;
     const Eigen::Vector3d before = v.row(j).transpose();
-    const Eigen::Vector3d relative = before - collider.velocity;
+    const Eigen::Vector3d relative = before - scene.colliderVelocity(static_cast<int>(c), t);
     const Eigen::Vector3d tangential = relative - relative.dot(normal) * normal;
     const double speed = tangential.norm();
     if (!(speed > 0.0)) return;

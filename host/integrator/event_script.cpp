@@ -21,6 +21,23 @@ struct Overloaded : F... {
 template <class... F>
 Overloaded(F...) -> Overloaded<F...>;
 
+// Where a path that starts at `start` on `start_frame` is at `frame`: linear between the
+// keyframes, constant after the last one. A path applied late (after its frame) may start at or
+// after a keyframe: it goes straight to the next one.
+Eigen::Vector3d pathAt(const std::vector<PathKey>& path, int start_frame, const Eigen::Vector3d& start, int frame) {
+  int f0 = start_frame;
+  Eigen::Vector3d q0 = start;
+  for (const PathKey& k : path) {
+    if (frame <= k.frame) {
+      const double s = k.frame > f0 ? static_cast<double>(frame - f0) / static_cast<double>(k.frame - f0) : 1.0;
+      return frame == k.frame ? k.position : Eigen::Vector3d((1.0 - s) * q0 + s * k.position);
+    }
+    f0 = k.frame;
+    q0 = k.position;
+  }
+  return path.back().position;
+}
+
 }  // namespace
 
 EventScript::EventScript(std::vector<ScriptedEvent> events) : events_(std::move(events)) {
@@ -35,55 +52,67 @@ EventScript::EventScript(std::vector<ScriptedEvent> events) : events_(std::move(
     if (e.frame < previous_frame)
       fail("frames must not decrease (the previous event is at frame " + std::to_string(previous_frame) + ")");
     previous_frame = e.frame;
-    std::visit(
-        Overloaded{
-            [&](const GrabEvent& g) {
-              if (!std::isfinite(g.stiffness) || !(g.stiffness > 0.0)) fail("grab stiffness must be finite and > 0");
-              if (g.vertex < 0) fail("grab vertex " + std::to_string(g.vertex) + " must be >= 0");
-              int last = e.frame;
-              for (std::size_t k = 0; k < g.path.size(); ++k) {
-                if (g.path[k].frame <= last)
-                  fail("grab path keyframe " + std::to_string(k) + " must come after frame " + std::to_string(last));
-                if (!g.path[k].position.allFinite()) fail("grab path keyframe " + std::to_string(k) + " is not finite");
-                last = g.path[k].frame;
-              }
-              if (!g.id.empty())
-                for (const auto& seen : grabs)
-                  if (seen.first == g.id) fail("grab id '" + g.id + "' is used twice");
-              grabs.emplace_back(g.id, true);
-              held_vertices.push_back(g.vertex);
-            },
-            [&](const ReleaseEvent& r) {
-              if (!r.id.empty()) {
-                for (std::size_t k = 0; k < grabs.size(); ++k) {
-                  if (grabs[k].first != r.id) continue;
-                  if (!grabs[k].second) fail("grab '" + r.id + "' is already released");
-                  grabs[k].second = false;
-                  held_vertices[k] = -1;
-                  return;
-                }
-                fail("release of '" + r.id + "': no earlier grab has that id");
-              }
-              for (std::size_t k = held_vertices.size(); k-- > 0;) {
-                if (held_vertices[k] != r.vertex) continue;
-                grabs[k].second = false;
-                held_vertices[k] = -1;
-                return;
-              }
-              fail("release of vertex " + std::to_string(r.vertex) + ": no handle is held there");
-            },
-            [&](const ImpulseEvent& im) {
-              if (im.vertices.empty()) fail("impulse lists no vertex");
-              if (!im.velocity.allFinite()) fail("impulse velocity is not finite");
-            },
-            [&](const ElementEvent& el) {
-              if (el.indices.empty()) fail("elements event lists no element");
-              if (!el.stiffness && !el.enabled) fail("elements event needs a stiffness, an enabled flag or both");
-              if (el.stiffness && (!std::isfinite(*el.stiffness) || !(*el.stiffness >= 0.0)))
-                fail("elements event stiffness must be finite and >= 0");
-            },
-        },
-        e.action);
+    auto checkPath = [&](const std::vector<PathKey>& path, const char* owner) {
+      int last = e.frame;
+      for (std::size_t k = 0; k < path.size(); ++k) {
+        if (path[k].frame <= last)
+          fail(std::string(owner) + " path keyframe " + std::to_string(k) + " must come after frame " +
+               std::to_string(last));
+        if (!path[k].position.allFinite())
+          fail(std::string(owner) + " path keyframe " + std::to_string(k) + " is not finite");
+        last = path[k].frame;
+      }
+    };
+    std::visit(Overloaded{
+                   [&](const GrabEvent& g) {
+                     if (!std::isfinite(g.stiffness) || !(g.stiffness > 0.0))
+                       fail("grab stiffness must be finite and > 0");
+                     if (g.vertex < 0) fail("grab vertex " + std::to_string(g.vertex) + " must be >= 0");
+                     checkPath(g.path, "grab");
+                     if (!g.id.empty())
+                       for (const auto& seen : grabs)
+                         if (seen.first == g.id) fail("grab id '" + g.id + "' is used twice");
+                     grabs.emplace_back(g.id, true);
+                     held_vertices.push_back(g.vertex);
+                   },
+                   [&](const ReleaseEvent& r) {
+                     if (!r.id.empty()) {
+                       for (std::size_t k = 0; k < grabs.size(); ++k) {
+                         if (grabs[k].first != r.id) continue;
+                         if (!grabs[k].second) fail("grab '" + r.id + "' is already released");
+                         grabs[k].second = false;
+                         held_vertices[k] = -1;
+                         return;
+                       }
+                       fail("release of '" + r.id + "': no earlier grab has that id");
+                     }
+                     for (std::size_t k = held_vertices.size(); k-- > 0;) {
+                       if (held_vertices[k] != r.vertex) continue;
+                       grabs[k].second = false;
+                       held_vertices[k] = -1;
+                       return;
+                     }
+                     fail("release of vertex " + std::to_string(r.vertex) + ": no handle is held there");
+                   },
+                   [&](const ImpulseEvent& im) {
+                     if (im.vertices.empty()) fail("impulse lists no vertex");
+                     if (!im.velocity.allFinite()) fail("impulse velocity is not finite");
+                   },
+                   [&](const ElementEvent& el) {
+                     if (el.indices.empty()) fail("elements event lists no element");
+                     if (!el.stiffness && !el.enabled)
+                       fail("elements event needs a stiffness, an enabled flag or both");
+                     if (el.stiffness && (!std::isfinite(*el.stiffness) || !(*el.stiffness >= 0.0)))
+                       fail("elements event stiffness must be finite and >= 0");
+                   },
+                   [&](const ColliderEvent& c) {
+                     if (c.collider < 0) fail("collider " + std::to_string(c.collider) + " must be >= 0");
+                     if (c.path.empty() == !c.velocity) fail("collider event needs a path or a velocity (one of them)");
+                     if (c.velocity && !c.velocity->allFinite()) fail("collider velocity is not finite");
+                     checkPath(c.path, "collider");
+                   },
+               },
+               e.action);
   }
 }
 
@@ -131,6 +160,20 @@ void EventScript::apply(Simulator& sim) {
                        if (el.stiffness) sim.setElementStiffness(el.kind, el.indices, *el.stiffness);
                        if (el.enabled) sim.setElementEnabled(el.kind, el.indices, *el.enabled);
                      },
+                     [&](const ColliderEvent& c) {
+                       // Validated by the simulator first, so a refused event leaves the path
+                       // under way, if any, playing.
+                       Handle path{next_, c.collider, frame, Eigen::Vector3d::Zero()};
+                       if (c.velocity) {
+                         sim.setColliderVelocity(c.collider, *c.velocity);
+                       } else {
+                         path.start = sim.colliderPosition(c.collider);
+                       }
+                       for (std::size_t k = collider_paths_.size(); k-- > 0;)
+                         if (collider_paths_[k].pin == c.collider)
+                           collider_paths_.erase(collider_paths_.begin() + static_cast<std::ptrdiff_t>(k));
+                       if (!c.velocity) collider_paths_.push_back(path);
+                     },
                  },
                  e.action);
     } catch (const InvalidInputError& error) {
@@ -138,25 +181,23 @@ void EventScript::apply(Simulator& sim) {
       throw InvalidInputError(eventName(next_ - 1, e) + ": " + error.what());
     }
   }
-  // Each held handle's target for the end of the coming step (frame + 1): linear between the
-  // grab's position at its frame and the keyframes, constant after the last one.
+  // Each held handle's target and each moving collider's position for the end of the coming step
+  // (frame + 1), from their paths.
+  const int f = frame + 1;
   for (const Handle& h : held_) {
     const GrabEvent& g = std::get<GrabEvent>(events_[h.event].action);
-    if (g.path.empty()) continue;
-    const int f = frame + 1;
-    int f0 = h.start_frame;
-    Eigen::Vector3d q0 = h.start, q = g.path.back().position;
-    for (const PathKey& k : g.path) {
-      if (f <= k.frame) {
-        // A grab applied late (after its frame) may start at or after a keyframe: go straight to it.
-        const double s = k.frame > f0 ? static_cast<double>(f - f0) / static_cast<double>(k.frame - f0) : 1.0;
-        q = f == k.frame ? k.position : Eigen::Vector3d((1.0 - s) * q0 + s * k.position);
-        break;
-      }
-      f0 = k.frame;
-      q0 = k.position;
+    if (!g.path.empty()) sim.setPinTarget(h.pin, pathAt(g.path, h.start_frame, h.start, f));
+  }
+  for (std::size_t k = 0; k < collider_paths_.size();) {
+    const Handle& h = collider_paths_[k];
+    const std::vector<PathKey>& path = std::get<ColliderEvent>(events_[h.event].action).path;
+    sim.setColliderPosition(h.pin, pathAt(path, h.start_frame, h.start, f));
+    // At its last keyframe the collider stays: the path is done.
+    if (f >= path.back().frame) {
+      collider_paths_.erase(collider_paths_.begin() + static_cast<std::ptrdiff_t>(k));
+    } else {
+      ++k;
     }
-    sim.setPinTarget(h.pin, q);
   }
 }
 

@@ -12,6 +12,7 @@
 #include "integrator/root_find.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_data.hpp"
+#include "scene/validation.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 
@@ -511,6 +512,32 @@ struct Simulator::Impl {
     scene.rampPinTarget(pin, q, t, t + options.time_step);
   }
 
+  void checkCollider(int collider) const {
+    const int colliders = static_cast<int>(scene.scene().colliders.size());
+    if (collider < 0 || collider >= colliders)
+      throw InvalidInputError("collider " + std::to_string(collider) + " out of range (the scene has " +
+                              std::to_string(colliders) + " colliders)");
+  }
+
+  // The bound of the scene's coordinates and speeds (validateScene): beyond it the contact
+  // energies overflow.
+  void checkColliderVector(int collider, const Eigen::Vector3d& value, const char* what) const {
+    checkCollider(collider);
+    if (!value.allFinite() || !(value.cwiseAbs().maxCoeff() <= validation::kMaxMagnitude))
+      throw InvalidInputError("collider " + std::to_string(collider) + ": " + what +
+                              " is not finite or exceeds 1e150 in magnitude");
+  }
+
+  void setColliderPosition(int collider, const Eigen::Vector3d& position) {
+    checkColliderVector(collider, position, "position");
+    scene.rampColliderPosition(collider, position, t, t + options.time_step);
+  }
+
+  void setColliderVelocity(int collider, const Eigen::Vector3d& velocity) {
+    checkColliderVector(collider, velocity, "velocity");
+    scene.setColliderVelocity(collider, velocity, t);
+  }
+
   void setExternalForces(const Eigen::MatrixX3d& f) {
     checkState(f, "external forces");
     scene.rampUserForces(f, t, t + options.time_step);
@@ -718,6 +745,9 @@ struct Simulator::Impl {
       same_elements = d.stiffness[b].size() == count;
     }
     if (!same_elements) throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
+    const std::size_t motions = d.forcing.colliders.size();
+    if (motions != 0 && motions != scene.scene().colliders.size())
+      throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");
     if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
     restoreElements(d);
     backend->write(kX, d.x);
@@ -836,6 +866,20 @@ Eigen::Vector3d Simulator::pinTarget(int pin) const {
   return impl_->scene.pinTarget(pin, impl_->t);
 }
 void Simulator::setExternalForces(const Eigen::MatrixX3d& forces) { impl_->setExternalForces(forces); }
+void Simulator::setColliderPosition(int collider, const Eigen::Vector3d& position) {
+  impl_->setColliderPosition(collider, position);
+}
+void Simulator::setColliderVelocity(int collider, const Eigen::Vector3d& velocity) {
+  impl_->setColliderVelocity(collider, velocity);
+}
+Eigen::Vector3d Simulator::colliderPosition(int collider) const {
+  impl_->checkCollider(collider);
+  return impl_->scene.colliderPosition(collider, impl_->t);
+}
+Eigen::Vector3d Simulator::colliderVelocity(int collider) const {
+  impl_->checkCollider(collider);
+  return impl_->scene.colliderVelocity(collider, impl_->t);
+}
 void Simulator::setState(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   impl_->setState(positions, velocities);
 }

@@ -1104,8 +1104,8 @@ ordered sceneToJson(const Scene& s) {
 }
 
 // --- scripted events (include/stabint/events.hpp) --------------------------------------------------
-// {"frame": f, "<kind>": {...}}: one action per event. A new kind of event (moving a collider)
-// adds a key here, in eventToJson, and a case in EventScript::apply.
+// {"frame": f, "<kind>": {...}}: one action per event. A new kind of event adds a key here, in
+// eventToJson, and a case in EventScript::apply.
 
 // An element list index of `kind` in scene `s`.
 int elementCount(const Scene& s, ElementKind kind) {
@@ -1119,27 +1119,32 @@ int elementCount(const Scene& s, ElementKind kind) {
   return 0;
 }
 
+// A path: keyframes [frame, x, y, z] with frames increasing after the event's (`owner`'s).
+std::vector<PathKey> readPath(const Field& path, int frame, const char* owner) {
+  std::vector<PathKey> keys;
+  int last = frame;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const Field key = path[i];
+    if (!key.value().is_array() || key.size() != 4) key.fail("expected a keyframe [frame, x, y, z]");
+    PathKey k;
+    k.frame = key[0].integer();
+    if (k.frame <= last)
+      key[0].fail("keyframe frame " + std::to_string(k.frame) + " must be after " + std::to_string(last) +
+                  (i == 0 ? " (" + std::string(owner) + " frame)" : std::string(" (the previous keyframe's)")));
+    last = k.frame;
+    k.position = Eigen::Vector3d(key[1].number(), key[2].number(), key[3].number());
+    keys.push_back(k);
+  }
+  return keys;
+}
+
 GrabEvent readGrab(const Field& f, const Scene& s, int frame) {
   f.allowOnly({"id", "vertex", "stiffness", "path"});
   GrabEvent g;
   if (auto id = f.find("id")) g.id = id->string();
   g.vertex = f.member("vertex").particle(s.numParticles());
   g.stiffness = f.member("stiffness").positive();
-  if (auto path = f.find("path")) {
-    int last = frame;
-    for (size_t i = 0; i < path->size(); ++i) {
-      const Field key = (*path)[i];
-      if (!key.value().is_array() || key.size() != 4) key.fail("expected a keyframe [frame, x, y, z]");
-      PathKey k;
-      k.frame = key[0].integer();
-      if (k.frame <= last)
-        key[0].fail("keyframe frame " + std::to_string(k.frame) + " must be after " + std::to_string(last) +
-                    (i == 0 ? " (the grab's frame)" : " (the previous keyframe's)"));
-      last = k.frame;
-      k.position = Eigen::Vector3d(key[1].number(), key[2].number(), key[3].number());
-      g.path.push_back(k);
-    }
-  }
+  if (auto path = f.find("path")) g.path = readPath(*path, frame, "the grab's");
   return g;
 }
 
@@ -1196,13 +1201,34 @@ ElementEvent readElements(const Field& f, const Scene& s) {
   return e;
 }
 
+ColliderEvent readColliderEvent(const Field& f, const Scene& s, int frame) {
+  f.allowOnly({"index", "path", "velocity"});
+  ColliderEvent c;
+  const Field index = f.member("index");
+  c.collider = index.integer();
+  const int count = static_cast<int>(s.colliders.size());
+  if (c.collider < 0 || c.collider >= count)
+    index.fail("collider " + std::to_string(c.collider) + " out of range [0, " + std::to_string(count) + ")");
+  auto path = f.find("path");
+  auto velocity = f.find("velocity");
+  if (path && velocity) velocity->fail("give either path or velocity, not both");
+  if (!path && !velocity) f.fail("needs path or velocity");
+  if (path) {
+    c.path = readPath(*path, frame, "the event's");
+    if (c.path.empty()) path->fail("lists no keyframe");
+  } else {
+    c.velocity = velocity->vector3();
+  }
+  return c;
+}
+
 // The "events" list of a scene file, against its scene `s` (indices in range, "where" selected
 // on its rest shape); the ordering rules are EventScript's, reported at the event's path.
 EventScript readEvents(const Field& list, const Scene& s) {
   std::vector<ScriptedEvent> events;
   for (size_t i = 0; i < list.size(); ++i) {
     const Field entry = list[i];
-    entry.allowOnly({"frame", "grab", "release", "impulse", "elements"});
+    entry.allowOnly({"frame", "grab", "release", "impulse", "elements", "collider"});
     ScriptedEvent ev;
     const Field frame = entry.member("frame");
     ev.frame = frame.integer();
@@ -1212,7 +1238,8 @@ EventScript readEvents(const Field& list, const Scene& s) {
     if (auto f = entry.find("release")) ev.action = readRelease(*f, s), ++actions;
     if (auto f = entry.find("impulse")) ev.action = readImpulse(*f, s), ++actions;
     if (auto f = entry.find("elements")) ev.action = readElements(*f, s), ++actions;
-    if (actions != 1) entry.fail("needs exactly one of grab, release, impulse, elements");
+    if (auto f = entry.find("collider")) ev.action = readColliderEvent(*f, s, ev.frame), ++actions;
+    if (actions != 1) entry.fail("needs exactly one of grab, release, impulse, elements, collider");
     events.push_back(std::move(ev));
   }
   try {
@@ -1220,6 +1247,14 @@ EventScript readEvents(const Field& list, const Scene& s) {
   } catch (const InvalidInputError& e) {
     list.fail(e.what());
   }
+}
+
+ordered pathToJson(const std::vector<PathKey>& keys) {
+  ordered path = ordered::array();
+  for (const PathKey& k : keys)
+    path.push_back(
+        ordered::array({ordered(k.frame), ordered(k.position.x()), ordered(k.position.y()), ordered(k.position.z())}));
+  return path;
 }
 
 ordered eventToJson(const ScriptedEvent& ev) {
@@ -1230,13 +1265,7 @@ ordered eventToJson(const ScriptedEvent& ev) {
     if (!g->id.empty()) grab["id"] = g->id;
     grab["vertex"] = g->vertex;
     grab["stiffness"] = g->stiffness;
-    if (!g->path.empty()) {
-      ordered path = ordered::array();
-      for (const PathKey& k : g->path)
-        path.push_back(ordered::array(
-            {ordered(k.frame), ordered(k.position.x()), ordered(k.position.y()), ordered(k.position.z())}));
-      grab["path"] = std::move(path);
-    }
+    if (!g->path.empty()) grab["path"] = pathToJson(g->path);
     e["grab"] = std::move(grab);
   } else if (const auto* r = std::get_if<ReleaseEvent>(&ev.action)) {
     e["release"] = r->id.empty() ? ordered(r->vertex) : ordered(r->id);
@@ -1249,6 +1278,15 @@ ordered eventToJson(const ScriptedEvent& ev) {
     if (el->stiffness) elements["stiffness"] = *el->stiffness;
     if (el->enabled) elements["enabled"] = *el->enabled;
     e["elements"] = std::move(elements);
+  } else if (const auto* c = std::get_if<ColliderEvent>(&ev.action)) {
+    ordered collider;
+    collider["index"] = c->collider;
+    if (c->velocity) {
+      collider["velocity"] = vec(*c->velocity);
+    } else {
+      collider["path"] = pathToJson(c->path);
+    }
+    e["collider"] = std::move(collider);
   }
   return e;
 }

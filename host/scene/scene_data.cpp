@@ -2,6 +2,8 @@
 // every iteration.
 #include "scene/scene_data.hpp"
 
+#include "elements/contact.hpp"
+
 #include <algorithm>
 
 namespace stabint {
@@ -38,6 +40,49 @@ SceneData::SceneData(const Scene& scene) {
   moving_colliders_ =
       std::any_of(scene_.colliders.begin(), scene_.colliders.end(), [](const Collider& c) { return c.moving(); });
   pin_ramps_.resize(scene_.pins.size());
+  collider_motion_ = sceneColliderMotion();
+}
+
+std::vector<SceneData::ColliderMotion> SceneData::sceneColliderMotion() const {
+  std::vector<ColliderMotion> motion;
+  for (const Collider& c : scene_.colliders)
+    motion.push_back(ColliderMotion{0.0, 0.0, c.center, c.center, c.velocity, false});
+  return motion;
+}
+
+Eigen::Vector3d SceneData::ColliderMotion::at(double t) const {
+  if (t1 > t0) {
+    if (!(t > t0)) return start;
+    if (t < t1) {
+      const double s = (t - t0) / (t1 - t0);
+      return (1.0 - s) * start + s * end;
+    }
+  }
+  // The scene's law center + t velocity is end + (t - 0) velocity: the same operations.
+  if (velocity.isZero(0.0)) return end;
+  return end + (t - t1) * velocity;
+}
+
+Eigen::Vector3d SceneData::ColliderMotion::velocityAt(double t) const {
+  if (t1 > t0 && !(t > t1)) return (end - start) / (t1 - t0);
+  return velocity;
+}
+
+bool SceneData::ColliderMotion::movesDuring(double a, double b) const {
+  if (!velocity.isZero(0.0) && b > t1) return true;
+  return t1 > a && t0 < b && start != end;
+}
+
+Eigen::Vector3d SceneData::colliderPosition(int collider, double t) const {
+  return collider_motion_[static_cast<std::size_t>(collider)].at(t);
+}
+
+Eigen::Vector3d SceneData::colliderVelocity(int collider, double t) const {
+  return collider_motion_[static_cast<std::size_t>(collider)].velocityAt(t);
+}
+
+void SceneData::colliderGeometry(int collider, double t, double* geometry) const {
+  colliderGeometryAt(scene_.colliders[static_cast<std::size_t>(collider)], colliderPosition(collider, t), geometry);
 }
 
 Eigen::MatrixX3d SceneData::Ramp::at(double t) const {
@@ -74,9 +119,11 @@ void SceneData::pinTargets(double t, Eigen::MatrixX3d& out) const {
 }
 
 bool SceneData::forcingChangesDuring(double t0, double t1) const {
-  if (moving_pins_ || time_dependent_fields_ || moving_colliders_) return true;
+  if (moving_pins_ || time_dependent_fields_) return true;
   auto changes = [&](const Ramp& r) { return r.active && r.t1 > t0 && r.t0 < t1 && r.start != r.end; };
-  return changes(user_forces_) || std::any_of(pin_ramps_.begin(), pin_ramps_.end(), changes);
+  return changes(user_forces_) || std::any_of(pin_ramps_.begin(), pin_ramps_.end(), changes) ||
+         std::any_of(collider_motion_.begin(), collider_motion_.end(),
+                     [&](const ColliderMotion& m) { return m.movesDuring(t0, t1); });
 }
 
 void SceneData::rampPinTarget(int pin, const Eigen::Vector3d& target, double t0, double t1) {
@@ -90,6 +137,22 @@ void SceneData::rampPinTarget(int pin, const Eigen::Vector3d& target, double t0,
 void SceneData::rampUserForces(const Eigen::MatrixX3d& forces, double t0, double t1) {
   const Eigen::MatrixX3d start = user_forces_.active ? user_forces_.at(t0) : Eigen::MatrixX3d::Zero(n_, 3);
   user_forces_ = Ramp{t0, t1, start, forces, true};
+  ++forcing_version_;
+}
+
+void SceneData::rampColliderPosition(int collider, const Eigen::Vector3d& position, double t0, double t1) {
+  ColliderMotion& m = collider_motion_[static_cast<std::size_t>(collider)];
+  const Eigen::Vector3d start = m.at(t0);
+  if (!m.driven) ++driven_colliders_;
+  m = ColliderMotion{t0, t1, start, position, Eigen::Vector3d::Zero(), true};
+  ++forcing_version_;
+}
+
+void SceneData::setColliderVelocity(int collider, const Eigen::Vector3d& velocity, double t0) {
+  ColliderMotion& m = collider_motion_[static_cast<std::size_t>(collider)];
+  const Eigen::Vector3d start = m.at(t0);
+  if (!m.driven) ++driven_colliders_;
+  m = ColliderMotion{t0, t0, start, start, velocity, true};
   ++forcing_version_;
 }
 
@@ -182,6 +245,9 @@ void SceneData::setForcingState(const ForcingState& state) {
   ramped_pins_ =
       static_cast<int>(std::count_if(pin_ramps_.begin(), pin_ramps_.end(), [](const Ramp& r) { return r.active; }));
   user_forces_ = state.user_forces;
+  collider_motion_ = state.colliders.empty() ? sceneColliderMotion() : state.colliders;
+  driven_colliders_ = static_cast<int>(std::count_if(collider_motion_.begin(), collider_motion_.end(),
+                                                     [](const ColliderMotion& m) { return m.driven; }));
   ++forcing_version_;
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // SceneData: the validated scene in the form both backends consume. Built once per Simulator;
-// everything here is immutable afterwards except the forcing: pin targets and external forces,
-// which a running simulation's input replaces (docs/method.md, "Per-frame input"). Backends
+// everything here is immutable afterwards except the forcing: pin targets, external forces and
+// collider motion, which a running simulation's input replaces (docs/method.md, "Per-frame input"). Backends
 // evaluate the forcing through pinTarget/externalForces and key their caches on forcingVersion().
 #include "elements/element_type.hpp"
 
@@ -45,8 +45,15 @@ class SceneData {
   void pinTargets(double t, Eigen::MatrixX3d& out) const;
   /// True when pins move or force fields change with time (the blend then books forcing).
   bool hasTimeDependentForcing() const { return hasMovingPins() || hasTimeDependentForces() || hasMovingColliders(); }
-  /// A collider moves: the contact params depend on time and the collider does work.
-  bool hasMovingColliders() const { return moving_colliders_; }
+  /// A collider moves by its scene velocity or was driven at run time: the contact params depend
+  /// on time and the collider does work.
+  bool hasMovingColliders() const { return moving_colliders_ || driven_colliders_ > 0; }
+  /// Where collider c's reference point (Collider::center) is at time t, and how fast it moves
+  /// there (over the step ending at t when t ends a ramp).
+  Eigen::Vector3d colliderPosition(int collider, double t) const;
+  Eigen::Vector3d colliderVelocity(int collider, double t) const;
+  /// The collider's geometry (host/elements/contact.hpp) at time t.
+  void colliderGeometry(int collider, double t, double* geometry) const;
   /// Pin targets or external forces that may change with time: a pin law that moves, a force
   /// field that varies, or any user ramp (their params are then evaluated per time).
   bool hasTimeDependentForces() const { return time_dependent_fields_ || user_forces_.active; }
@@ -64,6 +71,11 @@ class SceneData {
   /// The user's per-particle forces move linearly from their value at t0 to `forces` at t1 and
   /// stay there (zero before the first call).
   void rampUserForces(const Eigen::MatrixX3d& forces, double t0, double t1);
+  /// Collider `collider` moves linearly from its position at t0 to `position` at t1 and stays
+  /// there; its scene velocity is no longer used.
+  void rampColliderPosition(int collider, const Eigen::Vector3d& position, double t0, double t1);
+  /// Collider `collider` moves with `velocity` from its position at t0 on.
+  void setColliderVelocity(int collider, const Eigen::Vector3d& velocity, double t0);
   /// Incremented by every change of the forcing (ramps, restore), so cached forcing is refreshed.
   int forcingVersion() const { return forcing_version_; }
 
@@ -103,11 +115,27 @@ class SceneData {
     /// Exactly `start` at t0 and `end` at and after t1.
     Eigen::MatrixX3d at(double t) const;
   };
+  /// A collider's translation: from `start` at t0 linearly to `end` at t1 (none when t1 == t0),
+  /// then on with `velocity`. The scene's law center + velocity t is {0, 0, center, center,
+  /// velocity}; `driven` tells a motion set at run time.
+  struct ColliderMotion {
+    double t0 = 0.0, t1 = 0.0;
+    Eigen::Vector3d start = Eigen::Vector3d::Zero(), end = Eigen::Vector3d::Zero();
+    Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+    bool driven = false;
+    /// Exactly `start` at t0 and `end` at t1; the scene's law bit for bit (center + t velocity).
+    Eigen::Vector3d at(double t) const;
+    /// The ramp's velocity up to t1 (so a step ending at t1 sees the velocity it moved with),
+    /// `velocity` after it.
+    Eigen::Vector3d velocityAt(double t) const;
+    bool movesDuring(double a, double b) const;
+  };
   struct ForcingState {
     std::vector<Ramp> pins;  // one per pin; inactive: the scene's law
     Ramp user_forces;
+    std::vector<ColliderMotion> colliders;  // one per collider; empty: the scene's laws
   };
-  ForcingState forcingState() const { return ForcingState{pin_ramps_, user_forces_}; }
+  ForcingState forcingState() const { return ForcingState{pin_ramps_, user_forces_, collider_motion_}; }
   /// Replaces the forcing with a saved one of the same scene (sizes checked by the caller).
   void setForcingState(const ForcingState& state);
 
@@ -116,6 +144,8 @@ class SceneData {
   void numberContributions();
   // Zeroes the weights of the disabled elements of a freshly built block.
   void applyEnabled(std::size_t block);
+  // The scene's laws of the colliders (their velocity from their center at t = 0).
+  std::vector<ColliderMotion> sceneColliderMotion() const;
 
   Scene scene_;
   int n_ = 0;
@@ -127,6 +157,8 @@ class SceneData {
   std::vector<Ramp> pin_ramps_;
   int ramped_pins_ = 0;
   Ramp user_forces_;
+  std::vector<ColliderMotion> collider_motion_;  // one per collider
+  int driven_colliders_ = 0;
   int forcing_version_ = 0;
   int layout_version_ = 0;
   std::vector<std::vector<std::uint8_t>> enabled_;  // per block; empty: all enabled

@@ -1,7 +1,7 @@
 #pragma once
 // Scripted interaction: timed events that a scene file may carry ("events", docs/scene-format.md)
 // and the player that applies them to a running Simulator before each step, so that a grab, a
-// drag, a release, an impulse or an element change replays, and can be charted and tested,
+// drag, a release, an impulse, an element change or a collider's motion replays, and can be charted and tested,
 // without a window. Every event goes through the Simulator's per-frame input, so its energy is
 // booked by the same rules (docs/method.md, "Per-frame input").
 #include <stabint/simulator.hpp>
@@ -56,10 +56,22 @@ struct ElementEvent {
   std::optional<bool> enabled;
 };
 
-/// What an event does. Extension point: a new kind of event (e.g. moving a collider) is a new
-/// struct here, a case in EventScript's checks and apply, and a key in the scene file's reader
-/// and writer (docs/scene-format.md, "Events").
-using EventAction = std::variant<GrabEvent, ReleaseEvent, ImpulseEvent, ElementEvent>;
+/// Move collider `collider` (its index in the scene's list) either along `path`, keyframes of
+/// where its reference point (Collider::center) is to be (Simulator::setColliderPosition): from
+/// where it is at the event's frame linearly to the keyframes in turn (frames strictly
+/// increasing, after the event's), then it stays at the last one; or with `velocity` from the
+/// event's frame on (Simulator::setColliderVelocity). Exactly one of the two. A later collider
+/// event for the same collider takes over from where the collider then is.
+struct ColliderEvent {
+  int collider = 0;
+  std::vector<PathKey> path;
+  std::optional<Eigen::Vector3d> velocity;
+};
+
+/// What an event does. Extension point: a new kind of event is a new struct here, a case in
+/// EventScript's checks and apply, and a key in the scene file's reader and writer
+/// (docs/scene-format.md, "Events").
+using EventAction = std::variant<GrabEvent, ReleaseEvent, ImpulseEvent, ElementEvent, ColliderEvent>;
 
 /// An action applied before the step whose index is `frame` (0: before the first step).
 struct ScriptedEvent {
@@ -69,8 +81,14 @@ struct ScriptedEvent {
 
 /// Plays a list of events on a simulator: call apply(sim) before every sim.step(). The events
 /// must be in non-decreasing frame order, releases must name an earlier grab, grabs' ids must
-/// be unique, paths must have increasing frames after their grab's and finite positions; the
+/// be unique, paths must have increasing frames after their event's and finite positions; the
 /// constructor throws InvalidInputError naming the event ("event 3 (frame 60): ...").
+///
+/// The script has state of its own: which events it applied, the handles it holds (with their
+/// pins and paths) and the collider paths under way. A Checkpoint of the simulator does not hold
+/// it. EventScript is a value: copy it when taking a checkpoint and play the copy after restoring
+/// that checkpoint (a fresh script played on a restored simulator would apply every earlier
+/// event again, and lose the handles it holds).
 class EventScript {
  public:
   EventScript() = default;
@@ -89,15 +107,17 @@ class EventScript {
   int handlePin(const std::string& id) const;
 
  private:
+  // A path being played: a held handle (the pin of its grab) or a moving collider.
   struct Handle {
-    std::size_t event;  // index of its grab in events_
-    int pin = -1;
+    std::size_t event;  // index of its grab or collider event in events_
+    int pin = -1;       // the handle's pin, or the collider's index
     int start_frame = 0;
     Eigen::Vector3d start = Eigen::Vector3d::Zero();
   };
   std::vector<ScriptedEvent> events_;
   std::size_t next_ = 0;
   std::vector<Handle> held_;
+  std::vector<Handle> collider_paths_;
 };
 
 /// A scene file's scene and its events (an empty list when it has none).

@@ -94,7 +94,8 @@ enum class ColliderShape { Plane, Sphere, Box, Capsule };
 /// the scene collides with every collider through the contact energy
 /// E = w_j/2 |x_j - p_j|^2, p_j the closest point of the collider's outside (x_j itself out of
 /// contact, so E = 0 there), w_j = stiffness * m_j. The collider translates with `velocity`
-/// (0: static): its geometry at time t is that at t = 0 moved by velocity * t.
+/// (0: static): its geometry at time t is that at t = 0 moved by velocity * t, until a running
+/// Simulator moves it (Simulator::setColliderPosition, setColliderVelocity).
 struct Collider {
   ColliderShape shape = ColliderShape::Plane;
   /// Plane: a point of the plane; sphere and box: the center; capsule: one end of its axis.

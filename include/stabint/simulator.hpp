@@ -170,7 +170,8 @@ struct StepReport {
 
 /// A snapshot of a running simulation: time, step count, state, BDF2 history, the tracked
 /// target H*, the pins (with grabbed and released handles), every element's stiffness and
-/// enabled flag, and the forcing set by per-frame input (pin targets, external forces). Restoring it into a Simulator
+/// enabled flag, and the forcing set by per-frame input (pin targets, external forces, collider motion). Restoring it
+/// into a Simulator
 /// of the same scene continues bit for bit as the original did from that moment (same options, same backend and
 /// precision) when both have the same pins and element stiffnesses; when they differ (a checkpoint
 /// taken during a grab or after a stiffness change, restored into a fresh simulator) the global
@@ -252,6 +253,21 @@ class Simulator {
   void setState(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
   void setPositions(const Eigen::MatrixX3d& positions);
   void setVelocities(const Eigen::MatrixX3d& velocities);
+  /// Collider `collider` (its index in the scene's list) translates linearly from where it is to
+  /// `position` over the next step and stays there (its scene velocity is no longer used).
+  /// `position` is where its reference point, Collider::center, goes (a plane's point, a sphere's
+  /// or box's center, a capsule's first end; the rest of its shape moves with it). Call it every
+  /// frame with a tool's or the mouse's position to push things around: the collider's work is
+  /// booked by the forcing rule, like a dragged pin's, and friction drags along at the collider's
+  /// velocity over the step. Finite, at most 1e150 in magnitude.
+  void setColliderPosition(int collider, const Eigen::Vector3d& position);
+  /// Collider `collider` translates with `velocity` (m/s; zeros stop it) from where it is now
+  /// on, until the next setColliderPosition or setColliderVelocity. Booked as above.
+  void setColliderVelocity(int collider, const Eigen::Vector3d& velocity);
+  /// Where collider `collider`'s reference point (Collider::center) is at time(), and its
+  /// velocity over the last step (its set or scene velocity when it moves on by one).
+  Eigen::Vector3d colliderPosition(int collider) const;
+  Eigen::Vector3d colliderVelocity(int collider) const;
   /// Local/global iteration budget of every later step (>= 1); time, state and H* are kept.
   void setIterations(int iterations);
 

@@ -225,6 +225,17 @@ size_t stabint_simulator_backend_description(const stabint_simulator* sim, char*
 stabint_status stabint_simulator_set_pin_target(stabint_simulator* sim, int pin, const double target[3]);
 /* Current target of pin `pin` (its law's or the last set value at the current time) into `out`. */
 stabint_status stabint_simulator_pin_target(const stabint_simulator* sim, int pin, double out[3]);
+/* Collider `collider` (an index into the scene's colliders) translates linearly from where it is
+ * to `position` (x y z: where its reference point, the collider's center, goes; the rest of its
+ * shape moves with it) over the next step and stays there; its scene velocity is no longer used.
+ * Call it every frame with a tool's or the mouse's position; its work is booked in H* like a
+ * dragged pin's. */
+stabint_status stabint_simulator_set_collider_position(stabint_simulator* sim, int collider, const double position[3]);
+/* Collider `collider` translates with `velocity` (m/s; zeros stop it) from where it is now on,
+ * until the next set_collider_position or set_collider_velocity. */
+stabint_status stabint_simulator_set_collider_velocity(stabint_simulator* sim, int collider, const double velocity[3]);
+/* Where collider `collider`'s reference point is now, into `out`. */
+stabint_status stabint_simulator_collider_position(const stabint_simulator* sim, int collider, double out[3]);
 /* Per-particle external forces in newtons (on top of gravity and force fields): they ramp from
  * their current value to `forces` over the next step and persist until the next call (set zeros
  * to remove them). */

@@ -8,9 +8,11 @@ properties of :class:`Scene` are fresh copies the caller owns; step reports are 
 element lists of a scene (``scene.springs``, ``scene.pins``, ...) are views that edit it.
 
 Per-frame input between steps: ``Simulator.set_pin_target``, ``set_external_forces``,
-``set_state``/``set_positions``/``set_velocities``, ``set_iterations``; ``Simulator.checkpoint()``
-returns a :class:`Checkpoint` (``save``/``load``, ``bytes``, picklable) that ``restore`` continues
-from bit for bit.
+``set_collider_position``/``set_collider_velocity``, ``set_state``/``set_positions``/
+``set_velocities``, ``set_iterations``; ``Simulator.checkpoint()`` returns a :class:`Checkpoint`
+(``save``/``load``, ``bytes``, picklable) that ``restore`` continues from bit for bit. Scripted
+events: ``load_scene_file_with_events`` gives a scene and an :class:`EventScript` whose
+``apply(sim)`` before each step plays them (copy the script with a checkpoint to resume both).
 
 Example::
 

@@ -546,3 +546,117 @@ def test_colliders_book_friction_and_refuse_other_checkpoints():
     with pytest.raises(stabint.InvalidInputError, match="another scene"):
         stabint.Simulator(other, stabint.SimulatorOptions()).restore(checkpoint)
     stabint.Simulator(scene, stabint.SimulatorOptions()).restore(checkpoint)
+
+
+def bar_and_box(box_velocity=(0.0, 0.0, 0.0)):
+    # tests/test_collider_motion.cpp's scene: the default tet bar on the ground (collider 0) with a
+    # box (collider 1) beside it, at x in [-0.55, -0.05] (the bar spans x in [0, 1]).
+    scene = stabint.tet_bar()
+    scene.pins.clear()
+    x = scene.positions
+    x[:, 1] -= x[:, 1].min()
+    scene.positions = x
+    ground = stabint.Collider()
+    ground.shape = stabint.ColliderShape.Plane
+    box = stabint.Collider()
+    box.shape = stabint.ColliderShape.Box
+    box.center = np.array([-0.3, 0.125, 0.125])
+    box.half_extents = np.array([0.25, 0.1, 0.5])
+    box.velocity = np.array(box_velocity, dtype=float)
+    scene.colliders.append(ground)
+    scene.colliders.append(box)
+    return scene
+
+
+def test_a_collider_moved_every_frame_pushes_the_bar_with_its_work_booked():
+    options = stabint.SimulatorOptions(contact_tolerance=0.03)
+    sim = stabint.Simulator(bar_and_box(), options)
+    h = options.time_step
+    forcing, worst = 0.0, 0.0
+    for _ in range(40):
+        t = sim.time + h
+        tool = (-0.3 + 0.6 * t, 0.125, 0.125 + 0.05 * np.sin(2.0 * np.pi * t))
+        sim.set_collider_position(1, tool)
+        r = sim.step()
+        forcing += r.forcing
+        band = options.energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energy_scale)
+        worst = max(worst, abs(r.energy.total - r.target) / band)
+        assert np.array_equal(sim.collider_position(1), tool)  # exactly where it was told
+    assert forcing > 0.0
+    assert sim.velocities[:, 0].mean() > 0.6  # pushed along (the C++ test measured 1.27 m/s)
+    assert worst < 1.0  # within the blend's band (measured 0.77 of it)
+
+    sim.set_collider_velocity(1, [0.0, 0.0, 0.0])
+    stopped = sim.collider_position(1)
+    sim.step()
+    assert np.array_equal(sim.collider_position(1), stopped)
+    with pytest.raises(stabint.InvalidInputError, match="collider 2 out of range"):
+        sim.set_collider_position(2, [0.0, 0.0, 0.0])
+    with pytest.raises(stabint.InvalidInputError, match="position is not finite"):
+        sim.set_collider_position(1, [0.0, np.nan, 0.0])
+    assert np.array_equal(sim.collider_position(1), stopped)
+
+
+def test_event_scripts_play_collider_and_grab_events_and_survive_a_checkpoint_as_copies(tmp_path):
+    import copy
+
+    scene = stabint.cloth_grid(nx=6, ny=6)
+    sphere = stabint.Collider()
+    sphere.shape = stabint.ColliderShape.Sphere
+    sphere.center = np.array([0.5, -0.5, -0.3])
+    sphere.radius = 0.2
+    scene.colliders.append(sphere)
+    grab = stabint.GrabEvent()
+    grab.id = "hand"
+    grab.vertex = 30
+    grab.stiffness = 2000.0
+    grab.path = [stabint.PathKey(12, [0.1, -0.8, 0.3])]
+    move = stabint.ColliderEvent()
+    move.collider = 0
+    move.path = [stabint.PathKey(6, [0.5, -0.5, 0.1]), stabint.PathKey(10, [0.3, -0.4, 0.2])]
+    slide = stabint.ColliderEvent()
+    slide.collider = 0
+    slide.velocity = np.array([0.0, 0.5, 0.0])
+    release = stabint.ReleaseEvent()
+    release.id = "hand"
+    events = [stabint.ScriptedEvent(2, move), stabint.ScriptedEvent(3, grab), stabint.ScriptedEvent(14, slide),
+              stabint.ScriptedEvent(18, release)]
+    script = stabint.EventScript(events)
+    assert len(script) == 4 and isinstance(script.events[2].action, stabint.ColliderEvent)
+
+    # Through a file and back: the same events.
+    path = str(tmp_path / "scripted.json")
+    stabint.save_scene_file_with_events(scene, script, path)
+    loaded_scene, loaded = stabint.load_scene_file_with_events(path)
+    assert len(loaded) == 4 and loaded.events[0].action.path[1].frame == 10
+    assert np.array_equal(loaded.events[2].action.velocity, [0.0, 0.5, 0.0])
+
+    sim = stabint.Simulator(loaded_scene)
+    saved_script, checkpoint = None, None
+    for frame in range(24):
+        if frame == 8:  # mid-drag and mid-path
+            saved_script, checkpoint = copy.copy(loaded), sim.checkpoint()
+        loaded.apply(sim)
+        if frame == 5:
+            assert loaded.handle_pin("hand") == len(scene.pins)
+        sim.step()
+        if sim.step_count == 6:
+            assert np.array_equal(sim.collider_position(0), [0.5, -0.5, 0.1])  # the keyframe, exactly
+    assert loaded.handle_pin("hand") == -1
+    assert np.array_equal(sim.collider_velocity(0), [0.0, 0.5, 0.0])
+
+    restored = stabint.Simulator(loaded_scene)
+    restored.restore(checkpoint)
+    for frame in range(8, 24):
+        saved_script.apply(restored)
+        restored.step()
+    assert np.array_equal(restored.positions, sim.positions)
+
+    bad = stabint.ColliderEvent()  # neither a path nor a velocity
+    with pytest.raises(stabint.InvalidInputError, match="path or a velocity"):
+        stabint.EventScript([stabint.ScriptedEvent(0, bad)])
+    (tmp_path / "bad.json").write_text(
+        '{"format": "stabint-scene", "builtin": {"name": "cloth", "nx": 4, "ny": 4},\n'
+        ' "events": [{"frame": 1, "collider": {"index": 0, "velocity": [0, 0, 1]}}]}')
+    with pytest.raises(stabint.FileFormatError, match=r"events\[0\]\.collider\.index: collider 0 out of range"):
+        stabint.load_scene_file_with_events(str(tmp_path / "bad.json"))

@@ -680,6 +680,51 @@ static void test_colliders_from_a_scene_file(void) {
   stabint_simulator_destroy(sim);
 }
 
+/* A collider moved every frame (scenes/cloth_poke.json's sphere, behind the hanging cloth) is
+ * where it was told at each step's end, pushes the cloth with its work booked (forcing > 0), and
+ * bad input changes nothing. */
+static void test_collider_moved_every_frame(const char* scene_dir) {
+  char path[1024];
+  stabint_scene* scene = NULL;
+  stabint_simulator* sim = NULL;
+  stabint_simulator_options options;
+  stabint_step_report report;
+  double p[3], q[3], forcing = 0.0;
+  const double bad[3] = {0.0, NAN, 0.0};
+  int f, k;
+  snprintf(path, sizeof path, "%s/cloth_poke.json", scene_dir);
+  CHECK(stabint_scene_load(path, &scene) == STABINT_OK);
+  if (scene == NULL) return;
+  stabint_simulator_options_default(&options);
+  CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_OK);
+  stabint_scene_destroy(scene);
+  if (sim == NULL) return;
+  CHECK(stabint_simulator_collider_position(sim, 0, p) == STABINT_OK);
+  CHECK(p[0] == 0.5 && p[1] == 0.5 && p[2] == -0.4);
+  for (f = 1; f <= 30; ++f) {
+    /* 1.5 cm a frame toward and into the cloth at z = 0 (the sphere's radius is 0.15 m). */
+    q[0] = 0.5, q[1] = 0.5, q[2] = -0.4 + 0.015 * f;
+    CHECK(stabint_simulator_set_collider_position(sim, 0, q) == STABINT_OK);
+    CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
+    forcing += report.forcing;
+    CHECK(stabint_simulator_collider_position(sim, 0, p) == STABINT_OK);
+    for (k = 0; k < 3; ++k) CHECK(p[k] == q[k]);
+  }
+  CHECK(forcing > 0.0);
+  CHECK(stabint_simulator_set_collider_position(sim, 1, q) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "collider 1 out of range") != NULL);
+  CHECK(stabint_simulator_set_collider_position(sim, 0, bad) == STABINT_INVALID_INPUT);
+  CHECK(stabint_simulator_set_collider_velocity(sim, 0, bad) == STABINT_INVALID_INPUT);
+  CHECK(stabint_simulator_set_collider_velocity(sim, 0, NULL) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_collider_position(sim, -1, p) == STABINT_INVALID_INPUT);
+  q[0] = 0.0, q[1] = 0.0, q[2] = 0.6;
+  CHECK(stabint_simulator_set_collider_velocity(sim, 0, q) == STABINT_OK);
+  CHECK(stabint_simulator_step(sim, &report) == STABINT_OK);
+  CHECK(stabint_simulator_collider_position(sim, 0, p) == STABINT_OK);
+  CHECK(fabs(p[2] - (0.05 + 0.6 * options.time_step)) <= 1e-15);
+  stabint_simulator_destroy(sim);
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     fprintf(stderr, "usage: %s SCENE_DIR\n", argv[0]);
@@ -697,6 +742,7 @@ int main(int argc, char** argv) {
   test_checkpoints_continue_bit_for_bit();
   test_grab_and_release();
   test_colliders_from_a_scene_file();
+  test_collider_moved_every_frame(argv[1]);
   test_element_changes();
   printf("%d passed, %d failed\n", passed, failed);
   return failed == 0 ? 0 : 1;

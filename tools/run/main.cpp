@@ -83,7 +83,9 @@ std::string usage() {
        "Output:\n"
        "  --frames N                number of time steps (default 100)\n"
        "  --csv FILE                per-frame CSV, '-' for standard output: frame, time, kinetic,\n"
-       "                            elastic, external, total, target, branch, alpha,\n"
+       "                            elastic, external, total, target, forcing, damping,\n"
+       "                            event_energy, friction, contact_projection (the step's\n"
+       "                            energy book: what entered or left H*), branch, alpha,\n"
        "                            velocity_scale, iterations,\n"
        "                            energy_evaluations, local_s, gather_s, transfer_s, global_s,\n"
        "                            energy_s, bookkeeping_s (frame 0 is the initial state)\n"
@@ -357,20 +359,23 @@ class CsvWriter {
       out_ = &file_;
     }
     *out_
-        << "frame,time,kinetic,elastic,external,total,target,branch,alpha,velocity_scale,iterations,energy_evaluations,"
-           "local_s,gather_s,transfer_s,global_s,energy_s,bookkeeping_s\n";
+        << "frame,time,kinetic,elastic,external,total,target,forcing,damping,event_energy,friction,contact_projection,"
+           "branch,alpha,velocity_scale,iterations,energy_evaluations,local_s,gather_s,transfer_s,global_s,energy_s,"
+           "bookkeeping_s\n";
     check();
   }
 
   void row(int frame, const stabint::StepReport& r) {
     const auto& e = r.energy;
     const auto& t = r.times;
-    char buf[512];
-    std::snprintf(buf, sizeof(buf),
-                  "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%.17g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame,
-                  r.time, e.kinetic, e.elastic, e.external, e.total(), r.target, stabint::blendBranchName(r.branch),
-                  r.alpha, r.velocity_scale, r.iterations, r.energy_evaluations, t.local, t.gather, t.transfer,
-                  t.global, t.energy, t.bookkeeping);
+    char buf[768];
+    std::snprintf(
+        buf, sizeof(buf),
+        "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%.17g,%d,%d,%.9g,%.9g,%."
+        "9g,%.9g,%.9g,%.9g\n",
+        frame, r.time, e.kinetic, e.elastic, e.external, e.total(), r.target, r.forcing, r.damping, r.event_energy,
+        r.friction, r.contact_projection, stabint::blendBranchName(r.branch), r.alpha, r.velocity_scale, r.iterations,
+        r.energy_evaluations, t.local, t.gather, t.transfer, t.global, t.energy, t.bookkeeping);
     *out_ << buf;
     check();
   }

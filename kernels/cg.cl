@@ -7,7 +7,7 @@
 //   cg_direction  beta = (r.z)_new/(r.z)_old, p = z + beta p_old, q = K p and the partials of p.q
 //                 (z = r/diag(K) is not stored: the SpMV applies it to each neighbour's r);
 //   cg_update     alpha = (r.z)/(p.q), x += alpha p, r -= alpha q and the partials of r.z, r.r.
-// Every scalar is a sum of per-group partials (reduce.cl's workGroupSum per group), which the
+// Every scalar is a sum of per-group partials (groupSums below), which the
 // next kernel adds itself in group order in every work-group: the same order everywhere, so every
 // group uses the same alpha and beta and nothing is read back. Each work-item serves the rows
 // i = global id, + global size, ... (the group count is fixed by n, so are the sums' orders).
@@ -25,17 +25,24 @@ inline void columnSums(__global const real* partials, int groups, __local real* 
   barrier(CLK_LOCAL_MEM_FENCE);
 }
 
-// Writes the group sums of the three components of `v` as the group's partials of three columns.
-inline void writePartials3(real3 v, __global real* partials, int groups, __local real* scratch) {
-  const int group = get_group_id(0), lid = get_local_id(0);
-  const real sx = workGroupSum(v.x, scratch);
-  if (lid == 0) partials[group] = sx;
+// The group sums of `count` values per work-item (v[0..count)), one tree in local memory for all
+// of them (a barrier per level, not per value), left in scratch[k * local size] for value k.
+// `scratch` holds count * local size reals. The tree is workGroupSum's: a fixed order.
+inline void groupSums(const real* v, int count, __local real* scratch) {
+  const int lid = get_local_id(0), size = get_local_size(0);
+  for (int k = 0; k < count; ++k) scratch[k * size + lid] = v[k];
   barrier(CLK_LOCAL_MEM_FENCE);
-  const real sy = workGroupSum(v.y, scratch);
-  if (lid == 0) partials[groups + group] = sy;
-  barrier(CLK_LOCAL_MEM_FENCE);
-  const real sz = workGroupSum(v.z, scratch);
-  if (lid == 0) partials[2 * groups + group] = sz;
+  for (int stride = size / 2; stride > 0; stride >>= 1) {
+    if (lid < stride)
+      for (int k = 0; k < count; ++k) scratch[k * size + lid] += scratch[k * size + lid + stride];
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+}
+
+// Work-items 0..2 store the sums of values first..first+2 (three columns) as the group's partials.
+inline void storePartials3(__local const real* scratch, int first, __global real* partials, int groups) {
+  const int lid = get_local_id(0);
+  if (lid < 3) partials[lid * groups + get_group_id(0)] = scratch[(first + lid) * get_local_size(0)];
 }
 
 inline real3 ratio3(real3 num, real3 den) {
@@ -67,11 +74,11 @@ __kernel void cg_start(const int n, const real c, __global const int* row_start,
     rr += ri * ri;
     bb += bi * bi;
   }
-  writePartials3(rz, rz_partials, groups, scratch);
-  barrier(CLK_LOCAL_MEM_FENCE);
-  writePartials3(rr, rr_partials, groups, scratch);
-  barrier(CLK_LOCAL_MEM_FENCE);
-  writePartials3(bb, bb_partials, groups, scratch);
+  const real v[9] = {rz.x, rz.y, rz.z, rr.x, rr.y, rr.z, bb.x, bb.y, bb.z};
+  groupSums(v, 9, scratch);
+  storePartials3(scratch, 0, rz_partials, groups);
+  storePartials3(scratch, 3, rr_partials, groups);
+  storePartials3(scratch, 6, bb_partials, groups);
 }
 
 // p = z + beta p_old (beta = 0 on the first iteration), q = K p, partials of p.q.
@@ -102,7 +109,9 @@ __kernel void cg_direction(const int n, const real c, __global const int* row_st
     q[i] = qi.x, q[n + i] = qi.y, q[2 * n + i] = qi.z;
     pq += pi * qi;
   }
-  writePartials3(pq, pq_partials, groups, scratch);
+  const real v[3] = {pq.x, pq.y, pq.z};
+  groupSums(v, 3, scratch);
+  storePartials3(scratch, 0, pq_partials, groups);
 }
 
 // alpha = (r.z)/(p.q), x += alpha p, r -= alpha q, partials of the new r.z and r.r.
@@ -124,7 +133,8 @@ __kernel void cg_update(const int n, __global const real* dinv, __global const r
     rz_new += dinv[i] * ri * ri;
     rr += ri * ri;
   }
-  writePartials3(rz_new, rz_new_partials, groups, scratch);
-  barrier(CLK_LOCAL_MEM_FENCE);
-  writePartials3(rr, rr_partials, groups, scratch);
+  const real v[6] = {rz_new.x, rz_new.y, rz_new.z, rr.x, rr.y, rr.z};
+  groupSums(v, 6, scratch);
+  storePartials3(scratch, 0, rz_new_partials, groups);
+  storePartials3(scratch, 3, rr_partials, groups);
 }

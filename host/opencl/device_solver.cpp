@@ -24,7 +24,7 @@ DeviceConjugateGradient<Real>::DeviceConjugateGradient(const cl::Context& contex
     : context_(context), queue_(queue), n_(n), masses_(masses) {
   constexpr bool kDouble = std::is_same<Real, double>::value;
   std::string source;
-  for (const char* file : {"real.cl", "reduce.cl", "cg.cl"})
+  for (const char* file : {"real.cl", "cg.cl"})
     source += "// ---- " + std::string(file) + " ----\n" + embeddedKernel(file) + "\n";
   program_ = cachedProgram(context_, device, source,
                            std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
@@ -106,7 +106,7 @@ int DeviceConjugateGradient<Real>::solve(double c, const cl::Buffer& b, const cl
   if (!have_matrix_) throw Error("DeviceConjugateGradient::solve before setMatrix");
   if (n_ == 0) return 0;
   const cl::NDRange global(local_ * std::size_t(groups_)), local(local_);
-  const cl::LocalSpaceArg scratch = cl::Local(local_ * sizeof(Real));
+  const cl::LocalSpaceArg scratch = cl::Local(9 * local_ * sizeof(Real));  // groupSums of up to 9 values
   const auto set = [](cl::Kernel& k, cl_uint index, const auto& value) {
     check(k.setArg(index, value), "clSetKernelArg");
   };

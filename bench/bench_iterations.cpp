@@ -272,6 +272,21 @@ void registerIterationCases() {
             ->UseRealTime()
             ->Unit(benchmark::kMicrosecond);
       }
+  // The same on the tet bars of growing size of autoRuleScenes(): where the device CG's O(n)
+  // iterations overtake the factor's solve, whose fill (and cost) grows faster than n in 3-D.
+  for (const SceneCase& scene : autoRuleScenes()) {
+    if (scene.name.rfind("tetbar", 0) != 0) continue;
+    for (const int cg : {0, 10})
+      for (BackendChoice backend : allBackends()) {
+        const std::string name = "global_solve_scaling/" + scene.name + "/" +
+                                 (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
+                                 backendLabel(backend);
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [=](benchmark::State& state) { runGlobalSolve(state, name, scene, backend, cg); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
+      }
+  }
   for (BackendChoice backend : allBackends()) {
     const std::string name = std::string("scaling_iteration/cloth/BE/") + backendLabel(backend);
     auto* b = benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {

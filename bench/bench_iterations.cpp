@@ -265,8 +265,9 @@ void registerIterationCases() {
   for (const SceneCase& scene : referenceScenes())
     for (const int cg : {0, 5, 10, 20, 40})
       for (BackendChoice backend : allBackends()) {
-        const std::string name = "global_solve/" + scene.name + "/" + (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) +
-                                 "/" + backendLabel(backend);
+        const std::string name = "global_solve/" + scene.name + "/" +
+                                 (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
+                                 backendLabel(backend);
         benchmark::RegisterBenchmark(name.c_str(),
                                      [=](benchmark::State& state) { runGlobalSolve(state, name, scene, backend, cg); })
             ->UseRealTime()

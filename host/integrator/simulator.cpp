@@ -145,10 +145,12 @@ struct Simulator::Impl {
   }
 
   IterationControl control(int iterations) const {
-    return IterationControl{iterations,           options.tolerance,     options.max_iterations,
-                            energy_scale,         options.acceleration,  options.chebyshev_rho,
-                            options.anderson_window, options.global_solve, options.cg_iterations,
-                            options.cg_tolerance};
+    IterationControl c{iterations,           options.tolerance,     options.max_iterations, energy_scale,
+                       options.acceleration, options.chebyshev_rho, options.anderson_window};
+    c.global_solve = options.global_solve;
+    c.cg_iterations = options.cg_iterations;
+    c.cg_tolerance = options.cg_tolerance;
+    return c;
   }
 
   // ---- the integrators: each leaves x_{n+1}, v_{n+1} in (kXNew, kVNew), returns iterations ----

@@ -231,8 +231,9 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
     have_accepted = true;
     if (done >= limit || converged) break;
 
-    if (control.global_solve == GlobalSolve::ConjugateGradient) x_host_ = x_cur_;  // the CG's warm start
-    globalStep(c, x, control, /*to_host=*/true);  // x_host_ = plain update of x_cur_
+    // x_host_ = the plain update of x_cur_ (which the host CG also starts from).
+    if (control.global_solve == GlobalSolve::ConjugateGradient) x_host_ = x_cur_;
+    globalStep(c, x, control, /*to_host=*/true);
     ++done;
     const bool last = done >= limit;
     extrapolated = rule.propose(x_cur_, x_host_, x_next_) && !last;

@@ -27,7 +27,7 @@ struct IterationControl {
   double chebyshev_rho = 0.98;  // spectral radius estimate of the plain iteration
   int anderson_window = 5;      // iterates Anderson acceleration combines
   GlobalSolve global_solve = GlobalSolve::Factor;
-  int cg_iterations = 20;    // CG iterations per global step (at most, with cg_tolerance > 0)
+  int cg_iterations = 20;     // CG iterations per global step (at most, with cg_tolerance > 0)
   double cg_tolerance = 0.0;  // relative residual at which CG stops early (0: fixed count)
 };
 

@@ -4,9 +4,12 @@
 // by the columns; the Jacobi preconditioner is 1/diag(K), recomputed by cg_start for each c.
 //
 // One CG iteration is two launches and no host wait:
-//   cg_direction  beta = (r.z)_new/(r.z)_old, p = z + beta p_old, q = K p and the partials of p.q
-//                 (z = r/diag(K) is not stored: the SpMV applies it to each neighbour's r);
-//   cg_update     alpha = (r.z)/(p.q), x += alpha p, r -= alpha q and the partials of r.z, r.r.
+//   cg_direction  beta = (r.z)_new/(r.z)_old, p = z + beta p_old, q = K p and the partials of p.q;
+//   cg_update     alpha = (r.z)/(p.q), x += alpha p, r -= alpha q, z = r/diag(K) and the partials
+//                 of r.z, r.r.
+// x and b are state slots (column-major); the CG's own vectors r, z, p, q are stored row by row
+// (x, y, z of a particle together, vload3), so that the SpMV's gather of a neighbour's z and p
+// touches one cache line instead of six.
 // Every scalar is a sum of per-group partials (groupSums below), which the
 // next kernel adds itself in group order in every work-group: the same order everywhere, so every
 // group uses the same alpha and beta and nothing is read back. Each work-item serves the rows
@@ -53,7 +56,8 @@ inline real3 ratio3(real3 num, real3 den) {
 // r = b - K x, dinv = 1/diag(K), and the partials of r.z, r.r and b.b.
 __kernel void cg_start(const int n, const real c, __global const int* row_start, __global const int* column,
                        __global const real* value, __global const real* masses, __global const real* b,
-                       __global const real* x, __global real* r, __global real* dinv, __global real* rz_partials,
+                       __global const real* x, __global real* r, __global real* z, __global real* dinv,
+                       __global real* rz_partials,
                        __global real* rr_partials, __global real* bb_partials, __local real* scratch) {
   const int groups = get_num_groups(0);
   real3 rz = (real3)(0), rr = (real3)(0), bb = (real3)(0);
@@ -68,7 +72,8 @@ __kernel void cg_start(const int n, const real c, __global const int* row_start,
     const real3 bi = loadRow(b, n, i);
     const real3 ri = bi - kx;
     const real d = 1 / diagonal;
-    r[i] = ri.x, r[n + i] = ri.y, r[2 * n + i] = ri.z;
+    vstore3(ri, i, r);
+    vstore3(d * ri, i, z);
     dinv[i] = d;
     rz += d * ri * ri;
     rr += ri * ri;
@@ -83,8 +88,8 @@ __kernel void cg_start(const int n, const real c, __global const int* row_start,
 
 // p = z + beta p_old (beta = 0 on the first iteration), q = K p, partials of p.q.
 __kernel void cg_direction(const int n, const real c, __global const int* row_start, __global const int* column,
-                           __global const real* value, __global const real* masses, __global const real* dinv,
-                           __global const real* r, __global const real* p_old, __global real* p,
+                           __global const real* value, __global const real* masses, __global const real* z,
+                           __global const real* p_old, __global real* p,
                            __global real* q, __global const real* rz_partials, __global const real* rz_old_partials,
                            const int first, __global real* pq_partials, __local real* scratch) {
   const int groups = get_num_groups(0);
@@ -98,15 +103,15 @@ __kernel void cg_direction(const int n, const real c, __global const int* row_st
     // The first direction reads no p_old (whatever a previous solve left there).
     for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
       const int j = column[k];
-      real3 pj = dinv[j] * loadRow(r, n, j);
-      if (!first) pj += beta * loadRow(p_old, n, j);
+      real3 pj = vload3(j, z);
+      if (!first) pj += beta * vload3(j, p_old);
       qi += value[k] * pj;
     }
-    real3 pi = dinv[i] * loadRow(r, n, i);
-    if (!first) pi += beta * loadRow(p_old, n, i);
+    real3 pi = vload3(i, z);
+    if (!first) pi += beta * vload3(i, p_old);
     qi += c * masses[i] * pi;
-    p[i] = pi.x, p[n + i] = pi.y, p[2 * n + i] = pi.z;
-    q[i] = qi.x, q[n + i] = qi.y, q[2 * n + i] = qi.z;
+    vstore3(pi, i, p);
+    vstore3(qi, i, q);
     pq += pi * qi;
   }
   const real v[3] = {pq.x, pq.y, pq.z};
@@ -114,9 +119,9 @@ __kernel void cg_direction(const int n, const real c, __global const int* row_st
   storePartials3(scratch, 0, pq_partials, groups);
 }
 
-// alpha = (r.z)/(p.q), x += alpha p, r -= alpha q, partials of the new r.z and r.r.
+// alpha = (r.z)/(p.q), x += alpha p, r -= alpha q, z = r/diag(K), partials of the new r.z and r.r.
 __kernel void cg_update(const int n, __global const real* dinv, __global const real* p, __global const real* q,
-                        __global real* x, __global real* r, __global const real* rz_partials,
+                        __global real* x, __global real* r, __global real* z, __global const real* rz_partials,
                         __global const real* pq_partials, __global real* rz_new_partials,
                         __global real* rr_partials, __local real* scratch) {
   const int groups = get_num_groups(0);
@@ -126,11 +131,13 @@ __kernel void cg_update(const int n, __global const real* dinv, __global const r
   const real3 alpha = ratio3((real3)(rz[0], rz[1], rz[2]), (real3)(pq[0], pq[1], pq[2]));
   real3 rz_new = (real3)(0), rr = (real3)(0);
   for (int i = get_global_id(0); i < n; i += get_global_size(0)) {
-    const real3 xi = loadRow(x, n, i) + alpha * loadRow(p, n, i);
-    const real3 ri = loadRow(r, n, i) - alpha * loadRow(q, n, i);
+    const real3 xi = loadRow(x, n, i) + alpha * vload3(i, p);
+    const real3 ri = vload3(i, r) - alpha * vload3(i, q);
+    const real3 zi = dinv[i] * ri;
     x[i] = xi.x, x[n + i] = xi.y, x[2 * n + i] = xi.z;
-    r[i] = ri.x, r[n + i] = ri.y, r[2 * n + i] = ri.z;
-    rz_new += dinv[i] * ri * ri;
+    vstore3(ri, i, r);
+    vstore3(zi, i, z);
+    rz_new += zi * ri;
     rr += ri * ri;
   }
   const real v[6] = {rz_new.x, rz_new.y, rz_new.z, rr.x, rr.y, rr.z};

@@ -48,6 +48,7 @@ DeviceConjugateGradient<Real>::DeviceConjugateGradient(const cl::Context& contex
 
   const std::size_t size3 = 3 * std::size_t(std::max(n_, 1));
   r_ = buffer(size3);
+  z_ = buffer(size3);
   q_ = buffer(size3);
   p_[0] = buffer(size3);
   p_[1] = buffer(size3);
@@ -118,16 +119,16 @@ int DeviceConjugateGradient<Real>::solve(double c, const cl::Buffer& b, const cl
   cl_uint a = 0;
   set(start_, a++, n), set(start_, a++, real_c);
   set(start_, a++, row_start_), set(start_, a++, column_), set(start_, a++, value_), set(start_, a++, masses_);
-  set(start_, a++, b), set(start_, a++, x), set(start_, a++, r_), set(start_, a++, dinv_);
+  set(start_, a++, b), set(start_, a++, x), set(start_, a++, r_), set(start_, a++, z_), set(start_, a++, dinv_);
   set(start_, a++, rz_[0]), set(start_, a++, rr_), set(start_, a++, bb_), set(start_, a++, scratch);
   run(start_);
 
   // Arguments that stay for the whole solve.
   set(direction_, 0, n), set(direction_, 1, real_c), set(direction_, 2, row_start_), set(direction_, 3, column_);
-  set(direction_, 4, value_), set(direction_, 5, masses_), set(direction_, 6, dinv_), set(direction_, 7, r_);
-  set(direction_, 10, q_), set(direction_, 14, pq_), set(direction_, 15, scratch);
+  set(direction_, 4, value_), set(direction_, 5, masses_), set(direction_, 6, z_);
+  set(direction_, 9, q_), set(direction_, 13, pq_), set(direction_, 14, scratch);
   set(update_, 0, n), set(update_, 1, dinv_), set(update_, 3, q_), set(update_, 4, x), set(update_, 5, r_);
-  set(update_, 7, pq_), set(update_, 9, rr_), set(update_, 10, scratch);
+  set(update_, 6, z_), set(update_, 8, pq_), set(update_, 10, rr_), set(update_, 11, scratch);
 
   double tolerance2_bb[3] = {0.0, 0.0, 0.0};
   const auto converged = [&] {
@@ -147,10 +148,10 @@ int DeviceConjugateGradient<Real>::solve(double c, const cl::Buffer& b, const cl
   while (done < iterations) {
     const cl::Buffer& p_old = p_[done % 2];
     const cl::Buffer& p_new = p_[(done + 1) % 2];
-    set(direction_, 8, p_old), set(direction_, 9, p_new);
-    set(direction_, 11, rz_[current]), set(direction_, 12, rz_[1 - current]), set(direction_, 13, cl_int(done == 0));
+    set(direction_, 7, p_old), set(direction_, 8, p_new);
+    set(direction_, 10, rz_[current]), set(direction_, 11, rz_[1 - current]), set(direction_, 12, cl_int(done == 0));
     run(direction_);
-    set(update_, 2, p_new), set(update_, 6, rz_[current]), set(update_, 8, rz_[1 - current]);
+    set(update_, 2, p_new), set(update_, 7, rz_[current]), set(update_, 9, rz_[1 - current]);
     run(update_);
     current = 1 - current;
     ++done;

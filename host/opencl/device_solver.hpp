@@ -43,7 +43,7 @@ class DeviceConjugateGradient {
   int groups_ = 1;
   bool have_matrix_ = false;
   cl::Buffer row_start_, column_, value_;
-  cl::Buffer r_, dinv_, p_[2], q_;
+  cl::Buffer r_, z_, dinv_, p_[2], q_;  // r, z, p, q row by row (kernels/cg.cl)
   cl::Buffer rz_[2], pq_, rr_, bb_;
   std::vector<Real> host_partials_;
 };

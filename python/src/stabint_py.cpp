@@ -400,8 +400,9 @@ void bindSimulator(nb::module_& m) {
           "__init__",
           [](SimulatorOptions* o, Integrator integrator, double time_step, int iterations, double tolerance,
              int max_iterations, Acceleration acceleration, double chebyshev_rho, int anderson_window,
-             GlobalSolve global_solve, int cg_iterations, double cg_tolerance, int be_iterations, double energy_tolerance, double max_velocity_scale, int max_root_evaluations,
-             double energy_limit, double contact_tolerance, BackendKind backend, const OpenCLOptions& opencl) {
+             GlobalSolve global_solve, int cg_iterations, double cg_tolerance, int be_iterations,
+             double energy_tolerance, double max_velocity_scale, int max_root_evaluations, double energy_limit,
+             double contact_tolerance, BackendKind backend, const OpenCLOptions& opencl) {
             new (o) SimulatorOptions{integrator,
                                      time_step,
                                      iterations,

@@ -146,6 +146,73 @@ TEST_P(OpenCLGlobalCgTest, RunsWithElementChangesAgreeWithTheCpuReference) {
   }
 }
 
+// The paths around the device CG that read back: the objective tracking of a solve to an outer
+// tolerance (the energy of every local step), and the accelerations, whose extrapolation runs on
+// the host (each iteration reads the CG's result back). Double only: in float the accelerations'
+// accept/reject decisions may differ from the CPU's (test_opencl_support.hpp).
+TEST(OpenCLGlobalCg, TrackedAndAcceleratedSolvesAgreeWithTheCpuReference) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  const Scene s = tetScene();
+  const SceneData data(s);
+  for (const Acceleration acceleration : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson}) {
+    IterationControl control = cgControl(15, 8, 0.0);
+    control.acceleration = acceleration;
+    control.tolerance = acceleration == Acceleration::None ? 1e-9 : 0.0;  // tracked to a tolerance
+    control.max_iterations = 15;
+    control.energy_scale = 1.0;
+    auto cpu = makeCpuBackend(data, kSlots);
+    auto device = makeOpenCLBackend(data, kSlots, openclOptions(Precision::Double));
+    const Eigen::MatrixX3d reference = solveOn(*cpu, data, s, control);
+    const Eigen::MatrixX3d x = solveOn(*device, data, s, control);
+    // Measured 5e-16: the same iterates and the same decisions.
+    EXPECT_LE(relativeError(x, reference), crossBackendTolerance(Precision::Double)) << accelerationName(acceleration);
+  }
+}
+
+// cg_tolerance reaches the device: a simulator with a tight tolerance and a large iteration cap
+// ends where the factor's run does (both solve every global step to round-off).
+TEST(OpenCLGlobalCg, ToleranceOptionMatchesTheFactorRun) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  const Scene s = clothScene();
+  SimulatorOptions factor_options;
+  factor_options.integrator = Integrator::BackwardEuler;
+  SimulatorOptions o = factor_options;
+  o.backend = BackendKind::OpenCL;
+  o.opencl = openclOptions(Precision::Double);
+  o.global_solve = GlobalSolve::ConjugateGradient;
+  o.cg_iterations = 5000;
+  o.cg_tolerance = 1e-12;
+  Simulator factor(s, factor_options), device(s, o);
+  for (int n = 0; n < 10; ++n) factor.step(), device.step();
+  // Each global step leaves a relative residual <= 1e-12, an error up to cond(K_c) times that
+  // (the stiff cloth's K_c is far less well conditioned than the tet bar's): measured 1.1e-10
+  // after 10 steps.
+  EXPECT_LE(relativeError(device.positions(), factor.positions()), 1e-8);
+}
+
+// With cg_tolerance the device stops once the residual is small enough: a looser tolerance takes
+// fewer CG iterations, and neither needs the cap.
+TEST(OpenCLGlobalCg, ToleranceStopsEarly) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  const Scene s = clothScene();
+  const SceneData data(s);
+  GlobalSystem system(data);
+  auto device = makeOpenCLBackend(data, kSlots, openclOptions(Precision::Double));
+  device->setGlobalMatrix(system.stiffnessLaplacian());
+  const Eigen::MatrixX3d y = stretched(s);
+  const double h = 1.0 / 30.0, c = 1.0 / (h * h);
+  auto iterationsFor = [&](double tolerance) {
+    device->write(kY, y);
+    device->write(kX, y);
+    device->localStep(kX, kY, c, h, nullptr);
+    return device->solveGlobal(c, kX, 5000, tolerance);
+  };
+  const int loose = iterationsFor(1e-3), tight = iterationsFor(1e-10);
+  EXPECT_GT(loose, 0);
+  EXPECT_LT(loose, tight);
+  EXPECT_LT(tight, 5000);
+}
+
 INSTANTIATE_TEST_SUITE_P(Precisions, OpenCLGlobalCgTest, ::testing::Values(Precision::Double, Precision::Float),
                          [](const auto& info) { return testing::precisionName(info.param); });
 

@@ -4,12 +4,14 @@
 // solve + the transfer of the new positions back.
 //   auto_iteration/<scene>/BE/<backend>  one BE iteration on the scenes of autoRuleScenes(), the
 //                               figures behind BackendKind::Auto's rule.
-//   global_solve/<scene>/<solver>/<backend>  one local/global iteration with the CHOLMOD factor
+//   global_step/<scene>/<solver>/<backend>  one local/global iteration with the CHOLMOD factor
 //                               (factor) or GlobalSolve::ConjugateGradient with k CG iterations
 //                               (cg<k>; on OpenCL on the device, nothing read back); the counter
 //                               position_error is, after one frame's BE solve of 10 iterations
 //                               from the same start, the largest distance from the CPU factor's
 //                               result, relative to the body's size (speed against accuracy).
+//   global_step_scaling/<tetbar>/<solver>/<backend>  the same, factor and cg10, on the tet bars
+//                               of autoRuleScenes().
 //   rotation/<scene>/<method>   the nearest rotation of every tet's F at the same state, alone,
 //                               per tet (items_per_second): the library's (newton-polar), Eigen's
 //                               Jacobi SVD (jacobi-svd, the method it replaced) and one
@@ -265,7 +267,7 @@ void registerIterationCases() {
   for (const SceneCase& scene : referenceScenes())
     for (const int cg : {0, 5, 10, 20, 40})
       for (BackendChoice backend : allBackends()) {
-        const std::string name = "global_solve/" + scene.name + "/" +
+        const std::string name = "global_step/" + scene.name + "/" +
                                  (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
                                  backendLabel(backend);
         benchmark::RegisterBenchmark(name.c_str(),
@@ -279,7 +281,7 @@ void registerIterationCases() {
     if (scene.name.rfind("tetbar", 0) != 0) continue;
     for (const int cg : {0, 10})
       for (BackendChoice backend : allBackends()) {
-        const std::string name = "global_solve_scaling/" + scene.name + "/" +
+        const std::string name = "global_step_scaling/" + scene.name + "/" +
                                  (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
                                  backendLabel(backend);
         benchmark::RegisterBenchmark(name.c_str(),

@@ -2,14 +2,14 @@
 """Speed against accuracy of the global step: the CHOLMOD factor against the conjugate-gradient
 global solve (GlobalSolve::ConjugateGradient), from stabint_bench's JSON output.
 
-    stabint_bench --benchmark_filter='^global_solve' --benchmark_repetitions=3 \
-        --benchmark_enable_random_interleaving=true --benchmark_out=global_solve.json
-    /usr/bin/python3 bench/global_solve_chart.py global_solve.json [--chart docs/images/global_solve.png]
+    stabint_bench --benchmark_filter='^global_step' --benchmark_repetitions=3 \
+        --benchmark_enable_random_interleaving=true --benchmark_out=global_step.json
+    /usr/bin/python3 bench/global_solve_chart.py global_step.json [--chart docs/images/global_solve.png]
 
-Takes the fastest repetition of every case. Left panels (global_solve/<scene>/<solver>/<backend>):
+Takes the fastest repetition of every case. Left panels (global_step/<scene>/<solver>/<backend>):
 time of one local/global iteration against the counter position_error (after one frame's BE
 solve of 10 iterations, the largest distance from the CPU factor's result over the body's size).
-Right panel (global_solve_scaling/<tetbar>/...): time per iteration against particles. Prints a
+Right panel (global_step_scaling/<tetbar>/...): time per iteration against particles. Prints a
 markdown table with the ratio CG / factor per scene and backend.
 Use /usr/bin/python3 (Debian's python3-matplotlib).
 """
@@ -34,7 +34,7 @@ def load(path):
         parts = entry["run_name"].split("/")
         if parts[-1] == "real_time":
             parts = parts[:-1]
-        if len(parts) != 4 or not parts[0].startswith("global_solve"):
+        if len(parts) != 4 or not parts[0].startswith("global_step"):
             continue
         seconds = entry["real_time"] * UNIT_S[entry.get("time_unit", "ns")]
         key = tuple(parts)
@@ -71,12 +71,12 @@ def chart(best, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    scenes = sorted({k[1] for k in best if k[0] == "global_solve"})
+    scenes = sorted({k[1] for k in best if k[0] == "global_step"})
     fig, axes = plt.subplots(1, len(scenes) + 1, figsize=(5.2 * (len(scenes) + 1), 4.4))
     for ax, scene in zip(axes, scenes):
         for backend in BACKENDS:
             points = [(v[0], max(v[1].get("position_error", 0.0), ERROR_FLOOR), k[2])
-                      for k, v in best.items() if k[0] == "global_solve" and k[1] == scene and k[3] == backend]
+                      for k, v in best.items() if k[0] == "global_step" and k[1] == scene and k[3] == backend]
             if not points:
                 continue
             points.sort(key=lambda p: (p[2] != "factor", int(p[2][2:]) if p[2].startswith("cg") else 0))
@@ -94,7 +94,7 @@ def chart(best, path):
     for backend in BACKENDS:
         for solver, style in (("factor", "-"), ("cg10", "--")):
             points = sorted((particles(v[1]), v[0]) for k, v in best.items()
-                            if k[0] == "global_solve_scaling" and k[2] == solver and k[3] == backend)
+                            if k[0] == "global_step_scaling" and k[2] == solver and k[3] == backend)
             if points:
                 ax.plot([p[0] for p in points], [p[1] * 1e3 for p in points], style, marker=MARKERS[backend],
                         label=f"{solver} {backend}")

@@ -1,8 +1,9 @@
 #pragma once
 // Local/global iterations for one implicit solve (docs/method.md, "One implicit solve"):
 //   x* = argmin_x c/2 ||x - y||_M^2 + E_int(x) + U_ext(x, t).
-// Each iteration projects every element at the current x (local, on the backend) and solves the
-// prefactored K_c x = rhs on the host (global). The loop is shared by all backends.
+// Each iteration projects every element at the current x (local, on the backend) and solves
+// K_c x = rhs (global): with the prefactored K_c on the host, or by CG (GlobalSolve::
+// ConjugateGradient) on the host or, for OpenCL, on the device. The loop is shared by all backends.
 #include "backend.hpp"
 #include "solver/global_system.hpp"
 

@@ -4,6 +4,14 @@
 // solve + the transfer of the new positions back.
 //   auto_iteration/<scene>/BE/<backend>  one BE iteration on the scenes of autoRuleScenes(), the
 //                               figures behind BackendKind::Auto's rule.
+//   global_step/<scene>/<solver>/<backend>  one local/global iteration with the CHOLMOD factor
+//                               (factor) or GlobalSolve::ConjugateGradient with k CG iterations
+//                               (cg<k>; on OpenCL on the device, nothing read back); the counter
+//                               position_error is, after one frame's BE solve of 10 iterations
+//                               from the same start, the largest distance from the CPU factor's
+//                               result, relative to the body's size (speed against accuracy).
+//   global_step_scaling/<tetbar>/<solver>/<backend>  the same, factor and cg10, on the tet bars
+//                               of autoRuleScenes().
 //   rotation/<scene>/<method>   the nearest rotation of every tet's F at the same state, alone,
 //                               per tet (items_per_second): the library's (newton-polar), Eigen's
 //                               Jacobi SVD (jacobi-svd, the method it replaced) and one
@@ -66,8 +74,12 @@ Eigen::MatrixX3d inertialTarget(const Scene& s) {
 }
 
 struct IterationFixture {
-  IterationFixture(const Scene& s, BackendChoice choice, double c_)
+  IterationFixture(const Scene& s, BackendChoice choice, double c_, int cg_iterations = 0)
       : scene(s), data(s), backend(makeBackend(data, choice)), system(data), solver(*backend, system, kScratch), c(c_) {
+    if (cg_iterations > 0) {
+      control.global_solve = GlobalSolve::ConjugateGradient;
+      control.cg_iterations = cg_iterations;
+    }
     const Eigen::MatrixX3d y = inertialTarget(s);
     backend->write(kY, y);
     backend->write(kX, y);
@@ -105,6 +117,50 @@ void runIteration(benchmark::State& state, const std::string& key, const std::fu
   setSizeCounters(state, f.scene);
   setPhaseCounters(state, f.backend->times());
   state.counters["iterations"] = benchmark::Counter(iterations, benchmark::Counter::kAvgIterations);
+  state.SetLabel(f.backend->description());
+}
+
+/// One frame's BE solve (10 iterations from y) with `control`'s global solve on `backend`.
+Eigen::MatrixX3d frameSolve(Backend& backend, const SceneData& data, const Scene& s, IterationControl control) {
+  GlobalSystem system(data);
+  LocalGlobalSolver solver(backend, system, kScratch);
+  const Eigen::MatrixX3d y = inertialTarget(s);
+  backend.write(kY, y);
+  backend.write(kX, y);
+  control.iterations = control.max_iterations = 10;
+  solver.solve(solveConstant(Integrator::BackwardEuler), kY, kX, kTimeStep, control);
+  Eigen::MatrixX3d x;
+  backend.read(kX, x);
+  return x;
+}
+
+void runGlobalSolve(benchmark::State& state, const std::string& key, const SceneCase& scene, BackendChoice choice,
+                    int cg_iterations) {
+  if (const std::string why = skipReason(choice); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  IterationFixture* fixture = nullptr;
+  try {
+    fixture = &cachedFixture<IterationFixture>(key, [&] {
+      return std::make_unique<IterationFixture>(scene.make(), choice, solveConstant(Integrator::BackwardEuler),
+                                                cg_iterations);
+    });
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  IterationFixture& f = *fixture;
+  f.backend->times() = PhaseTimes{};
+  for (auto _ : state) f.solver.solve(f.c, kY, kX, kTimeStep, f.control);
+  setSizeCounters(state, f.scene);
+  setPhaseCounters(state, f.backend->times());
+  // Accuracy, outside the timed loop: the frame's result against the CPU factor's.
+  auto cpu = makeCpuBackend(f.data, kSlots);
+  const Eigen::MatrixX3d reference = frameSolve(*cpu, f.data, f.scene, IterationControl{10, 0.0, 10, 1.0});
+  const Eigen::MatrixX3d x = frameSolve(*f.backend, f.data, f.scene, f.control);
+  const double size = (f.scene.positions.colwise().maxCoeff() - f.scene.positions.colwise().minCoeff()).norm();
+  state.counters["position_error"] = (x - reference).cwiseAbs().maxCoeff() / size;
   state.SetLabel(f.backend->description());
 }
 
@@ -206,6 +262,34 @@ void registerIterationCases() {
             ->Unit(benchmark::kMicrosecond);
       }
 
+  // Factor against the CG global step (GlobalSolve::ConjugateGradient), per iteration, with the
+  // accuracy counter; run interleaved (docs/bench_summary.md "Global solve on the device").
+  for (const SceneCase& scene : referenceScenes())
+    for (const int cg : {0, 5, 10, 20, 40})
+      for (BackendChoice backend : allBackends()) {
+        const std::string name = "global_step/" + scene.name + "/" +
+                                 (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
+                                 backendLabel(backend);
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [=](benchmark::State& state) { runGlobalSolve(state, name, scene, backend, cg); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
+      }
+  // The same on the tet bars of growing size of autoRuleScenes(): where the device CG's O(n)
+  // iterations overtake the factor's solve, whose fill (and cost) grows faster than n in 3-D.
+  for (const SceneCase& scene : autoRuleScenes()) {
+    if (scene.name.rfind("tetbar", 0) != 0) continue;
+    for (const int cg : {0, 10})
+      for (BackendChoice backend : allBackends()) {
+        const std::string name = "global_step_scaling/" + scene.name + "/" +
+                                 (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
+                                 backendLabel(backend);
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [=](benchmark::State& state) { runGlobalSolve(state, name, scene, backend, cg); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
+      }
+  }
   for (BackendChoice backend : allBackends()) {
     const std::string name = std::string("scaling_iteration/cloth/BE/") + backendLabel(backend);
     auto* b = benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {

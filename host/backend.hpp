@@ -2,10 +2,12 @@
 // The backend interface the integrator driver talks to: whole-array operations on a fixed set of
 // `n by 3` state slots that live in the backend's memory (host arrays for the CPU reference,
 // device buffers for OpenCL). The integrator logic (host/integrator/) is written once against
-// this interface; the global sparse solve stays on the host (host/solver/).
+// this interface; the global sparse solve stays on the host (host/solver/), except with
+// GlobalSolve::ConjugateGradient on a backend that solvesGlobalSystem() (OpenCL: on the device).
 #include <stabint/simulator.hpp>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include <string>
 
@@ -47,6 +49,32 @@ class Backend {
   virtual void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
                             PotentialEnergy* energy_at_x = nullptr) = 0;
 
+  // ---- the global step on the backend (GlobalSolve::ConjugateGradient; docs/method.md) -------
+  // A backend that keeps the global system in its own memory runs the whole local/global
+  // iteration there: localStep leaves the right-hand side in place and solveGlobal runs a
+  // Jacobi-preconditioned CG on it, so nothing crosses to the host per iteration. The CPU
+  // reference has none (its host CG is GlobalSystem::solveConjugateGradient).
+
+  /// Whether localStep / solveGlobal are available.
+  virtual bool solvesGlobalSystem() const { return false; }
+  /// Copies L = sum_e w_e A_e^T A_e (symmetric, `n by n`) into the backend; called again after
+  /// every change of L (element changes, grabs).
+  virtual void setGlobalMatrix(const Eigen::SparseMatrix<double>& /*laplacian*/) { noGlobalSolver(); }
+  /// localStepRhs with the right-hand side kept in the backend for solveGlobal. Reads back only
+  /// the energy, when `energy_at_x` is given.
+  virtual void localStep(int /*x*/, int /*y*/, double /*c*/, double /*t*/, PotentialEnergy* /*energy_at_x*/) {
+    noGlobalSolver();
+  }
+  /// `iterations` Jacobi-preconditioned CG iterations on (c M + L) x = rhs (the last localStep's),
+  /// warm-started from slot `x`, which receives the result; with `tolerance` > 0 it stops once
+  /// ||rhs - K x|| <= tolerance ||rhs|| in every column. Returns the CG iterations done.
+  virtual int solveGlobal(double /*c*/, int /*x*/, int /*iterations*/, double /*tolerance*/) {
+    noGlobalSolver();
+    return 0;
+  }
+  /// Waits until everything queued has completed.
+  virtual void synchronize() {}
+
   /// The scene's element blocks and contribution lists were rebuilt (SceneData::setPins): the
   /// backend drops what it derived from the old ones.
   virtual void elementsChanged() {}
@@ -57,6 +85,9 @@ class Backend {
 
  protected:
   PhaseTimes times_;
+
+ private:
+  void noGlobalSolver() const { throw Error(description() + " does not solve the global system itself"); }
 };
 
 }  // namespace stabint

@@ -267,6 +267,9 @@ void stabint_simulator_options_default(stabint_simulator_options* options) {
   options->opencl_platform = nullptr;
   options->opencl_device = nullptr;
   options->opencl_precision = static_cast<stabint_precision>(d.opencl.precision);
+  options->global_solve = static_cast<stabint_global_solve>(d.global_solve);
+  options->cg_iterations = d.cg_iterations;
+  options->cg_tolerance = d.cg_tolerance;
 }
 
 stabint_status stabint_simulator_create(const stabint_scene* scene, const stabint_simulator_options* options,
@@ -294,6 +297,9 @@ stabint_status stabint_simulator_create(const stabint_scene* scene, const stabin
     o.opencl.platform = options->opencl_platform ? options->opencl_platform : "";
     o.opencl.device = options->opencl_device ? options->opencl_device : "";
     o.opencl.precision = checkedEnum<stabint::Precision>(options->opencl_precision, 2, "opencl_precision");
+    o.global_solve = checkedEnum<stabint::GlobalSolve>(options->global_solve, 2, "global_solve");
+    o.cg_iterations = options->cg_iterations;
+    o.cg_tolerance = options->cg_tolerance;
     *out = new stabint_simulator{stabint::Simulator(scene->scene, o)};
   });
 }

@@ -79,6 +79,11 @@ void validateOptions(const SimulatorOptions& o) {
     fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
   if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
     fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
+  if (o.global_solve != GlobalSolve::Factor && o.global_solve != GlobalSolve::ConjugateGradient)
+    fail("global_solve = " + std::to_string(static_cast<int>(o.global_solve)) + " is not a GlobalSolve value");
+  if (o.cg_iterations < 1) fail("cg_iterations = " + std::to_string(o.cg_iterations) + " must be >= 1");
+  if (!std::isfinite(o.cg_tolerance) || !(o.cg_tolerance >= 0.0 && o.cg_tolerance < 1.0))
+    fail("cg_tolerance must be finite and in [0, 1) (0: a fixed count of cg_iterations)");
   if (o.max_root_evaluations < 1) fail("max_root_evaluations must be >= 1");
   if (!std::isfinite(o.contact_tolerance) || !(o.contact_tolerance >= 0.0))
     fail("contact_tolerance must be finite and >= 0");
@@ -118,6 +123,9 @@ struct Simulator::Impl {
       case Integrator::ForwardEuler:
       case Integrator::SymplecticEuler: break;  // explicit: no system
     }
+    // CG needs no factor: they only validated the systems, and element changes would keep
+    // updating them for nothing.
+    if (options.global_solve == GlobalSolve::ConjugateGradient) system.dropFactors();
     backend->write(kX, x);
     backend->write(kV, v);
     potential = backend->potential(kX, 0.0);
@@ -138,8 +146,12 @@ struct Simulator::Impl {
   }
 
   IterationControl control(int iterations) const {
-    return IterationControl{iterations,           options.tolerance,     options.max_iterations, energy_scale,
-                            options.acceleration, options.chebyshev_rho, options.anderson_window};
+    IterationControl c{iterations,           options.tolerance,     options.max_iterations, energy_scale,
+                       options.acceleration, options.chebyshev_rho, options.anderson_window};
+    c.global_solve = options.global_solve;
+    c.cg_iterations = options.cg_iterations;
+    c.cg_tolerance = options.cg_tolerance;
+    return c;
   }
 
   // ---- the integrators: each leaves x_{n+1}, v_{n+1} in (kXNew, kVNew), returns iterations ----

@@ -1,6 +1,7 @@
 #include "opencl/opencl_backend.hpp"
 
 #include "opencl/cl_runtime.hpp"
+#include "opencl/device_solver.hpp"
 #include "opencl/element_program.hpp"
 #include "scene/scene_data.hpp"
 
@@ -191,6 +192,42 @@ class OpenCLBackend final : public Backend {
     times_.gather += gather;
     times_.transfer += std::max(0.0, wall - local - gather);
   }
+
+  // ---- the global step on the device (GlobalSolve::ConjugateGradient, device_solver.hpp) ----
+  bool solvesGlobalSystem() const override { return true; }
+
+  void setGlobalMatrix(const Eigen::SparseMatrix<double>& laplacian) override {
+    const auto start = Clock::now();
+    if (!cg_) cg_ = std::make_unique<ocl::DeviceConjugateGradient<Real>>(context_, device_.device, queue_, n_, masses_);
+    cg_->setMatrix(laplacian);
+    times_.transfer += secondsSince(start);
+  }
+
+  // localStepRhs without the read of the right-hand side: queued, no wait unless the energy is
+  // asked for (then the only wait is the read of the energy partials).
+  void localStep(int x, int y, double c, double t, PotentialEnergy* energy_at_x) override {
+    checkSlot(x);
+    checkSlot(y);
+    uploadForcing(t, false);
+    const auto start = Clock::now();
+    enqueueElementPass(x, kPassProjection | (energy_at_x ? kPassEnergy : 0));
+    gather_rhs_.bindSlot(gather_rhs_args_.y, y, slots_);
+    gather_rhs_.set(gather_rhs_args_.c, Real(c));
+    enqueue(gather_rhs_);
+    if (energy_at_x) {
+      readPartials(full_groups_);
+      *energy_at_x = sumEnergies();
+      times_.local += secondsSince(start);
+    }
+  }
+
+  int solveGlobal(double c, int x, int iterations, double tolerance) override {
+    checkSlot(x);
+    if (!cg_) throw Error("OpenCL backend: solveGlobal before setGlobalMatrix");
+    return cg_->solve(c, rhs_, slots_[x], iterations, tolerance);
+  }
+
+  void synchronize() override { ocl::check(queue_.finish(), "clFinish"); }
 
   std::string description() const override {
     return "OpenCL: " + device_.platform_name + " / " + device_.device_name + (kDouble ? " (double)" : " (float)");
@@ -532,6 +569,7 @@ class OpenCLBackend final : public Backend {
   std::vector<PendingWrite> pending_writes_;
   std::size_t next_write_ = 0;
   std::vector<Real> host_partials_;
+  std::unique_ptr<ocl::DeviceConjugateGradient<Real>> cg_;  // made by the first setGlobalMatrix
 };
 
 }  // namespace

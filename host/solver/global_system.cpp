@@ -46,13 +46,17 @@ GlobalSystem::GlobalSystem(const SceneData& scene) : masses_(scene.masses()) {
   laplacian_.setFromTriplets(entries.begin(), entries.end());
 }
 
-void GlobalSystem::factor(double c, const char* c_name) {
-  if (factors_.count(c)) return;
+Eigen::SparseMatrix<double> GlobalSystem::shiftedLaplacian(double c) const {
   // A particle touched by no element has no diagonal entry in L, so add c M as a matrix.
   Eigen::SparseMatrix<double> mass(laplacian_.rows(), laplacian_.cols());
   mass.reserve(Eigen::VectorXi::Ones(laplacian_.cols()));
   for (Eigen::Index j = 0; j < masses_.size(); ++j) mass.insert(j, j) = c * masses_[j];
-  const Eigen::SparseMatrix<double> k = laplacian_ + mass;
+  return laplacian_ + mass;
+}
+
+void GlobalSystem::factor(double c, const char* c_name) {
+  if (factors_.count(c)) return;
+  const Eigen::SparseMatrix<double> k = shiftedLaplacian(c);
   auto factor = std::make_unique<Factor>();
   // CHOLMOD reports a failure by printing on stdout (into an application's CSV output); the
   // failure is reported by the exception below instead.
@@ -77,6 +81,27 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
   x = factors_.find(c)->second->solve(rhs);
 }
 
+int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,
+                                         double tolerance) {
+  auto found = cg_systems_.find(c);
+  if (found == cg_systems_.end()) {
+    auto system = std::make_unique<CgSystem>();
+    system->matrix = shiftedLaplacian(c);
+    system->cg.compute(system->matrix);
+    found = cg_systems_.emplace(c, std::move(system)).first;
+  }
+  auto& cg = found->second->cg;
+  cg.setMaxIterations(iterations);
+  cg.setTolerance(tolerance);  // 0: Eigen's threshold becomes the smallest normal number (a fixed count)
+  int most = 0;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::VectorXd column = cg.solveWithGuess(rhs.col(k), x.col(k));
+    x.col(k) = column;
+    most = std::max(most, static_cast<int>(cg.iterations()));
+  }
+  return most;
+}
+
 void GlobalSystem::addToDiagonal(int j, double delta, bool refactor) {
   const double one = 1.0;
   addElementTerm(&j, 1, &one, 1, delta, refactor ? FactorChange::Drop : FactorChange::RankUpdate);
@@ -97,6 +122,8 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
       if (sum != 0.0) laplacian_.coeffRef(vertices[i], vertices[j]) += delta * sum;
     }
   }
+  ++laplacian_version_;
+  cg_systems_.clear();
   if (how == FactorChange::Deferred) return;
   if (how == FactorChange::Drop) {
     factors_.clear();

@@ -3,6 +3,7 @@
 // `n by n` scalar matrix shared by x, y and z. Factored once per distinct c with CHOLMOD and
 // reused for every iteration of every step (docs/method.md section 2).
 #include <Eigen/CholmodSupport>
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 
 #include <map>
@@ -25,10 +26,25 @@ class GlobalSystem {
   /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use.
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x);
 
+  /// Jacobi-preconditioned conjugate gradients on K_c x = rhs (GlobalSolve::ConjugateGradient on
+  /// the host: the CPU reference of the OpenCL device's CG, the same algorithm in double, Eigen's
+  /// ConjugateGradient with its DiagonalPreconditioner), each column warm-started from `x`:
+  /// `iterations` iterations, or fewer once ||rhs - K_c x|| < tolerance ||rhs|| (tolerance > 0).
+  /// Returns the largest iteration count of the three columns.
+  int solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,
+                             double tolerance);
+
+  /// Drops every factor (GlobalSolve::ConjugateGradient factors only to validate the system, so
+  /// element changes then update no factor).
+  void dropFactors() { factors_.clear(); }
+
   /// L = sum_e w_e A_e^T A_e (assembled once).
   const Eigen::SparseMatrix<double>& stiffnessLaplacian() const { return laplacian_; }
   /// Lumped masses (the M of c M + L).
   const Eigen::VectorXd& masses() const { return masses_; }
+  /// Incremented by every change of L (addToDiagonal, addElementTerm): a copy of L elsewhere (the
+  /// OpenCL device's) is stale when its version differs.
+  int laplacianVersion() const { return laplacian_version_; }
   /// Number of factorizations done so far (one per distinct c).
   int factorizations() const { return factorizations_; }
 
@@ -61,6 +77,14 @@ class GlobalSystem {
     cholmod_factor* factor() { return m_cholmodFactor; }
   };
   int factorizations_ = 0;
+  int laplacian_version_ = 0;
+  // K_c = c M + L and its CG solver (which keeps a reference to it) per c, dropped when L changes.
+  struct CgSystem {
+    Eigen::SparseMatrix<double> matrix;
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
+  };
+  std::map<double, std::unique_ptr<CgSystem>> cg_systems_;
+  Eigen::SparseMatrix<double> shiftedLaplacian(double c) const;  // c M + L
 
   Eigen::SparseMatrix<double> laplacian_;
   Eigen::VectorXd masses_;

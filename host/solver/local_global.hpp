@@ -1,8 +1,9 @@
 #pragma once
 // Local/global iterations for one implicit solve (docs/method.md, "One implicit solve"):
 //   x* = argmin_x c/2 ||x - y||_M^2 + E_int(x) + U_ext(x, t).
-// Each iteration projects every element at the current x (local, on the backend) and solves the
-// prefactored K_c x = rhs on the host (global). The loop is shared by all backends.
+// Each iteration projects every element at the current x (local, on the backend) and solves
+// K_c x = rhs (global): with the prefactored K_c on the host, or by CG (GlobalSolve::
+// ConjugateGradient) on the host or, for OpenCL, on the device. The loop is shared by all backends.
 #include "backend.hpp"
 #include "solver/global_system.hpp"
 
@@ -26,6 +27,9 @@ struct IterationControl {
   Acceleration acceleration = Acceleration::None;
   double chebyshev_rho = 0.98;  // spectral radius estimate of the plain iteration
   int anderson_window = 5;      // iterates Anderson acceleration combines
+  GlobalSolve global_solve = GlobalSolve::Factor;
+  int cg_iterations = 20;     // CG iterations per global step (at most, with cg_tolerance > 0)
+  double cg_tolerance = 0.0;  // relative residual at which CG stops early (0: fixed count)
 };
 
 class LocalGlobalSolver {
@@ -36,7 +40,10 @@ class LocalGlobalSolver {
   /// Runs iterations from the positions in slot `x` (the warm start) and leaves the result there.
   /// Returns the number of iterations (global solves) done. When `objective_history` is given,
   /// it receives the objective at the start and after every iteration. The objective never
-  /// rises from one iteration to the next, with or without acceleration.
+  /// rises from one iteration to the next, with or without acceleration, and with either global
+  /// solve: CG warm-started from the current iterate lowers the global step's quadratic at every
+  /// CG iteration, so even an inexact global step lowers it (in exact arithmetic; to round-off
+  /// of the device's precision on OpenCL; docs/method.md, "Global solve").
   int solve(double c, int y, int x, double t, const IterationControl& control,
             std::vector<double>* objective_history = nullptr);
 
@@ -51,13 +58,23 @@ class LocalGlobalSolver {
                  std::vector<double>* objective_history);
   int solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
                        std::vector<double>* objective_history);
-  void globalSolve(double c);
+  // The global step of the iterate in slot `x`, whose local step was the last one. Factor or host
+  // CG: from rhs_ into x_host_, and into slot x unless `to_host` (the caller writes slot x). On
+  // the backend: into slot x, and also into x_host_ when `to_host`. The host CG starts from
+  // x_host_, which the caller keeps equal to slot x.
+  void globalStep(double c, int x, const IterationControl& control, bool to_host);
+  // The local step at slot `x`: rhs_ on the host, or kept in the backend for its own solve.
+  void localStep(double c, int y, int x, double t, const IterationControl& control, PotentialEnergy* energy);
+  bool onBackend(const IterationControl& control) const {
+    return control.global_solve == GlobalSolve::ConjugateGradient && backend_.solvesGlobalSystem();
+  }
   double inertia(double c, const Eigen::MatrixX3d& x) const;
 
   Backend& backend_;
   GlobalSystem& system_;
   int scratch_;
   int rejected_ = 0;
+  int backend_matrix_version_ = -1;  // GlobalSystem::laplacianVersion() of the backend's copy of L
   // Reused across iterations and solves: no per-iteration allocation.
   Eigen::MatrixX3d rhs_, x_host_, y_host_, x_cur_, x_next_;
   Eigen::VectorXd masses_;

@@ -43,6 +43,15 @@ const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev"
 /// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
 Acceleration parseAcceleration(const std::string& name);
 
+/// How the global step of every local/global iteration solves K_c x = rhs (docs/method.md,
+/// "Global solve").
+enum class GlobalSolve {
+  Factor,             // the CHOLMOD factor of K_c on the host: exact (default)
+  ConjugateGradient,  // Jacobi-preconditioned CG warm-started from the current iterate, run by
+                      // the backend: on the OpenCL device with nothing read back per iteration,
+                      // on the host in double for the CPU reference
+};
+
 /// The element types of a Scene, one per element list, for the run-time element changes
 /// (Simulator::setElementStiffness, setElementEnabled).
 enum class ElementKind { Spring, Tet, TriangleStrain, BendingHinge, Pin };
@@ -91,6 +100,14 @@ struct SimulatorOptions {
   Acceleration acceleration = Acceleration::None;
   double chebyshev_rho = 0.98;
   int anderson_window = 5;
+
+  /// The global step's solver. With ConjugateGradient every global step runs `cg_iterations`
+  /// CG iterations (>= 1; a fixed count: the OpenCL device reads nothing back), or, when
+  /// `cg_tolerance` > 0, stops earlier once ||rhs - K_c x|| <= cg_tolerance ||rhs|| in every
+  /// column (the device then reads back the residual after every CG iteration).
+  GlobalSolve global_solve = GlobalSolve::Factor;
+  int cg_iterations = 20;
+  double cg_tolerance = 0.0;
 
   /// Energy-tracking blend (docs/method.md, "The blend").
   int be_iterations = 3;           // budget of the BE partner solve, warm-started at x_n

@@ -92,6 +92,11 @@ typedef enum stabint_acceleration {
   STABINT_ACCELERATION_ANDERSON = 2,
   STABINT_ENUM_INT_WIDE_(STABINT_ACCELERATION)
 } stabint_acceleration;
+typedef enum stabint_global_solve {
+  STABINT_GLOBAL_SOLVE_FACTOR = 0,
+  STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT = 1,
+  STABINT_ENUM_INT_WIDE_(STABINT_GLOBAL_SOLVE)
+} stabint_global_solve;
 typedef enum stabint_blend_branch {
   STABINT_BRANCH_NONE = 0,
   STABINT_BRANCH_IMPLICIT_MIDPOINT = 1,
@@ -146,6 +151,9 @@ typedef struct stabint_simulator_options {
   const char* opencl_platform; /* NULL or "": environment variable, then the first */
   const char* opencl_device;   /* NULL or "": environment variable, then the first */
   stabint_precision opencl_precision;
+  stabint_global_solve global_solve;
+  int cg_iterations;
+  double cg_tolerance;
 } stabint_simulator_options;
 
 /* The C++ defaults (blend, h = 1/30, 10 iterations, CPU reference backend, ...). */

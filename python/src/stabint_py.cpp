@@ -162,6 +162,10 @@ void bindEnums(nb::module_& m) {
       .value("None_", Acceleration::None, "Plain local/global iterations ('None' is a Python keyword).")
       .value("Chebyshev", Acceleration::Chebyshev)
       .value("Anderson", Acceleration::Anderson);
+  nb::enum_<GlobalSolve>(m, "GlobalSolve")
+      .value("Factor", GlobalSolve::Factor, "The CHOLMOD factor on the host (exact).")
+      .value("ConjugateGradient", GlobalSolve::ConjugateGradient,
+             "Jacobi-preconditioned CG warm-started from the current iterate, run by the backend.");
   nb::enum_<BlendBranch>(m, "BlendBranch", "What the blend did with the IM candidate.")
       .value("None_", BlendBranch::None, "Not a blend step.")
       .value("ImplicitMidpoint", BlendBranch::ImplicitMidpoint)
@@ -399,8 +403,9 @@ void bindSimulator(nb::module_& m) {
           "__init__",
           [](SimulatorOptions* o, Integrator integrator, double time_step, int iterations, double tolerance,
              int max_iterations, Acceleration acceleration, double chebyshev_rho, int anderson_window,
-             int be_iterations, double energy_tolerance, double max_velocity_scale, int max_root_evaluations,
-             double energy_limit, double contact_tolerance, BackendKind backend, const OpenCLOptions& opencl) {
+             GlobalSolve global_solve, int cg_iterations, double cg_tolerance, int be_iterations,
+             double energy_tolerance, double max_velocity_scale, int max_root_evaluations, double energy_limit,
+             double contact_tolerance, BackendKind backend, const OpenCLOptions& opencl) {
             new (o) SimulatorOptions{integrator,
                                      time_step,
                                      iterations,
@@ -409,6 +414,9 @@ void bindSimulator(nb::module_& m) {
                                      acceleration,
                                      chebyshev_rho,
                                      anderson_window,
+                                     global_solve,
+                                     cg_iterations,
+                                     cg_tolerance,
                                      be_iterations,
                                      energy_tolerance,
                                      max_velocity_scale,
@@ -421,6 +429,7 @@ void bindSimulator(nb::module_& m) {
           nb::kw_only(), "integrator"_a = d.integrator, "time_step"_a = d.time_step, "iterations"_a = d.iterations,
           "tolerance"_a = d.tolerance, "max_iterations"_a = d.max_iterations, "acceleration"_a = d.acceleration,
           "chebyshev_rho"_a = d.chebyshev_rho, "anderson_window"_a = d.anderson_window,
+          "global_solve"_a = d.global_solve, "cg_iterations"_a = d.cg_iterations, "cg_tolerance"_a = d.cg_tolerance,
           "be_iterations"_a = d.be_iterations, "energy_tolerance"_a = d.energy_tolerance,
           "max_velocity_scale"_a = d.max_velocity_scale, "max_root_evaluations"_a = d.max_root_evaluations,
           "energy_limit"_a = d.energy_limit, "contact_tolerance"_a = d.contact_tolerance, "backend"_a = d.backend,
@@ -434,6 +443,9 @@ void bindSimulator(nb::module_& m) {
       .def_rw("acceleration", &SimulatorOptions::acceleration)
       .def_rw("chebyshev_rho", &SimulatorOptions::chebyshev_rho)
       .def_rw("anderson_window", &SimulatorOptions::anderson_window)
+      .def_rw("global_solve", &SimulatorOptions::global_solve)
+      .def_rw("cg_iterations", &SimulatorOptions::cg_iterations)
+      .def_rw("cg_tolerance", &SimulatorOptions::cg_tolerance)
       .def_rw("be_iterations", &SimulatorOptions::be_iterations)
       .def_rw("energy_tolerance", &SimulatorOptions::energy_tolerance)
       .def_rw("max_velocity_scale", &SimulatorOptions::max_velocity_scale)

@@ -665,6 +665,17 @@ static void test_colliders_from_a_scene_file(void) {
   CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_INVALID_INPUT);
   CHECK(strstr(stabint_last_error_message(), "contact_tolerance") != NULL);
   options.contact_tolerance = 0.02;
+  /* The global solve's options reach the simulator and are checked too. */
+  CHECK(options.global_solve == STABINT_GLOBAL_SOLVE_FACTOR && options.cg_iterations == 20);
+  options.global_solve = (stabint_global_solve)5;
+  CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "global_solve") != NULL);
+  options.global_solve = STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT;
+  options.cg_iterations = 0;
+  CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_INVALID_INPUT);
+  CHECK(strstr(stabint_last_error_message(), "cg_iterations") != NULL);
+  options.global_solve = STABINT_GLOBAL_SOLVE_FACTOR;
+  options.cg_iterations = 20;
   CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_OK);
   stabint_scene_destroy(scene);
   if (sim == NULL) return;

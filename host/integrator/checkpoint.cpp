@@ -15,7 +15,7 @@ namespace stabint {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'T', 'B', 'C', 'K', 'P', 'T', '\n'};
-constexpr std::uint32_t kVersion = 2;  // 2: element stiffnesses and enabled flags
+constexpr std::uint32_t kVersion = 3;  // 2: element stiffnesses and enabled flags; 3: the contact log
 
 class Writer {
  public:
@@ -199,6 +199,8 @@ std::string serializeCheckpoint(const CheckpointData& d) {
     for (double k : d.stiffness[b]) out.value(k);
     for (std::uint8_t e : d.enabled[b]) out.flag(e != 0);
   }
+  out.value(static_cast<std::int64_t>(d.contact_log.size()));
+  for (std::int32_t entry : d.contact_log) out.value(entry);
   return out.take();
 }
 
@@ -251,6 +253,15 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
     for (std::uint8_t& e : enabled) e = in.flag("an element flag") ? 1 : 0;
     d.stiffness.push_back(std::move(stiffness));
     d.enabled.push_back(std::move(enabled));
+  }
+  // Entries are checked against the scene's contact set when restored.
+  const auto log_size = in.value<std::int64_t>("the contact log size");
+  if (log_size < 0 || static_cast<std::uint64_t>(log_size) > bytes.size() / 4)
+    in.fail("contact log size " + std::to_string(log_size) + " does not fit the data");
+  d.contact_log.resize(static_cast<std::size_t>(log_size));
+  for (std::int32_t& entry : d.contact_log) {
+    entry = in.value<std::int32_t>("a contact log entry");
+    if (entry == std::numeric_limits<std::int32_t>::min()) in.fail("a contact log entry is out of range");
   }
   in.expectEnd();
   return d;

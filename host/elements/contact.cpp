@@ -151,9 +151,32 @@ class ContactElementType final : public ElementType {
   double project(const double* ax, const double* params, double* p) const override {
     return ContactKind::project(ax, params, p);
   }
+  // kindPass's arithmetic (bit for bit) for the pairs of the contact set only: the others, weight
+  // 0 and most of them, add nothing.
   double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
               Eigen::MatrixX3d* out) const override {
-    return kindPass<ContactKind>(block, params, x, flags, out);
+    const bool write = (flags & (kPassProjection | kPassForce)) != 0;
+    const bool force = (flags & kPassForce) != 0;
+    const Eigen::Index n = x.rows();
+    const double* xs = x.data();
+    double* os = write ? out->data() : nullptr;
+    double energy = 0.0;
+    for (int e = 0; e < block.count; ++e) {
+      const double* prm = params.data() + std::size_t(P) * std::size_t(e);
+      const double w = prm[0];
+      if (w == 0.0) continue;
+      const int j = block.vertices[std::size_t(e)];
+      const double ax[3] = {xs[j], xs[n + j], xs[2 * n + j]};
+      double p[3];
+      const double element_energy = ContactKind::project(ax, prm, p);
+      if (flags & kPassEnergy) energy += element_energy;
+      if (!write) continue;
+      for (int i = 0; i < 3; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
+      os[j] += p[0];
+      os[n + j] += p[1];
+      os[2 * n + j] += p[2];
+    }
+    return energy;
   }
 
   // Colliders have their own JSON form (host/io/scene_json.cpp).

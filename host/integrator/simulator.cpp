@@ -638,8 +638,9 @@ struct Simulator::Impl {
   }
 
   // [project rule] A contact set change of more than this many pairs assembles L and refactors
-  // instead of updating: on the 50 x 50 cloth a batched update costs 0.046 ms per pair for both
-  // blend factors, a new assembly and the two factorizations 11.4 ms (docs/method.md, "Contact").
+  // instead of updating: on the 50 x 50 cloth a batched update of both blend factors costs about
+  // as much per pair as 1/400 of a new assembly with both factorizations (docs/method.md,
+  // "Contact"); refactoring a little early also resets the updates' round-off.
   static constexpr int kMaxContactUpdateColumns = 256;
   // The log of updates since the last assembly is bounded too (a checkpoint's restore replays it).
   static constexpr int kMaxContactLogColumns = 4096;

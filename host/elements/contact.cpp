@@ -4,10 +4,10 @@
 // the pairs of the contact set (the broad phase of host/integrator/contact.cpp enables them),
 // 0 for the others, which then neither enter the global matrix nor pull their particle toward
 // its previous iterate. The elements are not a Scene list: they are every particle against every
-// collider, so this type implements ElementType itself, with the generic pass (kindPass) for the
-// math. Its params depend on time when a collider moves, like a pin's target, and its energy is
-// booked with the pins' (EnergyTerm::Pins) so that the forcing rule books a moving collider's
-// work.
+// collider, so this type implements ElementType itself, with the generic pass's (kindPass)
+// arithmetic over the pairs of the set. Its params depend on time when a collider moves, like a
+// pin's target, and its energy is booked with the pins' (EnergyTerm::Pins) so that the forcing
+// rule books a moving collider's work.
 #include "elements/contact.hpp"
 
 #include "elements/element_kind.hpp"
@@ -34,11 +34,9 @@ namespace {
 
 using validation::invalid;
 
+// One vertex, one row, the shared coefficient 1 (A x = x_j).
 struct ContactKind {
-  static constexpr int kVertices = 1, kRows = 1;
   static constexpr int kParams = 1 + kColliderGeometry;  // w_j, the collider's geometry
-  static constexpr bool kSharedCoefficients = true;
-  static constexpr std::array<double, 1> kCoefficients{1.0};
 
   static double project(const double* ax, const double* params, double* p) {
     // Out of the contact set (weight 0) the element does nothing: skip the geometry.

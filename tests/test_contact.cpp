@@ -162,7 +162,7 @@ Rebounds reboundHeights(Simulator& sim, int steps, double rest_height, double co
 // blend keeps the energy and the bar's centre rebounds high three times; BE's numerical damping
 // kills the bounce at once. Measured over 10 s (printed): the blend 93 %, 98 % and 96 % of the
 // drop (92, 97, 93 % with 20 or 200 iterations: it is the converged behaviour), BE no flight. A
-// hard contact (3e5) rebounds 20-28 % once converged (200 iterations): the soft bar (1e5 Pa)
+// hard contact (3e5) rebounds 23, 9, 10 % once converged (200 iterations): the soft bar (1e5 Pa)
 // takes the short impact's energy into vibration and tumbling (docs/method.md, "Contact"). Over
 // the fall, the first landing and its flight (40 steps; the bottom particles enter the contact
 // set the step before the impact and leave it in the flight), the set's changes book nothing and

@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <exception>
+#include <vector>
 
 namespace stabint::bench {
 namespace {
@@ -95,10 +96,9 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
   state.SetLabel(f.contact->backendDescription());
 }
 
-// The alternative to the constant matrix (docs/method.md, "Contact"): the contact weight in L
-// only while a particle is in contact, each change of the contact set a rank-1 update of the
-// blend's two factors (c = 1/h^2 and 4/h^2). One iteration is one particle entering contact and
-// one leaving; the dropped 50 x 50 cloth changes 118 contacts per step on average.
+// One pair entering the contact set and one leaving (docs/method.md, "Contact"), each a rank-1
+// update of the blend's two factors (c = 1/h^2 and 4/h^2); the simulator batches a step's
+// changes into one rank-k update and one downdate per factor.
 void runActiveSetUpdates(benchmark::State& state) {
   const Scene cloth = clothOnSphereAndGround();
   SceneData data(cloth);
@@ -118,9 +118,47 @@ void runActiveSetUpdates(benchmark::State& state) {
   state.SetLabel("rank-1 update of both blend factors");
 }
 
+// A contact set change of k pairs (docs/method.md, "Contact"): one batched rank-k update and
+// its downdate of both blend factors (GlobalSystem::addToDiagonal), against a new assembly of L
+// with both factorizations (the simulator's choice above kMaxContactUpdateColumns pairs). The
+// counter is the time of one change.
+void runContactSetChange(benchmark::State& state) {
+  const Scene cloth = clothOnSphereAndGround();
+  SceneData data(cloth);
+  GlobalSystem system(data);
+  const double h = 1.0 / 30.0;
+  system.factor(1.0 / (h * h));
+  system.factor(4.0 / (h * h));
+  const int pairs = static_cast<int>(state.range(0));
+  const double w = Collider{}.stiffness * cloth.masses[1000];
+  std::vector<int> vertices;
+  for (int i = 0; i < pairs; ++i) vertices.push_back((i * 997) % cloth.numParticles());
+  const std::vector<double> up(vertices.size(), w), down(vertices.size(), -w);
+  for (auto _ : state) {
+    if (pairs == 0) {
+      system.assemble(data);
+      system.refactorAll();
+    } else {
+      system.addToDiagonal(vertices, up);
+      system.addToDiagonal(vertices, down);
+    }
+  }
+  state.counters["change"] = benchmark::Counter((pairs == 0 ? 1.0 : 2.0) * state.iterations(),
+                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.SetLabel(pairs == 0 ? "assemble and refactor both blend factors" : "batched update of both blend factors");
+}
+
 }  // namespace
 
 void registerContactCases() {
+  benchmark::RegisterBenchmark("contact_set_change/cloth50", runContactSetChange)
+      ->Arg(0)
+      ->Arg(1)
+      ->Arg(32)
+      ->Arg(128)
+      ->Arg(256)
+      ->Arg(512)
+      ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("contact_active_set_updates/cloth50", runActiveSetUpdates)
       ->Unit(benchmark::kMicrosecond);
   for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {

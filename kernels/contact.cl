@@ -6,6 +6,8 @@ inline real contact_project(const real* ax, __global const real* params, real* p
   p[0] = ax[0];
   p[1] = ax[1];
   p[2] = ax[2];
+  // Out of the contact set (weight 0) the element does nothing: skip the geometry.
+  if (params[0] == (real)0) return (real)0;
   const int shape = (int)params[1];
   const real c0 = params[2], c1 = params[3], c2 = params[4];
   const real a0 = params[5], a1 = params[6], a2 = params[7];

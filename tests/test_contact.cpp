@@ -6,11 +6,13 @@
 #include "contact_scenes.hpp"
 #include "temp_dir_test.hpp"
 #include "elements/contact.hpp"
+#include "integrator/checkpoint.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <string>
@@ -72,23 +74,20 @@ TEST(Contact, ClosestPointOutsideOfEachShape) {
   EXPECT_FALSE(project(capsule, {1.0, 0.6, 0.0}).first);
 }
 
-// The price of a constant global matrix: out of contact the contact term pulls each particle
-// toward its previous iterate (p_j = x_j), which slows every solve. On a 20 x 20 cloth falling
-// freely for 0.5 s above a ground it does not reach, the positions differ from those without
-// the collider by at most 1.4 % of the drop at the default stiffness (1e4 / s^2, 10 iterations;
-// measured 0.0 % at 1e3, 22 % at 1e5: docs/method.md, "Contact"), and by less with more
-// iterations.
-TEST(Contact, ProximalCostOfTheDefaultStiffnessIsSmall) {
+// Only pairs near their collider are in the contact set (docs/method.md, "Contact"): a 20 x 20
+// cloth falling freely for 0.5 s above a ground it never comes near moves exactly as without the
+// collider (the constant contact matrix used to pull every particle toward its previous iterate,
+// 1.4 % of the drop at the default stiffness, 22 % at 1e5), whatever the stiffness.
+TEST(Contact, AColliderFarAwayChangesNothing) {
   Scene s = horizontalCloth(20, 0.5);
   SimulatorOptions o;
   Simulator free_fall(s, o);
-  s.colliders.push_back(groundPlane(-10.0, Collider{}.stiffness));
+  s.colliders.push_back(groundPlane(-10.0, 1e5));
   Simulator with_ground(s, o);
   for (int i = 0; i < 15; ++i) free_fall.step(), with_ground.step();
-  const double drop = 0.5 - free_fall.positions().col(1).mean();
-  const double difference = (with_ground.positions() - free_fall.positions()).cwiseAbs().maxCoeff();
-  EXPECT_GT(difference, 0.0);  // the pull is there
-  EXPECT_LT(difference, 0.02 * drop);
+  EXPECT_GT(0.5 - free_fall.positions().col(1).mean(), 1.0);  // it fell
+  EXPECT_EQ(with_ground.positions(), free_fall.positions());
+  EXPECT_EQ(with_ground.velocities(), free_fall.velocities());
 }
 
 // A cloth dropped onto a sphere and the ground (friction 0.5) comes to rest draped over them, and
@@ -128,14 +127,18 @@ TEST(Contact, ClothComesToRestOnSphereAndGround) {
 struct Rebounds {
   std::vector<double> flights;       // highest point of each flight that ended in a new contact
   double after_first_contact = 0.0;  // highest point after the first contact, ended or not
+  double worst_band = 0.0;           // over the first landing: largest |H - H*| / the blend's band
 };
 
-Rebounds reboundHeights(Simulator& sim, int steps, double rest_height, double contact_band) {
+Rebounds reboundHeights(Simulator& sim, int steps, double rest_height, double contact_band, int first_landing_steps) {
   Rebounds out;
   bool touched = false, airborne_since_touch = false;
   double highest = 0.0;
   for (int i = 0; i < steps; ++i) {
-    sim.step();
+    const StepReport& r = sim.step();
+    const double band = sim.options().energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+    if (i < first_landing_steps)
+      out.worst_band = std::max(out.worst_band, std::abs(r.energy.total() - r.target) / band);
     const bool touching = sim.positions().col(1).minCoeff() < contact_band;
     const double y = sim.positions().col(1).mean() - rest_height;
     if (touching) {
@@ -152,37 +155,45 @@ Rebounds reboundHeights(Simulator& sim, int steps, double rest_height, double co
   return out;
 }
 
-// A tet bar dropped from 0.5 m onto a frictionless ground. The contact stiffness (3e5 / s^2)
-// makes the impact depth |v| / sqrt(stiffness) = 3.1 / 548 = 6 mm, below the tolerance (3 cm),
-// so the final projection never acts and the contact is conservative: the blend keeps the
-// energy and the bar's centre rebounds high three times; BE's numerical damping kills the
-// bounce at once. Measured over 10 s (printed): the blend 99 %, 96 % and 89 % of the drop, then
-// below 30 % as the kept energy has gone into the bar's tumbling and vibration (H stays on H*);
-// BE 16 %, then no flight. The bound 0.85 is under the measured third rebound with a margin, and
-// far above what a contact that loses energy gives (BE's 16 %).
+// A tet bar dropped from 0.5 m onto a frictionless ground. The contact is soft enough to last
+// over about three steps (stiffness 1.5e3 / s^2: half a period pi / sqrt(1.5e3) = 81 ms, h = 33
+// ms) and the tolerance (0.2 m) is above the impact depth (|v| / sqrt(stiffness) = 8 cm, more in
+// the discrete steps), so the final projection never acts and the contact is conservative: the
+// blend keeps the energy and the bar's centre rebounds high three times; BE's numerical damping
+// kills the bounce at once. Measured over 10 s (printed): the blend 93 %, 98 % and 96 % of the
+// drop (92, 97, 93 % with 20 or 200 iterations: it is the converged behaviour), BE no flight. A
+// hard contact (3e5) rebounds 23, 9, 10 % once converged (200 iterations): the soft bar (1e5 Pa)
+// takes the short impact's energy into vibration and tumbling (docs/method.md, "Contact"). Over
+// the fall, the first landing and its flight (40 steps; the bottom particles enter the contact
+// set the step before the impact and leave it in the flight), the set's changes book nothing and
+// H stays within the blend's band of H* (measured 0.55 of it; later, corners hitting the ground
+// at a tumble go deeper than the tolerance, and the energy the projection adds is the blend's to
+// take out).
 TEST(Contact, BarBouncesWithTheBlendAndNotWithBackwardEuler) {
   const double drop = 0.5;
   Scene s = freeBar(drop);
-  s.colliders.push_back(groundPlane(0.0, 3e5));
+  s.colliders.push_back(groundPlane(0.0, 1.5e3));
   const double rest_height = 0.125;  // half the bar's width
   const double contact_band = 0.01;  // deeper than any particle flies while the bar rests on it
   for (Integrator integrator : {Integrator::EnergyBlend, Integrator::BackwardEuler}) {
     SimulatorOptions o;
     o.integrator = integrator;
-    o.contact_tolerance = 0.03;
+    o.contact_tolerance = 0.2;
     Simulator sim(s, o);
-    const Rebounds rebounds = reboundHeights(sim, 300, rest_height, contact_band);
+    const Rebounds rebounds = reboundHeights(sim, 300, rest_height, contact_band, 40);
     const std::vector<double>& heights = rebounds.flights;
     std::string measured;
     for (double h : heights) measured += " " + std::to_string(h / drop);
     RecordProperty(integrator == Integrator::EnergyBlend ? "blend_rebounds" : "be_rebounds", measured);
-    std::printf("%s rebounds / drop:%s\n", integrator == Integrator::EnergyBlend ? "blend" : "BE", measured.c_str());
+    std::printf("%s rebounds / drop:%s; worst |H - H*| / band %.3f\n",
+                integrator == Integrator::EnergyBlend ? "blend" : "BE", measured.c_str(), rebounds.worst_band);
     if (integrator == Integrator::EnergyBlend) {
       ASSERT_GE(heights.size(), 3u);
-      for (int b = 0; b < 3; ++b) EXPECT_GT(heights[b], 0.85 * drop) << "bounce " << b;
+      for (int b = 0; b < 3; ++b) EXPECT_GT(heights[b], 0.9 * drop) << "bounce " << b;
+      EXPECT_LE(rebounds.worst_band, 1.0);
     } else {
-      // BE's first rebound is its highest (measured 16 % of the drop).
-      EXPECT_LT(rebounds.after_first_contact, 0.25 * drop);
+      // BE's first rebound is its highest (measured: no flight at all).
+      EXPECT_LT(rebounds.after_first_contact, 0.1 * drop);
     }
   }
 }
@@ -282,6 +293,47 @@ TEST(Contact, MovingColliderWorkIsBookedAndCheckpointsContinue) {
   other.restore(mid);
   for (int i = 16; i < 30; ++i) other.step();
   EXPECT_EQ(other.positions(), final_x);
+}
+
+// The contact set's changes since the global matrix was last assembled travel with a checkpoint
+// (docs/method.md, "Contact"): a checkpoint taken while that log is not empty (a cloth settling
+// on a sphere and the ground, pairs coming and going by rank updates) continues bit for bit in
+// the same simulator and in a fresh one; a log that does not fit the checkpoint's contact set is
+// refused and changes nothing.
+TEST(Contact, CheckpointsCarryTheContactSetChanges) {
+  Scene s = horizontalCloth(12, 0.3);
+  s.colliders.push_back(sphereCollider(Eigen::Vector3d(0.0, 0.0, 0.0), 0.2, 1e4, 0.5));
+  s.colliders.push_back(groundPlane(-0.1, 1e4, 0.5));
+  SimulatorOptions o;
+  Simulator sim(s, o);
+  Checkpoint logged;
+  CheckpointData data;
+  for (int i = 0; i < 120 && data.contact_log.empty(); ++i) {
+    sim.step();
+    logged = sim.checkpoint();
+    data = parseCheckpoint(logged.bytes(), "test");
+  }
+  ASSERT_FALSE(data.contact_log.empty()) << "no rank update of the contact set within 4 s";
+  std::vector<Eigen::MatrixX3d> original;
+  for (int i = 0; i < 20; ++i) original.push_back((sim.step(), sim.positions()));
+
+  Simulator fresh(s, o);
+  fresh.restore(logged);
+  sim.restore(logged);
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_EQ((fresh.step(), fresh.positions()), original[std::size_t(i)]) << "fresh, step " << i;
+    EXPECT_EQ((sim.step(), sim.positions()), original[std::size_t(i)]) << "same, step " << i;
+  }
+
+  CheckpointData bad = data;
+  for (std::int32_t& entry : bad.contact_log) entry = -entry;  // entered becomes left: flags disagree
+  const Checkpoint corrupt = Checkpoint::fromBytes(serializeCheckpoint(bad));
+  Simulator other(s, o);
+  other.step();
+  const Eigen::MatrixX3d x = other.positions();
+  EXPECT_THROW(other.restore(corrupt), InvalidInputError);
+  EXPECT_EQ(other.positions(), x);
+  EXPECT_EQ(other.stepCount(), 1);
 }
 
 // A checkpoint belongs to its colliders as much as to its masses: a simulator whose colliders

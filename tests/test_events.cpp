@@ -232,8 +232,9 @@ TEST_F(EventsTest, ColliderEventsReplayTheSameCallsMadeByHand) {
 
 // A checkpoint holds the simulator, not the script's progress (handles held, collider paths
 // under way): the documented way is to copy the script with the checkpoint and play the copy
-// after restoring. That continues bit for bit in the middle of a drag and a collider path.
-TEST_F(EventsTest, ACopyOfTheScriptTakenWithACheckpointContinuesBitForBit) {
+// after restoring. That continues in the middle of a drag and a collider path, to round-off here
+// (a fresh simulator restoring a grab; bit for bit where the pins are the same).
+TEST_F(EventsTest, ACopyOfTheScriptTakenWithACheckpointContinues) {
   const SceneFile file = loadSceneFileWithEvents(sceneWithColliders(kColliderEvents));
   SimulatorOptions o;
   Simulator sim(file.scene, o);
@@ -254,8 +255,11 @@ TEST_F(EventsTest, ACopyOfTheScriptTakenWithACheckpointContinuesBitForBit) {
     saved.apply(restored);
     restored.step();
   }
-  EXPECT_EQ(restored.positions(), sim.positions());
-  EXPECT_EQ(restored.target(), sim.target());
+  // The restore refactors L with the grab's pin in it where the original rank-updated its factor
+  // (with colliders a restore always assembles and factors anew, docs/method.md "Per-frame
+  // input"): the same matrix, other round-off, amplified over 16 steps (measured 7e-13 m).
+  EXPECT_LT((restored.positions() - sim.positions()).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_NEAR(restored.target(), sim.target(), 1e-9 * std::abs(sim.target()) + 1e-9);
   EXPECT_EQ(restored.colliderPosition(0), sim.colliderPosition(0));
 }
 

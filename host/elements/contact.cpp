@@ -1,11 +1,13 @@
 // Contact (docs/method.md, "Contact"): one element per (collider, particle) pair,
 //   E = w_j/2 |x_j - p_j|^2,   p_j = the closest point of the collider's outside to x_j,
-// so E = 0 and p_j = x_j out of contact. A x = x_j (coefficient [1]), w_j = stiffness * m_j is
-// constant: the global matrix gains a constant diagonal and is never refactored as contacts come
-// and go. The elements are not a Scene list: they are every particle against every collider, so
-// this type implements ElementType itself, with the generic pass (kindPass) for the math. Its
-// params depend on time when a collider moves, like a pin's target, and its energy is booked
-// with the pins' (EnergyTerm::Pins) so that the forcing rule books a moving collider's work.
+// so E = 0 and p_j = x_j out of contact. A x = x_j (coefficient [1]), w_j = stiffness * m_j for
+// the pairs of the contact set (the broad phase of host/integrator/contact.cpp enables them),
+// 0 for the others, which then neither enter the global matrix nor pull their particle toward
+// its previous iterate. The elements are not a Scene list: they are every particle against every
+// collider, so this type implements ElementType itself, with the generic pass's (kindPass)
+// arithmetic over the pairs of the set. Its params depend on time when a collider moves, like a
+// pin's target, and its energy is booked with the pins' (EnergyTerm::Pins) so that the forcing
+// rule books a moving collider's work.
 #include "elements/contact.hpp"
 
 #include "elements/element_kind.hpp"
@@ -33,13 +35,16 @@ namespace {
 
 using validation::invalid;
 
+// One vertex, one row, the shared coefficient 1 (A x = x_j).
 struct ContactKind {
-  static constexpr int kVertices = 1, kRows = 1;
   static constexpr int kParams = 1 + kColliderGeometry;  // w_j, the collider's geometry
-  static constexpr bool kSharedCoefficients = true;
-  static constexpr std::array<double, 1> kCoefficients{1.0};
 
   static double project(const double* ax, const double* params, double* p) {
+    // Out of the contact set (weight 0) the element does nothing: skip the geometry.
+    if (params[0] == 0.0) {
+      for (int c = 0; c < 3; ++c) p[c] = ax[c];
+      return 0.0;
+    }
     closestPointOutside(params + 1, ax, p);
     return halfWeightedSquaredDistance(params[0], ax, p, 3);
   }
@@ -122,6 +127,19 @@ class ContactElementType final : public ElementType {
   bool timeDependent(const SceneData& data) const override { return data.hasMovingColliders(); }
   void paramsAt(const SceneData& data, double t, std::vector<double>& params) const override {
     writeParams(data.scene(), &data, t, params);
+    // Pairs out of the contact set have weight 0 (SceneData::setElementEnabled).
+    const int block = data.blockIndex(*this);
+    for (int e = 0; e < count(data.scene()); ++e)
+      if (!data.elementEnabled(block, e)) params[std::size_t(P) * std::size_t(e)] = 0.0;
+  }
+
+  // The params of pair e as build() writes them (SceneData::setElementEnabled puts them back when
+  // the pair enters the contact set).
+  void elementParams(const Scene& scene, int e, double* params) const override {
+    const int n = scene.numParticles();
+    const Collider& collider = scene.colliders[static_cast<std::size_t>(e / n)];
+    params[0] = collider.stiffness * scene.masses[e % n];
+    colliderGeometryAt(collider, collider.center, params + 1);
   }
 
   // Colliders are the scene's, not a part's particles': a part's colliders are appended as they are.
@@ -132,9 +150,32 @@ class ContactElementType final : public ElementType {
   double project(const double* ax, const double* params, double* p) const override {
     return ContactKind::project(ax, params, p);
   }
+  // kindPass's arithmetic (bit for bit) for the pairs of the contact set only: the others, weight
+  // 0 and most of them, add nothing.
   double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
               Eigen::MatrixX3d* out) const override {
-    return kindPass<ContactKind>(block, params, x, flags, out);
+    const bool write = (flags & (kPassProjection | kPassForce)) != 0;
+    const bool force = (flags & kPassForce) != 0;
+    const Eigen::Index n = x.rows();
+    const double* xs = x.data();
+    double* os = write ? out->data() : nullptr;
+    double energy = 0.0;
+    for (int e = 0; e < block.count; ++e) {
+      const double* prm = params.data() + std::size_t(P) * std::size_t(e);
+      const double w = prm[0];
+      if (w == 0.0) continue;
+      const int j = block.vertices[std::size_t(e)];
+      const double ax[3] = {xs[j], xs[n + j], xs[2 * n + j]};
+      double p[3];
+      const double element_energy = ContactKind::project(ax, prm, p);
+      if (flags & kPassEnergy) energy += element_energy;
+      if (!write) continue;
+      for (int i = 0; i < 3; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
+      os[j] += p[0];
+      os[n + j] += p[1];
+      os[2 * n + j] += p[2];
+    }
+    return energy;
   }
 
   // Colliders have their own JSON form (host/io/scene_json.cpp).

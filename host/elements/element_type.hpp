@@ -130,5 +130,7 @@ class ElementType {
 const std::vector<const ElementType*>& elementTypes();
 /// The pin type, for what the element set changes at run time (grab and release).
 const ElementType& pinElementType();
+/// The contact type, whose elements the contact set enables and disables at run time.
+const ElementType& contactElementType();
 
 }  // namespace stabint

@@ -15,8 +15,9 @@ namespace stabint {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'T', 'B', 'C', 'K', 'P', 'T', '\n'};
-// 2: element stiffnesses and enabled flags; 3: collider motion (a version 2 checkpoint is read
-// with the colliders on their scene laws, which is all they could do then).
+// 2: element stiffnesses and enabled flags; 3: collider motion and the contact set's update log
+// (a version 2 checkpoint is read with the colliders on their scene laws, which is all they could
+// do then, and an empty log).
 constexpr std::uint32_t kVersion = 3;
 constexpr std::uint32_t kOldestVersion = 2;
 
@@ -227,6 +228,8 @@ std::string serializeCheckpoint(const CheckpointData& d) {
   }
   out.value(static_cast<std::int64_t>(d.forcing.colliders.size()));
   for (const SceneData::ColliderMotion& m : d.forcing.colliders) out.motion(m);
+  out.value(static_cast<std::int64_t>(d.contact_log.size()));
+  for (std::int32_t entry : d.contact_log) out.value(entry);
   return out.take();
 }
 
@@ -288,6 +291,15 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
     if (colliders < 0 || static_cast<std::uint64_t>(colliders) > bytes.size() / kMotionBytes)
       in.fail("collider count " + std::to_string(colliders) + " does not fit the data");
     for (std::int64_t c = 0; c < colliders; ++c) d.forcing.colliders.push_back(in.motion());
+    // Entries are checked against the scene's contact set when restored.
+    const auto log_size = in.value<std::int64_t>("the contact log size");
+    if (log_size < 0 || static_cast<std::uint64_t>(log_size) > bytes.size() / 4)
+      in.fail("contact log size " + std::to_string(log_size) + " does not fit the data");
+    d.contact_log.resize(static_cast<std::size_t>(log_size));
+    for (std::int32_t& entry : d.contact_log) {
+      entry = in.value<std::int32_t>("a contact log entry");
+      if (entry == std::numeric_limits<std::int32_t>::min()) in.fail("a contact log entry is out of range");
+    }
   }
   in.expectEnd();
   return d;

@@ -1,12 +1,29 @@
 #pragma once
-// What the step does for contact after the solve (docs/method.md, "Contact"): Coulomb friction on
-// the velocities and the final projection of the positions. The contact energy itself is an
-// element (host/elements/contact.cpp) and acts inside every solve.
+// What the step does for contact (docs/method.md, "Contact"): before the solve, the broad phase
+// that picks the (collider, particle) pairs whose contact element is active; after it, Coulomb
+// friction on the velocities and the final projection of the positions. The contact energy
+// itself is an element (host/elements/contact.cpp) and acts inside every solve.
 #include <Eigen/Core>
+
+#include <vector>
 
 namespace stabint {
 
 class SceneData;
+
+/// The broad phase's change of the contact set at the start of a step of length h from (x, v)
+/// at time t. Contact element e = c n + j (collider c, particle j) is active when its flag in
+/// the scene's contact block is set. A pair enters when x_j (against collider c at t) or its
+/// prediction x_j + h v_j (against c at t + h) is within `margin` of the collider, inside
+/// included; it leaves only when both are farther than 8 margins (hysteresis, so the set and the
+/// global matrix change rarely).
+struct ContactSetChange {
+  std::vector<int> entering, leaving;  // contact element indices, ascending
+  bool entered_inside = false;         // a pair entered with x_j already inside: E jumps from 0
+  bool empty() const { return entering.empty() && leaving.empty(); }
+};
+ContactSetChange contactSetChange(const SceneData& scene, double t, double h, double margin, const Eigen::MatrixX3d& x,
+                                  const Eigen::MatrixX3d& v);
 
 /// Coulomb friction at the end of a step of length h, on the velocities `v` of the particles in
 /// contact at positions `x` at time t: for each (collider, particle) in contact, the tangential

@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <sstream>
 #include <vector>
@@ -113,6 +114,7 @@ struct Simulator::Impl {
     // refused here, naming them, rather than failing the first step().
     // The same expressions for c as the integrators below, so that each is factored once.
     const double h = options.time_step;
+    initialContactSet();
     switch (options.integrator) {
       case Integrator::BDF2:
         system.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
@@ -430,6 +432,7 @@ struct Simulator::Impl {
     StepReport r;
     r.step = steps;
     r.time = t1;
+    updateContactSet();
     r.event_energy = pending_event_energy;
     double target_now = target;
 
@@ -565,6 +568,7 @@ struct Simulator::Impl {
     // The slots may hold less precision (OpenCL float): the host copies are what they hold.
     backend->read(kX, x);
     backend->read(kV, v);
+    updateContactSet();  // so that the event books the contact energy of the new positions
     potential = backend->potential(kX, t);
     kinetic = kineticEnergy(v);
     const double event = kinetic + potential.total() - h_before;
@@ -628,6 +632,125 @@ struct Simulator::Impl {
     pins[pin].target = PinTarget{};  // a released pin does no work
     pins[pin].target.position = scene.pinTarget(pin, t);
     changePinsAsEvent(pins);
+  }
+
+  // ---- the contact set (docs/method.md, "Contact") -------------------------------------------
+  int contactCount() const {
+    return contact_block < 0 ? 0 : scene.blocks()[static_cast<std::size_t>(contact_block)].count;
+  }
+
+  // Enter a pair while x_j or x_j + h v_j is this close to its collider: the final projection's
+  // depth plus the fall under gravity over one step beyond the prediction.
+  double contactMargin() const {
+    const double h = options.time_step;
+    return options.contact_tolerance + h * h * scene.scene().gravity.norm();
+  }
+
+  // At construction: the pairs near their colliders form the set, the others get weight 0, and L
+  // is assembled from that (before anything is factored).
+  void initialContactSet() {
+    contact_block = scene.blockIndex(contactElementType());
+    if (contactCount() == 0) return;
+    for (int e = 0; e < contactCount(); ++e) scene.setElementEnabled(contact_block, e, false);
+    const ContactSetChange change = contactSetChange(scene, t, options.time_step, contactMargin(), x, v);
+    for (int e : change.entering) scene.setElementEnabled(contact_block, e, true);
+    system.assemble(scene);
+  }
+
+  // Pairs entering and leaving the set: their flags, L and every factor by one rank-k update and
+  // one rank-k downdate (GlobalSystem::addToDiagonal).
+  void changeContactSet(const std::vector<int>& entering, const std::vector<int>& leaving) {
+    const int n = scene.numParticles();
+    std::vector<int> vertices;
+    std::vector<double> deltas;
+    for (int e : entering) {
+      scene.setElementEnabled(contact_block, e, true);
+      vertices.push_back(e % n);
+      deltas.push_back(scene.elementWeight(contact_block, e));
+    }
+    for (int e : leaving) {
+      vertices.push_back(e % n);
+      deltas.push_back(-scene.elementWeight(contact_block, e));
+      scene.setElementEnabled(contact_block, e, false);
+    }
+    system.addToDiagonal(vertices, deltas);
+  }
+
+  // [project rule] A contact set change of more than this many pairs assembles L and refactors
+  // instead of updating: on the 50 x 50 cloth a batched update of both blend factors costs about
+  // as much per pair as 1/400 of a new assembly with both factorizations (docs/method.md,
+  // "Contact"); refactoring a little early also resets the updates' round-off.
+  static constexpr int kMaxContactUpdateColumns = 256;
+  // The log of updates since the last assembly is bounded too (a checkpoint's restore replays it).
+  static constexpr int kMaxContactLogColumns = 4096;
+
+  // The broad phase at the start of a step (and after setState), before anything is solved. A
+  // change of the set updates the factors, or, when it is large (a landing) or the updates since
+  // L was last assembled are many, assembles L and factors it again. Energy: a pair enters or
+  // leaves out of contact (E = 0 both sides), so nothing is booked; one that enters already
+  // inside (it moved farther than the margin) makes H jump by its contact energy, which is not
+  // booked either: the blend takes it out, as it takes the final projection's additions.
+  void updateContactSet() {
+    if (contactCount() == 0) return;
+    const ContactSetChange change = contactSetChange(scene, t, options.time_step, contactMargin(), x, v);
+    if (change.empty()) return;
+    const int columns = static_cast<int>(change.entering.size() + change.leaving.size());
+    if (columns > kMaxContactUpdateColumns || contact_log_columns + columns > kMaxContactLogColumns) {
+      for (int e : change.entering) scene.setElementEnabled(contact_block, e, true);
+      for (int e : change.leaving) scene.setElementEnabled(contact_block, e, false);
+      system.assemble(scene);
+      system.refactorAll();
+      contact_log.clear();
+      contact_log_columns = 0;
+    } else {
+      changeContactSet(change.entering, change.leaving);
+      for (int e : change.entering) contact_log.push_back(e + 1);
+      for (int e : change.leaving) contact_log.push_back(-(e + 1));
+      contact_log.push_back(0);
+      contact_log_columns += columns;
+    }
+    if (change.entered_inside) potential = backend->potential(kX, t);
+  }
+
+  // The contact flags before a checkpoint's log (those L was last assembled from), checked
+  // against it; throws for a log that does not fit the flags or the scene.
+  std::vector<std::uint8_t> contactBaseFlags(const CheckpointData& d) const {
+    const auto corrupt = [] {
+      throw InvalidInputError("checkpoint: its contact set changes do not fit its contact set");
+    };
+    if (contactCount() == 0) {
+      if (!d.contact_log.empty()) corrupt();
+      return {};
+    }
+    std::vector<std::uint8_t> flags = d.enabled[static_cast<std::size_t>(contact_block)];
+    if (!d.contact_log.empty() && d.contact_log.back() != 0) corrupt();
+    for (std::size_t i = d.contact_log.size(); i-- > 0;) {
+      const std::int64_t entry = d.contact_log[i];
+      if (entry == 0) continue;
+      const std::int64_t e = (entry > 0 ? entry : -entry) - 1;
+      if (e >= contactCount()) corrupt();
+      std::uint8_t& flag = flags[static_cast<std::size_t>(e)];
+      if ((flag != 0) != (entry > 0)) corrupt();  // it entered: it is in; it left: it is out
+      flag = entry > 0 ? 0 : 1;
+    }
+    return flags;
+  }
+
+  // Replays a checkpoint's log on L and factors assembled from its base flags: the same rank
+  // updates in the same order give the same factors, bit for bit.
+  void replayContactLog(const std::vector<std::int32_t>& log) {
+    std::vector<int> entering, leaving;
+    for (std::int32_t entry : log) {
+      if (entry > 0) entering.push_back(entry - 1);
+      if (entry < 0) leaving.push_back(-entry - 1);
+      if (entry != 0) continue;
+      changeContactSet(entering, leaving);
+      entering.clear();
+      leaving.clear();
+    }
+    contact_log = log;
+    contact_log_columns =
+        static_cast<int>(std::count_if(log.begin(), log.end(), [](std::int32_t entry) { return entry != 0; }));
   }
 
   // ---- element changes (docs/method.md, "Per-frame input") ----------------------------------
@@ -732,6 +855,7 @@ struct Simulator::Impl {
     backend->read(kXPrev, d.x_prev);
     backend->read(kVPrev, d.v_prev);
     d.forcing = scene.forcingState();
+    d.contact_log = contact_log;
     for (std::size_t b = 0; b < scene.blocks().size(); ++b) {
       const ElementBlock& block = scene.blocks()[b];
       d.stiffness.emplace_back();
@@ -760,8 +884,19 @@ struct Simulator::Impl {
     const std::size_t motions = d.forcing.colliders.size();
     if (motions != 0 && motions != scene.scene().colliders.size())
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");
+    const std::vector<std::uint8_t> contact_base = contactBaseFlags(d);
     if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
-    restoreElements(d);
+    if (contactCount() == 0) {
+      restoreElements(d, nullptr);
+    } else {
+      // With colliders, L is assembled and factored from the flags of the checkpoint's last
+      // assembly and its contact set changes since are replayed, so that the run continues bit
+      // for bit (rank updates on other factors would differ in round-off).
+      restoreElements(d, &contact_base);
+      system.assemble(scene);
+      system.refactorAll();
+      replayContactLog(d.contact_log);
+    }
     backend->write(kX, d.x);
     backend->write(kV, d.v);
     backend->write(kXPrev, d.x_prev);
@@ -780,20 +915,22 @@ struct Simulator::Impl {
   }
 
   // The stiffnesses and enabled flags of a checkpoint (counts checked by restore): elements that
-  // differ are changed as setElementStiffness would, without an event (H* is restored).
-  void restoreElements(const CheckpointData& d) {
+  // differ are changed as setElementStiffness would, without an event (H* is restored). With
+  // `contact_flags` the contact block takes those flags and L and the factors are left to the
+  // caller, who assembles and factors them again.
+  void restoreElements(const CheckpointData& d, const std::vector<std::uint8_t>* contact_flags) {
     for (std::size_t b = 0; b < scene.blocks().size(); ++b) {
       const ElementBlock& block = scene.blocks()[b];
       const int bi = static_cast<int>(b);
       for (int e = 0; e < block.count; ++e) {
         const double k = d.stiffness[b][static_cast<std::size_t>(e)];
-        const bool on = d.enabled[b][static_cast<std::size_t>(e)] != 0;
+        const bool on = (contact_flags && bi == contact_block ? *contact_flags : d.enabled[b])[std::size_t(e)] != 0;
         const bool k_differs = block.type->hasStiffness() && block.type->stiffness(scene.scene(), e) != k;
         if (!k_differs && scene.elementEnabled(bi, e) == on) continue;
         const double w_old = scene.elementWeight(bi, e);
         if (k_differs) scene.setElementStiffness(bi, e, k);
         if (scene.elementEnabled(bi, e) != on) scene.setElementEnabled(bi, e, on);
-        updateSystem(bi, e, w_old);
+        if (!contact_flags) updateSystem(bi, e, w_old);
       }
     }
   }
@@ -828,6 +965,11 @@ struct Simulator::Impl {
   Eigen::MatrixX3d x_im, v_im;        // host copies of that candidate
   double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
   StepReport report;
+  int contact_block = -1;  // the contact element type's block
+  // The contact set's changes since L was last assembled, in order: e + 1 for pair e entering,
+  // -(e + 1) for one leaving, 0 closing each step's batch; checkpoints carry it (restore).
+  std::vector<std::int32_t> contact_log;
+  int contact_log_columns = 0;  // its nonzero entries
 };
 
 void Simulator::setElementStiffness(ElementKind kind, int index, double stiffness) {

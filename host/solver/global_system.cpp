@@ -15,7 +15,9 @@
 
 namespace stabint {
 
-GlobalSystem::GlobalSystem(const SceneData& scene) : masses_(scene.masses()) {
+GlobalSystem::GlobalSystem(const SceneData& scene) : masses_(scene.masses()) { assemble(scene); }
+
+void GlobalSystem::assemble(const SceneData& scene) {
   const int n = scene.numParticles();
   std::vector<Eigen::Triplet<double>> entries;
   std::size_t count = 0;
@@ -167,6 +169,51 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
     }
     // A failed update (out of memory, or a downdate that lost positive definiteness to
     // round-off) leaves the factor unusable: factor that c again on its next use.
+    it = updated ? std::next(it) : factors_.erase(it);
+  }
+}
+
+}  // namespace stabint
+
+namespace stabint {
+
+void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::vector<double>& deltas) {
+  for (std::size_t i = 0; i < vertices.size(); ++i) laplacian_.coeffRef(vertices[i], vertices[i]) += deltas[i];
+  const int n = static_cast<int>(laplacian_.rows());
+  for (auto it = factors_.begin(); it != factors_.end();) {
+    cholmod_factor* factor = it->second->factor();
+    cholmod_common& common = it->second->cholmod();
+    // Row of vertex v in the factor's fill-reducing order (Perm[row] = v), found once for all.
+    std::vector<int> row_of(static_cast<std::size_t>(n));
+    const int* perm = static_cast<const int*>(factor->Perm);
+    for (int r = 0; r < n; ++r) row_of[static_cast<std::size_t>(perm ? perm[r] : r)] = r;
+    bool updated = true;
+    for (const bool update : {true, false}) {
+      std::vector<std::size_t> columns;
+      for (std::size_t i = 0; i < deltas.size(); ++i)
+        if (update ? deltas[i] > 0.0 : deltas[i] < 0.0) columns.push_back(i);
+      if (columns.empty() || !updated) continue;
+      const int k = static_cast<int>(columns.size());
+      cholmod_sparse* c = cholmod_allocate_sparse(n, static_cast<std::size_t>(k), static_cast<std::size_t>(k),
+                                                  /*sorted=*/1, /*packed=*/1, /*stype=*/0, CHOLMOD_REAL, &common);
+      if (c == nullptr) {
+        updated = false;
+        continue;
+      }
+      int* cp = static_cast<int*>(c->p);
+      int* ci = static_cast<int*>(c->i);
+      double* cx = static_cast<double*>(c->x);
+      for (int col = 0; col < k; ++col) {
+        const std::size_t i = columns[static_cast<std::size_t>(col)];
+        cp[col] = col;
+        ci[col] = row_of[static_cast<std::size_t>(vertices[i])];
+        cx[col] = std::sqrt(std::abs(deltas[i]));
+      }
+      cp[k] = k;
+      updated = cholmod_updown(update ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
+      cholmod_free_sparse(&c, &common);
+    }
+    // As addElementTerm: a failed update leaves the factor unusable; factor it again on next use.
     it = updated ? std::next(it) : factors_.erase(it);
   }
 }

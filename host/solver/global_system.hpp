@@ -8,6 +8,7 @@
 
 #include <map>
 #include <memory>
+#include <vector>
 
 namespace stabint {
 
@@ -16,6 +17,11 @@ class SceneData;
 class GlobalSystem {
  public:
   explicit GlobalSystem(const SceneData& scene);
+
+  /// L assembled again from the scene's current element weights (after changes whose factors
+  /// the caller refactors with refactorAll). The result depends only on those weights, not on
+  /// the changes that led to them.
+  void assemble(const SceneData& scene);
 
   /// Factors K_c unless it already is. A K_c that is not numerically positive definite (masses
   /// too small for the stiffnesses at this c, e.g. 5e-324 kg against 1e308 N/m) is an
@@ -68,6 +74,12 @@ class GlobalSystem {
                       FactorChange how = FactorChange::RankUpdate);
   /// Factors every c factored so far again from the current L (after Deferred changes).
   void refactorAll();
+
+  /// L(v_i, v_i) += delta_i for each i, every existing factor updated with one rank-k CHOLMOD
+  /// update for the positive deltas followed by one rank-k downdate for the negative ones (in
+  /// the order given): the contact set's change at a step's start. Deterministic: the same
+  /// calls on the same factors give the same factors, bit for bit.
+  void addToDiagonal(const std::vector<int>& vertices, const std::vector<double>& deltas);
 
  private:
   // Simplicial CHOLMOD: with Debian's reference BLAS its triangular solves beat the supernodal

@@ -93,7 +93,8 @@ enum class ColliderShape { Plane, Sphere, Box, Capsule };
 /// A rigid obstacle that no particle may enter (docs/method.md, "Contact"). Every particle of
 /// the scene collides with every collider through the contact energy
 /// E = w_j/2 |x_j - p_j|^2, p_j the closest point of the collider's outside (x_j itself out of
-/// contact, so E = 0 there), w_j = stiffness * m_j. The collider translates with `velocity`
+/// contact, so E = 0 there), w_j = stiffness * m_j while the particle is near the collider (the
+/// contact set, chosen at each step's start; 0 elsewhere). The collider translates with `velocity`
 /// (0: static): its geometry at time t is that at t = 0 moved by velocity * t, until a running
 /// Simulator moves it (Simulator::setColliderPosition, setColliderVelocity).
 struct Collider {

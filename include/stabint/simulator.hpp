@@ -124,7 +124,9 @@ struct SimulatorOptions {
   double energy_limit = 0.0;
 
   /// Contact (docs/method.md, "Contact"): after every step, no particle stays deeper than this
-  /// inside a collider (m, >= 0); the final projection that moves it out is booked in H*.
+  /// inside a collider (m, >= 0); the final projection that moves it out is booked in H*. It also
+  /// sets the contact set's margin, contact_tolerance + time_step^2 |gravity|: a particle that is
+  /// (or, at its velocity, will be) that close to a collider carries its contact term.
   double contact_tolerance = 1e-2;
 
   BackendKind backend = BackendKind::CpuReference;

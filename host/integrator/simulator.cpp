@@ -490,7 +490,10 @@ struct Simulator::Impl {
     // the blend never undoes physical damping.
     r.damping = applyMomentumPreservingDamping(scene.scene().bodies, scene.masses(), x_new, v_new);
     velocities_changed = velocities_changed || r.damping != 0.0;
-    if (velocities_changed) backend->write(kVNew, v_new);
+    if (velocities_changed) {
+      backend->roundToStorage(v_new);  // the host copy is what the slot holds (a float device)
+      backend->write(kVNew, v_new);
+    }
     target_now -= r.damping;
 
     const double k_new = kineticEnergy(v_new);

@@ -364,7 +364,9 @@ struct Simulator::Impl {
                                  options.max_velocity_scale);
     } else if (excess() > tau) {
       changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
-      if (excess() > tau && report.branch == BlendBranch::BackwardEuler) {
+      // Only toward this step's partner: after a non-finite IM candidate the state is the BE
+      // solve itself and kXPartner holds an older step's partner.
+      if (excess() > tau && report.branch == BlendBranch::BackwardEuler && partner_on_host) {
         p_new = lowerPotentialTowardPartner(target_now - kineticEnergy(v_new), p_new, report);
         // Moving the positions moved the angular momentum about the origin with them.
         if (momentumConserved() && im_momenta_known)
@@ -393,9 +395,9 @@ struct Simulator::Impl {
     return true;
   }
 
-  // Moves the blended positions toward the BE partner's (kXPartner), which carry less elastic
-  // energy, until their potential is `potential_wanted` or they reach the partner's. Velocities
-  // stay as they are.
+  // Moves the blended positions toward this step's BE partner's (kXPartner, x_partner, whose
+  // potential the blend evaluated), which carry less elastic energy, until their potential is
+  // `potential_wanted` or they reach the partner's. Velocities stay as they are.
   PotentialEnergy lowerPotentialTowardPartner(double potential_wanted, const PotentialEnergy& p_new,
                                               StepReport& report) {
     const double t1 = t + options.time_step;
@@ -415,18 +417,11 @@ struct Simulator::Impl {
     };
     // At beta = 1 the trial positions are the partner's bit for bit (0 x + 1 y), whose potential
     // the blend's root find has evaluated already.
-    const double p_partner = partner_on_host ? consider(1.0, partner_potential) : potentialAt(1.0);
+    const double p_partner = consider(1.0, partner_potential);
     if (p_partner - potential_wanted < -tau)
       findBlendWeight(KineticQuadratic{}, potentialAt, potential_wanted, 0.0, p_new.total(), 1.0, p_partner, tau,
                       options.max_root_evaluations);
-    if (best_beta > 0.0) {
-      if (partner_on_host) {
-        blendTowardPartner(x_new, x_new, x_partner, best_beta, kXNew);
-      } else {
-        backend->combine(kXNew, 1.0 - best_beta, kXNew, best_beta, kXPartner);
-        backend->read(kXNew, x_new);
-      }
-    }
+    if (best_beta > 0.0) blendTowardPartner(x_new, x_new, x_partner, best_beta, kXNew);
     return best;
   }
 

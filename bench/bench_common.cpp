@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdlib>
 
 namespace stabint::bench {
@@ -57,6 +58,28 @@ const std::vector<SceneCase>& referenceScenes() {
          p.nz = 9;
          return makeTetBar(p);
        }},
+  };
+  return scenes;
+}
+
+const std::vector<SceneCase>& violentScenes() {
+  static const std::vector<SceneCase> scenes{
+      {"fallingcloth20x20",
+       [] {
+         // As the study's falling cloth (tools/study/study_scenes.cpp): tilted about its pinned top
+         // edge to 30 degrees below the horizontal, at rest in that shape.
+         ClothGridParams p;
+         Scene s = makeClothGrid(p);
+         const double tilt = 30.0 * M_PI / 180.0;
+         for (int r = 0; r < s.numParticles(); ++r) {
+           const double along = p.height - s.positions(r, 1);
+           s.positions.row(r) << s.positions(r, 0), -along * std::sin(tilt), along * std::cos(tilt);
+         }
+         s.rest_positions = s.positions;
+         for (Pin& pin : s.pins) pin.target.position = s.positions.row(pin.vertex).transpose();
+         return s;
+       }},
+      {"chain", [] { return makeChainPendulum(); }},
   };
   return scenes;
 }

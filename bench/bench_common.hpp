@@ -31,6 +31,10 @@ struct SceneCase {
 /// (5,000 particles).
 const std::vector<SceneCase>& referenceScenes();
 Scene clothScene(int side);
+/// The main job's violent scenes (stabint-study motion): the 20 x 20 cloth falling from 30
+/// degrees below the horizontal about its pinned top corners, and the stiff chain pendulum
+/// released horizontally at rest. The blend takes every branch on them.
+const std::vector<SceneCase>& violentScenes();
 
 /// Side lengths of the cloth scaling family, 10x10 up to 224x224 (50,176 particles). With
 /// STABINT_BENCH_QUICK set, only up to 71x71.
@@ -87,4 +91,5 @@ void registerIterationCases();    // bench_iterations.cpp
 void registerSolverCases();       // bench_solver.cpp
 void registerInteractionCases();  // bench_interaction.cpp
 void registerContactCases();      // bench_contact.cpp
+void registerHostSolveCases();    // bench_host_solve.cpp
 }  // namespace stabint::bench

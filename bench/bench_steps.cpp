@@ -114,12 +114,17 @@ void runSteps(benchmark::State& state, const std::string& key, const std::functi
 // one case so that other load on a shared machine hits both alike: each benchmark iteration is
 // one BE step and one blend step, each timed on its own. The two simulators start from the same
 // state and advance in lock step.
+// With `restart_steps` > 0 both go back to their first state (Simulator::restore, timing paused)
+// every that many steps, so that a long run keeps measuring the same stretch of motion (the
+// violent scenes' fall and swing) instead of whatever the simulation has come to.
 struct PairFixture {
   StepFixture be, blend;
+  Checkpoint be_start, blend_start;
+  int since_restart = 0;
 };
 
 void runPair(benchmark::State& state, const std::string& key, const std::function<Scene()>& make_scene,
-             BackendChoice backend) {
+             BackendChoice backend, int restart_steps = 0) {
   if (const std::string why = skipReason(backend); !why.empty()) {
     state.SkipWithError(why.c_str());
     return;
@@ -135,6 +140,8 @@ void runPair(benchmark::State& state, const std::string& key, const std::functio
       }
       const int steps = warmUp(f->blend, 3, 20);
       warmUp(f->be, steps, steps);  // same step index: both integrate the same time span
+      f->be_start = f->be.sim->checkpoint();
+      f->blend_start = f->blend.sim->checkpoint();
       return f;
     });
   } catch (const std::exception& e) {
@@ -145,14 +152,25 @@ void runPair(benchmark::State& state, const std::string& key, const std::functio
   using Clock = std::chrono::steady_clock;
   double be_time = 0, blend_time = 0, be_iterations = 0, blend_iterations = 0;
   double branch_im = 0, branch_be = 0, branch_scale = 0, blend_energy_evaluations = 0;
+  PhaseTimes be_phases, blend_phases;
   try {
     for (auto _ : state) {
+      if (restart_steps > 0 && ++f.since_restart > restart_steps) {
+        state.PauseTiming();
+        f.be.sim->restore(f.be_start);
+        f.blend.sim->restore(f.blend_start);
+        f.since_restart = 1;
+        state.ResumeTiming();
+      }
       auto start = Clock::now();
-      be_iterations += f.be.sim->step().iterations;
+      const StepReport& be = f.be.sim->step();
       be_time += std::chrono::duration<double>(Clock::now() - start).count();
+      be_iterations += be.iterations;
+      be_phases += be.times;
       start = Clock::now();
       const StepReport& r = f.blend.sim->step();
       blend_time += std::chrono::duration<double>(Clock::now() - start).count();
+      blend_phases += r.times;
       blend_iterations += r.iterations;
       blend_energy_evaluations += r.energy_evaluations;
       branch_im += r.branch == BlendBranch::ImplicitMidpoint;
@@ -174,19 +192,42 @@ void runPair(benchmark::State& state, const std::string& key, const std::functio
   state.counters["branch_IM"] = Counter(branch_im, Counter::kAvgIterations);
   state.counters["branch_BE"] = Counter(branch_be, Counter::kAvgIterations);
   state.counters["branch_scale"] = Counter(branch_scale, Counter::kAvgIterations);
+  // Where the time goes, per step: the host solves, the element passes of the iterations (local,
+  // with the gather and transfers on OpenCL) and the energy passes and reductions.
+  for (const auto& [prefix, t] :
+       {std::pair<const char*, const PhaseTimes&>{"be_", be_phases}, {"blend_", blend_phases}}) {
+    state.counters[std::string(prefix) + "global"] = Counter(t.global, Counter::kAvgIterations);
+    state.counters[std::string(prefix) + "local"] = Counter(t.local + t.gather + t.transfer, Counter::kAvgIterations);
+    state.counters[std::string(prefix) + "energy"] = Counter(t.energy, Counter::kAvgIterations);
+    state.counters[std::string(prefix) + "other"] = Counter(t.bookkeeping, Counter::kAvgIterations);
+  }
   state.SetLabel(f.be.sim->backendDescription());
 }
 
 }  // namespace
 
 void registerStepCases() {
+  // A fixed number of steps per repetition, restarted from the same state, so that every
+  // repetition (and every build compared) times the same stretch of motion with the same mix of
+  // blend branches: the first 2 s of the reference scenes (60 steps), and 4 times the first 5 s
+  // (150 steps: the fall and the first swings) of the main job's violent scenes.
   for (const SceneCase& scene : referenceScenes())
     for (BackendChoice backend : allBackends()) {
       const std::string name = "blend_vs_be/" + scene.name + "/" + backendLabel(backend);
       benchmark::RegisterBenchmark(name.c_str(),
-                                   [=](benchmark::State& state) { runPair(state, name, scene.make, backend); })
+                                   [=](benchmark::State& state) { runPair(state, name, scene.make, backend, 60); })
+          ->Iterations(60)
           ->UseRealTime()
           ->Unit(benchmark::kMillisecond);
+    }
+  for (const SceneCase& scene : violentScenes())
+    for (BackendChoice backend : allBackends()) {
+      const std::string name = "blend_vs_be/" + scene.name + "/" + backendLabel(backend);
+      benchmark::RegisterBenchmark(name.c_str(),
+                                   [=](benchmark::State& state) { runPair(state, name, scene.make, backend, 150); })
+          ->Iterations(600)
+          ->UseRealTime()
+          ->Unit(benchmark::kMicrosecond);
     }
 
   for (const SceneCase& scene : referenceScenes())

@@ -3,6 +3,7 @@
 //   blend_vs_be/<scene>/<backend>                     one BE step and one blend step, alternated
 //   iteration/<scene>/<integrator>/<backend>          one local/global iteration
 //   rotation/<scene>/<method>                         the tets' nearest rotations alone
+//   host_solve/<scene>/<backend>/<when>               the host's CHOLMOD solve alone, after a local step
 //   scaling_step/cloth/<integrator>/<backend>/side:N  step on an N x N cloth
 //   scaling_iteration/cloth/BE/<backend>/side:N       iteration on an N x N cloth
 // with counters particles, elements, iterations and the phase times (seconds per benchmark
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
   bench::registerSolverCases();
   bench::registerInteractionCases();
   bench::registerContactCases();
+  bench::registerHostSolveCases();
   benchmark::RunSpecifiedBenchmarks();
   bench::releaseAllFixtures();  // OpenCL objects go while the runtime is still loaded
   benchmark::Shutdown();

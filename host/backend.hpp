@@ -32,6 +32,13 @@ class Backend {
   /// Copies between host and a slot (`n by 3`).
   virtual void write(int slot, const Eigen::MatrixX3d& host) = 0;
   virtual void read(int slot, Eigen::MatrixX3d& host) = 0;
+  /// Two slots to the host; on a device backend with one wait instead of two.
+  virtual void readBoth(int slot_a, Eigen::MatrixX3d& a, int slot_b, Eigen::MatrixX3d& b) {
+    read(slot_a, a);
+    read(slot_b, b);
+  }
+  /// Rounds host values to what a slot holds after write() (a device in float keeps floats).
+  virtual void roundToStorage(Eigen::MatrixX3d& /*host*/) const {}
   virtual void copy(int dst, int src) = 0;
   /// dst = a * x + b * y. dst may be x or y.
   virtual void combine(int dst, double a, int x, double b, int y) = 0;

@@ -234,6 +234,32 @@ TEST(OpenCLBlend, ChainPendulumBranchesAndAlphaMatchCpu) {
   std::printf("  %d partner steps, worst alpha difference %.3g\n", partner_steps, worst_alpha);
 }
 
+// The blend forms the blended state, the position move toward the partner and the velocity
+// corrections on the host and writes them to the device (docs/method.md section 5, "Passes and
+// waits per step"). The host's copies must be what the device holds: in float every position and
+// velocity the simulator reports is a float, in every branch.
+TEST(OpenCLBlend, HostStateIsWhatAFloatDeviceHolds) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Float);
+  SimulatorOptions o;
+  o.integrator = Integrator::EnergyBlend;
+  o.backend = BackendKind::OpenCL;
+  o.opencl.precision = Precision::Float;
+  Simulator sim(makeChainPendulum({}), o);
+  auto holdsFloats = [](const Eigen::MatrixX3d& m) {
+    return (m.cast<float>().cast<double>().array() == m.array()).all();
+  };
+  int blended = 0, scaled = 0;
+  for (int i = 0; i < 60; ++i) {
+    const StepReport& r = sim.step();
+    blended += r.branch == BlendBranch::BackwardEuler && r.alpha > 0.0 && r.alpha < 1.0;
+    scaled += r.velocity_scale != 1.0;
+    ASSERT_TRUE(holdsFloats(sim.positions())) << "step " << i << ", branch " << blendBranchName(r.branch);
+    ASSERT_TRUE(holdsFloats(sim.velocities())) << "step " << i << ", branch " << blendBranchName(r.branch);
+  }
+  EXPECT_GT(blended, 0) << "the test should blend with the BE partner";
+  EXPECT_GT(scaled, 0) << "the test should correct the velocities";
+}
+
 TEST(OpenCLBlend, SimulatorReportsOpenCLBackendAndPhaseTimes) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
   SimulatorOptions o;

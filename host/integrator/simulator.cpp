@@ -212,17 +212,24 @@ struct Simulator::Impl {
     const double h = options.time_step;
     const double t1 = t + h;
     report.iterations += implicitMidpoint(kXNew, kVNew);
+    // The driver needs the candidate on the host whatever the branch (step() for the accepted
+    // state, the BE branch for its momenta): read once here, with one wait, and its kinetic
+    // energy computed from that copy instead of a device reduction.
+    backend->readBoth(kXNew, x_new, kVNew, v_new);
+    new_state_on_host = true;
     PotentialEnergy p_im = backend->potential(kXNew, t1);
     ++report.energy_evaluations;
-    const double vv_im = backend->massDot(kVNew, kVNew);
+    const double vv_im = massDot(v_new, v_new);
     const double h_im = 0.5 * vv_im + p_im.total();
     report.branch = BlendBranch::ImplicitMidpoint;
     report.alpha = 0.0;
     im_momenta_known = false;
+    partner_on_host = false;
 
     if (!std::isfinite(h_im)) {
       // An IM candidate that blew up is no candidate: the step is the BE partner, with the full
       // iteration budget since nothing else of the step is usable.
+      new_state_on_host = false;
       report.branch = BlendBranch::BackwardEuler;
       report.alpha = 1.0;
       backend->copy(kXNew, kX);
@@ -245,17 +252,23 @@ struct Simulator::Impl {
     // iterations start at x_n, where the BE objective equals H_n and can only decrease, so a
     // few iterations cannot pile up elastic energy (docs/method.md has the measurements).
     report.branch = BlendBranch::BackwardEuler;
-    backend->read(kXNew, x_im);
-    backend->read(kVNew, v_im);
+    x_im.swap(x_new);
+    v_im.swap(v_new);
     im_momenta = rigidMotion(scene.masses(), x_im, v_im);
     im_momenta_known = true;
     backend->copy(kXPartner, kX);
     report.iterations += backwardEuler(kXPartner, kVPartner, options.be_iterations, /*warm_start=*/true);
 
+    // The partner on the host (one wait): the kinetic quadratic below, the blended state and the
+    // position root find in step() are formed there, which saves two device reductions and the
+    // reads of the blended state.
+    backend->readBoth(kXPartner, x_partner, kVPartner, v_partner);
+    partner_on_host = true;
+
     // H(alpha) = K(alpha) + P(alpha). The kinetic part is an exact quadratic in alpha:
     // K = 1/2 (vv + 2 alpha vd + alpha^2 dd) with d = v_partner - v_IM.
-    backend->combine(kScratch, 1.0, kVPartner, -1.0, kVNew);
-    const KineticQuadratic k_alpha{vv_im, backend->massDot(kVNew, kScratch), backend->massDot(kScratch, kScratch)};
+    v_scratch = 1.0 * v_partner + -1.0 * v_im;  // as Backend::combine(d, 1, partner, -1, IM) forms it
+    const KineticQuadratic k_alpha{vv_im, massDot(v_im, v_scratch), massDot(v_scratch, v_scratch)};
     struct Evaluation {
       double alpha;
       double g;  // H(alpha) - H*
@@ -270,6 +283,8 @@ struct Simulator::Impl {
       return p.total();
     };
     const double p_be = potentialAt(1.0);
+    // The partner's potential is also the far end of the position root find in step().
+    partner_potential = evaluations.front().potential;
     const bool partner_cannot_reach_target = evaluations.front().g >= 0.0;
     if (!partner_cannot_reach_target && std::abs(evaluations.front().g) > tau)
       findBlendWeight(k_alpha, potentialAt, target_now, 0.0, p_im.total(), 1.0, p_be, tau,
@@ -281,12 +296,28 @@ struct Simulator::Impl {
       for (const Evaluation& e : evaluations)
         if (std::abs(e.g) < std::abs(accepted.g)) accepted = e;
     report.alpha = accepted.alpha;
-    backend->combine(kXNew, 1.0 - accepted.alpha, kXNew, accepted.alpha, kXPartner);
-    backend->combine(kVNew, 1.0 - accepted.alpha, kVNew, accepted.alpha, kVPartner);
+    blendTowardPartner(x_new, x_im, x_partner, accepted.alpha, kXNew);
+    blendTowardPartner(v_new, v_im, v_partner, accepted.alpha, kVNew);
+    new_state_on_host = true;
     return accepted.potential;
   }
 
+  // out = (1 - w) from + w partner, formed on the host as Backend::combine forms it (bit for bit
+  // on the CPU reference; the device's own combine may round differently, by an ulp), rounded to
+  // what the slot holds and written there without a wait.
+  void blendTowardPartner(Eigen::MatrixX3d& out, const Eigen::MatrixX3d& from, const Eigen::MatrixX3d& partner,
+                          double w, int slot) {
+    out = (1.0 - w) * from + w * partner;
+    backend->roundToStorage(out);
+    backend->write(slot, out);
+  }
+
   double tolerance() const { return options.energy_tolerance * (kinetic + potential.elastic() + energy_scale); }
+
+  // sum_j m_j a_j . b_j on host copies, as the CPU reference's Backend::massDot forms it.
+  double massDot(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) const {
+    return (a.cwiseProduct(b).rowwise().sum().array() * scene.masses().array()).sum();
+  }
 
   // No pins, no force fields, no user forces and no colliders: IM keeps linear and angular
   // momentum.
@@ -348,7 +379,9 @@ struct Simulator::Impl {
                                  options.max_velocity_scale);
     } else if (excess() > tau) {
       changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
-      if (excess() > tau && report.branch == BlendBranch::BackwardEuler) {
+      // Only toward this step's partner: after a non-finite IM candidate the state is the BE
+      // solve itself and kXPartner holds an older step's partner.
+      if (excess() > tau && report.branch == BlendBranch::BackwardEuler && partner_on_host) {
         p_new = lowerPotentialTowardPartner(target_now - kineticEnergy(v_new), p_new, report);
         // Moving the positions moved the angular momentum about the origin with them.
         if (momentumConserved() && im_momenta_known)
@@ -377,31 +410,33 @@ struct Simulator::Impl {
     return true;
   }
 
-  // Moves the blended positions toward the BE partner's (kXPartner), which carry less elastic
-  // energy, until their potential is `potential_wanted` or they reach the partner's. Velocities
-  // stay as they are.
+  // Moves the blended positions toward this step's BE partner's (kXPartner, x_partner, whose
+  // potential the blend evaluated), which carry less elastic energy, until their potential is
+  // `potential_wanted` or they reach the partner's. Velocities stay as they are.
   PotentialEnergy lowerPotentialTowardPartner(double potential_wanted, const PotentialEnergy& p_new,
                                               StepReport& report) {
     const double t1 = t + options.time_step;
     const double tau = tolerance();
     PotentialEnergy best = p_new;
     double best_beta = 0.0, best_g = p_new.total() - potential_wanted;
-    auto potentialAt = [&](double beta) {
-      backend->combine(kXTrial, 1.0 - beta, kXNew, beta, kXPartner);
-      const PotentialEnergy p = backend->potential(kXTrial, t1);
-      ++report.energy_evaluations;
+    auto consider = [&](double beta, const PotentialEnergy& p) {
       if (std::abs(p.total() - potential_wanted) < std::abs(best_g))
         best = p, best_beta = beta, best_g = p.total() - potential_wanted;
       return p.total();
     };
-    const double p_partner = potentialAt(1.0);
+    auto potentialAt = [&](double beta) {
+      backend->combine(kXTrial, 1.0 - beta, kXNew, beta, kXPartner);
+      const PotentialEnergy p = backend->potential(kXTrial, t1);
+      ++report.energy_evaluations;
+      return consider(beta, p);
+    };
+    // At beta = 1 the trial positions are the partner's bit for bit (0 x + 1 y), whose potential
+    // the blend's root find has evaluated already.
+    const double p_partner = consider(1.0, partner_potential);
     if (p_partner - potential_wanted < -tau)
       findBlendWeight(KineticQuadratic{}, potentialAt, potential_wanted, 0.0, p_new.total(), 1.0, p_partner, tau,
                       options.max_root_evaluations);
-    if (best_beta > 0.0) {
-      backend->combine(kXNew, 1.0 - best_beta, kXNew, best_beta, kXPartner);
-      backend->read(kXNew, x_new);
-    }
+    if (best_beta > 0.0) blendTowardPartner(x_new, x_new, x_partner, best_beta, kXNew);
     return best;
   }
 
@@ -454,8 +489,10 @@ struct Simulator::Impl {
       if (std::isfinite(p_new.total())) target_now += forcingWork(kXNew, p_new, r);
     }
 
-    backend->read(kXNew, x_new);
-    backend->read(kVNew, v_new);
+    // The blend has its state on the host already (the IM candidate it read, or the blend it
+    // formed there).
+    if (options.integrator != Integrator::EnergyBlend || !new_state_on_host)
+      backend->readBoth(kXNew, x_new, kVNew, v_new);
     if (!allFinite(x_new) || !allFinite(v_new)) refuse(r, "non-finite position or velocity");
     bool velocities_changed = correctBlendState(target_now, p_new, r);
     if (!scene.scene().colliders.empty()) velocities_changed |= resolveContact(t1, target_now, p_new, r);
@@ -464,7 +501,10 @@ struct Simulator::Impl {
     // the blend never undoes physical damping.
     r.damping = applyMomentumPreservingDamping(scene.scene().bodies, scene.masses(), x_new, v_new);
     velocities_changed = velocities_changed || r.damping != 0.0;
-    if (velocities_changed) backend->write(kVNew, v_new);
+    if (velocities_changed) {
+      backend->roundToStorage(v_new);  // the host copy is what the slot holds (a float device)
+      backend->write(kVNew, v_new);
+    }
     target_now -= r.damping;
 
     const double k_new = kineticEnergy(v_new);
@@ -962,8 +1002,12 @@ struct Simulator::Impl {
   double energy_scale = 0.0;
   RigidMotion im_momenta;  // of the IM candidate, when the blend took a BE partner
   bool im_momenta_known = false;
-  Eigen::MatrixX3d x_im, v_im;        // host copies of that candidate
-  double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
+  Eigen::MatrixX3d x_im, v_im;                       // host copies of the blend's IM candidate, when it took a partner
+  bool new_state_on_host = false;                    // the blend left (x_new, v_new) equal to (kXNew, kVNew)
+  Eigen::MatrixX3d x_partner, v_partner, v_scratch;  // host copies of the BE partner, and scratch
+  bool partner_on_host = false;                      // this step's partner: copies and potential
+  PotentialEnergy partner_potential;                 // of the partner's positions at t + h
+  double pending_event_energy = 0.0;                 // booked by discontinuous input since the last step
   StepReport report;
   int contact_block = -1;  // the contact element type's block
   // The contact set's changes since L was last assembled, in order: e + 1 for pair e entering,

@@ -110,6 +110,18 @@ class OpenCLBackend final : public Backend {
     times_.transfer += secondsSince(start);
   }
 
+  void readBoth(int slot_a, Eigen::MatrixX3d& a, int slot_b, Eigen::MatrixX3d& b) override {
+    checkSlot(slot_a);
+    checkSlot(slot_b);
+    const auto start = Clock::now();
+    readMatrices(slots_[slot_a], a, slots_[slot_b], b);
+    times_.transfer += secondsSince(start);
+  }
+
+  void roundToStorage(Eigen::MatrixX3d& host) const override {
+    if (!kDouble) host = host.cast<Real>().template cast<double>();
+  }
+
   void copy(int dst, int src) override {
     checkSlot(dst);
     checkSlot(src);
@@ -175,7 +187,6 @@ class OpenCLBackend final : public Backend {
   void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs, PotentialEnergy* energy_at_x) override {
     checkSlot(x);
     checkSlot(y);
-    if (energy_at_x) *energy_at_x = potential(x, t);
     uploadForcing(t, false);
     const auto start = Clock::now();
     const bool launched = enqueueElementPass(x, kPassProjection | (energy_at_x ? kPassEnergy : 0));
@@ -346,6 +357,27 @@ class OpenCLBackend final : public Backend {
       staging_.resize(count);
       ocl::check(queue_.enqueueReadBuffer(buffer, CL_TRUE, 0, bytes(count), staging_.data()), "clEnqueueReadBuffer");
       std::copy(staging_.begin(), staging_.begin() + count, host.data());
+    }
+  }
+
+  // Two buffers with one wait: the first read is queued without blocking, the blocking second
+  // one completes both (in-order queue).
+  void readMatrices(const cl::Buffer& buffer_a, Eigen::MatrixX3d& a, const cl::Buffer& buffer_b, Eigen::MatrixX3d& b) {
+    a.resize(n_, 3);
+    b.resize(n_, 3);
+    const std::size_t count = 3 * std::size_t(n_);
+    if (count == 0) return;
+    if (kDouble) {
+      ocl::check(queue_.enqueueReadBuffer(buffer_a, CL_FALSE, 0, bytes(count), a.data()), "clEnqueueReadBuffer");
+      ocl::check(queue_.enqueueReadBuffer(buffer_b, CL_TRUE, 0, bytes(count), b.data()), "clEnqueueReadBuffer");
+    } else {
+      staging_.resize(count);
+      staging_second_.resize(count);
+      ocl::check(queue_.enqueueReadBuffer(buffer_a, CL_FALSE, 0, bytes(count), staging_.data()), "clEnqueueReadBuffer");
+      ocl::check(queue_.enqueueReadBuffer(buffer_b, CL_TRUE, 0, bytes(count), staging_second_.data()),
+                 "clEnqueueReadBuffer");
+      std::copy(staging_.begin(), staging_.begin() + count, a.data());
+      std::copy(staging_second_.begin(), staging_second_.begin() + count, b.data());
     }
   }
 
@@ -561,7 +593,7 @@ class OpenCLBackend final : public Backend {
   double fext_time_ = std::numeric_limits<double>::quiet_NaN();
   int fext_version_ = -1;
   Eigen::MatrixX3d host_fext_;
-  std::vector<Real> staging_;
+  std::vector<Real> staging_, staging_second_;
   struct PendingWrite {
     std::vector<Real> data;
     cl::Event done;

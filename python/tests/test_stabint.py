@@ -650,7 +650,9 @@ def test_event_scripts_play_collider_and_grab_events_and_survive_a_checkpoint_as
     for frame in range(8, 24):
         saved_script.apply(restored)
         restored.step()
-    assert np.array_equal(restored.positions, sim.positions)
+    # A fresh simulator restoring a grab in a scene with colliders factors L anew where the original
+    # rank-updated it: round-off, amplified over 16 steps (docs/method.md, "Per-frame input").
+    assert np.max(np.abs(restored.positions - sim.positions)) < 1e-9
 
     bad = stabint.ColliderEvent()  # neither a path nor a velocity
     with pytest.raises(stabint.InvalidInputError, match="path or a velocity"):

@@ -35,6 +35,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <initializer_list>
 #include <utility>
 #include <vector>
 
@@ -262,12 +263,12 @@ void registerIterationCases() {
             ->Unit(benchmark::kMicrosecond);
       }
 
-  // Factor against the CG global step (GlobalSolve::ConjugateGradient), per iteration, with the
-  // accuracy counter; run interleaved (docs/bench_summary.md "Global solve on the device").
-  for (const SceneCase& scene : referenceScenes())
-    for (const int cg : {0, 5, 10, 20, 40})
+  // Factor (cg = 0) against the CG global step (GlobalSolve::ConjugateGradient), per iteration,
+  // with the accuracy counter; run interleaved (docs/bench_summary.md "Global solve on the device").
+  auto registerGlobalStep = [](const std::string& family, const SceneCase& scene, std::initializer_list<int> cgs) {
+    for (const int cg : cgs)
       for (BackendChoice backend : allBackends()) {
-        const std::string name = "global_step/" + scene.name + "/" +
+        const std::string name = family + "/" + scene.name + "/" +
                                  (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
                                  backendLabel(backend);
         benchmark::RegisterBenchmark(name.c_str(),
@@ -275,21 +276,12 @@ void registerIterationCases() {
             ->UseRealTime()
             ->Unit(benchmark::kMicrosecond);
       }
+  };
+  for (const SceneCase& scene : referenceScenes()) registerGlobalStep("global_step", scene, {0, 5, 10, 20, 40});
   // The same on the tet bars of growing size of autoRuleScenes(): where the device CG's O(n)
   // iterations overtake the factor's solve, whose fill (and cost) grows faster than n in 3-D.
-  for (const SceneCase& scene : autoRuleScenes()) {
-    if (scene.name.rfind("tetbar", 0) != 0) continue;
-    for (const int cg : {0, 10})
-      for (BackendChoice backend : allBackends()) {
-        const std::string name = "global_step_scaling/" + scene.name + "/" +
-                                 (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
-                                 backendLabel(backend);
-        benchmark::RegisterBenchmark(name.c_str(),
-                                     [=](benchmark::State& state) { runGlobalSolve(state, name, scene, backend, cg); })
-            ->UseRealTime()
-            ->Unit(benchmark::kMicrosecond);
-      }
-  }
+  for (const SceneCase& scene : autoRuleScenes())
+    if (scene.name.rfind("tetbar", 0) == 0) registerGlobalStep("global_step_scaling", scene, {0, 10});
   for (BackendChoice backend : allBackends()) {
     const std::string name = std::string("scaling_iteration/cloth/BE/") + backendLabel(backend);
     auto* b = benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {

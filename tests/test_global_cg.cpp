@@ -9,6 +9,7 @@
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
+#include "global_cg_scenes.hpp"
 
 #include <gtest/gtest.h>
 
@@ -21,21 +22,8 @@ namespace {
 
 enum { kX, kY, kScratch, kSlots };
 
-Scene clothScene() {
-  ClothGridParams p;
-  p.nx = 12;
-  p.ny = 10;
-  return makeClothGrid(p);
-}
-
-Scene tetScene() {
-  TetBarParams p;
-  p.nx = 6;
-  p.ny = 2;
-  p.nz = 2;
-  p.stiffness = 2e4;
-  return makeTetBar(p);
-}
+using testing::cgClothScene;
+using testing::cgTetScene;
 
 // K_c = c M + L assembled here from the system's L and masses (not through the solver's code).
 Eigen::SparseMatrix<double> shifted(const GlobalSystem& system, double c) {
@@ -52,7 +40,7 @@ Eigen::MatrixX3d randomRhs(Eigen::Index n, unsigned seed) {
 
 class HostCgTest : public ::testing::TestWithParam<bool> {
  protected:
-  Scene scene() const { return GetParam() ? tetScene() : clothScene(); }
+  Scene scene() const { return GetParam() ? cgTetScene() : cgClothScene(); }
 };
 
 TEST_P(HostCgTest, SolvesToTheRequestedToleranceAgainstTheFactor) {
@@ -111,7 +99,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, HostCgTest, ::testing::Values(false, true),
 // The plain local/global objective stays monotone with an inexact global step: CG warm-started
 // at the current iterate lowers the global step's quadratic at each of its iterations.
 TEST(HostCgLocalGlobal, ObjectiveNeverIncreasesWithFewCgIterations) {
-  for (const Scene& s : {clothScene(), tetScene()}) {
+  for (const Scene& s : {cgClothScene(), cgTetScene()}) {
     const SceneData data(s);
     auto backend = makeCpuBackend(data, kSlots);
     GlobalSystem system(data);
@@ -145,7 +133,7 @@ SimulatorOptions cgOptions() {
 }
 
 TEST(HostCgSimulator, BadOptionsAreRefused) {
-  const Scene s = clothScene();
+  const Scene s = cgClothScene();
   auto refused = [&](SimulatorOptions o, const char* name) {
     try {
       Simulator sim(s, o);
@@ -177,7 +165,7 @@ TEST(HostCgSimulator, BadOptionsAreRefused) {
 // size catches a CG that does not solve (a global step left at its warm start misses by metres).
 // Measured band use: 0.43.
 TEST(HostCgSimulator, BlendStaysInTheBandAndNearTheFactorRun) {
-  const Scene s = clothScene();
+  const Scene s = cgClothScene();
   SimulatorOptions factor_options;
   Simulator factor(s, factor_options);
   const SimulatorOptions o = cgOptions();
@@ -197,7 +185,7 @@ TEST(HostCgSimulator, BlendStaysInTheBandAndNearTheFactorRun) {
 // Grabs and element changes change L: the CG follows (its matrices are rebuilt from the new L)
 // and agrees with the factor's run, whose factors get rank updates instead.
 TEST(HostCgSimulator, GrabAndStiffnessChangeFollowTheFactorRun) {
-  const Scene s = clothScene();
+  const Scene s = cgClothScene();
   SimulatorOptions factor_options;
   factor_options.integrator = Integrator::BackwardEuler;
   SimulatorOptions o = cgOptions();

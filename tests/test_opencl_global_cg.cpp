@@ -11,6 +11,7 @@
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 #include "test_opencl_support.hpp"
+#include "global_cg_scenes.hpp"
 
 #include <gtest/gtest.h>
 
@@ -25,21 +26,8 @@ using testing::relativeError;
 
 enum { kX, kY, kScratch, kSlots };
 
-Scene clothScene() {
-  ClothGridParams p;
-  p.nx = 12;
-  p.ny = 10;
-  return makeClothGrid(p);
-}
-
-Scene tetScene() {
-  TetBarParams p;
-  p.nx = 6;
-  p.ny = 2;
-  p.nz = 2;
-  p.stiffness = 2e4;
-  return makeTetBar(p);
-}
+using testing::cgClothScene;
+using testing::cgTetScene;
 
 Eigen::MatrixX3d stretched(const Scene& s) {
   Eigen::MatrixX3d y = s.positions;
@@ -78,7 +66,7 @@ class OpenCLGlobalCgTest : public ::testing::TestWithParam<Precision> {};
 TEST_P(OpenCLGlobalCgTest, FixedCountAgreesWithTheCpuReference) {
   const Precision p = GetParam();
   STABINT_SKIP_WITHOUT_OPENCL(p);
-  for (const Scene& s : {clothScene(), tetScene()}) {
+  for (const Scene& s : {cgClothScene(), cgTetScene()}) {
     const SceneData data(s);
     for (const int cg : {1, 5, 20}) {
       auto cpu = makeCpuBackend(data, kSlots);
@@ -99,7 +87,7 @@ TEST_P(OpenCLGlobalCgTest, SolvesToTheRequestedToleranceAgainstTheFactor) {
   const Precision p = GetParam();
   STABINT_SKIP_WITHOUT_OPENCL(p);
   const double tolerance = p == Precision::Double ? 1e-10 : 1e-5;
-  for (const Scene& s : {clothScene(), tetScene()}) {
+  for (const Scene& s : {cgClothScene(), cgTetScene()}) {
     const SceneData data(s);
     auto cpu = makeCpuBackend(data, kSlots);
     auto device = makeOpenCLBackend(data, kSlots, openclOptions(p));
@@ -116,7 +104,7 @@ TEST_P(OpenCLGlobalCgTest, SolvesToTheRequestedToleranceAgainstTheFactor) {
 TEST_P(OpenCLGlobalCgTest, RunsWithElementChangesAgreeWithTheCpuReference) {
   const Precision p = GetParam();
   STABINT_SKIP_WITHOUT_OPENCL(p);
-  const Scene s = clothScene();
+  const Scene s = cgClothScene();
   for (const Integrator integrator : testing::crossBackendIntegrators(p)) {
     SimulatorOptions o;
     o.integrator = integrator;
@@ -152,7 +140,7 @@ TEST_P(OpenCLGlobalCgTest, RunsWithElementChangesAgreeWithTheCpuReference) {
 // accept/reject decisions may differ from the CPU's (test_opencl_support.hpp).
 TEST(OpenCLGlobalCg, TrackedAndAcceleratedSolvesAgreeWithTheCpuReference) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
-  const Scene s = tetScene();
+  const Scene s = cgTetScene();
   const SceneData data(s);
   for (const Acceleration acceleration : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson}) {
     IterationControl control = cgControl(15, 8, 0.0);
@@ -173,7 +161,7 @@ TEST(OpenCLGlobalCg, TrackedAndAcceleratedSolvesAgreeWithTheCpuReference) {
 // ends where the factor's run does (both solve every global step to round-off).
 TEST(OpenCLGlobalCg, ToleranceOptionMatchesTheFactorRun) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
-  const Scene s = clothScene();
+  const Scene s = cgClothScene();
   SimulatorOptions factor_options;
   factor_options.integrator = Integrator::BackwardEuler;
   SimulatorOptions o = factor_options;
@@ -194,7 +182,7 @@ TEST(OpenCLGlobalCg, ToleranceOptionMatchesTheFactorRun) {
 // fewer CG iterations, and neither needs the cap.
 TEST(OpenCLGlobalCg, ToleranceStopsEarly) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
-  const Scene s = clothScene();
+  const Scene s = cgClothScene();
   const SceneData data(s);
   GlobalSystem system(data);
   auto device = makeOpenCLBackend(data, kSlots, openclOptions(Precision::Double));

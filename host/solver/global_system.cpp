@@ -46,6 +46,7 @@ void GlobalSystem::assemble(const SceneData& scene) {
   }
   laplacian_.resize(n, n);
   laplacian_.setFromTriplets(entries.begin(), entries.end());
+  laplacianChanged();
 }
 
 Eigen::SparseMatrix<double> GlobalSystem::shiftedLaplacian(double c) const {
@@ -124,8 +125,7 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
       if (sum != 0.0) laplacian_.coeffRef(vertices[i], vertices[j]) += delta * sum;
     }
   }
-  ++laplacian_version_;
-  cg_systems_.clear();
+  laplacianChanged();
   if (how == FactorChange::Deferred) return;
   if (how == FactorChange::Drop) {
     factors_.clear();
@@ -173,12 +173,9 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
   }
 }
 
-}  // namespace stabint
-
-namespace stabint {
-
 void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::vector<double>& deltas) {
   for (std::size_t i = 0; i < vertices.size(); ++i) laplacian_.coeffRef(vertices[i], vertices[i]) += deltas[i];
+  laplacianChanged();
   const int n = static_cast<int>(laplacian_.rows());
   for (auto it = factors_.begin(); it != factors_.end();) {
     cholmod_factor* factor = it->second->factor();

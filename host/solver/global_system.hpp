@@ -48,8 +48,8 @@ class GlobalSystem {
   const Eigen::SparseMatrix<double>& stiffnessLaplacian() const { return laplacian_; }
   /// Lumped masses (the M of c M + L).
   const Eigen::VectorXd& masses() const { return masses_; }
-  /// Incremented by every change of L (addToDiagonal, addElementTerm): a copy of L elsewhere (the
-  /// OpenCL device's) is stale when its version differs.
+  /// Incremented by every change of L (assemble, addToDiagonal, addElementTerm): a copy of L
+  /// elsewhere (the OpenCL device's) is stale when its version differs.
   int laplacianVersion() const { return laplacian_version_; }
   /// Number of factorizations done so far (one per distinct c).
   int factorizations() const { return factorizations_; }
@@ -96,6 +96,12 @@ class GlobalSystem {
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
   };
   std::map<double, std::unique_ptr<CgSystem>> cg_systems_;
+  // Every change of L goes through here: the copies made from it (CG systems here, the device's
+  // CSR through laplacianVersion) follow.
+  void laplacianChanged() {
+    ++laplacian_version_;
+    cg_systems_.clear();
+  }
   Eigen::SparseMatrix<double> shiftedLaplacian(double c) const;  // c M + L
 
   Eigen::SparseMatrix<double> laplacian_;

@@ -5,8 +5,11 @@
 #include <stabint/errors.hpp>
 #include <stabint/simulator.hpp>
 
+#include "cpu/cpu_backend.hpp"
 #include "elements/element_type.hpp"
+#include "integrator/batch_simulator.hpp"
 #include "scene/scene_batch.hpp"
+#include "scene/scene_data.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +17,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -88,7 +92,8 @@ TEST(SceneBatch, SegmentsLocateEveryScenesParticlesAndElements) {
         EXPECT_EQ(batch.scene.tets[std::size_t(seg.first_element[std::size_t(tet)]) + k].vertices[std::size_t(v)],
                   own.tets[k].vertices[std::size_t(v)] + off);
     for (std::size_t k = 0; k < own.pins.size(); ++k)
-      EXPECT_EQ(batch.scene.pins[std::size_t(seg.first_element[std::size_t(pin)]) + k].vertex, own.pins[k].vertex + off);
+      EXPECT_EQ(batch.scene.pins[std::size_t(seg.first_element[std::size_t(pin)]) + k].vertex,
+                own.pins[k].vertex + off);
     particles += own.numParticles();
   }
   EXPECT_EQ(batch.scene.numParticles(), particles);
@@ -134,6 +139,63 @@ TEST(SceneBatch, RefusesWhatItCannotKeepApartNamingTheScene) {
   } catch (const InvalidInputError& e) {
     EXPECT_EQ(std::string(e.what()).rfind("scene 3: ", 0), 0u) << e.what();
   }
+}
+
+// Positions and velocities away from rest, the same for a scene alone and in the batch.
+Eigen::MatrixX3d perturbed(const Eigen::MatrixX3d& m, double amount) {
+  Eigen::MatrixX3d out = m;
+  for (Eigen::Index j = 0; j < out.rows(); ++j)
+    for (int k = 0; k < 3; ++k) out(j, k) += amount * std::sin(1.7 * double(j) + 2.3 * double(k) + 0.4);
+  return out;
+}
+
+// The CPU reference's per-scene values of a batch are each scene's own backend's, bit for bit:
+// the same elements in the same order, and each segment's reductions over an `n_s by 3` copy as
+// the scene alone's are. Bit for bit is what the batch's blend decisions need to match the own
+// simulators' (a decision at the tolerance's edge would otherwise go the other way).
+TEST(SceneBatch, CpuPerSceneEnergiesAreEachScenesOwn) {
+  const std::vector<Scene> scenes = mixedScenes();
+  const SceneBatch batch = concatenateScenes(scenes);
+  const SceneData data(batch.scene);
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
+  ASSERT_TRUE(backend->computesPerScene());
+  backend->setSegments(batch.segments);
+  backend->write(0, perturbed(batch.scene.positions, 0.02));
+  backend->write(1, perturbed(batch.scene.velocities, 0.5));
+  const double t = 0.7;  // the chain's force field has grown by its rate
+  std::vector<PotentialEnergy> potentials;
+  std::vector<double> dots;
+  backend->potentials(0, t, potentials);
+  backend->massDots(1, 1, dots);
+  ASSERT_EQ(potentials.size(), scenes.size());
+  ASSERT_EQ(dots.size(), scenes.size());
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    const SceneSegment& seg = batch.segments[s];
+    const SceneData own_data(scenes[s]);
+    const std::unique_ptr<Backend> own = makeCpuBackend(own_data, 2);
+    own->write(0, perturbed(batch.scene.positions, 0.02).middleRows(seg.first_particle, seg.num_particles));
+    own->write(1, perturbed(batch.scene.velocities, 0.5).middleRows(seg.first_particle, seg.num_particles));
+    const PotentialEnergy p = own->potential(0, t);
+    // Not trivially zero: every term is exercised somewhere.
+    EXPECT_NE(p.internal, 0.0) << "scene " << s;
+    EXPECT_EQ(potentials[s].internal, p.internal) << "scene " << s;
+    EXPECT_EQ(potentials[s].pins, p.pins) << "scene " << s;
+    EXPECT_EQ(potentials[s].external, p.external) << "scene " << s;
+    EXPECT_EQ(dots[s], own->massDot(1, 1)) << "scene " << s;
+  }
+  // And together they are the batch's single values, to the round-off of the different sums.
+  const PotentialEnergy whole = backend->potential(0, t);
+  double internal = 0.0, pins = 0.0, external = 0.0, dot = 0.0;
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    internal += potentials[s].internal;
+    pins += potentials[s].pins;
+    external += potentials[s].external;
+    dot += dots[s];
+  }
+  EXPECT_NEAR(whole.internal, internal, 1e-13 * std::abs(internal));
+  EXPECT_NEAR(whole.pins, pins, 1e-13 * std::abs(pins));
+  EXPECT_NEAR(whole.external, external, 1e-12 * (std::abs(external) + std::abs(whole.external)));
+  EXPECT_NEAR(backend->massDot(1, 1), dot, 1e-13 * dot);
 }
 
 struct PremiseCase {
@@ -203,6 +265,125 @@ INSTANTIATE_TEST_SUITE_P(Integrators, SceneBatchPremise,
                          [](const ::testing::TestParamInfo<PremiseCase>& info) {
                            return std::string(integratorName(info.param.integrator));
                          });
+
+// ---- BatchSimulator (SE and BE for now) --------------------------------------------------------
+
+class BatchSimulatorMatches : public ::testing::TestWithParam<PremiseCase> {};
+
+// Every scene of the batch follows its own Simulator: state (SE bit for bit, BE to the round-off
+// of the factor's ordering, as in the premise above), and its own energies, target, forcing and
+// damping, which the batch computes per segment. The energies agree to 1e-12 of the scene's
+// energy scale: bit for bit where the states are, round-off of the state otherwise.
+TEST_P(BatchSimulatorMatches, EveryScenesStateEnergyAndTargetAreItsOwnSimulators) {
+  const PremiseCase c = GetParam();
+  const std::vector<Scene> scenes = mixedScenes();
+  SimulatorOptions options;
+  options.integrator = c.integrator;
+  options.time_step = c.time_step;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  ASSERT_EQ(batch.size(), int(scenes.size()));
+  for (std::size_t s = 0; s < scenes.size(); ++s) EXPECT_EQ(batch.energyScale(int(s)), alone[s].energyScale());
+  double forcing = 0.0, damping = 0.0;
+  for (int step = 0; step < c.steps; ++step) {
+    const BatchStepReport& report = batch.step();
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const StepReport& own = alone[s].step();
+      const StepReport& got = report.scenes[s];
+      EXPECT_TRUE(report.refusals[s].empty()) << report.refusals[s];
+      const double scale = alone[s].energyScale();
+      EXPECT_EQ(got.step, own.step);
+      EXPECT_EQ(got.time, own.time);
+      EXPECT_NEAR(got.forcing, own.forcing, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.damping, own.damping, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.target, own.target, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.energy.kinetic, own.energy.kinetic, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.energy.elastic, own.energy.elastic, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.energy.external, own.energy.external, 1e-12 * scale) << "scene " << s << " step " << step;
+      forcing += std::abs(own.forcing);
+      damping += own.damping;
+    }
+  }
+  // The chain's growing field does work and the cloth's body is damped: both were compared.
+  EXPECT_GT(forcing, 0.0);
+  EXPECT_GT(damping, 0.0);
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    EXPECT_EQ(batch.time(int(s)), alone[s].time());
+    if (c.integrator == Integrator::SymplecticEuler) {
+      EXPECT_EQ(batch.positions(int(s)), alone[s].positions()) << "scene " << s;
+      EXPECT_EQ(batch.velocities(int(s)), alone[s].velocities()) << "scene " << s;
+    } else {
+      const double size = (scenes[s].positions.colwise().maxCoeff() - scenes[s].positions.colwise().minCoeff()).norm();
+      EXPECT_LE((batch.positions(int(s)) - alone[s].positions()).cwiseAbs().maxCoeff(), 1e-9 * size);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, BatchSimulatorMatches,
+                         ::testing::Values(PremiseCase{Integrator::SymplecticEuler, 1e-4, 20},
+                                           PremiseCase{Integrator::BackwardEuler, 1.0 / 60.0, 20}),
+                         [](const ::testing::TestParamInfo<PremiseCase>& info) {
+                           return std::string(integratorName(info.param.integrator));
+                         });
+
+// A scene that blows up is refused alone, with its own Simulator's message at the same step, and
+// keeps its last accepted state; its neighbour steps on as its own Simulator does.
+TEST(BatchSimulator, OneScenesRefusalLeavesTheOthersStepping) {
+  ChainPendulumParams soft, stiff;
+  soft.stiffness = 10.0;
+  soft.pin_stiffness = 100.0;  // SE stable at h = 1e-3 (omega about 90/s)
+  stiff.particles = 6;         // pin omega about 7,700/s: SE explodes at h = 1e-3
+  const std::vector<Scene> scenes = {makeChainPendulum(soft), makeChainPendulum(stiff)};
+  SimulatorOptions options;
+  options.integrator = Integrator::SymplecticEuler;
+  options.time_step = 1e-3;
+  options.energy_limit = 1.0;
+  BatchSimulator batch(scenes, options);
+  Simulator soft_alone(scenes[0], options), stiff_alone(scenes[1], options);
+  std::string own_refusal;
+  int refused_at = -1;
+  for (int step = 0; step < 200; ++step) {
+    const BatchStepReport& report = batch.step();
+    soft_alone.step();
+    EXPECT_TRUE(report.refusals[0].empty()) << report.refusals[0];
+    if (own_refusal.empty()) {
+      try {
+        stiff_alone.step();
+        EXPECT_TRUE(report.refusals[1].empty()) << "step " << step << ": " << report.refusals[1];
+      } catch (const EnergyLimitError& e) {
+        own_refusal = e.what();
+        refused_at = step;
+        EXPECT_EQ(report.refusals[1], own_refusal);
+      }
+    } else {
+      EXPECT_FALSE(report.refusals[1].empty());
+      EXPECT_FALSE(batch.active(1));
+    }
+  }
+  ASSERT_GE(refused_at, 1) << "the stiff chain never exceeded the limit";
+  EXPECT_EQ(batch.stepCount(1), stiff_alone.stepCount());
+  EXPECT_EQ(batch.positions(1), stiff_alone.positions());
+  EXPECT_EQ(batch.target(1), stiff_alone.target());
+  EXPECT_TRUE(batch.active(0));
+  EXPECT_EQ(batch.positions(0), soft_alone.positions());
+  EXPECT_EQ(batch.velocities(0), soft_alone.velocities());
+}
+
+TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
+  const std::vector<Scene> scenes = mixedScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::BackwardEuler;
+  options.tolerance = 1e-6;
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.tolerance = 0.0;
+  options.global_solve = GlobalSolve::ConjugateGradient;
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.global_solve = GlobalSolve::Factor;
+  options.integrator = Integrator::EnergyBlend;
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+}
 
 }  // namespace
 }  // namespace stabint

@@ -3,6 +3,7 @@
 #include "scene/scene_data.hpp"
 
 #include <chrono>
+#include <cstddef>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -53,6 +54,48 @@ class CpuBackend final : public Backend {
     const PotentialEnergy e = elementPass(slots_[x_slot], t, flags, &rhs);
     if (energy_at_x) *energy_at_x = e;
     times_.local += secondsSince(start);
+  }
+
+  bool computesPerScene() const override { return true; }
+  void setSegments(const std::vector<SceneSegment>& segments) override { segments_ = segments; }
+
+  // Each segment's rows copied out first, so that the reduction runs over an `n_s by 3` matrix as
+  // massDot's does over the scene alone's: the same order of additions, bit for bit.
+  void massDots(int a, int b, std::vector<double>& out) override {
+    const auto start = Clock::now();
+    out.resize(segments_.size());
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      const SceneSegment& seg = segments_[s];
+      segment_a_ = slots_[a].middleRows(seg.first_particle, seg.num_particles);
+      segment_b_ = slots_[b].middleRows(seg.first_particle, seg.num_particles);
+      segment_m_ = scene_.masses().segment(seg.first_particle, seg.num_particles);
+      out[s] = (segment_a_.cwiseProduct(segment_b_).rowwise().sum().array() * segment_m_.array()).sum();
+    }
+    times_.energy += secondsSince(start);
+  }
+
+  void potentials(int slot, double t, std::vector<PotentialEnergy>& out) override {
+    const auto start = Clock::now();
+    const Eigen::MatrixX3d& x = slots_[slot];
+    const std::vector<ElementBlock>& blocks = scene_.blocks();
+    const Eigen::MatrixX3d& f = externalForces(t);
+    out.assign(segments_.size(), PotentialEnergy{});
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      const SceneSegment& seg = segments_[s];
+      PotentialEnergy& e = out[s];
+      for (std::size_t b = 0; b < blocks.size(); ++b) {
+        const ElementBlock& block = blocks[b];
+        const int count = seg.num_elements[b];
+        if (count == 0) continue;
+        const double energy =
+            block.type->passRange(block, paramsAt(b, t), x, seg.first_element[b], count, kPassEnergy, nullptr);
+        (block.type->term() == EnergyTerm::Pins ? e.pins : e.internal) += energy;
+      }
+      segment_a_ = f.middleRows(seg.first_particle, seg.num_particles);
+      segment_b_ = x.middleRows(seg.first_particle, seg.num_particles);
+      e.external = -segment_a_.cwiseProduct(segment_b_).sum();
+    }
+    times_.energy += secondsSince(start);
   }
 
   std::string description() const override { return "CPU reference (double)"; }
@@ -110,6 +153,9 @@ class CpuBackend final : public Backend {
   std::vector<TimedParams> params_;  // per block
   Eigen::MatrixX3d external_;
   ForcingKey external_key_;
+  std::vector<SceneSegment> segments_;
+  Eigen::MatrixX3d segment_a_, segment_b_;  // one segment's rows (massDots, potentials)
+  Eigen::VectorXd segment_m_;
 };
 
 }  // namespace

@@ -82,8 +82,8 @@ struct KindDefaults {
 /// Scene list, such as contact). Plain arrays with compile-time bounds, the same loops as
 /// kernels/element_pass.cl: the compiler unrolls them and keeps A_e x and p_e in registers.
 template <class Kind>
-double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
-                Eigen::MatrixX3d* out) {
+double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
+                int count, int flags, Eigen::MatrixX3d* out) {
   constexpr int K = Kind::kVertices;
   constexpr int R = Kind::kRows;
   constexpr int P = Kind::kParams;
@@ -98,7 +98,7 @@ double kindPass(const ElementBlock& block, const std::vector<double>& params, co
     for (int i = 0; i < R * K; ++i) shared[i] = Kind::kCoefficients[i];
   }
   double energy = 0.0;
-  for (int e = 0; e < block.count; ++e) {
+  for (int e = first; e < first + count; ++e) {
     const int* v = block.vertices.data() + K * e;
     const double* a = Kind::kSharedCoefficients ? shared : block.coefficients.data() + kStride * e;
     const double* prm = params.data() + P * e;
@@ -238,9 +238,9 @@ class ElementTypeOf final : public ElementType {
     return Kind::project(ax, params, p);
   }
 
-  double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
-              Eigen::MatrixX3d* out) const override {
-    return kindPass<Kind>(block, params, x, flags, out);
+  double passRange(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
+                   int count, int flags, Eigen::MatrixX3d* out) const override {
+    return kindPass<Kind>(block, params, x, first, count, flags, out);
   }
 
   std::vector<Field> jsonFields() const override {

@@ -28,7 +28,7 @@ struct SceneSegment {
 };
 
 struct SceneBatch {
-  Scene scene;                        // the concatenation
+  Scene scene;                         // the concatenation
   std::vector<SceneSegment> segments;  // one per scene, in order
 };
 

@@ -23,8 +23,9 @@ const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
     fail("time_step must be finite and > 0, with 1/h^2 finite");
   if (o.iterations < 1) fail("iterations must be >= 1");
   if (o.tolerance != 0.0 || o.acceleration != Acceleration::None || o.global_solve != GlobalSolve::Factor)
-    fail("a tolerance stop, acceleration and CG sum over the whole batch: a fixed iteration count with the factor "
-         "only, until they are per scene");
+    fail(
+        "a tolerance stop, acceleration and CG sum over the whole batch: a fixed iteration count with the factor "
+        "only, until they are per scene");
   if (!std::isfinite(o.energy_limit) || o.energy_limit < 0.0) fail("energy_limit must be finite and >= 0");
   return o;
 }
@@ -64,9 +65,8 @@ BatchSimulator::BatchSimulator(SceneBatch batch, const std::vector<Scene>& scene
     p.target = p.kinetic + p.potential.total();
     // As Simulator's E_scale, from the scene alone.
     const Scene& own = scenes_[s];
-    const double size = own.numParticles() > 0
-                            ? (own.positions.colwise().maxCoeff() - own.positions.colwise().minCoeff()).norm()
-                            : 0.0;
+    const double size =
+        own.numParticles() > 0 ? (own.positions.colwise().maxCoeff() - own.positions.colwise().minCoeff()).norm() : 0.0;
     p.energy_scale = p.kinetic + p.potential.elastic() + own.masses.sum() * own.gravity.norm() * size;
   }
   backend_->times() = PhaseTimes{};
@@ -146,8 +146,8 @@ const BatchStepReport& BatchSimulator::step() {
     }
     Eigen::MatrixX3d x_rows = rowsOf(x_new_, seg), v_rows = rowsOf(v_new_, seg);
     std::ostringstream what;
-    what << "step " << r.step << " (t = " << t_ << " -> " << t1 << ", integrator " << integratorName(options_.integrator)
-         << "): ";
+    what << "step " << r.step << " (t = " << t_ << " -> " << t1 << ", integrator "
+         << integratorName(options_.integrator) << "): ";
     if (!x_rows.allFinite() || !v_rows.allFinite()) {
       what << "non-finite position or velocity; the simulation blew up, step refused, state kept at t = " << p.time;
       report_.refusals[s] = what.str();

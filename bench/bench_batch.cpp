@@ -43,21 +43,18 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
 }  // namespace
 
 void registerBatchCases() {
-  const std::vector<SceneCase> scenes = {
-      {"chain", [] { return makeChainPendulum(); }},
-      {"cloth10", [] {
-         ClothGridParams p;
-         p.nx = 10;
-         p.ny = 10;
-         return makeClothGrid(p);
-       }}};
+  const std::vector<SceneCase> scenes = {{"chain", [] { return makeChainPendulum(); }}, {"cloth10", [] {
+                                                                                           ClothGridParams p;
+                                                                                           p.nx = 10;
+                                                                                           p.ny = 10;
+                                                                                           return makeClothGrid(p);
+                                                                                         }}};
   for (const SceneCase& scene : scenes)
     for (int count : {100, 1000})
       for (bool batched : {true, false}) {
         const std::string name = "batch/" + scene.name + "/BE/cpu/" + (batched ? "batch" : "separate");
-        benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
-          runBatch(state, name, scene.make, batched);
-        })
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [=](benchmark::State& state) { runBatch(state, name, scene.make, batched); })
             ->Arg(count)
             ->ArgName("scenes")
             ->Iterations(20)

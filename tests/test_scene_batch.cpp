@@ -383,6 +383,15 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   options.global_solve = GlobalSolve::Factor;
   options.integrator = Integrator::EnergyBlend;
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  // Simulator's own checks come first.
+  options.integrator = Integrator::BackwardEuler;
+  options.time_step = -1.0;
+  try {
+    BatchSimulator batch(scenes, options);
+    ADD_FAILURE() << "a negative time step accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulator options: time_step"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

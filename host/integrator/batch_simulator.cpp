@@ -2,6 +2,7 @@
 
 #include "cpu/cpu_backend.hpp"
 #include "integrator/damping.hpp"
+#include "integrator/options.hpp"
 
 #include <cmath>
 #include <cstddef>
@@ -14,19 +15,17 @@ namespace {
 // Backend slots of the batch (the same roles as Simulator's).
 enum Slot : int { kX, kV, kY, kXNew, kVNew, kScratch, kSolverScratch, kNumSlots };
 
+// Simulator's checks, then what the batch does not support yet.
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
+  validateOptions(o);
   auto fail = [](const std::string& what) { throw InvalidInputError("batch simulator options: " + what); };
   if (o.integrator != Integrator::SymplecticEuler && o.integrator != Integrator::BackwardEuler)
     fail("integrator " + std::string(integratorName(o.integrator)) + " is not supported in a batch yet (SE, BE)");
   if (o.backend != BackendKind::CpuReference) fail("only the CPU reference backend steps a batch yet");
-  if (!std::isfinite(o.time_step) || o.time_step <= 0.0 || !std::isnormal(o.time_step * o.time_step))
-    fail("time_step must be finite and > 0, with 1/h^2 finite");
-  if (o.iterations < 1) fail("iterations must be >= 1");
   if (o.tolerance != 0.0 || o.acceleration != Acceleration::None || o.global_solve != GlobalSolve::Factor)
     fail(
         "a tolerance stop, acceleration and CG sum over the whole batch: a fixed iteration count with the factor "
         "only, until they are per scene");
-  if (!std::isfinite(o.energy_limit) || o.energy_limit < 0.0) fail("energy_limit must be finite and >= 0");
   return o;
 }
 

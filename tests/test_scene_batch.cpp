@@ -266,7 +266,7 @@ INSTANTIATE_TEST_SUITE_P(Integrators, SceneBatchPremise,
                            return std::string(integratorName(info.param.integrator));
                          });
 
-// ---- BatchSimulator (SE and BE for now) --------------------------------------------------------
+// ---- BatchSimulator (SE, BE, BDF2, IM for now) --------------------------------------------------------
 
 class BatchSimulatorMatches : public ::testing::TestWithParam<PremiseCase> {};
 
@@ -323,7 +323,9 @@ TEST_P(BatchSimulatorMatches, EveryScenesStateEnergyAndTargetAreItsOwnSimulators
 
 INSTANTIATE_TEST_SUITE_P(Integrators, BatchSimulatorMatches,
                          ::testing::Values(PremiseCase{Integrator::SymplecticEuler, 1e-4, 20},
-                                           PremiseCase{Integrator::BackwardEuler, 1.0 / 60.0, 20}),
+                                           PremiseCase{Integrator::BackwardEuler, 1.0 / 60.0, 20},
+                                           PremiseCase{Integrator::BDF2, 1.0 / 60.0, 20},
+                                           PremiseCase{Integrator::ImplicitMidpoint, 1.0 / 60.0, 20}),
                          [](const ::testing::TestParamInfo<PremiseCase>& info) {
                            return std::string(integratorName(info.param.integrator));
                          });

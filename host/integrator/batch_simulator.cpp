@@ -13,14 +13,15 @@ namespace stabint {
 namespace {
 
 // Backend slots of the batch (the same roles as Simulator's).
-enum Slot : int { kX, kV, kY, kXNew, kVNew, kScratch, kSolverScratch, kNumSlots };
+enum Slot : int { kX, kV, kXPrev, kVPrev, kY, kXNew, kVNew, kScratch, kSolverScratch, kNumSlots };
 
 // Simulator's checks, then what the batch does not support yet.
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   validateOptions(o);
   auto fail = [](const std::string& what) { throw InvalidInputError("batch simulator options: " + what); };
-  if (o.integrator != Integrator::SymplecticEuler && o.integrator != Integrator::BackwardEuler)
-    fail("integrator " + std::string(integratorName(o.integrator)) + " is not supported in a batch yet (SE, BE)");
+  if (o.integrator == Integrator::ForwardEuler || o.integrator == Integrator::EnergyBlend)
+    fail("integrator " + std::string(integratorName(o.integrator)) +
+         " is not supported in a batch yet (SE, BE, BDF2, IM)");
   if (o.backend != BackendKind::CpuReference) fail("only the CPU reference backend steps a batch yet");
   if (o.tolerance != 0.0 || o.acceleration != Acceleration::None || o.global_solve != GlobalSolve::Factor)
     fail(
@@ -51,7 +52,11 @@ BatchSimulator::BatchSimulator(SceneBatch batch, const std::vector<Scene>& scene
       v_(batch.scene.velocities),
       per_scene_(segments_.size()) {
   const double h = options_.time_step;
-  if (options_.integrator == Integrator::BackwardEuler) system_.factor(1.0 / (h * h), "1/time_step^2");
+  // The systems Simulator factors for these integrators, with the same expressions for c.
+  if (options_.integrator == Integrator::BDF2) system_.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
+  if (options_.integrator == Integrator::BackwardEuler || options_.integrator == Integrator::BDF2)
+    system_.factor(1.0 / (h * h), "1/time_step^2");
+  if (options_.integrator == Integrator::ImplicitMidpoint) system_.factor(4.0 / (h * h), "4/time_step^2");
   backend_->setSegments(segments_);
   backend_->write(kX, x_);
   backend_->write(kV, v_);
@@ -89,21 +94,44 @@ const BatchStepReport& BatchSimulator::step() {
   const double h = options_.time_step;
   const double t1 = t_ + h;
   // The integrators as Simulator forms them, on the whole batch.
-  if (options_.integrator == Integrator::BackwardEuler) {
-    backend_->combine(kY, 1.0, kX, h, kV);
-    backend_->copy(kXNew, kY);
-    IterationControl control;
-    control.iterations = options_.iterations;
-    const int done = solver_.solve(1.0 / (h * h), kY, kXNew, t1, control);
-    backend_->combine(kVNew, 1.0 / h, kXNew, -1.0 / h, kX);
-    report_.scenes.assign(segments_.size(), StepReport{});
-    for (StepReport& r : report_.scenes) r.iterations = done;
-  } else {
-    backend_->accelerations(kScratch, kX, t_);
-    backend_->combine(kVNew, 1.0, kV, h, kScratch);
-    backend_->combine(kXNew, 1.0, kX, h, kVNew);
-    report_.scenes.assign(segments_.size(), StepReport{});
+  IterationControl control;
+  control.iterations = options_.iterations;
+  int iterations = 0;
+  switch (options_.integrator) {
+    case Integrator::SymplecticEuler:
+      backend_->accelerations(kScratch, kX, t_);
+      backend_->combine(kVNew, 1.0, kV, h, kScratch);
+      backend_->combine(kXNew, 1.0, kX, h, kVNew);
+      break;
+    case Integrator::BDF2:
+      if (has_history_) {
+        backend_->combine(kScratch, 4.0 / 3.0, kX, -1.0 / 3.0, kXPrev);
+        backend_->combine(kY, 8.0 * h / 9.0, kV, -2.0 * h / 9.0, kVPrev);
+        backend_->combine(kY, 1.0, kY, 1.0, kScratch);
+        backend_->copy(kXNew, kY);
+        iterations = solver_.solve(9.0 / (4.0 * h * h), kY, kXNew, t1, control);
+        backend_->combine(kVNew, 1.5 / h, kXNew, -1.5 / h, kScratch);
+        break;
+      }
+      [[fallthrough]];  // the first step has no history: BE
+    case Integrator::BackwardEuler:
+      backend_->combine(kY, 1.0, kX, h, kV);
+      backend_->copy(kXNew, kY);
+      iterations = solver_.solve(1.0 / (h * h), kY, kXNew, t1, control);
+      backend_->combine(kVNew, 1.0 / h, kXNew, -1.0 / h, kX);
+      break;
+    case Integrator::ImplicitMidpoint:
+      backend_->combine(kY, 1.0, kX, 0.5 * h, kV);
+      backend_->copy(kXNew, kY);
+      iterations = solver_.solve(4.0 / (h * h), kY, kXNew, t_ + 0.5 * h, control);
+      backend_->combine(kVNew, 4.0 / h, kXNew, -4.0 / h, kX);
+      backend_->combine(kVNew, 1.0, kVNew, -1.0, kV);
+      backend_->combine(kXNew, 2.0, kXNew, -1.0, kX);
+      break;
+    default: break;  // refused at construction
   }
+  report_.scenes.assign(segments_.size(), StepReport{});
+  for (StepReport& r : report_.scenes) r.iterations = iterations;
   report_.refusals.assign(segments_.size(), std::string());
 
   std::vector<PotentialEnergy> p_new, new_mid, old_mid;
@@ -188,6 +216,11 @@ const BatchStepReport& BatchSimulator::step() {
   if (rows_changed) {
     backend_->write(kXNew, x_new_);
     backend_->write(kVNew, v_new_);
+  }
+  if (options_.integrator == Integrator::BDF2) {
+    backend_->copy(kXPrev, kX);
+    backend_->copy(kVPrev, kV);
+    has_history_ = true;
   }
   backend_->copy(kX, kXNew);
   backend_->copy(kV, kVNew);

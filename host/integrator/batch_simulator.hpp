@@ -4,7 +4,7 @@
 // per scene its own energies, target H*, damping, forcing and refusal. Internal until it has the
 // blend and the OpenCL backend; then it moves to include/stabint/batch.hpp.
 //
-// Supported for now: SymplecticEuler and BackwardEuler on the CPU reference, with a fixed
+// Supported for now: SymplecticEuler, BackwardEuler, BDF2 and ImplicitMidpoint on the CPU reference, with a fixed
 // iteration count and the factor (the controls that sum over the whole batch, a tolerance stop,
 // acceleration and CG, are refused: they would couple the scenes, and one scene's NaN would reach
 // the others through them).
@@ -74,6 +74,7 @@ class BatchSimulator {
   LocalGlobalSolver solver_;
   Eigen::MatrixX3d x_, v_, x_new_, v_new_;  // host copies of the whole batch
   double t_ = 0.0;                          // the batch's time (of the active scenes)
+  bool has_history_ = false;                // BDF2: (kXPrev, kVPrev) hold the previous step
   std::vector<PerScene> per_scene_;
   BatchStepReport report_;
 };

@@ -266,7 +266,8 @@ INSTANTIATE_TEST_SUITE_P(Integrators, SceneBatchPremise,
                            return std::string(integratorName(info.param.integrator));
                          });
 
-// ---- BatchSimulator (SE, BE, BDF2, IM for now) --------------------------------------------------------
+// ---- BatchSimulator (every integrator but the blend, for now)
+// --------------------------------------------------------
 
 class BatchSimulatorMatches : public ::testing::TestWithParam<PremiseCase> {};
 
@@ -311,7 +312,7 @@ TEST_P(BatchSimulatorMatches, EveryScenesStateEnergyAndTargetAreItsOwnSimulators
   EXPECT_GT(damping, 0.0);
   for (std::size_t s = 0; s < scenes.size(); ++s) {
     EXPECT_EQ(batch.time(int(s)), alone[s].time());
-    if (c.integrator == Integrator::SymplecticEuler) {
+    if (c.integrator == Integrator::SymplecticEuler || c.integrator == Integrator::ForwardEuler) {
       EXPECT_EQ(batch.positions(int(s)), alone[s].positions()) << "scene " << s;
       EXPECT_EQ(batch.velocities(int(s)), alone[s].velocities()) << "scene " << s;
     } else {
@@ -323,6 +324,7 @@ TEST_P(BatchSimulatorMatches, EveryScenesStateEnergyAndTargetAreItsOwnSimulators
 
 INSTANTIATE_TEST_SUITE_P(Integrators, BatchSimulatorMatches,
                          ::testing::Values(PremiseCase{Integrator::SymplecticEuler, 1e-4, 20},
+                                           PremiseCase{Integrator::ForwardEuler, 1e-5, 20},
                                            PremiseCase{Integrator::BackwardEuler, 1.0 / 60.0, 20},
                                            PremiseCase{Integrator::BDF2, 1.0 / 60.0, 20},
                                            PremiseCase{Integrator::ImplicitMidpoint, 1.0 / 60.0, 20}),

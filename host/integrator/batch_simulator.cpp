@@ -19,9 +19,8 @@ enum Slot : int { kX, kV, kXPrev, kVPrev, kY, kXNew, kVNew, kScratch, kSolverScr
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   validateOptions(o);
   auto fail = [](const std::string& what) { throw InvalidInputError("batch simulator options: " + what); };
-  if (o.integrator == Integrator::ForwardEuler || o.integrator == Integrator::EnergyBlend)
-    fail("integrator " + std::string(integratorName(o.integrator)) +
-         " is not supported in a batch yet (SE, BE, BDF2, IM)");
+  if (o.integrator == Integrator::EnergyBlend)
+    fail("the blend is not supported in a batch yet (its decisions per scene: docs/batch_design.md)");
   if (o.backend != BackendKind::CpuReference) fail("only the CPU reference backend steps a batch yet");
   if (o.tolerance != 0.0 || o.acceleration != Acceleration::None || o.global_solve != GlobalSolve::Factor)
     fail(
@@ -98,11 +97,14 @@ const BatchStepReport& BatchSimulator::step() {
   control.iterations = options_.iterations;
   int iterations = 0;
   switch (options_.integrator) {
-    case Integrator::SymplecticEuler:
+    case Integrator::ForwardEuler:
+    case Integrator::SymplecticEuler: {
+      const bool symplectic = options_.integrator == Integrator::SymplecticEuler;
       backend_->accelerations(kScratch, kX, t_);
       backend_->combine(kVNew, 1.0, kV, h, kScratch);
-      backend_->combine(kXNew, 1.0, kX, h, kVNew);
+      backend_->combine(kXNew, 1.0, kX, h, symplectic ? kVNew : kV);
       break;
+    }
     case Integrator::BDF2:
       if (has_history_) {
         backend_->combine(kScratch, 4.0 / 3.0, kX, -1.0 / 3.0, kXPrev);
@@ -128,7 +130,7 @@ const BatchStepReport& BatchSimulator::step() {
       backend_->combine(kVNew, 1.0, kVNew, -1.0, kV);
       backend_->combine(kXNew, 2.0, kXNew, -1.0, kX);
       break;
-    default: break;  // refused at construction
+    case Integrator::EnergyBlend: break;  // refused at construction
   }
   report_.scenes.assign(segments_.size(), StepReport{});
   for (StepReport& r : report_.scenes) r.iterations = iterations;
@@ -154,54 +156,15 @@ const BatchStepReport& BatchSimulator::step() {
     r.step = p.steps;
     r.time = t1;
     r.energy_evaluations = forced ? 3 : 1;
-    double target_now = p.target;
-    std::string refusal;
     auto keepOld = [&] {
       x_new_.middleRows(seg.first_particle, seg.num_particles) = rowsOf(x_, seg);
       v_new_.middleRows(seg.first_particle, seg.num_particles) = rowsOf(v_, seg);
       rows_changed = true;
     };
     if (!p.active) {
-      keepOld();
       report_.refusals[s] = "inactive since a refused step";
-      continue;
-    }
-    if (forced && std::isfinite(p_new[s].total())) {
-      auto work = [](const PotentialEnergy& e) { return e.pins + e.external; };
-      r.forcing = (work(p_new[s]) - work(new_mid[s])) + (work(old_mid[s]) - work(p.potential));
-      target_now += r.forcing;
-    }
-    Eigen::MatrixX3d x_rows = rowsOf(x_new_, seg), v_rows = rowsOf(v_new_, seg);
-    std::ostringstream what;
-    what << "step " << r.step << " (t = " << t_ << " -> " << t1 << ", integrator "
-         << integratorName(options_.integrator) << "): ";
-    if (!x_rows.allFinite() || !v_rows.allFinite()) {
-      what << "non-finite position or velocity; the simulation blew up, step refused, state kept at t = " << p.time;
-      report_.refusals[s] = what.str();
     } else {
-      r.damping = applyMomentumPreservingDamping(scenes_[s].bodies, scenes_[s].masses, x_rows, v_rows);
-      if (r.damping != 0.0) {
-        v_new_.middleRows(seg.first_particle, seg.num_particles) = v_rows;
-        rows_changed = true;
-      }
-      target_now -= r.damping;
-      const double k_new = kineticEnergy(int(s), v_new_);
-      const double excess = k_new + p_new[s].total() - target_now;
-      if (!std::isfinite(k_new) || !std::isfinite(p_new[s].total()) || !std::isfinite(target_now)) {
-        what << "non-finite energy; the simulation blew up, step refused, state kept at t = " << p.time;
-        report_.refusals[s] = what.str();
-      } else if (options_.energy_limit > 0.0 && excess > options_.energy_limit * p.energy_scale) {
-        what << "energy H = " << k_new + p_new[s].total() << " exceeds the target H* = " << target_now
-             << " by more than energy_limit * E_scale = " << options_.energy_limit * p.energy_scale
-             << "; step refused, state kept at t = " << p.time;
-        report_.refusals[s] = what.str();
-      } else {
-        p.kinetic = k_new;
-        p.potential = p_new[s];
-        p.target = target_now;
-        p.time = t1;
-        ++p.steps;
-      }
+      acceptOrRefuse(s, forced ? &new_mid[s] : nullptr, forced ? &old_mid[s] : nullptr, p_new[s], t1, r, rows_changed);
     }
     if (!report_.refusals[s].empty()) {
       p.active = false;
@@ -228,6 +191,52 @@ const BatchStepReport& BatchSimulator::step() {
   v_.swap(v_new_);
   t_ = t1;
   return report_;
+}
+
+// Scene s's candidate (rows of x_new_, v_new_; potential p_new at t1): its forcing work, damping
+// and refusal checks as Simulator::step's, and on acceptance its new energies and target.
+void BatchSimulator::acceptOrRefuse(std::size_t s, const PotentialEnergy* new_mid, const PotentialEnergy* old_mid,
+                                    const PotentialEnergy& p_new, double t1, StepReport& r, bool& rows_changed) {
+  PerScene& p = per_scene_[s];
+  const SceneSegment& seg = segments_[s];
+  double target_now = p.target;
+  if (new_mid && std::isfinite(p_new.total())) {
+    auto work = [](const PotentialEnergy& e) { return e.pins + e.external; };
+    r.forcing = (work(p_new) - work(*new_mid)) + (work(*old_mid) - work(p.potential));
+    target_now += r.forcing;
+  }
+  Eigen::MatrixX3d x_rows = rowsOf(x_new_, seg), v_rows = rowsOf(v_new_, seg);
+  std::ostringstream what;
+  what << "step " << r.step << " (t = " << t_ << " -> " << t1 << ", integrator " << integratorName(options_.integrator)
+       << "): ";
+  if (!x_rows.allFinite() || !v_rows.allFinite()) {
+    what << "non-finite position or velocity; the simulation blew up, step refused, state kept at t = " << p.time;
+    report_.refusals[s] = what.str();
+  } else {
+    r.damping = applyMomentumPreservingDamping(scenes_[s].bodies, scenes_[s].masses, x_rows, v_rows);
+    if (r.damping != 0.0) {
+      v_new_.middleRows(seg.first_particle, seg.num_particles) = v_rows;
+      rows_changed = true;
+    }
+    target_now -= r.damping;
+    const double k_new = kineticEnergy(int(s), v_new_);
+    const double excess = k_new + p_new.total() - target_now;
+    if (!std::isfinite(k_new) || !std::isfinite(p_new.total()) || !std::isfinite(target_now)) {
+      what << "non-finite energy; the simulation blew up, step refused, state kept at t = " << p.time;
+      report_.refusals[s] = what.str();
+    } else if (options_.energy_limit > 0.0 && excess > options_.energy_limit * p.energy_scale) {
+      what << "energy H = " << k_new + p_new.total() << " exceeds the target H* = " << target_now
+           << " by more than energy_limit * E_scale = " << options_.energy_limit * p.energy_scale
+           << "; step refused, state kept at t = " << p.time;
+      report_.refusals[s] = what.str();
+    } else {
+      p.kinetic = k_new;
+      p.potential = p_new;
+      p.target = target_now;
+      p.time = t1;
+      ++p.steps;
+    }
+  }
 }
 
 }  // namespace stabint

@@ -4,7 +4,7 @@
 // per scene its own energies, target H*, damping, forcing and refusal. Internal until it has the
 // blend and the OpenCL backend; then it moves to include/stabint/batch.hpp.
 //
-// Supported for now: SymplecticEuler, BackwardEuler, BDF2 and ImplicitMidpoint on the CPU reference, with a fixed
+// Supported for now: every integrator but the blend, on the CPU reference, with a fixed
 // iteration count and the factor (the controls that sum over the whole batch, a tolerance stop,
 // acceleration and CG, are refused: they would couple the scenes, and one scene's NaN would reach
 // the others through them).
@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -64,6 +65,10 @@ class BatchSimulator {
   };
   BatchSimulator(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
   double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;
+  // Scene s's forcing work (new_mid, old_mid: potentials at t_m, null when no forcing changes),
+  // damping and refusal checks; on acceptance its new energies and target.
+  void acceptOrRefuse(std::size_t s, const PotentialEnergy* new_mid, const PotentialEnergy* old_mid,
+                      const PotentialEnergy& p_new, double t1, StepReport& r, bool& rows_changed);
 
   std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping
   std::vector<SceneSegment> segments_;

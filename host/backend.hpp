@@ -90,7 +90,7 @@ class Backend {
   /// Whether setSegments / massDots / potentials are available.
   virtual bool computesPerScene() const { return false; }
   /// The segments of the backend's scene (their element ranges index SceneData::blocks(), which
-  /// are in elementTypes() order). Checked by the caller against the scene.
+  /// are in elementTypes() order): those concatenateScenes gave with that scene; not checked.
   virtual void setSegments(const std::vector<SceneSegment>& /*segments*/) { notPerScene(); }
   /// out[s] = sum over segment s's particles of m_j a_j . b_j.
   virtual void massDots(int /*a*/, int /*b*/, std::vector<double>& /*out*/) { notPerScene(); }

@@ -96,17 +96,27 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
   state.SetLabel(f.contact->backendDescription());
 }
 
+// The landing cloth's global system with both blend factors (c = 1/h^2 and 4/h^2), and the
+// weight of one contact pair at the default stiffness.
+struct BlendFactoredCloth {
+  Scene cloth = clothOnSphereAndGround();
+  SceneData data{cloth};
+  GlobalSystem system{data};
+  double pair_weight = Collider{}.stiffness * cloth.masses[1000];
+  BlendFactoredCloth() {
+    const double h = 1.0 / 30.0;
+    system.factor(1.0 / (h * h));
+    system.factor(4.0 / (h * h));
+  }
+};
+
 // One pair entering the contact set and one leaving (docs/method.md, "Contact"), each a rank-1
 // update of the blend's two factors (c = 1/h^2 and 4/h^2); the simulator batches a step's
 // changes into one rank-k update and one downdate per factor.
 void runActiveSetUpdates(benchmark::State& state) {
-  const Scene cloth = clothOnSphereAndGround();
-  SceneData data(cloth);
-  GlobalSystem system(data);
-  const double h = 1.0 / 30.0;
-  system.factor(1.0 / (h * h));
-  system.factor(4.0 / (h * h));
-  const double w = Collider{}.stiffness * cloth.masses[1000];
+  BlendFactoredCloth f;
+  GlobalSystem& system = f.system;
+  const double w = f.pair_weight;
   int vertex = 100;
   for (auto _ : state) {
     system.addToDiagonal(vertex, w);
@@ -123,20 +133,16 @@ void runActiveSetUpdates(benchmark::State& state) {
 // with both factorizations (the simulator's choice above kMaxContactUpdateColumns pairs). The
 // counter is the time of one change.
 void runContactSetChange(benchmark::State& state) {
-  const Scene cloth = clothOnSphereAndGround();
-  SceneData data(cloth);
-  GlobalSystem system(data);
-  const double h = 1.0 / 30.0;
-  system.factor(1.0 / (h * h));
-  system.factor(4.0 / (h * h));
+  BlendFactoredCloth f;
+  GlobalSystem& system = f.system;
   const int pairs = static_cast<int>(state.range(0));
-  const double w = Collider{}.stiffness * cloth.masses[1000];
+  const double w = f.pair_weight;
   std::vector<int> vertices;
-  for (int i = 0; i < pairs; ++i) vertices.push_back((i * 997) % cloth.numParticles());
+  for (int i = 0; i < pairs; ++i) vertices.push_back((i * 997) % f.cloth.numParticles());
   const std::vector<double> up(vertices.size(), w), down(vertices.size(), -w);
   for (auto _ : state) {
     if (pairs == 0) {
-      system.assemble(data);
+      system.assemble(f.data);
       system.refactorAll();
     } else {
       system.addToDiagonal(vertices, up);

@@ -5,9 +5,7 @@
 # summary and the compact motion table (issue 8's targets, printed at the end of the charts step).
 # Idempotent; the reference trajectories (the IM h/16 accuracy references and the small-step
 # motion references) are cached in results/cache/ so a rerun skips them.
-# Measured on the shared 2-core machine (load average 2-5 from other jobs) with the build already
-# there: 3.5-4.2 minutes with no cache (computing the motion references about 1.5 of them), 2.9
-# with it; a fresh clone adds the build (about 1.5 minutes).
+# Its run time is in the README, "The main job".
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)

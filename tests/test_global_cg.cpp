@@ -189,20 +189,8 @@ TEST(HostCgSimulator, GrabAndStiffnessChangeFollowTheFactorRun) {
   const Scene s = cgClothScene();
   SimulatorOptions factor_options;
   factor_options.integrator = Integrator::BackwardEuler;
-  SimulatorOptions o = cgOptions();
-  o.integrator = Integrator::BackwardEuler;
-  o.cg_tolerance = 1e-12;
-  o.cg_iterations = 10000;
-  Simulator factor(s, factor_options), cg(s, o);
-  for (Simulator* sim : {&factor, &cg}) {
-    for (int n = 0; n < 5; ++n) sim->step();
-    const int pin = sim->grab(40, 1e4);
-    sim->setPinTarget(pin, sim->pinTarget(pin) + Eigen::Vector3d(0.1, 0.2, 0.0));
-    for (int n = 0; n < 5; ++n) sim->step();
-    sim->setElementStiffness(ElementKind::Spring, {0, 1, 2, 3}, 10.0);
-    sim->release(pin);
-    for (int n = 0; n < 5; ++n) sim->step();
-  }
+  Simulator factor(s, factor_options), cg(s, testing::convergedCgOptions());
+  for (Simulator* sim : {&factor, &cg}) testing::stepWithChangesOfL(*sim);
   // Both solve each global step to 1e-12 relative: the runs agree to far below 1e-8.
   EXPECT_LT((cg.positions() - factor.positions()).cwiseAbs().maxCoeff(), 1e-8);
 }
@@ -215,15 +203,8 @@ TEST(HostCgSimulator, ContactSetChangesFollowTheFactorRun) {
   const Scene s = testing::clothOnColliders();
   SimulatorOptions factor_options;
   factor_options.integrator = Integrator::BackwardEuler;
-  SimulatorOptions o = cgOptions();
-  o.integrator = Integrator::BackwardEuler;
-  o.cg_tolerance = 1e-12;
-  o.cg_iterations = 10000;
-  Simulator factor(s, factor_options), cg(s, o);
-  for (int n = 0; n < 30; ++n) {
-    factor.step();
-    cg.step();
-  }
+  Simulator factor(s, factor_options), cg(s, testing::convergedCgOptions());
+  for (int n = 0; n < 30; ++n) factor.step(), cg.step();
   EXPECT_LT((cg.positions() - factor.positions()).cwiseAbs().maxCoeff(), 1e-8);
 }
 

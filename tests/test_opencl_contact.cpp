@@ -41,12 +41,7 @@ ContactRun run(const Scene& scene, Integrator integrator, BackendKind backend, P
 
 TEST(OpenCLContact, ClothOnCollidersMatchesCpu) {
   const Scene scene = testing::clothOnColliders();
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    const std::string skip = testing::openclSkipReason(precision);
-    if (!skip.empty()) {
-      std::printf("  %s skipped: %s\n", testing::precisionName(precision), skip.c_str());
-      continue;
-    }
+  for (Precision precision : testing::availablePrecisions()) {
     const std::vector<Integrator> integrators = testing::crossBackendIntegrators(precision);
     const double tol = testing::crossBackendTolerance(precision);
     for (Integrator integrator : integrators) {
@@ -76,8 +71,7 @@ TEST(OpenCLContact, CollidersMovedAtRunTimeMatchCpu) {
     sim.setColliderPosition(2, Eigen::Vector3d(-0.6 + 0.8 * t, -0.2, 0.15 * std::sin(4.0 * t)));
     if (sim.stepCount() == 10) sim.setColliderVelocity(0, Eigen::Vector3d(0.0, 0.3, 0.0));
   };
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    if (!testing::openclSkipReason(precision).empty()) continue;
+  for (Precision precision : testing::availablePrecisions()) {
     const double tol = testing::crossBackendTolerance(precision);
     for (Integrator integrator : testing::crossBackendIntegrators(precision)) {
       const ContactRun ref = run(scene, integrator, BackendKind::CpuReference, Precision::Double, 30, input);
@@ -98,8 +92,7 @@ TEST(OpenCLContact, CollidersMovedAtRunTimeMatchCpu) {
 
 TEST(OpenCLContact, CheckpointsContinueBitForBit) {
   const Scene scene = testing::clothOnColliders();
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    if (!testing::openclSkipReason(precision).empty()) continue;
+  for (Precision precision : testing::availablePrecisions()) {
     SimulatorOptions o;
     o.backend = BackendKind::OpenCL;
     o.opencl.precision = precision;

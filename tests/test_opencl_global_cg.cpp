@@ -115,15 +115,7 @@ TEST_P(OpenCLGlobalCgTest, RunsWithElementChangesAgreeWithTheCpuReference) {
     device_options.backend = BackendKind::OpenCL;
     device_options.opencl = openclOptions(p);
     Simulator cpu(s, o), device(s, device_options);
-    for (Simulator* sim : {&cpu, &device}) {
-      for (int n = 0; n < 5; ++n) sim->step();
-      const int pin = sim->grab(40, 1e4);
-      sim->setPinTarget(pin, sim->pinTarget(pin) + Eigen::Vector3d(0.1, 0.2, 0.0));
-      for (int n = 0; n < 5; ++n) sim->step();
-      sim->setElementStiffness(ElementKind::Spring, {0, 1, 2, 3}, 10.0);
-      sim->release(pin);
-      for (int n = 0; n < 5; ++n) sim->step();
-    }
+    for (Simulator* sim : {&cpu, &device}) testing::stepWithChangesOfL(*sim);
     EXPECT_LE(relativeError(device.positions(), cpu.positions()), crossBackendTolerance(p))
         << integratorName(integrator);
     // Velocities against max(|v|, |x| / h), as test_opencl_integrators: they are differences of
@@ -158,44 +150,33 @@ TEST(OpenCLGlobalCg, TrackedAndAcceleratedSolvesAgreeWithTheCpuReference) {
   }
 }
 
-// cg_tolerance reaches the device: a simulator with a tight tolerance and a large iteration cap
-// ends where the factor's run does (both solve every global step to round-off).
-TEST(OpenCLGlobalCg, ToleranceOptionMatchesTheFactorRun) {
-  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
-  const Scene s = cgClothScene();
+// A device run with converged CG steps against the CPU reference's factor run, both BE.
+// Each global step leaves a relative residual <= 1e-12, an error up to cond(K_c) times that
+// (the stiff cloth's K_c is far less well conditioned than the tet bar's): measured 1.1e-10
+// after 10 steps of the cloth.
+void expectDeviceCgTracksTheFactorRun(const Scene& s, int steps) {
   SimulatorOptions factor_options;
   factor_options.integrator = Integrator::BackwardEuler;
-  SimulatorOptions o = factor_options;
+  SimulatorOptions o = testing::convergedCgOptions();
   o.backend = BackendKind::OpenCL;
   o.opencl = openclOptions(Precision::Double);
-  o.global_solve = GlobalSolve::ConjugateGradient;
-  o.cg_iterations = 5000;
-  o.cg_tolerance = 1e-12;
   Simulator factor(s, factor_options), device(s, o);
-  for (int n = 0; n < 10; ++n) factor.step(), device.step();
-  // Each global step leaves a relative residual <= 1e-12, an error up to cond(K_c) times that
-  // (the stiff cloth's K_c is far less well conditioned than the tet bar's): measured 1.1e-10
-  // after 10 steps.
+  for (int n = 0; n < steps; ++n) factor.step(), device.step();
   EXPECT_LE(relativeError(device.positions(), factor.positions()), 1e-8);
 }
 
+// cg_tolerance reaches the device: with a tight tolerance and a large iteration cap the run ends
+// where the factor's does.
+TEST(OpenCLGlobalCg, ToleranceOptionMatchesTheFactorRun) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  expectDeviceCgTracksTheFactorRun(cgClothScene(), 10);
+}
+
 // The contact set changes L at step starts: the device's copy of L follows (a stale one, without
-// the contact weights, misses by the sink depth, > 1e-3 relative). A cloth dropped onto every
-// collider shape; tolerance as above.
+// the contact weights, misses by a relative 14). A cloth dropped onto every collider shape.
 TEST(OpenCLGlobalCg, ContactSetChangesFollowTheFactorRun) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
-  const Scene s = testing::clothOnColliders();
-  SimulatorOptions factor_options;
-  factor_options.integrator = Integrator::BackwardEuler;
-  SimulatorOptions o = factor_options;
-  o.backend = BackendKind::OpenCL;
-  o.opencl = openclOptions(Precision::Double);
-  o.global_solve = GlobalSolve::ConjugateGradient;
-  o.cg_iterations = 5000;
-  o.cg_tolerance = 1e-12;
-  Simulator factor(s, factor_options), device(s, o);
-  for (int n = 0; n < 30; ++n) factor.step(), device.step();
-  EXPECT_LE(relativeError(device.positions(), factor.positions()), 1e-8);
+  expectDeviceCgTracksTheFactorRun(testing::clothOnColliders(), 30);
 }
 
 // With cg_tolerance the device stops once the residual is small enough: a looser tolerance takes

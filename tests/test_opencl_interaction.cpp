@@ -45,12 +45,7 @@ DrivenRun drivenRun(const DrivenCloth& d, BackendKind backend, Precision precisi
 }
 
 TEST(OpenCLInteraction, DrivenClothMatchesCpu) {
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    const std::string skip = testing::openclSkipReason(precision);
-    if (!skip.empty()) {
-      std::printf("  %s skipped: %s\n", testing::precisionName(precision), skip.c_str());
-      continue;
-    }
+  for (Precision precision : testing::availablePrecisions()) {
     const std::vector<Integrator> integrators = testing::crossBackendIntegrators(precision);
     const double tol = testing::crossBackendTolerance(precision);
     for (Integrator integrator : integrators) {
@@ -78,9 +73,8 @@ TEST(OpenCLInteraction, DrivenClothMatchesCpu) {
 // the changes continues bit for bit.
 TEST(OpenCLInteraction, ElementChangesMatchCpu) {
   const Scene cloth = testing::triangleCloth();
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    if (!testing::openclSkipReason(precision).empty()) continue;
-    const double tol = precision == Precision::Double ? 1e-9 : 1e-3;
+  for (Precision precision : testing::availablePrecisions()) {
+    const double tol = testing::crossBackendTolerance(precision);
     auto run = [&](BackendKind backend, Precision p, std::vector<StepReport>& reports) {
       SimulatorOptions o;
       o.integrator = Integrator::BDF2;
@@ -140,9 +134,8 @@ TEST(OpenCLInteraction, ScriptedEventsMatchCpu) {
       {16, ImpulseEvent{{56, 57, 58}, Eigen::Vector3d(0.0, 0.0, 0.5)}},
       {18, ElementEvent{ElementKind::Spring, {0, 1, 2, 3}, 20.0, std::nullopt}},
   };
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    if (!testing::openclSkipReason(precision).empty()) continue;
-    const double tol = precision == Precision::Double ? 1e-9 : 1e-3;
+  for (Precision precision : testing::availablePrecisions()) {
+    const double tol = testing::crossBackendTolerance(precision);
     auto run = [&](BackendKind backend, Precision prec) {
       SimulatorOptions o;
       o.integrator = Integrator::BDF2;
@@ -166,8 +159,7 @@ TEST(OpenCLInteraction, ScriptedEventsMatchCpu) {
 }
 
 TEST(OpenCLInteraction, CheckpointsContinueBitForBit) {
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    if (!testing::openclSkipReason(precision).empty()) continue;
+  for (Precision precision : testing::availablePrecisions()) {
     for (Integrator integrator : {Integrator::EnergyBlend, Integrator::BDF2}) {
       DrivenCloth d = drivenCloth(integrator);
       d.options.backend = BackendKind::OpenCL;

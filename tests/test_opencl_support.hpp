@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,20 @@ inline OpenCLOptions openclOptions(Precision precision) {
 }
 
 inline const char* precisionName(Precision p) { return p == Precision::Double ? "double" : "float"; }
+
+/// The precisions an OpenCL device here runs (double, then float), for tests that loop over
+/// them; each missing one is reported as skipped on stdout.
+inline std::vector<Precision> availablePrecisions() {
+  std::vector<Precision> available;
+  for (Precision precision : {Precision::Double, Precision::Float}) {
+    const std::string skip = openclSkipReason(precision);
+    if (skip.empty())
+      available.push_back(precision);
+    else
+      std::printf("  %s skipped: %s\n", precisionName(precision), skip.c_str());
+  }
+  return available;
+}
 
 // The integrators a scene is compared on across backends: the blend's branch decisions compare
 // energies against its tolerance and may differ from the CPU's in float, so float is checked on

@@ -2,18 +2,15 @@
 
 #include "cpu/cpu_backend.hpp"
 #include "integrator/damping.hpp"
+#include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
 
 #include <cmath>
 #include <cstddef>
-#include <sstream>
 #include <utility>
 
 namespace stabint {
 namespace {
-
-// Backend slots of the batch (the same roles as Simulator's).
-enum Slot : int { kX, kV, kXPrev, kVPrev, kY, kXNew, kVNew, kScratch, kSolverScratch, kNumSlots };
 
 // Simulator's checks, then what the batch does not support yet.
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
@@ -44,18 +41,13 @@ BatchSimulator::BatchSimulator(SceneBatch batch, const std::vector<Scene>& scene
       segments_(std::move(batch.segments)),
       options_(options),
       data_(batch.scene),
-      backend_(makeCpuBackend(data_, kNumSlots)),
+      backend_(makeCpuBackend(data_, kNumDriverSlots)),
       system_(data_),
       solver_(*backend_, system_, kSolverScratch),
       x_(batch.scene.positions),
       v_(batch.scene.velocities),
       per_scene_(segments_.size()) {
-  const double h = options_.time_step;
-  // The systems Simulator factors for these integrators, with the same expressions for c.
-  if (options_.integrator == Integrator::BDF2) system_.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
-  if (options_.integrator == Integrator::BackwardEuler || options_.integrator == Integrator::BDF2)
-    system_.factor(1.0 / (h * h), "1/time_step^2");
-  if (options_.integrator == Integrator::ImplicitMidpoint) system_.factor(4.0 / (h * h), "4/time_step^2");
+  factorIntegratorSystems(system_, options_.integrator, options_.time_step);
   backend_->setSegments(segments_);
   backend_->write(kX, x_);
   backend_->write(kV, v_);
@@ -66,20 +58,15 @@ BatchSimulator::BatchSimulator(SceneBatch batch, const std::vector<Scene>& scene
     p.potential = potentials[s];
     p.kinetic = kineticEnergy(int(s), v_);
     p.target = p.kinetic + p.potential.total();
-    // As Simulator's E_scale, from the scene alone.
     const Scene& own = scenes_[s];
-    const double size =
-        own.numParticles() > 0 ? (own.positions.colwise().maxCoeff() - own.positions.colwise().minCoeff()).norm() : 0.0;
-    p.energy_scale = p.kinetic + p.potential.elastic() + own.masses.sum() * own.gravity.norm() * size;
+    p.energy_scale = initialEnergyScale(p.kinetic, p.potential, own.masses, own.gravity, own.positions);
   }
   backend_->times() = PhaseTimes{};
 }
 
 double BatchSimulator::kineticEnergy(int scene, const Eigen::MatrixX3d& v) const {
   const SceneSegment& seg = segments_[std::size_t(scene)];
-  const Eigen::MatrixX3d rows = rowsOf(v, seg);
-  const Eigen::VectorXd masses = data_.masses().segment(seg.first_particle, seg.num_particles);
-  return 0.5 * (rows.rowwise().squaredNorm().array() * masses.array()).sum();
+  return stabint::kineticEnergy(scenes_[std::size_t(scene)].masses, rowsOf(v, seg));
 }
 
 Eigen::MatrixX3d BatchSimulator::positions(int scene) const { return rowsOf(x_, segments_[std::size_t(scene)]); }
@@ -92,46 +79,11 @@ EnergyReport BatchSimulator::energy(int scene) const {
 const BatchStepReport& BatchSimulator::step() {
   const double h = options_.time_step;
   const double t1 = t_ + h;
-  // The integrators as Simulator forms them, on the whole batch.
+  // The integrators Simulator steps with, on the whole batch.
   IterationControl control;
   control.iterations = options_.iterations;
-  int iterations = 0;
-  switch (options_.integrator) {
-    case Integrator::ForwardEuler:
-    case Integrator::SymplecticEuler: {
-      const bool symplectic = options_.integrator == Integrator::SymplecticEuler;
-      backend_->accelerations(kScratch, kX, t_);
-      backend_->combine(kVNew, 1.0, kV, h, kScratch);
-      backend_->combine(kXNew, 1.0, kX, h, symplectic ? kVNew : kV);
-      break;
-    }
-    case Integrator::BDF2:
-      if (has_history_) {
-        backend_->combine(kScratch, 4.0 / 3.0, kX, -1.0 / 3.0, kXPrev);
-        backend_->combine(kY, 8.0 * h / 9.0, kV, -2.0 * h / 9.0, kVPrev);
-        backend_->combine(kY, 1.0, kY, 1.0, kScratch);
-        backend_->copy(kXNew, kY);
-        iterations = solver_.solve(9.0 / (4.0 * h * h), kY, kXNew, t1, control);
-        backend_->combine(kVNew, 1.5 / h, kXNew, -1.5 / h, kScratch);
-        break;
-      }
-      [[fallthrough]];  // the first step has no history: BE
-    case Integrator::BackwardEuler:
-      backend_->combine(kY, 1.0, kX, h, kV);
-      backend_->copy(kXNew, kY);
-      iterations = solver_.solve(1.0 / (h * h), kY, kXNew, t1, control);
-      backend_->combine(kVNew, 1.0 / h, kXNew, -1.0 / h, kX);
-      break;
-    case Integrator::ImplicitMidpoint:
-      backend_->combine(kY, 1.0, kX, 0.5 * h, kV);
-      backend_->copy(kXNew, kY);
-      iterations = solver_.solve(4.0 / (h * h), kY, kXNew, t_ + 0.5 * h, control);
-      backend_->combine(kVNew, 4.0 / h, kXNew, -4.0 / h, kX);
-      backend_->combine(kVNew, 1.0, kVNew, -1.0, kV);
-      backend_->combine(kXNew, 2.0, kXNew, -1.0, kX);
-      break;
-    case Integrator::EnergyBlend: break;  // refused at construction
-  }
+  const int iterations =
+      IntegratorSteps(*backend_, solver_).step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
   report_.scenes.assign(segments_.size(), StepReport{});
   for (StepReport& r : report_.scenes) r.iterations = iterations;
   report_.refusals.assign(segments_.size(), std::string());
@@ -201,42 +153,31 @@ void BatchSimulator::acceptOrRefuse(std::size_t s, const PotentialEnergy* new_mi
   const SceneSegment& seg = segments_[s];
   double target_now = p.target;
   if (new_mid && std::isfinite(p_new.total())) {
-    auto work = [](const PotentialEnergy& e) { return e.pins + e.external; };
-    r.forcing = (work(p_new) - work(*new_mid)) + (work(*old_mid) - work(p.potential));
+    r.forcing = forcingWork(p_new, *new_mid, *old_mid, p.potential);
     target_now += r.forcing;
   }
   Eigen::MatrixX3d x_rows = rowsOf(x_new_, seg), v_rows = rowsOf(v_new_, seg);
-  std::ostringstream what;
-  what << "step " << r.step << " (t = " << t_ << " -> " << t1 << ", integrator " << integratorName(options_.integrator)
-       << "): ";
   if (!x_rows.allFinite() || !v_rows.allFinite()) {
-    what << "non-finite position or velocity; the simulation blew up, step refused, state kept at t = " << p.time;
-    report_.refusals[s] = what.str();
-  } else {
-    r.damping = applyMomentumPreservingDamping(scenes_[s].bodies, scenes_[s].masses, x_rows, v_rows);
-    if (r.damping != 0.0) {
-      v_new_.middleRows(seg.first_particle, seg.num_particles) = v_rows;
-      rows_changed = true;
-    }
-    target_now -= r.damping;
-    const double k_new = kineticEnergy(int(s), v_new_);
-    const double excess = k_new + p_new.total() - target_now;
-    if (!std::isfinite(k_new) || !std::isfinite(p_new.total()) || !std::isfinite(target_now)) {
-      what << "non-finite energy; the simulation blew up, step refused, state kept at t = " << p.time;
-      report_.refusals[s] = what.str();
-    } else if (options_.energy_limit > 0.0 && excess > options_.energy_limit * p.energy_scale) {
-      what << "energy H = " << k_new + p_new.total() << " exceeds the target H* = " << target_now
-           << " by more than energy_limit * E_scale = " << options_.energy_limit * p.energy_scale
-           << "; step refused, state kept at t = " << p.time;
-      report_.refusals[s] = what.str();
-    } else {
-      p.kinetic = k_new;
-      p.potential = p_new;
-      p.target = target_now;
-      p.time = t1;
-      ++p.steps;
-    }
+    report_.refusals[s] = nonFiniteState(r.step, t_, t1, options_.integrator).message;
+    return;
   }
+  r.damping = applyMomentumPreservingDamping(scenes_[s].bodies, scenes_[s].masses, x_rows, v_rows);
+  if (r.damping != 0.0) {
+    v_new_.middleRows(seg.first_particle, seg.num_particles) = v_rows;
+    rows_changed = true;
+  }
+  target_now -= r.damping;
+  const double k_new = stabint::kineticEnergy(scenes_[s].masses, v_rows);
+  const StepRefusal refusal = checkStepEnergy(r.step, t_, t1, options_, k_new, p_new, target_now, p.energy_scale);
+  if (!refusal.message.empty()) {
+    report_.refusals[s] = refusal.message;
+    return;
+  }
+  p.kinetic = k_new;
+  p.potential = p_new;
+  p.target = target_now;
+  p.time = t1;
+  ++p.steps;
 }
 
 }  // namespace stabint

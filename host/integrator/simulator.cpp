@@ -8,6 +8,7 @@
 #include "integrator/checkpoint.hpp"
 #include "integrator/contact.hpp"
 #include "integrator/damping.hpp"
+#include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
 #include "integrator/rigid_motion.hpp"
 #include "integrator/root_find.hpp"
@@ -28,28 +29,9 @@
 namespace stabint {
 namespace {
 
-// Backend state slots used by the driver.
-enum Slot : int {
-  kX,         // x_n
-  kV,         // v_n
-  kXPrev,     // x_{n-1} (BDF2)
-  kVPrev,     // v_{n-1} (BDF2)
-  kY,         // inertial target y of the current solve
-  kXNew,      // candidate x_{n+1} (for the blend: the IM candidate, later the blended state)
-  kVNew,      // candidate v_{n+1}
-  kXPartner,  // BE or FE partner of the blend
-  kVPartner,
-  kXTrial,   // blended positions during the root find
-  kScratch,  // driver scratch
-  kSolverScratch,
-  kNumSlots
-};
-
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
-
-bool allFinite(const Eigen::MatrixX3d& m) { return m.allFinite(); }
 
 }  // namespace
 
@@ -59,27 +41,17 @@ struct Simulator::Impl {
         scene(s),
         choice(chooseBackend(
             options, options.backend == BackendKind::Auto ? listOpenCLDevices() : std::vector<OpenCLDeviceInfo>{})),
-        backend(choice.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, kNumSlots, choice.opencl)
-                                                   : makeCpuBackend(scene, kNumSlots)),
+        backend(choice.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, kNumDriverSlots, choice.opencl)
+                                                   : makeCpuBackend(scene, kNumDriverSlots)),
         system(scene),
         solver(*backend, system, kSolverScratch),
+        steps_of(*backend, solver),
         x(s.positions),
         v(s.velocities) {
     // The implicit systems are factored now, so that masses too small for the stiffnesses are
     // refused here, naming them, rather than failing the first step().
-    // The same expressions for c as the integrators below, so that each is factored once.
-    const double h = options.time_step;
     initialContactSet();
-    switch (options.integrator) {
-      case Integrator::BDF2:
-        system.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
-        [[fallthrough]];  // and its first step is BE
-      case Integrator::BackwardEuler: system.factor(1.0 / (h * h), "1/time_step^2"); break;
-      case Integrator::EnergyBlend: system.factor(1.0 / (h * h), "1/time_step^2"); [[fallthrough]];
-      case Integrator::ImplicitMidpoint: system.factor(4.0 / (h * h), "4/time_step^2"); break;
-      case Integrator::ForwardEuler:
-      case Integrator::SymplecticEuler: break;  // explicit: no system
-    }
+    factorIntegratorSystems(system, options.integrator, options.time_step);
     // CG needs no factor: they only validated the systems, and element changes would keep
     // updating them for nothing.
     if (options.global_solve == GlobalSolve::ConjugateGradient) system.dropFactors();
@@ -88,19 +60,11 @@ struct Simulator::Impl {
     potential = backend->potential(kX, 0.0);
     kinetic = kineticEnergy(v);
     target = kinetic + potential.total();
-    // E_scale: initial K + E_int plus the work gravity can do on the body, m |g| times its size,
-    // so the blend tolerance does not depend on where gravity's zero is. [project rule] The size
-    // is the diagonal of the initial bounding box, not the extent along gravity: a chain released
-    // horizontally has zero extent along gravity (and K = E_int = 0), which would make tau zero.
-    const double g = s.gravity.norm();
-    const double size = x.rows() > 0 ? (x.colwise().maxCoeff() - x.colwise().minCoeff()).norm() : 0.0;
-    energy_scale = kinetic + potential.elastic() + s.masses.sum() * g * size;
+    energy_scale = initialEnergyScale(kinetic, potential, s.masses, s.gravity, x);
     backend->times() = PhaseTimes{};
   }
 
-  double kineticEnergy(const Eigen::MatrixX3d& vel) const {
-    return 0.5 * (vel.rowwise().squaredNorm().array() * scene.masses().array()).sum();
-  }
+  double kineticEnergy(const Eigen::MatrixX3d& vel) const { return stabint::kineticEnergy(scene.masses(), vel); }
 
   IterationControl control(int iterations) const {
     IterationControl c{iterations,           options.tolerance,     options.max_iterations, energy_scale,
@@ -111,53 +75,12 @@ struct Simulator::Impl {
     return c;
   }
 
-  // ---- the integrators: each leaves x_{n+1}, v_{n+1} in (kXNew, kVNew), returns iterations ----
-
-  // x_{n+1} = x* of the solve with c = 1/h^2, y = x_n + h v_n; warm start in `x_out` if
-  // `warm_start` is true, else y.
+  // ---- the integrators (integrator_steps.hpp): each leaves x_{n+1}, v_{n+1} in (x_out, v_out) ----
   int backwardEuler(int x_out, int v_out, int iterations, bool warm_start) {
-    const double h = options.time_step;
-    backend->combine(kY, 1.0, kX, h, kV);
-    if (!warm_start) backend->copy(x_out, kY);
-    const int done = solver.solve(1.0 / (h * h), kY, x_out, t + h, control(iterations));
-    backend->combine(v_out, 1.0 / h, x_out, -1.0 / h, kX);  // v = (x* - x_n)/h
-    return done;
+    return steps_of.backwardEuler(options.time_step, t, x_out, v_out, control(iterations), warm_start);
   }
-
-  // Midpoint x* of the solve with c = 4/h^2, y = x_n + h/2 v_n, evaluated at t + h/2;
-  // x_{n+1} = 2x* - x_n, v_{n+1} = 4(x* - x_n)/h - v_n.
-  // When `midpoint_out` is a slot, the midpoint x* is also left there.
-  int implicitMidpoint(int x_out, int v_out, int midpoint_out = -1) {
-    const double h = options.time_step;
-    backend->combine(kY, 1.0, kX, 0.5 * h, kV);
-    backend->copy(x_out, kY);
-    const int done = solver.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, control(options.iterations));
-    backend->combine(v_out, 4.0 / h, x_out, -4.0 / h, kX);
-    backend->combine(v_out, 1.0, v_out, -1.0, kV);
-    if (midpoint_out >= 0) backend->copy(midpoint_out, x_out);
-    backend->combine(x_out, 2.0, x_out, -1.0, kX);
-    return done;
-  }
-
-  // c = 9/(4h^2), y = (4x_n - x_{n-1})/3 + (2h/9)(4v_n - v_{n-1});
-  // v_{n+1} = 3/(2h) (x* - (4x_n - x_{n-1})/3).
-  int bdf2(int x_out, int v_out) {
-    const double h = options.time_step;
-    backend->combine(kScratch, 4.0 / 3.0, kX, -1.0 / 3.0, kXPrev);
-    backend->combine(kY, 8.0 * h / 9.0, kV, -2.0 * h / 9.0, kVPrev);
-    backend->combine(kY, 1.0, kY, 1.0, kScratch);
-    backend->copy(x_out, kY);
-    const int done = solver.solve(9.0 / (4.0 * h * h), kY, x_out, t + h, control(options.iterations));
-    backend->combine(v_out, 1.5 / h, x_out, -1.5 / h, kScratch);
-    return done;
-  }
-
-  // Forward Euler (symplectic = false) or symplectic Euler (true), both with f(x_n, t_n).
-  void explicitEuler(int x_out, int v_out, bool symplectic) {
-    const double h = options.time_step;
-    backend->accelerations(kScratch, kX, t);
-    backend->combine(v_out, 1.0, kV, h, kScratch);
-    backend->combine(x_out, 1.0, kX, h, symplectic ? v_out : kV);
+  int implicitMidpoint(int x_out, int v_out) {
+    return steps_of.implicitMidpoint(options.time_step, t, x_out, v_out, control(options.iterations));
   }
 
   // ---- the energy-tracking blend (docs/method.md, "The blend") ------------------------------
@@ -269,9 +192,8 @@ struct Simulator::Impl {
 
   double tolerance() const { return options.energy_tolerance * (kinetic + potential.elastic() + energy_scale); }
 
-  // sum_j m_j a_j . b_j on host copies, as the CPU reference's Backend::massDot forms it.
   double massDot(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) const {
-    return (a.cwiseProduct(b).rowwise().sum().array() * scene.masses().array()).sum();
+    return stabint::massDot(scene.masses(), a, b);
   }
 
   // No pins, no force fields, no user forces and no colliders: IM keeps linear and angular
@@ -409,8 +331,7 @@ struct Simulator::Impl {
     const PotentialEnergy new_at_midtime = backend->potential(x_new_slot, tm);
     const PotentialEnergy old_at_midtime = backend->potential(kX, tm);
     report.energy_evaluations += 2;
-    auto forced = [](const PotentialEnergy& p) { return p.pins + p.external; };
-    report.forcing = (forced(p_new) - forced(new_at_midtime)) + (forced(old_at_midtime) - forced(potential));
+    report.forcing = stabint::forcingWork(p_new, new_at_midtime, old_at_midtime, potential);
     return report.forcing;
   }
 
@@ -427,18 +348,10 @@ struct Simulator::Impl {
     double target_now = target;
 
     PotentialEnergy p_new;
-    switch (options.integrator) {
-      case Integrator::ForwardEuler: explicitEuler(kXNew, kVNew, false); break;
-      case Integrator::SymplecticEuler: explicitEuler(kXNew, kVNew, true); break;
-      case Integrator::BackwardEuler: r.iterations = backwardEuler(kXNew, kVNew, options.iterations, false); break;
-      case Integrator::BDF2:
-        // The first step has no history: BE.
-        r.iterations = has_history ? bdf2(kXNew, kVNew) : backwardEuler(kXNew, kVNew, options.iterations, false);
-        break;
-      case Integrator::ImplicitMidpoint: r.iterations = implicitMidpoint(kXNew, kVNew); break;
-      case Integrator::EnergyBlend: p_new = blend(target_now, r); break;
-    }
-    if (options.integrator != Integrator::EnergyBlend) {
+    if (options.integrator == Integrator::EnergyBlend) {
+      p_new = blend(target_now, r);
+    } else {
+      r.iterations = steps_of.step(options.integrator, h, t, has_history, kXNew, kVNew, control(options.iterations));
       p_new = backend->potential(kXNew, t1);
       ++r.energy_evaluations;
       if (std::isfinite(p_new.total())) target_now += forcingWork(kXNew, p_new, r);
@@ -448,7 +361,7 @@ struct Simulator::Impl {
     // formed there).
     if (options.integrator != Integrator::EnergyBlend || !new_state_on_host)
       backend->readBoth(kXNew, x_new, kVNew, v_new);
-    if (!allFinite(x_new) || !allFinite(v_new)) refuse(r, "non-finite position or velocity");
+    if (!x_new.allFinite() || !v_new.allFinite()) refuse(nonFiniteState(r.step, t, t1, options.integrator));
     bool velocities_changed = correctBlendState(target_now, p_new, r);
     if (!scene.scene().colliders.empty()) velocities_changed |= resolveContact(t1, target_now, p_new, r);
 
@@ -463,16 +376,8 @@ struct Simulator::Impl {
     target_now -= r.damping;
 
     const double k_new = kineticEnergy(v_new);
-    if (!std::isfinite(k_new) || !std::isfinite(p_new.total()) || !std::isfinite(target_now))
-      refuse(r, "non-finite energy");
-    // The user's ceiling: an explicit or midpoint run that gains energy is stopped long before it
-    // overflows, by the same refusal (docs: SimulatorOptions::energy_limit).
-    if (options.energy_limit > 0.0 && k_new + p_new.total() - target_now > options.energy_limit * energy_scale) {
-      std::ostringstream what;
-      what << "energy H = " << k_new + p_new.total() << " exceeds the target H* = " << target_now << " by more than "
-           << "energy_limit * E_scale = " << options.energy_limit * energy_scale;
-      refuse(r, what.str(), /*energy_limit=*/true);
-    }
+    const StepRefusal refusal = checkStepEnergy(r.step, t, t1, options, k_new, p_new, target_now, energy_scale);
+    if (!refusal.message.empty()) refuse(refusal);
 
     // Commit.
     if (options.integrator == Integrator::BDF2) {
@@ -930,14 +835,10 @@ struct Simulator::Impl {
     }
   }
 
-  [[noreturn]] void refuse(const StepReport& r, const std::string& what, bool energy_limit = false) {
-    // Nothing was committed: the slots kX/kV and the host copies still hold the last finite state.
-    std::ostringstream msg;
-    msg << "step " << r.step << " (t = " << t << " -> " << r.time << ", integrator "
-        << integratorName(options.integrator) << "): " << what
-        << (energy_limit ? "; step refused" : "; the simulation blew up, step refused") << ", state kept at t = " << t;
-    if (energy_limit) throw EnergyLimitError(msg.str(), r.step);
-    throw NonFiniteStateError(msg.str(), r.step);
+  // Nothing was committed: the slots kX/kV and the host copies still hold the last finite state.
+  [[noreturn]] static void refuse(const StepRefusal& refusal) {
+    if (refusal.energy_limit) throw EnergyLimitError(refusal.message, refusal.step);
+    throw NonFiniteStateError(refusal.message, refusal.step);
   }
 
   SimulatorOptions options;
@@ -946,6 +847,7 @@ struct Simulator::Impl {
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   LocalGlobalSolver solver;
+  IntegratorSteps steps_of;
   Eigen::MatrixX3d x, v;          // accepted state on the host
   Eigen::MatrixX3d x_new, v_new;  // staging for the candidate
   double t = 0.0;

@@ -266,8 +266,7 @@ INSTANTIATE_TEST_SUITE_P(Integrators, SceneBatchPremise,
                            return std::string(integratorName(info.param.integrator));
                          });
 
-// ---- BatchSimulator (every integrator but the blend, for now)
-// --------------------------------------------------------
+// ---- BatchSimulator ----------------------------------------------------------------------------
 
 class BatchSimulatorMatches : public ::testing::TestWithParam<PremiseCase> {};
 
@@ -385,8 +384,9 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   options.global_solve = GlobalSolve::ConjugateGradient;
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
   options.global_solve = GlobalSolve::Factor;
-  options.integrator = Integrator::EnergyBlend;
+  options.acceleration = Acceleration::Anderson;
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.acceleration = Acceleration::None;
   // Simulator's own checks come first.
   options.integrator = Integrator::BackwardEuler;
   options.time_step = -1.0;
@@ -396,6 +396,173 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   } catch (const InvalidInputError& e) {
     EXPECT_NE(std::string(e.what()).find("simulator options: time_step"), std::string::npos) << e.what();
   }
+}
+
+// ---- the blend in lockstep -----------------------------------------------------------------------
+
+// Scenes whose blend steps take every branch in the first steps (checked below): the mixed scenes
+// (the chain's swing and growing field, the damped cloth, the bar, the triangle cloth) and a
+// chain released with its links stretched and moving, whose IM candidates gain energy at once.
+std::vector<Scene> blendScenes() {
+  std::vector<Scene> scenes = mixedScenes();
+  ChainPendulumParams chain;
+  chain.particles = 6;
+  Scene stretched = makeChainPendulum(chain);
+  stretched.positions = perturbed(stretched.positions, 0.05);
+  stretched.velocities = perturbed(Eigen::MatrixX3d::Zero(stretched.numParticles(), 3), 2.0);
+  scenes.push_back(stretched);
+  return scenes;
+}
+
+void expectSameReport(const StepReport& got, const StepReport& own, double scale, const std::string& where) {
+  EXPECT_EQ(got.branch, own.branch) << where;
+  EXPECT_EQ(got.step, own.step) << where;
+  EXPECT_EQ(got.time, own.time) << where;
+  EXPECT_EQ(got.iterations, own.iterations) << where;
+  EXPECT_NEAR(got.alpha, own.alpha, 1e-9) << where;
+  EXPECT_NEAR(got.velocity_scale, own.velocity_scale, 1e-9) << where;
+  EXPECT_NEAR(got.forcing, own.forcing, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.damping, own.damping, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.event_energy, own.event_energy, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.target, own.target, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.energy.kinetic, own.energy.kinetic, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.energy.elastic, own.energy.elastic, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.energy.external, own.energy.external, 1e-12 * scale) << where;
+}
+
+void expectSameState(const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v, const Simulator& own,
+                     const std::string& where) {
+  // The factor's ordering of a block may differ from the scene alone's (round-off, see the premise).
+  const Eigen::MatrixX3d& x0 = own.scene().positions;
+  const double size = (x0.colwise().maxCoeff() - x0.colwise().minCoeff()).norm();
+  const double speed = own.velocities().cwiseAbs().maxCoeff();
+  EXPECT_LE((x - own.positions()).cwiseAbs().maxCoeff(), 1e-9 * size) << where;
+  EXPECT_LE((v - own.velocities()).cwiseAbs().maxCoeff(), 1e-9 * (speed + size / own.options().time_step)) << where;
+}
+
+// Every scene of a blend batch takes the branch its own Simulator takes, step by step, with its
+// alpha, velocity scale, forcing, damping, target and energies, and follows its trajectory: the
+// decisions, root finds and corrections are per scene (one energy pass per round for all), the
+// partner is solved for the whole batch whenever any scene needs it.
+TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
+  const std::vector<Scene> scenes = blendScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  std::vector<std::vector<int>> branches(scenes.size(), std::vector<int>(4, 0));
+  int steps_with_mixed_branches = 0;
+  for (int step = 0; step < 40; ++step) {
+    const BatchStepReport& report = batch.step();
+    std::vector<int> this_step(4, 0);
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const StepReport& own = alone[s].step();
+      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
+      EXPECT_TRUE(report.refusals[s].empty()) << where << ": " << report.refusals[s];
+      expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
+      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
+      ++branches[s][std::size_t(own.branch)];
+      ++this_step[std::size_t(own.branch)];
+    }
+    const auto at = [&](BlendBranch b) { return this_step[std::size_t(b)]; };
+    if (at(BlendBranch::ImplicitMidpoint) > 0 && at(BlendBranch::BackwardEuler) > 0 &&
+        at(BlendBranch::VelocityScale) > 0)
+      ++steps_with_mixed_branches;
+  }
+  // The batch really mixed the branches within single steps (else lockstep was not exercised).
+  EXPECT_GT(steps_with_mixed_branches, 0);
+  for (std::size_t s = 0; s < scenes.size(); ++s)
+    EXPECT_EQ(branches[s][std::size_t(BlendBranch::None)], 0) << "scene " << s;
+}
+
+// With an energy ceiling far below the blend's band, the steps whose energy ends above H* are
+// refused: each scene at the step its own Simulator refuses, with its message; the others step on.
+TEST(BatchSimulatorBlend, RefusalsArePerScene) {
+  const std::vector<Scene> scenes = blendScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  options.energy_limit = 1e-7;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  std::vector<bool> refused(scenes.size(), false);
+  for (int step = 0; step < 40; ++step) {
+    const BatchStepReport& report = batch.step();
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
+      if (refused[s]) {
+        EXPECT_FALSE(batch.active(int(s))) << where;
+        EXPECT_FALSE(report.refusals[s].empty()) << where;
+        continue;
+      }
+      try {
+        const StepReport& own = alone[s].step();
+        EXPECT_TRUE(report.refusals[s].empty()) << where << ": " << report.refusals[s];
+        expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
+      } catch (const EnergyLimitError& e) {
+        EXPECT_EQ(report.refusals[s], e.what()) << where;
+        refused[s] = true;
+      }
+      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
+      EXPECT_EQ(batch.stepCount(int(s)), alone[s].stepCount()) << where;
+    }
+  }
+  int refused_scenes = 0;
+  for (bool r : refused) refused_scenes += r ? 1 : 0;
+  // Some scenes were refused and some were not: the refusals did not spread.
+  EXPECT_GT(refused_scenes, 0);
+  EXPECT_LT(refused_scenes, int(scenes.size()));
+}
+
+// setState is an event of one scene: booked in its H* only (its event_energy as its own
+// Simulator's), the others untouched; a refused scene steps again after it.
+TEST(BatchSimulatorBlend, SetStateIsAnEventOfOneScene) {
+  const std::vector<Scene> scenes = blendScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  for (int step = 0; step < 5; ++step) {
+    batch.step();
+    for (Simulator& sim : alone) sim.step();
+  }
+  const int moved = 1;
+  const Eigen::MatrixX3d x = perturbed(alone[moved].positions(), 0.01);
+  const Eigen::MatrixX3d v = perturbed(alone[moved].velocities(), 0.3);
+  std::vector<double> targets;
+  for (int s = 0; s < batch.size(); ++s) targets.push_back(batch.target(s));
+  batch.setState(moved, x, v);
+  alone[std::size_t(moved)].setState(x, v);
+  for (int s = 0; s < batch.size(); ++s) {
+    if (s == moved) {
+      EXPECT_NE(batch.target(s), targets[std::size_t(s)]);
+      EXPECT_NEAR(batch.target(s), alone[std::size_t(s)].target(), 1e-12 * alone[std::size_t(s)].energyScale());
+    } else {
+      EXPECT_EQ(batch.target(s), targets[std::size_t(s)]) << "scene " << s;
+    }
+  }
+  for (int step = 0; step < 10; ++step) {
+    const BatchStepReport& report = batch.step();
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const StepReport& own = alone[s].step();
+      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
+      expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
+      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
+    }
+  }
+  // Bad input changes nothing and names the scene.
+  const double before = batch.target(2);
+  EXPECT_THROW(batch.setState(2, x, v), InvalidInputError);  // scene 1's row count
+  EXPECT_THROW(batch.setState(7, x, v), InvalidInputError);
+  EXPECT_EQ(batch.target(2), before);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "integrator/backend_choice.hpp"
+#include "integrator/blend_step.hpp"
 #include "integrator/checkpoint.hpp"
 #include "integrator/contact.hpp"
 #include "integrator/damping.hpp"
@@ -83,33 +84,26 @@ struct Simulator::Impl {
     return steps_of.implicitMidpoint(options.time_step, t, x_out, v_out, control(options.iterations));
   }
 
-  // ---- the energy-tracking blend (docs/method.md, "The blend") ------------------------------
+  // ---- the energy-tracking blend (docs/method.md, "The blend"; its decisions: blend_step.hpp) --
   // Leaves the blend's positions and IM-or-BE velocities in (kXNew, kVNew) and returns their
-  // potential at t + h; the velocity corrections (momenta, energy) follow on the host in step().
+  // potential at t + h; the velocity corrections (momenta, energy) follow in step().
   PotentialEnergy blend(double& target_now, StepReport& report) {
-    const double h = options.time_step;
-    const double t1 = t + h;
+    const double t1 = t + options.time_step;
+    blend_step.start(BlendScene{&scene.masses(), momentumConserved(), energy_scale, tolerance()}, options, report);
     report.iterations += implicitMidpoint(kXNew, kVNew);
     // The driver needs the candidate on the host whatever the branch (step() for the accepted
     // state, the BE branch for its momenta): read once here, with one wait, and its kinetic
     // energy computed from that copy instead of a device reduction.
     backend->readBoth(kXNew, x_new, kVNew, v_new);
     new_state_on_host = true;
-    PotentialEnergy p_im = backend->potential(kXNew, t1);
+    const PotentialEnergy p_im = backend->potential(kXNew, t1);
     ++report.energy_evaluations;
     const double vv_im = massDot(v_new, v_new);
-    const double h_im = 0.5 * vv_im + p_im.total();
-    report.branch = BlendBranch::ImplicitMidpoint;
-    report.alpha = 0.0;
-    im_momenta_known = false;
-    partner_on_host = false;
-
-    if (!std::isfinite(h_im)) {
+    if (!std::isfinite(0.5 * vv_im + p_im.total())) {
       // An IM candidate that blew up is no candidate: the step is the BE partner, with the full
       // iteration budget since nothing else of the step is usable.
       new_state_on_host = false;
-      report.branch = BlendBranch::BackwardEuler;
-      report.alpha = 1.0;
+      blend_step.candidateNotFinite();
       backend->copy(kXNew, kX);
       report.iterations += backwardEuler(kXNew, kVNew, options.iterations, /*warm_start=*/true);
       const PotentialEnergy p_be = backend->potential(kXNew, t1);
@@ -119,90 +113,39 @@ struct Simulator::Impl {
     }
     // The target must include this step's forcing before the candidate is judged.
     target_now += forcingWork(kXNew, p_im, report);
-    const double tau = tolerance();
-    if (std::abs(h_im - target_now) <= tau) return p_im;
-    if (h_im < target_now) {
-      report.branch = BlendBranch::VelocityScale;  // step() scales the velocities up
-      return p_im;
-    }
+    if (!blend_step.judge(x_new, v_new, p_im, vv_im, target_now)) return p_im;
 
-    // Too much energy: blend with backward Euler from (x_n, v_n). [project rule] The partner's
-    // iterations start at x_n, where the BE objective equals H_n and can only decrease, so a
-    // few iterations cannot pile up elastic energy (docs/method.md has the measurements).
-    report.branch = BlendBranch::BackwardEuler;
-    x_im.swap(x_new);
-    v_im.swap(v_new);
-    im_momenta = rigidMotion(scene.masses(), x_im, v_im);
-    im_momenta_known = true;
     backend->copy(kXPartner, kX);
     report.iterations += backwardEuler(kXPartner, kVPartner, options.be_iterations, /*warm_start=*/true);
-
-    // The partner on the host (one wait): the kinetic quadratic below, the blended state and the
-    // position root find in step() are formed there, which saves two device reductions and the
-    // reads of the blended state.
-    backend->readBoth(kXPartner, x_partner, kVPartner, v_partner);
-    partner_on_host = true;
-
-    // H(alpha) = K(alpha) + P(alpha). The kinetic part is an exact quadratic in alpha:
-    // K = 1/2 (vv + 2 alpha vd + alpha^2 dd) with d = v_partner - v_IM.
-    v_scratch = 1.0 * v_partner + -1.0 * v_im;  // as Backend::combine(d, 1, partner, -1, IM) forms it
-    const KineticQuadratic k_alpha{vv_im, massDot(v_im, v_scratch), massDot(v_scratch, v_scratch)};
-    struct Evaluation {
-      double alpha;
-      double g;  // H(alpha) - H*
-      PotentialEnergy potential;
-    };
-    std::vector<Evaluation> evaluations;
-    auto potentialAt = [&](double alpha) {
-      backend->combine(kXTrial, 1.0 - alpha, kXNew, alpha, kXPartner);
-      const PotentialEnergy p = backend->potential(kXTrial, t1);
-      ++report.energy_evaluations;
-      evaluations.push_back({alpha, k_alpha.at(alpha) + p.total() - target_now, p});
-      return p.total();
-    };
-    const double p_be = potentialAt(1.0);
-    // The partner's potential is also the far end of the position root find in step().
-    partner_potential = evaluations.front().potential;
-    const bool partner_cannot_reach_target = evaluations.front().g >= 0.0;
-    if (!partner_cannot_reach_target && std::abs(evaluations.front().g) > tau)
-      findBlendWeight(k_alpha, potentialAt, target_now, 0.0, p_im.total(), 1.0, p_be, tau,
-                      options.max_root_evaluations);
-    // The best evaluation; the partner whole when even it has too much energy. When the root
-    // find runs out of evaluations the residual is left to the velocity scale in step().
-    Evaluation accepted = evaluations.front();
-    if (!partner_cannot_reach_target)
-      for (const Evaluation& e : evaluations)
-        if (std::abs(e.g) < std::abs(accepted.g)) accepted = e;
-    report.alpha = accepted.alpha;
-    blendTowardPartner(x_new, x_im, x_partner, accepted.alpha, kXNew);
-    blendTowardPartner(v_new, v_im, v_partner, accepted.alpha, kVNew);
-    new_state_on_host = true;
-    return accepted.potential;
+    // The partner on the host (one wait): the kinetic quadratic, the blended state and the
+    // position move are formed there, which saves two device reductions and the reads of the
+    // blended state.
+    backend->readBoth(kXPartner, blend_step.partnerPositions(), kVPartner, blend_step.partnerVelocities());
+    blend_step.partnerRead();
+    evaluateBlendPotentials(t1);  // kXNew holds the IM candidate
+    const PotentialEnergy p_blend = blend_step.blend(x_new, v_new, *backend);
+    backend->write(kXNew, x_new);
+    backend->write(kVNew, v_new);
+    return p_blend;
   }
 
-  // out = (1 - w) from + w partner, formed on the host as Backend::combine forms it (bit for bit
-  // on the CPU reference; the device's own combine may round differently, by an ulp), rounded to
-  // what the slot holds and written there without a wait.
-  void blendTowardPartner(Eigen::MatrixX3d& out, const Eigen::MatrixX3d& from, const Eigen::MatrixX3d& partner,
-                          double w, int slot) {
-    out = (1.0 - w) * from + w * partner;
-    backend->roundToStorage(out);
-    backend->write(slot, out);
+  // The potentials the blend asks for, at (1 - w) kXNew + w kXPartner (kXNew holds what
+  // BlendStep::from() is).
+  void evaluateBlendPotentials(double t1) {
+    while (blend_step.wantsPotential()) {
+      const double w = blend_step.weight();
+      backend->combine(kXTrial, 1.0 - w, kXNew, w, kXPartner);
+      blend_step.take(backend->potential(kXTrial, t1));
+    }
   }
 
-  double tolerance() const { return options.energy_tolerance * (kinetic + potential.elastic() + energy_scale); }
+  double tolerance() const { return blendTolerance(options, kinetic, potential, energy_scale); }
 
   double massDot(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) const {
     return stabint::massDot(scene.masses(), a, b);
   }
 
-  // No pins, no force fields, no user forces and no colliders: IM keeps linear and angular
-  // momentum.
-  bool momentumConserved() const {
-    const std::vector<Pin>& pins = scene.scene().pins;
-    const bool pinned = std::any_of(pins.begin(), pins.end(), [](const Pin& p) { return p.stiffness > 0.0; });
-    return !pinned && scene.scene().force_fields.empty() && !scene.hasUserForces() && scene.scene().colliders.empty();
-  }
+  bool momentumConserved() const { return stabint::momentumConserved(scene.scene(), scene.hasUserForces()); }
 
   // Contact after the solve (docs/method.md, "Contact"), on the accepted state: friction takes
   // kinetic energy out and H* with it, like damping; the final projection moves the positions out
@@ -227,94 +170,15 @@ struct Simulator::Impl {
     return rubbed;
   }
 
-  // The blend's corrections of the accepted state (host copies x_new, v_new; kXNew on the
-  // backend), so that the energy it keeps is motion [project rules, docs/method.md]:
-  // 1. after a BE blend, the IM candidate's linear and angular momentum are put back with a rigid
-  //    velocity field: the partner, a few iterations from x_n, would otherwise stop the swing of
-  //    a pendulum-like body at every blend;
-  // 2. too little energy: the velocities are scaled up, by at most max_velocity_scale per step:
-  //    where the scene conserves momentum (no pins, no force fields) only their non-rigid part,
-  //    which carries no momentum, elsewhere all of it. This replaces the forward-Euler partner,
-  //    whose explicit forces put the missing energy into stretch and flicker;
-  // 3. too much energy: removed first from the non-rigid velocities (keeping the swing), then
-  //    from the stretch, by moving the positions toward the BE partner's, and only then from the
-  //    rigid velocities.
+  // The blend's corrections of the accepted state (BlendStep::beginCorrections), on the host
+  // copies x_new, v_new; the position move toward the partner evaluates its potentials here.
   // Returns true when the velocities changed; p_new follows the positions.
-  bool correctBlendState(double target_now, PotentialEnergy& p_new, StepReport& report) {
-    if (report.branch == BlendBranch::ImplicitMidpoint || report.branch == BlendBranch::None) return false;
-    const double k_before = kineticEnergy(v_new);
-    bool changed = false;
-    if (report.branch == BlendBranch::BackwardEuler && im_momenta_known && report.alpha > 0.0) {
-      setMomenta(rigidMotion(scene.masses(), x_new, v_new), im_momenta.momentum,
-                 im_momenta.angularMomentumAboutOrigin(), x_new, v_new);
-      changed = true;
-    }
-    const double tau = tolerance();
-    auto excess = [&] { return kineticEnergy(v_new) + p_new.total() - target_now; };
-    if (excess() < -tau) {
-      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/momentumConserved(), 1.0,
-                                 options.max_velocity_scale);
-    } else if (excess() > tau) {
-      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
-      // Only toward this step's partner: after a non-finite IM candidate the state is the BE
-      // solve itself and kXPartner holds an older step's partner.
-      if (excess() > tau && report.branch == BlendBranch::BackwardEuler && partner_on_host) {
-        p_new = lowerPotentialTowardPartner(target_now - kineticEnergy(v_new), p_new, report);
-        // Moving the positions moved the angular momentum about the origin with them.
-        if (momentumConserved() && im_momenta_known)
-          setMomenta(rigidMotion(scene.masses(), x_new, v_new), im_momenta.momentum,
-                     im_momenta.angularMomentumAboutOrigin(), x_new, v_new);
-      }
-      if (excess() > tau && !momentumConserved())
-        changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/false, 0.0, 1.0);
-    }
-    if (k_before > 0.0) report.velocity_scale = std::sqrt(kineticEnergy(v_new) / k_before);
+  bool correctBlendState(double target_now, PotentialEnergy& p_new) {
+    blend_step.beginCorrections(x_new, v_new, target_now, p_new);
+    evaluateBlendPotentials(t + options.time_step);  // kXNew holds the blended positions
+    const bool changed = blend_step.finishCorrections(x_new, v_new, p_new, *backend);
+    if (blend_step.positionsMoved()) backend->write(kXNew, x_new);
     return changed;
-  }
-
-  // Scales v_new (its non-rigid part when keep_rigid) so that the kinetic energy approaches
-  // `kinetic_wanted`, with the factor clamped to [s_min, s_max]. Returns true when it scaled.
-  bool scaleVelocities(double kinetic_wanted, bool keep_rigid, double s_min, double s_max) {
-    const double k = kineticEnergy(v_new);
-    const RigidMotion rigid = keep_rigid ? rigidMotion(scene.masses(), x_new, v_new) : RigidMotion{};
-    const double k_scaled = k - rigid.kinetic;
-    if (!(k_scaled > 1e-14 * std::max(k, energy_scale))) return false;
-    const double s = std::clamp(std::sqrt(std::max(0.0, kinetic_wanted - rigid.kinetic) / k_scaled), s_min, s_max);
-    for (Eigen::Index j = 0; j < v_new.rows(); ++j) {
-      const Eigen::Vector3d kept = keep_rigid ? rigid.velocityAt(x_new.row(j).transpose()) : Eigen::Vector3d::Zero();
-      v_new.row(j) = (kept + s * (v_new.row(j).transpose() - kept)).transpose();
-    }
-    return true;
-  }
-
-  // Moves the blended positions toward this step's BE partner's (kXPartner, x_partner, whose
-  // potential the blend evaluated), which carry less elastic energy, until their potential is
-  // `potential_wanted` or they reach the partner's. Velocities stay as they are.
-  PotentialEnergy lowerPotentialTowardPartner(double potential_wanted, const PotentialEnergy& p_new,
-                                              StepReport& report) {
-    const double t1 = t + options.time_step;
-    const double tau = tolerance();
-    PotentialEnergy best = p_new;
-    double best_beta = 0.0, best_g = p_new.total() - potential_wanted;
-    auto consider = [&](double beta, const PotentialEnergy& p) {
-      if (std::abs(p.total() - potential_wanted) < std::abs(best_g))
-        best = p, best_beta = beta, best_g = p.total() - potential_wanted;
-      return p.total();
-    };
-    auto potentialAt = [&](double beta) {
-      backend->combine(kXTrial, 1.0 - beta, kXNew, beta, kXPartner);
-      const PotentialEnergy p = backend->potential(kXTrial, t1);
-      ++report.energy_evaluations;
-      return consider(beta, p);
-    };
-    // At beta = 1 the trial positions are the partner's bit for bit (0 x + 1 y), whose potential
-    // the blend's root find has evaluated already.
-    const double p_partner = consider(1.0, partner_potential);
-    if (p_partner - potential_wanted < -tau)
-      findBlendWeight(KineticQuadratic{}, potentialAt, potential_wanted, 0.0, p_new.total(), 1.0, p_partner, tau,
-                      options.max_root_evaluations);
-    if (best_beta > 0.0) blendTowardPartner(x_new, x_new, x_partner, best_beta, kXNew);
-    return best;
   }
 
   // Forcing: the energy the user puts in through time-dependent potentials U(x, t) (moving pins,
@@ -362,7 +226,7 @@ struct Simulator::Impl {
     if (options.integrator != Integrator::EnergyBlend || !new_state_on_host)
       backend->readBoth(kXNew, x_new, kVNew, v_new);
     if (!x_new.allFinite() || !v_new.allFinite()) refuse(nonFiniteState(r.step, t, t1, options.integrator));
-    bool velocities_changed = correctBlendState(target_now, p_new, r);
+    bool velocities_changed = options.integrator == Integrator::EnergyBlend && correctBlendState(target_now, p_new);
     if (!scene.scene().colliders.empty()) velocities_changed |= resolveContact(t1, target_now, p_new, r);
 
     // Damping acts on the accepted velocities; the energy it removes leaves the target too, so
@@ -857,14 +721,9 @@ struct Simulator::Impl {
   PotentialEnergy potential;  // of the accepted state at time t
   double target = 0.0;
   double energy_scale = 0.0;
-  RigidMotion im_momenta;  // of the IM candidate, when the blend took a BE partner
-  bool im_momenta_known = false;
-  Eigen::MatrixX3d x_im, v_im;                       // host copies of the blend's IM candidate, when it took a partner
-  bool new_state_on_host = false;                    // the blend left (x_new, v_new) equal to (kXNew, kVNew)
-  Eigen::MatrixX3d x_partner, v_partner, v_scratch;  // host copies of the BE partner, and scratch
-  bool partner_on_host = false;                      // this step's partner: copies and potential
-  PotentialEnergy partner_potential;                 // of the partner's positions at t + h
-  double pending_event_energy = 0.0;                 // booked by discontinuous input since the last step
+  BlendStep blend_step;               // the blend's decisions, root finds and corrections
+  bool new_state_on_host = false;     // the blend left (x_new, v_new) equal to (kXNew, kVNew)
+  double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
   StepReport report;
   int contact_block = -1;  // the contact element type's block
   // The contact set's changes since L was last assembled, in order: e + 1 for pair e entering,

@@ -1,13 +1,13 @@
 // Scene concatenation for the batched simulator (docs/batch_design.md, step 1): the segments say
 // where each scene lies, and the concatenation, stepped by one Simulator, steps every scene as its
 // own Simulator does (the premise of the batch: no element couples two scenes).
+#include <stabint/batch.hpp>
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
 #include <stabint/simulator.hpp>
 
 #include "cpu/cpu_backend.hpp"
 #include "elements/element_type.hpp"
-#include "integrator/batch_simulator.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
 
@@ -563,6 +563,48 @@ TEST(BatchSimulatorBlend, SetStateIsAnEventOfOneScene) {
   EXPECT_THROW(batch.setState(2, x, v), InvalidInputError);  // scene 1's row count
   EXPECT_THROW(batch.setState(7, x, v), InvalidInputError);
   EXPECT_EQ(batch.target(2), before);
+}
+
+// The public accessors: the concatenation's rows per scene, the batch's time, and bad scene
+// indices refused naming the call; setState refused for BDF2 (its restart is the whole batch's).
+TEST(BatchSimulator, AccessorsLocateEachSceneAndRefuseBadIndices) {
+  const std::vector<Scene> scenes = mixedScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::BDF2;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  EXPECT_FALSE(batch.backendDescription().empty());
+  EXPECT_EQ(batch.options().integrator, Integrator::BDF2);
+  batch.step();
+  batch.step();
+  EXPECT_EQ(batch.time(), 2.0 * (1.0 / 60.0));
+  int first = 0;
+  for (int s = 0; s < batch.size(); ++s) {
+    EXPECT_EQ(batch.firstParticle(s), first);
+    EXPECT_EQ(batch.numParticles(s), scenes[std::size_t(s)].numParticles());
+    EXPECT_EQ(batch.positions(s), batch.allPositions().middleRows(first, batch.numParticles(s)));
+    EXPECT_EQ(batch.time(s), batch.time());
+    EXPECT_EQ(batch.stepCount(s), 2);
+    first += batch.numParticles(s);
+  }
+  EXPECT_EQ(batch.allPositions().rows(), first);
+  for (int bad : {-1, batch.size()}) {
+    try {
+      batch.target(bad);
+      ADD_FAILURE() << "scene " << bad << " accepted";
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find("target: scene " + std::to_string(bad) + " out of range"), std::string::npos)
+          << e.what();
+    }
+    EXPECT_THROW(batch.positions(bad), InvalidInputError);
+    EXPECT_THROW(batch.active(bad), InvalidInputError);
+  }
+  const double target = batch.target(0);
+  const Eigen::MatrixX3d x = batch.positions(0);
+  EXPECT_THROW(batch.setState(0, x, Eigen::MatrixX3d::Zero(x.rows(), 3)), InvalidInputError);
+  EXPECT_EQ(batch.target(0), target);
+  EXPECT_EQ(batch.positions(0), x);
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 #include "integrator/batch_simulator.hpp"
 
-#include "cpu/cpu_backend.hpp"
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
@@ -13,14 +12,14 @@ namespace stabint {
 namespace {
 
 // Simulator's checks, then what the batch does not support yet.
+// Simulator's checks, then what the batch does not support yet. The backend is refused later,
+// once created, unless it computes per-scene energies (Backend::computesPerScene).
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   validateOptions(o);
-  auto fail = [](const std::string& what) { throw InvalidInputError("batch simulator options: " + what); };
-  if (o.backend != BackendKind::CpuReference) fail("only the CPU reference backend steps a batch yet");
   if (o.tolerance != 0.0 || o.acceleration != Acceleration::None || o.global_solve != GlobalSolve::Factor)
-    fail(
-        "a tolerance stop, acceleration and CG sum over the whole batch: a fixed iteration count with the factor "
-        "only, until they are per scene");
+    throw InvalidInputError(
+        "batch simulator options: a tolerance stop, acceleration and CG sum over the whole batch: a fixed iteration "
+        "count with the factor only, until they are per scene");
   return o;
 }
 
@@ -31,21 +30,26 @@ Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) {
 
 }  // namespace
 
-BatchSimulator::BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : BatchSimulator(concatenateScenes(scenes), scenes, checkedOptions(options)) {}
+BatchSimulator::Impl::Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options)
+    : Impl(concatenateScenes(scenes), scenes, checkedOptions(options)) {}
 
-BatchSimulator::BatchSimulator(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options)
+BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options)
     : scenes_(scenes),
       segments_(std::move(batch.segments)),
       options_(options),
       data_(batch.scene),
-      backend_(makeCpuBackend(data_, kNumDriverSlots)),
+      choice_(selectBackend(options_)),
+      backend_(makeBackend(data_, kNumDriverSlots, choice_)),
       system_(data_),
       solver_(*backend_, system_, kSolverScratch),
       x_(batch.scene.positions),
       v_(batch.scene.velocities),
       v_slot_(batch.scene.velocities),
       per_scene_(segments_.size()) {
+  // Any backend with per-scene energies steps a batch (the OpenCL backend once it has them).
+  if (!backend_->computesPerScene())
+    throw InvalidInputError("batch simulator: the backend (" + backend_->description() +
+                            ") computes no per-scene energies yet (docs/batch_design.md)");
   factorIntegratorSystems(system_, options_.integrator, options_.time_step);
   backend_->setSegments(segments_);
   backend_->write(kX, x_);
@@ -64,25 +68,25 @@ BatchSimulator::BatchSimulator(SceneBatch batch, const std::vector<Scene>& scene
   backend_->times() = PhaseTimes{};
 }
 
-double BatchSimulator::kineticEnergy(int scene, const Eigen::MatrixX3d& v) const {
+double BatchSimulator::Impl::kineticEnergy(int scene, const Eigen::MatrixX3d& v) const {
   const SceneSegment& seg = segments_[std::size_t(scene)];
   return stabint::kineticEnergy(scenes_[std::size_t(scene)].masses, rowsOf(v, seg));
 }
 
-Eigen::MatrixX3d BatchSimulator::positions(int scene) const { return rowsOf(x_, segments_[std::size_t(scene)]); }
-Eigen::MatrixX3d BatchSimulator::velocities(int scene) const { return rowsOf(v_, segments_[std::size_t(scene)]); }
-EnergyReport BatchSimulator::energy(int scene) const {
+Eigen::MatrixX3d BatchSimulator::Impl::positions(int scene) const { return rowsOf(x_, segments_[std::size_t(scene)]); }
+Eigen::MatrixX3d BatchSimulator::Impl::velocities(int scene) const { return rowsOf(v_, segments_[std::size_t(scene)]); }
+EnergyReport BatchSimulator::Impl::energy(int scene) const {
   const PerScene& p = per_scene_[std::size_t(scene)];
   return EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
 }
 
-void BatchSimulator::checkScene(int scene, const char* call) const {
+void BatchSimulator::Impl::checkScene(int scene, const char* call) const {
   if (scene < 0 || scene >= size())
     throw InvalidInputError(std::string(call) + ": scene " + std::to_string(scene) + " out of range (the batch has " +
                             std::to_string(size()) + " scenes)");
 }
 
-void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   checkScene(scene, "setState");
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const std::string where = "setState: scene " + std::to_string(scene) + ": ";
@@ -120,12 +124,12 @@ void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, cons
   }
 }
 
-void BatchSimulator::refuse(std::size_t s, const std::string& message) {
+void BatchSimulator::Impl::refuse(std::size_t s, const std::string& message) {
   report_.refusals[s] = message;
   per_scene_[s].stepping = false;
 }
 
-const BatchStepReport& BatchSimulator::step() {
+const BatchStepReport& BatchSimulator::Impl::step() {
   const double h = options_.time_step;
   const double t1 = t_ + h;
   const std::size_t n = segments_.size();
@@ -226,7 +230,7 @@ const BatchStepReport& BatchSimulator::step() {
   return report_;
 }
 
-void BatchSimulator::integrate(double t1, bool forced) {
+void BatchSimulator::Impl::integrate(double t1, bool forced) {
   const double h = options_.time_step;
   IterationControl control;
   control.iterations = options_.iterations;
@@ -255,7 +259,7 @@ void BatchSimulator::integrate(double t1, bool forced) {
   }
 }
 
-void BatchSimulator::blend(double t1, bool forced) {
+void BatchSimulator::Impl::blend(double t1, bool forced) {
   const double h = options_.time_step;
   const double tm = t_ + 0.5 * h;
   const std::size_t n = segments_.size();
@@ -353,7 +357,7 @@ void BatchSimulator::blend(double t1, bool forced) {
     }
 }
 
-void BatchSimulator::evaluateBlendPotentials(double t1) {
+void BatchSimulator::Impl::evaluateBlendPotentials(double t1) {
   // Rounds: as many as the scene that needs the most evaluations, not their sum.
   for (;;) {
     bool any = false;
@@ -376,6 +380,67 @@ void BatchSimulator::evaluateBlendPotentials(double t1) {
       if (per_scene_[s].stepping && b.wantsPotential()) b.take(p_all_[s]);
     }
   }
+}
+
+// ---- the public class ----------------------------------------------------------------------------
+
+BatchSimulator::BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options)
+    : impl_(std::make_unique<Impl>(scenes, options)) {}
+BatchSimulator::~BatchSimulator() = default;
+BatchSimulator::BatchSimulator(BatchSimulator&&) noexcept = default;
+BatchSimulator& BatchSimulator::operator=(BatchSimulator&&) noexcept = default;
+
+const BatchStepReport& BatchSimulator::step() { return impl_->step(); }
+int BatchSimulator::size() const { return impl_->size(); }
+bool BatchSimulator::active(int scene) const {
+  impl_->checkScene(scene, "active");
+  return impl_->per_scene_[std::size_t(scene)].active;
+}
+Eigen::MatrixX3d BatchSimulator::positions(int scene) const {
+  impl_->checkScene(scene, "positions");
+  return impl_->positions(scene);
+}
+Eigen::MatrixX3d BatchSimulator::velocities(int scene) const {
+  impl_->checkScene(scene, "velocities");
+  return impl_->velocities(scene);
+}
+const Eigen::MatrixX3d& BatchSimulator::allPositions() const { return impl_->x_; }
+int BatchSimulator::firstParticle(int scene) const {
+  impl_->checkScene(scene, "firstParticle");
+  return impl_->segments_[std::size_t(scene)].first_particle;
+}
+int BatchSimulator::numParticles(int scene) const {
+  impl_->checkScene(scene, "numParticles");
+  return impl_->segments_[std::size_t(scene)].num_particles;
+}
+double BatchSimulator::time() const { return impl_->t_; }
+double BatchSimulator::time(int scene) const {
+  impl_->checkScene(scene, "time");
+  return impl_->per_scene_[std::size_t(scene)].time;
+}
+int BatchSimulator::stepCount(int scene) const {
+  impl_->checkScene(scene, "stepCount");
+  return impl_->per_scene_[std::size_t(scene)].steps;
+}
+double BatchSimulator::target(int scene) const {
+  impl_->checkScene(scene, "target");
+  return impl_->per_scene_[std::size_t(scene)].target;
+}
+EnergyReport BatchSimulator::energy(int scene) const {
+  impl_->checkScene(scene, "energy");
+  return impl_->energy(scene);
+}
+double BatchSimulator::energyScale(int scene) const {
+  impl_->checkScene(scene, "energyScale");
+  return impl_->per_scene_[std::size_t(scene)].energy_scale;
+}
+const SimulatorOptions& BatchSimulator::options() const { return impl_->options_; }
+std::string BatchSimulator::backendDescription() const {
+  const std::string& reason = impl_->choice_.reason;
+  return impl_->backend_->description() + (reason.empty() ? "" : " [" + reason + "]");
+}
+void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+  impl_->setState(scene, positions, velocities);
 }
 
 }  // namespace stabint

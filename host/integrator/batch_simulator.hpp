@@ -1,19 +1,22 @@
 #pragma once
-// The batched simulator (docs/batch_design.md): many scenes stepped as one concatenation, with one
+// The batched simulator's implementation (docs/batch_design.md): many scenes stepped as one concatenation, with one
 // local/global solve and one block-diagonal factor for all, and per scene its own energies,
 // target H*, blend decisions, damping, forcing and refusal.
 //
 // Supported for now: every integrator, the blend included (its per-scene decisions in lockstep:
-// blend_step.hpp), on the CPU reference, with a fixed iteration count and the factor (the
+// blend_step.hpp), on any backend that computes per-scene energies (today the CPU reference),
+// with a fixed iteration count and the factor (the
 // controls that sum over the whole batch, a tolerance stop, acceleration and CG, are refused:
 // they would couple the scenes, and one scene's NaN would reach the others through them).
 #include "backend.hpp"
+#include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 
+#include <stabint/batch.hpp>
 #include <stabint/simulator.hpp>
 
 #include <Eigen/Core>
@@ -25,41 +28,22 @@
 
 namespace stabint {
 
-struct BatchStepReport {
-  std::vector<StepReport> scenes;  // one per scene, as its own Simulator::step reports it
-  /// Per scene: empty when the scene stepped, else why its step was refused (its state kept).
-  std::vector<std::string> refusals;
-};
-
-class BatchSimulator {
- public:
+// The public class (include/stabint/batch.hpp) is a pointer to this.
+struct BatchSimulator::Impl {
   /// Throws InvalidInputError for a bad scene ("scene <i>: ..."), scenes a batch cannot keep
   /// apart (concatenateScenes) or options it does not support yet.
-  BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options);
+  Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options);
 
-  /// Replaces scene `scene`'s positions and velocities (`n_s by 3`, finite), as
-  /// Simulator::setState: a discontinuous event booked in that scene's H* only. A scene refused
-  /// earlier becomes active again, at the batch's time. Refused (InvalidInputError, nothing
-  /// changed) for BDF2, whose restart would take every scene of the batch back to BE.
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
-
-  /// Advances every active scene one step. Never throws for a scene that blows up: that scene's
-  /// step is refused (BatchStepReport::refusals), its state kept, and it stays inactive; the
-  /// others step on as their own simulators would.
   const BatchStepReport& step();
 
   int size() const { return static_cast<int>(segments_.size()); }
-  bool active(int scene) const { return per_scene_[std::size_t(scene)].active; }
+  /// Throws InvalidInputError unless 0 <= scene < size().
+  void checkScene(int scene, const char* call) const;
   Eigen::MatrixX3d positions(int scene) const;
   Eigen::MatrixX3d velocities(int scene) const;
-  double time(int scene) const { return per_scene_[std::size_t(scene)].time; }
-  int stepCount(int scene) const { return per_scene_[std::size_t(scene)].steps; }
-  double target(int scene) const { return per_scene_[std::size_t(scene)].target; }
   EnergyReport energy(int scene) const;
-  double energyScale(int scene) const { return per_scene_[std::size_t(scene)].energy_scale; }
-  const SceneSegment& segment(int scene) const { return segments_[std::size_t(scene)]; }
 
- private:
   struct PerScene {
     bool active = true;
     double time = 0.0;
@@ -78,9 +62,8 @@ class BatchSimulator {
     double target_now = 0.0;          // H* with this step's forcing, damping
     BlendStep blend;
   };
-  BatchSimulator(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
+  Impl(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
   double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;
-  void checkScene(int scene, const char* call) const;
   // The integrators but the blend: the candidates of every stepping scene, with their forcing.
   void integrate(double t1, bool forced);
   // The blend in lockstep: one IM solve, at most one partner solve (and one full-budget BE solve
@@ -95,6 +78,7 @@ class BatchSimulator {
   std::vector<SceneSegment> segments_;
   SimulatorOptions options_;
   SceneData data_;
+  BackendSelection choice_;
   std::unique_ptr<Backend> backend_;
   GlobalSystem system_;
   LocalGlobalSolver solver_;

@@ -3,7 +3,6 @@
 #include <stabint/simulator.hpp>
 
 #include "backend.hpp"
-#include "cpu/cpu_backend.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
 #include "integrator/checkpoint.hpp"
@@ -11,9 +10,6 @@
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
-#include "integrator/rigid_motion.hpp"
-#include "integrator/root_find.hpp"
-#include "opencl/opencl_backend.hpp"
 #include "scene/scene_data.hpp"
 #include "scene/validation.hpp"
 #include "solver/global_system.hpp"
@@ -24,7 +20,6 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
-#include <sstream>
 #include <vector>
 
 namespace stabint {
@@ -40,10 +35,8 @@ struct Simulator::Impl {
   Impl(const Scene& s, const SimulatorOptions& o)
       : options((validateOptions(o), o)),
         scene(s),
-        choice(chooseBackend(
-            options, options.backend == BackendKind::Auto ? listOpenCLDevices() : std::vector<OpenCLDeviceInfo>{})),
-        backend(choice.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, kNumDriverSlots, choice.opencl)
-                                                   : makeCpuBackend(scene, kNumDriverSlots)),
+        choice(selectBackend(options)),
+        backend(makeBackend(scene, kNumDriverSlots, choice)),
         system(scene),
         solver(*backend, system, kSolverScratch),
         steps_of(*backend, solver),

@@ -374,6 +374,47 @@ TEST(BatchSimulator, OneScenesRefusalLeavesTheOthersStepping) {
   EXPECT_EQ(batch.velocities(0), soft_alone.velocities());
 }
 
+// A scene whose state overflows (SE above its stability limit: omega h = 2.5 multiplies the
+// energy by 16 per step) is refused with the NonFiniteStateError message of its own Simulator, at
+// its step; the NaN stays in its block and the neighbour steps on bit for bit.
+TEST(BatchSimulator, OneScenesBlowUpStaysInItsBlock) {
+  const double h = 1e-3;
+  LinearOscillatorParams oscillator;
+  oscillator.stiffness = std::pow(2.5 / h, 2.0);  // omega h = 2.5 with mass 1
+  ChainPendulumParams soft;
+  soft.stiffness = 10.0;
+  soft.pin_stiffness = 100.0;
+  soft.gravity = 0.0;  // the oscillator's
+  Scene chain = makeChainPendulum(soft);
+  chain.velocities = perturbed(Eigen::MatrixX3d::Zero(chain.numParticles(), 3), 0.5);
+  const std::vector<Scene> scenes = {makeLinearOscillator(oscillator), chain};
+  SimulatorOptions options;
+  options.integrator = Integrator::SymplecticEuler;
+  options.time_step = h;
+  BatchSimulator batch(scenes, options);
+  Simulator exploding(scenes[0], options), neighbour(scenes[1], options);
+  int refused_at = -1;
+  for (int step = 0; step < 400; ++step) {
+    const BatchStepReport& report = batch.step();
+    neighbour.step();
+    EXPECT_TRUE(report.refusals[1].empty()) << report.refusals[1];
+    if (refused_at >= 0) continue;
+    try {
+      exploding.step();
+      EXPECT_TRUE(report.refusals[0].empty()) << "step " << step << ": " << report.refusals[0];
+    } catch (const NonFiniteStateError& e) {
+      refused_at = step;
+      EXPECT_EQ(report.refusals[0], e.what());
+    }
+  }
+  ASSERT_GE(refused_at, 100) << "the oscillator did not overflow";
+  EXPECT_FALSE(batch.active(0));
+  EXPECT_EQ(batch.positions(0), exploding.positions());
+  EXPECT_TRUE(batch.positions(0).allFinite());
+  EXPECT_EQ(batch.positions(1), neighbour.positions());
+  EXPECT_EQ(batch.velocities(1), neighbour.velocities());
+}
+
 TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   const std::vector<Scene> scenes = mixedScenes();
   SimulatorOptions options;

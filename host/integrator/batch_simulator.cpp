@@ -11,7 +11,6 @@
 namespace stabint {
 namespace {
 
-// Simulator's checks, then what the batch does not support yet.
 // Simulator's checks, then what the batch does not support yet. The backend is refused later,
 // once created, unless it computes per-scene energies (Backend::computesPerScene).
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
@@ -104,13 +103,15 @@ void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions
                             "BDF2 would restart every scene of the batch with a BE step; not supported in a batch yet");
   PerScene& p = per_scene_[std::size_t(scene)];
   const double h_before = p.kinetic + p.potential.total();
+  // The other scenes' rows of kV stay what they are (v_slot_, which may differ from their host
+  // copies by round-off, as a Simulator's do).
   x_.middleRows(seg.first_particle, seg.num_particles) = positions;
-  v_.middleRows(seg.first_particle, seg.num_particles) = velocities;
+  v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;
   backend_->write(kX, x_);
-  backend_->write(kV, v_);
+  backend_->write(kV, v_slot_);
   // The slots may hold less precision (a float device): the host copies are what they hold.
-  backend_->readBoth(kX, x_, kV, v_);
-  v_slot_ = v_;
+  backend_->readBoth(kX, x_, kV, v_slot_);
+  v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
   std::vector<PotentialEnergy> potentials;
   backend_->potentials(kX, t_, potentials);
   p.potential = potentials[std::size_t(scene)];

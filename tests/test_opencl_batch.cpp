@@ -6,6 +6,7 @@
 
 #include "cpu/cpu_backend.hpp"
 #include "elements/element_type.hpp"
+#include "integrator/batch_simulator.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
@@ -14,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <memory>
@@ -192,6 +194,142 @@ TEST(OpenCLBatch, RefusesSegmentsOutsideTheScene) {
     std::vector<double> dots;
     backend->massDots(1, 1, dots);
     EXPECT_EQ(dots.size(), batch.segments.size());
+  }
+}
+
+// ---- BatchSimulator on OpenCL -------------------------------------------------------------
+
+struct BatchCase {
+  Integrator integrator;
+  double time_step;
+  int steps;
+};
+
+SimulatorOptions batchOptions(const BatchCase& c, BackendKind backend, Precision precision) {
+  SimulatorOptions o;
+  o.integrator = c.integrator;
+  o.time_step = c.time_step;
+  o.iterations = 5;
+  o.backend = backend;
+  o.opencl = openclOptions(precision);
+  return o;
+}
+
+class OpenCLBatchSimulator : public ::testing::TestWithParam<BatchCase> {};
+
+// The OpenCL batch steps every scene as the CPU batch does (which steps it as its own Simulator,
+// tests/test_scene_batch.cpp), to the cross-backend tolerance: positions relative to their size,
+// velocities relative to max(max |v|, max |x| / h) as in test_opencl_integrators (the implicit
+// integrators' difference quotients turn position rounding eps |x| into eps |x| / h), the
+// per-scene energies, target, forcing and damping relative to the scene's E_scale.
+TEST_P(OpenCLBatchSimulator, EverySceneFollowsTheCpuBatch) {
+  const BatchCase c = GetParam();
+  const std::vector<Scene> scenes = testing::mixedBatchScenes();
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const double tol = crossBackendTolerance(precision);
+    BatchSimulator opencl(scenes, batchOptions(c, BackendKind::OpenCL, precision));
+    BatchSimulator cpu(scenes, batchOptions(c, BackendKind::CpuReference, precision));
+    double forcing = 0.0, damping = 0.0;
+    for (int step = 0; step < c.steps; ++step) {
+      const BatchStepReport got = opencl.step();
+      const BatchStepReport& want = cpu.step();
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        SCOPED_TRACE("scene " + std::to_string(s) + " step " + std::to_string(step));
+        EXPECT_TRUE(got.refusals[s].empty()) << got.refusals[s];
+        const StepReport& g = got.scenes[s];
+        const StepReport& w = want.scenes[s];
+        const double scale = cpu.energyScale(int(s));
+        EXPECT_EQ(g.step, w.step);
+        EXPECT_EQ(g.time, w.time);
+        EXPECT_NEAR(g.forcing, w.forcing, tol * scale);
+        EXPECT_NEAR(g.damping, w.damping, tol * scale);
+        EXPECT_NEAR(g.target, w.target, tol * scale);
+        EXPECT_NEAR(g.energy.kinetic, w.energy.kinetic, tol * scale);
+        EXPECT_NEAR(g.energy.elastic, w.energy.elastic, tol * scale);
+        EXPECT_NEAR(g.energy.external, w.energy.external, tol * scale);
+        forcing += std::abs(w.forcing);
+        damping += w.damping;
+      }
+    }
+    // The chain's growing field does work and the cloth's body is damped: both were compared.
+    EXPECT_GT(forcing, 0.0);
+    EXPECT_GT(damping, 0.0);
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      SCOPED_TRACE("scene " + std::to_string(s));
+      const int i = int(s);
+      EXPECT_NEAR(opencl.energyScale(i), cpu.energyScale(i), tol * cpu.energyScale(i));
+      // The scene really moved (FE's 20 steps of 1e-5 s fall by g t^2 / 2 = 2e-7 m), so
+      // agreement is not two resting states.
+      const Eigen::MatrixX3d x = cpu.positions(i), v = cpu.velocities(i);
+      ASSERT_GT((x - scenes[s].positions).cwiseAbs().maxCoeff(), 1e-8);
+      EXPECT_LE(testing::relativeError(opencl.positions(i), x), tol);
+      const double v_scale = std::max(v.cwiseAbs().maxCoeff(), x.cwiseAbs().maxCoeff() / c.time_step);
+      EXPECT_LE((opencl.velocities(i) - v).cwiseAbs().maxCoeff(), tol * v_scale);
+      EXPECT_EQ(opencl.time(i), cpu.time(i));
+      // It ran on the device: a float device's state is floats (the CPU batch's is not).
+      if (precision == Precision::Float) {
+        EXPECT_TRUE((opencl.positions(i).cast<float>().cast<double>().array() == opencl.positions(i).array()).all());
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Integrators, OpenCLBatchSimulator,
+    ::testing::Values(BatchCase{Integrator::SymplecticEuler, 1e-4, 20}, BatchCase{Integrator::ForwardEuler, 1e-5, 20},
+                      BatchCase{Integrator::BackwardEuler, 1.0 / 60.0, 20}, BatchCase{Integrator::BDF2, 1.0 / 60.0, 20},
+                      BatchCase{Integrator::ImplicitMidpoint, 1.0 / 60.0, 20}),
+    [](const ::testing::TestParamInfo<BatchCase>& info) { return std::string(integratorName(info.param.integrator)); });
+
+// A scene that blows up is refused at the step the CPU batch refuses it, with the same reason, and
+// keeps its last state; its neighbour steps on as on the CPU.
+// The batch makes the backend the options ask for, with its errors.
+TEST(OpenCLBatchSimulator, MakesTheOpenCLBackendTheOptionsAskFor) {
+  SimulatorOptions options = batchOptions({Integrator::BackwardEuler, 0.01, 1}, BackendKind::OpenCL, Precision::Float);
+  options.opencl.platform = "no such platform";
+  EXPECT_THROW(BatchSimulator(testing::mixedBatchScenes(), options), NoOpenCLDeviceError);
+}
+
+TEST(OpenCLBatchSimulator, RefusesTheSceneTheCpuBatchRefuses) {
+  ChainPendulumParams soft, stiff;
+  soft.stiffness = 10.0;
+  soft.pin_stiffness = 100.0;  // SE stable at h = 1e-3 (omega about 90/s)
+  stiff.particles = 6;         // pin omega about 7,700/s: SE explodes at h = 1e-3
+  const std::vector<Scene> scenes = {makeChainPendulum(soft), makeChainPendulum(stiff)};
+  const BatchCase c{Integrator::SymplecticEuler, 1e-3, 200};
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    SimulatorOptions options = batchOptions(c, BackendKind::OpenCL, precision);
+    options.energy_limit = 1.0;
+    BatchSimulator opencl(scenes, options);
+    options.backend = BackendKind::CpuReference;
+    BatchSimulator cpu(scenes, options);
+    int refused_at = -1;
+    for (int step = 0; step < c.steps; ++step) {
+      const BatchStepReport got = opencl.step();
+      const BatchStepReport& want = cpu.step();
+      EXPECT_TRUE(got.refusals[0].empty()) << got.refusals[0];
+      ASSERT_EQ(got.refusals[1].empty(), want.refusals[1].empty()) << "step " << step << ": " << want.refusals[1];
+      if (!want.refusals[1].empty() && refused_at < 0) {
+        refused_at = step;
+        // The same reason at the same step; the figures after it are each backend's energies.
+        const std::string reason = want.refusals[1].substr(0, want.refusals[1].find("H = "));
+        EXPECT_EQ(got.refusals[1].substr(0, reason.size()), reason);
+        EXPECT_NE(reason.find("energy"), std::string::npos) << want.refusals[1];
+      }
+    }
+    ASSERT_GE(refused_at, 1) << "the stiff chain never exceeded the limit";
+    const double tol = crossBackendTolerance(precision);
+    EXPECT_FALSE(opencl.active(1));
+    EXPECT_EQ(opencl.stepCount(1), cpu.stepCount(1));
+    EXPECT_LE(testing::relativeError(opencl.positions(1), cpu.positions(1)), tol);
+    EXPECT_NEAR(opencl.target(1), cpu.target(1), tol * cpu.energyScale(1));
+    EXPECT_TRUE(opencl.active(0));
+    EXPECT_LE(testing::relativeError(opencl.positions(0), cpu.positions(0)), tol);
+    const double v_scale =
+        std::max(cpu.velocities(0).cwiseAbs().maxCoeff(), cpu.positions(0).cwiseAbs().maxCoeff() / c.time_step);
+    EXPECT_LE((opencl.velocities(0) - cpu.velocities(0)).cwiseAbs().maxCoeff(), tol * v_scale);
   }
 }
 

@@ -1,6 +1,6 @@
 #include "integrator/batch_simulator.hpp"
 
-#include "cpu/cpu_backend.hpp"
+#include "integrator/backend_choice.hpp"
 #include "integrator/damping.hpp"
 #include "integrator/options.hpp"
 
@@ -21,7 +21,6 @@ const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   auto fail = [](const std::string& what) { throw InvalidInputError("batch simulator options: " + what); };
   if (o.integrator == Integrator::EnergyBlend)
     fail("the blend is not supported in a batch yet (its decisions per scene: docs/batch_design.md)");
-  if (o.backend != BackendKind::CpuReference) fail("only the CPU reference backend steps a batch yet");
   if (o.tolerance != 0.0 || o.acceleration != Acceleration::None || o.global_solve != GlobalSolve::Factor)
     fail(
         "a tolerance stop, acceleration and CG sum over the whole batch: a fixed iteration count with the factor "
@@ -44,7 +43,7 @@ BatchSimulator::BatchSimulator(SceneBatch batch, const std::vector<Scene>& scene
       segments_(std::move(batch.segments)),
       options_(options),
       data_(batch.scene),
-      backend_(makeCpuBackend(data_, kNumSlots)),
+      backend_(makeBackend(data_, kNumSlots, chooseBackend(options_))),
       system_(data_),
       solver_(*backend_, system_, kSolverScratch),
       x_(batch.scene.positions),
@@ -56,6 +55,8 @@ BatchSimulator::BatchSimulator(SceneBatch batch, const std::vector<Scene>& scene
   if (options_.integrator == Integrator::BackwardEuler || options_.integrator == Integrator::BDF2)
     system_.factor(1.0 / (h * h), "1/time_step^2");
   if (options_.integrator == Integrator::ImplicitMidpoint) system_.factor(4.0 / (h * h), "4/time_step^2");
+  if (!backend_->computesPerScene())
+    throw InvalidInputError("batch simulator: " + backend_->description() + " has no per-scene results");
   backend_->setSegments(segments_);
   backend_->write(kX, x_);
   backend_->write(kV, v_);

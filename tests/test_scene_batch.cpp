@@ -606,6 +606,38 @@ TEST(BatchSimulatorBlend, SetStateIsAnEventOfOneScene) {
   EXPECT_EQ(batch.target(2), before);
 }
 
+// A pin dragged in one scene does work booked in that scene's H* only, as its own Simulator books
+// it; the other scenes' targets do not move by it.
+TEST(BatchSimulatorBlend, APinDraggedInOneSceneIsBookedInItsTargetOnly) {
+  const std::vector<Scene> scenes = blendScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  const int dragged = 4;  // the stretched chain, pinned at its first particle
+  ASSERT_FALSE(scenes[dragged].pins.empty());
+  double work = 0.0;
+  for (int step = 0; step < 30; ++step) {
+    const Eigen::Vector3d q = scenes[dragged].pins[0].target.position + Eigen::Vector3d(0.01 * step, 0.0, 0.0);
+    batch.setPinTarget(dragged, 0, q);
+    alone[std::size_t(dragged)].setPinTarget(0, q);
+    const BatchStepReport& report = batch.step();
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const StepReport& own = alone[s].step();
+      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
+      expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
+      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
+    }
+    work += std::abs(report.scenes[std::size_t(dragged)].forcing);
+  }
+  EXPECT_GT(work, 0.0);
+  EXPECT_THROW(batch.setPinTarget(dragged, 1, Eigen::Vector3d::Zero()), InvalidInputError);  // one pin
+  EXPECT_THROW(batch.setPinTarget(dragged, 0, Eigen::Vector3d::Constant(NAN)), InvalidInputError);
+}
+
 // The public accessors: the concatenation's rows per scene, the batch's time, and bad scene
 // indices refused naming the call; setState refused for BDF2 (its restart is the whole batch's).
 TEST(BatchSimulator, AccessorsLocateEachSceneAndRefuseBadIndices) {

@@ -1,9 +1,11 @@
 #include "integrator/batch_simulator.hpp"
 
+#include "elements/element_type.hpp"
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <utility>
@@ -123,6 +125,21 @@ void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions
     p.active = true;
     p.time = t_;
   }
+}
+
+void BatchSimulator::Impl::setPinTarget(int scene, int pin, const Eigen::Vector3d& q) {
+  checkScene(scene, "setPinTarget");
+  // The pins are a block like the others: scene s's are its segment's range of the pin type
+  // (fixed while the batch has no grab or release).
+  const std::vector<const ElementType*>& types = elementTypes();
+  const std::size_t type = std::size_t(std::find(types.begin(), types.end(), &pinElementType()) - types.begin());
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  const std::string where = "setPinTarget: scene " + std::to_string(scene) + ": pin " + std::to_string(pin);
+  if (pin < 0 || pin >= seg.num_elements[type])
+    throw InvalidInputError(where + " out of range (the scene has " + std::to_string(seg.num_elements[type]) +
+                            " pins)");
+  if (!q.allFinite()) throw InvalidInputError(where + ": target is not finite");
+  data_.rampPinTarget(seg.first_element[type] + pin, q, t_, t_ + options_.time_step);
 }
 
 void BatchSimulator::Impl::refuse(std::size_t s, const std::string& message) {
@@ -439,6 +456,9 @@ const SimulatorOptions& BatchSimulator::options() const { return impl_->options_
 std::string BatchSimulator::backendDescription() const {
   const std::string& reason = impl_->choice_.reason;
   return impl_->backend_->description() + (reason.empty() ? "" : " [" + reason + "]");
+}
+void BatchSimulator::setPinTarget(int scene, int pin, const Eigen::Vector3d& target) {
+  impl_->setPinTarget(scene, pin, target);
 }
 void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   impl_->setState(scene, positions, velocities);

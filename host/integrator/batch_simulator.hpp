@@ -35,6 +35,7 @@ struct BatchSimulator::Impl {
   Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options);
 
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  void setPinTarget(int scene, int pin, const Eigen::Vector3d& target);
   const BatchStepReport& step();
 
   int size() const { return static_cast<int>(segments_.size()); }

@@ -75,6 +75,10 @@ class BatchSimulator {
   /// Refused for BDF2 (whose restart would take every scene back to a BE step). Bad input:
   /// InvalidInputError naming the scene, nothing changed.
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  /// Pin `pin` of scene `scene` (its index in that scene's list) moves its target linearly to
+  /// `target` over the next step and stays there, as Simulator::setPinTarget: the work is booked
+  /// by the forcing rule in that scene's H* only.
+  void setPinTarget(int scene, int pin, const Eigen::Vector3d& target);
 
  private:
   struct Impl;

@@ -102,8 +102,10 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
     if (!workspace) workspace = std::make_unique<SolveWorkspace>();
   }
   // On one thread one solve of the three columns (the factor is read once); on more, two column
-  // groups {x, y} and {z} on two threads (each reads the factor). The factor is only read.
-  const bool groups = cpuThreads() > 1;
+  // groups {x, y} and {z} on two threads (each reads the factor; the factor is only read). Below
+  // kColumnGroupRows the solve takes microseconds, less than handing a task to a worker.
+  constexpr Eigen::Index kColumnGroupRows = 1000;
+  const bool groups = cpuThreads() > 1 && n >= kColumnGroupRows;
   bool solved[2] = {false, !groups};
   parallelFor(groups ? 2 : 1, [&](int group) {
     SolveWorkspace& w = *workspaces_[group];

@@ -30,9 +30,9 @@ class GlobalSystem {
   void factor(double c, const char* c_name = "c");
 
   /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use.
-  /// With cpuThreads() > 1 (host/cpu/worker_pool.hpp) columns x and y and column z are two solves
-  /// on two threads, else one solve: the same arithmetic either way (CHOLMOD's simplicial solves
-  /// treat each column alike), so the same result bit for bit.
+  /// With cpuThreads() > 1 (host/cpu/worker_pool.hpp) and at least 1,000 particles, columns x
+  /// and y and column z are two solves on two threads, else one solve: the same arithmetic either
+  /// way (CHOLMOD's simplicial solves treat each column alike), so the same result bit for bit.
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x);
 
   /// Jacobi-preconditioned conjugate gradients on K_c x = rhs (GlobalSolve::ConjugateGradient on

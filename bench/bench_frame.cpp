@@ -181,13 +181,14 @@ void registerFrameCases() {
   for (int threads : {1, 2}) {
     const std::string suffix = "/threads:" + std::to_string(threads);
     for (auto [energy_only, label] : {std::pair{false, "local"}, std::pair{true, "energy"}})
-      benchmark::RegisterBenchmark(("frame_pass/" + scene + "/" + label + suffix).c_str(),
-                                   [=](benchmark::State& state) { runPass(state, energy_only, threads); })
+      benchmark::RegisterBenchmark(
+          ("frame_pass/" + scene + "/" + label + suffix).c_str(),
+          [=, energy = energy_only](benchmark::State& state) { runPass(state, energy, threads); })
           ->UseRealTime()
           ->Unit(benchmark::kMicrosecond);
     for (auto [groups, label] : {std::pair{false, "one_solve"}, std::pair{true, "column_groups"}})
       benchmark::RegisterBenchmark(("frame_solve/" + scene + "/" + label + suffix).c_str(),
-                                   [=](benchmark::State& state) { runSolve(state, groups, threads); })
+                                   [=, split = groups](benchmark::State& state) { runSolve(state, split, threads); })
           ->UseManualTime()
           ->Unit(benchmark::kMicrosecond);
   }

@@ -93,4 +93,5 @@ void registerInteractionCases();  // bench_interaction.cpp
 void registerContactCases();      // bench_contact.cpp
 void registerHostSolveCases();    // bench_host_solve.cpp
 void registerBatchCases();        // bench_batch.cpp
+void registerFrameCases();        // bench_frame.cpp
 }  // namespace stabint::bench

@@ -117,6 +117,17 @@ class ElementType {
   /// simulator forms.
   virtual double passRange(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
                            int first, int count, int flags, Eigen::MatrixX3d* out) const = 0;
+  /// passRange's per-element results instead of their sums, for a pass split over threads
+  /// (host/cpu/cpu_backend.cpp): element e's energy w/2 ||A x - p||^2 at energies[e - first] when
+  /// kPassEnergy is set, and with kPassProjection or kPassForce the 3 reals its vertex k
+  /// contributes at contributions[3 (K (e - first) + k)], the very values passRange adds into
+  /// `out`. Adding them in element order is passRange bit for bit. False (nothing written) for a
+  /// type that does not provide it (its blocks take passRange); a call with count 0 asks.
+  virtual bool elementResults(const ElementBlock& /*block*/, const std::vector<double>& /*params*/,
+                              const Eigen::MatrixX3d& /*x*/, int /*first*/, int /*count*/, int /*flags*/,
+                              double* /*energies*/, double* /*contributions*/) const {
+    return false;
+  }
 
   // ---- the generic JSON form (types that have one) ---------------------------------------------
   /// Names of the numeric fields of an element in its JSON object, besides "vertices"; an empty

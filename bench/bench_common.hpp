@@ -92,4 +92,6 @@ void registerSolverCases();       // bench_solver.cpp
 void registerInteractionCases();  // bench_interaction.cpp
 void registerContactCases();      // bench_contact.cpp
 void registerHostSolveCases();    // bench_host_solve.cpp
+void registerBatchCases();        // bench_batch.cpp
+void registerFrameCases();        // bench_frame.cpp
 }  // namespace stabint::bench

@@ -6,6 +6,8 @@
 //   host_solve/<scene>/<backend>/<when>               the host's CHOLMOD solve alone, after a local step
 //   scaling_step/cloth/<integrator>/<backend>/side:N  step on an N x N cloth
 //   scaling_iteration/cloth/BE/<backend>/side:N       iteration on an N x N cloth
+//   batch/<scene>/BE/cpu/<batch|separate>/scenes:N    N small scenes, one step each
+//   frame/<scene>/<integrator>/<backend>/threads:N    tet-bar steps on N CPU threads (bench_frame.cpp)
 // with counters particles, elements, iterations and the phase times (seconds per benchmark
 // iteration): local, gather, transfer, global, energy, bookkeeping. OpenCL cases are reported as
 // errors ("skipped: ...") when no device exists. The default minimum time per case is 0.1 s
@@ -36,6 +38,8 @@ int main(int argc, char** argv) {
   bench::registerInteractionCases();
   bench::registerContactCases();
   bench::registerHostSolveCases();
+  bench::registerBatchCases();
+  bench::registerFrameCases();
   benchmark::RunSpecifiedBenchmarks();
   bench::releaseAllFixtures();  // OpenCL objects go while the runtime is still loaded
   benchmark::Shutdown();

@@ -4,12 +4,15 @@
 // device buffers for OpenCL). The integrator logic (host/integrator/) is written once against
 // this interface; the global sparse solve stays on the host (host/solver/), except with
 // GlobalSolve::ConjugateGradient on a backend that solvesGlobalSystem() (OpenCL: on the device).
+#include "scene/scene_batch.hpp"
+
 #include <stabint/simulator.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
 #include <string>
+#include <vector>
 
 namespace stabint {
 
@@ -79,6 +82,21 @@ class Backend {
     noGlobalSolver();
     return 0;
   }
+  // ---- per-scene results of a batch (docs/batch_design.md, "Backend operations") -------------
+  // The backend's scene is a concatenation (concatenateScenes) whose segments were set once; each
+  // call gives one value per segment, each summed as a backend of that scene alone sums it (bit
+  // for bit on the CPU reference), so one scene's energy never depends on its neighbours'.
+
+  /// Whether setSegments / massDots / potentials are available.
+  virtual bool computesPerScene() const { return false; }
+  /// The segments of the backend's scene (their element ranges index SceneData::blocks(), which
+  /// are in elementTypes() order): those concatenateScenes gave with that scene; not checked.
+  virtual void setSegments(const std::vector<SceneSegment>& /*segments*/) { notPerScene(); }
+  /// out[s] = sum over segment s's particles of m_j a_j . b_j.
+  virtual void massDots(int /*a*/, int /*b*/, std::vector<double>& /*out*/) { notPerScene(); }
+  /// out[s] = potential of segment s's particles and elements in `x` at time t.
+  virtual void potentials(int /*x*/, double /*t*/, std::vector<PotentialEnergy>& /*out*/) { notPerScene(); }
+
   /// Waits until everything queued has completed.
   virtual void synchronize() {}
 
@@ -95,6 +113,7 @@ class Backend {
 
  private:
   void noGlobalSolver() const { throw Error(description() + " does not solve the global system itself"); }
+  void notPerScene() const { throw Error(description() + " has no per-scene results of a batch yet"); }
 };
 
 }  // namespace stabint

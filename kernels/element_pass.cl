@@ -12,7 +12,8 @@
 // live in registers and PoCL's vectorizer sees the work-item loop as the innermost one.
 
 /// Element e: A_e x, its projection p_e, the contributions of `flags` written at
-/// base + K e + k, and the energy w_e/2 ||A_e x - p_e||^2 (0 unless PASS_ENERGY).
+/// base + K e + k, and the energy w_e/2 ||A_e x - p_e||^2 (0 unless PASS_ENERGY or
+/// PASS_ENERGY_PER_ELEMENT).
 inline real ELEMENT(element)(__global const real* x, const int n, const int e, const int flags,
                              const int base, __global const int* vertices,
                              __global const real* coefficients, __global const real* params,
@@ -62,5 +63,5 @@ inline real ELEMENT(element)(__global const real* x, const int n, const int e, c
       out[2] = c2;
     }
   }
-  return (flags & PASS_ENERGY) ? energy : (real)0;
+  return (flags & (PASS_ENERGY | PASS_ENERGY_PER_ELEMENT)) ? energy : (real)0;
 }

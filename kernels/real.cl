@@ -25,10 +25,12 @@ typedef float3 real3;
 // What an element pass computes, as bit flags (PassFlags in host/elements/element_type.hpp):
 // per contribution w_e A_e^T p_e (the local step's share of the global right-hand side) or
 // w_e A_e^T (p_e - A_e x) (the element's force, -grad E_e); and per work-group the summed
-// energies w_e/2 ||A_e x - p_e||^2.
+// energies w_e/2 ||A_e x - p_e||^2; or each element's energy on its own (PASS_ENERGY_PER_ELEMENT,
+// for the per-scene sums of a batch, segments.cl: a group's sum would mix scenes).
 #define PASS_PROJECTION 1
 #define PASS_FORCE 2
 #define PASS_ENERGY 4
+#define PASS_ENERGY_PER_ELEMENT 8
 
 inline real3 loadRow(__global const real* m, int rows, int i) {
   return (real3)(m[i], m[rows + i], m[2 * rows + i]);

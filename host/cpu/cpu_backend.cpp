@@ -1,8 +1,12 @@
 #include "cpu/cpu_backend.hpp"
 
+#include "cpu/worker_pool.hpp"
+
 #include "scene/scene_data.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cstddef>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -55,6 +59,48 @@ class CpuBackend final : public Backend {
     times_.local += secondsSince(start);
   }
 
+  bool computesPerScene() const override { return true; }
+  void setSegments(const std::vector<SceneSegment>& segments) override { segments_ = segments; }
+
+  // Each segment's rows copied out first, so that the reduction runs over an `n_s by 3` matrix as
+  // massDot's does over the scene alone's: the same order of additions, bit for bit.
+  void massDots(int a, int b, std::vector<double>& out) override {
+    const auto start = Clock::now();
+    out.resize(segments_.size());
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      const SceneSegment& seg = segments_[s];
+      segment_a_ = slots_[a].middleRows(seg.first_particle, seg.num_particles);
+      segment_b_ = slots_[b].middleRows(seg.first_particle, seg.num_particles);
+      segment_m_ = scene_.masses().segment(seg.first_particle, seg.num_particles);
+      out[s] = (segment_a_.cwiseProduct(segment_b_).rowwise().sum().array() * segment_m_.array()).sum();
+    }
+    times_.energy += secondsSince(start);
+  }
+
+  void potentials(int slot, double t, std::vector<PotentialEnergy>& out) override {
+    const auto start = Clock::now();
+    const Eigen::MatrixX3d& x = slots_[slot];
+    const std::vector<ElementBlock>& blocks = scene_.blocks();
+    const Eigen::MatrixX3d& f = externalForces(t);
+    out.assign(segments_.size(), PotentialEnergy{});
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      const SceneSegment& seg = segments_[s];
+      PotentialEnergy& e = out[s];
+      for (std::size_t b = 0; b < blocks.size(); ++b) {
+        const ElementBlock& block = blocks[b];
+        const int count = seg.num_elements[b];
+        if (count == 0) continue;
+        const double energy =
+            block.type->passRange(block, paramsAt(b, t), x, seg.first_element[b], count, kPassEnergy, nullptr);
+        (block.type->term() == EnergyTerm::Pins ? e.pins : e.internal) += energy;
+      }
+      segment_a_ = f.middleRows(seg.first_particle, seg.num_particles);
+      segment_b_ = x.middleRows(seg.first_particle, seg.num_particles);
+      e.external = -segment_a_.cwiseProduct(segment_b_).sum();
+    }
+    times_.energy += secondsSince(start);
+  }
+
   std::string description() const override { return "CPU reference (double)"; }
 
  private:
@@ -63,7 +109,8 @@ class CpuBackend final : public Backend {
   PotentialEnergy elementPass(const Eigen::MatrixX3d& x, double t, int flags, Eigen::MatrixX3d* out) {
     PotentialEnergy e;
     const std::vector<ElementBlock>& blocks = scene_.blocks();
-    for (size_t b = 0; b < blocks.size(); ++b) {
+    const size_t first_sequential = threadedPass(x, t, flags, out, e);
+    for (size_t b = first_sequential; b < blocks.size(); ++b) {
       const ElementBlock& block = blocks[b];
       if (block.count == 0) continue;
       const double energy = block.type->pass(block, paramsAt(b, t), x, flags, out);
@@ -71,6 +118,85 @@ class CpuBackend final : public Backend {
     }
     if (flags & kPassEnergy) e.external = -externalForces(t).cwiseProduct(x).sum();
     return e;
+  }
+
+  /// The leading blocks whose types give per-element results (ElementType::elementResults: all
+  /// but contact), on cpuThreads() threads: fixed chunks of elements write each element's energy
+  /// and contributions to buffers, then each block's energy is summed in element order and each
+  /// vertex adds its contributions in contribution order (SceneData::csr), vertices split
+  /// over the threads. These are the additions passRange makes, in the same order, so the
+  /// result is the single-threaded pass's bit for bit whatever the thread count (the buffers
+  /// cost one extra write and read per contribution, which a small scene does not win back:
+  /// below kThreadedElements it stays on one thread). Returns the first block it did not do.
+  size_t threadedPass(const Eigen::MatrixX3d& x, double t, int flags, Eigen::MatrixX3d* out, PotentialEnergy& e) {
+    const std::vector<ElementBlock>& blocks = scene_.blocks();
+    if (cpuThreads() <= 1) return 0;
+    size_t count = 0;  // blocks done here: [0, count)
+    int elements = 0, contributions_end = 0;
+    for (; count < blocks.size(); ++count) {
+      const ElementBlock& block = blocks[count];
+      if (!block.type->elementResults(block, block.params, x, 0, 0, flags, nullptr, nullptr)) break;
+      elements += block.count;
+      contributions_end = block.contribution_base + block.type->shape().vertices * block.count;
+    }
+    if (elements < kThreadedElements) return 0;
+    const bool write = (flags & (kPassProjection | kPassForce)) != 0;
+    chunks_.clear();
+    block_params_.resize(count);
+    element_base_.resize(count);
+    int base = 0;
+    for (size_t b = 0; b < count; ++b) {
+      block_params_[b] = &paramsAt(b, t);
+      element_base_[b] = base;
+      base += blocks[b].count;
+      for (int first = 0; first < blocks[b].count; first += kChunkElements) {
+        chunks_.push_back({b, first, std::min(kChunkElements, blocks[b].count - first)});
+      }
+    }
+    element_energies_.resize(static_cast<size_t>(elements));
+    if (write) contributions_.resize(3 * static_cast<size_t>(contributions_end));
+    parallelFor(static_cast<int>(chunks_.size()), [&](int i) {
+      const Chunk& chunk = chunks_[static_cast<size_t>(i)];
+      const ElementBlock& block = blocks[chunk.block];
+      const int k = block.type->shape().vertices;
+      block.type->elementResults(
+          block, *block_params_[chunk.block], x, chunk.first, chunk.count, flags,
+          element_energies_.data() + element_base_[chunk.block] + chunk.first,
+          write ? contributions_.data() + 3 * (static_cast<size_t>(block.contribution_base) + size_t(k) * chunk.first)
+                : nullptr);
+    });
+    for (size_t b = 0; b < count; ++b) {
+      if (blocks[b].count == 0) continue;
+      double energy = 0.0;
+      if (flags & kPassEnergy) {
+        const double* energies = element_energies_.data() + element_base_[b];
+        for (int i = 0; i < blocks[b].count; ++i) energy += energies[i];
+      }
+      (blocks[b].type->term() == EnergyTerm::Pins ? e.pins : e.internal) += energy;
+    }
+    if (write) {
+      const ContributionCsr& csr = scene_.csr();
+      const int n = scene_.numParticles();
+      double* os = out->data();
+      const double* c = contributions_.data();
+      parallelFor((n + kChunkVertices - 1) / kChunkVertices, [&](int i) {
+        const int end = std::min(n, (i + 1) * kChunkVertices);
+        for (int v = i * kChunkVertices; v < end; ++v) {
+          double o0 = os[v], o1 = os[n + v], o2 = os[2 * n + v];
+          for (int j = csr.offsets[size_t(v)]; j < csr.offsets[size_t(v) + 1]; ++j) {
+            const size_t index = static_cast<size_t>(csr.contributions[size_t(j)]);
+            if (index >= static_cast<size_t>(contributions_end)) break;  // sorted: the rest are later blocks'
+            o0 += c[3 * index];
+            o1 += c[3 * index + 1];
+            o2 += c[3 * index + 2];
+          }
+          os[v] = o0;
+          os[n + v] = o1;
+          os[2 * n + v] = o2;
+        }
+      });
+    }
+    return count;
   }
 
   // Params of block b at time t: the block's own unless its type depends on time; cached
@@ -105,11 +231,29 @@ class CpuBackend final : public Backend {
     ForcingKey key;
   };
 
+  // Below this many elements a pass stays on one thread (a 10 x 10 cloth's pass is a few
+  // microseconds, as long as waking a worker); chunks are a few microseconds of work each.
+  static constexpr int kThreadedElements = 2048;
+  static constexpr int kChunkElements = 512;
+  static constexpr int kChunkVertices = 1024;
+  struct Chunk {
+    size_t block;
+    int first, count;
+  };
+
   const SceneData& scene_;
   std::vector<Eigen::MatrixX3d> slots_;
   std::vector<TimedParams> params_;  // per block
   Eigen::MatrixX3d external_;
   ForcingKey external_key_;
+  std::vector<SceneSegment> segments_;
+  Eigen::MatrixX3d segment_a_, segment_b_;  // one segment's rows (massDots, potentials)
+  Eigen::VectorXd segment_m_;
+  // threadedPass's work list and buffers, reused from pass to pass.
+  std::vector<Chunk> chunks_;
+  std::vector<const std::vector<double>*> block_params_;
+  std::vector<int> element_base_;
+  std::vector<double> element_energies_, contributions_;
 };
 
 }  // namespace

@@ -152,15 +152,15 @@ class ContactElementType final : public ElementType {
   }
   // kindPass's arithmetic (bit for bit) for the pairs of the contact set only: the others, weight
   // 0 and most of them, add nothing.
-  double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
-              Eigen::MatrixX3d* out) const override {
+  double passRange(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
+                   int count, int flags, Eigen::MatrixX3d* out) const override {
     const bool write = (flags & (kPassProjection | kPassForce)) != 0;
     const bool force = (flags & kPassForce) != 0;
     const Eigen::Index n = x.rows();
     const double* xs = x.data();
     double* os = write ? out->data() : nullptr;
     double energy = 0.0;
-    for (int e = 0; e < block.count; ++e) {
+    for (int e = first; e < first + count; ++e) {
       const double* prm = params.data() + std::size_t(P) * std::size_t(e);
       const double w = prm[0];
       if (w == 0.0) continue;

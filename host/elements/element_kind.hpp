@@ -78,62 +78,105 @@ struct KindDefaults {
   static std::vector<KindField<Element>> jsonFields() { return {}; }
 };
 
-/// ElementType::pass of a Kind (ElementTypeOf's, and that of types whose elements are not a
-/// Scene list, such as contact). Plain arrays with compile-time bounds, the same loops as
+/// Element e of a Kind's block: A_e x into `ax`, its projection, the energy (returned) and, when
+/// `write`, the contributions w A_e^T p (or w A_e^T (p - A_e x) with `force`) of its K vertices into
+/// `c` (3 per vertex). Plain arrays with compile-time bounds, the same loops as
 /// kernels/element_pass.cl: the compiler unrolls them and keeps A_e x and p_e in registers.
 template <class Kind>
-double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
-                Eigen::MatrixX3d* out) {
+inline double kindElement(const ElementBlock& block, const std::vector<double>& params, const double* xs,
+                          Eigen::Index n, const double* shared, int e, bool write, bool force, double* c) {
   constexpr int K = Kind::kVertices;
   constexpr int R = Kind::kRows;
   constexpr int P = Kind::kParams;
   constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
+  const int* v = block.vertices.data() + K * e;
+  const double* a = Kind::kSharedCoefficients ? shared : block.coefficients.data() + kStride * e;
+  const double* prm = params.data() + P * e;
+  // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
+  // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
+  // exactly x_a - x_b or x_j.
+  double ax[3 * R];
+  for (int k = 0; k < K; ++k) {
+    const double x0 = xs[v[k]], x1 = xs[n + v[k]], x2 = xs[2 * n + v[k]];
+    for (int r = 0; r < R; ++r) {
+      const double coefficient = a[K * r + k];
+      ax[3 * r] = k == 0 ? coefficient * x0 : ax[3 * r] + coefficient * x0;
+      ax[3 * r + 1] = k == 0 ? coefficient * x1 : ax[3 * r + 1] + coefficient * x1;
+      ax[3 * r + 2] = k == 0 ? coefficient * x2 : ax[3 * r + 2] + coefficient * x2;
+    }
+  }
+  double p[3 * R];
+  const double element_energy = Kind::project(ax, prm, p);
+  if (!write) return element_energy;
+  const double w = prm[0];
+  for (int i = 0; i < 3 * R; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
+  for (int k = 0; k < K; ++k) {
+    double c0 = a[k] * p[0], c1 = a[k] * p[1], c2 = a[k] * p[2];
+    for (int r = 1; r < R; ++r) {
+      c0 += a[K * r + k] * p[3 * r];
+      c1 += a[K * r + k] * p[3 * r + 1];
+      c2 += a[K * r + k] * p[3 * r + 2];
+    }
+    c[3 * k] = c0;
+    c[3 * k + 1] = c1;
+    c[3 * k + 2] = c2;
+  }
+  return element_energy;
+}
+
+/// The shared coefficients of a Kind (unused when each element has its own).
+template <class Kind>
+inline void kindSharedCoefficients(double* shared) {
+  if constexpr (Kind::kSharedCoefficients) {
+    for (int i = 0; i < Kind::kRows * Kind::kVertices; ++i) shared[i] = Kind::kCoefficients[i];
+  }
+}
+
+/// ElementType::pass of a Kind (ElementTypeOf's, and that of types whose elements are not a
+/// Scene list, such as contact): kindElement per element, its contributions added into `out` in
+/// element order.
+template <class Kind>
+double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
+                int count, int flags, Eigen::MatrixX3d* out) {
+  constexpr int K = Kind::kVertices;
   const bool write = (flags & (kPassProjection | kPassForce)) != 0;
   const bool force = (flags & kPassForce) != 0;
   const Eigen::Index n = x.rows();
   const double* xs = x.data();
   double* os = write ? out->data() : nullptr;
-  double shared[R * K];
-  if constexpr (Kind::kSharedCoefficients) {
-    for (int i = 0; i < R * K; ++i) shared[i] = Kind::kCoefficients[i];
-  }
+  double shared[Kind::kRows * K];
+  kindSharedCoefficients<Kind>(shared);
   double energy = 0.0;
-  for (int e = 0; e < block.count; ++e) {
-    const int* v = block.vertices.data() + K * e;
-    const double* a = Kind::kSharedCoefficients ? shared : block.coefficients.data() + kStride * e;
-    const double* prm = params.data() + P * e;
-    // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
-    // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
-    // exactly x_a - x_b or x_j.
-    double ax[3 * R];
-    for (int k = 0; k < K; ++k) {
-      const double x0 = xs[v[k]], x1 = xs[n + v[k]], x2 = xs[2 * n + v[k]];
-      for (int r = 0; r < R; ++r) {
-        const double c = a[K * r + k];
-        ax[3 * r] = k == 0 ? c * x0 : ax[3 * r] + c * x0;
-        ax[3 * r + 1] = k == 0 ? c * x1 : ax[3 * r + 1] + c * x1;
-        ax[3 * r + 2] = k == 0 ? c * x2 : ax[3 * r + 2] + c * x2;
-      }
-    }
-    double p[3 * R];
-    const double element_energy = Kind::project(ax, prm, p);
+  for (int e = first; e < first + count; ++e) {
+    double c[3 * K];
+    const double element_energy = kindElement<Kind>(block, params, xs, n, shared, e, write, force, c);
     if (flags & kPassEnergy) energy += element_energy;
     if (!write) continue;
-    const double w = prm[0];
-    for (int i = 0; i < 3 * R; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
+    const int* v = block.vertices.data() + K * e;
     for (int k = 0; k < K; ++k) {
-      double c0 = a[k] * p[0], c1 = a[k] * p[1], c2 = a[k] * p[2];
-      for (int r = 1; r < R; ++r) {
-        c0 += a[K * r + k] * p[3 * r];
-        c1 += a[K * r + k] * p[3 * r + 1];
-        c2 += a[K * r + k] * p[3 * r + 2];
-      }
-      os[v[k]] += c0;
-      os[n + v[k]] += c1;
-      os[2 * n + v[k]] += c2;
+      os[v[k]] += c[3 * k];
+      os[n + v[k]] += c[3 * k + 1];
+      os[2 * n + v[k]] += c[3 * k + 2];
     }
   }
   return energy;
+}
+
+/// ElementType::elementResults of a Kind: kindElement per element, stored.
+template <class Kind>
+void kindElementResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
+                        int first, int count, int flags, double* energies, double* contributions) {
+  constexpr int K = Kind::kVertices;
+  const bool write = (flags & (kPassProjection | kPassForce)) != 0;
+  const bool force = (flags & kPassForce) != 0;
+  const bool energy = (flags & kPassEnergy) != 0;
+  double shared[Kind::kRows * K];
+  kindSharedCoefficients<Kind>(shared);
+  for (int i = 0; i < count; ++i) {
+    const double element_energy = kindElement<Kind>(block, params, x.data(), x.rows(), shared, first + i, write, force,
+                                                    write ? contributions + 3 * K * i : nullptr);
+    if (energy) energies[i] = element_energy;
+  }
 }
 
 template <class Kind>
@@ -238,9 +281,15 @@ class ElementTypeOf final : public ElementType {
     return Kind::project(ax, params, p);
   }
 
-  double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
-              Eigen::MatrixX3d* out) const override {
-    return kindPass<Kind>(block, params, x, flags, out);
+  double passRange(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
+                   int count, int flags, Eigen::MatrixX3d* out) const override {
+    return kindPass<Kind>(block, params, x, first, count, flags, out);
+  }
+
+  bool elementResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
+                      int first, int count, int flags, double* energies, double* contributions) const override {
+    kindElementResults<Kind>(block, params, x, first, count, flags, energies, contributions);
+    return true;
   }
 
   std::vector<Field> jsonFields() const override {

@@ -108,8 +108,26 @@ class ElementType {
   /// paramsAt's for a time-dependent type): adds the contributions of `flags` (kPassProjection or
   /// kPassForce) into `out` (`n by 3`, may be null without them) in element order, and returns
   /// the summed energy when kPassEnergy is set (else 0).
-  virtual double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
-                      int flags, Eigen::MatrixX3d* out) const = 0;
+  double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
+              Eigen::MatrixX3d* out) const {
+    return passRange(block, params, x, 0, block.count, flags, out);
+  }
+  /// pass() over elements [first, first + count) only: the elements of one scene of a batch
+  /// (docs/batch_design.md), with the same arithmetic, so a scene's energy is the sum its own
+  /// simulator forms.
+  virtual double passRange(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
+                           int first, int count, int flags, Eigen::MatrixX3d* out) const = 0;
+  /// passRange's per-element results instead of their sums, for a pass split over threads
+  /// (host/cpu/cpu_backend.cpp): element e's energy w/2 ||A x - p||^2 at energies[e - first] when
+  /// kPassEnergy is set, and with kPassProjection or kPassForce the 3 reals its vertex k
+  /// contributes at contributions[3 (K (e - first) + k)], the very values passRange adds into
+  /// `out`. Adding them in element order is passRange bit for bit. False (nothing written) for a
+  /// type that does not provide it (its blocks take passRange); a call with count 0 asks.
+  virtual bool elementResults(const ElementBlock& /*block*/, const std::vector<double>& /*params*/,
+                              const Eigen::MatrixX3d& /*x*/, int /*first*/, int /*count*/, int /*flags*/,
+                              double* /*energies*/, double* /*contributions*/) const {
+    return false;
+  }
 
   // ---- the generic JSON form (types that have one) ---------------------------------------------
   /// Names of the numeric fields of an element in its JSON object, besides "vertices"; an empty

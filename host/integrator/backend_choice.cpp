@@ -1,5 +1,8 @@
 #include "integrator/backend_choice.hpp"
 
+#include "cpu/cpu_backend.hpp"
+#include "opencl/opencl_backend.hpp"
+
 namespace stabint {
 
 // A GPU wins on any scene. An OpenCL CPU device (PoCL) is no faster than the CPU reference at any
@@ -26,6 +29,15 @@ BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<Open
     return {BackendKind::CpuReference, o.opencl, "auto: no OpenCL device" + std::string(need_fp64 ? " with fp64" : "")};
   return {BackendKind::CpuReference, o.opencl,
           "auto: no GPU; the OpenCL CPU device is no faster than the CPU reference"};
+}
+
+BackendSelection selectBackend(const SimulatorOptions& o) {
+  return chooseBackend(o, o.backend == BackendKind::Auto ? listOpenCLDevices() : std::vector<OpenCLDeviceInfo>{});
+}
+
+std::unique_ptr<Backend> makeBackend(const SceneData& scene, int num_slots, const BackendSelection& selection) {
+  return selection.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, num_slots, selection.opencl)
+                                               : makeCpuBackend(scene, num_slots);
 }
 
 }  // namespace stabint

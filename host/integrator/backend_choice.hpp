@@ -1,8 +1,11 @@
 #pragma once
 // BackendKind::Auto's rule [project rule, docs/method.md "Backend choice"], apart from the
 // simulator so that tests can give it any list of devices.
+#include "backend.hpp"
+
 #include <stabint/simulator.hpp>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,5 +20,11 @@ struct BackendSelection {
 /// The backend `o` asks for; for BackendKind::Auto, the first GPU of `devices` (with fp64 when
 /// `o.opencl.precision` is Double), else the CPU reference.
 BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<OpenCLDeviceInfo>& devices);
+
+/// chooseBackend with this machine's OpenCL devices (listed only for BackendKind::Auto).
+BackendSelection selectBackend(const SimulatorOptions& o);
+/// The backend of a selection with `num_slots` slots for `scene` (OpenCLError subtypes for OpenCL
+/// problems), for every simulator: the one place a backend is created.
+std::unique_ptr<Backend> makeBackend(const SceneData& scene, int num_slots, const BackendSelection& selection);
 
 }  // namespace stabint

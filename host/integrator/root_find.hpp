@@ -45,64 +45,100 @@ inline double quadraticRootInBracket(double c2, double c1, double c0, double a, 
 }
 }  // namespace detail
 
-/// Finds alpha in [a, b] with |K(alpha) + P(alpha) - target| <= tol, given P(a) = pa and
-/// P(b) = pb with K + P - target of opposite signs at a and b, using at most `max_evaluations`
-/// calls of `potential(alpha) -> double`.
-template <class Potential>
-RootResult findBlendWeight(const KineticQuadratic& kinetic, Potential&& potential, double target, double a, double pa,
-                           double b, double pb, double tol, int max_evaluations) {
-  double ga = kinetic.at(a) + pa - target;
-  double gb = kinetic.at(b) + pb - target;
-  RootResult best{std::abs(ga) <= std::abs(gb) ? a : b, std::abs(ga) <= std::abs(gb) ? ga : gb, 0};
-  bool bisect = false;  // the last two model steps made too little progress
-  int slow = 0;         // consecutive model steps that did not halve |H - H*|
-  double last_g = std::abs(best.g);
-  bool have_c = false;  // a third point (the end replaced last), for a quadratic model of P
-  double c = 0.0, pc = 0.0;
-  while (best.evaluations < max_evaluations && std::abs(best.g) > tol) {
-    double x;
-    if (bisect) {
-      x = 0.5 * (a + b);
-    } else {
-      // Model P by Newton interpolation through the bracket ends (and the third point when it
-      // is well separated from both): P = pa + f1 (x - a) + f2 (x - a)(x - b). The model
-      // matches H - H* at a and b, so K + P_model - target has exactly one root in [a, b].
-      const double f1 = (pb - pa) / (b - a);
-      const double span = std::abs(b - a);
-      double f2 = 0.0;
-      if (have_c && std::abs(c - a) > 1e-3 * span && std::abs(c - b) > 1e-3 * span)
-        f2 = ((pc - pa) / (c - a) - f1) / (c - b);
-      x = detail::quadraticRootInBracket(0.5 * kinetic.dd + f2, kinetic.vd + f1 - f2 * (a + b),
-                                         0.5 * kinetic.vv - target + pa - f1 * a + f2 * a * b, a, ga, b, gb);
-    }
-    const double px = potential(x);
-    const double gx = kinetic.at(x) + px - target;
-    ++best.evaluations;
+/// The root find as a resumable state machine, so that a batch of scenes can run one search per
+/// scene in lockstep, one batched energy pass per round (docs/batch_design.md, "The blend"):
+/// while !done(), evaluate the potential at next() and take() it. Finds alpha in [a, b] with
+/// |K(alpha) + P(alpha) - target| <= tol, given P(a) = pa and P(b) = pb with K + P - target of
+/// opposite signs at a and b, using at most `max_evaluations` evaluations.
+class BlendWeightSearch {
+ public:
+  BlendWeightSearch(const KineticQuadratic& kinetic, double target, double a, double pa, double b, double pb,
+                    double tol, int max_evaluations)
+      : kinetic_(kinetic),
+        target_(target),
+        tol_(tol),
+        max_evaluations_(max_evaluations),
+        a_(a),
+        pa_(pa),
+        b_(b),
+        pb_(pb) {
+    ga_ = kinetic.at(a) + pa - target;
+    gb_ = kinetic.at(b) + pb - target;
+    best_ = RootResult{std::abs(ga_) <= std::abs(gb_) ? a : b, std::abs(ga_) <= std::abs(gb_) ? ga_ : gb_, 0};
+    last_g_ = std::abs(best_.g);
+  }
+
+  bool done() const { return !(best_.evaluations < max_evaluations_ && std::abs(best_.g) > tol_); }
+
+  /// The point to evaluate next (only while !done()).
+  double next() const {
+    if (bisect_) return 0.5 * (a_ + b_);
+    // Model P by Newton interpolation through the bracket ends (and the third point when it is
+    // well separated from both): P = pa + f1 (x - a) + f2 (x - a)(x - b). The model matches
+    // H - H* at a and b, so K + P_model - target has exactly one root in [a, b].
+    const double f1 = (pb_ - pa_) / (b_ - a_);
+    const double span = std::abs(b_ - a_);
+    double f2 = 0.0;
+    if (have_c_ && std::abs(c_ - a_) > 1e-3 * span && std::abs(c_ - b_) > 1e-3 * span)
+      f2 = ((pc_ - pa_) / (c_ - a_) - f1) / (c_ - b_);
+    return detail::quadraticRootInBracket(0.5 * kinetic_.dd + f2, kinetic_.vd + f1 - f2 * (a_ + b_),
+                                          0.5 * kinetic_.vv - target_ + pa_ - f1 * a_ + f2 * a_ * b_, a_, ga_, b_, gb_);
+  }
+
+  /// The potential px at x = next().
+  void take(double x, double px) {
+    const double gx = kinetic_.at(x) + px - target_;
+    ++best_.evaluations;
     // Two model steps in a row that did not halve |H - H*| are followed by a bisection, so a
     // badly modelled P (blending two distant configurations can make it far from a parabola)
     // cannot stall the bracket on one side.
-    if (bisect) {
-      bisect = false;
-      slow = 0;
+    if (bisect_) {
+      bisect_ = false;
+      slow_ = 0;
     } else {
-      slow = std::abs(gx) > 0.5 * last_g ? slow + 1 : 0;
-      bisect = slow >= 2;
+      slow_ = std::abs(gx) > 0.5 * last_g_ ? slow_ + 1 : 0;
+      bisect_ = slow_ >= 2;
     }
-    last_g = std::abs(gx);
-    if (std::abs(gx) < std::abs(best.g)) {
-      best.x = x;
-      best.g = gx;
+    last_g_ = std::abs(gx);
+    if (std::abs(gx) < std::abs(best_.g)) {
+      best_.x = x;
+      best_.g = gx;
     }
-    have_c = true;
-    if ((gx > 0.0) == (ga > 0.0)) {  // x replaces a
-      c = a, pc = pa;
-      a = x, pa = px, ga = gx;
+    have_c_ = true;
+    if ((gx > 0.0) == (ga_ > 0.0)) {  // x replaces a
+      c_ = a_, pc_ = pa_;
+      a_ = x, pa_ = px, ga_ = gx;
     } else {
-      c = b, pc = pb;
-      b = x, pb = px, gb = gx;
+      c_ = b_, pc_ = pb_;
+      b_ = x, pb_ = px, gb_ = gx;
     }
   }
-  return best;
+
+  const RootResult& result() const { return best_; }
+
+ private:
+  KineticQuadratic kinetic_;
+  double target_, tol_;
+  int max_evaluations_;
+  double a_, pa_, ga_ = 0.0, b_, pb_, gb_ = 0.0;
+  RootResult best_;
+  bool bisect_ = false;  // the last two model steps made too little progress
+  int slow_ = 0;         // consecutive model steps that did not halve |H - H*|
+  double last_g_ = 0.0;
+  bool have_c_ = false;  // a third point (the end replaced last), for a quadratic model of P
+  double c_ = 0.0, pc_ = 0.0;
+};
+
+/// BlendWeightSearch run to the end with `potential(alpha) -> double`.
+template <class Potential>
+RootResult findBlendWeight(const KineticQuadratic& kinetic, Potential&& potential, double target, double a, double pa,
+                           double b, double pb, double tol, int max_evaluations) {
+  BlendWeightSearch search(kinetic, target, a, pa, b, pb, tol, max_evaluations);
+  while (!search.done()) {
+    const double x = search.next();
+    search.take(x, potential(x));
+  }
+  return search.result();
 }
 
 }  // namespace stabint

@@ -3,14 +3,13 @@
 #include <stabint/simulator.hpp>
 
 #include "backend.hpp"
-#include "cpu/cpu_backend.hpp"
 #include "integrator/backend_choice.hpp"
+#include "integrator/blend_step.hpp"
 #include "integrator/checkpoint.hpp"
 #include "integrator/contact.hpp"
 #include "integrator/damping.hpp"
-#include "integrator/rigid_motion.hpp"
-#include "integrator/root_find.hpp"
-#include "opencl/opencl_backend.hpp"
+#include "integrator/integrator_steps.hpp"
+#include "integrator/options.hpp"
 #include "scene/scene_data.hpp"
 #include "scene/validation.hpp"
 #include "solver/global_system.hpp"
@@ -21,80 +20,14 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
-#include <sstream>
 #include <vector>
 
 namespace stabint {
 namespace {
 
-// Backend state slots used by the driver.
-enum Slot : int {
-  kX,         // x_n
-  kV,         // v_n
-  kXPrev,     // x_{n-1} (BDF2)
-  kVPrev,     // v_{n-1} (BDF2)
-  kY,         // inertial target y of the current solve
-  kXNew,      // candidate x_{n+1} (for the blend: the IM candidate, later the blended state)
-  kVNew,      // candidate v_{n+1}
-  kXPartner,  // BE or FE partner of the blend
-  kVPartner,
-  kXTrial,   // blended positions during the root find
-  kScratch,  // driver scratch
-  kSolverScratch,
-  kNumSlots
-};
-
-void validateOptions(const SimulatorOptions& o) {
-  auto fail = [](const std::string& what) { throw InvalidInputError("simulator options: " + what); };
-  if (!std::isfinite(o.time_step) || o.time_step <= 0.0)
-    fail("time_step = " + std::to_string(o.time_step) + " must be finite and > 0");
-  // The solves use c = 4/h^2 (IM): h^2 must neither underflow (1e-300) nor overflow.
-  const double h2 = o.time_step * o.time_step;
-  if (!std::isnormal(h2) || !std::isfinite(4.0 / h2)) {
-    std::ostringstream h;
-    h << o.time_step;
-    fail("time_step = " + h.str() + " is out of range: 1/h^2 must be a finite, non-zero number");
-  }
-  // An enum from a config file or a binding can hold any integer; an unknown integrator used to
-  // run no integrator at all and commit a zero state.
-  if (static_cast<int>(o.integrator) < static_cast<int>(Integrator::ForwardEuler) ||
-      static_cast<int>(o.integrator) > static_cast<int>(Integrator::EnergyBlend))
-    fail("integrator = " + std::to_string(static_cast<int>(o.integrator)) + " is not an Integrator value");
-  if (o.backend != BackendKind::CpuReference && o.backend != BackendKind::OpenCL && o.backend != BackendKind::Auto)
-    fail("backend = " + std::to_string(static_cast<int>(o.backend)) + " is not a BackendKind value");
-  if (o.opencl.precision != Precision::Double && o.opencl.precision != Precision::Float)
-    fail("opencl.precision = " + std::to_string(static_cast<int>(o.opencl.precision)) + " is not a Precision value");
-  if (!std::isfinite(o.energy_limit) || o.energy_limit < 0.0)
-    fail("energy_limit must be finite and >= 0 (0: no limit)");
-  if (o.iterations < 1) fail("iterations = " + std::to_string(o.iterations) + " must be >= 1");
-  if (!std::isfinite(o.tolerance) || o.tolerance < 0.0) fail("tolerance must be finite and >= 0");
-  if (o.max_iterations < 1) fail("max_iterations must be >= 1");
-  if (o.be_iterations < 1) fail("be_iterations = " + std::to_string(o.be_iterations) + " must be >= 1");
-  if (!std::isfinite(o.energy_tolerance) || o.energy_tolerance <= 0.0) fail("energy_tolerance must be finite and > 0");
-  if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
-    fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
-  if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
-      o.acceleration != Acceleration::Anderson)
-    fail("acceleration = " + std::to_string(static_cast<int>(o.acceleration)) + " is not an Acceleration value");
-  if (o.anderson_window < 1 || o.anderson_window > 50)
-    fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
-  if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
-    fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
-  if (o.global_solve != GlobalSolve::Factor && o.global_solve != GlobalSolve::ConjugateGradient)
-    fail("global_solve = " + std::to_string(static_cast<int>(o.global_solve)) + " is not a GlobalSolve value");
-  if (o.cg_iterations < 1) fail("cg_iterations = " + std::to_string(o.cg_iterations) + " must be >= 1");
-  if (!std::isfinite(o.cg_tolerance) || !(o.cg_tolerance >= 0.0 && o.cg_tolerance < 1.0))
-    fail("cg_tolerance must be finite and in [0, 1) (0: a fixed count of cg_iterations)");
-  if (o.max_root_evaluations < 1) fail("max_root_evaluations must be >= 1");
-  if (!std::isfinite(o.contact_tolerance) || !(o.contact_tolerance >= 0.0))
-    fail("contact_tolerance must be finite and >= 0");
-}
-
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
-
-bool allFinite(const Eigen::MatrixX3d& m) { return m.allFinite(); }
 
 }  // namespace
 
@@ -102,29 +35,17 @@ struct Simulator::Impl {
   Impl(const Scene& s, const SimulatorOptions& o)
       : options((validateOptions(o), o)),
         scene(s),
-        choice(chooseBackend(
-            options, options.backend == BackendKind::Auto ? listOpenCLDevices() : std::vector<OpenCLDeviceInfo>{})),
-        backend(choice.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, kNumSlots, choice.opencl)
-                                                   : makeCpuBackend(scene, kNumSlots)),
+        choice(selectBackend(options)),
+        backend(makeBackend(scene, kNumDriverSlots, choice)),
         system(scene),
         solver(*backend, system, kSolverScratch),
+        steps_of(*backend, solver),
         x(s.positions),
         v(s.velocities) {
     // The implicit systems are factored now, so that masses too small for the stiffnesses are
     // refused here, naming them, rather than failing the first step().
-    // The same expressions for c as the integrators below, so that each is factored once.
-    const double h = options.time_step;
     initialContactSet();
-    switch (options.integrator) {
-      case Integrator::BDF2:
-        system.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
-        [[fallthrough]];  // and its first step is BE
-      case Integrator::BackwardEuler: system.factor(1.0 / (h * h), "1/time_step^2"); break;
-      case Integrator::EnergyBlend: system.factor(1.0 / (h * h), "1/time_step^2"); [[fallthrough]];
-      case Integrator::ImplicitMidpoint: system.factor(4.0 / (h * h), "4/time_step^2"); break;
-      case Integrator::ForwardEuler:
-      case Integrator::SymplecticEuler: break;  // explicit: no system
-    }
+    factorIntegratorSystems(system, options.integrator, options.time_step);
     // CG needs no factor: they only validated the systems, and element changes would keep
     // updating them for nothing.
     if (options.global_solve == GlobalSolve::ConjugateGradient) system.dropFactors();
@@ -133,19 +54,11 @@ struct Simulator::Impl {
     potential = backend->potential(kX, 0.0);
     kinetic = kineticEnergy(v);
     target = kinetic + potential.total();
-    // E_scale: initial K + E_int plus the work gravity can do on the body, m |g| times its size,
-    // so the blend tolerance does not depend on where gravity's zero is. [project rule] The size
-    // is the diagonal of the initial bounding box, not the extent along gravity: a chain released
-    // horizontally has zero extent along gravity (and K = E_int = 0), which would make tau zero.
-    const double g = s.gravity.norm();
-    const double size = x.rows() > 0 ? (x.colwise().maxCoeff() - x.colwise().minCoeff()).norm() : 0.0;
-    energy_scale = kinetic + potential.elastic() + s.masses.sum() * g * size;
+    energy_scale = initialEnergyScale(kinetic, potential, s.masses, s.gravity, x);
     backend->times() = PhaseTimes{};
   }
 
-  double kineticEnergy(const Eigen::MatrixX3d& vel) const {
-    return 0.5 * (vel.rowwise().squaredNorm().array() * scene.masses().array()).sum();
-  }
+  double kineticEnergy(const Eigen::MatrixX3d& vel) const { return stabint::kineticEnergy(scene.masses(), vel); }
 
   IterationControl control(int iterations) const {
     IterationControl c{iterations,           options.tolerance,     options.max_iterations, energy_scale,
@@ -156,82 +69,34 @@ struct Simulator::Impl {
     return c;
   }
 
-  // ---- the integrators: each leaves x_{n+1}, v_{n+1} in (kXNew, kVNew), returns iterations ----
-
-  // x_{n+1} = x* of the solve with c = 1/h^2, y = x_n + h v_n; warm start in `x_out` if
-  // `warm_start` is true, else y.
+  // ---- the integrators (integrator_steps.hpp): each leaves x_{n+1}, v_{n+1} in (x_out, v_out) ----
   int backwardEuler(int x_out, int v_out, int iterations, bool warm_start) {
-    const double h = options.time_step;
-    backend->combine(kY, 1.0, kX, h, kV);
-    if (!warm_start) backend->copy(x_out, kY);
-    const int done = solver.solve(1.0 / (h * h), kY, x_out, t + h, control(iterations));
-    backend->combine(v_out, 1.0 / h, x_out, -1.0 / h, kX);  // v = (x* - x_n)/h
-    return done;
+    return steps_of.backwardEuler(options.time_step, t, x_out, v_out, control(iterations), warm_start);
+  }
+  int implicitMidpoint(int x_out, int v_out) {
+    return steps_of.implicitMidpoint(options.time_step, t, x_out, v_out, control(options.iterations));
   }
 
-  // Midpoint x* of the solve with c = 4/h^2, y = x_n + h/2 v_n, evaluated at t + h/2;
-  // x_{n+1} = 2x* - x_n, v_{n+1} = 4(x* - x_n)/h - v_n.
-  // When `midpoint_out` is a slot, the midpoint x* is also left there.
-  int implicitMidpoint(int x_out, int v_out, int midpoint_out = -1) {
-    const double h = options.time_step;
-    backend->combine(kY, 1.0, kX, 0.5 * h, kV);
-    backend->copy(x_out, kY);
-    const int done = solver.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, control(options.iterations));
-    backend->combine(v_out, 4.0 / h, x_out, -4.0 / h, kX);
-    backend->combine(v_out, 1.0, v_out, -1.0, kV);
-    if (midpoint_out >= 0) backend->copy(midpoint_out, x_out);
-    backend->combine(x_out, 2.0, x_out, -1.0, kX);
-    return done;
-  }
-
-  // c = 9/(4h^2), y = (4x_n - x_{n-1})/3 + (2h/9)(4v_n - v_{n-1});
-  // v_{n+1} = 3/(2h) (x* - (4x_n - x_{n-1})/3).
-  int bdf2(int x_out, int v_out) {
-    const double h = options.time_step;
-    backend->combine(kScratch, 4.0 / 3.0, kX, -1.0 / 3.0, kXPrev);
-    backend->combine(kY, 8.0 * h / 9.0, kV, -2.0 * h / 9.0, kVPrev);
-    backend->combine(kY, 1.0, kY, 1.0, kScratch);
-    backend->copy(x_out, kY);
-    const int done = solver.solve(9.0 / (4.0 * h * h), kY, x_out, t + h, control(options.iterations));
-    backend->combine(v_out, 1.5 / h, x_out, -1.5 / h, kScratch);
-    return done;
-  }
-
-  // Forward Euler (symplectic = false) or symplectic Euler (true), both with f(x_n, t_n).
-  void explicitEuler(int x_out, int v_out, bool symplectic) {
-    const double h = options.time_step;
-    backend->accelerations(kScratch, kX, t);
-    backend->combine(v_out, 1.0, kV, h, kScratch);
-    backend->combine(x_out, 1.0, kX, h, symplectic ? v_out : kV);
-  }
-
-  // ---- the energy-tracking blend (docs/method.md, "The blend") ------------------------------
+  // ---- the energy-tracking blend (docs/method.md, "The blend"; its decisions: blend_step.hpp) --
   // Leaves the blend's positions and IM-or-BE velocities in (kXNew, kVNew) and returns their
-  // potential at t + h; the velocity corrections (momenta, energy) follow on the host in step().
+  // potential at t + h; the velocity corrections (momenta, energy) follow in step().
   PotentialEnergy blend(double& target_now, StepReport& report) {
-    const double h = options.time_step;
-    const double t1 = t + h;
+    const double t1 = t + options.time_step;
+    blend_step.start(BlendScene{&scene.masses(), momentumConserved(), energy_scale, tolerance()}, options, report);
     report.iterations += implicitMidpoint(kXNew, kVNew);
     // The driver needs the candidate on the host whatever the branch (step() for the accepted
     // state, the BE branch for its momenta): read once here, with one wait, and its kinetic
     // energy computed from that copy instead of a device reduction.
     backend->readBoth(kXNew, x_new, kVNew, v_new);
     new_state_on_host = true;
-    PotentialEnergy p_im = backend->potential(kXNew, t1);
+    const PotentialEnergy p_im = backend->potential(kXNew, t1);
     ++report.energy_evaluations;
     const double vv_im = massDot(v_new, v_new);
-    const double h_im = 0.5 * vv_im + p_im.total();
-    report.branch = BlendBranch::ImplicitMidpoint;
-    report.alpha = 0.0;
-    im_momenta_known = false;
-    partner_on_host = false;
-
-    if (!std::isfinite(h_im)) {
+    if (!std::isfinite(0.5 * vv_im + p_im.total())) {
       // An IM candidate that blew up is no candidate: the step is the BE partner, with the full
       // iteration budget since nothing else of the step is usable.
       new_state_on_host = false;
-      report.branch = BlendBranch::BackwardEuler;
-      report.alpha = 1.0;
+      blend_step.candidateNotFinite();
       backend->copy(kXNew, kX);
       report.iterations += backwardEuler(kXNew, kVNew, options.iterations, /*warm_start=*/true);
       const PotentialEnergy p_be = backend->potential(kXNew, t1);
@@ -241,91 +106,39 @@ struct Simulator::Impl {
     }
     // The target must include this step's forcing before the candidate is judged.
     target_now += forcingWork(kXNew, p_im, report);
-    const double tau = tolerance();
-    if (std::abs(h_im - target_now) <= tau) return p_im;
-    if (h_im < target_now) {
-      report.branch = BlendBranch::VelocityScale;  // step() scales the velocities up
-      return p_im;
-    }
+    if (!blend_step.judge(x_new, v_new, p_im, vv_im, target_now)) return p_im;
 
-    // Too much energy: blend with backward Euler from (x_n, v_n). [project rule] The partner's
-    // iterations start at x_n, where the BE objective equals H_n and can only decrease, so a
-    // few iterations cannot pile up elastic energy (docs/method.md has the measurements).
-    report.branch = BlendBranch::BackwardEuler;
-    x_im.swap(x_new);
-    v_im.swap(v_new);
-    im_momenta = rigidMotion(scene.masses(), x_im, v_im);
-    im_momenta_known = true;
     backend->copy(kXPartner, kX);
     report.iterations += backwardEuler(kXPartner, kVPartner, options.be_iterations, /*warm_start=*/true);
-
-    // The partner on the host (one wait): the kinetic quadratic below, the blended state and the
-    // position root find in step() are formed there, which saves two device reductions and the
-    // reads of the blended state.
-    backend->readBoth(kXPartner, x_partner, kVPartner, v_partner);
-    partner_on_host = true;
-
-    // H(alpha) = K(alpha) + P(alpha). The kinetic part is an exact quadratic in alpha:
-    // K = 1/2 (vv + 2 alpha vd + alpha^2 dd) with d = v_partner - v_IM.
-    v_scratch = 1.0 * v_partner + -1.0 * v_im;  // as Backend::combine(d, 1, partner, -1, IM) forms it
-    const KineticQuadratic k_alpha{vv_im, massDot(v_im, v_scratch), massDot(v_scratch, v_scratch)};
-    struct Evaluation {
-      double alpha;
-      double g;  // H(alpha) - H*
-      PotentialEnergy potential;
-    };
-    std::vector<Evaluation> evaluations;
-    auto potentialAt = [&](double alpha) {
-      backend->combine(kXTrial, 1.0 - alpha, kXNew, alpha, kXPartner);
-      const PotentialEnergy p = backend->potential(kXTrial, t1);
-      ++report.energy_evaluations;
-      evaluations.push_back({alpha, k_alpha.at(alpha) + p.total() - target_now, p});
-      return p.total();
-    };
-    const double p_be = potentialAt(1.0);
-    // The partner's potential is also the far end of the position root find in step().
-    partner_potential = evaluations.front().potential;
-    const bool partner_cannot_reach_target = evaluations.front().g >= 0.0;
-    if (!partner_cannot_reach_target && std::abs(evaluations.front().g) > tau)
-      findBlendWeight(k_alpha, potentialAt, target_now, 0.0, p_im.total(), 1.0, p_be, tau,
-                      options.max_root_evaluations);
-    // The best evaluation; the partner whole when even it has too much energy. When the root
-    // find runs out of evaluations the residual is left to the velocity scale in step().
-    Evaluation accepted = evaluations.front();
-    if (!partner_cannot_reach_target)
-      for (const Evaluation& e : evaluations)
-        if (std::abs(e.g) < std::abs(accepted.g)) accepted = e;
-    report.alpha = accepted.alpha;
-    blendTowardPartner(x_new, x_im, x_partner, accepted.alpha, kXNew);
-    blendTowardPartner(v_new, v_im, v_partner, accepted.alpha, kVNew);
-    new_state_on_host = true;
-    return accepted.potential;
+    // The partner on the host (one wait): the kinetic quadratic, the blended state and the
+    // position move are formed there, which saves two device reductions and the reads of the
+    // blended state.
+    backend->readBoth(kXPartner, blend_step.partnerPositions(), kVPartner, blend_step.partnerVelocities());
+    blend_step.partnerRead();
+    evaluateBlendPotentials(t1);  // kXNew holds the IM candidate
+    const PotentialEnergy p_blend = blend_step.blend(x_new, v_new, *backend);
+    backend->write(kXNew, x_new);
+    backend->write(kVNew, v_new);
+    return p_blend;
   }
 
-  // out = (1 - w) from + w partner, formed on the host as Backend::combine forms it (bit for bit
-  // on the CPU reference; the device's own combine may round differently, by an ulp), rounded to
-  // what the slot holds and written there without a wait.
-  void blendTowardPartner(Eigen::MatrixX3d& out, const Eigen::MatrixX3d& from, const Eigen::MatrixX3d& partner,
-                          double w, int slot) {
-    out = (1.0 - w) * from + w * partner;
-    backend->roundToStorage(out);
-    backend->write(slot, out);
+  // The potentials the blend asks for, at (1 - w) kXNew + w kXPartner (kXNew holds what
+  // BlendStep::from() is).
+  void evaluateBlendPotentials(double t1) {
+    while (blend_step.wantsPotential()) {
+      const double w = blend_step.weight();
+      backend->combine(kXTrial, 1.0 - w, kXNew, w, kXPartner);
+      blend_step.take(backend->potential(kXTrial, t1));
+    }
   }
 
-  double tolerance() const { return options.energy_tolerance * (kinetic + potential.elastic() + energy_scale); }
+  double tolerance() const { return blendTolerance(options, kinetic, potential, energy_scale); }
 
-  // sum_j m_j a_j . b_j on host copies, as the CPU reference's Backend::massDot forms it.
   double massDot(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) const {
-    return (a.cwiseProduct(b).rowwise().sum().array() * scene.masses().array()).sum();
+    return stabint::massDot(scene.masses(), a, b);
   }
 
-  // No pins, no force fields, no user forces and no colliders: IM keeps linear and angular
-  // momentum.
-  bool momentumConserved() const {
-    const std::vector<Pin>& pins = scene.scene().pins;
-    const bool pinned = std::any_of(pins.begin(), pins.end(), [](const Pin& p) { return p.stiffness > 0.0; });
-    return !pinned && scene.scene().force_fields.empty() && !scene.hasUserForces() && scene.scene().colliders.empty();
-  }
+  bool momentumConserved() const { return stabint::momentumConserved(scene.scene(), scene.hasUserForces()); }
 
   // Contact after the solve (docs/method.md, "Contact"), on the accepted state: friction takes
   // kinetic energy out and H* with it, like damping; the final projection moves the positions out
@@ -350,94 +163,15 @@ struct Simulator::Impl {
     return rubbed;
   }
 
-  // The blend's corrections of the accepted state (host copies x_new, v_new; kXNew on the
-  // backend), so that the energy it keeps is motion [project rules, docs/method.md]:
-  // 1. after a BE blend, the IM candidate's linear and angular momentum are put back with a rigid
-  //    velocity field: the partner, a few iterations from x_n, would otherwise stop the swing of
-  //    a pendulum-like body at every blend;
-  // 2. too little energy: the velocities are scaled up, by at most max_velocity_scale per step:
-  //    where the scene conserves momentum (no pins, no force fields) only their non-rigid part,
-  //    which carries no momentum, elsewhere all of it. This replaces the forward-Euler partner,
-  //    whose explicit forces put the missing energy into stretch and flicker;
-  // 3. too much energy: removed first from the non-rigid velocities (keeping the swing), then
-  //    from the stretch, by moving the positions toward the BE partner's, and only then from the
-  //    rigid velocities.
+  // The blend's corrections of the accepted state (BlendStep::beginCorrections), on the host
+  // copies x_new, v_new; the position move toward the partner evaluates its potentials here.
   // Returns true when the velocities changed; p_new follows the positions.
-  bool correctBlendState(double target_now, PotentialEnergy& p_new, StepReport& report) {
-    if (report.branch == BlendBranch::ImplicitMidpoint || report.branch == BlendBranch::None) return false;
-    const double k_before = kineticEnergy(v_new);
-    bool changed = false;
-    if (report.branch == BlendBranch::BackwardEuler && im_momenta_known && report.alpha > 0.0) {
-      setMomenta(rigidMotion(scene.masses(), x_new, v_new), im_momenta.momentum,
-                 im_momenta.angularMomentumAboutOrigin(), x_new, v_new);
-      changed = true;
-    }
-    const double tau = tolerance();
-    auto excess = [&] { return kineticEnergy(v_new) + p_new.total() - target_now; };
-    if (excess() < -tau) {
-      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/momentumConserved(), 1.0,
-                                 options.max_velocity_scale);
-    } else if (excess() > tau) {
-      changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/true, 0.0, 1.0);
-      // Only toward this step's partner: after a non-finite IM candidate the state is the BE
-      // solve itself and kXPartner holds an older step's partner.
-      if (excess() > tau && report.branch == BlendBranch::BackwardEuler && partner_on_host) {
-        p_new = lowerPotentialTowardPartner(target_now - kineticEnergy(v_new), p_new, report);
-        // Moving the positions moved the angular momentum about the origin with them.
-        if (momentumConserved() && im_momenta_known)
-          setMomenta(rigidMotion(scene.masses(), x_new, v_new), im_momenta.momentum,
-                     im_momenta.angularMomentumAboutOrigin(), x_new, v_new);
-      }
-      if (excess() > tau && !momentumConserved())
-        changed |= scaleVelocities(target_now - p_new.total(), /*keep_rigid=*/false, 0.0, 1.0);
-    }
-    if (k_before > 0.0) report.velocity_scale = std::sqrt(kineticEnergy(v_new) / k_before);
+  bool correctBlendState(double target_now, PotentialEnergy& p_new) {
+    blend_step.beginCorrections(x_new, v_new, target_now, p_new);
+    evaluateBlendPotentials(t + options.time_step);  // kXNew holds the blended positions
+    const bool changed = blend_step.finishCorrections(x_new, v_new, p_new, *backend);
+    if (blend_step.positionsMoved()) backend->write(kXNew, x_new);
     return changed;
-  }
-
-  // Scales v_new (its non-rigid part when keep_rigid) so that the kinetic energy approaches
-  // `kinetic_wanted`, with the factor clamped to [s_min, s_max]. Returns true when it scaled.
-  bool scaleVelocities(double kinetic_wanted, bool keep_rigid, double s_min, double s_max) {
-    const double k = kineticEnergy(v_new);
-    const RigidMotion rigid = keep_rigid ? rigidMotion(scene.masses(), x_new, v_new) : RigidMotion{};
-    const double k_scaled = k - rigid.kinetic;
-    if (!(k_scaled > 1e-14 * std::max(k, energy_scale))) return false;
-    const double s = std::clamp(std::sqrt(std::max(0.0, kinetic_wanted - rigid.kinetic) / k_scaled), s_min, s_max);
-    for (Eigen::Index j = 0; j < v_new.rows(); ++j) {
-      const Eigen::Vector3d kept = keep_rigid ? rigid.velocityAt(x_new.row(j).transpose()) : Eigen::Vector3d::Zero();
-      v_new.row(j) = (kept + s * (v_new.row(j).transpose() - kept)).transpose();
-    }
-    return true;
-  }
-
-  // Moves the blended positions toward this step's BE partner's (kXPartner, x_partner, whose
-  // potential the blend evaluated), which carry less elastic energy, until their potential is
-  // `potential_wanted` or they reach the partner's. Velocities stay as they are.
-  PotentialEnergy lowerPotentialTowardPartner(double potential_wanted, const PotentialEnergy& p_new,
-                                              StepReport& report) {
-    const double t1 = t + options.time_step;
-    const double tau = tolerance();
-    PotentialEnergy best = p_new;
-    double best_beta = 0.0, best_g = p_new.total() - potential_wanted;
-    auto consider = [&](double beta, const PotentialEnergy& p) {
-      if (std::abs(p.total() - potential_wanted) < std::abs(best_g))
-        best = p, best_beta = beta, best_g = p.total() - potential_wanted;
-      return p.total();
-    };
-    auto potentialAt = [&](double beta) {
-      backend->combine(kXTrial, 1.0 - beta, kXNew, beta, kXPartner);
-      const PotentialEnergy p = backend->potential(kXTrial, t1);
-      ++report.energy_evaluations;
-      return consider(beta, p);
-    };
-    // At beta = 1 the trial positions are the partner's bit for bit (0 x + 1 y), whose potential
-    // the blend's root find has evaluated already.
-    const double p_partner = consider(1.0, partner_potential);
-    if (p_partner - potential_wanted < -tau)
-      findBlendWeight(KineticQuadratic{}, potentialAt, potential_wanted, 0.0, p_new.total(), 1.0, p_partner, tau,
-                      options.max_root_evaluations);
-    if (best_beta > 0.0) blendTowardPartner(x_new, x_new, x_partner, best_beta, kXNew);
-    return best;
   }
 
   // Forcing: the energy the user puts in through time-dependent potentials U(x, t) (moving pins,
@@ -454,8 +188,7 @@ struct Simulator::Impl {
     const PotentialEnergy new_at_midtime = backend->potential(x_new_slot, tm);
     const PotentialEnergy old_at_midtime = backend->potential(kX, tm);
     report.energy_evaluations += 2;
-    auto forced = [](const PotentialEnergy& p) { return p.pins + p.external; };
-    report.forcing = (forced(p_new) - forced(new_at_midtime)) + (forced(old_at_midtime) - forced(potential));
+    report.forcing = stabint::forcingWork(p_new, new_at_midtime, old_at_midtime, potential);
     return report.forcing;
   }
 
@@ -472,18 +205,10 @@ struct Simulator::Impl {
     double target_now = target;
 
     PotentialEnergy p_new;
-    switch (options.integrator) {
-      case Integrator::ForwardEuler: explicitEuler(kXNew, kVNew, false); break;
-      case Integrator::SymplecticEuler: explicitEuler(kXNew, kVNew, true); break;
-      case Integrator::BackwardEuler: r.iterations = backwardEuler(kXNew, kVNew, options.iterations, false); break;
-      case Integrator::BDF2:
-        // The first step has no history: BE.
-        r.iterations = has_history ? bdf2(kXNew, kVNew) : backwardEuler(kXNew, kVNew, options.iterations, false);
-        break;
-      case Integrator::ImplicitMidpoint: r.iterations = implicitMidpoint(kXNew, kVNew); break;
-      case Integrator::EnergyBlend: p_new = blend(target_now, r); break;
-    }
-    if (options.integrator != Integrator::EnergyBlend) {
+    if (options.integrator == Integrator::EnergyBlend) {
+      p_new = blend(target_now, r);
+    } else {
+      r.iterations = steps_of.step(options.integrator, h, t, has_history, kXNew, kVNew, control(options.iterations));
       p_new = backend->potential(kXNew, t1);
       ++r.energy_evaluations;
       if (std::isfinite(p_new.total())) target_now += forcingWork(kXNew, p_new, r);
@@ -493,8 +218,8 @@ struct Simulator::Impl {
     // formed there).
     if (options.integrator != Integrator::EnergyBlend || !new_state_on_host)
       backend->readBoth(kXNew, x_new, kVNew, v_new);
-    if (!allFinite(x_new) || !allFinite(v_new)) refuse(r, "non-finite position or velocity");
-    bool velocities_changed = correctBlendState(target_now, p_new, r);
+    if (!x_new.allFinite() || !v_new.allFinite()) refuse(nonFiniteState(r.step, t, t1, options.integrator));
+    bool velocities_changed = options.integrator == Integrator::EnergyBlend && correctBlendState(target_now, p_new);
     if (!scene.scene().colliders.empty()) velocities_changed |= resolveContact(t1, target_now, p_new, r);
 
     // Damping acts on the accepted velocities; the energy it removes leaves the target too, so
@@ -508,16 +233,8 @@ struct Simulator::Impl {
     target_now -= r.damping;
 
     const double k_new = kineticEnergy(v_new);
-    if (!std::isfinite(k_new) || !std::isfinite(p_new.total()) || !std::isfinite(target_now))
-      refuse(r, "non-finite energy");
-    // The user's ceiling: an explicit or midpoint run that gains energy is stopped long before it
-    // overflows, by the same refusal (docs: SimulatorOptions::energy_limit).
-    if (options.energy_limit > 0.0 && k_new + p_new.total() - target_now > options.energy_limit * energy_scale) {
-      std::ostringstream what;
-      what << "energy H = " << k_new + p_new.total() << " exceeds the target H* = " << target_now << " by more than "
-           << "energy_limit * E_scale = " << options.energy_limit * energy_scale;
-      refuse(r, what.str(), /*energy_limit=*/true);
-    }
+    const StepRefusal refusal = checkStepEnergy(r.step, t, t1, options, k_new, p_new, target_now, energy_scale);
+    if (!refusal.message.empty()) refuse(refusal);
 
     // Commit.
     if (options.integrator == Integrator::BDF2) {
@@ -975,14 +692,10 @@ struct Simulator::Impl {
     }
   }
 
-  [[noreturn]] void refuse(const StepReport& r, const std::string& what, bool energy_limit = false) {
-    // Nothing was committed: the slots kX/kV and the host copies still hold the last finite state.
-    std::ostringstream msg;
-    msg << "step " << r.step << " (t = " << t << " -> " << r.time << ", integrator "
-        << integratorName(options.integrator) << "): " << what
-        << (energy_limit ? "; step refused" : "; the simulation blew up, step refused") << ", state kept at t = " << t;
-    if (energy_limit) throw EnergyLimitError(msg.str(), r.step);
-    throw NonFiniteStateError(msg.str(), r.step);
+  // Nothing was committed: the slots kX/kV and the host copies still hold the last finite state.
+  [[noreturn]] static void refuse(const StepRefusal& refusal) {
+    if (refusal.energy_limit) throw EnergyLimitError(refusal.message, refusal.step);
+    throw NonFiniteStateError(refusal.message, refusal.step);
   }
 
   SimulatorOptions options;
@@ -991,6 +704,7 @@ struct Simulator::Impl {
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   LocalGlobalSolver solver;
+  IntegratorSteps steps_of;
   Eigen::MatrixX3d x, v;          // accepted state on the host
   Eigen::MatrixX3d x_new, v_new;  // staging for the candidate
   double t = 0.0;
@@ -1000,14 +714,9 @@ struct Simulator::Impl {
   PotentialEnergy potential;  // of the accepted state at time t
   double target = 0.0;
   double energy_scale = 0.0;
-  RigidMotion im_momenta;  // of the IM candidate, when the blend took a BE partner
-  bool im_momenta_known = false;
-  Eigen::MatrixX3d x_im, v_im;                       // host copies of the blend's IM candidate, when it took a partner
-  bool new_state_on_host = false;                    // the blend left (x_new, v_new) equal to (kXNew, kVNew)
-  Eigen::MatrixX3d x_partner, v_partner, v_scratch;  // host copies of the BE partner, and scratch
-  bool partner_on_host = false;                      // this step's partner: copies and potential
-  PotentialEnergy partner_potential;                 // of the partner's positions at t + h
-  double pending_event_energy = 0.0;                 // booked by discontinuous input since the last step
+  BlendStep blend_step;               // the blend's decisions, root finds and corrections
+  bool new_state_on_host = false;     // the blend left (x_new, v_new) equal to (kXNew, kVNew)
+  double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
   StepReport report;
   int contact_block = -1;  // the contact element type's block
   // The contact set's changes since L was last assembled, in order: e + 1 for pair e entering,

@@ -4,6 +4,7 @@
 #include "elements/element_type.hpp"
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
+#include "scene/scene_batch.hpp"
 #include "scene/lumping.hpp"
 #include "scene/validation.hpp"
 
@@ -408,33 +409,6 @@ void translate(Scene& s, const Eigen::Vector3d& t) {
   for (Pin& pin : s.pins) pin.target.position += t;
 }
 
-// Concatenates `p` after the particles of `s`, shifting its indices.
-void append(Scene& s, const Scene& p) {
-  const int offset = s.numParticles();
-  appendRows(s.positions, p.positions);
-  appendRows(s.rest_positions, p.rest_positions);
-  appendRows(s.velocities, p.velocities);
-  s.masses.conservativeResize(offset + p.masses.size());
-  s.masses.tail(p.masses.size()) = p.masses;
-  for (const ElementType* type : elementTypes()) type->appendShifted(s, p, offset);
-  for (ForceField f : p.force_fields) {
-    // "All particles" of a part means the part's own particles once it has neighbours.
-    if (f.particles.empty()) {
-      for (int j = 0; j < p.numParticles(); ++j) f.particles.push_back(j);
-    }
-    for (int& j : f.particles) j += offset;
-    s.force_fields.push_back(std::move(f));
-  }
-  for (Body b : p.bodies) {
-    for (int& j : b.particles) j += offset;
-    s.bodies.push_back(std::move(b));
-  }
-  for (auto t : p.triangles) {
-    for (int& v : t) v += offset;
-    s.triangles.push_back(t);
-  }
-}
-
 // Calls `each` for the object, or for every object of the array, under `key`.
 template <typename Each>
 void forEachEntry(const Field& root, const std::string& key, Each each) {
@@ -786,7 +760,7 @@ Scene sceneFromJson(const json& doc, const std::string& file) {
     ++parts;
     part_name = part.name;
     if (!part_gravity) part_gravity = part.gravity;
-    append(s, part);
+    appendScene(s, part);
   };
   forEachEntry(root, "builtin", [&](const Field& entry) {
     const Field name = entry.member("name");

@@ -10,7 +10,8 @@ namespace stabint::ocl {
 namespace {
 
 // Concatenated first, in this order (real.cl defines `real`, reduce.cl workGroupSum).
-const char* const kCommonFiles[] = {"real.cl", "reduce.cl", "vector_ops.cl", "gather.cl", "projections.cl"};
+const char* const kCommonFiles[] = {"real.cl",   "reduce.cl",   "vector_ops.cl",
+                                    "gather.cl", "segments.cl", "projections.cl"};
 
 void appendFile(std::string& source, const std::string& file) {
   source += "// ---- " + file + " ----\n" + embeddedKernel(file) + "\n";
@@ -45,7 +46,9 @@ std::string instance(const ElementType& type) {
 // branch on kernel arguments), each work-item one element, and with PASS_ENERGY the group's
 // energies are summed in the same launch (one partial per group, added in group order by the
 // host: deterministic). Segment s is the int4 (first group, end group, items, first
-// contribution); the groups after the last type's segment serve the vertices.
+// contribution); the groups after the last type's segment serve the vertices. With
+// PASS_ENERGY_PER_ELEMENT (launched over the element groups only) each element's energy goes to
+// element_energies[its global id] for the per-scene sums of segments.cl.
 std::string dispatcher(const std::vector<const ElementType*>& types) {
   std::string args, branches;
   for (const ElementType* type : types) {
@@ -69,7 +72,8 @@ std::string dispatcher(const std::vector<const ElementType*>& types) {
   }
   return "__kernel void element_pass(__global const real* x, const int n, const int flags,\n"
          "                           __global const real* fext, __global real* contrib,\n"
-         "                           __global real* partials, __local real* scratch,\n"
+         "                           __global real* partials, __global real* element_energies,\n"
+         "                           __local real* scratch,\n"
          "                           const int vertex_first_group" +
          args +
          ") {\n"
@@ -80,6 +84,8 @@ std::string dispatcher(const std::vector<const ElementType*>& types) {
          "    const int j = (group - vertex_first_group) * local_size + lid;\n"
          "    if (j < n && (flags & PASS_ENERGY)) energy = externalEnergyAt(n, x, fext, j);\n"
          "  }\n"
+         "  if ((flags & PASS_ENERGY_PER_ELEMENT) && group < vertex_first_group)\n"
+         "    element_energies[group * local_size + lid] = energy;\n"
          "  if (flags & PASS_ENERGY) {\n"
          "    energy = workGroupSum(energy, scratch);\n"
          "    if (lid == 0) partials[group] = energy;\n"

@@ -7,9 +7,9 @@
 namespace stabint::ocl {
 
 /// Source of the whole program. element_pass's arguments are, in order: x, n, flags, f_ext,
-/// contributions, partials, local scratch, the first group of the vertex segment, then for each
-/// element type in the order of elementTypes(): its segment (int4: first group, end group,
-/// elements, first contribution), vertices, coefficients and params.
+/// contributions, partials, per-element energies, local scratch, the first group of the vertex
+/// segment, then for each element type in the order of elementTypes(): its segment (int4: first
+/// group, end group, elements, first contribution), vertices, coefficients and params.
 std::string elementProgramSource();
 
 }  // namespace stabint::ocl

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -238,6 +239,55 @@ class OpenCLBackend final : public Backend {
     return cg_->solve(c, rhs_, slots_[x], iterations, tolerance);
   }
 
+  // ---- per-scene results of a batch (kernels/segments.cl) ----------------------------------
+  bool computesPerScene() const override { return true; }
+
+  void setSegments(const std::vector<SceneSegment>& segments) override {
+    const std::string misfit = segmentsMisfit(segments);
+    if (!misfit.empty()) throw InvalidInputError(misfit);
+    segments_ = segments;
+    segments_misfit_.clear();
+    uploadSegmentTable();
+  }
+
+  // One launch and one read of one real per scene.
+  void massDots(int a, int b, std::vector<double>& out) override {
+    checkSlot(a);
+    checkSlot(b);
+    checkSegmentsFit();
+    const auto start = Clock::now();
+    out.resize(segments_.size());
+    if (!segments_.empty()) {
+      segment_mass_dots_.bindSlot(segment_mass_dots_args_.a, a, slots_);
+      segment_mass_dots_.bindSlot(segment_mass_dots_args_.b, b, slots_);
+      enqueue(segment_mass_dots_);
+      readSegmentSums(segments_.size());
+      for (std::size_t s = 0; s < segments_.size(); ++s) out[s] = double(host_segment_sums_[s]);
+    }
+    times_.energy += secondsSince(start);
+  }
+
+  // The element pass writing each element's energy, the per-scene sums, one read (one wait).
+  void potentials(int x, double t, std::vector<PotentialEnergy>& out) override {
+    checkSlot(x);
+    checkSegmentsFit();
+    uploadForcing(t, false);
+    const auto start = Clock::now();
+    out.assign(segments_.size(), PotentialEnergy{});
+    if (!segments_.empty()) {
+      enqueueElementPass(x, kPassEnergyPerElement);
+      segment_energies_.bindSlot(segment_energies_x_, x, slots_);
+      enqueue(segment_energies_);
+      readSegmentSums(3 * segments_.size());
+      for (std::size_t s = 0; s < segments_.size(); ++s) {
+        out[s].internal = double(host_segment_sums_[3 * s]);
+        out[s].pins = double(host_segment_sums_[3 * s + 1]);
+        out[s].external = double(host_segment_sums_[3 * s + 2]);
+      }
+    }
+    times_.energy += secondsSince(start);
+  }
+
   void synchronize() override { ocl::check(queue_.finish(), "clFinish"); }
 
   std::string description() const override {
@@ -250,6 +300,9 @@ class OpenCLBackend final : public Backend {
   static constexpr int kReduceLocalSize = 128;
   static constexpr int kMaxReduceGroups = 64;
   static constexpr int kMinTermsPerWorkItem = 4;
+  // kernels/real.cl's PASS_ENERGY_PER_ELEMENT: an OpenCL-only pass flag (the CPU reference sums
+  // a scene's elements with passRange instead).
+  static constexpr int kPassEnergyPerElement = 8;
 
   // An element block on the device; the params of a time-dependent type are rewritten whenever
   // the time or the forcing (SceneData's version) changes.
@@ -389,6 +442,77 @@ class OpenCLBackend final : public Backend {
                "clEnqueueReadBuffer");
   }
 
+  // The first `count` per-scene sums to the host (blocking: the only wait of a per-scene call).
+  void readSegmentSums(std::size_t count) {
+    ocl::check(queue_.enqueueReadBuffer(segment_sums_, CL_TRUE, 0, bytes(count), host_segment_sums_.data()),
+               "clEnqueueReadBuffer");
+  }
+
+  // The kernels index buffers with the table, so a table that does not fit this scene is refused
+  // rather than read out of bounds on the device: why it does not fit, or "".
+  std::string segmentsMisfit(const std::vector<SceneSegment>& segments) const {
+    const std::size_t num_blocks = blocks_.size();
+    for (std::size_t s = 0; s < segments.size(); ++s) {
+      const SceneSegment& seg = segments[s];
+      const std::string which = "OpenCL backend: segment " + std::to_string(s) + ": ";
+      if (seg.first_particle < 0 || seg.num_particles < 0 || seg.first_particle > n_ - seg.num_particles)
+        return which + "particles outside the scene's " + std::to_string(n_);
+      if (seg.first_element.size() != num_blocks || seg.num_elements.size() != num_blocks)
+        return which + "element ranges for " + std::to_string(seg.first_element.size()) + " types, the scene has " +
+               std::to_string(num_blocks);
+      for (std::size_t b = 0; b < num_blocks; ++b)
+        if (seg.first_element[b] < 0 || seg.num_elements[b] < 0 ||
+            seg.first_element[b] > blocks_[b].block->count - seg.num_elements[b])
+          return which + "elements of " + blocks_[b].block->type->name() + " outside the scene's " +
+                 std::to_string(blocks_[b].block->count);
+    }
+    return "";
+  }
+
+  // Per-scene calls need segments that fit the current elements (after setPins changed them, the
+  // caller sets the new segments).
+  void checkSegmentsFit() const {
+    if (!segments_misfit_.empty()) throw InvalidInputError(segments_misfit_ + " (setSegments after setPins)");
+  }
+
+  // The segment table of kernels/segments.cl for the current element layout: per segment its
+  // particle range, then per block the range of its elements' energies, which element_pass
+  // writes at the element's global id (block b's element e at segment_groups_[b] groups + e).
+  // Built again by buildKernels when the blocks change (elementsChanged).
+  void uploadSegmentTable() {
+    const std::size_t num_blocks = blocks_.size();
+    std::vector<cl_int> table;
+    table.reserve(segments_.size() * (2 + 2 * num_blocks));
+    for (const SceneSegment& seg : segments_) {
+      table.push_back(seg.first_particle);
+      table.push_back(seg.num_particles);
+      for (std::size_t b = 0; b < num_blocks; ++b) {
+        table.push_back(cl_int(std::size_t(segment_groups_[b]) * element_local_) + seg.first_element[b]);
+        table.push_back(seg.num_elements[b]);
+      }
+    }
+    std::vector<cl_int> block_is_pins;
+    for (const DeviceBlock& d : blocks_) block_is_pins.push_back(d.block->type->term() == EnergyTerm::Pins ? 1 : 0);
+    segment_table_ = upload(table);
+    block_is_pins_ = upload(block_is_pins);
+    segment_sums_ = zeroBuffer(3 * segments_.size());
+    host_segment_sums_.resize(3 * std::max<std::size_t>(segments_.size(), 1));
+
+    const cl_int segments = cl_int(segments_.size()), blocks = cl_int(num_blocks), n = n_;
+    segment_energies_ = elementLaunch("segment_energies", int(segments_.size()));
+    segment_energies_.add(segments), segment_energies_.add(blocks), segment_energies_.add(segment_table_);
+    segment_energies_.add(block_is_pins_), segment_energies_.add(element_energies_), segment_energies_.add(n);
+    segment_energies_x_ = segment_energies_.addSlot(0, slots_);
+    segment_energies_.add(fext_), segment_energies_.add(segment_sums_);
+
+    segment_mass_dots_ = elementLaunch("segment_mass_dots", int(segments_.size()));
+    segment_mass_dots_.add(segments), segment_mass_dots_.add(blocks), segment_mass_dots_.add(segment_table_);
+    segment_mass_dots_.add(n), segment_mass_dots_.add(masses_);
+    segment_mass_dots_args_.a = segment_mass_dots_.addSlot(0, slots_);
+    segment_mass_dots_args_.b = segment_mass_dots_.addSlot(0, slots_);
+    segment_mass_dots_.add(segment_sums_);
+  }
+
   // Partials [first, last) added in group order (a fixed order: deterministic).
   double sumPartials(int first, int last) const {
     double sum = 0.0;
@@ -512,6 +636,7 @@ class OpenCLBackend final : public Backend {
     const int max_partials = std::max(full_groups_, mass_dot_groups_);
     partials_ = zeroBuffer(std::size_t(max_partials));
     host_partials_.resize(std::size_t(max_partials));
+    element_energies_ = zeroBuffer(std::size_t(segment_groups_.back()) * element_local_);
 
     element_args_.x = element_pass_.addSlot(0, slots_);
     element_pass_.add(n);
@@ -519,6 +644,7 @@ class OpenCLBackend final : public Backend {
     element_pass_.add(fext_);
     element_pass_.add(contrib_);
     element_pass_.add(partials_);
+    element_pass_.add(element_energies_);
     element_pass_.add(cl::Local(bytes(element_local_)));
     element_pass_.add(cl_int(segment_groups_.back()));
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
@@ -554,6 +680,10 @@ class OpenCLBackend final : public Backend {
     mass_dot_args_.b = mass_dot_.addSlot(0, slots_);
     mass_dot_.add(partials_);
     mass_dot_.add(cl::Local(bytes(reduce_local)));
+
+    // The segment table indexes element_energies_ by the element groups just laid out.
+    segments_misfit_ = segmentsMisfit(segments_);
+    if (!segments_.empty() && segments_misfit_.empty()) uploadSegmentTable();
   }
 
   const SceneData& scene_;
@@ -573,6 +703,17 @@ class OpenCLBackend final : public Backend {
   std::vector<cl::Buffer> slots_;
   cl::Buffer masses_, fext_, rhs_, contrib_, offsets_, list_;
   cl::Buffer partials_;
+  // Per-scene sums of a batch: each element's energy (element_pass with kPassEnergyPerElement),
+  // the segment table, which blocks are pins, the sums (3 per segment, or 1 for massDots).
+  std::vector<SceneSegment> segments_;
+  std::string segments_misfit_;  // why segments_ no longer fit the elements, or ""
+  cl::Buffer element_energies_, segment_table_, block_is_pins_, segment_sums_;
+  std::vector<Real> host_segment_sums_;
+  Launch segment_energies_, segment_mass_dots_;
+  cl_uint segment_energies_x_ = 0;
+  struct {
+    cl_uint a, b;
+  } segment_mass_dots_args_{};
 
   Launch element_pass_, mass_dot_, combine_, gather_rhs_, gather_accel_;
   struct {

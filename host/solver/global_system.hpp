@@ -30,6 +30,9 @@ class GlobalSystem {
   void factor(double c, const char* c_name = "c");
 
   /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use.
+  /// With cpuThreads() > 1 (host/cpu/worker_pool.hpp) and at least 1,000 particles, columns x
+  /// and y and column z are two solves on two threads, else one solve: the same arithmetic either
+  /// way (CHOLMOD's simplicial solves treat each column alike), so the same result bit for bit.
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x);
 
   /// Jacobi-preconditioned conjugate gradients on K_c x = rhs (GlobalSolve::ConjugateGradient on
@@ -107,6 +110,20 @@ class GlobalSystem {
   Eigen::SparseMatrix<double> laplacian_;
   Eigen::VectorXd masses_;
   std::map<double, std::unique_ptr<Factor>> factors_;
+  // One CHOLMOD workspace per concurrent solve: a cholmod_common is not thread-safe, so each
+  // column group solves with its own (cholmod_solve2, which also keeps its X, Y and E buffers
+  // from one solve to the next).
+  struct SolveWorkspace {
+    cholmod_common common;
+    cholmod_dense* x = nullptr;
+    cholmod_dense* y = nullptr;
+    cholmod_dense* e = nullptr;
+    SolveWorkspace();
+    ~SolveWorkspace();
+    SolveWorkspace(const SolveWorkspace&) = delete;
+    SolveWorkspace& operator=(const SolveWorkspace&) = delete;
+  };
+  std::unique_ptr<SolveWorkspace> workspaces_[2];
 };
 
 }  // namespace stabint

@@ -662,3 +662,64 @@ def test_event_scripts_play_collider_and_grab_events_and_survive_a_checkpoint_as
         ' "events": [{"frame": 1, "collider": {"index": 0, "velocity": [0, 0, 1]}}]}')
     with pytest.raises(stabint.FileFormatError, match=r"events\[0\]\.collider\.index: collider 0 out of range"):
         stabint.load_scene_file_with_events(str(tmp_path / "bad.json"))
+
+
+# --- batches -----------------------------------------------------------------------------------
+def test_a_batch_steps_every_scene_as_its_own_simulator_and_refuses_per_scene():
+    # Three scenes of different sizes and parameters in one blend batch: each follows its own
+    # Simulator (the block-diagonal factor may order a block differently: round-off, 1e-9 of the
+    # scene's size over 30 steps, as the C++ batch tests assert), with its own branch and H*.
+    scenes = [stabint.chain_pendulum(), stabint.chain_pendulum(particles=6, stiffness=1e3),
+              stabint.cloth_grid(nx=6, ny=6)]
+    options = stabint.SimulatorOptions(integrator=Integrator.EnergyBlend, iterations=5)
+    batch = stabint.BatchSimulator(scenes, options)
+    alone = [stabint.Simulator(s, options) for s in scenes]
+    assert len(batch) == 3
+    for _ in range(30):
+        report = batch.step()
+        own = [sim.step() for sim in alone]
+        assert report.refusals == ["", "", ""]
+        assert [r.branch for r in report.scenes] == [r.branch for r in own]
+    for i, sim in enumerate(alone):
+        size = np.ptp(scenes[i].positions, axis=0).max()
+        assert np.abs(batch.positions(i) - sim.positions).max() <= 1e-9 * size
+        assert batch.target(i) == pytest.approx(sim.target, rel=1e-9, abs=1e-12 * sim.energy_scale)
+        assert batch.num_particles(i) == scenes[i].positions.shape[0]
+    first = batch.first_particle(2)
+    np.testing.assert_array_equal(batch.all_positions[first:], batch.positions(2))
+
+    # Symplectic Euler is unstable on the stiff chain (omega h ~ 30 > 2) and stable on a soft one:
+    # the stiff scene's step is refused with the message its own Simulator raises, its state kept,
+    # and the soft scene steps on.
+    soft = stabint.chain_pendulum(stiffness=10.0, pin_stiffness=100.0)
+    se = stabint.SimulatorOptions(integrator=Integrator.SymplecticEuler)
+    batch = stabint.BatchSimulator([soft, stabint.chain_pendulum()], se)
+    own = stabint.Simulator(stabint.chain_pendulum(), se)
+    with pytest.raises(stabint.NonFiniteStateError) as refused:
+        for _ in range(300):
+            own.step()
+    for _ in range(300):
+        last = batch.positions(1)
+        report = batch.step()
+        if not batch.active(1):
+            break
+    assert not batch.active(1) and batch.active(0)
+    assert report.refusals[1] == str(refused.value)
+    assert report.refusals[0] == ""
+    np.testing.assert_array_equal(batch.positions(1), last)
+    assert batch.step_count(1) == own.step_count
+    batch.step()
+    assert batch.step_count(0) == batch.step_count(1) + 2
+
+
+def test_a_batch_refuses_what_would_couple_its_scenes_naming_the_scene():
+    oscillator = stabint.linear_oscillator()
+    other_gravity = stabint.chain_pendulum()
+    other_gravity.gravity = np.array([0.0, -1.0, 0.0])
+    with pytest.raises(stabint.InvalidInputError, match="scene 1"):
+        stabint.BatchSimulator([stabint.chain_pendulum(), other_gravity])
+    with pytest.raises(stabint.InvalidInputError, match="tolerance"):
+        stabint.BatchSimulator([oscillator], stabint.SimulatorOptions(tolerance=1e-6))
+    batch = stabint.BatchSimulator([oscillator])
+    with pytest.raises(stabint.InvalidInputError):
+        batch.positions(1)

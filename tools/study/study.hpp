@@ -159,6 +159,14 @@ struct RunResult {
 /// `on_frame(frame, simulator)` is called after each completed frame (frame >= 1).
 RunResult simulate(const Scene& scene, const RunSpec& spec,
                    const std::function<void(int, const stabint::Simulator&)>& on_frame = {});
+/// The same runs for many scenes at once, one stabint::BatchSimulator for all (the options of
+/// `spec`, which a batch must support: fixed iterations, no acceleration): each run is what
+/// simulate(scenes[s], spec with energy_unit = energy_units[s]) records, to the round-off of the
+/// batch's factor ordering, except the wall clock, which is the batch's divided evenly among its
+/// scenes. A refused scene step is the run's blow-up; a stopped or blown-up scene is no longer
+/// recorded, while the batch steps on until every scene stopped or `spec.frames` frames.
+std::vector<RunResult> simulateBatch(const std::vector<Scene>& scenes, const RunSpec& spec,
+                                     const std::vector<double>& energy_units);
 
 // ---- metrics -------------------------------------------------------------------------------
 

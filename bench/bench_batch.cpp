@@ -1,0 +1,78 @@
+// batch/<scene>/BE/<backend>/<variant>/scenes:N: N small scenes advanced one step each, either as
+// one BatchSimulator (variant "batch": one solve and one factor for all, one launch per phase on
+// OpenCL) or as N Simulators one after another ("separate"). The ratio of the two is the batch's
+// gain (docs/batch_design.md, the benchmark that judges issue 11 item 3: on OpenCL the batch must
+// be at least 20x "separate" and faster than the CPU reference's "separate").
+#include "bench_common.hpp"
+
+#include "integrator/batch_simulator.hpp"
+
+namespace stabint::bench {
+namespace {
+
+struct BatchFixture {
+  std::unique_ptr<BatchSimulator> batch;
+  std::vector<Simulator> separate;
+};
+
+void runBatch(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
+              BackendChoice backend, bool batched) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  const int count = static_cast<int>(state.range(0));
+  // A fresh fixture per case function call: every repetition times the same steps from rest.
+  releaseAllFixtures();
+  BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
+    auto fixture = std::make_unique<BatchFixture>();
+    const std::vector<Scene> scenes(static_cast<std::size_t>(count), make());
+    const SimulatorOptions options = optionsFor(backend, Integrator::BackwardEuler);
+    if (batched) {
+      fixture->batch = std::make_unique<BatchSimulator>(scenes, options);
+    } else {
+      fixture->separate.reserve(scenes.size());
+      for (const Scene& s : scenes) fixture->separate.emplace_back(s, options);
+    }
+    return fixture;
+  });
+  for (auto _ : state) {
+    if (batched) {
+      benchmark::DoNotOptimize(f.batch->step());
+    } else {
+      for (Simulator& s : f.separate) benchmark::DoNotOptimize(s.step());
+    }
+  }
+  state.counters["scenes"] = count;
+  state.SetLabel(batched ? "one BatchSimulator" : "one Simulator per scene");
+}
+
+}  // namespace
+
+void registerBatchCases() {
+  const std::vector<SceneCase> scenes = {{"chain", [] { return makeChainPendulum(); }}, {"cloth10", [] {
+                                                                                           ClothGridParams p;
+                                                                                           p.nx = 10;
+                                                                                           p.ny = 10;
+                                                                                           return makeClothGrid(p);
+                                                                                         }}};
+  for (BackendChoice backend : allBackends())
+    for (const SceneCase& scene : scenes)
+      for (int count : {100, 1000}) {
+        // The goal's OpenCL cases: 1,000 chains, 100 and 1,000 cloths (the CPU has all four).
+        if (backend != BackendChoice::Cpu && scene.name == "chain" && count == 100) continue;
+        for (bool batched : {true, false}) {
+          const std::string name =
+              "batch/" + scene.name + "/BE/" + backendLabel(backend) + "/" + (batched ? "batch" : "separate");
+          benchmark::RegisterBenchmark(
+              name.c_str(), [=](benchmark::State& state) { runBatch(state, name, scene.make, backend, batched); })
+              ->Arg(count)
+              ->ArgName("scenes")
+              ->Iterations(20)
+              ->UseRealTime()
+              ->Unit(benchmark::kMillisecond);
+        }
+      }
+}
+
+}  // namespace stabint::bench

@@ -1,0 +1,467 @@
+#include "integrator/batch_simulator.hpp"
+
+#include "elements/element_type.hpp"
+#include "integrator/damping.hpp"
+#include "integrator/integrator_steps.hpp"
+#include "integrator/options.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <utility>
+
+namespace stabint {
+namespace {
+
+// Simulator's checks, then what the batch does not support yet. The backend is refused later,
+// once created, unless it computes per-scene energies (Backend::computesPerScene).
+const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
+  validateOptions(o);
+  if (o.tolerance != 0.0 || o.acceleration != Acceleration::None || o.global_solve != GlobalSolve::Factor)
+    throw InvalidInputError(
+        "batch simulator options: a tolerance stop, acceleration and CG sum over the whole batch: a fixed iteration "
+        "count with the factor only, until they are per scene");
+  return o;
+}
+
+// The segment's rows as an `n_s by 3` matrix (so that its reductions run as the scene alone's).
+Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) {
+  return m.middleRows(s.first_particle, s.num_particles);
+}
+
+}  // namespace
+
+BatchSimulator::Impl::Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options)
+    : Impl(concatenateScenes(scenes), scenes, checkedOptions(options)) {}
+
+BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options)
+    : scenes_(scenes),
+      segments_(std::move(batch.segments)),
+      options_(options),
+      data_(batch.scene),
+      choice_(selectBackend(options_)),
+      backend_(makeBackend(data_, kNumDriverSlots, choice_)),
+      system_(data_),
+      solver_(*backend_, system_, kSolverScratch),
+      x_(batch.scene.positions),
+      v_(batch.scene.velocities),
+      v_slot_(batch.scene.velocities),
+      per_scene_(segments_.size()) {
+  // Any backend with per-scene energies steps a batch (the OpenCL backend once it has them).
+  if (!backend_->computesPerScene())
+    throw InvalidInputError("batch simulator: the backend (" + backend_->description() +
+                            ") computes no per-scene energies yet (docs/batch_design.md)");
+  factorIntegratorSystems(system_, options_.integrator, options_.time_step);
+  backend_->setSegments(segments_);
+  backend_->write(kX, x_);
+  backend_->write(kV, v_);
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kX, 0.0, potentials);
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    PerScene& p = per_scene_[s];
+    p.potential = potentials[s];
+    p.kinetic = kineticEnergy(int(s), v_);
+    p.target = p.kinetic + p.potential.total();
+    const Scene& own = scenes_[s];
+    p.energy_scale = initialEnergyScale(p.kinetic, p.potential, own.masses, own.gravity, own.positions);
+    p.momentum_conserved = momentumConserved(own, /*has_user_forces=*/false);
+  }
+  backend_->times() = PhaseTimes{};
+}
+
+double BatchSimulator::Impl::kineticEnergy(int scene, const Eigen::MatrixX3d& v) const {
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  return stabint::kineticEnergy(scenes_[std::size_t(scene)].masses, rowsOf(v, seg));
+}
+
+Eigen::MatrixX3d BatchSimulator::Impl::positions(int scene) const { return rowsOf(x_, segments_[std::size_t(scene)]); }
+Eigen::MatrixX3d BatchSimulator::Impl::velocities(int scene) const { return rowsOf(v_, segments_[std::size_t(scene)]); }
+EnergyReport BatchSimulator::Impl::energy(int scene) const {
+  const PerScene& p = per_scene_[std::size_t(scene)];
+  return EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
+}
+
+void BatchSimulator::Impl::checkScene(int scene, const char* call) const {
+  if (scene < 0 || scene >= size())
+    throw InvalidInputError(std::string(call) + ": scene " + std::to_string(scene) + " out of range (the batch has " +
+                            std::to_string(size()) + " scenes)");
+}
+
+void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+  checkScene(scene, "setState");
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  const std::string where = "setState: scene " + std::to_string(scene) + ": ";
+  for (const Eigen::MatrixX3d* m : {&positions, &velocities}) {
+    const char* field = m == &positions ? "positions" : "velocities";
+    if (m->rows() != seg.num_particles)
+      throw InvalidInputError(where + field + ": " + std::to_string(m->rows()) + " rows, expected one per particle (" +
+                              std::to_string(seg.num_particles) + ")");
+    for (Eigen::Index j = 0; j < m->rows(); ++j)
+      if (!m->row(j).allFinite())
+        throw InvalidInputError(where + field + ": row " + std::to_string(j) + " is not finite");
+  }
+  if (options_.integrator == Integrator::BDF2)
+    throw InvalidInputError(where +
+                            "BDF2 would restart every scene of the batch with a BE step; not supported in a batch yet");
+  PerScene& p = per_scene_[std::size_t(scene)];
+  const double h_before = p.kinetic + p.potential.total();
+  // The other scenes' rows of kV stay what they are (v_slot_, which may differ from their host
+  // copies by round-off, as a Simulator's do).
+  x_.middleRows(seg.first_particle, seg.num_particles) = positions;
+  v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;
+  backend_->write(kX, x_);
+  backend_->write(kV, v_slot_);
+  // The slots may hold less precision (a float device): the host copies are what they hold.
+  backend_->readBoth(kX, x_, kV, v_slot_);
+  v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kX, t_, potentials);
+  p.potential = potentials[std::size_t(scene)];
+  p.kinetic = kineticEnergy(scene, v_);
+  const double event = p.kinetic + p.potential.total() - h_before;
+  p.target += event;
+  p.pending_event_energy += event;
+  if (!p.active) {
+    p.active = true;
+    p.time = t_;
+  }
+}
+
+void BatchSimulator::Impl::setPinTarget(int scene, int pin, const Eigen::Vector3d& q) {
+  checkScene(scene, "setPinTarget");
+  // The pins are a block like the others: scene s's are its segment's range of the pin type
+  // (fixed while the batch has no grab or release).
+  const std::vector<const ElementType*>& types = elementTypes();
+  const std::size_t type = std::size_t(std::find(types.begin(), types.end(), &pinElementType()) - types.begin());
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  const std::string where = "setPinTarget: scene " + std::to_string(scene) + ": pin " + std::to_string(pin);
+  if (pin < 0 || pin >= seg.num_elements[type])
+    throw InvalidInputError(where + " out of range (the scene has " + std::to_string(seg.num_elements[type]) +
+                            " pins)");
+  if (!q.allFinite()) throw InvalidInputError(where + ": target is not finite");
+  data_.rampPinTarget(seg.first_element[type] + pin, q, t_, t_ + options_.time_step);
+}
+
+void BatchSimulator::Impl::refuse(std::size_t s, const std::string& message) {
+  report_.refusals[s] = message;
+  per_scene_[s].stepping = false;
+}
+
+const BatchStepReport& BatchSimulator::Impl::step() {
+  const double h = options_.time_step;
+  const double t1 = t_ + h;
+  const std::size_t n = segments_.size();
+  report_.scenes.assign(n, StepReport{});
+  report_.refusals.assign(n, std::string());
+  for (std::size_t s = 0; s < n; ++s) {
+    PerScene& p = per_scene_[s];
+    StepReport& r = report_.scenes[s];
+    r.step = p.steps;
+    r.time = t1;
+    r.event_energy = p.pending_event_energy;
+    p.stepping = p.active;
+    p.velocities_changed = false;
+    p.target_now = p.target;
+    if (!p.active) report_.refusals[s] = "inactive since a refused step";
+  }
+  // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
+  // exactly 0 (its terms at t_m and t_1 are the same numbers).
+  const bool forced = data_.forcingChangesDuring(t_, t1);
+  if (options_.integrator == Integrator::EnergyBlend)
+    blend(t1, forced);
+  else
+    integrate(t1, forced);
+
+  for (std::size_t s = 0; s < n; ++s) {
+    PerScene& p = per_scene_[s];
+    if (p.stepping && (!p.x_new.allFinite() || !p.v_new.allFinite()))
+      refuse(s, nonFiniteState(report_.scenes[s].step, t_, t1, options_.integrator).message);
+  }
+  if (options_.integrator == Integrator::EnergyBlend) {
+    for (PerScene& p : per_scene_)
+      if (p.stepping) p.blend.beginCorrections(p.x_new, p.v_new, p.target_now, p.p_new);
+    evaluateBlendPotentials(t1);
+    for (PerScene& p : per_scene_)
+      if (p.stepping) p.velocities_changed = p.blend.finishCorrections(p.x_new, p.v_new, p.p_new, *backend_);
+  }
+  for (std::size_t s = 0; s < n; ++s) {
+    PerScene& p = per_scene_[s];
+    StepReport& r = report_.scenes[s];
+    if (!p.stepping) continue;
+    // Damping acts on the accepted velocities; the energy it removes leaves the target too.
+    r.damping = applyMomentumPreservingDamping(scenes_[s].bodies, scenes_[s].masses, p.x_new, p.v_new);
+    p.velocities_changed = p.velocities_changed || r.damping != 0.0;
+    if (p.velocities_changed) backend_->roundToStorage(p.v_new);
+    p.target_now -= r.damping;
+    const double k_new = stabint::kineticEnergy(scenes_[s].masses, p.v_new);
+    const StepRefusal refusal = checkStepEnergy(r.step, t_, t1, options_, k_new, p.p_new, p.target_now, p.energy_scale);
+    if (!refusal.message.empty()) {
+      refuse(s, refusal.message);
+      continue;
+    }
+    p.kinetic = k_new;
+    p.potential = p.p_new;
+    p.target = p.target_now;
+    p.time = t1;
+    ++p.steps;
+    p.pending_event_energy = 0.0;
+  }
+
+  // The new state of the batch: each stepped scene's candidate, each other scene's last state
+  // (its block was solved too: its results are dropped). The slots get the velocities Simulator's
+  // slots would hold: the host copy when it changed them (corrections, damping that removed
+  // energy), else the solve's (v_new_ mirrors kVNew; damping that removes exactly 0 J may still
+  // move the host copy by round-off, and Simulator then keeps the solve's).
+  for (std::size_t s = 0; s < n; ++s) {
+    PerScene& p = per_scene_[s];
+    const SceneSegment& seg = segments_[s];
+    StepReport& r = report_.scenes[s];
+    if (p.stepping) {
+      x_new_.middleRows(seg.first_particle, seg.num_particles) = p.x_new;
+      if (p.velocities_changed) v_new_.middleRows(seg.first_particle, seg.num_particles) = p.v_new;
+      v_.middleRows(seg.first_particle, seg.num_particles) = p.v_new;
+    } else {
+      x_new_.middleRows(seg.first_particle, seg.num_particles) = rowsOf(x_, seg);
+      v_new_.middleRows(seg.first_particle, seg.num_particles) = rowsOf(v_slot_, seg);
+      p.active = false;
+      const double event_energy = r.event_energy;
+      r = StepReport{};
+      r.step = p.steps;
+      r.time = p.time;
+      r.event_energy = event_energy;
+    }
+    r.energy = EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
+    r.target = p.target;
+  }
+  backend_->write(kXNew, x_new_);
+  backend_->write(kVNew, v_new_);
+  if (options_.integrator == Integrator::BDF2) {
+    backend_->copy(kXPrev, kX);
+    backend_->copy(kVPrev, kV);
+    has_history_ = true;
+  }
+  backend_->copy(kX, kXNew);
+  backend_->copy(kV, kVNew);
+  x_.swap(x_new_);
+  v_slot_.swap(v_new_);
+  t_ = t1;
+  return report_;
+}
+
+void BatchSimulator::Impl::integrate(double t1, bool forced) {
+  const double h = options_.time_step;
+  IterationControl control;
+  control.iterations = options_.iterations;
+  const int iterations =
+      IntegratorSteps(*backend_, solver_).step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
+  backend_->potentials(kXNew, t1, p_all_);
+  if (forced) {
+    backend_->potentials(kXNew, t_ + 0.5 * h, new_mid_);
+    backend_->potentials(kX, t_ + 0.5 * h, old_mid_);
+  }
+  backend_->readBoth(kXNew, x_new_, kVNew, v_new_);
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    PerScene& p = per_scene_[s];
+    if (!p.stepping) continue;
+    StepReport& r = report_.scenes[s];
+    r.iterations = iterations;
+    r.energy_evaluations = 1;
+    p.x_new = rowsOf(x_new_, segments_[s]);
+    p.v_new = rowsOf(v_new_, segments_[s]);
+    p.p_new = p_all_[s];
+    if (forced && std::isfinite(p.p_new.total())) {
+      r.forcing = forcingWork(p.p_new, new_mid_[s], old_mid_[s], p.potential);
+      r.energy_evaluations += 2;
+      p.target_now += r.forcing;
+    }
+  }
+}
+
+void BatchSimulator::Impl::blend(double t1, bool forced) {
+  const double h = options_.time_step;
+  const double tm = t_ + 0.5 * h;
+  const std::size_t n = segments_.size();
+  IterationControl control;
+  control.iterations = options_.iterations;
+  IntegratorSteps steps(*backend_, solver_);
+  const int im_iterations = steps.implicitMidpoint(h, t_, kXNew, kVNew, control);
+  backend_->readBoth(kXNew, x_new_, kVNew, v_new_);
+  backend_->potentials(kXNew, t1, p_all_);
+  if (forced) {
+    backend_->potentials(kXNew, tm, new_mid_);
+    backend_->potentials(kX, tm, old_mid_);
+  }
+  std::vector<char> not_finite(n, 0), needs_partner(n, 0);
+  bool any_not_finite = false, any_partner = false;
+  for (std::size_t s = 0; s < n; ++s) {
+    PerScene& p = per_scene_[s];
+    if (!p.stepping) continue;
+    StepReport& r = report_.scenes[s];
+    const Eigen::VectorXd& masses = scenes_[s].masses;
+    r.iterations = im_iterations;
+    r.energy_evaluations = 1;
+    p.blend.start(BlendScene{&masses, p.momentum_conserved, p.energy_scale,
+                             blendTolerance(options_, p.kinetic, p.potential, p.energy_scale)},
+                  options_, r);
+    p.x_new = rowsOf(x_new_, segments_[s]);
+    p.v_new = rowsOf(v_new_, segments_[s]);
+    const PotentialEnergy& p_im = p_all_[s];
+    const double vv_im = massDot(masses, p.v_new, p.v_new);
+    if (!std::isfinite(0.5 * vv_im + p_im.total())) {
+      p.blend.candidateNotFinite();
+      not_finite[s] = 1;
+      any_not_finite = true;
+      continue;
+    }
+    p.p_new = p_im;
+    // The target must include this step's forcing before the candidate is judged.
+    if (forced) {
+      r.forcing = forcingWork(p_im, new_mid_[s], old_mid_[s], p.potential);
+      r.energy_evaluations += 2;
+      p.target_now += r.forcing;
+    }
+    needs_partner[s] = p.blend.judge(p.x_new, p.v_new, p_im, vv_im, p.target_now) ? 1 : 0;
+    any_partner = any_partner || needs_partner[s];
+  }
+
+  if (any_not_finite) {
+    // The BE step with the full budget for the scenes whose IM candidate blew up, solved for the
+    // whole batch (a rare step: its cost does not matter) in kXTrial and kScratch.
+    backend_->copy(kXTrial, kX);
+    const int iterations = steps.backwardEuler(h, t_, kXTrial, kScratch, control, /*warm_start=*/true);
+    backend_->readBoth(kXTrial, x_aux_, kScratch, v_aux_);
+    backend_->potentials(kXTrial, t1, p_all_);
+    if (forced) backend_->potentials(kXTrial, tm, aux_mid_);
+    for (std::size_t s = 0; s < n; ++s) {
+      if (!not_finite[s]) continue;
+      PerScene& p = per_scene_[s];
+      StepReport& r = report_.scenes[s];
+      r.iterations += iterations;
+      r.energy_evaluations += 1;
+      p.x_new = rowsOf(x_aux_, segments_[s]);
+      p.v_new = rowsOf(v_aux_, segments_[s]);
+      v_new_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.v_new;  // Simulator's kVNew
+      p.p_new = p_all_[s];
+      if (forced) {
+        r.forcing = forcingWork(p.p_new, aux_mid_[s], old_mid_[s], p.potential);
+        r.energy_evaluations += 2;
+        p.target_now += r.forcing;
+      }
+    }
+  }
+
+  if (!any_partner) return;
+  // The BE partner for the whole batch when any scene needs it; the other scenes' rows are
+  // dropped (their blocks are independent: masking them would save element work only,
+  // docs/batch_design.md).
+  control.iterations = options_.be_iterations;
+  backend_->copy(kXPartner, kX);
+  const int be_iterations = steps.backwardEuler(h, t_, kXPartner, kVPartner, control, /*warm_start=*/true);
+  backend_->readBoth(kXPartner, x_aux_, kVPartner, v_aux_);
+  for (std::size_t s = 0; s < n; ++s) {
+    if (!needs_partner[s]) continue;
+    PerScene& p = per_scene_[s];
+    report_.scenes[s].iterations += be_iterations;
+    p.blend.partnerPositions() = rowsOf(x_aux_, segments_[s]);
+    p.blend.partnerVelocities() = rowsOf(v_aux_, segments_[s]);
+    p.blend.partnerRead();
+  }
+  evaluateBlendPotentials(t1);
+  for (std::size_t s = 0; s < n; ++s)
+    if (needs_partner[s]) {
+      PerScene& p = per_scene_[s];
+      p.p_new = p.blend.blend(p.x_new, p.v_new, *backend_);
+      v_new_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.v_new;  // Simulator writes it
+    }
+}
+
+void BatchSimulator::Impl::evaluateBlendPotentials(double t1) {
+  // Rounds: as many as the scene that needs the most evaluations, not their sum.
+  for (;;) {
+    bool any = false;
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      const BlendStep& b = per_scene_[s].blend;
+      if (!per_scene_[s].stepping || !b.wantsPotential()) continue;
+      if (!any && x_trial_.rows() != x_.rows()) x_trial_ = x_;
+      any = true;
+      // As Backend::combine(kXTrial, 1 - w, from, w, partner) forms it (bit for bit on the CPU
+      // reference).
+      const double w = b.weight();
+      x_trial_.middleRows(segments_[s].first_particle, segments_[s].num_particles) =
+          (1.0 - w) * b.from() + w * b.partner();
+    }
+    if (!any) return;
+    backend_->write(kXTrial, x_trial_);
+    backend_->potentials(kXTrial, t1, p_all_);
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      BlendStep& b = per_scene_[s].blend;
+      if (per_scene_[s].stepping && b.wantsPotential()) b.take(p_all_[s]);
+    }
+  }
+}
+
+// ---- the public class ----------------------------------------------------------------------------
+
+BatchSimulator::BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options)
+    : impl_(std::make_unique<Impl>(scenes, options)) {}
+BatchSimulator::~BatchSimulator() = default;
+BatchSimulator::BatchSimulator(BatchSimulator&&) noexcept = default;
+BatchSimulator& BatchSimulator::operator=(BatchSimulator&&) noexcept = default;
+
+const BatchStepReport& BatchSimulator::step() { return impl_->step(); }
+int BatchSimulator::size() const { return impl_->size(); }
+bool BatchSimulator::active(int scene) const {
+  impl_->checkScene(scene, "active");
+  return impl_->per_scene_[std::size_t(scene)].active;
+}
+Eigen::MatrixX3d BatchSimulator::positions(int scene) const {
+  impl_->checkScene(scene, "positions");
+  return impl_->positions(scene);
+}
+Eigen::MatrixX3d BatchSimulator::velocities(int scene) const {
+  impl_->checkScene(scene, "velocities");
+  return impl_->velocities(scene);
+}
+const Eigen::MatrixX3d& BatchSimulator::allPositions() const { return impl_->x_; }
+int BatchSimulator::firstParticle(int scene) const {
+  impl_->checkScene(scene, "firstParticle");
+  return impl_->segments_[std::size_t(scene)].first_particle;
+}
+int BatchSimulator::numParticles(int scene) const {
+  impl_->checkScene(scene, "numParticles");
+  return impl_->segments_[std::size_t(scene)].num_particles;
+}
+double BatchSimulator::time() const { return impl_->t_; }
+double BatchSimulator::time(int scene) const {
+  impl_->checkScene(scene, "time");
+  return impl_->per_scene_[std::size_t(scene)].time;
+}
+int BatchSimulator::stepCount(int scene) const {
+  impl_->checkScene(scene, "stepCount");
+  return impl_->per_scene_[std::size_t(scene)].steps;
+}
+double BatchSimulator::target(int scene) const {
+  impl_->checkScene(scene, "target");
+  return impl_->per_scene_[std::size_t(scene)].target;
+}
+EnergyReport BatchSimulator::energy(int scene) const {
+  impl_->checkScene(scene, "energy");
+  return impl_->energy(scene);
+}
+double BatchSimulator::energyScale(int scene) const {
+  impl_->checkScene(scene, "energyScale");
+  return impl_->per_scene_[std::size_t(scene)].energy_scale;
+}
+const SimulatorOptions& BatchSimulator::options() const { return impl_->options_; }
+std::string BatchSimulator::backendDescription() const {
+  const std::string& reason = impl_->choice_.reason;
+  return impl_->backend_->description() + (reason.empty() ? "" : " [" + reason + "]");
+}
+void BatchSimulator::setPinTarget(int scene, int pin, const Eigen::Vector3d& target) {
+  impl_->setPinTarget(scene, pin, target);
+}
+void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+  impl_->setState(scene, positions, velocities);
+}
+
+}  // namespace stabint

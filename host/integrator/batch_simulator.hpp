@@ -1,0 +1,97 @@
+#pragma once
+// The batched simulator's implementation (docs/batch_design.md): many scenes stepped as one concatenation, with one
+// local/global solve and one block-diagonal factor for all, and per scene its own energies,
+// target H*, blend decisions, damping, forcing and refusal.
+//
+// Supported for now: every integrator, the blend included (its per-scene decisions in lockstep:
+// blend_step.hpp), on any backend that computes per-scene energies (today the CPU reference),
+// with a fixed iteration count and the factor (the
+// controls that sum over the whole batch, a tolerance stop, acceleration and CG, are refused:
+// they would couple the scenes, and one scene's NaN would reach the others through them).
+#include "backend.hpp"
+#include "integrator/backend_choice.hpp"
+#include "integrator/blend_step.hpp"
+#include "scene/scene_batch.hpp"
+#include "scene/scene_data.hpp"
+#include "solver/global_system.hpp"
+#include "solver/local_global.hpp"
+
+#include <stabint/batch.hpp>
+#include <stabint/simulator.hpp>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stabint {
+
+// The public class (include/stabint/batch.hpp) is a pointer to this.
+struct BatchSimulator::Impl {
+  /// Throws InvalidInputError for a bad scene ("scene <i>: ..."), scenes a batch cannot keep
+  /// apart (concatenateScenes) or options it does not support yet.
+  Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options);
+
+  void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  void setPinTarget(int scene, int pin, const Eigen::Vector3d& target);
+  const BatchStepReport& step();
+
+  int size() const { return static_cast<int>(segments_.size()); }
+  /// Throws InvalidInputError unless 0 <= scene < size().
+  void checkScene(int scene, const char* call) const;
+  Eigen::MatrixX3d positions(int scene) const;
+  Eigen::MatrixX3d velocities(int scene) const;
+  EnergyReport energy(int scene) const;
+
+  struct PerScene {
+    bool active = true;
+    double time = 0.0;
+    int steps = 0;
+    double kinetic = 0.0;
+    PotentialEnergy potential;  // of the accepted state at `time`
+    double target = 0.0;
+    double energy_scale = 0.0;
+    bool momentum_conserved = false;
+    double pending_event_energy = 0.0;  // booked by setState since the last step
+    // This step's.
+    bool stepping = false;            // active, and not refused so far in this step
+    bool velocities_changed = false;  // the host copy v_new differs from kVNew's rows
+    Eigen::MatrixX3d x_new, v_new;    // the candidate (the scene's rows)
+    PotentialEnergy p_new;            // its potential at t + h
+    double target_now = 0.0;          // H* with this step's forcing, damping
+    BlendStep blend;
+  };
+  Impl(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
+  double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;
+  // The integrators but the blend: the candidates of every stepping scene, with their forcing.
+  void integrate(double t1, bool forced);
+  // The blend in lockstep: one IM solve, at most one partner solve (and one full-budget BE solve
+  // when some scene's IM candidate blew up), one batched energy pass per root-find round.
+  void blend(double t1, bool forced);
+  // The potentials every scene's BlendStep asks for, one batched pass per round: the trial
+  // positions are formed on the host (no per-scene combine on the backend interface yet).
+  void evaluateBlendPotentials(double t1);
+  void refuse(std::size_t s, const std::string& message);
+
+  std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping
+  std::vector<SceneSegment> segments_;
+  SimulatorOptions options_;
+  SceneData data_;
+  BackendSelection choice_;
+  std::unique_ptr<Backend> backend_;
+  GlobalSystem system_;
+  LocalGlobalSolver solver_;
+  Eigen::MatrixX3d x_, v_, x_new_, v_new_;  // host copies of the whole batch (v_new_: kVNew's)
+  Eigen::MatrixX3d v_slot_;                 // what kV holds (see step())
+  Eigen::MatrixX3d x_aux_, v_aux_;          // host copies of the partner or the full-budget BE solve
+  Eigen::MatrixX3d x_trial_;                // the root finds' trial positions
+  std::vector<PotentialEnergy> p_all_, new_mid_, old_mid_, aux_mid_;  // per-scene potentials
+  double t_ = 0.0;                                                    // the batch's time (of the active scenes)
+  bool has_history_ = false;                                          // BDF2: (kXPrev, kVPrev) hold the previous step
+  std::vector<PerScene> per_scene_;
+  BatchStepReport report_;
+};
+
+}  // namespace stabint

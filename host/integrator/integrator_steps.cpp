@@ -1,0 +1,127 @@
+#include "integrator/integrator_steps.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace stabint {
+
+void factorIntegratorSystems(GlobalSystem& system, Integrator integrator, double h) {
+  switch (integrator) {
+    case Integrator::BDF2:
+      system.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
+      [[fallthrough]];  // and its first step is BE
+    case Integrator::BackwardEuler: system.factor(1.0 / (h * h), "1/time_step^2"); break;
+    case Integrator::EnergyBlend: system.factor(1.0 / (h * h), "1/time_step^2"); [[fallthrough]];
+    case Integrator::ImplicitMidpoint: system.factor(4.0 / (h * h), "4/time_step^2"); break;
+    case Integrator::ForwardEuler:
+    case Integrator::SymplecticEuler: break;  // explicit: no system
+  }
+}
+
+int IntegratorSteps::backwardEuler(double h, double t, int x_out, int v_out, const IterationControl& control,
+                                   bool warm_start) {
+  backend_.combine(kY, 1.0, kX, h, kV);
+  if (!warm_start) backend_.copy(x_out, kY);
+  const int done = solver_.solve(1.0 / (h * h), kY, x_out, t + h, control);
+  backend_.combine(v_out, 1.0 / h, x_out, -1.0 / h, kX);  // v = (x* - x_n)/h
+  return done;
+}
+
+int IntegratorSteps::implicitMidpoint(double h, double t, int x_out, int v_out, const IterationControl& control,
+                                      int midpoint_out) {
+  backend_.combine(kY, 1.0, kX, 0.5 * h, kV);
+  backend_.copy(x_out, kY);
+  const int done = solver_.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, control);
+  backend_.combine(v_out, 4.0 / h, x_out, -4.0 / h, kX);
+  backend_.combine(v_out, 1.0, v_out, -1.0, kV);
+  if (midpoint_out >= 0) backend_.copy(midpoint_out, x_out);
+  backend_.combine(x_out, 2.0, x_out, -1.0, kX);
+  return done;
+}
+
+int IntegratorSteps::bdf2(double h, double t, int x_out, int v_out, const IterationControl& control) {
+  backend_.combine(kScratch, 4.0 / 3.0, kX, -1.0 / 3.0, kXPrev);
+  backend_.combine(kY, 8.0 * h / 9.0, kV, -2.0 * h / 9.0, kVPrev);
+  backend_.combine(kY, 1.0, kY, 1.0, kScratch);
+  backend_.copy(x_out, kY);
+  const int done = solver_.solve(9.0 / (4.0 * h * h), kY, x_out, t + h, control);
+  backend_.combine(v_out, 1.5 / h, x_out, -1.5 / h, kScratch);
+  return done;
+}
+
+void IntegratorSteps::explicitEuler(double h, double t, int x_out, int v_out, bool symplectic) {
+  backend_.accelerations(kScratch, kX, t);
+  backend_.combine(v_out, 1.0, kV, h, kScratch);
+  backend_.combine(x_out, 1.0, kX, h, symplectic ? v_out : kV);
+}
+
+int IntegratorSteps::step(Integrator integrator, double h, double t, bool has_history, int x_out, int v_out,
+                          const IterationControl& control) {
+  switch (integrator) {
+    case Integrator::ForwardEuler: explicitEuler(h, t, x_out, v_out, false); return 0;
+    case Integrator::SymplecticEuler: explicitEuler(h, t, x_out, v_out, true); return 0;
+    case Integrator::BackwardEuler: return backwardEuler(h, t, x_out, v_out, control, false);
+    case Integrator::BDF2:
+      // The first step has no history: BE.
+      return has_history ? bdf2(h, t, x_out, v_out, control) : backwardEuler(h, t, x_out, v_out, control, false);
+    case Integrator::ImplicitMidpoint: return implicitMidpoint(h, t, x_out, v_out, control);
+    case Integrator::EnergyBlend: break;
+  }
+  throw Error("IntegratorSteps::step: the blend is the driver's (it decides between steps)");
+}
+
+double forcingWork(const PotentialEnergy& p_new, const PotentialEnergy& new_mid, const PotentialEnergy& old_mid,
+                   const PotentialEnergy& p_old) {
+  auto forced = [](const PotentialEnergy& p) { return p.pins + p.external; };
+  return (forced(p_new) - forced(new_mid)) + (forced(old_mid) - forced(p_old));
+}
+
+double initialEnergyScale(double kinetic, const PotentialEnergy& potential, const Eigen::VectorXd& masses,
+                          const Eigen::Vector3d& gravity, const Eigen::MatrixX3d& positions) {
+  // [project rule] The size is the diagonal of the initial bounding box, not the extent along
+  // gravity: a chain released horizontally has zero extent along gravity (and K = E_int = 0),
+  // which would make tau zero.
+  const double g = gravity.norm();
+  const double size =
+      positions.rows() > 0 ? (positions.colwise().maxCoeff() - positions.colwise().minCoeff()).norm() : 0.0;
+  return kinetic + potential.elastic() + masses.sum() * g * size;
+}
+
+double massDot(const Eigen::VectorXd& masses, const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
+  return (a.cwiseProduct(b).rowwise().sum().array() * masses.array()).sum();
+}
+
+double kineticEnergy(const Eigen::VectorXd& masses, const Eigen::MatrixX3d& v) {
+  return 0.5 * (v.rowwise().squaredNorm().array() * masses.array()).sum();
+}
+
+StepRefusal stepRefusal(int step, double t, double t1, Integrator integrator, const std::string& what,
+                        bool energy_limit) {
+  // Nothing was committed: the state is the last accepted one, at t.
+  std::ostringstream msg;
+  msg << "step " << step << " (t = " << t << " -> " << t1 << ", integrator " << integratorName(integrator)
+      << "): " << what << (energy_limit ? "; step refused" : "; the simulation blew up, step refused")
+      << ", state kept at t = " << t;
+  return StepRefusal{msg.str(), energy_limit, step};
+}
+
+StepRefusal nonFiniteState(int step, double t, double t1, Integrator integrator) {
+  return stepRefusal(step, t, t1, integrator, "non-finite position or velocity", false);
+}
+
+StepRefusal checkStepEnergy(int step, double t, double t1, const SimulatorOptions& options, double kinetic,
+                            const PotentialEnergy& potential, double target, double energy_scale) {
+  if (!std::isfinite(kinetic) || !std::isfinite(potential.total()) || !std::isfinite(target))
+    return stepRefusal(step, t, t1, options.integrator, "non-finite energy", false);
+  // The user's ceiling: an explicit or midpoint run that gains energy is stopped long before it
+  // overflows, by the same refusal (docs: SimulatorOptions::energy_limit).
+  if (options.energy_limit > 0.0 && kinetic + potential.total() - target > options.energy_limit * energy_scale) {
+    std::ostringstream what;
+    what << "energy H = " << kinetic + potential.total() << " exceeds the target H* = " << target << " by more than "
+         << "energy_limit * E_scale = " << options.energy_limit * energy_scale;
+    return stepRefusal(step, t, t1, options.integrator, what.str(), true);
+  }
+  return StepRefusal{};
+}
+
+}  // namespace stabint

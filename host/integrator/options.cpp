@@ -1,0 +1,55 @@
+#include "integrator/options.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace stabint {
+
+void validateOptions(const SimulatorOptions& o) {
+  auto fail = [](const std::string& what) { throw InvalidInputError("simulator options: " + what); };
+  if (!std::isfinite(o.time_step) || o.time_step <= 0.0)
+    fail("time_step = " + std::to_string(o.time_step) + " must be finite and > 0");
+  // The solves use c = 4/h^2 (IM): h^2 must neither underflow (1e-300) nor overflow.
+  const double h2 = o.time_step * o.time_step;
+  if (!std::isnormal(h2) || !std::isfinite(4.0 / h2)) {
+    std::ostringstream h;
+    h << o.time_step;
+    fail("time_step = " + h.str() + " is out of range: 1/h^2 must be a finite, non-zero number");
+  }
+  // An enum from a config file or a binding can hold any integer; an unknown integrator used to
+  // run no integrator at all and commit a zero state.
+  if (static_cast<int>(o.integrator) < static_cast<int>(Integrator::ForwardEuler) ||
+      static_cast<int>(o.integrator) > static_cast<int>(Integrator::EnergyBlend))
+    fail("integrator = " + std::to_string(static_cast<int>(o.integrator)) + " is not an Integrator value");
+  if (o.backend != BackendKind::CpuReference && o.backend != BackendKind::OpenCL && o.backend != BackendKind::Auto)
+    fail("backend = " + std::to_string(static_cast<int>(o.backend)) + " is not a BackendKind value");
+  if (o.opencl.precision != Precision::Double && o.opencl.precision != Precision::Float)
+    fail("opencl.precision = " + std::to_string(static_cast<int>(o.opencl.precision)) + " is not a Precision value");
+  if (!std::isfinite(o.energy_limit) || o.energy_limit < 0.0)
+    fail("energy_limit must be finite and >= 0 (0: no limit)");
+  if (o.iterations < 1) fail("iterations = " + std::to_string(o.iterations) + " must be >= 1");
+  if (!std::isfinite(o.tolerance) || o.tolerance < 0.0) fail("tolerance must be finite and >= 0");
+  if (o.max_iterations < 1) fail("max_iterations must be >= 1");
+  if (o.be_iterations < 1) fail("be_iterations = " + std::to_string(o.be_iterations) + " must be >= 1");
+  if (!std::isfinite(o.energy_tolerance) || o.energy_tolerance <= 0.0) fail("energy_tolerance must be finite and > 0");
+  if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
+    fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
+  if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
+      o.acceleration != Acceleration::Anderson)
+    fail("acceleration = " + std::to_string(static_cast<int>(o.acceleration)) + " is not an Acceleration value");
+  if (o.anderson_window < 1 || o.anderson_window > 50)
+    fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
+  if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
+    fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
+  if (o.global_solve != GlobalSolve::Factor && o.global_solve != GlobalSolve::ConjugateGradient)
+    fail("global_solve = " + std::to_string(static_cast<int>(o.global_solve)) + " is not a GlobalSolve value");
+  if (o.cg_iterations < 1) fail("cg_iterations = " + std::to_string(o.cg_iterations) + " must be >= 1");
+  if (!std::isfinite(o.cg_tolerance) || !(o.cg_tolerance >= 0.0 && o.cg_tolerance < 1.0))
+    fail("cg_tolerance must be finite and in [0, 1) (0: a fixed count of cg_iterations)");
+  if (o.max_root_evaluations < 1) fail("max_root_evaluations must be >= 1");
+  if (!std::isfinite(o.contact_tolerance) || !(o.contact_tolerance >= 0.0))
+    fail("contact_tolerance must be finite and >= 0");
+}
+
+}  // namespace stabint

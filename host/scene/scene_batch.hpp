@@ -1,0 +1,41 @@
+#pragma once
+// Many scenes as one (docs/batch_design.md): the scenes' particles one after another and, type by
+// type, their element lists one after another with shifted vertex indices. No element couples two
+// scenes, so the global matrix of the concatenation is block-diagonal and its local step and
+// gather give each scene the sums its own simulator forms, in the same order; what sums over
+// particles or elements (energies, the blend's decisions) needs the segments to stay per scene.
+#include <stabint/scene.hpp>
+
+#include <vector>
+
+namespace stabint {
+
+/// Appends `part` after the particles of `into`: positions, masses, every element type's list
+/// (ElementType::appendShifted), force fields ("all particles" becomes the part's own), bodies
+/// and triangles, with particle indices shifted. Gravity and colliders stay `into`'s. The scene
+/// files' "parts" and concatenateScenes both build with it.
+void appendScene(Scene& into, const Scene& part);
+
+/// Where one scene lies in a concatenation.
+struct SceneSegment {
+  int first_particle = 0;
+  int num_particles = 0;
+  /// Per element type, in elementTypes() order: the scene's elements are
+  /// [first_element[i], first_element[i] + num_elements[i]) of that type's list (and of its
+  /// SceneData block, which keeps the list's order).
+  std::vector<int> first_element;
+  std::vector<int> num_elements;
+};
+
+struct SceneBatch {
+  Scene scene;                         // the concatenation
+  std::vector<SceneSegment> segments;  // one per scene, in order
+};
+
+/// Validates every scene (InvalidInputError "scene <i>: ...") and concatenates them. The batch
+/// needs one gravity (Scene has one) and no colliders (every collider would act on every scene's
+/// particles): both are refused, naming the scene, until the batch has per-segment gravity and
+/// colliders (docs/batch_design.md, "Segments").
+SceneBatch concatenateScenes(const std::vector<Scene>& scenes);
+
+}  // namespace stabint

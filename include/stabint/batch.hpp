@@ -1,0 +1,88 @@
+#pragma once
+// Many independent scenes stepped as one (docs/method.md, "Batches"; the design:
+// docs/batch_design.md): parameter sweeps, training data, crowds of small objects.
+#include <stabint/errors.hpp>
+#include <stabint/scene.hpp>
+#include <stabint/simulator.hpp>
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stabint {
+
+struct BatchStepReport {
+  /// One per scene, as that scene's own Simulator::step would report it, except
+  /// energy_evaluations: the batched passes the scene took part in (the forcing's two whenever
+  /// any scene's forcing changes during the step). A refused or inactive scene's report
+  /// describes its kept state (its step count and time, energies, target).
+  std::vector<StepReport> scenes;
+  /// Per scene: empty when the scene stepped, else why its step was refused (the message its own
+  /// Simulator::step would have thrown) or that it is inactive since a refused step.
+  std::vector<std::string> refusals;
+};
+
+/// Steps many scenes with one integrator and one set of options: one local/global solve and one
+/// block-diagonal factor for all (no element couples two scenes), and per scene its own energies,
+/// target H*, blend decisions, forcing, damping and refusals, so that every scene follows the
+/// trajectory its own Simulator would (to the round-off of the factor's ordering).
+///
+/// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
+/// scene valid and with the same gravity, no colliders, the CPU reference backend (or one that
+/// computes per-scene energies), a fixed iteration count with the factor (no tolerance stop, no
+/// acceleration, no CG: they sum over the whole batch, and one scene's blow-up would reach the
+/// others through them).
+class BatchSimulator {
+ public:
+  BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options);
+  ~BatchSimulator();
+  BatchSimulator(const BatchSimulator&) = delete;
+  BatchSimulator& operator=(const BatchSimulator&) = delete;
+  BatchSimulator(BatchSimulator&&) noexcept;
+  BatchSimulator& operator=(BatchSimulator&&) noexcept;
+
+  /// Advances every active scene one step. Never throws for a scene that blows up or exceeds
+  /// energy_limit: that scene's step is refused (BatchStepReport::refusals), its state kept, and
+  /// it stays inactive (its block is still solved, its results dropped) until setState; the
+  /// others step on.
+  const BatchStepReport& step();
+
+  int size() const;  // number of scenes
+  bool active(int scene) const;
+  /// Scene `scene`'s state (`n_s by 3`, a copy of its rows of allPositions()).
+  Eigen::MatrixX3d positions(int scene) const;
+  Eigen::MatrixX3d velocities(int scene) const;
+  /// Every scene's positions, one after another (for renderers): scene s's rows start at
+  /// firstParticle(s).
+  const Eigen::MatrixX3d& allPositions() const;
+  int firstParticle(int scene) const;
+  int numParticles(int scene) const;
+  /// The batch's time (every active scene's), and a scene's (that of its last accepted state).
+  double time() const;
+  double time(int scene) const;
+  int stepCount(int scene) const;
+  double target(int scene) const;        // H* of the scene
+  EnergyReport energy(int scene) const;  // of its current state
+  double energyScale(int scene) const;   // its E_scale (of the scene alone)
+  const SimulatorOptions& options() const;
+  std::string backendDescription() const;
+
+  /// Replaces scene `scene`'s positions and velocities (`n_s by 3`, finite), as
+  /// Simulator::setState: a discontinuous event booked in that scene's H* only (the next
+  /// report's event_energy). A scene refused earlier steps again, from the batch's time.
+  /// Refused for BDF2 (whose restart would take every scene back to a BE step). Bad input:
+  /// InvalidInputError naming the scene, nothing changed.
+  void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  /// Pin `pin` of scene `scene` (its index in that scene's list) moves its target linearly to
+  /// `target` over the next step and stays there, as Simulator::setPinTarget: the work is booked
+  /// by the forcing rule in that scene's H* only.
+  void setPinTarget(int scene, int pin, const Eigen::Vector3d& target);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stabint

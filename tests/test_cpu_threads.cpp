@@ -1,0 +1,166 @@
+// The CPU side's threads (host/cpu/worker_pool.hpp, docs/method.md "Threads on the CPU"): the
+// CPU reference's element passes and the host solve give the same results bit for bit on one
+// thread and on several, on scenes whose passes take the threaded path (at least 2,048 elements)
+// with every element type and the blocks after them that stay on one thread (contact, pins).
+#include "contact_scenes.hpp"
+#include "cpu/worker_pool.hpp"
+#include "scene/scene_data.hpp"
+#include "solver/global_system.hpp"
+
+#include <stabint/stabint.hpp>
+
+#include <Eigen/CholmodSupport>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+#include <vector>
+
+namespace stabint {
+namespace {
+
+class ThreadCount {
+ public:
+  explicit ThreadCount(int threads) : previous_(cpuThreads()) { setCpuThreads(threads); }
+  ~ThreadCount() { setCpuThreads(previous_); }
+
+ private:
+  int previous_;
+};
+
+struct Run {
+  Eigen::MatrixX3d x, v;
+  std::vector<double> energies;
+  std::vector<int> branches;
+};
+
+Run runWith(const Scene& scene, Integrator integrator, int threads, int steps) {
+  ThreadCount setting(threads);
+  SimulatorOptions options;
+  options.integrator = integrator;
+  options.time_step = 1.0 / 60.0;
+  Simulator sim(scene, options);
+  Run run;
+  for (int i = 0; i < steps; ++i) {
+    const StepReport& r = sim.step();
+    run.energies.push_back(r.energy.total());
+    run.energies.push_back(r.target);
+    run.branches.push_back(static_cast<int>(r.branch));
+  }
+  run.x = sim.positions();
+  run.v = sim.velocities();
+  return run;
+}
+
+// Bit for bit: == on every entry (a tolerance would hide a changed order of additions).
+void expectSameRun(const Run& one, const Run& many) {
+  ASSERT_EQ(one.x.rows(), many.x.rows());
+  for (Eigen::Index i = 0; i < one.x.size(); ++i) {
+    ASSERT_EQ(one.x.data()[i], many.x.data()[i]) << "position entry " << i;
+    ASSERT_EQ(one.v.data()[i], many.v.data()[i]) << "velocity entry " << i;
+  }
+  EXPECT_EQ(one.energies, many.energies);
+  EXPECT_EQ(one.branches, many.branches);
+}
+
+// A pinned tet bar of 2,880 tets (above the threaded-pass threshold) swinging down under gravity
+// onto a ground plane: tets in the threaded part, contact and pins after it.
+Scene barOnGround() {
+  TetBarParams p;
+  p.nx = 24;
+  p.ny = 4;
+  p.nz = 4;
+  Scene s = makeTetBar(p);
+  s.colliders.push_back(testing::groundPlane(s.positions.col(1).minCoeff() - 0.05, 1e4));
+  return s;
+}
+
+// A 40 x 40 triangle cloth (triangle strain and bending hinges, 3,042 + 4,485 elements) with
+// pinned corners falling onto a sphere.
+Scene triangleClothOnSphere() {
+  ClothGridParams p;
+  p.nx = 40;
+  p.ny = 40;
+  p.model = ClothModel::Triangles;
+  Scene s = makeClothGrid(p);
+  s.colliders.push_back(testing::sphereCollider(Eigen::Vector3d(0.5, 0.3, 0.2), 0.2, 1e4));
+  return s;
+}
+
+TEST(CpuThreads, BlendOnTetBarIsTheSameBitForBitOnOneAndTwoThreads) {
+  const Scene scene = barOnGround();
+  expectSameRun(runWith(scene, Integrator::EnergyBlend, 1, 12), runWith(scene, Integrator::EnergyBlend, 2, 12));
+}
+
+TEST(CpuThreads, BackwardEulerOnTetBarIsTheSameOnOneAndThreeThreads) {
+  const Scene scene = barOnGround();
+  expectSameRun(runWith(scene, Integrator::BackwardEuler, 1, 6), runWith(scene, Integrator::BackwardEuler, 3, 6));
+}
+
+TEST(CpuThreads, TriangleClothIsTheSameOnOneAndTwoThreads) {
+  const Scene scene = triangleClothOnSphere();
+  for (Integrator integrator : {Integrator::EnergyBlend, Integrator::SymplecticEuler}) {
+    SCOPED_TRACE(integratorName(integrator));
+    expectSameRun(runWith(scene, integrator, 1, 8), runWith(scene, integrator, 2, 8));
+  }
+}
+
+// The solve in two column groups (2,009 particles: above the 1,000 from which it splits) is
+// CHOLMOD's solve of all three columns at once, bit for bit, on one thread and on two.
+TEST(CpuThreads, ColumnGroupSolveIsTheOneSolveBitForBit) {
+  TetBarParams p;
+  p.nx = 40;
+  p.ny = 6;
+  p.nz = 6;
+  const Scene scene = makeTetBar(p);
+  const SceneData data(scene);
+  GlobalSystem system(data);
+  const double c = 3600.0;
+  Eigen::SparseMatrix<double> k = system.stiffnessLaplacian();
+  for (Eigen::Index j = 0; j < k.rows(); ++j) k.coeffRef(j, j) += c * system.masses()[j];
+  Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> one;
+  one.compute(k);
+  ASSERT_EQ(one.info(), Eigen::Success);
+  const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(scene.numParticles(), 3);
+  const Eigen::MatrixX3d expected = one.solve(rhs);
+  for (int threads : {1, 2}) {
+    ThreadCount setting(threads);
+    Eigen::MatrixX3d x;
+    system.solve(c, rhs, x);
+    ASSERT_EQ(x.rows(), rhs.rows());
+    for (Eigen::Index i = 0; i < x.size(); ++i) ASSERT_EQ(x.data()[i], expected.data()[i]) << threads << " threads";
+  }
+}
+
+TEST(CpuThreads, ParallelForRunsEveryTaskOnceWhateverTheThreadCount) {
+  for (int threads : {1, 2, 4}) {
+    ThreadCount setting(threads);
+    for (int tasks : {0, 1, 2, 7, 1000}) {
+      std::vector<std::atomic<int>> runs(static_cast<std::size_t>(tasks));
+      parallelFor(tasks, [&](int i) { runs[static_cast<std::size_t>(i)].fetch_add(1); });
+      for (int i = 0; i < tasks; ++i) EXPECT_EQ(runs[static_cast<std::size_t>(i)].load(), 1) << tasks << " tasks";
+    }
+  }
+}
+
+// Two simulators stepped from two threads at once share the pool: one of the calls runs on its
+// own thread, and both still finish every task.
+TEST(CpuThreads, ConcurrentCallsFromTwoThreadsBothComplete) {
+  ThreadCount setting(2);
+  std::atomic<long> sum{0};
+  auto caller = [&] {
+    for (int round = 0; round < 200; ++round) parallelFor(16, [&](int i) { sum.fetch_add(i + 1); });
+  };
+  std::thread other(caller);
+  caller();
+  other.join();
+  EXPECT_EQ(sum.load(), 2L * 200 * (16 * 17 / 2));
+}
+
+TEST(CpuThreads, SettingIsAtLeastOne) {
+  ThreadCount setting(0);
+  EXPECT_EQ(cpuThreads(), 1);
+}
+
+}  // namespace
+}  // namespace stabint

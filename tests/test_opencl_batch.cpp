@@ -1,0 +1,337 @@
+// The OpenCL side of the batch (docs/batch_design.md): per-scene energies and mass dots of a
+// concatenation (Backend::setSegments / potentials / massDots, kernels/segments.cl), checked
+// against the single-value reductions and against the CPU reference per scene.
+#include "batch_scenes.hpp"
+#include "test_opencl_support.hpp"
+
+#include "cpu/cpu_backend.hpp"
+#include "elements/element_type.hpp"
+#include "integrator/batch_simulator.hpp"
+#include "opencl/opencl_backend.hpp"
+#include "scene/scene_batch.hpp"
+#include "scene/scene_data.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stabint {
+namespace {
+
+using testing::availablePrecisions;
+using testing::crossBackendTolerance;
+using testing::openclOptions;
+using testing::precisionName;
+
+// The same terms summed in another order (a tree per work-group and the groups on the host, or
+// one compensated running sum per scene): within a few units of round-off of the sum of the
+// terms' magnitudes, whatever their count; these bounds are 10^3-10^4 units (double 1.1e-16,
+// float 6e-8), far below any term of the scenes here.
+double orderChangeTolerance(Precision p) { return p == Precision::Double ? 1e-12 : 1e-4; }
+
+int typeIndex(const char* identifier) {
+  const std::vector<const ElementType*>& types = elementTypes();
+  for (std::size_t i = 0; i < types.size(); ++i)
+    if (std::string(types[i]->identifier()) == identifier) return static_cast<int>(i);
+  ADD_FAILURE() << "no element type " << identifier;
+  return 0;
+}
+
+// sum_j |f_j . x_j| over rows [first, first + count): the size of the external potential's terms,
+// against which its error is judged (the sum itself may cancel).
+double externalMagnitude(const SceneData& data, const Eigen::MatrixX3d& x, double t, int first, int count) {
+  Eigen::MatrixX3d f;
+  data.externalForces(t, f);
+  return f.middleRows(first, count).cwiseProduct(x.middleRows(first, count)).rowwise().sum().cwiseAbs().sum();
+}
+
+// One segment holding the whole scene gives the single-value reductions' numbers, up to the
+// order of the additions.
+TEST(OpenCLBatch, OneSegmentEqualsTheSingleValueCalls) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
+    const SceneBatch whole = concatenateScenes({batch.scene});
+    ASSERT_EQ(whole.segments.size(), 1u);
+    const SceneData data(batch.scene);
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    ASSERT_TRUE(backend->computesPerScene());
+    backend->setSegments(whole.segments);
+    const Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 3);
+    const Eigen::MatrixX3d v = testing::perturbed(batch.scene.velocities, 0.5, 4);
+    backend->write(0, x);
+    backend->write(1, v);
+    const double tol = orderChangeTolerance(precision);
+    for (double t : {0.0, 0.7}) {
+      std::vector<PotentialEnergy> per_scene;
+      backend->potentials(0, t, per_scene);
+      const PotentialEnergy single = backend->potential(0, t);
+      ASSERT_EQ(per_scene.size(), 1u);
+      EXPECT_GT(single.internal, 0.0);
+      EXPECT_GT(single.pins, 0.0);
+      EXPECT_NEAR(per_scene[0].internal, single.internal, tol * single.internal) << "t = " << t;
+      EXPECT_NEAR(per_scene[0].pins, single.pins, tol * single.pins) << "t = " << t;
+      EXPECT_NEAR(per_scene[0].external, single.external,
+                  tol * externalMagnitude(data, x, t, 0, batch.scene.numParticles()))
+          << "t = " << t;
+    }
+    std::vector<double> dots;
+    backend->massDots(1, 1, dots);
+    ASSERT_EQ(dots.size(), 1u);
+    const double single = backend->massDot(1, 1);
+    EXPECT_GT(single, 0.0);
+    EXPECT_NEAR(dots[0], single, tol * single);
+  }
+}
+
+// Each scene's potential and mass dot from the OpenCL batch equal the CPU reference's per-scene
+// values (which are each scene's own backend's, tests/test_scene_batch.cpp), to the cross-backend
+// tolerance, relative to the size of the scene's terms.
+void expectPerSceneEqualsCpu(const SceneData& data, const SceneBatch& batch, Backend& opencl, Backend& cpu,
+                             const Eigen::MatrixX3d& x, double t, Precision precision) {
+  std::vector<PotentialEnergy> got, want;
+  opencl.potentials(0, t, got);
+  cpu.potentials(0, t, want);
+  std::vector<double> got_dots, want_dots;
+  opencl.massDots(1, 1, got_dots);
+  cpu.massDots(1, 1, want_dots);
+  ASSERT_EQ(got.size(), batch.segments.size());
+  ASSERT_EQ(want.size(), batch.segments.size());
+  ASSERT_EQ(got_dots.size(), batch.segments.size());
+  const double tol = crossBackendTolerance(precision);
+  for (std::size_t s = 0; s < batch.segments.size(); ++s) {
+    const SceneSegment& seg = batch.segments[s];
+    SCOPED_TRACE("scene " + std::to_string(s) + ", t = " + std::to_string(t));
+    EXPECT_GT(want[s].internal, 0.0);
+    EXPECT_NEAR(got[s].internal, want[s].internal, tol * want[s].internal);
+    EXPECT_NEAR(got[s].pins, want[s].pins, tol * want[s].pins);
+    EXPECT_NEAR(got[s].external, want[s].external,
+                tol * externalMagnitude(data, x, t, seg.first_particle, seg.num_particles));
+    EXPECT_GT(want_dots[s], 0.0);
+    EXPECT_NEAR(got_dots[s], want_dots[s], tol * want_dots[s]);
+  }
+}
+
+TEST(OpenCLBatch, PerSceneValuesEqualTheCpuReferences) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
+    const SceneData data(batch.scene);
+    const std::unique_ptr<Backend> opencl = makeOpenCLBackend(data, 2, openclOptions(precision));
+    const std::unique_ptr<Backend> cpu = makeCpuBackend(data, 2);
+    opencl->setSegments(batch.segments);
+    cpu->setSegments(batch.segments);
+    Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 5);
+    Eigen::MatrixX3d v = testing::perturbed(batch.scene.velocities, 0.5, 6);
+    opencl->roundToStorage(x);  // both backends see the same numbers
+    opencl->roundToStorage(v);
+    for (Backend* b : {opencl.get(), cpu.get()}) {
+      b->write(0, x);
+      b->write(1, v);
+    }
+    // The chain's field has grown by its rate at t = 0.7; the bar's pins hold at t = 0.
+    for (double t : {0.0, 0.7}) expectPerSceneEqualsCpu(data, batch, *opencl, *cpu, x, t, precision);
+  }
+}
+
+// A grab changes the pins block (SceneData::setPins, Backend::elementsChanged): the element
+// energies move in the device's layout, and the segments set again afterwards still pick each
+// scene's own.
+TEST(OpenCLBatch, SegmentsFollowAChangeOfThePins) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
+    SceneData data(batch.scene);
+    const std::unique_ptr<Backend> opencl = makeOpenCLBackend(data, 2, openclOptions(precision));
+    const std::unique_ptr<Backend> cpu = makeCpuBackend(data, 2);
+    opencl->setSegments(batch.segments);
+    // A pin on the last scene's first particle, at the end of the pins block: the last segment's.
+    std::vector<Pin> pins = batch.scene.pins;
+    Pin grab;
+    grab.vertex = batch.segments.back().first_particle;
+    grab.stiffness = 1e3;
+    grab.target.position = batch.scene.positions.row(grab.vertex).transpose() + Eigen::Vector3d(0.0, 0.1, 0.0);
+    pins.push_back(grab);
+    data.setPins(pins);
+    opencl->elementsChanged();
+    cpu->elementsChanged();
+    ++batch.segments.back().num_elements[std::size_t(typeIndex("pin"))];
+    opencl->setSegments(batch.segments);
+    cpu->setSegments(batch.segments);
+    Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 7);
+    Eigen::MatrixX3d v = testing::perturbed(batch.scene.velocities, 0.5, 8);
+    opencl->roundToStorage(x);
+    opencl->roundToStorage(v);
+    for (Backend* b : {opencl.get(), cpu.get()}) {
+      b->write(0, x);
+      b->write(1, v);
+    }
+    expectPerSceneEqualsCpu(data, batch, *opencl, *cpu, x, 0.3, precision);
+  }
+}
+
+TEST(OpenCLBatch, RefusesSegmentsOutsideTheScene) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
+    const SceneData data(batch.scene);
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    backend->setSegments(batch.segments);
+    std::vector<SceneSegment> bad = batch.segments;
+    bad.back().num_particles += 1;
+    EXPECT_THROW(backend->setSegments(bad), InvalidInputError);
+    bad = batch.segments;
+    bad[1].num_elements[std::size_t(typeIndex("spring"))] += 1000;
+    EXPECT_THROW(backend->setSegments(bad), InvalidInputError);
+    // The refused calls left the segments as they were.
+    std::vector<double> dots;
+    backend->massDots(1, 1, dots);
+    EXPECT_EQ(dots.size(), batch.segments.size());
+  }
+}
+
+// ---- BatchSimulator on OpenCL -------------------------------------------------------------
+
+struct BatchCase {
+  Integrator integrator;
+  double time_step;
+  int steps;
+};
+
+SimulatorOptions batchOptions(const BatchCase& c, BackendKind backend, Precision precision) {
+  SimulatorOptions o;
+  o.integrator = c.integrator;
+  o.time_step = c.time_step;
+  o.iterations = 5;
+  o.backend = backend;
+  o.opencl = openclOptions(precision);
+  return o;
+}
+
+class OpenCLBatchSimulator : public ::testing::TestWithParam<BatchCase> {};
+
+// The OpenCL batch steps every scene as the CPU batch does (which steps it as its own Simulator,
+// tests/test_scene_batch.cpp), to the cross-backend tolerance: positions relative to their size,
+// velocities relative to max(max |v|, max |x| / h) as in test_opencl_integrators (the implicit
+// integrators' difference quotients turn position rounding eps |x| into eps |x| / h), the
+// per-scene energies, target, forcing and damping relative to the scene's E_scale.
+TEST_P(OpenCLBatchSimulator, EverySceneFollowsTheCpuBatch) {
+  const BatchCase c = GetParam();
+  const std::vector<Scene> scenes = testing::mixedBatchScenes();
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const double tol = crossBackendTolerance(precision);
+    BatchSimulator opencl(scenes, batchOptions(c, BackendKind::OpenCL, precision));
+    BatchSimulator cpu(scenes, batchOptions(c, BackendKind::CpuReference, precision));
+    double forcing = 0.0, damping = 0.0;
+    for (int step = 0; step < c.steps; ++step) {
+      const BatchStepReport got = opencl.step();
+      const BatchStepReport& want = cpu.step();
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        SCOPED_TRACE("scene " + std::to_string(s) + " step " + std::to_string(step));
+        EXPECT_TRUE(got.refusals[s].empty()) << got.refusals[s];
+        const StepReport& g = got.scenes[s];
+        const StepReport& w = want.scenes[s];
+        const double scale = cpu.energyScale(int(s));
+        EXPECT_EQ(g.step, w.step);
+        EXPECT_EQ(g.time, w.time);
+        EXPECT_NEAR(g.forcing, w.forcing, tol * scale);
+        EXPECT_NEAR(g.damping, w.damping, tol * scale);
+        EXPECT_NEAR(g.target, w.target, tol * scale);
+        EXPECT_NEAR(g.energy.kinetic, w.energy.kinetic, tol * scale);
+        EXPECT_NEAR(g.energy.elastic, w.energy.elastic, tol * scale);
+        EXPECT_NEAR(g.energy.external, w.energy.external, tol * scale);
+        forcing += std::abs(w.forcing);
+        damping += w.damping;
+      }
+    }
+    // The chain's growing field does work and the cloth's body is damped: both were compared.
+    EXPECT_GT(forcing, 0.0);
+    EXPECT_GT(damping, 0.0);
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      SCOPED_TRACE("scene " + std::to_string(s));
+      const int i = int(s);
+      EXPECT_NEAR(opencl.energyScale(i), cpu.energyScale(i), tol * cpu.energyScale(i));
+      // The scene really moved (FE's 20 steps of 1e-5 s fall by g t^2 / 2 = 2e-7 m), so
+      // agreement is not two resting states.
+      const Eigen::MatrixX3d x = cpu.positions(i), v = cpu.velocities(i);
+      ASSERT_GT((x - scenes[s].positions).cwiseAbs().maxCoeff(), 1e-8);
+      EXPECT_LE(testing::relativeError(opencl.positions(i), x), tol);
+      const double v_scale = std::max(v.cwiseAbs().maxCoeff(), x.cwiseAbs().maxCoeff() / c.time_step);
+      EXPECT_LE((opencl.velocities(i) - v).cwiseAbs().maxCoeff(), tol * v_scale);
+      EXPECT_EQ(opencl.time(i), cpu.time(i));
+      // It ran on the device: a float device's state is floats (the CPU batch's is not).
+      if (precision == Precision::Float) {
+        EXPECT_TRUE((opencl.positions(i).cast<float>().cast<double>().array() == opencl.positions(i).array()).all());
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Integrators, OpenCLBatchSimulator,
+    ::testing::Values(BatchCase{Integrator::SymplecticEuler, 1e-4, 20}, BatchCase{Integrator::ForwardEuler, 1e-5, 20},
+                      BatchCase{Integrator::BackwardEuler, 1.0 / 60.0, 20}, BatchCase{Integrator::BDF2, 1.0 / 60.0, 20},
+                      BatchCase{Integrator::ImplicitMidpoint, 1.0 / 60.0, 20}),
+    [](const ::testing::TestParamInfo<BatchCase>& info) { return std::string(integratorName(info.param.integrator)); });
+
+// A scene that blows up is refused at the step the CPU batch refuses it, with the same reason, and
+// keeps its last state; its neighbour steps on as on the CPU.
+// The batch makes the backend the options ask for, with its errors.
+TEST(OpenCLBatchSimulator, MakesTheOpenCLBackendTheOptionsAskFor) {
+  SimulatorOptions options = batchOptions({Integrator::BackwardEuler, 0.01, 1}, BackendKind::OpenCL, Precision::Float);
+  options.opencl.platform = "no such platform";
+  EXPECT_THROW(BatchSimulator(testing::mixedBatchScenes(), options), NoOpenCLDeviceError);
+}
+
+TEST(OpenCLBatchSimulator, RefusesTheSceneTheCpuBatchRefuses) {
+  ChainPendulumParams soft, stiff;
+  soft.stiffness = 10.0;
+  soft.pin_stiffness = 100.0;  // SE stable at h = 1e-3 (omega about 90/s)
+  stiff.particles = 6;         // pin omega about 7,700/s: SE explodes at h = 1e-3
+  const std::vector<Scene> scenes = {makeChainPendulum(soft), makeChainPendulum(stiff)};
+  const BatchCase c{Integrator::SymplecticEuler, 1e-3, 200};
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    SimulatorOptions options = batchOptions(c, BackendKind::OpenCL, precision);
+    options.energy_limit = 1.0;
+    BatchSimulator opencl(scenes, options);
+    options.backend = BackendKind::CpuReference;
+    BatchSimulator cpu(scenes, options);
+    int refused_at = -1;
+    for (int step = 0; step < c.steps; ++step) {
+      const BatchStepReport got = opencl.step();
+      const BatchStepReport& want = cpu.step();
+      EXPECT_TRUE(got.refusals[0].empty()) << got.refusals[0];
+      ASSERT_EQ(got.refusals[1].empty(), want.refusals[1].empty()) << "step " << step << ": " << want.refusals[1];
+      if (!want.refusals[1].empty() && refused_at < 0) {
+        refused_at = step;
+        // The same reason at the same step; the figures after it are each backend's energies.
+        const std::string reason = want.refusals[1].substr(0, want.refusals[1].find("H = "));
+        EXPECT_EQ(got.refusals[1].substr(0, reason.size()), reason);
+        EXPECT_NE(reason.find("energy"), std::string::npos) << want.refusals[1];
+      }
+    }
+    ASSERT_GE(refused_at, 1) << "the stiff chain never exceeded the limit";
+    const double tol = crossBackendTolerance(precision);
+    EXPECT_FALSE(opencl.active(1));
+    EXPECT_EQ(opencl.stepCount(1), cpu.stepCount(1));
+    EXPECT_LE(testing::relativeError(opencl.positions(1), cpu.positions(1)), tol);
+    EXPECT_NEAR(opencl.target(1), cpu.target(1), tol * cpu.energyScale(1));
+    EXPECT_TRUE(opencl.active(0));
+    EXPECT_LE(testing::relativeError(opencl.positions(0), cpu.positions(0)), tol);
+    const double v_scale =
+        std::max(cpu.velocities(0).cwiseAbs().maxCoeff(), cpu.positions(0).cwiseAbs().maxCoeff() / c.time_step);
+    EXPECT_LE((opencl.velocities(0) - cpu.velocities(0)).cwiseAbs().maxCoeff(), tol * v_scale);
+  }
+}
+
+}  // namespace
+}  // namespace stabint

@@ -1,0 +1,684 @@
+// Scene concatenation for the batched simulator (docs/batch_design.md, step 1): the segments say
+// where each scene lies, and the concatenation, stepped by one Simulator, steps every scene as its
+// own Simulator does (the premise of the batch: no element couples two scenes).
+#include <stabint/batch.hpp>
+#include <stabint/builders.hpp>
+#include <stabint/errors.hpp>
+#include <stabint/simulator.hpp>
+
+#include "cpu/cpu_backend.hpp"
+#include "elements/element_type.hpp"
+#include "scene/scene_batch.hpp"
+#include "scene/scene_data.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stabint {
+namespace {
+
+// Four scenes covering every element type but contact: springs and a pin (chain, with a
+// time-dependent force field on "all particles"), springs with a damped body (cloth), tets
+// (bar), triangle strain and bending hinges (triangle cloth).
+std::vector<Scene> mixedScenes() {
+  ChainPendulumParams chain;
+  chain.particles = 8;
+  Scene a = makeChainPendulum(chain);
+  ForceField wind;
+  wind.force = Eigen::Vector3d(0.0, 0.0, 0.01);
+  wind.rate = Eigen::Vector3d(0.02, 0.0, 0.0);
+  a.force_fields.push_back(wind);
+
+  ClothGridParams cloth;
+  cloth.nx = 6;
+  cloth.ny = 5;
+  cloth.damping = 0.1;
+  const Scene b = makeClothGrid(cloth);
+
+  TetBarParams bar;
+  bar.nx = 3;
+  bar.ny = 1;
+  bar.nz = 1;
+  const Scene c = makeTetBar(bar);
+
+  ClothGridParams triangles;
+  triangles.nx = 5;
+  triangles.ny = 4;
+  triangles.model = ClothModel::Triangles;
+  const Scene d = makeClothGrid(triangles);
+  return {a, b, c, d};
+}
+
+int typeIndex(const char* identifier) {
+  const std::vector<const ElementType*>& types = elementTypes();
+  for (std::size_t i = 0; i < types.size(); ++i)
+    if (std::string(types[i]->identifier()) == identifier) return static_cast<int>(i);
+  ADD_FAILURE() << "no element type " << identifier;
+  return 0;
+}
+
+TEST(SceneBatch, SegmentsLocateEveryScenesParticlesAndElements) {
+  const std::vector<Scene> scenes = mixedScenes();
+  const SceneBatch batch = concatenateScenes(scenes);
+  ASSERT_EQ(batch.segments.size(), scenes.size());
+  const int spring = typeIndex("spring"), tet = typeIndex("tet"), pin = typeIndex("pin");
+  int particles = 0;
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    const SceneSegment& seg = batch.segments[s];
+    const Scene& own = scenes[s];
+    EXPECT_EQ(seg.first_particle, particles);
+    EXPECT_EQ(seg.num_particles, own.numParticles());
+    const int off = seg.first_particle;
+    EXPECT_EQ(batch.scene.positions.middleRows(off, own.numParticles()), own.positions);
+    EXPECT_EQ(batch.scene.masses.segment(off, own.numParticles()), own.masses);
+    for (std::size_t i = 0; i < elementTypes().size(); ++i)
+      EXPECT_EQ(seg.num_elements[i], elementTypes()[i]->count(own)) << elementTypes()[i]->name();
+    ASSERT_EQ(seg.num_elements[static_cast<std::size_t>(spring)], static_cast<int>(own.springs.size()));
+    for (std::size_t k = 0; k < own.springs.size(); ++k) {
+      const Spring& got = batch.scene.springs[std::size_t(seg.first_element[std::size_t(spring)]) + k];
+      EXPECT_EQ(got.a, own.springs[k].a + off);
+      EXPECT_EQ(got.b, own.springs[k].b + off);
+      EXPECT_EQ(got.stiffness, own.springs[k].stiffness);
+    }
+    for (std::size_t k = 0; k < own.tets.size(); ++k)
+      for (int v = 0; v < 4; ++v)
+        EXPECT_EQ(batch.scene.tets[std::size_t(seg.first_element[std::size_t(tet)]) + k].vertices[std::size_t(v)],
+                  own.tets[k].vertices[std::size_t(v)] + off);
+    for (std::size_t k = 0; k < own.pins.size(); ++k)
+      EXPECT_EQ(batch.scene.pins[std::size_t(seg.first_element[std::size_t(pin)]) + k].vertex,
+                own.pins[k].vertex + off);
+    particles += own.numParticles();
+  }
+  EXPECT_EQ(batch.scene.numParticles(), particles);
+  // The chain's field on "all particles" acts on the chain's particles only.
+  ASSERT_EQ(batch.scene.force_fields.size(), 1u);
+  EXPECT_EQ(batch.scene.force_fields[0].particles.size(), std::size_t(scenes[0].numParticles()));
+  EXPECT_EQ(batch.scene.force_fields[0].particles.back(), scenes[0].numParticles() - 1);
+  // Each scene's bodies (the builders make one per scene; the cloth's is damped) follow, shifted.
+  ASSERT_EQ(batch.scene.bodies.size(), scenes.size());
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    ASSERT_EQ(scenes[s].bodies.size(), 1u);
+    const Body& got = batch.scene.bodies[s];
+    EXPECT_EQ(got.damping, scenes[s].bodies[0].damping);
+    ASSERT_EQ(got.particles.size(), scenes[s].bodies[0].particles.size());
+    for (std::size_t k = 0; k < got.particles.size(); ++k)
+      EXPECT_EQ(got.particles[k], scenes[s].bodies[0].particles[k] + batch.segments[s].first_particle);
+  }
+}
+
+TEST(SceneBatch, RefusesWhatItCannotKeepApartNamingTheScene) {
+  EXPECT_THROW(concatenateScenes({}), InvalidInputError);
+  std::vector<Scene> scenes = mixedScenes();
+  scenes[2].gravity = Eigen::Vector3d(0.0, -1.0, 0.0);
+  try {
+    concatenateScenes(scenes);
+    ADD_FAILURE() << "differing gravity accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("scene 2: gravity"), std::string::npos) << e.what();
+  }
+  scenes = mixedScenes();
+  scenes[1].colliders.push_back(Collider{});
+  try {
+    concatenateScenes(scenes);
+    ADD_FAILURE() << "a collider accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("scene 1: has colliders"), std::string::npos) << e.what();
+  }
+  scenes = mixedScenes();
+  scenes[3].masses[0] = -1.0;
+  try {
+    concatenateScenes(scenes);
+    ADD_FAILURE() << "a negative mass accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("scene 3: ", 0), 0u) << e.what();
+  }
+}
+
+// Positions and velocities away from rest, the same for a scene alone and in the batch.
+Eigen::MatrixX3d perturbed(const Eigen::MatrixX3d& m, double amount) {
+  Eigen::MatrixX3d out = m;
+  for (Eigen::Index j = 0; j < out.rows(); ++j)
+    for (int k = 0; k < 3; ++k) out(j, k) += amount * std::sin(1.7 * double(j) + 2.3 * double(k) + 0.4);
+  return out;
+}
+
+// The CPU reference's per-scene values of a batch are each scene's own backend's, bit for bit:
+// the same elements in the same order, and each segment's reductions over an `n_s by 3` copy as
+// the scene alone's are. Bit for bit is what the batch's blend decisions need to match the own
+// simulators' (a decision at the tolerance's edge would otherwise go the other way).
+TEST(SceneBatch, CpuPerSceneEnergiesAreEachScenesOwn) {
+  const std::vector<Scene> scenes = mixedScenes();
+  const SceneBatch batch = concatenateScenes(scenes);
+  const SceneData data(batch.scene);
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
+  ASSERT_TRUE(backend->computesPerScene());
+  backend->setSegments(batch.segments);
+  backend->write(0, perturbed(batch.scene.positions, 0.02));
+  backend->write(1, perturbed(batch.scene.velocities, 0.5));
+  const double t = 0.7;  // the chain's force field has grown by its rate
+  std::vector<PotentialEnergy> potentials;
+  std::vector<double> dots;
+  backend->potentials(0, t, potentials);
+  backend->massDots(1, 1, dots);
+  ASSERT_EQ(potentials.size(), scenes.size());
+  ASSERT_EQ(dots.size(), scenes.size());
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    const SceneSegment& seg = batch.segments[s];
+    const SceneData own_data(scenes[s]);
+    const std::unique_ptr<Backend> own = makeCpuBackend(own_data, 2);
+    own->write(0, perturbed(batch.scene.positions, 0.02).middleRows(seg.first_particle, seg.num_particles));
+    own->write(1, perturbed(batch.scene.velocities, 0.5).middleRows(seg.first_particle, seg.num_particles));
+    const PotentialEnergy p = own->potential(0, t);
+    // Not trivially zero: every term is exercised somewhere.
+    EXPECT_NE(p.internal, 0.0) << "scene " << s;
+    EXPECT_EQ(potentials[s].internal, p.internal) << "scene " << s;
+    EXPECT_EQ(potentials[s].pins, p.pins) << "scene " << s;
+    EXPECT_EQ(potentials[s].external, p.external) << "scene " << s;
+    EXPECT_EQ(dots[s], own->massDot(1, 1)) << "scene " << s;
+  }
+  // And together they are the batch's single values, to the round-off of the different sums.
+  const PotentialEnergy whole = backend->potential(0, t);
+  double internal = 0.0, pins = 0.0, external = 0.0, dot = 0.0;
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    internal += potentials[s].internal;
+    pins += potentials[s].pins;
+    external += potentials[s].external;
+    dot += dots[s];
+  }
+  EXPECT_NEAR(whole.internal, internal, 1e-13 * std::abs(internal));
+  EXPECT_NEAR(whole.pins, pins, 1e-13 * std::abs(pins));
+  EXPECT_NEAR(whole.external, external, 1e-12 * (std::abs(external) + std::abs(whole.external)));
+  EXPECT_NEAR(backend->massDot(1, 1), dot, 1e-13 * dot);
+}
+
+struct PremiseCase {
+  Integrator integrator;
+  double time_step;
+  int steps;
+};
+
+class SceneBatchPremise : public ::testing::TestWithParam<PremiseCase> {};
+
+// The concatenation stepped by one Simulator gives every scene its own Simulator's trajectory.
+// Explicit (SE): bit for bit, since every per-vertex sum (forces, the gather) adds the scene's
+// own terms in the same order. Implicit: the factor of the block-diagonal K_c orders each block as
+// CHOLMOD orders the union, which need not be the order of the scene alone, so only agreement to
+// round-off is guaranteed: about eps times the conditioning per solve, grown over the steps; 1e-9
+// of the scene's size is far above that and far below any coupling (one element between two
+// scenes would move them by millimetres in these steps). With these scenes AMD happens to order
+// each block as alone and the trajectories were bit for bit (docs/batch_design.md).
+TEST_P(SceneBatchPremise, EachSceneStepsAsItsOwnSimulator) {
+  const PremiseCase c = GetParam();
+  const std::vector<Scene> scenes = mixedScenes();
+  const SceneBatch batch = concatenateScenes(scenes);
+  SimulatorOptions options;
+  options.integrator = c.integrator;
+  options.time_step = c.time_step;
+  options.iterations = 5;
+  Simulator together(batch.scene, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  for (int step = 0; step < c.steps; ++step) {
+    together.step();
+    for (Simulator& sim : alone) sim.step();
+  }
+  const bool explicit_method = c.integrator == Integrator::SymplecticEuler;
+  double energy_sum = 0.0, energy_scale = 0.0;
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    const SceneSegment& seg = batch.segments[s];
+    const Eigen::MatrixX3d x = together.positions().middleRows(seg.first_particle, seg.num_particles);
+    const Eigen::MatrixX3d v = together.velocities().middleRows(seg.first_particle, seg.num_particles);
+    const Eigen::MatrixX3d& x_own = alone[s].positions();
+    const Eigen::MatrixX3d& v_own = alone[s].velocities();
+    // The scene really moved (so agreement is not two resting states).
+    ASSERT_GT((x_own - scenes[s].positions).cwiseAbs().maxCoeff(), 1e-6) << "scene " << s;
+    if (explicit_method) {
+      EXPECT_EQ(x, x_own) << "scene " << s;
+      EXPECT_EQ(v, v_own) << "scene " << s;
+    } else {
+      const double size = (scenes[s].positions.colwise().maxCoeff() - scenes[s].positions.colwise().minCoeff()).norm();
+      const double speed = v_own.cwiseAbs().maxCoeff();
+      EXPECT_LE((x - x_own).cwiseAbs().maxCoeff(), 1e-9 * size) << "scene " << s;
+      EXPECT_LE((v - v_own).cwiseAbs().maxCoeff(), 1e-9 * (speed + size / c.time_step)) << "scene " << s;
+    }
+    const EnergyReport e = alone[s].energy();
+    energy_sum += e.total();
+    energy_scale += std::abs(e.kinetic) + std::abs(e.elastic) + std::abs(e.external);
+  }
+  // The batch's energy is the sum of the scenes' (the per-segment energies the batch will report
+  // add up to what one reduction over the concatenation gives), to the round-off of the sums.
+  EXPECT_NEAR(together.energy().total(), energy_sum, 1e-11 * energy_scale);
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, SceneBatchPremise,
+                         ::testing::Values(PremiseCase{Integrator::SymplecticEuler, 1e-4, 20},
+                                           PremiseCase{Integrator::BackwardEuler, 1.0 / 60.0, 20},
+                                           PremiseCase{Integrator::ImplicitMidpoint, 1.0 / 60.0, 20},
+                                           PremiseCase{Integrator::BDF2, 1.0 / 60.0, 20}),
+                         [](const ::testing::TestParamInfo<PremiseCase>& info) {
+                           return std::string(integratorName(info.param.integrator));
+                         });
+
+// ---- BatchSimulator ----------------------------------------------------------------------------
+
+class BatchSimulatorMatches : public ::testing::TestWithParam<PremiseCase> {};
+
+// Every scene of the batch follows its own Simulator: state (SE bit for bit, BE to the round-off
+// of the factor's ordering, as in the premise above), and its own energies, target, forcing and
+// damping, which the batch computes per segment. The energies agree to 1e-12 of the scene's
+// energy scale: bit for bit where the states are, round-off of the state otherwise.
+TEST_P(BatchSimulatorMatches, EveryScenesStateEnergyAndTargetAreItsOwnSimulators) {
+  const PremiseCase c = GetParam();
+  const std::vector<Scene> scenes = mixedScenes();
+  SimulatorOptions options;
+  options.integrator = c.integrator;
+  options.time_step = c.time_step;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  ASSERT_EQ(batch.size(), int(scenes.size()));
+  for (std::size_t s = 0; s < scenes.size(); ++s) EXPECT_EQ(batch.energyScale(int(s)), alone[s].energyScale());
+  double forcing = 0.0, damping = 0.0;
+  for (int step = 0; step < c.steps; ++step) {
+    const BatchStepReport& report = batch.step();
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const StepReport& own = alone[s].step();
+      const StepReport& got = report.scenes[s];
+      EXPECT_TRUE(report.refusals[s].empty()) << report.refusals[s];
+      const double scale = alone[s].energyScale();
+      EXPECT_EQ(got.step, own.step);
+      EXPECT_EQ(got.time, own.time);
+      EXPECT_NEAR(got.forcing, own.forcing, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.damping, own.damping, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.target, own.target, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.energy.kinetic, own.energy.kinetic, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.energy.elastic, own.energy.elastic, 1e-12 * scale) << "scene " << s << " step " << step;
+      EXPECT_NEAR(got.energy.external, own.energy.external, 1e-12 * scale) << "scene " << s << " step " << step;
+      forcing += std::abs(own.forcing);
+      damping += own.damping;
+    }
+  }
+  // The chain's growing field does work and the cloth's body is damped: both were compared.
+  EXPECT_GT(forcing, 0.0);
+  EXPECT_GT(damping, 0.0);
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    EXPECT_EQ(batch.time(int(s)), alone[s].time());
+    if (c.integrator == Integrator::SymplecticEuler || c.integrator == Integrator::ForwardEuler) {
+      EXPECT_EQ(batch.positions(int(s)), alone[s].positions()) << "scene " << s;
+      EXPECT_EQ(batch.velocities(int(s)), alone[s].velocities()) << "scene " << s;
+    } else {
+      const double size = (scenes[s].positions.colwise().maxCoeff() - scenes[s].positions.colwise().minCoeff()).norm();
+      EXPECT_LE((batch.positions(int(s)) - alone[s].positions()).cwiseAbs().maxCoeff(), 1e-9 * size);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, BatchSimulatorMatches,
+                         ::testing::Values(PremiseCase{Integrator::SymplecticEuler, 1e-4, 20},
+                                           PremiseCase{Integrator::ForwardEuler, 1e-5, 20},
+                                           PremiseCase{Integrator::BackwardEuler, 1.0 / 60.0, 20},
+                                           PremiseCase{Integrator::BDF2, 1.0 / 60.0, 20},
+                                           PremiseCase{Integrator::ImplicitMidpoint, 1.0 / 60.0, 20}),
+                         [](const ::testing::TestParamInfo<PremiseCase>& info) {
+                           return std::string(integratorName(info.param.integrator));
+                         });
+
+// A scene that blows up is refused alone, with its own Simulator's message at the same step, and
+// keeps its last accepted state; its neighbour steps on as its own Simulator does.
+TEST(BatchSimulator, OneScenesRefusalLeavesTheOthersStepping) {
+  ChainPendulumParams soft, stiff;
+  soft.stiffness = 10.0;
+  soft.pin_stiffness = 100.0;  // SE stable at h = 1e-3 (omega about 90/s)
+  stiff.particles = 6;         // pin omega about 7,700/s: SE explodes at h = 1e-3
+  const std::vector<Scene> scenes = {makeChainPendulum(soft), makeChainPendulum(stiff)};
+  SimulatorOptions options;
+  options.integrator = Integrator::SymplecticEuler;
+  options.time_step = 1e-3;
+  options.energy_limit = 1.0;
+  BatchSimulator batch(scenes, options);
+  Simulator soft_alone(scenes[0], options), stiff_alone(scenes[1], options);
+  std::string own_refusal;
+  int refused_at = -1;
+  for (int step = 0; step < 200; ++step) {
+    const BatchStepReport& report = batch.step();
+    soft_alone.step();
+    EXPECT_TRUE(report.refusals[0].empty()) << report.refusals[0];
+    if (own_refusal.empty()) {
+      try {
+        stiff_alone.step();
+        EXPECT_TRUE(report.refusals[1].empty()) << "step " << step << ": " << report.refusals[1];
+      } catch (const EnergyLimitError& e) {
+        own_refusal = e.what();
+        refused_at = step;
+        EXPECT_EQ(report.refusals[1], own_refusal);
+      }
+    } else {
+      EXPECT_FALSE(report.refusals[1].empty());
+      EXPECT_FALSE(batch.active(1));
+    }
+  }
+  ASSERT_GE(refused_at, 1) << "the stiff chain never exceeded the limit";
+  EXPECT_EQ(batch.stepCount(1), stiff_alone.stepCount());
+  EXPECT_EQ(batch.positions(1), stiff_alone.positions());
+  EXPECT_EQ(batch.target(1), stiff_alone.target());
+  EXPECT_TRUE(batch.active(0));
+  EXPECT_EQ(batch.positions(0), soft_alone.positions());
+  EXPECT_EQ(batch.velocities(0), soft_alone.velocities());
+}
+
+// A scene whose state overflows (SE above its stability limit: omega h = 2.5 multiplies the
+// energy by 16 per step) is refused with the NonFiniteStateError message of its own Simulator, at
+// its step; the NaN stays in its block and the neighbour steps on bit for bit.
+TEST(BatchSimulator, OneScenesBlowUpStaysInItsBlock) {
+  const double h = 1e-3;
+  LinearOscillatorParams oscillator;
+  oscillator.stiffness = std::pow(2.5 / h, 2.0);  // omega h = 2.5 with mass 1
+  ChainPendulumParams soft;
+  soft.stiffness = 10.0;
+  soft.pin_stiffness = 100.0;
+  soft.gravity = 0.0;  // the oscillator's
+  Scene chain = makeChainPendulum(soft);
+  chain.velocities = perturbed(Eigen::MatrixX3d::Zero(chain.numParticles(), 3), 0.5);
+  const std::vector<Scene> scenes = {makeLinearOscillator(oscillator), chain};
+  SimulatorOptions options;
+  options.integrator = Integrator::SymplecticEuler;
+  options.time_step = h;
+  BatchSimulator batch(scenes, options);
+  Simulator exploding(scenes[0], options), neighbour(scenes[1], options);
+  int refused_at = -1;
+  for (int step = 0; step < 400; ++step) {
+    const BatchStepReport& report = batch.step();
+    neighbour.step();
+    EXPECT_TRUE(report.refusals[1].empty()) << report.refusals[1];
+    if (refused_at >= 0) continue;
+    try {
+      exploding.step();
+      EXPECT_TRUE(report.refusals[0].empty()) << "step " << step << ": " << report.refusals[0];
+    } catch (const NonFiniteStateError& e) {
+      refused_at = step;
+      EXPECT_EQ(report.refusals[0], e.what());
+    }
+  }
+  ASSERT_GE(refused_at, 100) << "the oscillator did not overflow";
+  EXPECT_FALSE(batch.active(0));
+  EXPECT_EQ(batch.positions(0), exploding.positions());
+  EXPECT_TRUE(batch.positions(0).allFinite());
+  EXPECT_EQ(batch.positions(1), neighbour.positions());
+  EXPECT_EQ(batch.velocities(1), neighbour.velocities());
+}
+
+TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
+  const std::vector<Scene> scenes = mixedScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::BackwardEuler;
+  options.tolerance = 1e-6;
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.tolerance = 0.0;
+  options.global_solve = GlobalSolve::ConjugateGradient;
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.global_solve = GlobalSolve::Factor;
+  options.acceleration = Acceleration::Anderson;
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.acceleration = Acceleration::None;
+  // Simulator's own checks come first.
+  options.integrator = Integrator::BackwardEuler;
+  options.time_step = -1.0;
+  try {
+    BatchSimulator batch(scenes, options);
+    ADD_FAILURE() << "a negative time step accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulator options: time_step"), std::string::npos) << e.what();
+  }
+}
+
+// ---- the blend in lockstep -----------------------------------------------------------------------
+
+// Scenes whose blend steps take every branch in the first steps (checked below): the mixed scenes
+// (the chain's swing and growing field, the damped cloth, the bar, the triangle cloth) and a
+// chain released with its links stretched and moving, whose IM candidates gain energy at once.
+std::vector<Scene> blendScenes() {
+  std::vector<Scene> scenes = mixedScenes();
+  ChainPendulumParams chain;
+  chain.particles = 6;
+  Scene stretched = makeChainPendulum(chain);
+  stretched.positions = perturbed(stretched.positions, 0.05);
+  stretched.velocities = perturbed(Eigen::MatrixX3d::Zero(stretched.numParticles(), 3), 2.0);
+  scenes.push_back(stretched);
+  return scenes;
+}
+
+void expectSameReport(const StepReport& got, const StepReport& own, double scale, const std::string& where) {
+  EXPECT_EQ(got.branch, own.branch) << where;
+  EXPECT_EQ(got.step, own.step) << where;
+  EXPECT_EQ(got.time, own.time) << where;
+  EXPECT_EQ(got.iterations, own.iterations) << where;
+  EXPECT_NEAR(got.alpha, own.alpha, 1e-9) << where;
+  EXPECT_NEAR(got.velocity_scale, own.velocity_scale, 1e-9) << where;
+  EXPECT_NEAR(got.forcing, own.forcing, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.damping, own.damping, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.event_energy, own.event_energy, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.target, own.target, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.energy.kinetic, own.energy.kinetic, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.energy.elastic, own.energy.elastic, 1e-12 * scale) << where;
+  EXPECT_NEAR(got.energy.external, own.energy.external, 1e-12 * scale) << where;
+}
+
+void expectSameState(const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v, const Simulator& own,
+                     const std::string& where) {
+  // The factor's ordering of a block may differ from the scene alone's (round-off, see the premise).
+  const Eigen::MatrixX3d& x0 = own.scene().positions;
+  const double size = (x0.colwise().maxCoeff() - x0.colwise().minCoeff()).norm();
+  const double speed = own.velocities().cwiseAbs().maxCoeff();
+  EXPECT_LE((x - own.positions()).cwiseAbs().maxCoeff(), 1e-9 * size) << where;
+  EXPECT_LE((v - own.velocities()).cwiseAbs().maxCoeff(), 1e-9 * (speed + size / own.options().time_step)) << where;
+}
+
+// Every scene of a blend batch takes the branch its own Simulator takes, step by step, with its
+// alpha, velocity scale, forcing, damping, target and energies, and follows its trajectory: the
+// decisions, root finds and corrections are per scene (one energy pass per round for all), the
+// partner is solved for the whole batch whenever any scene needs it.
+TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
+  const std::vector<Scene> scenes = blendScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  std::vector<std::vector<int>> branches(scenes.size(), std::vector<int>(4, 0));
+  int steps_with_mixed_branches = 0;
+  for (int step = 0; step < 40; ++step) {
+    const BatchStepReport& report = batch.step();
+    std::vector<int> this_step(4, 0);
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const StepReport& own = alone[s].step();
+      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
+      EXPECT_TRUE(report.refusals[s].empty()) << where << ": " << report.refusals[s];
+      expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
+      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
+      ++branches[s][std::size_t(own.branch)];
+      ++this_step[std::size_t(own.branch)];
+    }
+    const auto at = [&](BlendBranch b) { return this_step[std::size_t(b)]; };
+    if (at(BlendBranch::ImplicitMidpoint) > 0 && at(BlendBranch::BackwardEuler) > 0 &&
+        at(BlendBranch::VelocityScale) > 0)
+      ++steps_with_mixed_branches;
+  }
+  // The batch really mixed the branches within single steps (else lockstep was not exercised).
+  EXPECT_GT(steps_with_mixed_branches, 0);
+  for (std::size_t s = 0; s < scenes.size(); ++s)
+    EXPECT_EQ(branches[s][std::size_t(BlendBranch::None)], 0) << "scene " << s;
+}
+
+// With an energy ceiling far below the blend's band, the steps whose energy ends above H* are
+// refused: each scene at the step its own Simulator refuses, with its message; the others step on.
+TEST(BatchSimulatorBlend, RefusalsArePerScene) {
+  const std::vector<Scene> scenes = blendScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  options.energy_limit = 1e-7;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  std::vector<bool> refused(scenes.size(), false);
+  for (int step = 0; step < 40; ++step) {
+    const BatchStepReport& report = batch.step();
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
+      if (refused[s]) {
+        EXPECT_FALSE(batch.active(int(s))) << where;
+        EXPECT_FALSE(report.refusals[s].empty()) << where;
+        continue;
+      }
+      try {
+        const StepReport& own = alone[s].step();
+        EXPECT_TRUE(report.refusals[s].empty()) << where << ": " << report.refusals[s];
+        expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
+      } catch (const EnergyLimitError& e) {
+        EXPECT_EQ(report.refusals[s], e.what()) << where;
+        refused[s] = true;
+      }
+      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
+      EXPECT_EQ(batch.stepCount(int(s)), alone[s].stepCount()) << where;
+    }
+  }
+  int refused_scenes = 0;
+  for (bool r : refused) refused_scenes += r ? 1 : 0;
+  // Some scenes were refused and some were not: the refusals did not spread.
+  EXPECT_GT(refused_scenes, 0);
+  EXPECT_LT(refused_scenes, int(scenes.size()));
+}
+
+// setState is an event of one scene: booked in its H* only (its event_energy as its own
+// Simulator's), the others untouched; a refused scene steps again after it.
+TEST(BatchSimulatorBlend, SetStateIsAnEventOfOneScene) {
+  const std::vector<Scene> scenes = blendScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  for (int step = 0; step < 5; ++step) {
+    batch.step();
+    for (Simulator& sim : alone) sim.step();
+  }
+  const int moved = 1;
+  const Eigen::MatrixX3d x = perturbed(alone[moved].positions(), 0.01);
+  const Eigen::MatrixX3d v = perturbed(alone[moved].velocities(), 0.3);
+  std::vector<double> targets;
+  for (int s = 0; s < batch.size(); ++s) targets.push_back(batch.target(s));
+  batch.setState(moved, x, v);
+  alone[std::size_t(moved)].setState(x, v);
+  for (int s = 0; s < batch.size(); ++s) {
+    if (s == moved) {
+      EXPECT_NE(batch.target(s), targets[std::size_t(s)]);
+      EXPECT_NEAR(batch.target(s), alone[std::size_t(s)].target(), 1e-12 * alone[std::size_t(s)].energyScale());
+    } else {
+      EXPECT_EQ(batch.target(s), targets[std::size_t(s)]) << "scene " << s;
+    }
+  }
+  for (int step = 0; step < 10; ++step) {
+    const BatchStepReport& report = batch.step();
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const StepReport& own = alone[s].step();
+      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
+      expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
+      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
+    }
+  }
+  // Bad input changes nothing and names the scene.
+  const double before = batch.target(2);
+  EXPECT_THROW(batch.setState(2, x, v), InvalidInputError);  // scene 1's row count
+  EXPECT_THROW(batch.setState(7, x, v), InvalidInputError);
+  EXPECT_EQ(batch.target(2), before);
+}
+
+// A pin dragged in one scene does work booked in that scene's H* only, as its own Simulator books
+// it; the other scenes' targets do not move by it.
+TEST(BatchSimulatorBlend, APinDraggedInOneSceneIsBookedInItsTargetOnly) {
+  const std::vector<Scene> scenes = blendScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  std::vector<Simulator> alone;
+  for (const Scene& s : scenes) alone.emplace_back(s, options);
+  const int dragged = 4;  // the stretched chain, pinned at its first particle
+  ASSERT_FALSE(scenes[dragged].pins.empty());
+  double work = 0.0;
+  for (int step = 0; step < 30; ++step) {
+    const Eigen::Vector3d q = scenes[dragged].pins[0].target.position + Eigen::Vector3d(0.01 * step, 0.0, 0.0);
+    batch.setPinTarget(dragged, 0, q);
+    alone[std::size_t(dragged)].setPinTarget(0, q);
+    const BatchStepReport& report = batch.step();
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const StepReport& own = alone[s].step();
+      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
+      expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
+      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
+    }
+    work += std::abs(report.scenes[std::size_t(dragged)].forcing);
+  }
+  EXPECT_GT(work, 0.0);
+  EXPECT_THROW(batch.setPinTarget(dragged, 1, Eigen::Vector3d::Zero()), InvalidInputError);  // one pin
+  EXPECT_THROW(batch.setPinTarget(dragged, 0, Eigen::Vector3d::Constant(NAN)), InvalidInputError);
+}
+
+// The public accessors: the concatenation's rows per scene, the batch's time, and bad scene
+// indices refused naming the call; setState refused for BDF2 (its restart is the whole batch's).
+TEST(BatchSimulator, AccessorsLocateEachSceneAndRefuseBadIndices) {
+  const std::vector<Scene> scenes = mixedScenes();
+  SimulatorOptions options;
+  options.integrator = Integrator::BDF2;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  BatchSimulator batch(scenes, options);
+  EXPECT_FALSE(batch.backendDescription().empty());
+  EXPECT_EQ(batch.options().integrator, Integrator::BDF2);
+  batch.step();
+  batch.step();
+  EXPECT_EQ(batch.time(), 2.0 * (1.0 / 60.0));
+  int first = 0;
+  for (int s = 0; s < batch.size(); ++s) {
+    EXPECT_EQ(batch.firstParticle(s), first);
+    EXPECT_EQ(batch.numParticles(s), scenes[std::size_t(s)].numParticles());
+    EXPECT_EQ(batch.positions(s), batch.allPositions().middleRows(first, batch.numParticles(s)));
+    EXPECT_EQ(batch.time(s), batch.time());
+    EXPECT_EQ(batch.stepCount(s), 2);
+    first += batch.numParticles(s);
+  }
+  EXPECT_EQ(batch.allPositions().rows(), first);
+  for (int bad : {-1, batch.size()}) {
+    try {
+      batch.target(bad);
+      ADD_FAILURE() << "scene " << bad << " accepted";
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find("target: scene " + std::to_string(bad) + " out of range"), std::string::npos)
+          << e.what();
+    }
+    EXPECT_THROW(batch.positions(bad), InvalidInputError);
+    EXPECT_THROW(batch.active(bad), InvalidInputError);
+  }
+  const double target = batch.target(0);
+  const Eigen::MatrixX3d x = batch.positions(0);
+  EXPECT_THROW(batch.setState(0, x, Eigen::MatrixX3d::Zero(x.rows(), 3)), InvalidInputError);
+  EXPECT_EQ(batch.target(0), target);
+  EXPECT_EQ(batch.positions(0), x);
+}
+
+}  // namespace
+}  // namespace stabint

@@ -13,12 +13,9 @@
 //                                                    CHOLMOD solve of the three columns as before,
 //                                                    or GlobalSystem::solve's two column groups
 #include "bench_common.hpp"
+#include "first_step.hpp"
 
-#include "backend.hpp"
-#include "cpu/cpu_backend.hpp"
 #include "cpu/worker_pool.hpp"
-#include "scene/scene_data.hpp"
-#include "solver/global_system.hpp"
 
 #include <Eigen/CholmodSupport>
 
@@ -28,9 +25,7 @@
 namespace stabint::bench {
 namespace {
 
-enum { kX, kY, kSlots };
-constexpr double kTimeStep = 1.0 / 30.0;
-constexpr double kC = 1.0 / (kTimeStep * kTimeStep);
+using namespace first_step;
 constexpr int kFrameSteps = 30;
 
 // Sets the process's thread count for one case and puts the previous one back.
@@ -99,26 +94,15 @@ void runFrame(benchmark::State& state, const std::string& key, BackendChoice bac
   state.SetLabel(f.sim->backendDescription());
 }
 
-// A backend and the global system at the bar's first implicit step (x = y = x_0 + h^2 g).
-struct PassFixture {
-  explicit PassFixture(const Scene& s) : scene(s), data(s), backend(makeCpuBackend(data, kSlots)), system(data) {
-    Eigen::MatrixX3d y = s.positions;
-    for (Eigen::Index j = 0; j < y.rows(); ++j) y.row(j) += (kTimeStep * kTimeStep * s.gravity).transpose();
-    backend->write(kY, y);
-    backend->write(kX, y);
-    backend->localStepRhs(kX, kY, kC, kTimeStep, rhs);
-    system.solve(kC, rhs, x);  // factors
+// The first-step fixture with the solve as it was before GlobalSystem::solve split its columns.
+struct PassFixture : Fixture {
+  explicit PassFixture(const Scene& s) : Fixture(s, BackendChoice::Cpu) {
     // The solve as it was before GlobalSystem::solve split the columns: one Eigen solve.
     Eigen::SparseMatrix<double> k = system.stiffnessLaplacian();
     for (Eigen::Index j = 0; j < k.rows(); ++j) k.coeffRef(j, j) += kC * system.masses()[j];
     one_solve.compute(k);
   }
-  Scene scene;
-  SceneData data;
-  std::unique_ptr<Backend> backend;
-  GlobalSystem system;
   Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> one_solve;
-  Eigen::MatrixX3d rhs, x;
 };
 
 PassFixture* passFixture(benchmark::State& state) {

@@ -9,12 +9,7 @@
 //                                             factor hot in the cache, nothing in between)
 // On the CPU reference the three differ only by what the local step leaves in the caches.
 #include "bench_common.hpp"
-
-#include "backend.hpp"
-#include "cpu/cpu_backend.hpp"
-#include "opencl/opencl_backend.hpp"
-#include "scene/scene_data.hpp"
-#include "solver/global_system.hpp"
+#include "first_step.hpp"
 
 #include <chrono>
 #include <ctime>
@@ -24,9 +19,7 @@
 namespace stabint::bench {
 namespace {
 
-enum { kX, kY, kSlots };
-constexpr double kTimeStep = 1.0 / 30.0;
-constexpr double kC = 1.0 / (kTimeStep * kTimeStep);
+using namespace first_step;
 
 enum class When { AfterLocal, AfterIdle, Repeated };
 
@@ -36,27 +29,7 @@ double cpuSeconds(clockid_t clock) {
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
-struct HostSolveFixture {
-  HostSolveFixture(const Scene& s, BackendChoice choice)
-      : scene(s),
-        data(s),
-        backend(choice == BackendChoice::Cpu
-                    ? makeCpuBackend(data, kSlots)
-                    : makeOpenCLBackend(data, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl)),
-        system(data) {
-    Eigen::MatrixX3d y = s.positions;
-    for (Eigen::Index j = 0; j < y.rows(); ++j) y.row(j) += (kTimeStep * kTimeStep * s.gravity).transpose();
-    backend->write(kY, y);
-    backend->write(kX, y);
-    backend->localStepRhs(kX, kY, kC, kTimeStep, rhs);
-    system.solve(kC, rhs, x);  // factors
-  }
-  Scene scene;
-  SceneData data;
-  std::unique_ptr<Backend> backend;
-  GlobalSystem system;
-  Eigen::MatrixX3d rhs, x;
-};
+using HostSolveFixture = first_step::Fixture;
 
 void runHostSolve(benchmark::State& state, const std::string& key, const std::function<Scene()>& make_scene,
                   BackendChoice choice, When when) {
@@ -109,7 +82,8 @@ void registerHostSolveCases() {
         const std::string name = "host_solve/" + scene.name + "/" + backendLabel(backend) + "/" + label;
         const std::string key = "host_solve/" + scene.name + "/" + backendLabel(backend);
         benchmark::RegisterBenchmark(
-            name.c_str(), [=](benchmark::State& state) { runHostSolve(state, key, scene.make, backend, when); })
+            name.c_str(),
+            [=, when = when](benchmark::State& state) { runHostSolve(state, key, scene.make, backend, when); })
             ->UseManualTime()
             ->Unit(benchmark::kMicrosecond);
       }

@@ -1,11 +1,18 @@
 #pragma once
 // The mixed scenes of the batch tests (tests/test_scene_batch.cpp, tests/test_opencl_batch.cpp):
-// every element type but contact, pins, a time-dependent force field and a damped body.
+// every element type but contact, pins, a time-dependent force field and a damped body; and where
+// each element type lies in a segment.
 #include <stabint/builders.hpp>
 #include <stabint/scene.hpp>
 
+#include "elements/element_type.hpp"
+
+#include <gtest/gtest.h>
+
 #include <Eigen/Core>
 
+#include <cstddef>
+#include <string>
 #include <vector>
 
 namespace stabint::testing {
@@ -40,6 +47,15 @@ inline std::vector<Scene> mixedBatchScenes() {
   triangles.model = ClothModel::Triangles;
   const Scene d = makeClothGrid(triangles);
   return {a, b, c, d};
+}
+
+/// Position of the element type `identifier` in elementTypes() (the per-type ranges of a segment).
+inline int typeIndex(const char* identifier) {
+  const std::vector<const ElementType*>& types = elementTypes();
+  for (std::size_t i = 0; i < types.size(); ++i)
+    if (std::string(types[i]->identifier()) == identifier) return static_cast<int>(i);
+  ADD_FAILURE() << "no element type " << identifier;
+  return 0;
 }
 
 }  // namespace stabint::testing

@@ -29,20 +29,13 @@ using testing::availablePrecisions;
 using testing::crossBackendTolerance;
 using testing::openclOptions;
 using testing::precisionName;
+using testing::typeIndex;
 
 // The same terms summed in another order (a tree per work-group and the groups on the host, or
 // one compensated running sum per scene): within a few units of round-off of the sum of the
 // terms' magnitudes, whatever their count; these bounds are 10^3-10^4 units (double 1.1e-16,
 // float 6e-8), far below any term of the scenes here.
 double orderChangeTolerance(Precision p) { return p == Precision::Double ? 1e-12 : 1e-4; }
-
-int typeIndex(const char* identifier) {
-  const std::vector<const ElementType*>& types = elementTypes();
-  for (std::size_t i = 0; i < types.size(); ++i)
-    if (std::string(types[i]->identifier()) == identifier) return static_cast<int>(i);
-  ADD_FAILURE() << "no element type " << identifier;
-  return 0;
-}
 
 // sum_j |f_j . x_j| over rows [first, first + count): the size of the external potential's terms,
 // against which its error is judged (the sum itself may cancel).

@@ -6,6 +6,7 @@
 #include <stabint/errors.hpp>
 #include <stabint/simulator.hpp>
 
+#include "batch_scenes.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "elements/element_type.hpp"
 #include "scene/scene_batch.hpp"
@@ -24,48 +25,11 @@
 namespace stabint {
 namespace {
 
-// Four scenes covering every element type but contact: springs and a pin (chain, with a
-// time-dependent force field on "all particles"), springs with a damped body (cloth), tets
-// (bar), triangle strain and bending hinges (triangle cloth).
-std::vector<Scene> mixedScenes() {
-  ChainPendulumParams chain;
-  chain.particles = 8;
-  Scene a = makeChainPendulum(chain);
-  ForceField wind;
-  wind.force = Eigen::Vector3d(0.0, 0.0, 0.01);
-  wind.rate = Eigen::Vector3d(0.02, 0.0, 0.0);
-  a.force_fields.push_back(wind);
-
-  ClothGridParams cloth;
-  cloth.nx = 6;
-  cloth.ny = 5;
-  cloth.damping = 0.1;
-  const Scene b = makeClothGrid(cloth);
-
-  TetBarParams bar;
-  bar.nx = 3;
-  bar.ny = 1;
-  bar.nz = 1;
-  const Scene c = makeTetBar(bar);
-
-  ClothGridParams triangles;
-  triangles.nx = 5;
-  triangles.ny = 4;
-  triangles.model = ClothModel::Triangles;
-  const Scene d = makeClothGrid(triangles);
-  return {a, b, c, d};
-}
-
-int typeIndex(const char* identifier) {
-  const std::vector<const ElementType*>& types = elementTypes();
-  for (std::size_t i = 0; i < types.size(); ++i)
-    if (std::string(types[i]->identifier()) == identifier) return static_cast<int>(i);
-  ADD_FAILURE() << "no element type " << identifier;
-  return 0;
-}
+using testing::mixedBatchScenes;
+using testing::typeIndex;
 
 TEST(SceneBatch, SegmentsLocateEveryScenesParticlesAndElements) {
-  const std::vector<Scene> scenes = mixedScenes();
+  const std::vector<Scene> scenes = mixedBatchScenes();
   const SceneBatch batch = concatenateScenes(scenes);
   ASSERT_EQ(batch.segments.size(), scenes.size());
   const int spring = typeIndex("spring"), tet = typeIndex("tet"), pin = typeIndex("pin");
@@ -115,7 +79,7 @@ TEST(SceneBatch, SegmentsLocateEveryScenesParticlesAndElements) {
 
 TEST(SceneBatch, RefusesWhatItCannotKeepApartNamingTheScene) {
   EXPECT_THROW(concatenateScenes({}), InvalidInputError);
-  std::vector<Scene> scenes = mixedScenes();
+  std::vector<Scene> scenes = mixedBatchScenes();
   scenes[2].gravity = Eigen::Vector3d(0.0, -1.0, 0.0);
   try {
     concatenateScenes(scenes);
@@ -123,7 +87,7 @@ TEST(SceneBatch, RefusesWhatItCannotKeepApartNamingTheScene) {
   } catch (const InvalidInputError& e) {
     EXPECT_NE(std::string(e.what()).find("scene 2: gravity"), std::string::npos) << e.what();
   }
-  scenes = mixedScenes();
+  scenes = mixedBatchScenes();
   scenes[1].colliders.push_back(Collider{});
   try {
     concatenateScenes(scenes);
@@ -131,7 +95,7 @@ TEST(SceneBatch, RefusesWhatItCannotKeepApartNamingTheScene) {
   } catch (const InvalidInputError& e) {
     EXPECT_NE(std::string(e.what()).find("scene 1: has colliders"), std::string::npos) << e.what();
   }
-  scenes = mixedScenes();
+  scenes = mixedBatchScenes();
   scenes[3].masses[0] = -1.0;
   try {
     concatenateScenes(scenes);
@@ -154,7 +118,7 @@ Eigen::MatrixX3d perturbed(const Eigen::MatrixX3d& m, double amount) {
 // the scene alone's are. Bit for bit is what the batch's blend decisions need to match the own
 // simulators' (a decision at the tolerance's edge would otherwise go the other way).
 TEST(SceneBatch, CpuPerSceneEnergiesAreEachScenesOwn) {
-  const std::vector<Scene> scenes = mixedScenes();
+  const std::vector<Scene> scenes = mixedBatchScenes();
   const SceneBatch batch = concatenateScenes(scenes);
   const SceneData data(batch.scene);
   const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
@@ -216,7 +180,7 @@ class SceneBatchPremise : public ::testing::TestWithParam<PremiseCase> {};
 // each block as alone and the trajectories were bit for bit (docs/batch_design.md).
 TEST_P(SceneBatchPremise, EachSceneStepsAsItsOwnSimulator) {
   const PremiseCase c = GetParam();
-  const std::vector<Scene> scenes = mixedScenes();
+  const std::vector<Scene> scenes = mixedBatchScenes();
   const SceneBatch batch = concatenateScenes(scenes);
   SimulatorOptions options;
   options.integrator = c.integrator;
@@ -276,7 +240,7 @@ class BatchSimulatorMatches : public ::testing::TestWithParam<PremiseCase> {};
 // energy scale: bit for bit where the states are, round-off of the state otherwise.
 TEST_P(BatchSimulatorMatches, EveryScenesStateEnergyAndTargetAreItsOwnSimulators) {
   const PremiseCase c = GetParam();
-  const std::vector<Scene> scenes = mixedScenes();
+  const std::vector<Scene> scenes = mixedBatchScenes();
   SimulatorOptions options;
   options.integrator = c.integrator;
   options.time_step = c.time_step;
@@ -416,7 +380,7 @@ TEST(BatchSimulator, OneScenesBlowUpStaysInItsBlock) {
 }
 
 TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
-  const std::vector<Scene> scenes = mixedScenes();
+  const std::vector<Scene> scenes = mixedBatchScenes();
   SimulatorOptions options;
   options.integrator = Integrator::BackwardEuler;
   options.tolerance = 1e-6;
@@ -445,7 +409,7 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
 // (the chain's swing and growing field, the damped cloth, the bar, the triangle cloth) and a
 // chain released with its links stretched and moving, whose IM candidates gain energy at once.
 std::vector<Scene> blendScenes() {
-  std::vector<Scene> scenes = mixedScenes();
+  std::vector<Scene> scenes = mixedBatchScenes();
   ChainPendulumParams chain;
   chain.particles = 6;
   Scene stretched = makeChainPendulum(chain);
@@ -453,6 +417,15 @@ std::vector<Scene> blendScenes() {
   stretched.velocities = perturbed(Eigen::MatrixX3d::Zero(stretched.numParticles(), 3), 2.0);
   scenes.push_back(stretched);
   return scenes;
+}
+
+// The blend tests' options: 60 Hz, 5 iterations (every branch occurs in blendScenes' first steps).
+SimulatorOptions blendOptions() {
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  return options;
 }
 
 void expectSameReport(const StepReport& got, const StepReport& own, double scale, const std::string& where) {
@@ -487,10 +460,7 @@ void expectSameState(const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v, const
 // partner is solved for the whole batch whenever any scene needs it.
 TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
   const std::vector<Scene> scenes = blendScenes();
-  SimulatorOptions options;
-  options.integrator = Integrator::EnergyBlend;
-  options.time_step = 1.0 / 60.0;
-  options.iterations = 5;
+  SimulatorOptions options = blendOptions();
   BatchSimulator batch(scenes, options);
   std::vector<Simulator> alone;
   for (const Scene& s : scenes) alone.emplace_back(s, options);
@@ -523,10 +493,7 @@ TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
 // refused: each scene at the step its own Simulator refuses, with its message; the others step on.
 TEST(BatchSimulatorBlend, RefusalsArePerScene) {
   const std::vector<Scene> scenes = blendScenes();
-  SimulatorOptions options;
-  options.integrator = Integrator::EnergyBlend;
-  options.time_step = 1.0 / 60.0;
-  options.iterations = 5;
+  SimulatorOptions options = blendOptions();
   options.energy_limit = 1e-7;
   BatchSimulator batch(scenes, options);
   std::vector<Simulator> alone;
@@ -564,10 +531,7 @@ TEST(BatchSimulatorBlend, RefusalsArePerScene) {
 // Simulator's), the others untouched; a refused scene steps again after it.
 TEST(BatchSimulatorBlend, SetStateIsAnEventOfOneScene) {
   const std::vector<Scene> scenes = blendScenes();
-  SimulatorOptions options;
-  options.integrator = Integrator::EnergyBlend;
-  options.time_step = 1.0 / 60.0;
-  options.iterations = 5;
+  SimulatorOptions options = blendOptions();
   BatchSimulator batch(scenes, options);
   std::vector<Simulator> alone;
   for (const Scene& s : scenes) alone.emplace_back(s, options);
@@ -610,10 +574,7 @@ TEST(BatchSimulatorBlend, SetStateIsAnEventOfOneScene) {
 // it; the other scenes' targets do not move by it.
 TEST(BatchSimulatorBlend, APinDraggedInOneSceneIsBookedInItsTargetOnly) {
   const std::vector<Scene> scenes = blendScenes();
-  SimulatorOptions options;
-  options.integrator = Integrator::EnergyBlend;
-  options.time_step = 1.0 / 60.0;
-  options.iterations = 5;
+  SimulatorOptions options = blendOptions();
   BatchSimulator batch(scenes, options);
   std::vector<Simulator> alone;
   for (const Scene& s : scenes) alone.emplace_back(s, options);
@@ -641,7 +602,7 @@ TEST(BatchSimulatorBlend, APinDraggedInOneSceneIsBookedInItsTargetOnly) {
 // The public accessors: the concatenation's rows per scene, the batch's time, and bad scene
 // indices refused naming the call; setState refused for BDF2 (its restart is the whole batch's).
 TEST(BatchSimulator, AccessorsLocateEachSceneAndRefuseBadIndices) {
-  const std::vector<Scene> scenes = mixedScenes();
+  const std::vector<Scene> scenes = mixedBatchScenes();
   SimulatorOptions options;
   options.integrator = Integrator::BDF2;
   options.time_step = 1.0 / 60.0;

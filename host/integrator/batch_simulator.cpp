@@ -235,13 +235,7 @@ const BatchStepReport& BatchSimulator::Impl::step() {
   }
   backend_->write(kXNew, x_new_);
   backend_->write(kVNew, v_new_);
-  if (options_.integrator == Integrator::BDF2) {
-    backend_->copy(kXPrev, kX);
-    backend_->copy(kVPrev, kV);
-    has_history_ = true;
-  }
-  backend_->copy(kX, kXNew);
-  backend_->copy(kV, kVNew);
+  IntegratorSteps(*backend_, solver_).commit(options_.integrator, has_history_);
   x_.swap(x_new_);
   v_slot_.swap(v_new_);
   t_ = t1;

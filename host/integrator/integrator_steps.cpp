@@ -70,6 +70,16 @@ int IntegratorSteps::step(Integrator integrator, double h, double t, bool has_hi
   throw Error("IntegratorSteps::step: the blend is the driver's (it decides between steps)");
 }
 
+void IntegratorSteps::commit(Integrator integrator, bool& has_history) {
+  if (integrator == Integrator::BDF2) {
+    backend_.copy(kXPrev, kX);
+    backend_.copy(kVPrev, kV);
+    has_history = true;
+  }
+  backend_.copy(kX, kXNew);
+  backend_.copy(kV, kVNew);
+}
+
 double forcingWork(const PotentialEnergy& p_new, const PotentialEnergy& new_mid, const PotentialEnergy& old_mid,
                    const PotentialEnergy& p_old) {
   auto forced = [](const PotentialEnergy& p) { return p.pins + p.external; };

@@ -59,6 +59,9 @@ class IntegratorSteps {
   /// The integrator's step (BDF2 without history: BE), for every integrator but the blend.
   int step(Integrator integrator, double h, double t, bool has_history, int x_out, int v_out,
            const IterationControl& control);
+  /// Commits the accepted step: (kXNew, kVNew) become (kX, kV); BDF2 keeps the old state as its
+  /// history (kXPrev, kVPrev) and sets `has_history`.
+  void commit(Integrator integrator, bool& has_history);
 
  private:
   Backend& backend_;

@@ -237,13 +237,7 @@ struct Simulator::Impl {
     if (!refusal.message.empty()) refuse(refusal);
 
     // Commit.
-    if (options.integrator == Integrator::BDF2) {
-      backend->copy(kXPrev, kX);
-      backend->copy(kVPrev, kV);
-      has_history = true;
-    }
-    backend->copy(kX, kXNew);
-    backend->copy(kV, kVNew);
+    steps_of.commit(options.integrator, has_history);
     x.swap(x_new);
     v.swap(v_new);
     t = t1;

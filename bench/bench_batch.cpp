@@ -81,7 +81,7 @@ void registerBatchCases() {
                 [=](benchmark::State& state) { runBatch(state, name, scene.make, backend, integrator, batched); })
                 ->Arg(count)
                 ->ArgName("scenes")
-                ->Iterations(10)
+                ->Iterations(20)
                 ->UseRealTime()
                 ->Unit(benchmark::kMillisecond);
           }

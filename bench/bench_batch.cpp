@@ -1,8 +1,10 @@
-// batch/<scene>/BE/<backend>/<variant>/scenes:N: N small scenes advanced one step each, either as
-// one BatchSimulator (variant "batch": one solve and one factor for all, one launch per phase on
-// OpenCL) or as N Simulators one after another ("separate"). The ratio of the two is the batch's
+// batch/<scene>/<integrator>/<backend>/<variant>/scenes:N: N small scenes advanced one step each,
+// either as one BatchSimulator (variant "batch": one solve and one factor for all, one launch per
+// phase on OpenCL) or as N Simulators one after another ("separate"), with BackwardEuler ("BE") or
+// the blend ("blend", EnergyBlend at the default iterations). The ratio of the two is the batch's
 // gain (docs/batch_design.md, the benchmark that judges issue 11 item 3: on OpenCL the batch must
 // be at least 20x "separate" and faster than the CPU reference's "separate").
+// bench/batch_chart.py draws and tabulates a run of the family.
 #include "bench_common.hpp"
 
 #include "integrator/batch_simulator.hpp"
@@ -16,7 +18,7 @@ struct BatchFixture {
 };
 
 void runBatch(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
-              BackendChoice backend, bool batched) {
+              BackendChoice backend, Integrator integrator, bool batched) {
   if (const std::string why = skipReason(backend); !why.empty()) {
     state.SkipWithError(why.c_str());
     return;
@@ -27,7 +29,7 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
   BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
     auto fixture = std::make_unique<BatchFixture>();
     const std::vector<Scene> scenes(static_cast<std::size_t>(count), make());
-    const SimulatorOptions options = optionsFor(backend, Integrator::BackwardEuler);
+    const SimulatorOptions options = optionsFor(backend, integrator);
     if (batched) {
       fixture->batch = std::make_unique<BatchSimulator>(scenes, options);
     } else {
@@ -36,14 +38,22 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
     }
     return fixture;
   });
+  // The share of scene-steps whose IM candidate the blend accepted (the others need the BE partner,
+  // which the batch then solves for every scene): the two variants must take the same branches
+  // for their times to compare.
+  int im_steps = 0;
+  auto count_branch = [&](const StepReport& r) { im_steps += r.branch == BlendBranch::ImplicitMidpoint; };
   for (auto _ : state) {
     if (batched) {
-      benchmark::DoNotOptimize(f.batch->step());
+      const BatchStepReport& r = f.batch->step();
+      for (const StepReport& scene : r.scenes) count_branch(scene);
     } else {
-      for (Simulator& s : f.separate) benchmark::DoNotOptimize(s.step());
+      for (Simulator& s : f.separate) count_branch(s.step());
     }
   }
   state.counters["scenes"] = count;
+  if (integrator == Integrator::EnergyBlend)
+    state.counters["im_fraction"] = double(im_steps) / (double(count) * double(state.iterations()));
   state.SetLabel(batched ? "one BatchSimulator" : "one Simulator per scene");
 }
 
@@ -61,17 +71,20 @@ void registerBatchCases() {
       for (int count : {100, 1000}) {
         // The goal's OpenCL cases: 1,000 chains, 100 and 1,000 cloths (the CPU has all four).
         if (backend != BackendChoice::Cpu && scene.name == "chain" && count == 100) continue;
-        for (bool batched : {true, false}) {
-          const std::string name =
-              "batch/" + scene.name + "/BE/" + backendLabel(backend) + "/" + (batched ? "batch" : "separate");
-          benchmark::RegisterBenchmark(
-              name.c_str(), [=](benchmark::State& state) { runBatch(state, name, scene.make, backend, batched); })
-              ->Arg(count)
-              ->ArgName("scenes")
-              ->Iterations(20)
-              ->UseRealTime()
-              ->Unit(benchmark::kMillisecond);
-        }
+        for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend})
+          for (bool batched : {true, false}) {
+            const std::string name = "batch/" + scene.name + "/" +
+                                     (integrator == Integrator::BackwardEuler ? "BE" : "blend") + "/" +
+                                     backendLabel(backend) + "/" + (batched ? "batch" : "separate");
+            benchmark::RegisterBenchmark(
+                name.c_str(),
+                [=](benchmark::State& state) { runBatch(state, name, scene.make, backend, integrator, batched); })
+                ->Arg(count)
+                ->ArgName("scenes")
+                ->Iterations(20)
+                ->UseRealTime()
+                ->Unit(benchmark::kMillisecond);
+          }
       }
 }
 

@@ -14,10 +14,10 @@ markdown table with the ratio CG / factor per scene and backend.
 Use /usr/bin/python3 (Debian's python3-matplotlib).
 """
 import argparse
-import json
 from collections import defaultdict
 
-UNIT_S = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
+from bench_json import fastest_repetitions
+
 BACKENDS = ["cpu", "opencl-double", "opencl-float"]
 MARKERS = {"cpu": "o", "opencl-double": "s", "opencl-float": "^"}
 ERROR_FLOOR = 1e-17  # the CPU factor's own error is 0: drawn at the floor
@@ -25,22 +25,7 @@ ERROR_FLOOR = 1e-17  # the CPU factor's own error is 0: drawn at the floor
 
 def load(path):
     """{(kind, scene, solver, backend): (fastest seconds, counters)} over the repetitions."""
-    with open(path) as f:
-        data = json.load(f)
-    best = {}
-    for entry in data["benchmarks"]:
-        if entry.get("run_type") != "iteration" or entry.get("error_occurred"):
-            continue
-        parts = entry["run_name"].split("/")
-        if parts[-1] == "real_time":
-            parts = parts[:-1]
-        if len(parts) != 4 or not parts[0].startswith("global_step"):
-            continue
-        seconds = entry["real_time"] * UNIT_S[entry.get("time_unit", "ns")]
-        key = tuple(parts)
-        if key not in best or seconds < best[key][0]:
-            best[key] = (seconds, entry)
-    return best
+    return fastest_repetitions(path, "global_step", 4)
 
 
 def particles(entry):

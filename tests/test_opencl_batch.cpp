@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -274,6 +275,152 @@ INSTANTIATE_TEST_SUITE_P(
                       BatchCase{Integrator::BackwardEuler, 1.0 / 60.0, 20}, BatchCase{Integrator::BDF2, 1.0 / 60.0, 20},
                       BatchCase{Integrator::ImplicitMidpoint, 1.0 / 60.0, 20}),
     [](const ::testing::TestParamInfo<BatchCase>& info) { return std::string(integratorName(info.param.integrator)); });
+
+// ---- the blend on OpenCL ---------------------------------------------------------------------
+
+// The mixed scenes and a stretched chain thrown with random velocities: on these the blend accepts
+// IM, blends with the BE partner and scales velocities, mixed within single steps.
+std::vector<Scene> blendBatchScenes() {
+  std::vector<Scene> scenes = testing::mixedBatchScenes();
+  ChainPendulumParams chain;
+  chain.particles = 6;
+  Scene stretched = makeChainPendulum(chain);
+  stretched.positions = testing::perturbed(stretched.positions, 0.05, 11);
+  stretched.velocities = testing::perturbed(Eigen::MatrixX3d::Zero(stretched.numParticles(), 3), 2.0, 12);
+  scenes.push_back(stretched);
+  return scenes;
+}
+
+// The blend's IM decision compares |H_IM - H*| with tau = energy_tolerance (K_n + E_int,n +
+// E_scale) (docs/method.md section 7). How far a step's decision was from that edge, read from a
+// step that accepted IM: its reported H - H* is H_IM - H* at the decision (damping after the
+// decision takes the same energy from H and H*; the corrections of an accepted IM candidate leave
+// its energy). `previous` is the scene's energy at the step's start.
+double distanceFromTheEdge(const StepReport& r, const EnergyReport& previous, double energy_scale,
+                           const SimulatorOptions& options) {
+  const double tau = options.energy_tolerance * (previous.kinetic + previous.elastic + energy_scale);
+  return std::abs(std::abs(r.energy.total() - r.target) - tau);
+}
+
+// The OpenCL batch with the blend steps every scene as the CPU batch does (itself each scene's own
+// Simulator, tests/test_scene_batch.cpp). In double the energies agree to ~1e-12 of E_scale (measured 3e-12), far
+// inside any decision's distance from the tolerance edge: every scene takes the same branch with the same alpha,
+// velocity scale and iterations, and the energies, targets and states agree to the cross-backend tolerance (as
+// OpenCLBlend.ChainPendulumBranchesAndAlphaMatchCpu for one Simulator). In float the energies carry about 1e-5 of
+// E_scale of round-off (measured 8e-6) against a tolerance band of 1e-3 of it, so a decision within that round-off of
+// the edge may go either way (the reason crossBackendIntegrators leaves the blend out in float); a scene is compared as
+// in double up to its first different branch, which must be such a decision; after it the scene follows its own
+// trajectory, of which the blend still holds H within tau of H*. The thrown chain is chaotic: float round-off grows on
+// it without any different decision (measured: positions 1e-3 apart at step 14, 4e-3 at step 15, branches the same), so
+// in float it is compared over its first 10 steps, as test_opencl_integrators compares float runs over a horizon rather
+// than chaos.
+TEST(OpenCLBatchSimulator, BlendFollowsTheCpuBatch) {
+  const std::vector<Scene> scenes = blendBatchScenes();
+  const BatchCase c{Integrator::EnergyBlend, 1.0 / 60.0, 40};
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const double tol = crossBackendTolerance(precision);
+    const SimulatorOptions cpu_options = batchOptions(c, BackendKind::CpuReference, precision);
+    BatchSimulator opencl(scenes, batchOptions(c, BackendKind::OpenCL, precision));
+    BatchSimulator cpu(scenes, cpu_options);
+    // Float: the two runs' energies differ by float round-off (8e-6 of E_scale measured here;
+    // orderChangeTolerance's 1e-4 bounds float sums); a decision closer than that to the edge may
+    // differ. Double: none may.
+    const double edge = precision == Precision::Double ? 0.0 : 1e-4;
+    std::vector<EnergyReport> previous_cpu, previous_opencl;
+    for (int s = 0; s < int(scenes.size()); ++s) {
+      previous_cpu.push_back(cpu.energy(s));
+      previous_opencl.push_back(opencl.energy(s));
+    }
+    std::vector<int> diverged_at(scenes.size(), -1);
+    std::vector<int> horizon(scenes.size(), c.steps);
+    if (precision == Precision::Float) horizon.back() = 10;  // the thrown chain
+    int to_compare = 0;
+    for (int h : horizon) to_compare += h;
+    std::vector<int> branches(4, 0);
+    int compared = 0;
+    double worst_energy = 0.0;  // max |H_OpenCL - H_CPU| / E_scale over the compared steps
+    for (int step = 0; step < c.steps; ++step) {
+      const BatchStepReport got = opencl.step();
+      const BatchStepReport& want = cpu.step();
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        SCOPED_TRACE("scene " + std::to_string(s) + " step " + std::to_string(step));
+        EXPECT_TRUE(got.refusals[s].empty()) << got.refusals[s];
+        EXPECT_TRUE(want.refusals[s].empty()) << want.refusals[s];
+        const StepReport& g = got.scenes[s];
+        const StepReport& w = want.scenes[s];
+        const double scale = cpu.energyScale(int(s));
+        // Both runs' tau: each holds H within its tau of its H* (docs/method.md section 7).
+        const double tau_band =
+            cpu_options.energy_tolerance * (previous_cpu[s].kinetic + previous_cpu[s].elastic + scale) +
+            cpu_options.energy_tolerance * (previous_opencl[s].kinetic + previous_opencl[s].elastic + scale);
+        if (step >= horizon[s]) continue;
+        if (diverged_at[s] < 0 && g.branch != w.branch) {
+          // Only a decision within round-off of the edge may differ: the run that accepted IM
+          // reports where its decision stood.
+          const bool cpu_took_im = w.branch == BlendBranch::ImplicitMidpoint;
+          const double distance =
+              cpu_took_im ? distanceFromTheEdge(w, previous_cpu[s], scale, cpu_options)
+                          : distanceFromTheEdge(g, previous_opencl[s], opencl.energyScale(int(s)), cpu_options);
+          ASSERT_TRUE(cpu_took_im || g.branch == BlendBranch::ImplicitMidpoint)
+              << "branches " << blendBranchName(g.branch) << " vs " << blendBranchName(w.branch)
+              << ": neither accepted IM";
+          EXPECT_LE(distance, edge * scale)
+              << "branches " << blendBranchName(g.branch) << " (OpenCL) vs " << blendBranchName(w.branch) << " (CPU)";
+          diverged_at[s] = step;
+          std::printf("  %s: scene %zu takes %s vs %s at step %d, %.3g E_scale from the edge\n",
+                      precisionName(precision), s, blendBranchName(g.branch), blendBranchName(w.branch), step,
+                      distance / scale);
+        }
+        previous_cpu[s] = w.energy;
+        previous_opencl[s] = g.energy;
+        EXPECT_EQ(g.step, w.step);
+        EXPECT_EQ(g.time, w.time);
+        if (diverged_at[s] >= 0) {
+          // Each run on its own trajectory: the targets, moved only by the chain's small forcing
+          // and the cloth's damping, stay within the band of each other, and the blend holds
+          // each H within its tau of its H*.
+          EXPECT_NEAR(g.target, w.target, tau_band);
+          EXPECT_NEAR(g.energy.total(), w.energy.total(), 2.0 * tau_band);
+          continue;
+        }
+        ++compared;
+        ++branches[std::size_t(w.branch)];
+        worst_energy = std::max(worst_energy, std::abs(g.energy.total() - w.energy.total()) / scale);
+        EXPECT_EQ(g.iterations, w.iterations);
+        EXPECT_NEAR(g.alpha, w.alpha, precision == Precision::Double ? 1e-8 : tol);
+        EXPECT_NEAR(g.velocity_scale, w.velocity_scale, precision == Precision::Double ? 1e-8 : tol);
+        EXPECT_NEAR(g.forcing, w.forcing, tol * scale);
+        EXPECT_NEAR(g.damping, w.damping, tol * scale);
+        EXPECT_NEAR(g.target, w.target, tol * scale);
+        EXPECT_NEAR(g.energy.kinetic, w.energy.kinetic, tol * scale);
+        EXPECT_NEAR(g.energy.elastic, w.energy.elastic, tol * scale);
+        EXPECT_NEAR(g.energy.external, w.energy.external, tol * scale);
+        const Eigen::MatrixX3d x = cpu.positions(int(s)), v = cpu.velocities(int(s));
+        EXPECT_LE(testing::relativeError(opencl.positions(int(s)), x), tol);
+        const double v_scale = std::max(v.cwiseAbs().maxCoeff(), x.cwiseAbs().maxCoeff() / c.time_step);
+        EXPECT_LE((opencl.velocities(int(s)) - v).cwiseAbs().maxCoeff(), tol * v_scale);
+      }
+    }
+    // Every branch was compared step by step, and most of the run was (a float run that parted
+    // at its first steps would compare nothing but bands).
+    EXPECT_GT(branches[std::size_t(BlendBranch::ImplicitMidpoint)], 0);
+    EXPECT_GT(branches[std::size_t(BlendBranch::BackwardEuler)], 0);
+    EXPECT_GT(branches[std::size_t(BlendBranch::VelocityScale)], 0);
+    EXPECT_EQ(branches[std::size_t(BlendBranch::None)], 0);
+    if (precision == Precision::Double) {
+      EXPECT_EQ(compared, to_compare);
+    } else {
+      EXPECT_GE(compared, to_compare / 2);
+    }
+    std::printf(
+        "  %s: %d of %d scene-steps compared branch for branch (IM %d, BE %d, scale %d), energies within "
+        "%.2g E_scale\n",
+        precisionName(precision), compared, to_compare, branches[std::size_t(BlendBranch::ImplicitMidpoint)],
+        branches[std::size_t(BlendBranch::BackwardEuler)], branches[std::size_t(BlendBranch::VelocityScale)],
+        worst_energy);
+  }
+}
 
 // A scene that blows up is refused at the step the CPU batch refuses it, with the same reason, and
 // keeps its last state; its neighbour steps on as on the CPU.

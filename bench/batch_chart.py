@@ -13,10 +13,9 @@ and the ratios the goal names (OpenCL separate / OpenCL batch >= 20, CPU separat
 separate simulators per case, with the goal's line at 1/20 of each OpenCL backend's separate time.
 Use /usr/bin/python3 (Debian's python3-matplotlib).
 """
-import argparse
 from collections import defaultdict
 
-from bench_json import fastest_repetitions
+from bench_json import chart_main, fastest_repetitions
 
 BACKENDS = ["cpu", "opencl-double", "opencl-float"]
 INTEGRATORS = ["BE", "blend"]
@@ -103,13 +102,7 @@ def chart(cases, path):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("json")
-    parser.add_argument("--chart", default="batch.png")
-    args = parser.parse_args()
-    cases = load(args.json)
-    print(table(cases))
-    chart(cases, args.chart)
+    chart_main(__doc__, "batch.png", load, table, chart)
 
 
 if __name__ == "__main__":

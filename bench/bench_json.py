@@ -1,5 +1,6 @@
 """Reading stabint_bench's JSON output (--benchmark_out=... --benchmark_out_format=json or
 --benchmark_format=json), shared by the chart scripts."""
+import argparse
 import json
 
 UNIT_S = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
@@ -26,3 +27,15 @@ def fastest_repetitions(path, family, parts_count):
         if key not in best or seconds < best[key][0]:
             best[key] = (seconds, entry)
     return best
+
+
+def chart_main(doc, default_chart, load, table, chart):
+    """The chart scripts' command line: `<script> JSON [--chart PNG]` prints table(load(JSON)) and
+    draws chart(cases, PNG)."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("json")
+    parser.add_argument("--chart", default=default_chart)
+    args = parser.parse_args()
+    cases = load(args.json)
+    print(table(cases))
+    chart(cases, args.chart)

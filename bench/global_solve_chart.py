@@ -13,10 +13,9 @@ Right panel (global_step_scaling/<tetbar>/...): time per iteration against parti
 markdown table with the ratio CG / factor per scene and backend.
 Use /usr/bin/python3 (Debian's python3-matplotlib).
 """
-import argparse
 from collections import defaultdict
 
-from bench_json import fastest_repetitions
+from bench_json import chart_main, fastest_repetitions
 
 BACKENDS = ["cpu", "opencl-double", "opencl-float"]
 MARKERS = {"cpu": "o", "opencl-double": "s", "opencl-float": "^"}
@@ -95,13 +94,7 @@ def chart(best, path):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("json")
-    parser.add_argument("--chart", default="global_solve.png")
-    args = parser.parse_args()
-    best = load(args.json)
-    print(table(best))
-    chart(best, args.chart)
+    chart_main(__doc__, "global_solve.png", load, table, chart)
 
 
 if __name__ == "__main__":

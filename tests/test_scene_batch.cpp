@@ -77,32 +77,27 @@ TEST(SceneBatch, SegmentsLocateEveryScenesParticlesAndElements) {
   }
 }
 
+// concatenateScenes refuses `scenes` with an InvalidInputError whose message starts with `prefix`.
+void expectRefusedNaming(const std::vector<Scene>& scenes, const std::string& prefix) {
+  try {
+    concatenateScenes(scenes);
+    ADD_FAILURE() << "accepted; expected a refusal starting \"" << prefix << "\"";
+  } catch (const InvalidInputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(prefix, 0), 0u) << e.what();
+  }
+}
+
 TEST(SceneBatch, RefusesWhatItCannotKeepApartNamingTheScene) {
   EXPECT_THROW(concatenateScenes({}), InvalidInputError);
   std::vector<Scene> scenes = mixedBatchScenes();
   scenes[2].gravity = Eigen::Vector3d(0.0, -1.0, 0.0);
-  try {
-    concatenateScenes(scenes);
-    ADD_FAILURE() << "differing gravity accepted";
-  } catch (const InvalidInputError& e) {
-    EXPECT_NE(std::string(e.what()).find("scene 2: gravity"), std::string::npos) << e.what();
-  }
+  expectRefusedNaming(scenes, "scene 2: gravity");
   scenes = mixedBatchScenes();
   scenes[1].colliders.push_back(Collider{});
-  try {
-    concatenateScenes(scenes);
-    ADD_FAILURE() << "a collider accepted";
-  } catch (const InvalidInputError& e) {
-    EXPECT_NE(std::string(e.what()).find("scene 1: has colliders"), std::string::npos) << e.what();
-  }
+  expectRefusedNaming(scenes, "scene 1: has colliders");
   scenes = mixedBatchScenes();
   scenes[3].masses[0] = -1.0;
-  try {
-    concatenateScenes(scenes);
-    ADD_FAILURE() << "a negative mass accepted";
-  } catch (const InvalidInputError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("scene 3: ", 0), 0u) << e.what();
-  }
+  expectRefusedNaming(scenes, "scene 3: ");
 }
 
 // Positions and velocities away from rest, the same for a scene alone and in the batch.

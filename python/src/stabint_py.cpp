@@ -775,7 +775,15 @@ void bindBatch(nb::module_& m) {
       .def_prop_ro("backend_description", &BatchSimulator::backendDescription)
       .def("set_state", &BatchSimulator::setState, "scene"_a, "positions"_a, "velocities"_a,
            "Replaces one scene's positions and velocities ((n_s, 3) each, finite), booked in that scene's H* "
-           "only; a refused scene steps again. Raises InvalidInputError naming the scene for bad input.");
+           "only; a refused scene steps again. Raises InvalidInputError naming the scene for bad input.")
+      .def(
+          "set_pin_target",
+          [](BatchSimulator& b, int scene, int pin, const std::array<double, 3>& target) {
+            b.setPinTarget(scene, pin, Eigen::Vector3d(target[0], target[1], target[2]));
+          },
+          "scene"_a, "pin"_a, "target"_a,
+          "Pin `pin` of scene `scene` (an index into that scene's pins) moves linearly to `target` (x, y, z) over "
+          "the next step and stays there, as Simulator.set_pin_target: its work is booked in that scene's H* only.");
 }
 
 }  // namespace

@@ -688,6 +688,19 @@ def test_a_batch_steps_every_scene_as_its_own_simulator_and_refuses_per_scene():
     first = batch.first_particle(2)
     np.testing.assert_array_equal(batch.all_positions[first:], batch.positions(2))
 
+    # A pin dragged in scene 1 does work booked in scene 1's H* only, as in its own Simulator.
+    target = (0.1, 0.0, 0.05)
+    batch.set_pin_target(1, 0, target)
+    alone[1].set_pin_target(0, target)
+    report = batch.step()
+    own = [sim.step() for sim in alone]
+    assert own[1].forcing != 0.0
+    for i in range(3):
+        assert report.scenes[i].forcing == pytest.approx(own[i].forcing, rel=1e-9, abs=1e-12 * alone[i].energy_scale)
+    assert report.scenes[0].forcing == 0.0 and report.scenes[2].forcing == 0.0
+    with pytest.raises(stabint.InvalidInputError):
+        batch.set_pin_target(3, 0, target)
+
     # Symplectic Euler is unstable on the stiff chain (omega h ~ 30 > 2) and stable on a soft one:
     # the stiff scene's step is refused with the message its own Simulator raises, its state kept,
     # and the soft scene steps on.

@@ -94,4 +94,5 @@ void registerContactCases();      // bench_contact.cpp
 void registerHostSolveCases();    // bench_host_solve.cpp
 void registerBatchCases();        // bench_batch.cpp
 void registerFrameCases();        // bench_frame.cpp
+void registerConvergenceCases();  // bench_convergence.cpp
 }  // namespace stabint::bench

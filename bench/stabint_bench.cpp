@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   bench::registerHostSolveCases();
   bench::registerBatchCases();
   bench::registerFrameCases();
+  bench::registerConvergenceCases();
   benchmark::RunSpecifiedBenchmarks();
   bench::releaseAllFixtures();  // OpenCL objects go while the runtime is still loaded
   benchmark::Shutdown();

@@ -183,7 +183,7 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
   // apart relative). The triangle cloth without limits has one.
   const Scene s = GetParam() == SceneKind::Triangles ? testing::triangleCloth(6, 5, false) : scene();
   const double max_gap_ratio = GetParam() == SceneKind::Tets ? 1.01 : GetParam() == SceneKind::Contact ? 0.75 : 0.5;
-  for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson})
+  for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS})
     checkAcceleration(s, max_gap_ratio, acceleration);
 }
 

@@ -135,7 +135,8 @@ TEST(OpenCLGlobalCg, TrackedAndAcceleratedSolvesAgreeWithTheCpuReference) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
   const Scene s = cgTetScene();
   const SceneData data(s);
-  for (const Acceleration acceleration : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson}) {
+  for (const Acceleration acceleration :
+       {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS}) {
     IterationControl control = cgControl(15, 8, 0.0);
     control.acceleration = acceleration;
     control.tolerance = acceleration == Acceleration::None ? 1e-9 : 0.0;  // tracked to a tolerance

@@ -179,12 +179,12 @@ INSTANTIATE_TEST_SUITE_P(AllIntegrators, OpenCLIntegratorTest, ::testing::Values
                            return name;
                          });
 
-// Accelerated solves (Chebyshev, Anderson): the safeguard decides on objective comparisons,
+// Accelerated solves (Chebyshev, Anderson, L-BFGS): the safeguard or line search decides on objective comparisons,
 // which agree between backends to round-off, so both take the same iterates. IM only over the
 // steps before its energy takes off on this cloth (see OpenCLIntegratorTest::options).
 TEST(OpenCLAcceleration, AcceleratedSolvesMatchCpu) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
-  for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson}) {
+  for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS}) {
     for (Integrator integrator :
          {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {
       SimulatorOptions o;

@@ -38,6 +38,8 @@ TEST(SimulatorInput, BadOptionsNameTheField) {
   expectRejected([](SimulatorOptions& o) { o.chebyshev_rho = 0.0; }, "chebyshev_rho");
   expectRejected([](SimulatorOptions& o) { o.acceleration = static_cast<Acceleration>(42); }, "acceleration");
   expectRejected([](SimulatorOptions& o) { o.anderson_window = 0; }, "anderson_window");
+  expectRejected([](SimulatorOptions& o) { o.lbfgs_history = 0; }, "lbfgs_history");
+  expectRejected([](SimulatorOptions& o) { o.lbfgs_history = 51; }, "lbfgs_history");
   expectRejected([](SimulatorOptions& o) { o.max_root_evaluations = 0; }, "max_root_evaluations");
 }
 

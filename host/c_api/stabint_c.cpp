@@ -257,6 +257,7 @@ void stabint_simulator_options_default(stabint_simulator_options* options) {
   options->acceleration = static_cast<stabint_acceleration>(d.acceleration);
   options->chebyshev_rho = d.chebyshev_rho;
   options->anderson_window = d.anderson_window;
+  options->lbfgs_history = d.lbfgs_history;
   options->be_iterations = d.be_iterations;
   options->energy_tolerance = d.energy_tolerance;
   options->max_velocity_scale = d.max_velocity_scale;
@@ -284,9 +285,10 @@ stabint_status stabint_simulator_create(const stabint_scene* scene, const stabin
     o.iterations = options->iterations;
     o.tolerance = options->tolerance;
     o.max_iterations = options->max_iterations;
-    o.acceleration = checkedEnum<stabint::Acceleration>(options->acceleration, 3, "acceleration");
+    o.acceleration = checkedEnum<stabint::Acceleration>(options->acceleration, 4, "acceleration");
     o.chebyshev_rho = options->chebyshev_rho;
     o.anderson_window = options->anderson_window;
+    o.lbfgs_history = options->lbfgs_history;
     o.be_iterations = options->be_iterations;
     o.energy_tolerance = options->energy_tolerance;
     o.max_velocity_scale = options->max_velocity_scale;

@@ -65,14 +65,15 @@ const char* accelerationName(Acceleration acceleration) {
     case Acceleration::None: return "none";
     case Acceleration::Chebyshev: return "chebyshev";
     case Acceleration::Anderson: return "anderson";
+    case Acceleration::LBFGS: return "lbfgs";
   }
   return "?";
 }
 
 Acceleration parseAcceleration(const std::string& name) {
-  for (Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson})
+  for (Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS})
     if (lower(name) == accelerationName(a)) return a;
-  throw InvalidInputError("unknown acceleration '" + name + "' (expected none, chebyshev or anderson)");
+  throw InvalidInputError("unknown acceleration '" + name + "' (expected none, chebyshev, anderson or lbfgs)");
 }
 
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {

@@ -36,10 +36,12 @@ void validateOptions(const SimulatorOptions& o) {
   if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
     fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
   if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
-      o.acceleration != Acceleration::Anderson)
+      o.acceleration != Acceleration::Anderson && o.acceleration != Acceleration::LBFGS)
     fail("acceleration = " + std::to_string(static_cast<int>(o.acceleration)) + " is not an Acceleration value");
   if (o.anderson_window < 1 || o.anderson_window > 50)
     fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
+  if (o.lbfgs_history < 1 || o.lbfgs_history > 50)
+    fail("lbfgs_history = " + std::to_string(o.lbfgs_history) + " must be in [1, 50]");
   if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
     fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
   if (o.global_solve != GlobalSolve::Factor && o.global_solve != GlobalSolve::ConjugateGradient)

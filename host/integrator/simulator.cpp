@@ -63,6 +63,7 @@ struct Simulator::Impl {
   IterationControl control(int iterations) const {
     IterationControl c{iterations,           options.tolerance,     options.max_iterations, energy_scale,
                        options.acceleration, options.chebyshev_rho, options.anderson_window};
+    c.lbfgs_history = options.lbfgs_history;
     c.global_solve = options.global_solve;
     c.cg_iterations = options.cg_iterations;
     c.cg_tolerance = options.cg_tolerance;

@@ -5,6 +5,7 @@
 // K_c x = rhs (global): with the prefactored K_c on the host, or by CG (GlobalSolve::
 // ConjugateGradient) on the host or, for OpenCL, on the device. The loop is shared by all backends.
 #include "backend.hpp"
+#include "scene/scene_batch.hpp"
 #include "solver/global_system.hpp"
 
 #include <stabint/simulator.hpp>
@@ -27,6 +28,7 @@ struct IterationControl {
   Acceleration acceleration = Acceleration::None;
   double chebyshev_rho = 0.98;  // spectral radius estimate of the plain iteration
   int anderson_window = 5;      // iterates Anderson acceleration combines
+  int lbfgs_history = 5;        // curvature pairs L-BFGS keeps
   GlobalSolve global_solve = GlobalSolve::Factor;
   int cg_iterations = 20;     // CG iterations per global step (at most, with cg_tolerance > 0)
   double cg_tolerance = 0.0;  // relative residual at which CG stops early (0: fixed count)
@@ -53,11 +55,24 @@ class LocalGlobalSolver {
   /// Accelerated iterates rejected (objective rose) since construction.
   int rejectedAccelerations() const { return rejected_; }
 
+  /// The scenes of a batch (block-diagonal K_c): L-BFGS keeps its dot products, step lengths
+  /// and history per segment, so each scene takes the steps it takes alone. Without segments
+  /// the whole system is one.
+  void setSegments(const std::vector<SceneSegment>& segments);
+
  private:
   int solvePlain(double c, int y, int x, double t, const IterationControl& control,
                  std::vector<double>* objective_history);
   int solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
                        std::vector<double>* objective_history);
+  // L-BFGS with K_c^-1 as the initial inverse Hessian (host/solver/lbfgs.cpp).
+  int solveLbfgs(double c, int y, int x, double t, const IterationControl& control,
+                 std::vector<double>* objective_history);
+  void localStepObjectives(double c, int y, int x, double t, std::vector<double>& objective);
+  void gradientAtTrial(double c, Eigen::MatrixX3d& g) const;
+  void applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
+                                  Eigen::MatrixX3d& r);
+  void segmentDots(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b, std::vector<double>& out) const;
   // The global step of the iterate in slot `x`, whose local step was the last one. Factor or host
   // CG: from rhs_ into x_host_, and into slot x unless `to_host` (the caller writes slot x). On
   // the backend: into slot x, and also into x_host_ when `to_host`. The host CG starts from
@@ -78,6 +93,19 @@ class LocalGlobalSolver {
   // Reused across iterations and solves: no per-iteration allocation.
   Eigen::MatrixX3d rhs_, x_host_, y_host_, x_cur_, x_next_;
   Eigen::VectorXd masses_;
+  // L-BFGS: the scene segments (first particle, count), the iterate and its trial, gradient,
+  // search vectors and the ring of curvature pairs with their per-segment 1/(s.y) (0: skipped).
+  struct Segment {
+    int first = 0;
+    int count = 0;
+  };
+  std::vector<Segment> rows_;
+  std::vector<PotentialEnergy> segment_potentials_;
+  Eigen::MatrixX3d x_trial_, gradient_, search_, direction_;
+  std::vector<Eigen::MatrixX3d> history_s_, history_y_;
+  std::vector<std::vector<double>> history_rho_, history_alpha_;
+  std::vector<double> scalars_[7];  // per-segment scalars of one solve (no allocation per solve)
+  std::vector<char> accepted_, moved_, converged_;
 };
 
 }  // namespace stabint

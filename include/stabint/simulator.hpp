@@ -38,8 +38,9 @@ enum class Acceleration {
   None,       // plain local/global iterations
   Chebyshev,  // Chebyshev semi-iteration (Wang 2015)
   Anderson,   // Anderson acceleration (Peng et al. 2018)
+  LBFGS,      // L-BFGS with the prefactored K_c as initial Hessian (Liu et al. 2017), line search
 };
-const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev", "anderson"
+const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev", "anderson", "lbfgs"
 /// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
 Acceleration parseAcceleration(const std::string& name);
 
@@ -96,10 +97,11 @@ struct SimulatorOptions {
   int max_iterations = 1000;
   /// Acceleration of every local/global solve; the spectral-radius estimate of the plain
   /// iteration that the Chebyshev recurrence uses (in (0, 1)); the number of past iterates
-  /// Anderson acceleration combines (>= 1).
+  /// Anderson acceleration combines (>= 1); the curvature pairs L-BFGS keeps (in [1, 50]).
   Acceleration acceleration = Acceleration::None;
   double chebyshev_rho = 0.98;
   int anderson_window = 5;
+  int lbfgs_history = 5;
 
   /// The global step's solver. With ConjugateGradient every global step runs `cg_iterations`
   /// CG iterations (>= 1; a fixed count: the OpenCL device reads nothing back), or, when

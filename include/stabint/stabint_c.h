@@ -90,6 +90,7 @@ typedef enum stabint_acceleration {
   STABINT_ACCELERATION_NONE = 0,
   STABINT_ACCELERATION_CHEBYSHEV = 1,
   STABINT_ACCELERATION_ANDERSON = 2,
+  STABINT_ACCELERATION_LBFGS = 3,
   STABINT_ENUM_INT_WIDE_(STABINT_ACCELERATION)
 } stabint_acceleration;
 typedef enum stabint_global_solve {
@@ -141,6 +142,7 @@ typedef struct stabint_simulator_options {
   stabint_acceleration acceleration;
   double chebyshev_rho;
   int anderson_window;
+  int lbfgs_history;
   int be_iterations;
   double energy_tolerance;
   double max_velocity_scale;

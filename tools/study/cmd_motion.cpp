@@ -174,6 +174,7 @@ std::vector<MotionSeries> motionSeries() {
   for (Integrator i : stabint::allIntegrators())
     series.push_back({i, stabint::Acceleration::None, stabint::integratorName(i)});
   series.push_back({Integrator::EnergyBlend, stabint::Acceleration::Anderson, "blend+AA"});
+  series.push_back({Integrator::EnergyBlend, stabint::Acceleration::LBFGS, "blend+LB"});
   return series;
 }
 

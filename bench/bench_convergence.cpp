@@ -1,0 +1,131 @@
+// Accuracy per iteration budget (issue 19, docs/bench_summary.md "Convergence"): BE from rest for
+// a fixed number of frames with each solver at a fixed budget, against the same BE with every
+// solve converged (L-BFGS to a 1e-13 relative objective change, at most 20,000 iterations, on the
+// CPU reference; cached per scene for the run).
+//   convergence/<scene>/<solver>/<iterations>/<backend>
+//     scene   peercloth50: the peers' cloth (ShapeOp's and GenPD's comparison scene), 50 x 50
+//             particles, 1 m square, horizontal, the two corners of one edge pinned (k = 1e6),
+//             0.1 kg in all, structural, shear and skip-one bending springs of 1e4, 1e4, 1e3 N/m;
+//             30 frames;
+//             tetbar50x10x10: the reference tet bar (5,000 particles); 10 frames
+//     solver  plain, anderson, lbfgs (SimulatorOptions::acceleration)
+// Counters: rms_error [m] (RMS over particles of the distance to the converged run after the
+// last frame), us_per_iteration (the case's time per frame over its iterations per frame).
+#include "bench_common.hpp"
+
+#include <cmath>
+#include <exception>
+#include <map>
+
+namespace stabint::bench {
+namespace {
+
+Scene peerCloth() {
+  ClothGridParams p;
+  p.nx = p.ny = 50;
+  p.areal_density = 0.1;  // 0.1 kg over 1 m^2
+  p.stretch_stiffness = 1e4;
+  p.shear_stiffness = 1e4;
+  p.bend_stiffness = 1e3;
+  p.pin_stiffness = 1e6;
+  Scene s = makeClothGrid(p);
+  // Horizontal: the grid's y becomes -z, so the cloth lies in the x-z plane and falls along -y.
+  for (int r = 0; r < s.numParticles(); ++r) {
+    s.positions(r, 2) = -s.positions(r, 1);
+    s.positions(r, 1) = 0.0;
+  }
+  for (Pin& pin : s.pins) pin.target.position = s.positions.row(pin.vertex).transpose();
+  return s;
+}
+
+struct ConvergenceScene {
+  std::string name;
+  std::function<Scene()> make;
+  int frames;
+  std::vector<int> budgets;
+};
+
+const std::vector<ConvergenceScene>& convergenceScenes() {
+  static const std::vector<ConvergenceScene> scenes{
+      {"peercloth50", peerCloth, 30, {10, 20, 40}},
+      {"tetbar50x10x10", referenceScenes()[1].make, 10, {10, 20}},
+  };
+  return scenes;
+}
+
+Eigen::MatrixX3d runFrames(const Scene& scene, const SimulatorOptions& options, int frames) {
+  Simulator sim(scene, options);
+  for (int f = 0; f < frames; ++f) sim.step();
+  return sim.positions();
+}
+
+const Eigen::MatrixX3d& convergedPositions(const ConvergenceScene& c) {
+  static std::map<std::string, Eigen::MatrixX3d> cache;
+  auto it = cache.find(c.name);
+  if (it != cache.end()) return it->second;
+  SimulatorOptions o;
+  o.integrator = Integrator::BackwardEuler;
+  o.acceleration = Acceleration::LBFGS;
+  o.tolerance = 1e-13;
+  o.max_iterations = 20000;
+  return cache.emplace(c.name, runFrames(c.make(), o, c.frames)).first->second;
+}
+
+double rmsDistance(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
+  return std::sqrt((a - b).rowwise().squaredNorm().mean());
+}
+
+void runConvergence(benchmark::State& state, const ConvergenceScene& c, Acceleration solver, int iterations,
+                    BackendChoice backend) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  try {
+    const Scene scene = c.make();
+    const Eigen::MatrixX3d& converged = convergedPositions(c);
+    SimulatorOptions o = optionsFor(backend, Integrator::BackwardEuler);
+    o.acceleration = solver;
+    o.iterations = iterations;
+    double error = 0.0;
+    for (auto _ : state) {
+      state.PauseTiming();
+      Simulator sim(scene, o);  // the factorization is not the solve's cost
+      state.ResumeTiming();
+      for (int f = 0; f < c.frames; ++f) sim.step();
+      state.PauseTiming();
+      error = rmsDistance(sim.positions(), converged);
+      state.ResumeTiming();
+    }
+    state.counters["rms_error"] = error;
+    state.counters["us_per_iteration"] =
+        benchmark::Counter(1e-6 * double(c.frames * iterations),
+                           benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+    setSizeCounters(state, scene);
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+  }
+}
+
+}  // namespace
+
+void registerConvergenceCases() {
+  for (const ConvergenceScene& c : convergenceScenes())
+    for (const auto& [label, solver] :
+         {std::pair{"plain", Acceleration::None}, std::pair{"anderson", Acceleration::Anderson},
+          std::pair{"lbfgs", Acceleration::LBFGS}})
+      for (int iterations : c.budgets)
+        for (BackendChoice backend : allBackends()) {
+          const std::string name =
+              "convergence/" + c.name + "/" + label + "/" + std::to_string(iterations) + "/" + backendLabel(backend);
+          const Acceleration s = solver;
+          benchmark::RegisterBenchmark(name.c_str(),
+                                       [c, s, iterations, backend](benchmark::State& state) {
+                                         runConvergence(state, c, s, iterations, backend);
+                                       })
+              ->UseRealTime()
+              ->Unit(benchmark::kMillisecond);
+        }
+}
+
+}  // namespace stabint::bench

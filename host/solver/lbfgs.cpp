@@ -1,0 +1,228 @@
+// L-BFGS on the objective of one implicit solve, with the prefactored K_c = c M + L as its initial
+// inverse Hessian (Liu, Bouaziz and Kavan 2017, "Quasi-Newton Methods for Real-Time Simulation of
+// Hyperelastic Materials"; docs/method.md, "L-BFGS"). Every element has the Projective-Dynamics
+// form w/2 ||A x - p(x)||^2 with p(x) the projection onto the element's rest set, whose gradient
+// is w A^T (A x - p(x)); so the local step's right-hand side gives the objective's gradient
+//   g(x) = K_c x - rhs(x),
+// and an iteration costs what a plain one does (one local step with its energy, one solve) plus a
+// sparse product and a few vector operations over the history. With an empty history the
+// direction -K_c^-1 g is the plain iteration's step.
+//
+// Per scene segment (a batch's concatenated scenes, block-diagonal K_c): every dot product, step
+// length and history is the segment's own, so a scene takes the steps it takes alone.
+#include "solver/local_global.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace stabint {
+
+namespace {
+
+// Armijo's sufficient-decrease constant. A plain step satisfies the test with any constant up to
+// 1/2 (f(x + d) <= f(x) - 1/2 d^T K_c d, d = -K_c^-1 g), so an empty history always passes.
+constexpr double kArmijo = 1e-4;
+// Halvings of a step that fails the test before the segment stays where it is for this iteration
+// and drops its history (its next direction is the plain step).
+constexpr int kMaxHalvings = 4;
+
+}  // namespace
+
+void LocalGlobalSolver::setSegments(const std::vector<SceneSegment>& segments) {
+  rows_.clear();
+  for (const SceneSegment& s : segments) rows_.push_back({s.first_particle, s.num_particles});
+}
+
+void LocalGlobalSolver::segmentDots(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b,
+                                    std::vector<double>& out) const {
+  out.resize(rows_.size());
+  for (std::size_t s = 0; s < rows_.size(); ++s) {
+    const Segment& seg = rows_[s];
+    out[s] = a.middleRows(seg.first, seg.count).cwiseProduct(b.middleRows(seg.first, seg.count)).sum();
+  }
+}
+
+// The objective of every segment at the positions x_trial_ (already in slot x), from the local
+// step that also leaves the right-hand side for the gradient there.
+void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, std::vector<double>& objective) {
+  PotentialEnergy potential;
+  const bool one = rows_.size() == 1;
+  backend_.localStepRhs(x, y, c, t, rhs_, one ? &potential : nullptr);
+  objective.resize(rows_.size());
+  if (one) {
+    objective[0] = inertia(c, x_trial_) + potential.total();
+    return;
+  }
+  backend_.potentials(x, t, segment_potentials_);
+  for (std::size_t s = 0; s < rows_.size(); ++s) {
+    const Segment& seg = rows_[s];
+    const auto d = x_trial_.middleRows(seg.first, seg.count) - y_host_.middleRows(seg.first, seg.count);
+    const double inertial =
+        0.5 * c * (d.rowwise().squaredNorm().transpose() * masses_.segment(seg.first, seg.count))(0);
+    objective[s] = inertial + segment_potentials_[s].total();
+  }
+}
+
+// g = c M x + L x - rhs at the positions x_trial_.
+void LocalGlobalSolver::gradientAtTrial(double c, Eigen::MatrixX3d& g) const {
+  g.noalias() = system_.stiffnessLaplacian() * x_trial_;
+  g += (c * masses_).asDiagonal() * x_trial_;
+  g -= rhs_;
+}
+
+void LocalGlobalSolver::applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
+                                                   Eigen::MatrixX3d& r) {
+  const auto start = std::chrono::steady_clock::now();
+  if (control.global_solve == GlobalSolve::ConjugateGradient) {
+    r.setZero(q.rows(), 3);
+    system_.solveConjugateGradient(c, q, r, control.cg_iterations, control.cg_tolerance);
+  } else {
+    system_.solve(c, q, r);
+  }
+  backend_.times().global += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const IterationControl& control,
+                                  std::vector<double>* objective_history) {
+  const Eigen::Index n = masses_.size();
+  if (rows_.empty()) rows_.push_back({0, static_cast<int>(n)});
+  const std::size_t segments = rows_.size();
+  const bool to_tolerance = control.tolerance > 0.0;
+  const int limit = to_tolerance ? control.max_iterations : control.iterations;
+  const int window = std::max(1, control.lbfgs_history);
+  if (static_cast<int>(history_s_.size()) != window) {
+    history_s_.assign(std::size_t(window), Eigen::MatrixX3d());
+    history_y_.assign(std::size_t(window), Eigen::MatrixX3d());
+  }
+  history_rho_.resize(std::size_t(window));
+  history_alpha_.resize(std::size_t(window));
+  for (int i = 0; i < window; ++i) {
+    history_rho_[std::size_t(i)].assign(segments, 0.0);
+    history_alpha_[std::size_t(i)].assign(segments, 0.0);
+  }
+  int stored = 0, newest = -1;  // pairs in the ring, index of the newest
+
+  backend_.read(y, y_host_);
+  backend_.read(x, x_trial_);
+  x_cur_ = x_trial_;
+  std::vector<double>&objective = scalars_[0], &trial_objective = scalars_[1], &slope = scalars_[2], &dot = scalars_[3],
+  &yy = scalars_[4], &ss = scalars_[5], &step = scalars_[6];
+  step.resize(segments);
+  localStepObjectives(c, y, x, t, objective);
+  gradientAtTrial(c, gradient_);
+  if (objective_history) objective_history->assign(1, objective[0]);
+
+  int done = 0;
+  accepted_.assign(segments, 0);
+  moved_.assign(segments, 0);
+  converged_.assign(segments, 0);
+  std::vector<char>&accepted = accepted_, &moved = moved_, &converged = converged_;
+  auto rowsOf = [&](Eigen::MatrixX3d& m, std::size_t s) { return m.middleRows(rows_[s].first, rows_[s].count); };
+  auto forgetSegment = [&](std::size_t s) {
+    for (auto& rho : history_rho_) rho[s] = 0.0;
+  };
+  while (done < limit) {
+    // Two-loop recursion: direction_ = -H g with H0 = K_c^-1.
+    search_ = gradient_;
+    for (int k = 0; k < stored; ++k) {
+      const int i = (newest - k + window) % window;
+      segmentDots(history_s_[std::size_t(i)], search_, dot);
+      for (std::size_t s = 0; s < segments; ++s) {
+        const double a = history_rho_[std::size_t(i)][s] * dot[s];
+        history_alpha_[std::size_t(i)][s] = a;
+        if (a != 0.0) rowsOf(search_, s) -= a * rowsOf(history_y_[std::size_t(i)], s);
+      }
+    }
+    applyInitialInverseHessian(c, control, search_, direction_);
+    for (int k = stored - 1; k >= 0; --k) {
+      const int i = (newest - k + window) % window;
+      segmentDots(history_y_[std::size_t(i)], direction_, dot);
+      for (std::size_t s = 0; s < segments; ++s) {
+        const double rho = history_rho_[std::size_t(i)][s];
+        if (rho == 0.0) continue;
+        rowsOf(direction_, s) +=
+            (history_alpha_[std::size_t(i)][s] - rho * dot[s]) * rowsOf(history_s_[std::size_t(i)], s);
+      }
+    }
+    direction_ = -direction_;
+    ++done;
+    segmentDots(gradient_, direction_, slope);
+    // With positive curvature pairs H is positive definite and the direction descends; a slope
+    // >= 0 is round-off (or a converged segment): that segment takes no step this iteration.
+    for (std::size_t s = 0; s < segments; ++s) {
+      step[s] = slope[s] < 0.0 ? 1.0 : 0.0;
+      accepted[s] = step[s] == 0.0;
+      moved[s] = 0;
+      if (step[s] == 0.0) forgetSegment(s);
+    }
+
+    // Backtracking line search, per segment: f(x + a d) <= f(x) + kArmijo a g.d, up to round-off
+    // of the objective (as the accelerated loop: two backends that agree to round-off must take
+    // the same decisions).
+    for (int halving = 0; halving <= kMaxHalvings; ++halving) {
+      bool any_trial = false;
+      for (std::size_t s = 0; s < segments; ++s) {
+        if (accepted[s]) continue;
+        rowsOf(x_trial_, s) = rowsOf(x_cur_, s) + step[s] * rowsOf(direction_, s);
+        any_trial = true;
+      }
+      if (!any_trial) break;
+      backend_.roundToStorage(x_trial_);
+      backend_.write(x, x_trial_);
+      localStepObjectives(c, y, x, t, trial_objective);
+      for (std::size_t s = 0; s < segments; ++s) {
+        if (accepted[s]) continue;
+        const double noise = 1e-12 * std::max(std::abs(objective[s]), control.energy_scale);
+        if (trial_objective[s] <= objective[s] + kArmijo * step[s] * slope[s] + noise) {
+          accepted[s] = 1;
+          moved[s] = 1;
+        } else if (halving < kMaxHalvings) {
+          step[s] *= 0.5;
+        } else {
+          // No sufficient decrease along this direction: stay, and restart from the plain step.
+          accepted[s] = 1;
+          rowsOf(x_trial_, s) = rowsOf(x_cur_, s);
+          forgetSegment(s);
+        }
+      }
+    }
+    // Slot x and rhs_ must be at the iterate the loop continues from. A segment that stayed
+    // changed slot x in its trials: one more local step at the kept positions.
+    bool any_stayed = false;
+    for (std::size_t s = 0; s < segments; ++s) any_stayed |= !moved[s] && step[s] != 0.0;
+    if (any_stayed) {
+      backend_.write(x, x_trial_);
+      localStepObjectives(c, y, x, t, trial_objective);
+    }
+
+    // The curvature pair of the step: s = x_new - x, y = g_new - g, kept where s.y > 0.
+    const int slot = (newest + 1) % window;
+    Eigen::MatrixX3d& s_new = history_s_[std::size_t(slot)];
+    Eigen::MatrixX3d& y_new = history_y_[std::size_t(slot)];
+    s_new = x_trial_ - x_cur_;
+    y_new = -gradient_;
+    gradientAtTrial(c, gradient_);
+    y_new += gradient_;
+    segmentDots(s_new, y_new, dot);
+    segmentDots(y_new, y_new, yy);
+    segmentDots(s_new, s_new, ss);
+    for (std::size_t s = 0; s < segments; ++s) {
+      // Positive curvature keeps H positive definite; a pair at round-off's angle would not.
+      const bool curvature = moved[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);
+      history_rho_[std::size_t(slot)][s] = curvature ? 1.0 / dot[s] : 0.0;
+      const double change = std::abs(objective[s] - trial_objective[s]);
+      converged[s] =
+          to_tolerance && change <= control.tolerance * std::max(std::abs(trial_objective[s]), control.energy_scale);
+      objective[s] = trial_objective[s];
+    }
+    newest = slot;
+    stored = std::min(stored + 1, window);
+    x_cur_ = x_trial_;
+    if (objective_history) objective_history->push_back(objective[0]);
+    if (to_tolerance && std::all_of(converged.begin(), converged.end(), [](char c) { return c != 0; })) break;
+  }
+  return done;
+}
+
+}  // namespace stabint

@@ -21,11 +21,13 @@ from matplotlib.colors import ListedColormap  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 INTEGRATORS = ["FE", "SE", "BE", "BDF2", "IM", "blend"]
-# Series with Anderson-accelerated solves (the sweep's "<integrator>+AA" rows).
-ACCELERATED = ["BE+AA", "blend+AA"]
+# Series with accelerated solves: Anderson ("<integrator>+AA") and L-BFGS ("<integrator>+LB").
+ACCELERATED = ["BE+AA", "blend+AA", "BE+LB", "blend+LB"]
 COLORS = {"FE": "#8c564b", "SE": "#9467bd", "BE": "#1f77b4", "BDF2": "#2ca02c", "IM": "#d62728",
-          "blend": "#ff7f0e", "BE+AA": "#17becf", "blend+AA": "#e377c2"}
-MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*", "BE+AA": "P", "blend+AA": "X"}
+          "blend": "#ff7f0e", "BE+AA": "#17becf", "blend+AA": "#e377c2",
+          "BE+LB": "#7f7f7f", "blend+LB": "#bcbd22"}
+MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*", "BE+AA": "P", "blend+AA": "X", "BE+LB": "p",
+           "blend+LB": "h"}
 VERDICTS = ["stable", "over-damped", "exploded"]
 VERDICT_COLORS = ["#4daf4a", "#377eb8", "#e41a1c"]
 SCENE_TITLES = {"cloth": "cloth 20x20 (pinned corners)", "tetbar": "tet bar 8x2x2 (pinned at x = 0)",
@@ -493,7 +495,7 @@ def motion_table(results):
     motion = read_csv(results, "motion.csv")
     if not motion:
         return []
-    cols = INTEGRATORS + [c for c in ("blend+AA",) if any(r["integrator"] == c for r in motion)] + ["reference"]
+    cols = INTEGRATORS + [c for c in ("blend+AA", "blend+LB") if any(r["integrator"] == c for r in motion)] + ["reference"]
     rows = {(r["scene"], r["integrator"]): r for r in motion}
 
     def line(label, scene, key, digits=3, scale=1.0, until=math.inf):

@@ -162,8 +162,9 @@ double comDropWithinOneSecond(const std::vector<Eigen::MatrixX3d>& positions, co
   return fall;
 }
 
-// Every integrator with plain iterations, and the blend with Anderson-accelerated solves
-// ("blend+AA"), which helps where its IM candidate is short of converged (docs/method.md).
+// Every integrator with plain iterations, and the blend with Anderson-accelerated ("blend+AA") and
+// L-BFGS ("blend+LB") solves, which help where its IM candidate is short of converged
+// (docs/method.md).
 struct MotionSeries {
   Integrator integrator;
   stabint::Acceleration acceleration;
@@ -173,8 +174,8 @@ std::vector<MotionSeries> motionSeries() {
   std::vector<MotionSeries> series;
   for (Integrator i : stabint::allIntegrators())
     series.push_back({i, stabint::Acceleration::None, stabint::integratorName(i)});
-  series.push_back({Integrator::EnergyBlend, stabint::Acceleration::Anderson, "blend+AA"});
-  series.push_back({Integrator::EnergyBlend, stabint::Acceleration::LBFGS, "blend+LB"});
+  for (stabint::Acceleration acceleration : {stabint::Acceleration::Anderson, stabint::Acceleration::LBFGS})
+    series.push_back({Integrator::EnergyBlend, acceleration, std::string("blend") + accelerationSuffix(acceleration)});
   return series;
 }
 

@@ -317,6 +317,9 @@ void runInteraction(const StudyOptions& options);  // cmd_interaction.cpp
 /// Creates the directory (and parents) if needed.
 void ensureDirectory(const std::string& path);
 std::string joinPath(const std::string& dir, const std::string& name);
+/// The label suffix of a series with accelerated solves: "+AA" (Anderson), "+LB" (L-BFGS),
+/// "+CH" (Chebyshev), "" (plain).
+const char* accelerationSuffix(stabint::Acceleration acceleration);
 /// Prints a line prefixed with the elapsed time since program start, flushed.
 void progress(const std::string& message);
 

@@ -17,6 +17,15 @@ std::string joinPath(const std::string& dir, const std::string& name) {
   return (std::filesystem::path(dir) / name).string();
 }
 
+const char* accelerationSuffix(stabint::Acceleration acceleration) {
+  switch (acceleration) {
+    case stabint::Acceleration::Anderson: return "+AA";
+    case stabint::Acceleration::LBFGS: return "+LB";
+    case stabint::Acceleration::Chebyshev: return "+CH";
+    default: return "";
+  }
+}
+
 void progress(const std::string& message) {
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - kProgramStart).count();
   std::printf("[%6.1f s] %s\n", s, message.c_str());

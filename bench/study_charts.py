@@ -528,6 +528,8 @@ def motion_table(results):
                  for c in cols]
         out.append(f"| cloth: RMS error 0-1 s at the blend's median {fmt(t)} ms/frame (sweep, interpolated) [m] | " + " | ".join(cells)
                    + " |")
+    if "swing_period_s" in motion[0]:
+        out.append(line("cloth: swing period of the centre of mass [s]", "cloth", "swing_period_s"))
     out.append(line("cloth: mean K 5-10 s [J]", "cloth", "mean_K_J"))
     out.append(line("cloth: mean K 5-10 s / reference's", "cloth", "mean_K_ratio"))
     out.append(line("cloth: flicker of K", "cloth", "flicker"))
@@ -543,6 +545,8 @@ def motion_table(results):
     out.append(line("chain: max abs(H - H*) / E_avail", "chain", "max_dev_target_rel"))
     out.append(line("chain: mean K 5-10 s / reference's", "chain", "mean_K_ratio"))
     out.append(line("chain: flicker of K", "chain", "flicker"))
+    if "swing_period_s" in motion[0]:
+        out.append(line("chain: swing period of the centre of mass [s]", "chain", "swing_period_s"))
     out.append(verdicts("chain: verdict", "chain"))
     out.append(line("spinning bar (y axis): L kept after 10 s [%]", "spinbar", "L_kept", 4, 100.0))
     out.append(line("spinning bar (general axis, 20 % stretch): L kept [%]", "spinbar_general", "L_kept", 4, 100.0))

@@ -276,6 +276,35 @@ INSTANTIATE_TEST_SUITE_P(
                       BatchCase{Integrator::ImplicitMidpoint, 1.0 / 60.0, 20}),
     [](const ::testing::TestParamInfo<BatchCase>& info) { return std::string(integratorName(info.param.integrator)); });
 
+// L-BFGS in a batch on the device: its per-scene line-search decisions compare objectives that
+// agree with the CPU batch's to round-off (double), so every scene takes the same iterates.
+TEST(OpenCLBatchSimulator, LbfgsFollowsTheCpuBatch) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
+  const std::vector<Scene> scenes = testing::mixedBatchScenes();
+  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+    SCOPED_TRACE(integratorName(integrator));
+    const BatchCase c{integrator, 1.0 / 60.0, 20};
+    SimulatorOptions device = batchOptions(c, BackendKind::OpenCL, Precision::Double);
+    SimulatorOptions host = batchOptions(c, BackendKind::CpuReference, Precision::Double);
+    device.acceleration = host.acceleration = Acceleration::LBFGS;
+    BatchSimulator opencl(scenes, device), cpu(scenes, host);
+    for (int step = 0; step < c.steps; ++step) {
+      const BatchStepReport got = opencl.step();
+      const BatchStepReport& want = cpu.step();
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        EXPECT_EQ(got.scenes[s].iterations, want.scenes[s].iterations) << "scene " << s << " step " << step;
+        EXPECT_EQ(got.scenes[s].branch, want.scenes[s].branch) << "scene " << s << " step " << step;
+      }
+    }
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const Eigen::MatrixX3d x = cpu.positions(int(s));
+      ASSERT_GT((x - scenes[s].positions).cwiseAbs().maxCoeff(), 1e-6) << "scene " << s;
+      EXPECT_LE(testing::relativeError(opencl.positions(int(s)), x), crossBackendTolerance(Precision::Double))
+          << "scene " << s;
+    }
+  }
+}
+
 // ---- the blend on OpenCL ---------------------------------------------------------------------
 
 // The mixed scenes and a stretched chain thrown with random velocities: on these the blend accepts

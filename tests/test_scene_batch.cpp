@@ -386,6 +386,10 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   options.global_solve = GlobalSolve::Factor;
   options.acceleration = Acceleration::Anderson;
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.acceleration = Acceleration::Chebyshev;
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.acceleration = Acceleration::LBFGS;  // per scene
+  EXPECT_NO_THROW(BatchSimulator(scenes, options));
   options.acceleration = Acceleration::None;
   // Simulator's own checks come first.
   options.integrator = Integrator::BackwardEuler;
@@ -453,9 +457,10 @@ void expectSameState(const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v, const
 // alpha, velocity scale, forcing, damping, target and energies, and follows its trajectory: the
 // decisions, root finds and corrections are per scene (one energy pass per round for all), the
 // partner is solved for the whole batch whenever any scene needs it.
-TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
+void expectBlendBatchFollowsItsScenes(Acceleration acceleration) {
   const std::vector<Scene> scenes = blendScenes();
   SimulatorOptions options = blendOptions();
+  options.acceleration = acceleration;
   BatchSimulator batch(scenes, options);
   std::vector<Simulator> alone;
   for (const Scene& s : scenes) alone.emplace_back(s, options);
@@ -483,6 +488,15 @@ TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
   for (std::size_t s = 0; s < scenes.size(); ++s)
     EXPECT_EQ(branches[s][std::size_t(BlendBranch::None)], 0) << "scene " << s;
 }
+
+TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
+  expectBlendBatchFollowsItsScenes(Acceleration::None);
+}
+
+// L-BFGS in a batch keeps its dot products, step lengths, line search and history per scene
+// (LocalGlobalSolver::setSegments): each scene takes the iterates it takes alone, so the blend's
+// decisions and states are again its own Simulator's.
+TEST(BatchSimulatorBlend, LbfgsSolvesArePerScene) { expectBlendBatchFollowsItsScenes(Acceleration::LBFGS); }
 
 // With an energy ceiling far below the blend's band, the steps whose energy ends above H* are
 // refused: each scene at the step its own Simulator refuses, with its message; the others step on.

@@ -17,10 +17,11 @@ namespace {
 // once created, unless it computes per-scene energies (Backend::computesPerScene).
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   validateOptions(o);
-  if (o.tolerance != 0.0 || o.acceleration != Acceleration::None || o.global_solve != GlobalSolve::Factor)
+  const bool per_scene_solver = o.acceleration == Acceleration::None || o.acceleration == Acceleration::LBFGS;
+  if (o.tolerance != 0.0 || !per_scene_solver || o.global_solve != GlobalSolve::Factor)
     throw InvalidInputError(
-        "batch simulator options: a tolerance stop, acceleration and CG sum over the whole batch: a fixed iteration "
-        "count with the factor only, until they are per scene");
+        "batch simulator options: a tolerance stop, Chebyshev or Anderson acceleration and CG sum over the whole "
+        "batch: a fixed iteration count with the factor only, plain or L-BFGS (per scene), until they are per scene");
   return o;
 }
 
@@ -70,6 +71,9 @@ BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, c
     p.energy_scale = initialEnergyScale(p.kinetic, p.potential, own.masses, own.gravity, own.positions);
     p.momentum_conserved = momentumConserved(own, /*has_user_forces=*/false);
   }
+  std::vector<double> energy_scales;
+  for (const PerScene& p : per_scene_) energy_scales.push_back(p.energy_scale);
+  solver_.setSegments(segments_, energy_scales);
   backend_->times() = PhaseTimes{};
 }
 
@@ -246,10 +250,17 @@ const BatchStepReport& BatchSimulator::Impl::step() {
   return report_;
 }
 
+IterationControl BatchSimulator::Impl::iterationControl(int iterations) const {
+  IterationControl control;
+  control.iterations = iterations;
+  control.acceleration = options_.acceleration;
+  control.lbfgs_history = options_.lbfgs_history;
+  return control;
+}
+
 void BatchSimulator::Impl::integrate(double t1, bool forced) {
   const double h = options_.time_step;
-  IterationControl control;
-  control.iterations = options_.iterations;
+  const IterationControl control = iterationControl(options_.iterations);
   const int iterations =
       IntegratorSteps(*backend_, solver_).step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
   backend_->potentials(kXNew, t1, p_all_);
@@ -279,8 +290,7 @@ void BatchSimulator::Impl::blend(double t1, bool forced) {
   const double h = options_.time_step;
   const double tm = t_ + 0.5 * h;
   const std::size_t n = segments_.size();
-  IterationControl control;
-  control.iterations = options_.iterations;
+  IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
   const int im_iterations = steps.implicitMidpoint(h, t_, kXNew, kVNew, control);
   backend_->readBoth(kXNew, x_new_, kVNew, v_new_);

@@ -67,6 +67,7 @@ struct BatchSimulator::Impl {
   double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;
   // The integrators but the blend: the candidates of every stepping scene, with their forcing.
   void integrate(double t1, bool forced);
+  IterationControl iterationControl(int iterations) const;
   // The blend in lockstep: one IM solve, at most one partner solve (and one full-budget BE solve
   // when some scene's IM candidate blew up), one batched energy pass per root-find round.
   void blend(double t1, bool forced);

@@ -29,9 +29,11 @@ constexpr int kMaxHalvings = 4;
 
 }  // namespace
 
-void LocalGlobalSolver::setSegments(const std::vector<SceneSegment>& segments) {
+void LocalGlobalSolver::setSegments(const std::vector<SceneSegment>& segments,
+                                    const std::vector<double>& energy_scales) {
   rows_.clear();
   for (const SceneSegment& s : segments) rows_.push_back({s.first_particle, s.num_particles});
+  segment_scales_ = energy_scales;
 }
 
 void LocalGlobalSolver::segmentDots(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b,
@@ -173,7 +175,8 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
       localStepObjectives(c, y, x, t, trial_objective);
       for (std::size_t s = 0; s < segments; ++s) {
         if (accepted[s]) continue;
-        const double noise = 1e-12 * std::max(std::abs(objective[s]), control.energy_scale);
+        const double scale = segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
+        const double noise = 1e-12 * std::max(std::abs(objective[s]), scale);
         if (trial_objective[s] <= objective[s] + kArmijo * step[s] * slope[s] + noise) {
           accepted[s] = 1;
           moved[s] = 1;

@@ -57,8 +57,9 @@ class LocalGlobalSolver {
 
   /// The scenes of a batch (block-diagonal K_c): L-BFGS keeps its dot products, step lengths
   /// and history per segment, so each scene takes the steps it takes alone. Without segments
-  /// the whole system is one.
-  void setSegments(const std::vector<SceneSegment>& segments);
+  /// the whole system is one. `energy_scales` (one per segment) replace IterationControl::
+  /// energy_scale in each segment's round-off allowance.
+  void setSegments(const std::vector<SceneSegment>& segments, const std::vector<double>& energy_scales);
 
  private:
   int solvePlain(double c, int y, int x, double t, const IterationControl& control,
@@ -100,6 +101,7 @@ class LocalGlobalSolver {
     int count = 0;
   };
   std::vector<Segment> rows_;
+  std::vector<double> segment_scales_;
   std::vector<PotentialEnergy> segment_potentials_;
   Eigen::MatrixX3d x_trial_, gradient_, search_, direction_;
   std::vector<Eigen::MatrixX3d> history_s_, history_y_;

@@ -32,8 +32,9 @@ struct BatchStepReport {
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
 /// scene valid and with the same gravity, no colliders, the CPU reference backend (or one that
 /// computes per-scene energies), a fixed iteration count with the factor (no tolerance stop, no
-/// acceleration, no CG: they sum over the whole batch, and one scene's blow-up would reach the
-/// others through them).
+/// Chebyshev or Anderson acceleration, no CG: they sum over the whole batch, and one scene's
+/// blow-up would reach the others through them). Acceleration::LBFGS runs per scene: its dot
+/// products, line search and history are each scene's own.
 class BatchSimulator {
  public:
   BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options);

@@ -34,6 +34,7 @@ struct MotionRow {
   std::string scene, integrator;
   const JudgedRun* judged = nullptr;
   double com_drop = kNaN, com_drop_ref = kNaN;  // comDropWithinOneSecond [m]
+  double period = kNaN, period_ref = kNaN;      // swingPeriod of the centre of mass's height [s]
   double l_kept = kNaN, l_error = kNaN;         // spinning bar: L.L0/|L0|^2 and |L - L0|/|L0|
   double energy_kept = kNaN;                    // spinning bar: H_end / H_0
 };
@@ -64,6 +65,8 @@ class MotionTable {
                                                    "max_dev_target_rel",
                                                    "com_drop_1s_m",
                                                    "com_drop_1s_ref_m",
+                                                   "swing_period_s",
+                                                   "swing_period_ref_s",
                                                    "L_kept",
                                                    "L_error",
                                                    "H_end_over_H0",
@@ -80,25 +83,25 @@ class MotionTable {
         "the K window relative to the reference's, flicker = median over frames of max(K_i+1/K_i, K_i/K_i+1);\n"
         "frozen: mean K < %g x reference; jittery: flicker > %g.\n",
         backend_.c_str(), kFrozenFraction, kJitteryFlicker);
-    std::printf("%-15s %-6s %7s %9s %9s %9s %7s %8s %9s %8s %8s %7s %9s  %s\n", "scene", "integ", "ms/fr*", "rms0-.5s",
-                "rms0-1s", "meanK", "K/Kref", "flicker", "max|H-H*|", "drop1s", "L kept", "whole", "branches",
-                "verdict");
+    std::printf("%-15s %-6s %7s %9s %9s %9s %7s %8s %9s %8s %7s %8s %7s %9s  %s\n", "scene", "integ", "ms/fr*",
+                "rms0-.5s", "rms0-1s", "meanK", "K/Kref", "flicker", "max|H-H*|", "drop1s", "period", "L kept", "whole",
+                "branches", "verdict");
   }
 
   /// The reference's own row: its mean K, flicker, energy error and centre-of-mass fall.
-  void addReference(const StudyScene& s, const MotionReference& ref, double com_drop) {
+  void addReference(const StudyScene& s, const MotionReference& ref, double com_drop, double period) {
     const TimeWindow w = kineticWindow(ref.horizon());
     const double mean_k = meanOverWindow(ref.kinetic, ref.frame_step, w.from, w.to);
     const double flicker = kineticFlicker(ref.kinetic, kFlickerFloor * ref.available);
     csv_ << s.key << "reference"
          << "cpu" << ref.frame_step / ref.substeps << 0 << ref.positions.size() - 1 << ref.positions.size() - 1 << kNaN
          << kNaN << kNaN << ref.available << 0.0 << 0.0 << w.from << w.to << mean_k << mean_k << 1.0 << flicker
-         << flicker << ref.energy_error << com_drop << com_drop << kNaN << kNaN << kNaN << 0 << "-" << 0 << "-" << -1
-         << "reference"
+         << flicker << ref.energy_error << com_drop << com_drop << period << period << kNaN << kNaN << kNaN << 0 << "-"
+         << 0 << "-" << -1 << "reference"
          << "reference";
     csv_.endRow();
-    std::printf("%-15s %-6s %7s %9s %9s %9.3g %7s %8.3g %9.2g %8.3g %8s %7s %9s  %s\n", s.key.c_str(), "ref", "-", "-",
-                "-", mean_k, "1", flicker, ref.energy_error, com_drop, "-", "-", "-", ref.method.c_str());
+    std::printf("%-15s %-6s %7s %9s %9s %9.3g %7s %8.3g %9.2g %8.3g %7.3f %8s %7s %9s  %s\n", s.key.c_str(), "ref", "-",
+                "-", "-", mean_k, "1", flicker, ref.energy_error, com_drop, period, "-", "-", "-", ref.method.c_str());
   }
 
   void add(const MotionRow& r, double h, int iterations, int frames) {
@@ -108,15 +111,15 @@ class MotionTable {
     csv_ << r.scene << r.integrator << backend_ << h << iterations << frames << run.frames_done << run.ms_per_frame()
          << run.medianMsPerFrame() << e.exploded_at << e.available << m.rms_short << m.rms_long << m.k_window.from
          << m.k_window.to << m.mean_k << m.mean_k_ref << m.mean_k_ratio << m.flicker << m.flicker_ref
-         << e.max_target_dev << r.com_drop << r.com_drop_ref << r.l_kept << r.l_error << r.energy_kept
-         << run.partner_whole << run.partnerWholeSummary() << run.steps_tried << run.branchSummary()
+         << e.max_target_dev << r.com_drop << r.com_drop_ref << r.period << r.period_ref << r.l_kept << r.l_error
+         << r.energy_kept << run.partner_whole << run.partnerWholeSummary() << run.steps_tried << run.branchSummary()
          << run.blew_up_frame << e.verdict << m.verdict;
     csv_.endRow();
     char whole[16] = "-";
     if (!run.branches.empty()) std::snprintf(whole, sizeof whole, "%d/%ld", run.partner_whole, run.steps_tried);
-    std::printf("%-15s %-6s %7.3f %9.3g %9.3g %9.3g %7.3g %8.3g %9.3g %8.3g %8.4g %7s %9s  %s\n", r.scene.c_str(),
+    std::printf("%-15s %-6s %7.3f %9.3g %9.3g %9.3g %7.3g %8.3g %9.3g %8.3g %7.3f %8.4g %7s %9s  %s\n", r.scene.c_str(),
                 r.integrator.c_str(), run.medianMsPerFrame(), m.rms_short, m.rms_long, m.mean_k, m.mean_k_ratio,
-                m.flicker, e.max_target_dev, r.com_drop, r.l_kept, whole, run.branchSummary().c_str(),
+                m.flicker, e.max_target_dev, r.com_drop, r.period, r.l_kept, whole, run.branchSummary().c_str(),
                 m.verdict.c_str());
     std::fflush(stdout);
   }
@@ -162,6 +165,12 @@ double comDropWithinOneSecond(const std::vector<Eigen::MatrixX3d>& positions, co
   return fall;
 }
 
+std::vector<double> comHeights(const std::vector<Eigen::MatrixX3d>& positions, const Scene& scene) {
+  std::vector<double> y;
+  for (const Eigen::MatrixX3d& x : positions) y.push_back(centreOfMass(x, scene.masses).y());
+  return y;
+}
+
 // Every integrator with plain iterations, and the blend with Anderson-accelerated ("blend+AA") and
 // L-BFGS ("blend+LB") solves, which help where its IM candidate is short of converged
 // (docs/method.md).
@@ -189,7 +198,8 @@ void referenceScene(const StudyScene& s, const StudyOptions& options, MotionTabl
   references.endRow();
   series.addReference(s, ref);
   const double drop_ref = comDropWithinOneSecond(ref.positions, s.scene, ref.frame_step);
-  table.addReference(s, ref, drop_ref);
+  const double period_ref = swingPeriod(comHeights(ref.positions, s.scene), ref.frame_step);
+  table.addReference(s, ref, drop_ref, period_ref);
   for (const MotionSeries& m : motionSeries()) {
     RunSpec spec;
     spec.integrator = m.integrator;
@@ -200,6 +210,8 @@ void referenceScene(const StudyScene& s, const StudyOptions& options, MotionTabl
     MotionRow row{s.key, m.label, &j};
     row.com_drop = comDropWithinOneSecond(j.run.positions, s.scene, s.frame_step);
     row.com_drop_ref = drop_ref;
+    row.period = swingPeriod(comHeights(j.run.positions, s.scene), s.frame_step);
+    row.period_ref = period_ref;
     table.add(row, s.frame_step, spec.iterations, spec.frames);
     series.add(s, row.integrator, j.run);
   }
@@ -313,6 +325,7 @@ void runMotion(const StudyOptions& options) {
       "reference's own energy error; motion_reference.csv has its check against half the steps per frame.\n");
   std::printf(
       "ms/fr*: median wall clock per frame; drop1s: largest drop of the centre of mass within 1 s [m];\n"
+      "period: swing period of the centre of mass's height (mean spacing of its minima) [s];\n"
       "whole: blend steps that took the partner whole (alpha = 1); L kept: angular momentum after 10 s\n"
       "along the initial one, L.L0/|L0|^2 (spinning bars).\n");
   movingPin(options);

@@ -95,6 +95,26 @@ double kineticFlicker(const std::vector<double>& kinetic, double floor) {
   return median(std::move(ratios));
 }
 
+double swingPeriod(const std::vector<double>& series, double frame_step) {
+  const int n = static_cast<int>(series.size());
+  for (double v : series)
+    if (!std::isfinite(v)) return kNaN;
+  std::vector<double> minima;
+  for (int i = kSwingWindow; i + kSwingWindow < n; ++i) {
+    bool lowest = true;
+    for (int j = i - kSwingWindow; j <= i + kSwingWindow && lowest; ++j)
+      lowest = j == i || (j < i ? series[size_t(i)] < series[size_t(j)] : series[size_t(i)] <= series[size_t(j)]);
+    if (!lowest) continue;
+    // Vertex of the parabola through (i-1, i, i+1): offset in (-1/2, 1/2) for a strict minimum.
+    const double a = series[size_t(i - 1)], b = series[size_t(i)], c = series[size_t(i + 1)];
+    const double curvature = a - 2.0 * b + c;
+    const double offset = curvature > 0.0 ? 0.5 * (a - c) / curvature : 0.0;
+    minima.push_back((i + offset) * frame_step);
+  }
+  if (minima.size() < 3) return kNaN;
+  return (minima.back() - minima.front()) / double(minima.size() - 1);
+}
+
 Eigen::Vector3d centreOfMass(const Eigen::MatrixX3d& x, const Eigen::VectorXd& masses) {
   return (x.transpose() * masses) / masses.sum();
 }

@@ -213,6 +213,12 @@ double meanOverWindow(const std::vector<double>& values, double frame_step, doub
 /// fewer than two frames.
 double kineticFlicker(const std::vector<double>& kinetic, double floor);
 double median(std::vector<double> values);
+/// Swing period [s] of a series sampled every `frame_step` (the height of the centre of mass):
+/// the mean spacing of its minima, each the lowest sample within kSwingWindow frames on either
+/// side (so frame-to-frame jitter is no minimum) and placed between samples by a parabola
+/// through its two neighbours. NaN with fewer than three minima or a non-finite sample.
+double swingPeriod(const std::vector<double>& series, double frame_step);
+constexpr int kSwingWindow = 4;
 /// Mass-weighted centre of mass of the rows of x.
 Eigen::Vector3d centreOfMass(const Eigen::MatrixX3d& x, const Eigen::VectorXd& masses);
 /// Angular momentum sum_p m_p (x_p - c) x v_p about the centre of mass c.

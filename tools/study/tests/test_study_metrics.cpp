@@ -69,6 +69,24 @@ TEST(KineticFlicker, SmoothAlternatingAndGeometricSeries) {
   EXPECT_TRUE(std::isnan(kineticFlicker({0.0, 1.0}, 0.0)));
 }
 
+// A cosine of period 0.867 s sampled at 30 frames per second for 10 s (the main job's cloth
+// swings at that period): the minima fall between frames, and the parabola places each to well
+// under a frame (1/30 s), so the mean spacing is within 0.2 % of the period. Frame-to-frame jitter
+// of 1 % of the swing makes no extra minima. Two minima give no period.
+TEST(SwingPeriod, CosineBetweenFramesAndJitter) {
+  const double period = 0.867, h = 1.0 / 30.0;
+  std::vector<double> y, jittery;
+  for (int f = 0; f <= 300; ++f) {
+    y.push_back(-std::cos(2.0 * M_PI * f * h / period));
+    jittery.push_back(y.back() + (f % 2 ? 0.01 : -0.01));
+  }
+  EXPECT_NEAR(swingPeriod(y, h), period, 2e-3 * period);
+  EXPECT_NEAR(swingPeriod(jittery, h), period, 1e-2 * period);
+  EXPECT_TRUE(std::isnan(swingPeriod(std::vector<double>(y.begin(), y.begin() + 40), h)));
+  y[100] = kNaN;
+  EXPECT_TRUE(std::isnan(swingPeriod(y, h)));
+}
+
 TEST(Median, OddAndEvenCounts) {
   EXPECT_DOUBLE_EQ(median({5.0, 1.0, 3.0}), 3.0);
   EXPECT_DOUBLE_EQ(median({4.0, 1.0, 3.0, 2.0}), 2.5);

@@ -51,6 +51,29 @@ void GlobalSystem::assemble(const SceneData& scene) {
   laplacianChanged();
 }
 
+void GlobalSystem::multiply(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out) const {
+  const Eigen::Index n = x.rows();
+  out.resize(n, 3);
+  const auto* begin = laplacian_.outerIndexPtr();
+  const auto* rows = laplacian_.innerIndexPtr();
+  const double* values = laplacian_.valuePtr();
+  const auto* nonzeros = laplacian_.innerNonZeroPtr();  // null when compressed
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double cm = c * masses_[i];
+    double a = cm * x(i, 0), b = cm * x(i, 1), d = cm * x(i, 2);
+    const auto end = nonzeros ? begin[i] + nonzeros[i] : begin[i + 1];
+    for (auto k = begin[i]; k < end; ++k) {
+      const Eigen::Index j = rows[k];
+      a += values[k] * x(j, 0);
+      b += values[k] * x(j, 1);
+      d += values[k] * x(j, 2);
+    }
+    out(i, 0) = a;
+    out(i, 1) = b;
+    out(i, 2) = d;
+  }
+}
+
 Eigen::SparseMatrix<double> GlobalSystem::shiftedLaplacian(double c) const {
   // A particle touched by no element has no diagonal entry in L, so add c M as a matrix.
   Eigen::SparseMatrix<double> mass(laplacian_.rows(), laplacian_.cols());

@@ -43,6 +43,10 @@ class GlobalSystem {
   int solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,
                              double tolerance);
 
+  /// out = (c M + L) x for the three columns at once (L symmetric: its stored columns are its
+  /// rows, read once for all three columns).
+  void multiply(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out) const;
+
   /// Drops every factor (GlobalSolve::ConjugateGradient factors only to validate the system, so
   /// element changes then update no factor).
   void dropFactors() { factors_.clear(); }

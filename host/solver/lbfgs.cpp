@@ -45,6 +45,29 @@ void LocalGlobalSolver::segmentDots(const Eigen::MatrixX3d& a, const Eigen::Matr
   }
 }
 
+// s.y, y.y and s.s per segment in one pass over the rows.
+void LocalGlobalSolver::curvatureDots(const Eigen::MatrixX3d& s_new, const Eigen::MatrixX3d& y_new,
+                                      std::vector<double>& sy, std::vector<double>& yy, std::vector<double>& ss) const {
+  sy.resize(rows_.size());
+  yy.resize(rows_.size());
+  ss.resize(rows_.size());
+  for (std::size_t s = 0; s < rows_.size(); ++s) {
+    double a = 0.0, b = 0.0, d = 0.0;
+    for (int col = 0; col < 3; ++col) {
+      const auto u = s_new.col(col).segment(rows_[s].first, rows_[s].count);
+      const auto v = y_new.col(col).segment(rows_[s].first, rows_[s].count);
+      for (Eigen::Index r = 0; r < u.size(); ++r) {
+        a += u[r] * v[r];
+        b += v[r] * v[r];
+        d += u[r] * u[r];
+      }
+    }
+    sy[s] = a;
+    yy[s] = b;
+    ss[s] = d;
+  }
+}
+
 // The objective of every segment at the positions x_trial_ (already in slot x), from the local
 // step that also leaves the right-hand side for the gradient there.
 void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, std::vector<double>& objective) {
@@ -68,8 +91,7 @@ void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, st
 
 // g = c M x + L x - rhs at the positions x_trial_.
 void LocalGlobalSolver::gradientAtTrial(double c, Eigen::MatrixX3d& g) const {
-  g.noalias() = system_.stiffnessLaplacian() * x_trial_;
-  g += (c * masses_).asDiagonal() * x_trial_;
+  system_.multiply(c, x_trial_, g);
   g -= rhs_;
 }
 
@@ -207,9 +229,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     y_new = -gradient_;
     gradientAtTrial(c, gradient_);
     y_new += gradient_;
-    segmentDots(s_new, y_new, dot);
-    segmentDots(y_new, y_new, yy);
-    segmentDots(s_new, s_new, ss);
+    curvatureDots(s_new, y_new, dot, yy, ss);
     for (std::size_t s = 0; s < segments; ++s) {
       // Positive curvature keeps H positive definite; a pair at round-off's angle would not.
       const bool curvature = moved[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);

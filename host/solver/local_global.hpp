@@ -74,6 +74,8 @@ class LocalGlobalSolver {
   void applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
                                   Eigen::MatrixX3d& r);
   void segmentDots(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b, std::vector<double>& out) const;
+  void curvatureDots(const Eigen::MatrixX3d& s_new, const Eigen::MatrixX3d& y_new, std::vector<double>& sy,
+                     std::vector<double>& yy, std::vector<double>& ss) const;
   // The global step of the iterate in slot `x`, whose local step was the last one. Factor or host
   // CG: from rhs_ into x_host_, and into slot x unless `to_host` (the caller writes slot x). On
   // the backend: into slot x, and also into x_host_ when `to_host`. The host CG starts from

@@ -227,6 +227,23 @@ TEST(GlobalSystem, FactorsOncePerDistinctC) {
   EXPECT_EQ(f.system.factorizations(), 2);
 }
 
+// K_c x in one pass over L for the three columns (L-BFGS's gradient) is Eigen's sparse product,
+// also after a pin's diagonal change (an uncompressed L): to the round-off of a different
+// summation order, 1e-14 of the product's size.
+TEST(GlobalSystem, MultiplyIsTheShiftedSystemTimesX) {
+  const Scene s = clothScene();
+  SceneData data(s);
+  GlobalSystem system(data);
+  const Eigen::MatrixX3d x = Eigen::MatrixX3d::Random(s.numParticles(), 3);
+  for (int change = 0; change < 2; ++change) {
+    if (change == 1) system.addToDiagonal(3, 5e3);
+    Eigen::MatrixX3d fast;
+    system.multiply(900.0, x, fast);
+    const Eigen::MatrixX3d expected = system.stiffnessLaplacian() * x + (900.0 * system.masses()).asDiagonal() * x;
+    EXPECT_LE((fast - expected).cwiseAbs().maxCoeff(), 1e-14 * expected.cwiseAbs().maxCoeff()) << "change " << change;
+  }
+}
+
 // A pin attached to and detached from a particle by rank-1 updates of the existing factors
 // solves the same systems as fresh factorizations of cM + L (to round-off of the factor), and
 // costs no factorization.

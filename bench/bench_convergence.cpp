@@ -8,9 +8,11 @@
 //             0.1 kg in all, structural, shear and skip-one bending springs of 1e4, 1e4, 1e3 N/m;
 //             30 frames;
 //             tetbar50x10x10: the reference tet bar (5,000 particles); 10 frames
-//     solver  plain, anderson, lbfgs (SimulatorOptions::acceleration)
+//     solver  plain, anderson, lbfgs (SimulatorOptions::acceleration); lbfgs-gradient<tol>: L-BFGS
+//             with SimulatorOptions::gradient_tolerance = tol, the budget its cap (100)
 // Counters: rms_error [m] (RMS over particles of the distance to the converged run after the
-// last frame), us_per_iteration (the case's time per frame over its iterations per frame).
+// last frame), iterations_per_frame (as the steps report them), us_per_iteration (the case's
+// time per frame over its iterations per frame).
 #include "bench_common.hpp"
 
 #include <cmath>
@@ -76,7 +78,7 @@ double rmsDistance(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
 }
 
 void runConvergence(benchmark::State& state, const ConvergenceScene& c, Acceleration solver, int iterations,
-                    BackendChoice backend) {
+                    double gradient_tolerance, BackendChoice backend) {
   if (const std::string why = skipReason(backend); !why.empty()) {
     state.SkipWithError(why.c_str());
     return;
@@ -87,20 +89,23 @@ void runConvergence(benchmark::State& state, const ConvergenceScene& c, Accelera
     SimulatorOptions o = optionsFor(backend, Integrator::BackwardEuler);
     o.acceleration = solver;
     o.iterations = iterations;
+    o.gradient_tolerance = gradient_tolerance;
     double error = 0.0;
+    long done = 0;
     for (auto _ : state) {
       state.PauseTiming();
       Simulator sim(scene, o);  // the factorization is not the solve's cost
       state.ResumeTiming();
-      for (int f = 0; f < c.frames; ++f) sim.step();
+      done = 0;
+      for (int f = 0; f < c.frames; ++f) done += sim.step().iterations;
       state.PauseTiming();
       error = rmsDistance(sim.positions(), converged);
       state.ResumeTiming();
     }
     state.counters["rms_error"] = error;
-    state.counters["us_per_iteration"] =
-        benchmark::Counter(1e-6 * double(c.frames * iterations),
-                           benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+    state.counters["iterations_per_frame"] = double(done) / c.frames;
+    state.counters["us_per_iteration"] = benchmark::Counter(
+        1e-6 * double(done), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
     setSizeCounters(state, scene);
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());
@@ -121,11 +126,26 @@ void registerConvergenceCases() {
           const Acceleration s = solver;
           benchmark::RegisterBenchmark(name.c_str(),
                                        [c, s, iterations, backend](benchmark::State& state) {
-                                         runConvergence(state, c, s, iterations, backend);
+                                         runConvergence(state, c, s, iterations, 0.0, backend);
                                        })
               ->UseRealTime()
               ->Unit(benchmark::kMillisecond);
         }
+  // The stopping rule by accuracy: the iterations a gradient tolerance takes and the error it
+  // leaves, with a cap of 100.
+  for (const ConvergenceScene& c : convergenceScenes())
+    for (const double tolerance : {1e-1, 1e-2, 1e-3})
+      for (BackendChoice backend : allBackends()) {
+        char label[32];
+        std::snprintf(label, sizeof label, "lbfgs-gradient%g", tolerance);
+        const std::string name = "convergence/" + c.name + "/" + label + "/100/" + backendLabel(backend);
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [c, tolerance, backend](benchmark::State& state) {
+                                       runConvergence(state, c, Acceleration::LBFGS, 100, tolerance, backend);
+                                     })
+            ->UseRealTime()
+            ->Unit(benchmark::kMillisecond);
+      }
 }
 
 }  // namespace stabint::bench

@@ -187,6 +187,46 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
     checkAcceleration(s, max_gap_ratio, acceleration);
 }
 
+// L-BFGS's stopping rule by accuracy: a solve stops once the Newton decrement sqrt(g.H g) has
+// fallen to gradient_tolerance of its value at the warm start. Half the decrement's square
+// estimates the objective's distance to the minimum, so the gap left should shrink about as the
+// tolerance squared: a tighter tolerance takes more iterations and leaves a smaller gap, and the
+// count stays a cap.
+TEST_P(LocalGlobalTest, GradientToleranceStopsByTheDecrement) {
+  const Scene s = GetParam() == SceneKind::Triangles ? testing::triangleCloth(6, 5, false) : scene();
+  Fixture f(s);
+  const Eigen::MatrixX3d y = inertialTarget(s);
+  const double c = 900.0, t = 0.0;
+  auto run = [&](double gradient_tolerance, int cap, int* used) {
+    IterationControl control{cap, 0.0, cap, 1e-12, Acceleration::LBFGS};
+    control.gradient_tolerance = gradient_tolerance;
+    f.backend->write(kY, y);
+    f.backend->write(kX, y);
+    std::vector<double> history;
+    *used = f.solver.solve(c, kY, kX, t, control, &history);
+    return history;
+  };
+  int used = 0;
+  const std::vector<double> converged = run(0.0, 3000, &used);
+  const double minimum = converged.back(), initial_gap = converged.front() - minimum;
+  int previous_used = 0;
+  double previous_gap = initial_gap;
+  for (double tolerance : {1e-1, 1e-2, 1e-3, 1e-5}) {
+    const double gap = run(tolerance, 3000, &used).back() - minimum;
+    std::printf("  gradient tolerance %g: %d iterations, gap %.3g of the initial\n", tolerance, used,
+                gap / initial_gap);
+    EXPECT_LT(used, 3000) << tolerance;
+    EXPECT_GE(used, previous_used) << tolerance;
+    EXPECT_LE(gap, previous_gap + 1e-12 * std::abs(minimum)) << tolerance;
+    previous_used = used;
+    previous_gap = gap;
+  }
+  // The tightest tolerance leaves at most 1e-6 of the initial gap (measured: below 1e-9).
+  EXPECT_LE(previous_gap, 1e-6 * initial_gap + 1e-12 * std::abs(minimum));
+  run(1e-12, 3, &used);
+  EXPECT_EQ(used, 3);
+}
+
 INSTANTIATE_TEST_SUITE_P(Elements, LocalGlobalTest,
                          ::testing::Values(SceneKind::Springs, SceneKind::Tets, SceneKind::Triangles,
                                            SceneKind::Contact),

@@ -390,6 +390,9 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
   options.acceleration = Acceleration::LBFGS;  // per scene
   EXPECT_NO_THROW(BatchSimulator(scenes, options));
+  options.gradient_tolerance = 1e-3;  // a stop for the whole batch
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.gradient_tolerance = 0.0;
   options.acceleration = Acceleration::None;
   // Simulator's own checks come first.
   options.integrator = Integrator::BackwardEuler;

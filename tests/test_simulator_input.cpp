@@ -40,6 +40,19 @@ TEST(SimulatorInput, BadOptionsNameTheField) {
   expectRejected([](SimulatorOptions& o) { o.anderson_window = 0; }, "anderson_window");
   expectRejected([](SimulatorOptions& o) { o.lbfgs_history = 0; }, "lbfgs_history");
   expectRejected([](SimulatorOptions& o) { o.lbfgs_history = 51; }, "lbfgs_history");
+  expectRejected([](SimulatorOptions& o) { o.gradient_tolerance = 1e-3; }, "gradient_tolerance > 0 needs");
+  expectRejected(
+      [](SimulatorOptions& o) {
+        o.acceleration = Acceleration::LBFGS;
+        o.gradient_tolerance = 1.0;
+      },
+      "gradient_tolerance");
+  expectRejected(
+      [](SimulatorOptions& o) {
+        o.acceleration = Acceleration::LBFGS;
+        o.gradient_tolerance = std::nan("");
+      },
+      "gradient_tolerance");
   expectRejected([](SimulatorOptions& o) { o.max_root_evaluations = 0; }, "max_root_evaluations");
 }
 

@@ -258,6 +258,7 @@ void stabint_simulator_options_default(stabint_simulator_options* options) {
   options->chebyshev_rho = d.chebyshev_rho;
   options->anderson_window = d.anderson_window;
   options->lbfgs_history = d.lbfgs_history;
+  options->gradient_tolerance = d.gradient_tolerance;
   options->be_iterations = d.be_iterations;
   options->energy_tolerance = d.energy_tolerance;
   options->max_velocity_scale = d.max_velocity_scale;
@@ -289,6 +290,7 @@ stabint_status stabint_simulator_create(const stabint_scene* scene, const stabin
     o.chebyshev_rho = options->chebyshev_rho;
     o.anderson_window = options->anderson_window;
     o.lbfgs_history = options->lbfgs_history;
+    o.gradient_tolerance = options->gradient_tolerance;
     o.be_iterations = options->be_iterations;
     o.energy_tolerance = options->energy_tolerance;
     o.max_velocity_scale = options->max_velocity_scale;

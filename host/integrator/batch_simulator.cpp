@@ -18,10 +18,11 @@ namespace {
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   validateOptions(o);
   const bool per_scene_solver = o.acceleration == Acceleration::None || o.acceleration == Acceleration::LBFGS;
-  if (o.tolerance != 0.0 || !per_scene_solver || o.global_solve != GlobalSolve::Factor)
+  if (o.tolerance != 0.0 || o.gradient_tolerance != 0.0 || !per_scene_solver || o.global_solve != GlobalSolve::Factor)
     throw InvalidInputError(
-        "batch simulator options: a tolerance stop, Chebyshev or Anderson acceleration and CG sum over the whole "
-        "batch: a fixed iteration count with the factor only, plain or L-BFGS (per scene), until they are per scene");
+        "batch simulator options: a tolerance stop (tolerance, gradient_tolerance), Chebyshev or Anderson acceleration "
+        "and CG sum over the whole batch: a fixed iteration count with the factor only, plain or L-BFGS (per scene), "
+        "until they are per scene");
   return o;
 }
 

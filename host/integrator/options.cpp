@@ -42,6 +42,10 @@ void validateOptions(const SimulatorOptions& o) {
     fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
   if (o.lbfgs_history < 1 || o.lbfgs_history > 50)
     fail("lbfgs_history = " + std::to_string(o.lbfgs_history) + " must be in [1, 50]");
+  if (!std::isfinite(o.gradient_tolerance) || !(o.gradient_tolerance >= 0.0 && o.gradient_tolerance < 1.0))
+    fail("gradient_tolerance must be finite and in [0, 1) (0: off)");
+  if (o.gradient_tolerance > 0.0 && o.acceleration != Acceleration::LBFGS)
+    fail("gradient_tolerance > 0 needs acceleration = lbfgs (the solve that computes the gradient)");
   if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
     fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
   if (o.global_solve != GlobalSolve::Factor && o.global_solve != GlobalSolve::ConjugateGradient)

@@ -64,6 +64,7 @@ struct Simulator::Impl {
     IterationControl c{iterations,           options.tolerance,     options.max_iterations, energy_scale,
                        options.acceleration, options.chebyshev_rho, options.anderson_window};
     c.lbfgs_history = options.lbfgs_history;
+    c.gradient_tolerance = options.gradient_tolerance;
     c.global_solve = options.global_solve;
     c.cg_iterations = options.cg_iterations;
     c.cg_tolerance = options.cg_tolerance;

@@ -135,6 +135,12 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   step.resize(segments);
   localStepObjectives(c, y, x, t, objective);
   gradientAtTrial(c, gradient_);
+  // The stopping rule by accuracy (IterationControl::gradient_tolerance): each segment's gradient
+  // in the norm of the current inverse Hessian H, sqrt(g.H g) = sqrt(-g.d) (the Newton decrement:
+  // half its square estimates the objective's distance to the minimum), against its value at the
+  // warm start, where H = K_c^-1.
+  const bool by_gradient = control.gradient_tolerance > 0.0;
+  std::vector<double>& initial_decrement = scalars_[7];
   if (objective_history) objective_history->assign(1, objective[0]);
 
   int done = 0;
@@ -172,6 +178,18 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     direction_ = -direction_;
     ++done;
     segmentDots(gradient_, direction_, slope);
+    if (by_gradient) {
+      if (done == 1) initial_decrement.assign(segments, 0.0);
+      bool all = true;
+      for (std::size_t s = 0; s < segments; ++s) {
+        const double decrement = std::sqrt(std::max(0.0, -slope[s]));
+        if (done == 1) initial_decrement[s] = decrement;
+        all = all && decrement <= control.gradient_tolerance * initial_decrement[s];
+      }
+      // Converged: the direction's solve is spent, but no local step follows (slot x and the
+      // objective are still the accepted iterate's).
+      if (all && done > 1) break;
+    }
     // With positive curvature pairs H is positive definite and the direction descends; a slope
     // >= 0 is round-off (or a converged segment): that segment takes no step this iteration.
     for (std::size_t s = 0; s < segments; ++s) {

@@ -26,9 +26,10 @@ struct IterationControl {
   /// so that the test does not depend on where gravity's zero is.
   double energy_scale = 1.0;
   Acceleration acceleration = Acceleration::None;
-  double chebyshev_rho = 0.98;  // spectral radius estimate of the plain iteration
-  int anderson_window = 5;      // iterates Anderson acceleration combines
-  int lbfgs_history = 5;        // curvature pairs L-BFGS keeps
+  double chebyshev_rho = 0.98;      // spectral radius estimate of the plain iteration
+  int anderson_window = 5;          // iterates Anderson acceleration combines
+  int lbfgs_history = 5;            // curvature pairs L-BFGS keeps
+  double gradient_tolerance = 0.0;  // L-BFGS: stop at this fraction of the warm start's gradient
   GlobalSolve global_solve = GlobalSolve::Factor;
   int cg_iterations = 20;     // CG iterations per global step (at most, with cg_tolerance > 0)
   double cg_tolerance = 0.0;  // relative residual at which CG stops early (0: fixed count)
@@ -108,7 +109,7 @@ class LocalGlobalSolver {
   Eigen::MatrixX3d x_trial_, gradient_, search_, direction_;
   std::vector<Eigen::MatrixX3d> history_s_, history_y_;
   std::vector<std::vector<double>> history_rho_, history_alpha_;
-  std::vector<double> scalars_[7];  // per-segment scalars of one solve (no allocation per solve)
+  std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, converged_;
 };
 

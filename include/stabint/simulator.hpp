@@ -102,6 +102,11 @@ struct SimulatorOptions {
   double chebyshev_rho = 0.98;
   int anderson_window = 5;
   int lbfgs_history = 5;
+  /// L-BFGS's stopping rule by accuracy (Acceleration::LBFGS only; 0: off): a solve stops once the
+  /// gradient of its objective, in the norm of L-BFGS's inverse Hessian (sqrt(g.H g), the Newton
+  /// decrement), has fallen to gradient_tolerance times its value at the warm start; `iterations`
+  /// stays the cap (docs/method.md, "L-BFGS"). In [0, 1).
+  double gradient_tolerance = 0.0;
 
   /// The global step's solver. With ConjugateGradient every global step runs `cg_iterations`
   /// CG iterations (>= 1; a fixed count: the OpenCL device reads nothing back), or, when

@@ -143,6 +143,7 @@ typedef struct stabint_simulator_options {
   double chebyshev_rho;
   int anderson_window;
   int lbfgs_history;
+  double gradient_tolerance;
   int be_iterations;
   double energy_tolerance;
   double max_velocity_scale;

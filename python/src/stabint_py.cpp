@@ -404,9 +404,10 @@ void bindSimulator(nb::module_& m) {
           "__init__",
           [](SimulatorOptions* o, Integrator integrator, double time_step, int iterations, double tolerance,
              int max_iterations, Acceleration acceleration, double chebyshev_rho, int anderson_window,
-             int lbfgs_history, GlobalSolve global_solve, int cg_iterations, double cg_tolerance, int be_iterations,
-             double energy_tolerance, double max_velocity_scale, int max_root_evaluations, double energy_limit,
-             double contact_tolerance, BackendKind backend, const OpenCLOptions& opencl) {
+             int lbfgs_history, double gradient_tolerance, GlobalSolve global_solve, int cg_iterations,
+             double cg_tolerance, int be_iterations, double energy_tolerance, double max_velocity_scale,
+             int max_root_evaluations, double energy_limit, double contact_tolerance, BackendKind backend,
+             const OpenCLOptions& opencl) {
             // Field by field, by name: a positional initializer would silently misassign a field
             // inserted between two of the same type.
             new (o) SimulatorOptions{};
@@ -419,6 +420,7 @@ void bindSimulator(nb::module_& m) {
             o->chebyshev_rho = chebyshev_rho;
             o->anderson_window = anderson_window;
             o->lbfgs_history = lbfgs_history;
+            o->gradient_tolerance = gradient_tolerance;
             o->global_solve = global_solve;
             o->cg_iterations = cg_iterations;
             o->cg_tolerance = cg_tolerance;
@@ -434,11 +436,12 @@ void bindSimulator(nb::module_& m) {
           nb::kw_only(), "integrator"_a = d.integrator, "time_step"_a = d.time_step, "iterations"_a = d.iterations,
           "tolerance"_a = d.tolerance, "max_iterations"_a = d.max_iterations, "acceleration"_a = d.acceleration,
           "chebyshev_rho"_a = d.chebyshev_rho, "anderson_window"_a = d.anderson_window,
-          "lbfgs_history"_a = d.lbfgs_history, "global_solve"_a = d.global_solve, "cg_iterations"_a = d.cg_iterations,
-          "cg_tolerance"_a = d.cg_tolerance, "be_iterations"_a = d.be_iterations,
-          "energy_tolerance"_a = d.energy_tolerance, "max_velocity_scale"_a = d.max_velocity_scale,
-          "max_root_evaluations"_a = d.max_root_evaluations, "energy_limit"_a = d.energy_limit,
-          "contact_tolerance"_a = d.contact_tolerance, "backend"_a = d.backend, "opencl"_a = d.opencl,
+          "lbfgs_history"_a = d.lbfgs_history, "gradient_tolerance"_a = d.gradient_tolerance,
+          "global_solve"_a = d.global_solve, "cg_iterations"_a = d.cg_iterations, "cg_tolerance"_a = d.cg_tolerance,
+          "be_iterations"_a = d.be_iterations, "energy_tolerance"_a = d.energy_tolerance,
+          "max_velocity_scale"_a = d.max_velocity_scale, "max_root_evaluations"_a = d.max_root_evaluations,
+          "energy_limit"_a = d.energy_limit, "contact_tolerance"_a = d.contact_tolerance, "backend"_a = d.backend,
+          "opencl"_a = d.opencl,
           "Keyword arguments set the fields of the same names; values are checked when a Simulator is built.")
       .def_rw("integrator", &SimulatorOptions::integrator)
       .def_rw("time_step", &SimulatorOptions::time_step)
@@ -449,6 +452,7 @@ void bindSimulator(nb::module_& m) {
       .def_rw("chebyshev_rho", &SimulatorOptions::chebyshev_rho)
       .def_rw("anderson_window", &SimulatorOptions::anderson_window)
       .def_rw("lbfgs_history", &SimulatorOptions::lbfgs_history)
+      .def_rw("gradient_tolerance", &SimulatorOptions::gradient_tolerance)
       .def_rw("global_solve", &SimulatorOptions::global_solve)
       .def_rw("cg_iterations", &SimulatorOptions::cg_iterations)
       .def_rw("cg_tolerance", &SimulatorOptions::cg_tolerance)

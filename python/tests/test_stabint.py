@@ -139,8 +139,8 @@ def test_an_unmatched_opencl_device_raises_no_device():
 # --- options and reports -----------------------------------------------------------------------
 NON_DEFAULT_OPTIONS = dict(
     integrator=Integrator.BackwardEuler, time_step=0.01, iterations=3, tolerance=1e-9,
-    max_iterations=50, acceleration=stabint.Acceleration.Anderson, chebyshev_rho=0.9,
-    anderson_window=3, lbfgs_history=3, be_iterations=2, energy_tolerance=1e-2, max_velocity_scale=1.5,
+    max_iterations=50, acceleration=stabint.Acceleration.LBFGS, chebyshev_rho=0.9,
+    anderson_window=3, lbfgs_history=3, gradient_tolerance=1e-3, be_iterations=2, energy_tolerance=1e-2, max_velocity_scale=1.5,
     max_root_evaluations=8, energy_limit=10.0, contact_tolerance=0.05,
     backend=stabint.BackendKind.CpuReference)
 

@@ -118,7 +118,7 @@ void registerConvergenceCases() {
   for (const ConvergenceScene& c : convergenceScenes())
     for (const auto& [label, solver] :
          {std::pair{"plain", Acceleration::None}, std::pair{"anderson", Acceleration::Anderson},
-          std::pair{"lbfgs", Acceleration::LBFGS}})
+          std::pair{"lbfgs", Acceleration::LBFGS}, std::pair{"newton", Acceleration::Newton}})
       for (int iterations : c.budgets)
         for (BackendChoice backend : allBackends()) {
           const std::string name =

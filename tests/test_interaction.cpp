@@ -365,11 +365,12 @@ TEST_F(CheckpointTest, CheckpointsCarryGrabbedHandles) {
   EXPECT_EQ(sim.stepCount(), 5);
 }
 
-// L-BFGS keeps no history from one solve to the next, so its runs restore bit for bit too.
+// L-BFGS and Newton-CG keep nothing from one solve to the next, so their runs restore bit for bit too.
 TEST_F(CheckpointTest, RestoredRunsContinueBitForBit) {
   for (const auto& [integrator, acceleration] :
        {std::pair{Integrator::EnergyBlend, Acceleration::None}, std::pair{Integrator::BDF2, Acceleration::None},
-        std::pair{Integrator::EnergyBlend, Acceleration::LBFGS}}) {
+        std::pair{Integrator::EnergyBlend, Acceleration::LBFGS},
+        std::pair{Integrator::EnergyBlend, Acceleration::Newton}}) {
     DrivenCloth d = drivenCloth(integrator);
     d.options.acceleration = acceleration;
     Simulator sim(d.scene, d.options);

@@ -36,7 +36,9 @@ Scene tetScene() {
 
 struct Fixture {
   explicit Fixture(const Scene& s)
-      : data(s), backend(makeCpuBackend(data, kSlots)), system(data), solver(*backend, system, kScratch) {}
+      : data(s), backend(makeCpuBackend(data, kSlots)), system(data), solver(*backend, system, kScratch) {
+    solver.setScene(&data);
+  }
   SceneData data;
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
@@ -160,7 +162,12 @@ void checkAcceleration(const Scene& s, double max_gap_ratio, Acceleration accele
   const double minimum = converged.back();
   const std::vector<double> plain = run(Acceleration::None, 10, 0.0);
   const std::vector<double> fast = run(acceleration, 10, 0.0);
-  ASSERT_EQ(fast.size(), 11u);
+  // One objective per iteration; Newton-CG's iteration budget counts its CG solves, and it records
+  // one objective per Newton step.
+  if (acceleration == Acceleration::Newton)
+    ASSERT_GE(fast.size(), 3u);
+  else
+    ASSERT_EQ(fast.size(), 11u);
   for (size_t k = 1; k < fast.size(); ++k)
     EXPECT_LE(fast[k], fast[k - 1] + 1e-12 * std::abs(fast[k - 1])) << "iteration " << k;
   const double gap_plain = plain.back() - minimum, gap_fast = fast.back() - minimum;
@@ -185,6 +192,12 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
   const double max_gap_ratio = GetParam() == SceneKind::Tets ? 1.01 : GetParam() == SceneKind::Contact ? 0.75 : 0.5;
   for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS})
     checkAcceleration(s, max_gap_ratio, acceleration);
+  // Newton-CG has Hessians for springs only; elsewhere its Hessian is K_c, its direction the plain
+  // step's, and it must not be worse than plain iterations. Measured gaps after 10 iterations:
+  // spring cloth 0.895 (plain 2.77); with colliders 9.28 (plain 11.1): the contact terms keep
+  // their PD matrix, far stiffer than their Hessian (zero out of contact).
+  const double newton_ratio = GetParam() == SceneKind::Springs ? 0.5 : GetParam() == SceneKind::Contact ? 0.9 : 1.01;
+  checkAcceleration(s, newton_ratio, Acceleration::Newton);
 }
 
 // L-BFGS's stopping rule by accuracy: a solve stops once the Newton decrement sqrt(g.H g) has

@@ -184,7 +184,8 @@ INSTANTIATE_TEST_SUITE_P(AllIntegrators, OpenCLIntegratorTest, ::testing::Values
 // steps before its energy takes off on this cloth (see OpenCLIntegratorTest::options).
 TEST(OpenCLAcceleration, AcceleratedSolvesMatchCpu) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
-  for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS}) {
+  for (Acceleration acceleration :
+       {Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS, Acceleration::Newton}) {
     for (Integrator integrator :
          {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {
       SimulatorOptions o;

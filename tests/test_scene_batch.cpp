@@ -388,6 +388,8 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
   options.acceleration = Acceleration::Chebyshev;
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.acceleration = Acceleration::Newton;  // not per scene yet
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
   options.acceleration = Acceleration::LBFGS;  // per scene
   EXPECT_NO_THROW(BatchSimulator(scenes, options));
   options.gradient_tolerance = 1e-3;  // a stop for the whole batch

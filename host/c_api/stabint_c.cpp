@@ -286,7 +286,7 @@ stabint_status stabint_simulator_create(const stabint_scene* scene, const stabin
     o.iterations = options->iterations;
     o.tolerance = options->tolerance;
     o.max_iterations = options->max_iterations;
-    o.acceleration = checkedEnum<stabint::Acceleration>(options->acceleration, 4, "acceleration");
+    o.acceleration = checkedEnum<stabint::Acceleration>(options->acceleration, 5, "acceleration");
     o.chebyshev_rho = options->chebyshev_rho;
     o.anderson_window = options->anderson_window;
     o.lbfgs_history = options->lbfgs_history;

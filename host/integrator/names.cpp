@@ -66,14 +66,16 @@ const char* accelerationName(Acceleration acceleration) {
     case Acceleration::Chebyshev: return "chebyshev";
     case Acceleration::Anderson: return "anderson";
     case Acceleration::LBFGS: return "lbfgs";
+    case Acceleration::Newton: return "newton";
   }
   return "?";
 }
 
 Acceleration parseAcceleration(const std::string& name) {
-  for (Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS})
+  for (Acceleration a :
+       {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS, Acceleration::Newton})
     if (lower(name) == accelerationName(a)) return a;
-  throw InvalidInputError("unknown acceleration '" + name + "' (expected none, chebyshev, anderson or lbfgs)");
+  throw InvalidInputError("unknown acceleration '" + name + "' (expected none, chebyshev, anderson, lbfgs or newton)");
 }
 
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {

@@ -36,7 +36,8 @@ void validateOptions(const SimulatorOptions& o) {
   if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
     fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
   if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
-      o.acceleration != Acceleration::Anderson && o.acceleration != Acceleration::LBFGS)
+      o.acceleration != Acceleration::Anderson && o.acceleration != Acceleration::LBFGS &&
+      o.acceleration != Acceleration::Newton)
     fail("acceleration = " + std::to_string(static_cast<int>(o.acceleration)) + " is not an Acceleration value");
   if (o.anderson_window < 1 || o.anderson_window > 50)
     fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");

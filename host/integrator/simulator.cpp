@@ -45,6 +45,7 @@ struct Simulator::Impl {
     // The implicit systems are factored now, so that masses too small for the stiffnesses are
     // refused here, naming them, rather than failing the first step().
     initialContactSet();
+    solver.setScene(&scene);
     factorIntegratorSystems(system, options.integrator, options.time_step);
     // CG needs no factor: they only validated the systems, and element changes would keep
     // updating them for nothing.

@@ -55,6 +55,7 @@ void LocalGlobalSolver::globalStep(double c, int x, const IterationControl& cont
 int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationControl& control,
                              std::vector<double>* objective_history) {
   if (control.acceleration == Acceleration::LBFGS) return solveLbfgs(c, y, x, t, control, objective_history);
+  if (control.acceleration == Acceleration::Newton) return solveNewton(c, y, x, t, control, objective_history);
   if (control.acceleration != Acceleration::None) return solveAccelerated(c, y, x, t, control, objective_history);
   return solvePlain(c, y, x, t, control, objective_history);
 }

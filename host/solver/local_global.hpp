@@ -16,6 +16,8 @@
 
 namespace stabint {
 
+class SceneData;
+
 /// How long a solve runs: a fixed count (real-time budget), or with tolerance > 0 until the
 /// relative change of the objective is below it (reference runs), at most max_iterations.
 struct IterationControl {
@@ -62,11 +64,20 @@ class LocalGlobalSolver {
   /// energy_scale in each segment's round-off allowance.
   void setSegments(const std::vector<SceneSegment>& segments, const std::vector<double>& energy_scales);
 
+  /// The scene whose springs Newton-CG takes its Hessians from (Acceleration::Newton); without
+  /// one its Hessian is K_c.
+  void setScene(const SceneData* scene);
+
  private:
   int solvePlain(double c, int y, int x, double t, const IterationControl& control,
                  std::vector<double>* objective_history);
   int solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
                        std::vector<double>* objective_history);
+  // Newton-CG with the springs' projected Hessians (host/solver/newton.cpp).
+  int solveNewton(double c, int y, int x, double t, const IterationControl& control,
+                  std::vector<double>* objective_history);
+  void springCurvature();
+  void hessianTimes(double c, const Eigen::MatrixX3d& v, Eigen::MatrixX3d& out) const;
   // L-BFGS with K_c^-1 as the initial inverse Hessian (host/solver/lbfgs.cpp).
   int solveLbfgs(double c, int y, int x, double t, const IterationControl& control,
                  std::vector<double>* objective_history);
@@ -111,6 +122,16 @@ class LocalGlobalSolver {
   std::vector<std::vector<double>> history_rho_, history_alpha_;
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, converged_;
+  // Newton-CG: the scene, each spring's transverse coefficient w min(1, r/|u|) and direction at
+  // the iterate, the CG vectors.
+  const SceneData* scene_ = nullptr;
+  struct SpringCurvature {
+    int a, b;
+    double beta;
+    Eigen::Vector3d n;
+  };
+  std::vector<SpringCurvature> springs_;
+  Eigen::MatrixX3d cg_z_, cg_p_, cg_hp_;
 };
 
 }  // namespace stabint

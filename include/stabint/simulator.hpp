@@ -39,8 +39,9 @@ enum class Acceleration {
   Chebyshev,  // Chebyshev semi-iteration (Wang 2015)
   Anderson,   // Anderson acceleration (Peng et al. 2018)
   LBFGS,      // L-BFGS with the prefactored K_c as initial Hessian (Liu et al. 2017), line search
+  Newton,     // Newton-CG: springs' projected Hessians, CG preconditioned with K_c, line search
 };
-const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev", "anderson", "lbfgs"
+const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev", "anderson", "lbfgs", "newton"
 /// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
 Acceleration parseAcceleration(const std::string& name);
 

@@ -91,6 +91,7 @@ typedef enum stabint_acceleration {
   STABINT_ACCELERATION_CHEBYSHEV = 1,
   STABINT_ACCELERATION_ANDERSON = 2,
   STABINT_ACCELERATION_LBFGS = 3,
+  STABINT_ACCELERATION_NEWTON = 4,
   STABINT_ENUM_INT_WIDE_(STABINT_ACCELERATION)
 } stabint_acceleration;
 typedef enum stabint_global_solve {

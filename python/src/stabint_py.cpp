@@ -162,7 +162,8 @@ void bindEnums(nb::module_& m) {
       .value("None_", Acceleration::None, "Plain local/global iterations ('None' is a Python keyword).")
       .value("Chebyshev", Acceleration::Chebyshev)
       .value("Anderson", Acceleration::Anderson)
-      .value("LBFGS", Acceleration::LBFGS);
+      .value("LBFGS", Acceleration::LBFGS)
+      .value("Newton", Acceleration::Newton);
   nb::enum_<GlobalSolve>(m, "GlobalSolve")
       .value("Factor", GlobalSolve::Factor, "The CHOLMOD factor on the host (exact).")
       .value("ConjugateGradient", GlobalSolve::ConjugateGradient,

@@ -171,9 +171,9 @@ std::vector<double> comHeights(const std::vector<Eigen::MatrixX3d>& positions, c
   return y;
 }
 
-// Every integrator with plain iterations, and the blend with Anderson-accelerated ("blend+AA") and
-// L-BFGS ("blend+LB") solves, which help where its IM candidate is short of converged
-// (docs/method.md).
+// Every integrator with plain iterations, and the blend with Anderson-accelerated ("blend+AA"),
+// L-BFGS ("blend+LB") and Newton-CG ("blend+NT") solves, which help where its IM candidate is short
+// of converged (docs/method.md).
 struct MotionSeries {
   Integrator integrator;
   stabint::Acceleration acceleration;
@@ -183,7 +183,8 @@ std::vector<MotionSeries> motionSeries() {
   std::vector<MotionSeries> series;
   for (Integrator i : stabint::allIntegrators())
     series.push_back({i, stabint::Acceleration::None, stabint::integratorName(i)});
-  for (stabint::Acceleration acceleration : {stabint::Acceleration::Anderson, stabint::Acceleration::LBFGS})
+  for (stabint::Acceleration acceleration :
+       {stabint::Acceleration::Anderson, stabint::Acceleration::LBFGS, stabint::Acceleration::Newton})
     series.push_back({Integrator::EnergyBlend, acceleration, std::string("blend") + accelerationSuffix(acceleration)});
   return series;
 }

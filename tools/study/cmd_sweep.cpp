@@ -107,14 +107,15 @@ void runSweep(const StudyOptions& options) {
                  "ms_per_frame_median", "position_error_m", "rms_0_0.5s_m", "rms_0_1s_m", "drift_rel", "damping_rel",
                  "max_rise_rel", "verdict", "blew_up_frame"});
   // Every integrator with plain iterations, then the blend and BE with Anderson acceleration
-  // ("<integrator>+AA") and with L-BFGS ("+LB"): the shift each gives on the chart.
+  // ("<integrator>+AA"), L-BFGS ("+LB") and Newton-CG ("+NT"): the shift each gives on the chart.
   struct Series {
     Integrator integrator;
     stabint::Acceleration acceleration;
   };
   std::vector<Series> series;
   for (Integrator i : stabint::allIntegrators()) series.push_back({i, stabint::Acceleration::None});
-  for (stabint::Acceleration acceleration : {stabint::Acceleration::Anderson, stabint::Acceleration::LBFGS})
+  for (stabint::Acceleration acceleration :
+       {stabint::Acceleration::Anderson, stabint::Acceleration::LBFGS, stabint::Acceleration::Newton})
     for (Integrator i : {Integrator::BackwardEuler, Integrator::EnergyBlend}) series.push_back({i, acceleration});
   for (const AccuracyScene& a : scenes) {
     for (const Series& sr : series) {

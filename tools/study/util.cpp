@@ -21,6 +21,7 @@ const char* accelerationSuffix(stabint::Acceleration acceleration) {
   switch (acceleration) {
     case stabint::Acceleration::Anderson: return "+AA";
     case stabint::Acceleration::LBFGS: return "+LB";
+    case stabint::Acceleration::Newton: return "+NT";
     case stabint::Acceleration::Chebyshev: return "+CH";
     default: return "";
   }

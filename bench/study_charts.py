@@ -696,6 +696,17 @@ def write_summary(results):
             out.extend("| " + " | ".join(r[key] if digits is None else fmt(num(r, key), digits)
                                          for _, key, digits in columns) + " |" for r in refs)
             out.append("")
+        handle = read_csv(results, "handle_convergence.csv")
+        if handle:
+            out.append("Handle cloth, blend, by how far its solves converge (docs/method.md, \"Which solver is the "
+                       "default\"): H* gained over 10 s (booked work minus damping) against the reference's energy "
+                       f"gain of {fmt(num(handle[0], 'reference_gain_J'))} J.\n")
+            out.append("| solver | iterations | tolerance | mean K 5-10 s / reference's | H* gained [J] |")
+            out.append("|---|---:|---:|---:|---:|")
+            out.extend(f"| {r['solver']} | {r['iterations'] if int(r['iterations']) > 0 else '-'} | "
+                       f"{fmt(num(r, 'tolerance')) if num(r, 'tolerance') > 0 else '-'} | "
+                       f"{fmt(num(r, 'mean_K_ratio'))} | {fmt(num(r, 'target_gain_J'))} |" for r in handle)
+            out.append("")
     bounce = read_csv(results, "bounce.csv")
     if bounce:
         drop = 0.5  # cmd_interaction.cpp: the bar's bottom starts 0.5 m above the ground, at rest

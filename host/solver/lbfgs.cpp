@@ -252,9 +252,11 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
       // Positive curvature keeps H positive definite; a pair at round-off's angle would not.
       const bool curvature = moved[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);
       history_rho_[std::size_t(slot)][s] = curvature ? 1.0 / dot[s] : 0.0;
+      // A segment that stayed for want of decrease has not converged: it restarts from the plain step.
+      const bool stayed = !moved[s] && step[s] != 0.0;
       const double change = std::abs(objective[s] - trial_objective[s]);
-      converged[s] =
-          to_tolerance && change <= control.tolerance * std::max(std::abs(trial_objective[s]), control.energy_scale);
+      converged[s] = to_tolerance && !stayed &&
+                     change <= control.tolerance * std::max(std::abs(trial_objective[s]), control.energy_scale);
       objective[s] = trial_objective[s];
     }
     newest = slot;

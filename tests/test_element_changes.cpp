@@ -155,9 +155,9 @@ TEST(ElementChanges, BadCallsAreNamedAndChangeNothing) {
   expectRefused([&] { sim.setElementStiffness(ElementKind::TriangleStrain, 2, -1.0); }, "stiffness -1");
   expectRefused([&] { sim.setElementStiffness(ElementKind::TriangleStrain, 2, std::nan("")); }, "stiffness nan");
   expectRefused([&] { sim.setElementStiffness(static_cast<ElementKind>(17), 2, 1.0); }, "element kind 17");
-  // w = 3 k / (A_0 + A_1): finite k whose weight overflows on these small triangles; the hinges
-  // before it in the list are put back.
-  expectRefused([&] { sim.setElementStiffness(ElementKind::BendingHinge, {0, 1, 2}, 1e308); }, "not finite");
+  // Beyond the 1e150 every input value obeys (its weight w = 3 k / (A_0 + A_1) would overflow on
+  // these small triangles).
+  expectRefused([&] { sim.setElementStiffness(ElementKind::BendingHinge, {0, 1, 2}, 1e308); }, "at most 1e+150");
   EXPECT_THROW(sim.elementEnabled(ElementKind::Pin, 2), InvalidInputError);
   EXPECT_EQ(sim.scene().bending_hinges[0].stiffness, cloth.bending_hinges[0].stiffness);
   EXPECT_EQ(sim.target(), untouched.target());
@@ -212,6 +212,36 @@ TEST_F(ElementCheckpointTest, CheckpointsCarryStiffnessesAndFlags) {
   Simulator other(fewer, o);
   EXPECT_THROW(other.restore(changed), InvalidInputError);
   EXPECT_EQ(other.stepCount(), 0);
+}
+
+}  // namespace
+}  // namespace stabint
+
+namespace stabint {
+namespace {
+
+// A stiffness far beyond the particles' diagonal and back (1e140 N/m on one spring of a cloth of
+// 1e3 N/m springs): updated in place, L itself would lose the entries' digits (1e140 added and
+// taken off again) and every later factorization would fail. Such a change assembles L from the
+// scene and refactors (GlobalSystem::changeIsHuge), so the simulator then steps as a twin that
+// never saw it, to the round-off of a fresh factorization.
+TEST(ElementChanges, AHugeStiffnessAndBackLeaveAWorkingSimulator) {
+  ClothGridParams p;
+  p.nx = p.ny = 6;
+  const Scene cloth = makeClothGrid(p);
+  SimulatorOptions o;
+  o.integrator = Integrator::BackwardEuler;
+  Simulator sim(cloth, o), twin(cloth, o);
+  sim.step();
+  twin.step();
+  sim.setElementStiffness(ElementKind::Spring, 0, 1e140);
+  sim.setElementStiffness(ElementKind::Spring, 0, cloth.springs[0].stiffness);
+  for (int i = 0; i < 10; ++i) {
+    sim.step();
+    twin.step();
+  }
+  const double size = (cloth.positions.colwise().maxCoeff() - cloth.positions.colwise().minCoeff()).norm();
+  EXPECT_LE((sim.positions() - twin.positions()).cwiseAbs().maxCoeff(), 1e-9 * size);
 }
 
 }  // namespace

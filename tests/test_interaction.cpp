@@ -124,6 +124,15 @@ TEST(Interaction, RejectedInputChangesNothing) {
   expectRejected([&] { sim.setVelocities(bad); }, "velocities: row 3 is not finite");
   expectRejected([&] { sim.setPositions(Eigen::MatrixX3d::Zero(0, 3)); }, "positions: 0 rows");
   expectRejected([&] { sim.setIterations(0); }, "iterations = 0");
+  // Finite but beyond the 1e150 every scene value obeys (the simulator would then run with
+  // H ~ 1e300 or refuse every step): refused, naming the row or the pin.
+  Eigen::MatrixX3d huge = cloth.positions;
+  huge(4, 2) = 1e151;
+  expectRejected([&] { sim.setPinTarget(1, Eigen::Vector3d(0, -1e151, 0)); }, "pin 1: target (0, -1e+151, 0) exceeds");
+  expectRejected([&] { sim.setExternalForces(huge); }, "external forces: row 4");
+  expectRejected([&] { sim.setPositions(huge); }, "positions: row 4");
+  expectRejected([&] { sim.setVelocities(huge); }, "velocities: row 4");
+  expectRejected([&] { sim.setState(cloth.positions, huge); }, "velocities: row 4");
   EXPECT_EQ(sim.target(), twin.target());
   for (int i = 0; i < 5; ++i) {
     const StepReport& a = sim.step();
@@ -315,6 +324,35 @@ TEST(Interaction, GrabAndReleaseMatchScenesBuiltThatWay) {
   EXPECT_LT((grabbed.positions() - built.positions()).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_LT((released.positions() - built_released.positions()).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_GT((released.positions() - built.positions()).cwiseAbs().maxCoeff(), 0.1) << "the pins should matter";
+}
+
+// A grab far stiffer than the particle's diagonal (1e140 N/m on a 0.25 g particle) and its release
+// would spoil a rank-updated factor (the release's downdate cancels 1e140 against ~1e3): such a
+// change refactors instead (GlobalSystem::kLargestRankUpdate). After the release, and after
+// restoring a checkpoint taken before the grab, the simulator steps as a twin that never grabbed,
+// to the round-off of a fresh factorization. Stiffnesses beyond 1e150 are refused.
+TEST(Interaction, AHugeGrabAndItsReleaseLeaveAWorkingSimulator) {
+  ClothGridParams p;
+  p.nx = p.ny = 7;
+  const Scene cloth = makeClothGrid(p);
+  SimulatorOptions o;
+  o.integrator = Integrator::BackwardEuler;
+  Simulator sim(cloth, o), twin(cloth, o);
+  sim.step();
+  twin.step();
+  const Checkpoint before = sim.checkpoint();
+  EXPECT_THROW(sim.grab(3, 1e151), InvalidInputError);
+  const int handle = sim.grab(3, 1e140);
+  for (int i = 0; i < 3; ++i) sim.step();
+  sim.release(handle);
+  for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(sim.step());
+  sim.restore(before);
+  for (int i = 0; i < 10; ++i) {
+    sim.step();
+    twin.step();
+  }
+  const double size = (cloth.positions.colwise().maxCoeff() - cloth.positions.colwise().minCoeff()).norm();
+  EXPECT_LE((sim.positions() - twin.positions()).cwiseAbs().maxCoeff(), 1e-9 * size);
 }
 
 TEST(Interaction, BadGrabAndReleaseChangeNothing) {

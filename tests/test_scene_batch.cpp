@@ -581,6 +581,18 @@ TEST(BatchSimulatorBlend, SetStateIsAnEventOfOneScene) {
   const double before = batch.target(2);
   EXPECT_THROW(batch.setState(2, x, v), InvalidInputError);  // scene 1's row count
   EXPECT_THROW(batch.setState(7, x, v), InvalidInputError);
+  // Finite but beyond 1e150, as every scene value must be (docs/method.md, "Per-frame input").
+  const Eigen::MatrixX3d x_own = batch.positions(moved), v_own = batch.velocities(moved);
+  Eigen::MatrixX3d huge = v_own;
+  huge(0, 0) = -1e151;
+  try {
+    batch.setState(moved, x_own, huge);
+    ADD_FAILURE() << "a velocity of -1e151 accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("velocities: row 0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("exceeds"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(batch.velocities(moved), v_own);
   EXPECT_EQ(batch.target(2), before);
 }
 
@@ -611,6 +623,7 @@ TEST(BatchSimulatorBlend, APinDraggedInOneSceneIsBookedInItsTargetOnly) {
   EXPECT_GT(work, 0.0);
   EXPECT_THROW(batch.setPinTarget(dragged, 1, Eigen::Vector3d::Zero()), InvalidInputError);  // one pin
   EXPECT_THROW(batch.setPinTarget(dragged, 0, Eigen::Vector3d::Constant(NAN)), InvalidInputError);
+  EXPECT_THROW(batch.setPinTarget(dragged, 0, Eigen::Vector3d(0.0, 1e151, 0.0)), InvalidInputError);
 }
 
 // The public accessors: the concatenation's rows per scene, the batch's time, and bad scene

@@ -4,6 +4,7 @@
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
+#include "scene/validation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -100,15 +101,8 @@ void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions
   checkScene(scene, "setState");
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const std::string where = "setState: scene " + std::to_string(scene) + ": ";
-  for (const Eigen::MatrixX3d* m : {&positions, &velocities}) {
-    const char* field = m == &positions ? "positions" : "velocities";
-    if (m->rows() != seg.num_particles)
-      throw InvalidInputError(where + field + ": " + std::to_string(m->rows()) + " rows, expected one per particle (" +
-                              std::to_string(seg.num_particles) + ")");
-    for (Eigen::Index j = 0; j < m->rows(); ++j)
-      if (!m->row(j).allFinite())
-        throw InvalidInputError(where + field + ": row " + std::to_string(j) + " is not finite");
-  }
+  validation::checkInputRows(positions, seg.num_particles, where + "positions");
+  validation::checkInputRows(velocities, seg.num_particles, where + "velocities");
   if (options_.integrator == Integrator::BDF2)
     throw InvalidInputError(where +
                             "BDF2 would restart every scene of the batch with a BE step; not supported in a batch yet");
@@ -147,7 +141,7 @@ void BatchSimulator::Impl::setPinTarget(int scene, int pin, const Eigen::Vector3
   if (pin < 0 || pin >= seg.num_elements[type])
     throw InvalidInputError(where + " out of range (the scene has " + std::to_string(seg.num_elements[type]) +
                             " pins)");
-  if (!q.allFinite()) throw InvalidInputError(where + ": target is not finite");
+  validation::checkInputVector(q, where + ": target");
   data_.rampPinTarget(seg.first_element[type] + pin, q, t_, t_ + options_.time_step);
 }
 

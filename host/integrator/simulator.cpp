@@ -260,12 +260,7 @@ struct Simulator::Impl {
 
   // ---- per-frame input (docs/method.md, "Per-frame input") ------------------------------------
   void checkState(const Eigen::MatrixX3d& m, const char* field) const {
-    if (m.rows() != scene.numParticles())
-      throw InvalidInputError(std::string(field) + ": " + std::to_string(m.rows()) +
-                              " rows, expected one per particle (" + std::to_string(scene.numParticles()) + ")");
-    for (Eigen::Index j = 0; j < m.rows(); ++j)
-      if (!m.row(j).allFinite())
-        throw InvalidInputError(std::string(field) + ": row " + std::to_string(j) + " is not finite");
+    validation::checkInputRows(m, scene.numParticles(), field);
   }
 
   void checkPin(int pin) const {
@@ -277,7 +272,7 @@ struct Simulator::Impl {
 
   void setPinTarget(int pin, const Eigen::Vector3d& q) {
     checkPin(pin);
-    if (!q.allFinite()) throw InvalidInputError("pin " + std::to_string(pin) + ": target is not finite");
+    validation::checkInputVector(q, "pin " + std::to_string(pin) + ": target");
     scene.rampPinTarget(pin, q, t, t + options.time_step);
   }
 
@@ -348,8 +343,24 @@ struct Simulator::Impl {
     for (const Pin& p : pins) delta[p.vertex] += p.stiffness;
     scene.setPins(pins);
     backend->elementsChanged();
-    for (const auto& [vertex, k] : delta)
-      if (k != 0.0) system.addToDiagonal(vertex, k);
+    const double one = 1.0;
+    for (const auto& [vertex, k] : delta) {
+      if (k == 0.0) continue;
+      if (system.changeIsHuge(&vertex, 1, &one, 1, k))
+        laplacian_from_scene = true;
+      else
+        system.addToDiagonal(vertex, k);
+    }
+    applyLaplacianFromScene();
+  }
+
+  // After changes of which one was too large for an update of L and the factors
+  // (GlobalSystem::changeIsHuge): L assembled from the scene's weights and every factor again.
+  void applyLaplacianFromScene() {
+    if (!laplacian_from_scene) return;
+    laplacian_from_scene = false;
+    system.assemble(scene);
+    system.refactorAll();
   }
 
   // Grab and release: the pin set changes, and H* moves by the jump of H it causes.
@@ -366,8 +377,9 @@ struct Simulator::Impl {
     if (vertex < 0 || vertex >= scene.numParticles())
       throw InvalidInputError("grab: vertex " + std::to_string(vertex) + " out of range (the scene has " +
                               std::to_string(scene.numParticles()) + " particles)");
-    if (!std::isfinite(stiffness) || !(stiffness > 0.0))
-      throw InvalidInputError("grab: stiffness " + std::to_string(stiffness) + " must be finite and > 0");
+    if (!std::isfinite(stiffness) || !(stiffness > 0.0) || !(stiffness <= validation::kMaxMagnitude))
+      throw InvalidInputError("grab: stiffness " + validation::cat(stiffness) + " must be finite, > 0 and at most " +
+                              validation::cat(validation::kMaxMagnitude));
     std::vector<Pin> pins = scene.scene().pins;
     Pin handle;
     handle.vertex = vertex;
@@ -536,8 +548,13 @@ struct Simulator::Impl {
     const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
     const ElementShape shape = b.type->shape();
     const std::size_t stride = shape.shared_coefficients ? 0 : std::size_t(shape.rows * shape.vertices);
-    system.addElementTerm(&b.vertices[std::size_t(shape.vertices) * std::size_t(e)], shape.vertices,
-                          b.coefficients.data() + stride * std::size_t(e), shape.rows, w_new - w_old, how);
+    const int* vertices = &b.vertices[std::size_t(shape.vertices) * std::size_t(e)];
+    const double* a = b.coefficients.data() + stride * std::size_t(e);
+    // A huge change is left to applyLaplacianFromScene, which the caller runs after all changes.
+    if (system.changeIsHuge(vertices, shape.vertices, a, shape.rows, w_new - w_old))
+      laplacian_from_scene = true;
+    else
+      system.addElementTerm(vertices, shape.vertices, a, shape.rows, w_new - w_old, how);
   }
 
   // [project rule] A change of more than this many rank-1 columns (elements times rows of A_e)
@@ -558,9 +575,9 @@ struct Simulator::Impl {
     indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
     if (stiffness && !b.type->hasStiffness())
       throw InvalidInputError(std::string(call) + ": a " + b.type->name() + " has no stiffness");
-    if (stiffness && (!std::isfinite(*stiffness) || !(*stiffness >= 0.0)))
-      throw InvalidInputError(std::string(call) + ": " + b.type->name() + " stiffness " + std::to_string(*stiffness) +
-                              " must be finite and >= 0");
+    if (stiffness && (!std::isfinite(*stiffness) || !(*stiffness >= 0.0) || !(*stiffness <= validation::kMaxMagnitude)))
+      throw InvalidInputError(std::string(call) + ": " + b.type->name() + " stiffness " + validation::cat(*stiffness) +
+                              " must be finite, >= 0 and at most " + validation::cat(validation::kMaxMagnitude));
     std::vector<double> w_old, k_old;
     for (int e : indices) {
       w_old.push_back(scene.elementWeight(block, e));
@@ -584,7 +601,8 @@ struct Simulator::Impl {
     const bool refactor = indices.size() * std::size_t(b.type->shape().rows) > std::size_t(kMaxUpdateColumns);
     const auto how = refactor ? GlobalSystem::FactorChange::Deferred : GlobalSystem::FactorChange::RankUpdate;
     for (std::size_t i = 0; i < indices.size(); ++i) updateSystem(block, indices[i], w_old[i], how);
-    if (refactor) system.refactorAll();
+    if (refactor && !laplacian_from_scene) system.refactorAll();
+    applyLaplacianFromScene();
     potential = backend->potential(kX, t);
     const double event = kinetic + potential.total() - h_before;
     target += event;
@@ -642,6 +660,7 @@ struct Simulator::Impl {
     if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
     if (contactCount() == 0) {
       restoreElements(d, nullptr);
+      applyLaplacianFromScene();
     } else {
       // With colliders, L is assembled and factored from the flags of the checkpoint's last
       // assembly and its contact set changes since are replayed, so that the run continues bit
@@ -697,6 +716,7 @@ struct Simulator::Impl {
 
   SimulatorOptions options;
   SceneData scene;
+  bool laplacian_from_scene = false;  // a change since the last assembly was too large to update
   BackendSelection choice;
   std::unique_ptr<Backend> backend;
   GlobalSystem system;

@@ -78,6 +78,27 @@ inline void checkFinite(double x, const Owner& owner, const char* field) {
   if (!(std::abs(x) <= kMaxMagnitude)) invalid(owner, ": ", field, " ", x, " exceeds ", kMaxMagnitude, " in magnitude");
 }
 
+/// Per-frame input (positions, velocities, external forces of a running simulation): `expected`
+/// rows, each finite and at most kMaxMagnitude in magnitude, the rule a scene's values obey.
+/// `what` prefixes the message ("setState: scene 2: positions").
+inline void checkInputRows(const Eigen::MatrixX3d& m, long expected, const std::string& what) {
+  if (m.rows() != expected)
+    throw InvalidInputError(cat(what, ": ", m.rows(), " rows, expected one per particle (", expected, ")"));
+  for (Eigen::Index j = 0; j < m.rows(); ++j) {
+    const Eigen::Vector3d row = m.row(j).transpose();
+    if (!row.allFinite()) throw InvalidInputError(cat(what, ": row ", j, " is not finite"));
+    if (!(row.cwiseAbs().maxCoeff() <= kMaxMagnitude))
+      throw InvalidInputError(cat(what, ": row ", j, " ", vec(row), " exceeds ", kMaxMagnitude, " in magnitude"));
+  }
+}
+
+/// A per-frame vector (a pin's target): finite and at most kMaxMagnitude in magnitude.
+inline void checkInputVector(const Eigen::Vector3d& v, const std::string& what) {
+  if (!v.allFinite()) throw InvalidInputError(cat(what, " is not finite"));
+  if (!(v.cwiseAbs().maxCoeff() <= kMaxMagnitude))
+    throw InvalidInputError(cat(what, " ", vec(v), " exceeds ", kMaxMagnitude, " in magnitude"));
+}
+
 /// Each of `count` vertices `vertices[k]` (field "vertices[k]") in range and no particle twice.
 template <typename Vertices>
 void checkVertexList(const Vertices& vertices, int n, const Owner& owner) {

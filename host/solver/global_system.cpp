@@ -94,8 +94,9 @@ void GlobalSystem::factor(double c, const char* c_name) {
     const double stiffest = laplacian_.nonZeros() > 0 ? laplacian_.diagonal().maxCoeff() : 0.0;
     const double lightest = masses_.size() > 0 ? masses_.minCoeff() : 0.0;
     std::ostringstream what;
-    what << "the implicit system c M + L (c = " << c_name << " = " << c
-         << ") is not numerically positive definite: c times the smallest mass, " << c * lightest
+    what << "the implicit system c M + L (c = ";
+    if (std::string(c_name) != "c") what << c_name << " = ";  // not "c = c = 900"
+    what << c << ") is not numerically positive definite: c times the smallest mass, " << c * lightest
          << ", is lost against the largest element stiffness (diagonal of L), " << stiffest
          << ", in double precision; raise the masses, shorten time_step or lower the stiffnesses";
     throw InvalidInputError(what.str());
@@ -174,6 +175,20 @@ int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, 
 void GlobalSystem::addToDiagonal(int j, double delta, bool refactor) {
   const double one = 1.0;
   addElementTerm(&j, 1, &one, 1, delta, refactor ? FactorChange::Drop : FactorChange::RankUpdate);
+}
+
+bool GlobalSystem::changeIsHuge(const int* vertices, int K, const double* a, int R, double delta) const {
+  const double c = factors_.empty() ? 0.0 : factors_.begin()->first;  // the smallest c factored
+  for (int i = 0; i < K; ++i) {
+    double sum = 0.0;
+    for (int r = 0; r < R; ++r) sum += a[K * r + i] * a[K * r + i];
+    const double change = std::abs(delta) * sum;
+    const double diagonal = c * masses_[vertices[i]] + laplacian_.coeff(vertices[i], vertices[i]);
+    // The smaller of the entry before and after the change (the change may be a removal).
+    const double smaller = std::min(diagonal, diagonal + (delta > 0.0 ? change : -change));
+    if (!(change <= kLargestRankUpdate * std::max(smaller, 0.0))) return true;
+  }
+  return false;
 }
 
 void GlobalSystem::refactorAll() {

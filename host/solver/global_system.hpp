@@ -67,6 +67,16 @@ class GlobalSystem {
   /// factored again on their next use instead (for comparison).
   void addToDiagonal(int j, double delta, bool refactor = false);
 
+  /// Largest change of a diagonal entry of c M + L that addElementTerm carries (about 6 of the
+  /// 16 digits of the entry and of the factor's row).
+  static constexpr double kLargestRankUpdate = 1e6;
+  /// Whether L += delta A^T A (as addElementTerm) changes a diagonal entry of c M + L, at the
+  /// smallest c factored so far, by more than kLargestRankUpdate times the smaller of the entry
+  /// before and after. [project rule] Such a change (a grab of 1e20 N/m on a 0.25 g particle, and
+  /// the release that takes it off again) would cancel most of the entry's digits in L and in the
+  /// updated factor: the caller assembles L from the scene and refactors instead.
+  bool changeIsHuge(const int* vertices, int K, const double* a, int R, double delta) const;
+
   /// How addElementTerm treats the existing factors.
   enum class FactorChange {
     RankUpdate,  // a rank-R cholmod_updown of each
@@ -76,7 +86,8 @@ class GlobalSystem {
   /// L += delta A^T A over `vertices` (K of them) with A the R by K row-major `coefficients`: an
   /// element's weight changed by delta (a stiffness change, an element enabled or disabled). By
   /// default the factors get a rank-R update or downdate (C = sqrt|delta| A^T, in their permuted
-  /// order).
+  /// order). A change that changeIsHuge() would spoil them and L itself: assemble and refactor
+  /// instead.
   void addElementTerm(const int* vertices, int K, const double* coefficients, int R, double delta,
                       FactorChange how = FactorChange::RankUpdate);
   /// Factors every c factored so far again from the current L (after Deferred changes).

@@ -10,7 +10,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
+#include <limits>
 #include <vector>
 
 namespace stabint {
@@ -460,15 +462,41 @@ TEST_F(CheckpointTest, BadCheckpointsAreNamedErrorsAndChangeNothing) {
       EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
     }
   };
-  expectFormatError(c.bytes().substr(0, c.bytes().size() - 1), "truncated");
-  expectFormatError(c.bytes() + "x", "1 bytes after the end");
+  // Any change of the bytes breaks the checksum (FNV-1a 64 over all but the last 8 bytes).
+  expectFormatError(c.bytes().substr(0, c.bytes().size() - 1), "checksum");
+  expectFormatError(c.bytes() + "x", "checksum");
+  expectFormatError(c.bytes().substr(0, 14), "truncated");
   expectFormatError("not a checkpoint", "wrong header");
   std::string other_version = c.bytes();
   other_version[8] = 7;
   expectFormatError(other_version, "format version 7");
-  std::string huge_count = c.bytes();
-  huge_count[8 + 4 + 8 + 7] = 0x7f;  // the top byte of the particle count
-  expectFormatError(huge_count, "particle count");
+  std::string flipped = c.bytes();
+  flipped[120] ^= 0x10;  // a bit of a position
+  expectFormatError(flipped, "checksum");
+  // With the checksum made to match, every field is still checked by value, naming it.
+  auto signedWith = [&](std::size_t offset, const auto& value) {
+    std::string bytes = c.bytes();
+    std::memcpy(&bytes[offset], &value, sizeof(value));
+    std::uint64_t hash = 14695981039346656037ull;
+    for (std::size_t i = 0; i + 8 < bytes.size(); ++i) {
+      hash ^= static_cast<unsigned char>(bytes[i]);
+      hash *= 1099511628211ull;
+    }
+    std::memcpy(&bytes[bytes.size() - 8], &hash, sizeof(hash));
+    return bytes;
+  };
+  // Header 8, version 4, fingerprint 8, particle and pin counts 8 each: the time at 36, the step
+  // count at 44, the target at 52, the kinetic energy at 60; the positions' row count at 101, their
+  // values from 109.
+  expectFormatError(signedWith(8 + 4 + 8 + 7, std::uint8_t(0x7f)), "particle count");
+  expectFormatError(signedWith(36, -1e300), "the time: beyond 1e150");
+  expectFormatError(signedWith(36, std::nan("")), "the time: not finite");
+  expectFormatError(signedWith(44, std::int64_t(std::numeric_limits<int>::max())),
+                    "step count 2147483647 out of range");
+  expectFormatError(signedWith(52, std::nan("")), "the target: not finite");
+  expectFormatError(signedWith(60, -1.0), "kinetic energy is negative");
+  expectFormatError(signedWith(109 + 8, std::nan("")), "positions: not finite");
+  EXPECT_NO_THROW(Checkpoint::fromBytes(signedWith(36, 0.1), "retimed"));  // the helper signs right
   EXPECT_THROW(Checkpoint::load((dir_ / "missing.ckpt").string()), FileFormatError);
   EXPECT_THROW(Checkpoint::load(dir_.string()), FileFormatError);
   EXPECT_THROW(c.save((dir_ / "no" / "such" / "dir").string()), FileFormatError);

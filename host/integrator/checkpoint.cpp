@@ -1,6 +1,7 @@
 #include "integrator/checkpoint.hpp"
 
 #include "io/text_reader.hpp"
+#include "scene/validation.hpp"
 
 #include <stabint/simulator.hpp>
 
@@ -17,9 +18,22 @@ namespace {
 constexpr char kMagic[8] = {'S', 'T', 'B', 'C', 'K', 'P', 'T', '\n'};
 // 2: element stiffnesses and enabled flags; 3: collider motion and the contact set's update log
 // (a version 2 checkpoint is read with the colliders on their scene laws, which is all they could
-// do then, and an empty log).
-constexpr std::uint32_t kVersion = 3;
+// do then, and an empty log); 4: a checksum over everything before it, at the end.
+constexpr std::uint32_t kVersion = 4;
 constexpr std::uint32_t kOldestVersion = 2;
+constexpr std::uint32_t kFirstChecksummedVersion = 4;
+// Steps a restored simulator may still take before its int step count would overflow.
+constexpr std::int64_t kMostSteps = std::int64_t(1) << 30;
+
+// FNV-1a, 64 bits, over a byte range: the checksum of version 4 and later.
+std::uint64_t checksum(const char* data, std::size_t size) {
+  std::uint64_t hash = 14695981039346656037ull;
+  for (std::size_t i = 0; i < size; ++i) {
+    hash ^= static_cast<unsigned char>(data[i]);
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
 
 class Writer {
  public:
@@ -80,6 +94,19 @@ class Reader {
     pos_ += sizeof(T);
     return v;
   }
+  // A value that is part of the state: finite and at most validation::kMaxMagnitude, the rule of
+  // every input (an energy may be larger, but finite).
+  double real(const char* what) {
+    const auto v = value<double>(what);
+    if (!std::isfinite(v)) fail(std::string(what) + ": not finite");
+    if (!(std::abs(v) <= validation::kMaxMagnitude)) fail(std::string(what) + ": beyond 1e150 in magnitude");
+    return v;
+  }
+  double energy(const char* what) {
+    const auto v = value<double>(what);
+    if (!std::isfinite(v)) fail(std::string(what) + ": not finite");
+    return v;
+  }
   bool flag(const char* what) {
     const auto b = value<std::uint8_t>(what);
     if (b > 1) fail(std::string(what) + ": not a flag");
@@ -92,12 +119,12 @@ class Reader {
       fail(std::string(what) + ": " + std::to_string(rows) + " rows, expected " + std::to_string(expected_rows));
     Eigen::MatrixX3d m(rows, 3);
     for (Eigen::Index i = 0; i < rows; ++i)
-      for (int c = 0; c < 3; ++c) m(i, c) = value<double>(what);
+      for (int c = 0; c < 3; ++c) m(i, c) = real(what);
     return m;
   }
   Eigen::Vector3d vector(const char* what) {
     Eigen::Vector3d v;
-    for (int c = 0; c < 3; ++c) v[c] = value<double>(what);
+    for (int c = 0; c < 3; ++c) v[c] = real(what);
     return v;
   }
   // Vertex indices are checked against the scene when the checkpoint is restored.
@@ -106,26 +133,28 @@ class Reader {
     const auto vertex = value<std::int64_t>("a pin");
     if (vertex < 0 || vertex > std::numeric_limits<int>::max()) fail("pin vertex out of range");
     p.vertex = static_cast<int>(vertex);
-    p.stiffness = value<double>("a pin");
-    p.target.position = vector("a pin");
-    p.target.velocity = vector("a pin");
-    p.target.amplitude = vector("a pin");
-    p.target.frequency = value<double>("a pin");
+    p.stiffness = real("a pin's stiffness");
+    if (!(p.stiffness >= 0.0)) fail("a pin's stiffness is negative");
+    p.target.position = vector("a pin's target");
+    p.target.velocity = vector("a pin's target");
+    p.target.amplitude = vector("a pin's target");
+    p.target.frequency = real("a pin's target");
     return p;
   }
   SceneData::Ramp ramp(std::int64_t rows, const char* what) {
     SceneData::Ramp r;
     r.active = flag(what);
-    r.t0 = value<double>(what);
-    r.t1 = value<double>(what);
+    r.t0 = real(what);
+    r.t1 = real(what);
+    if (!(r.t1 >= r.t0)) fail(std::string(what) + ": ends before it starts");
     r.start = matrix(r.active ? rows : 0, what);
     r.end = matrix(r.active ? rows : 0, what);
     return r;
   }
   SceneData::ColliderMotion motion() {
     SceneData::ColliderMotion m;
-    m.t0 = value<double>("a collider's motion");
-    m.t1 = value<double>("a collider's motion");
+    m.t0 = real("a collider's motion");
+    m.t1 = real("a collider's motion");
     m.start = vector("a collider's motion");
     m.end = vector("a collider's motion");
     m.velocity = vector("a collider's motion");
@@ -230,32 +259,51 @@ std::string serializeCheckpoint(const CheckpointData& d) {
   for (const SceneData::ColliderMotion& m : d.forcing.colliders) out.motion(m);
   out.value(static_cast<std::int64_t>(d.contact_log.size()));
   for (std::int32_t entry : d.contact_log) out.value(entry);
-  return out.take();
+  std::string bytes = out.take();
+  const std::uint64_t sum = checksum(bytes.data(), bytes.size());
+  bytes.append(reinterpret_cast<const char*>(&sum), sizeof sum);
+  return bytes;
 }
 
-CheckpointData parseCheckpoint(const std::string& bytes, const std::string& origin) {
-  Reader in(bytes, origin);
+CheckpointData parseCheckpoint(const std::string& all_bytes, const std::string& origin) {
+  Reader header(all_bytes, origin);
   for (char c : kMagic)
-    if (in.value<char>("the header") != c) in.fail("wrong header");
-  const auto version = in.value<std::uint32_t>("the version");
+    if (header.value<char>("the header") != c) header.fail("wrong header");
+  const auto version = header.value<std::uint32_t>("the version");
   if (version < kOldestVersion || version > kVersion)
-    in.fail("format version " + std::to_string(version) + ", expected " + std::to_string(kOldestVersion) + " to " +
-            std::to_string(kVersion));
+    header.fail("format version " + std::to_string(version) + ", expected " + std::to_string(kOldestVersion) + " to " +
+                std::to_string(kVersion));
+  // Version 4 on: the last 8 bytes are the checksum of the others, checked before any field.
+  std::string checked;
+  if (version >= kFirstChecksummedVersion) {
+    std::uint64_t stored = 0;
+    if (all_bytes.size() < sizeof kMagic + sizeof version + sizeof stored) header.fail("truncated at the checksum");
+    const std::size_t payload = all_bytes.size() - sizeof stored;
+    std::memcpy(&stored, all_bytes.data() + payload, sizeof stored);
+    if (stored != checksum(all_bytes.data(), payload))
+      header.fail("the checksum does not match: the data is corrupted or was changed");
+    checked = all_bytes.substr(0, payload);
+  }
+  const std::string& bytes = version >= kFirstChecksummedVersion ? checked : all_bytes;
+  Reader in(bytes, origin);
+  for (std::size_t i = 0; i < sizeof kMagic + sizeof version; ++i) in.value<char>("the header");
   CheckpointData d;
   d.scene_fingerprint = in.value<std::uint64_t>("the scene fingerprint");
   d.particles = in.value<std::int64_t>("the particle count");
   d.pins = in.value<std::int64_t>("the pin count");
   checkCount(in, d.particles, bytes.size(), "particle count");
   checkCount(in, d.pins, bytes.size(), "pin count");
-  d.time = in.value<double>("the time");
+  d.time = in.real("the time");
   d.steps = in.value<std::int64_t>("the step count");
-  if (d.steps < 0 || d.steps > std::numeric_limits<int>::max()) in.fail("step count out of range");
-  d.target = in.value<double>("the target");
-  d.kinetic = in.value<double>("the kinetic energy");
-  d.potential.internal = in.value<double>("the potential energy");
-  d.potential.pins = in.value<double>("the potential energy");
-  d.potential.external = in.value<double>("the potential energy");
-  d.pending_event_energy = in.value<double>("the event energy");
+  if (d.steps < 0 || d.steps > kMostSteps)
+    in.fail("step count " + std::to_string(d.steps) + " out of range [0, " + std::to_string(kMostSteps) + "]");
+  d.target = in.energy("the target");
+  d.kinetic = in.energy("the kinetic energy");
+  if (!(d.kinetic >= 0.0)) in.fail("the kinetic energy is negative");
+  d.potential.internal = in.energy("the potential energy");
+  d.potential.pins = in.energy("the potential energy");
+  d.potential.external = in.energy("the potential energy");
+  d.pending_event_energy = in.energy("the event energy");
   d.has_history = in.flag("the history flag");
   d.x = in.matrix(d.particles, "positions");
   d.v = in.matrix(d.particles, "velocities");
@@ -276,8 +324,8 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
       in.fail("element count " + std::to_string(count) + " does not fit the data");
     std::vector<double> stiffness(static_cast<std::size_t>(count));
     for (double& k : stiffness) {
-      k = in.value<double>("an element stiffness");
-      if (!std::isfinite(k) || !(k >= 0.0)) in.fail("an element stiffness is not finite and >= 0");
+      k = in.real("an element stiffness");
+      if (!(k >= 0.0)) in.fail("an element stiffness is negative");
     }
     std::vector<std::uint8_t> enabled(static_cast<std::size_t>(count));
     for (std::uint8_t& e : enabled) e = in.flag("an element flag") ? 1 : 0;

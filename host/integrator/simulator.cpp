@@ -579,9 +579,11 @@ struct Simulator::Impl {
       throw InvalidInputError(std::string(call) + ": " + b.type->name() + " stiffness " + validation::cat(*stiffness) +
                               " must be finite, >= 0 and at most " + validation::cat(validation::kMaxMagnitude));
     std::vector<double> w_old, k_old;
+    std::vector<bool> on_old;
     for (int e : indices) {
       w_old.push_back(scene.elementWeight(block, e));
       k_old.push_back(b.type->stiffness(scene.scene(), e));
+      on_old.push_back(scene.elementEnabled(block, e));
     }
     if (stiffness) {
       for (int e : indices) scene.setElementStiffness(block, e, *stiffness);
@@ -600,9 +602,22 @@ struct Simulator::Impl {
     const double h_before = kinetic + potential.total();
     const bool refactor = indices.size() * std::size_t(b.type->shape().rows) > std::size_t(kMaxUpdateColumns);
     const auto how = refactor ? GlobalSystem::FactorChange::Deferred : GlobalSystem::FactorChange::RankUpdate;
-    for (std::size_t i = 0; i < indices.size(); ++i) updateSystem(block, indices[i], w_old[i], how);
-    if (refactor && !laplacian_from_scene) system.refactorAll();
-    applyLaplacianFromScene();
+    try {
+      for (std::size_t i = 0; i < indices.size(); ++i) updateSystem(block, indices[i], w_old[i], how);
+      if (refactor && !laplacian_from_scene) system.refactorAll();
+      applyLaplacianFromScene();
+    } catch (const Error&) {
+      // The new system does not factor (a stiffness too large for the masses, as the constructor
+      // refuses it): the old stiffnesses and flags go back, with L and the factors from them.
+      for (std::size_t i = indices.size(); i-- > 0;) {
+        scene.setElementStiffness(block, indices[i], k_old[i]);
+        scene.setElementEnabled(block, indices[i], on_old[i]);
+      }
+      laplacian_from_scene = false;
+      system.assemble(scene);
+      system.refactorAll();
+      throw;
+    }
     potential = backend->potential(kX, t);
     const double event = kinetic + potential.total() - h_before;
     target += event;
@@ -640,7 +655,21 @@ struct Simulator::Impl {
     return d;
   }
 
+  // A refused restore changes nothing: what can be checked against the scene is checked first
+  // (checkRestorable); what only applying shows (a pin set the scene refuses, stiffnesses whose
+  // system does not factor) puts the state taken before back, through the same path.
   void restore(const CheckpointData& d) {
+    checkRestorable(d);
+    const CheckpointData before = checkpointData();
+    try {
+      applyCheckpoint(d);
+    } catch (const Error&) {
+      applyCheckpoint(before);
+      throw;
+    }
+  }
+
+  void checkRestorable(const CheckpointData& d) const {
     if (d.particles != scene.numParticles() || d.scene_fingerprint != sceneFingerprint(scene.scene()))
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
                               " particles, or other masses, rest shape or colliders)");
@@ -656,6 +685,14 @@ struct Simulator::Impl {
     const std::size_t motions = d.forcing.colliders.size();
     if (motions != 0 && motions != scene.scene().colliders.size())
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");
+    contactBaseFlags(d);  // its checks of the contact log
+    for (const Pin& p : d.pin_list)
+      if (p.vertex >= scene.numParticles())
+        throw InvalidInputError("checkpoint: pin vertex " + std::to_string(p.vertex) + " out of range (the scene has " +
+                                std::to_string(scene.numParticles()) + " particles)");
+  }
+
+  void applyCheckpoint(const CheckpointData& d) {
     const std::vector<std::uint8_t> contact_base = contactBaseFlags(d);
     if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
     if (contactCount() == 0) {

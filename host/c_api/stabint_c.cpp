@@ -68,6 +68,8 @@ stabint_status guarded(Body&& body) noexcept {
     return fail(STABINT_UNSUPPORTED_PRECISION, "UnsupportedPrecisionError", e.what());
   } catch (const stabint::OpenCLError& e) {
     return fail(STABINT_OPENCL, "OpenCLError", e.what());
+  } catch (const stabint::OutOfMemoryError& e) {
+    return fail(STABINT_OUT_OF_MEMORY, "OutOfMemoryError", e.what());
   } catch (const stabint::Error& e) {
     return fail(STABINT_ERROR, "Error", e.what());
   } catch (const std::bad_alloc&) {

@@ -4,6 +4,7 @@
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
+#include "out_of_memory.hpp"
 #include "scene/validation.hpp"
 
 #include <algorithm>
@@ -406,12 +407,14 @@ void BatchSimulator::Impl::evaluateBlendPotentials(double t1) {
 // ---- the public class ----------------------------------------------------------------------------
 
 BatchSimulator::BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : impl_(std::make_unique<Impl>(scenes, options)) {}
+    : impl_(reportingOutOfMemory("BatchSimulator", [&] { return std::make_unique<Impl>(scenes, options); })) {}
 BatchSimulator::~BatchSimulator() = default;
 BatchSimulator::BatchSimulator(BatchSimulator&&) noexcept = default;
 BatchSimulator& BatchSimulator::operator=(BatchSimulator&&) noexcept = default;
 
-const BatchStepReport& BatchSimulator::step() { return impl_->step(); }
+const BatchStepReport& BatchSimulator::step() {
+  return reportingOutOfMemory("BatchSimulator::step", [&]() -> const BatchStepReport& { return impl_->step(); });
+}
 int BatchSimulator::size() const { return impl_->size(); }
 bool BatchSimulator::active(int scene) const {
   impl_->checkScene(scene, "active");

@@ -3,6 +3,7 @@
 #include <stabint/simulator.hpp>
 
 #include "backend.hpp"
+#include "out_of_memory.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
 #include "integrator/checkpoint.hpp"
@@ -798,12 +799,14 @@ bool Simulator::elementEnabled(ElementKind kind, int index) const {
 }
 
 Simulator::Simulator(const Scene& scene, const SimulatorOptions& options)
-    : impl_(std::make_unique<Impl>(scene, options)) {}
+    : impl_(reportingOutOfMemory("Simulator", [&] { return std::make_unique<Impl>(scene, options); })) {}
 Simulator::~Simulator() = default;
 Simulator::Simulator(Simulator&&) noexcept = default;
 Simulator& Simulator::operator=(Simulator&&) noexcept = default;
 
-const StepReport& Simulator::step() { return impl_->step(); }
+const StepReport& Simulator::step() {
+  return reportingOutOfMemory("Simulator::step", [&]() -> const StepReport& { return impl_->step(); });
+}
 const Eigen::MatrixX3d& Simulator::positions() const { return impl_->x; }
 const Eigen::MatrixX3d& Simulator::velocities() const { return impl_->v; }
 double Simulator::time() const { return impl_->t; }
@@ -862,7 +865,8 @@ Checkpoint Simulator::checkpoint() const {
 }
 
 void Simulator::restore(const Checkpoint& checkpoint) {
-  impl_->restore(parseCheckpoint(checkpoint.bytes(), "checkpoint"));
+  reportingOutOfMemory("Simulator::restore",
+                       [&] { impl_->restore(parseCheckpoint(checkpoint.bytes(), "checkpoint")); });
 }
 
 }  // namespace stabint

@@ -1,6 +1,7 @@
 // JSON scene files (docs/scene-format.md): the explicit form saveSceneFile writes, plus the
 // conveniences people write by hand: built-in scenes by name, meshes next to the JSON file, pins
 // and particle sets selected by region. Every error names the file and the JSON field path.
+#include "out_of_memory.hpp"
 #include "elements/element_type.hpp"
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
@@ -1352,7 +1353,13 @@ void writeSceneText(const std::string& text, const std::string& path) {
 // The events are read and checked too (an error in them is an error in the file), then dropped.
 Scene loadSceneFile(const std::string& path) { return loadSceneFileWithEvents(path).scene; }
 
+static SceneFile loadSceneFileWithEventsUnguarded(const std::string& path);
+
 SceneFile loadSceneFileWithEvents(const std::string& path) {
+  return reportingOutOfMemory("loadSceneFile", [&] { return loadSceneFileWithEventsUnguarded(path); });
+}
+
+static SceneFile loadSceneFileWithEventsUnguarded(const std::string& path) {
   const json doc = io::parseJson(io::readTextFile(path), path);
   SceneFile file;
   file.scene = io::sceneFromJson(doc, path);

@@ -4,6 +4,8 @@
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
 
+#include "out_of_memory.hpp"
+
 #include <algorithm>
 #include <array>
 #include <initializer_list>
@@ -86,7 +88,7 @@ Scene makeLinearOscillator(const LinearOscillatorParams& p) {
   return finish(std::move(s));
 }
 
-Scene makeChainPendulum(const ChainPendulumParams& p) {
+static Scene makeChainPendulumUnguarded(const ChainPendulumParams& p) {
   requireAtLeast(p.particles, 2, "chain particles");
   gridParticles({p.particles}, "chain particles");
   Scene s;
@@ -118,7 +120,7 @@ std::vector<std::array<int, 3>> clothGridTriangles(int nx, int ny) {
 
 // Particle (i, j) is index j*nx + i at (i dx, height - j dy, 0): row j = 0 is the top edge at
 // y = height, so the default pins hang the cloth from its top corners.
-Scene makeClothGrid(const ClothGridParams& p) {
+static Scene makeClothGridUnguarded(const ClothGridParams& p) {
   requireAtLeast(p.nx, 2, "cloth nx");
   requireAtLeast(p.ny, 2, "cloth ny");
   Scene s;
@@ -169,7 +171,7 @@ Scene makeClothGrid(const ClothGridParams& p) {
 // Kuhn (Freudenthal) split: each cube becomes the six tets along the monotone paths from its
 // corner (0,0,0) to (1,1,1), one per axis permutation. All cubes use the same main diagonal,
 // so the split of every shared face agrees between the two cubes on either side.
-Scene makeTetBar(const TetBarParams& p) {
+static Scene makeTetBarUnguarded(const TetBarParams& p) {
   requireAtLeast(p.nx, 1, "tet bar nx");
   requireAtLeast(p.ny, 1, "tet bar ny");
   requireAtLeast(p.nz, 1, "tet bar nz");
@@ -215,6 +217,18 @@ Scene makeTetBar(const TetBarParams& p) {
   s.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
   s.bodies.push_back(wholeBody(s, p.damping));
   return finish(std::move(s));
+}
+
+// The public builders: a size that passes the limits but not the machine's memory is an
+// OutOfMemoryError naming the builder.
+Scene makeChainPendulum(const ChainPendulumParams& p) {
+  return reportingOutOfMemory("makeChainPendulum", [&] { return makeChainPendulumUnguarded(p); });
+}
+Scene makeClothGrid(const ClothGridParams& p) {
+  return reportingOutOfMemory("makeClothGrid", [&] { return makeClothGridUnguarded(p); });
+}
+Scene makeTetBar(const TetBarParams& p) {
+  return reportingOutOfMemory("makeTetBar", [&] { return makeTetBarUnguarded(p); });
 }
 
 }  // namespace stabint

@@ -54,6 +54,13 @@ class EnergyLimitError : public NonFiniteStateError {
   using NonFiniteStateError::NonFiniteStateError;
 };
 
+/// Memory ran out (std::bad_alloc inside the library): the message names the call. Refused like
+/// bad input: a simulator keeps the state it had before the call.
+class OutOfMemoryError : public Error {
+ public:
+  using Error::Error;
+};
+
 /// Any OpenCL failure; the message names the API call and the OpenCL error code.
 class OpenCLError : public Error {
  public:

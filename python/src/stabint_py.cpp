@@ -77,6 +77,7 @@ struct ErrorTypes {
   PyObject* no_opencl_device = nullptr;
   PyObject* kernel_build = nullptr;
   PyObject* unsupported_precision = nullptr;
+  PyObject* out_of_memory = nullptr;
 } errors;
 
 PyObject* newErrorType(nb::module_& m, const char* name, PyObject* base, const char* doc) {
@@ -117,6 +118,8 @@ void translate(const std::exception_ptr& p, void*) {
     raise(errors.unsupported_precision, e.what());
   } catch (const OpenCLError& e) {
     raise(errors.opencl, e.what());
+  } catch (const OutOfMemoryError& e) {
+    raise(errors.out_of_memory, e.what());
   } catch (const Error& e) {
     raise(errors.error, e.what());
   }
@@ -142,6 +145,10 @@ void bindErrors(nb::module_& m) {
       newErrorType(m, "KernelBuildError", errors.opencl, "A kernel failed to compile. Attribute: build_log.");
   errors.unsupported_precision =
       newErrorType(m, "UnsupportedPrecisionError", errors.opencl, "Double precision on a device without cl_khr_fp64.");
+  // Both a stabint.Error and Python's MemoryError, so either handler catches it.
+  nb::object bases = nb::make_tuple(nb::handle(errors.error), nb::handle(PyExc_MemoryError));
+  errors.out_of_memory = newErrorType(m, "OutOfMemoryError", bases.release().ptr(),
+                                      "Memory ran out inside the call the message names; a simulator keeps its state.");
   nb::register_exception_translator(translate);
 }
 

@@ -38,7 +38,8 @@ from . import _stabint
 # The exception classes live in the extension (so that its stub declares them); they are used
 # as stabint.<Name>, so they say so in tracebacks.
 for _name in ("Error", "InvalidInputError", "FileFormatError", "NonFiniteStateError", "EnergyLimitError",
-              "OpenCLError", "NoOpenCLDeviceError", "KernelBuildError", "UnsupportedPrecisionError"):
+              "OpenCLError", "NoOpenCLDeviceError", "KernelBuildError", "UnsupportedPrecisionError",
+              "OutOfMemoryError"):
     getattr(_stabint, _name).__module__ = "stabint"
 
 __version__ = "0.1.0"

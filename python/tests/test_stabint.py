@@ -102,6 +102,7 @@ def test_error_hierarchy_matches_the_library():
     assert stabint.EnergyLimitError.__bases__ == (stabint.NonFiniteStateError,)
     for name in ("NoOpenCLDeviceError", "KernelBuildError", "UnsupportedPrecisionError"):
         assert getattr(stabint, name).__bases__ == (stabint.OpenCLError,)
+    assert stabint.OutOfMemoryError.__bases__ == (stabint.Error, MemoryError)
     assert stabint.InvalidInputError.__module__ == "stabint"
 
 

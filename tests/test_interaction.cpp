@@ -368,7 +368,10 @@ TEST(Interaction, BadGrabAndReleaseChangeNothing) {
   EXPECT_THROW(sim.release(2), InvalidInputError);
   EXPECT_EQ(sim.scene().pins.size(), 2u);
   sim.release(0);
-  sim.release(0);  // already released: nothing to do
+  // A second release of the same pin is a mistake of the caller's, refused like the others.
+  const double target = sim.target();
+  EXPECT_THROW(sim.release(0), InvalidInputError);
+  EXPECT_EQ(sim.target(), target);
   EXPECT_EQ(sim.scene().pins[0].stiffness, 0.0);
 }
 

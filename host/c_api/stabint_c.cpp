@@ -214,6 +214,7 @@ const char* stabint_blend_branch_name(stabint_blend_branch branch) {
 
 stabint_status stabint_scene_create_builtin(const char* name, const char* params_json, stabint_scene** out) {
   return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
     require(name, "name");
     require(out, "out");
     *out = new stabint_scene{stabint::builtinScene(name, params_json ? params_json : "{}")};
@@ -222,6 +223,7 @@ stabint_status stabint_scene_create_builtin(const char* name, const char* params
 
 stabint_status stabint_scene_load(const char* path, stabint_scene** out) {
   return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
     require(path, "path");
     require(out, "out");
     *out = new stabint_scene{stabint::loadSceneFile(path)};
@@ -279,6 +281,7 @@ void stabint_simulator_options_default(stabint_simulator_options* options) {
 stabint_status stabint_simulator_create(const stabint_scene* scene, const stabint_simulator_options* options,
                                         stabint_simulator** out) {
   return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
     require(scene, "scene");
     require(options, "options");
     require(out, "out");
@@ -489,6 +492,7 @@ stabint_status stabint_simulator_set_element_enabled(stabint_simulator* sim, con
 
 stabint_status stabint_simulator_checkpoint(const stabint_simulator* sim, stabint_checkpoint** out) {
   return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
     require(sim, "simulator");
     require(out, "out");
     *out = new stabint_checkpoint{sim->sim.checkpoint()};
@@ -513,6 +517,7 @@ stabint_status stabint_checkpoint_save(const stabint_checkpoint* checkpoint, con
 
 stabint_status stabint_checkpoint_load(const char* path, stabint_checkpoint** out) {
   return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
     require(path, "path");
     require(out, "out");
     *out = new stabint_checkpoint{stabint::Checkpoint::load(path)};
@@ -526,6 +531,7 @@ const void* stabint_checkpoint_data(const stabint_checkpoint* checkpoint, size_t
 
 stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size, stabint_checkpoint** out) {
   return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
     if (size > 0) require(data, "data");
     require(out, "out");
     std::string bytes;

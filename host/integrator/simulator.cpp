@@ -394,7 +394,8 @@ struct Simulator::Impl {
   void release(int pin) {
     checkPin(pin);
     std::vector<Pin> pins = scene.scene().pins;
-    if (pins[pin].stiffness == 0.0) return;
+    if (pins[pin].stiffness == 0.0)
+      throw InvalidInputError("release: pin " + std::to_string(pin) + " is already released (stiffness 0)");
     pins[pin].stiffness = 0.0;
     pins[pin].target = PinTarget{};  // a released pin does no work
     pins[pin].target.position = scene.pinTarget(pin, t);

@@ -298,13 +298,15 @@ class Simulator {
   /// Local/global iteration budget of every later step (>= 1); time, state and H* are kept.
   void setIterations(int iterations);
 
-  /// Attaches a handle to particle `vertex`: a new pin of `stiffness` (> 0) whose target is the
-  /// particle's current position (no energy jump), returned as its pin index for setPinTarget
-  /// and release. The global matrix gains the pin's term by a rank-1 update of its factors.
+  /// Attaches a handle to particle `vertex`: a new pin of `stiffness` (> 0, at most 1e150) whose
+  /// target is the particle's current position (no energy jump), returned as its pin index for
+  /// setPinTarget and release. The global matrix gains the pin's term by a rank-1 update of its
+  /// factors (a stiffness more than 1e6 times the particle's diagonal refactors instead).
   int grab(int vertex, double stiffness);
   /// Detaches pin `pin` (a handle or a scene pin): its stiffness becomes 0 and its index stays
   /// valid (it can be grabbed again only through grab). A discontinuous event: the pin's energy
-  /// leaves H and H* alike (event_energy); the factors get a rank-1 downdate.
+  /// leaves H and H* alike (event_energy); the factors get a rank-1 downdate. Releasing a pin that
+  /// is already released (stiffness 0) is an InvalidInputError.
   void release(int pin);
 
   /// Element `index` of `kind` (its index in the scene's list of that kind; pins include grabbed

@@ -11,7 +11,8 @@
  * Threads: the last error is per thread; one handle must not be used by two threads at once.
  *
  * Ownership: a handle returned through an out-parameter belongs to the caller and is released
- * with the matching *_destroy function (which accepts NULL). A simulator copies its scene, so a
+ * with the matching *_destroy function (which accepts NULL); a create that fails sets it to NULL
+ * (nothing to destroy). A simulator copies its scene, so a
  * scene may be destroyed as soon as the simulators built from it exist.
  *
  * Per-frame input (pin targets, external forces, state replacement, iteration budget) and

@@ -32,7 +32,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ._stabint import *  # noqa: F401,F403  (the extension's public names)
-from ._stabint import Pin, Scene, Spring, Tet, builtin_scene
+from ._stabint import InvalidInputError, Pin, Scene, Spring, Tet, builtin_scene
 from . import _stabint
 
 # The exception classes live in the extension (so that its stub declares them); they are used
@@ -90,8 +90,21 @@ def scene_from_arrays(
     """A scene from numpy arrays: ``positions`` (n, 3) (also the rest shape), ``masses`` (n,) or
     a scalar per particle, ``springs`` (m, 2) particle pairs (rest lengths from ``positions``),
     ``tets`` (m, 4), ``triangles`` (m, 3) surface, ``pinned`` particle indices held in place.
-    Nothing is validated here: a Simulator validates the scene (InvalidInputError)."""
+    A Simulator validates the scene (InvalidInputError); arrays that numpy cannot read as these
+    shapes (ragged, wrong width, an index past the end) are an InvalidInputError here, naming the
+    problem."""
+    try:
+        return _scene_from_arrays(positions, masses, velocities, springs, spring_stiffness, tets, tet_stiffness,
+                                  triangles, pinned, pin_stiffness, gravity, name)
+    except (ValueError, TypeError, IndexError) as e:
+        raise InvalidInputError(f"scene_from_arrays: {e}") from e
+
+
+def _scene_from_arrays(positions, masses, velocities, springs, spring_stiffness, tets, tet_stiffness, triangles,
+                       pinned, pin_stiffness, gravity, name):
     x = np.asarray(positions, dtype=np.float64)
+    if x.ndim != 2 or x.shape[1] != 3:
+        raise ValueError(f"positions have shape {x.shape}, expected (n, 3)")
     scene = Scene()
     scene.name = name
     scene.positions = x

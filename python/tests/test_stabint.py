@@ -117,6 +117,15 @@ def test_a_bad_scene_raises_invalid_input_naming_the_element():
         stabint.Simulator(scene)
 
 
+def test_arrays_numpy_cannot_read_raise_invalid_input():
+    with pytest.raises(stabint.InvalidInputError, match="expected \\(n, 3\\)"):
+        stabint.scene_from_arrays([[0, 0], [1, 0]], 1.0)
+    with pytest.raises(stabint.InvalidInputError, match="scene_from_arrays"):
+        stabint.scene_from_arrays([[0, 0, 0], [1, 0]], 1.0)  # ragged
+    with pytest.raises(stabint.InvalidInputError, match="scene_from_arrays"):
+        stabint.scene_from_arrays([[0, 0, 0], [1, 0, 0]], 1.0, pinned=[5])  # past the end
+
+
 def test_file_errors_carry_file_and_line(tmp_path):
     with pytest.raises(stabint.FileFormatError) as missing:
         stabint.load_scene_file(str(tmp_path / "none.json"))

@@ -96,6 +96,7 @@ static void test_bad_options_are_reported(void) {
 
   stabint_simulator_options_default(&options);
   options.time_step = -0.1;
+  sim = (stabint_simulator*)&options; /* a stale value: a failed create sets it to NULL */
   CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_INVALID_INPUT);
   CHECK(sim == NULL);
   CHECK(stabint_last_error_status() == STABINT_INVALID_INPUT);

@@ -331,6 +331,15 @@ TEST_F(EventsTest, BadEventsNameTheirPath) {
   expectError(R"([{"frame": 1, "elements": {"kind": "springs", "indices": [0]}}])", "needs stiffness, enabled or both");
   expectError(R"([{"frame": 1, "grab": {"vertex": 1, "stiffness": 1}, "release": 1}])", "exactly one of");
   expectError(R"([{"frame": 1, "teleport": {}}])", "events[0]: unknown field 'teleport'");
+  // Values beyond 1e150 (the rule of every per-frame input) are refused at load, naming the event.
+  expectError(R"([{"frame": 4, "grab": {"vertex": 3, "stiffness": 1, "path": [[6, 0, 1e300, 0]]}}])",
+              "events[0].grab.path[0][2]: 1e+300 exceeds 1e150");
+  expectError(R"([{"frame": 1, "grab": {"vertex": 3, "stiffness": 1e300}}])",
+              "events[0].grab.stiffness: 1e+300 exceeds 1e150");
+  expectError(R"([{"frame": 1, "impulse": {"vertices": [1], "velocity": [0, -1e300, 0]}}])",
+              "events[0].impulse.velocity[1]: -1e+300 exceeds 1e150");
+  expectError(R"([{"frame": 1, "elements": {"kind": "springs", "indices": [0], "stiffness": 1e200}}])",
+              "events[0].elements.stiffness: 1e+200 exceeds 1e150");
   expectError(R"([{"frame": 1, "grab": {"id": "a", "vertex": 1, "stiffness": 1}},
                   {"frame": 2, "grab": {"id": "a", "vertex": 2, "stiffness": 1}}])",
               "grab id 'a' is used twice");

@@ -108,6 +108,19 @@ class Field {
     if (!std::isfinite(x)) fail("expected a finite number");
     return x;
   }
+  // An event's value (keyframe, grab or element stiffness, impulse, collider velocity): the rule
+  // of per-frame input, finite and at most 1e150, checked at load so that the file and the event
+  // are named, not when the event is played.
+  double eventValue() const {
+    const double x = number();
+    if (!(std::abs(x) <= validation::kMaxMagnitude)) fail(text(x) + " exceeds 1e150 in magnitude");
+    return x;
+  }
+  Eigen::Vector3d eventVector() const {
+    if (!value_->is_array() || value_->size() != 3)
+      fail("expected an array of 3 numbers [x, y, z], got " + shortDump());
+    return Eigen::Vector3d((*this)[0].eventValue(), (*this)[1].eventValue(), (*this)[2].eventValue());
+  }
   double nonNegative() const {
     const double x = number();
     if (x < 0.0) fail("must be >= 0, got " + text(x));
@@ -1107,7 +1120,7 @@ std::vector<PathKey> readPath(const Field& path, int frame, const char* owner) {
       key[0].fail("keyframe frame " + std::to_string(k.frame) + " must be after " + std::to_string(last) +
                   (i == 0 ? " (" + std::string(owner) + " frame)" : std::string(" (the previous keyframe's)")));
     last = k.frame;
-    k.position = Eigen::Vector3d(key[1].number(), key[2].number(), key[3].number());
+    k.position = Eigen::Vector3d(key[1].eventValue(), key[2].eventValue(), key[3].eventValue());
     keys.push_back(k);
   }
   return keys;
@@ -1118,7 +1131,9 @@ GrabEvent readGrab(const Field& f, const Scene& s, int frame) {
   GrabEvent g;
   if (auto id = f.find("id")) g.id = id->string();
   g.vertex = f.member("vertex").particle(s.numParticles());
-  g.stiffness = f.member("stiffness").positive();
+  const Field stiffness = f.member("stiffness");
+  g.stiffness = stiffness.positive();
+  stiffness.eventValue();
   if (auto path = f.find("path")) g.path = readPath(*path, frame, "the grab's");
   return g;
 }
@@ -1144,7 +1159,7 @@ ImpulseEvent readImpulse(const Field& f, const Scene& s) {
   if (!list && !where) f.fail("needs vertices or where");
   im.vertices = list ? list->particles(s.numParticles()) : selectWhere(*where, s);
   if (im.vertices.empty()) list->fail("lists no vertex");
-  im.velocity = f.member("velocity").vector3();
+  im.velocity = f.member("velocity").eventVector();
   return im;
 }
 
@@ -1167,7 +1182,7 @@ ElementEvent readElements(const Field& f, const Scene& s) {
     e.indices.push_back(index);
   }
   if (e.indices.empty()) indices.fail("lists no element");
-  if (auto k = f.find("stiffness")) e.stiffness = k->nonNegative();
+  if (auto k = f.find("stiffness")) e.stiffness = (k->eventValue(), k->nonNegative());
   if (auto on = f.find("enabled")) {
     if (!on->value().is_boolean()) on->fail(std::string("expected true or false, got ") + on->value().type_name());
     e.enabled = on->value().get<bool>();
@@ -1192,7 +1207,7 @@ ColliderEvent readColliderEvent(const Field& f, const Scene& s, int frame) {
     c.path = readPath(*path, frame, "the event's");
     if (c.path.empty()) path->fail("lists no keyframe");
   } else {
-    c.velocity = velocity->vector3();
+    c.velocity = velocity->eventVector();
   }
   return c;
 }

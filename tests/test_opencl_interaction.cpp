@@ -7,6 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <string>
+
 namespace stabint {
 namespace {
 
@@ -174,6 +177,40 @@ TEST(OpenCLInteraction, CheckpointsContinueBitForBit) {
       other.restore(c);
       EXPECT_EQ(d.run(other, 10), original) << integratorName(integrator) << " " << testing::precisionName(precision);
     }
+  }
+}
+
+// On a float device per-frame values are bounded by validation::kMaxMagnitudeFloat (1e15), not
+// 1e150: a pin target of 1e20 or velocities of 1e100 used to overflow the device, after which
+// every step was refused. They are refused, the simulator unchanged; a double device takes 1e20.
+TEST(OpenCLInteraction, FloatDevicesRefuseValuesBeyondTheirRange) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Float);
+  const DrivenCloth d = drivenCloth(Integrator::BackwardEuler);
+  SimulatorOptions o = d.options;
+  o.backend = BackendKind::OpenCL;
+  o.opencl = testing::openclOptions(Precision::Float);
+  Simulator sim(d.scene, o);
+  sim.step();
+  const Eigen::MatrixX3d x = sim.positions();
+  auto refused = [&](const std::function<void()>& call, const std::string& names) {
+    try {
+      call();
+      ADD_FAILURE() << "accepted: " << names;
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+    }
+  };
+  refused([&] { sim.setPinTarget(0, Eigen::Vector3d(1e20, 0.0, 0.0)); }, "the limit of a float device");
+  Eigen::MatrixX3d fast = Eigen::MatrixX3d::Zero(x.rows(), 3);
+  fast(2, 1) = 1e100;
+  refused([&] { sim.setVelocities(fast); }, "velocities: row 2");
+  EXPECT_EQ(sim.positions(), x);
+  EXPECT_NO_THROW(sim.step());
+  SimulatorOptions in_double = o;
+  in_double.opencl = testing::openclOptions(Precision::Double);
+  if (testing::openclSkipReason(Precision::Double).empty()) {
+    Simulator wide(d.scene, in_double);
+    EXPECT_NO_THROW(wide.setPinTarget(0, Eigen::Vector3d(1e20, 0.0, 0.0)));
   }
 }
 

@@ -1,5 +1,7 @@
 #include "integrator/backend_choice.hpp"
 
+#include "scene/validation.hpp"
+
 #include "cpu/cpu_backend.hpp"
 #include "opencl/opencl_backend.hpp"
 
@@ -38,6 +40,12 @@ BackendSelection selectBackend(const SimulatorOptions& o) {
 std::unique_ptr<Backend> makeBackend(const SceneData& scene, int num_slots, const BackendSelection& selection) {
   return selection.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, num_slots, selection.opencl)
                                                : makeCpuBackend(scene, num_slots);
+}
+
+double inputLimit(const BackendSelection& selection) {
+  return selection.kind == BackendKind::OpenCL && selection.opencl.precision == Precision::Float
+             ? validation::kMaxMagnitudeFloat
+             : validation::kMaxMagnitude;
 }
 
 }  // namespace stabint

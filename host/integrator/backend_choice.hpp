@@ -17,6 +17,10 @@ struct BackendSelection {
   std::string reason;  // for backendDescription(); empty unless Auto chose
 };
 
+/// The bound of per-frame input values on the selected backend: validation::kMaxMagnitude, or
+/// validation::kMaxMagnitudeFloat on an OpenCL device in float.
+double inputLimit(const BackendSelection& selection);
+
 /// The backend `o` asks for; for BackendKind::Auto, the first GPU of `devices` (with fp64 when
 /// `o.opencl.precision` is Double), else the CPU reference.
 BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<OpenCLDeviceInfo>& devices);

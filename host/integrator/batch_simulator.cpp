@@ -102,8 +102,9 @@ void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions
   checkScene(scene, "setState");
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const std::string where = "setState: scene " + std::to_string(scene) + ": ";
-  validation::checkInputRows(positions, seg.num_particles, where + "positions");
-  validation::checkInputRows(velocities, seg.num_particles, where + "velocities");
+  const double limit = inputLimit(choice_);
+  validation::checkInputRows(positions, seg.num_particles, where + "positions", limit);
+  validation::checkInputRows(velocities, seg.num_particles, where + "velocities", limit);
   if (options_.integrator == Integrator::BDF2)
     throw InvalidInputError(where +
                             "BDF2 would restart every scene of the batch with a BE step; not supported in a batch yet");
@@ -142,7 +143,7 @@ void BatchSimulator::Impl::setPinTarget(int scene, int pin, const Eigen::Vector3
   if (pin < 0 || pin >= seg.num_elements[type])
     throw InvalidInputError(where + " out of range (the scene has " + std::to_string(seg.num_elements[type]) +
                             " pins)");
-  validation::checkInputVector(q, where + ": target");
+  validation::checkInputVector(q, where + ": target", inputLimit(choice_));
   data_.rampPinTarget(seg.first_element[type] + pin, q, t_, t_ + options_.time_step);
 }
 

@@ -261,8 +261,9 @@ struct Simulator::Impl {
 
   // ---- per-frame input (docs/method.md, "Per-frame input") ------------------------------------
   void checkState(const Eigen::MatrixX3d& m, const char* field) const {
-    validation::checkInputRows(m, scene.numParticles(), field);
+    validation::checkInputRows(m, scene.numParticles(), field, inputLimit());
   }
+  double inputLimit() const { return stabint::inputLimit(choice); }
 
   void checkPin(int pin) const {
     const int pins = static_cast<int>(scene.scene().pins.size());
@@ -273,7 +274,7 @@ struct Simulator::Impl {
 
   void setPinTarget(int pin, const Eigen::Vector3d& q) {
     checkPin(pin);
-    validation::checkInputVector(q, "pin " + std::to_string(pin) + ": target");
+    validation::checkInputVector(q, "pin " + std::to_string(pin) + ": target", inputLimit());
     scene.rampPinTarget(pin, q, t, t + options.time_step);
   }
 

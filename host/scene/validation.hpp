@@ -78,25 +78,33 @@ inline void checkFinite(double x, const Owner& owner, const char* field) {
   if (!(std::abs(x) <= kMaxMagnitude)) invalid(owner, ": ", field, " ", x, " exceeds ", kMaxMagnitude, " in magnitude");
 }
 
+/// The same bound on a device that computes in float: its squares (1e30) times a stiffness or a
+/// mass of up to 1e8 stay within float's 3.4e38. Beyond it a per-frame value (setPinTarget at
+/// 1e150, setVelocities at 1e100) overflowed the device and every later step was refused.
+constexpr double kMaxMagnitudeFloat = 1e15;
+
 /// Per-frame input (positions, velocities, external forces of a running simulation): `expected`
-/// rows, each finite and at most kMaxMagnitude in magnitude, the rule a scene's values obey.
-/// `what` prefixes the message ("setState: scene 2: positions").
-inline void checkInputRows(const Eigen::MatrixX3d& m, long expected, const std::string& what) {
+/// rows, each finite and at most `limit` (kMaxMagnitude, or kMaxMagnitudeFloat on a float
+/// device) in magnitude. `what` prefixes the message ("setState: scene 2: positions").
+inline void checkInputRows(const Eigen::MatrixX3d& m, long expected, const std::string& what,
+                           double limit = kMaxMagnitude) {
   if (m.rows() != expected)
     throw InvalidInputError(cat(what, ": ", m.rows(), " rows, expected one per particle (", expected, ")"));
   for (Eigen::Index j = 0; j < m.rows(); ++j) {
     const Eigen::Vector3d row = m.row(j).transpose();
     if (!row.allFinite()) throw InvalidInputError(cat(what, ": row ", j, " is not finite"));
-    if (!(row.cwiseAbs().maxCoeff() <= kMaxMagnitude))
-      throw InvalidInputError(cat(what, ": row ", j, " ", vec(row), " exceeds ", kMaxMagnitude, " in magnitude"));
+    if (!(row.cwiseAbs().maxCoeff() <= limit))
+      throw InvalidInputError(cat(what, ": row ", j, " ", vec(row), " exceeds ", limit, " in magnitude",
+                                  limit < kMaxMagnitude ? " (the limit of a float device)" : ""));
   }
 }
 
-/// A per-frame vector (a pin's target): finite and at most kMaxMagnitude in magnitude.
-inline void checkInputVector(const Eigen::Vector3d& v, const std::string& what) {
+/// A per-frame vector (a pin's target): finite and at most `limit` in magnitude.
+inline void checkInputVector(const Eigen::Vector3d& v, const std::string& what, double limit = kMaxMagnitude) {
   if (!v.allFinite()) throw InvalidInputError(cat(what, " is not finite"));
-  if (!(v.cwiseAbs().maxCoeff() <= kMaxMagnitude))
-    throw InvalidInputError(cat(what, " ", vec(v), " exceeds ", kMaxMagnitude, " in magnitude"));
+  if (!(v.cwiseAbs().maxCoeff() <= limit))
+    throw InvalidInputError(cat(what, " ", vec(v), " exceeds ", limit, " in magnitude",
+                                limit < kMaxMagnitude ? " (the limit of a float device)" : ""));
 }
 
 /// Each of `count` vertices `vertices[k]` (field "vertices[k]") in range and no particle twice.

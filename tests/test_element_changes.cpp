@@ -4,6 +4,8 @@
 // carry the stiffnesses and flags.
 #include <stabint/stabint.hpp>
 
+#include "../fuzz/checkpoint_properties.hpp"
+#include "cloth_and_twin.hpp"
 #include "temp_dir_test.hpp"
 #include "triangle_cloth_scene.hpp"
 
@@ -228,22 +230,11 @@ namespace {
 // scene and refactors (GlobalSystem::changeIsHuge), so the simulator then steps as a twin that
 // never saw it, to the round-off of a fresh factorization.
 TEST(ElementChanges, AHugeStiffnessAndBackLeaveAWorkingSimulator) {
-  ClothGridParams p;
-  p.nx = p.ny = 6;
-  const Scene cloth = makeClothGrid(p);
-  SimulatorOptions o;
-  o.integrator = Integrator::BackwardEuler;
-  Simulator sim(cloth, o), twin(cloth, o);
-  sim.step();
-  twin.step();
-  sim.setElementStiffness(ElementKind::Spring, 0, 1e140);
-  sim.setElementStiffness(ElementKind::Spring, 0, cloth.springs[0].stiffness);
-  for (int i = 0; i < 10; ++i) {
-    sim.step();
-    twin.step();
-  }
-  const double size = (cloth.positions.colwise().maxCoeff() - cloth.positions.colwise().minCoeff()).norm();
-  EXPECT_LE((sim.positions() - twin.positions()).cwiseAbs().maxCoeff(), 1e-9 * size);
+  testing::ClothAndTwin c(1);
+  c.sim.setElementStiffness(ElementKind::Spring, 0, 1e140);
+  c.sim.setElementStiffness(ElementKind::Spring, 0, c.cloth.springs[0].stiffness);
+  c.both(10);
+  EXPECT_LE((c.sim.positions() - c.twin.positions()).cwiseAbs().maxCoeff(), 1e-9 * c.size());
 }
 
 // A stiffness whose system does not factor (1e150 N/m against a 0.25 g particle: c m is lost in
@@ -251,71 +242,43 @@ TEST(ElementChanges, AHugeStiffnessAndBackLeaveAWorkingSimulator) {
 // refusal changes nothing: the simulator then steps as an untouched twin, bit for bit (L and the
 // factors are rebuilt from the same weights as at construction).
 TEST(ElementChanges, AStiffnessThatCannotFactorIsRefusedAndChangesNothing) {
-  ClothGridParams p;
-  p.nx = p.ny = 6;
-  const Scene cloth = makeClothGrid(p);
-  SimulatorOptions o;
-  o.integrator = Integrator::BackwardEuler;
-  Simulator sim(cloth, o), twin(cloth, o);
-  sim.step();
-  twin.step();
+  testing::ClothAndTwin c(1);
   try {
-    sim.setElementStiffness(ElementKind::Spring, 0, 1e150);
+    c.sim.setElementStiffness(ElementKind::Spring, 0, 1e150);
     ADD_FAILURE() << "a stiffness of 1e150 accepted";
   } catch (const InvalidInputError& e) {
     EXPECT_NE(std::string(e.what()).find("not numerically positive definite"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(sim.scene().springs[0].stiffness, cloth.springs[0].stiffness);
-  EXPECT_EQ(sim.target(), twin.target());
-  for (int i = 0; i < 5; ++i) {
-    sim.step();
-    twin.step();
-  }
-  EXPECT_EQ(sim.positions(), twin.positions());
+  EXPECT_EQ(c.sim.scene().springs[0].stiffness, c.cloth.springs[0].stiffness);
+  EXPECT_EQ(c.sim.target(), c.twin.target());
+  c.both(5);
+  EXPECT_EQ(c.sim.positions(), c.twin.positions());
 }
 
 // The same stiffness arriving through a checkpoint (its bytes changed and re-signed, as a file
 // edited by hand would be): the restore is refused and the simulator keeps its state, stepping as
 // an untouched twin bit for bit.
 TEST(ElementChanges, ARestoreThatCannotFactorIsRefusedAndChangesNothing) {
-  ClothGridParams p;
-  p.nx = p.ny = 6;
-  const Scene cloth = makeClothGrid(p);
-  SimulatorOptions o;
-  o.integrator = Integrator::BackwardEuler;
-  Simulator source(cloth, o);
+  Simulator source(testing::ClothAndTwin::scene(), testing::ClothAndTwin::options());
   const double marker = 1234.5678;  // a stiffness to find in the bytes
   source.setElementStiffness(ElementKind::Spring, 0, marker);
   std::string bytes = source.checkpoint().bytes();
-  const std::string pattern(reinterpret_cast<const char*>(&marker), sizeof marker);
-  const std::size_t at = bytes.find(pattern);
+  const std::size_t at = bytes.find(std::string(reinterpret_cast<const char*>(&marker), sizeof marker));
   ASSERT_NE(at, std::string::npos);
   const double huge = 1e150;
   std::memcpy(&bytes[at], &huge, sizeof huge);
-  std::uint64_t hash = 14695981039346656037ull;  // FNV-1a 64 over all but the last 8 bytes
-  for (std::size_t i = 0; i + 8 < bytes.size(); ++i) {
-    hash ^= static_cast<unsigned char>(bytes[i]);
-    hash *= 1099511628211ull;
-  }
-  std::memcpy(&bytes[bytes.size() - 8], &hash, sizeof hash);
+  checkpoint_properties::resign(bytes);
   const Checkpoint bad = Checkpoint::fromBytes(bytes, "edited");
 
-  Simulator sim(cloth, o), twin(cloth, o);
-  for (int i = 0; i < 3; ++i) {
-    sim.step();
-    twin.step();
-  }
-  EXPECT_THROW(sim.restore(bad), InvalidInputError);
-  EXPECT_EQ(sim.stepCount(), 3);
-  EXPECT_EQ(sim.time(), twin.time());
-  EXPECT_EQ(sim.target(), twin.target());
-  EXPECT_EQ(sim.scene().springs[0].stiffness, cloth.springs[0].stiffness);
-  for (int i = 0; i < 5; ++i) {
-    sim.step();
-    twin.step();
-  }
-  EXPECT_EQ(sim.positions(), twin.positions());
-  EXPECT_EQ(sim.velocities(), twin.velocities());
+  testing::ClothAndTwin c(3);
+  EXPECT_THROW(c.sim.restore(bad), InvalidInputError);
+  EXPECT_EQ(c.sim.stepCount(), 3);
+  EXPECT_EQ(c.sim.time(), c.twin.time());
+  EXPECT_EQ(c.sim.target(), c.twin.target());
+  EXPECT_EQ(c.sim.scene().springs[0].stiffness, c.cloth.springs[0].stiffness);
+  c.both(5);
+  EXPECT_EQ(c.sim.positions(), c.twin.positions());
+  EXPECT_EQ(c.sim.velocities(), c.twin.velocities());
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // jump they cause, rejected calls change nothing, and checkpoints continue bit for bit.
 #include <stabint/stabint.hpp>
 
+#include "../fuzz/checkpoint_properties.hpp"
+#include "cloth_and_twin.hpp"
 #include "driven_cloth.hpp"
 #include "temp_dir_test.hpp"
 
@@ -334,27 +336,16 @@ TEST(Interaction, GrabAndReleaseMatchScenesBuiltThatWay) {
 // restoring a checkpoint taken before the grab, the simulator steps as a twin that never grabbed,
 // to the round-off of a fresh factorization. Stiffnesses beyond 1e150 are refused.
 TEST(Interaction, AHugeGrabAndItsReleaseLeaveAWorkingSimulator) {
-  ClothGridParams p;
-  p.nx = p.ny = 7;
-  const Scene cloth = makeClothGrid(p);
-  SimulatorOptions o;
-  o.integrator = Integrator::BackwardEuler;
-  Simulator sim(cloth, o), twin(cloth, o);
-  sim.step();
-  twin.step();
-  const Checkpoint before = sim.checkpoint();
-  EXPECT_THROW(sim.grab(3, 1e151), InvalidInputError);
-  const int handle = sim.grab(3, 1e140);
-  for (int i = 0; i < 3; ++i) sim.step();
-  sim.release(handle);
-  for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(sim.step());
-  sim.restore(before);
-  for (int i = 0; i < 10; ++i) {
-    sim.step();
-    twin.step();
-  }
-  const double size = (cloth.positions.colwise().maxCoeff() - cloth.positions.colwise().minCoeff()).norm();
-  EXPECT_LE((sim.positions() - twin.positions()).cwiseAbs().maxCoeff(), 1e-9 * size);
+  testing::ClothAndTwin c(1, 7);
+  const Checkpoint before = c.sim.checkpoint();
+  EXPECT_THROW(c.sim.grab(3, 1e151), InvalidInputError);
+  const int handle = c.sim.grab(3, 1e140);
+  for (int i = 0; i < 3; ++i) c.sim.step();
+  c.sim.release(handle);
+  for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(c.sim.step());
+  c.sim.restore(before);
+  c.both(10);
+  EXPECT_LE((c.sim.positions() - c.twin.positions()).cwiseAbs().maxCoeff(), 1e-9 * c.size());
 }
 
 TEST(Interaction, BadGrabAndReleaseChangeNothing) {
@@ -480,12 +471,7 @@ TEST_F(CheckpointTest, BadCheckpointsAreNamedErrorsAndChangeNothing) {
   auto signedWith = [&](std::size_t offset, const auto& value) {
     std::string bytes = c.bytes();
     std::memcpy(&bytes[offset], &value, sizeof(value));
-    std::uint64_t hash = 14695981039346656037ull;
-    for (std::size_t i = 0; i + 8 < bytes.size(); ++i) {
-      hash ^= static_cast<unsigned char>(bytes[i]);
-      hash *= 1099511628211ull;
-    }
-    std::memcpy(&bytes[bytes.size() - 8], &hash, sizeof(hash));
+    checkpoint_properties::resign(bytes);
     return bytes;
   };
   // Header 8, version 4, fingerprint 8, particle and pin counts 8 each: the time at 36, the step

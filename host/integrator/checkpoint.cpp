@@ -1,6 +1,7 @@
 #include "integrator/checkpoint.hpp"
 
 #include "io/text_reader.hpp"
+#include "out_of_memory.hpp"
 #include "scene/validation.hpp"
 
 #include <stabint/simulator.hpp>
@@ -354,7 +355,8 @@ CheckpointData parseCheckpoint(const std::string& all_bytes, const std::string& 
 }
 
 Checkpoint Checkpoint::fromBytes(std::string bytes, const std::string& origin) {
-  const CheckpointData d = parseCheckpoint(bytes, origin);
+  const CheckpointData d =
+      reportingOutOfMemory("Checkpoint::fromBytes", [&] { return parseCheckpoint(bytes, origin); });
   Checkpoint c;
   c.bytes_ = std::move(bytes);
   c.time_ = d.time;

@@ -1,5 +1,6 @@
 // Medit .mesh reader (ASCII; the format of Gmsh's and TetGen's -g output). The format is free:
 // a keyword and its count may share a line or not, so it is read as a token stream.
+#include "out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
 #include "scene/validation.hpp"
@@ -60,7 +61,7 @@ std::vector<io::TetRecord> readTetrahedra(io::TextReader& in, int num_vertices) 
 
 }  // namespace
 
-Scene loadMedit(const std::string& path, const SolidMaterial& material) {
+static Scene loadMeditUnguarded(const std::string& path, const SolidMaterial& material) {
   validation::checkDensity(material.density, "SolidMaterial density");
   io::TextReader in(path);
   io::VertexLines lines{path, "vertex", 1, {}};
@@ -93,6 +94,10 @@ Scene loadMedit(const std::string& path, const SolidMaterial& material) {
   if (!vertices) in.fail("no Vertices section");
   if (!tets) in.fail("no Tetrahedra section");
   return io::solidSceneFromMesh(io::sceneNameFromPath(path), path, lines, *vertices, std::move(*tets), material);
+}
+
+Scene loadMedit(const std::string& path, const SolidMaterial& material) {
+  return reportingOutOfMemory("loadMedit", [&] { return loadMeditUnguarded(path, material); });
 }
 
 }  // namespace stabint

@@ -1,5 +1,6 @@
 // Wavefront OBJ reader for cloth: only `v` and `f` matter; texture coordinates, normals, groups
 // and materials are skipped.
+#include "out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
 #include "scene/lumping.hpp"
@@ -113,7 +114,7 @@ Fan fanTriangles(const std::string& file, const std::vector<Face>& faces, const 
 
 }  // namespace
 
-Scene loadObjCloth(const std::string& path, const ClothMaterial& material) {
+static Scene loadObjClothUnguarded(const std::string& path, const ClothMaterial& material) {
   validation::checkDensity(material.areal_density, "ClothMaterial areal_density");
   io::TextReader in(path);
   io::VertexLines lines{path, "vertex", 1, {}};
@@ -153,6 +154,10 @@ Scene loadObjCloth(const std::string& path, const ClothMaterial& material) {
     s.springs = clothSpringsFromTriangles(x, s.triangles, material.stretch_stiffness, material.bend_stiffness);
   }
   return s;
+}
+
+Scene loadObjCloth(const std::string& path, const ClothMaterial& material) {
+  return reportingOutOfMemory("loadObjCloth", [&] { return loadObjClothUnguarded(path, material); });
 }
 
 }  // namespace stabint

@@ -1,4 +1,5 @@
 // TetGen .node/.ele reader (https://wias-berlin.de/software/tetgen/fformats.html).
+#include "out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
 #include "scene/validation.hpp"
@@ -92,13 +93,17 @@ std::string stripTetGenExtension(const std::string& path) {
 
 }  // namespace
 
-Scene loadTetGen(const std::string& base_path, const SolidMaterial& material) {
+static Scene loadTetGenUnguarded(const std::string& base_path, const SolidMaterial& material) {
   validation::checkDensity(material.density, "SolidMaterial density");
   const std::string base = stripTetGenExtension(base_path);
   const Nodes nodes = readNodes(base + ".node");
   const std::string ele = base + ".ele";
   return io::solidSceneFromMesh(io::sceneNameFromPath(base), ele, nodes.lines, nodes.positions,
                                 readElements(ele, nodes), material);
+}
+
+Scene loadTetGen(const std::string& base_path, const SolidMaterial& material) {
+  return reportingOutOfMemory("loadTetGen", [&] { return loadTetGenUnguarded(base_path, material); });
 }
 
 }  // namespace stabint

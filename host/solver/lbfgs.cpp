@@ -107,6 +107,60 @@ void LocalGlobalSolver::applyInitialInverseHessian(double c, const IterationCont
   backend_.times().global += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// Backtracking line search from x_cur_ along direction_, per segment: the full step where
+// f(x + a d) <= f(x) + kArmijo a g.d up to round-off of the objective (two backends that agree to
+// round-off must take the same decisions), else halved up to kMaxHalvings times. A segment whose
+// slope is not negative takes no step (step 0); one that finds no decrease stays (step != 0).
+// Leaves x_trial_, slot x and rhs_ at the kept positions, their objectives in `trial_objective`
+// and the segments that moved in moved_.
+void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const IterationControl& control,
+                                   const std::vector<double>& objective, const std::vector<double>& slope,
+                                   std::vector<double>& step, std::vector<double>& trial_objective) {
+  const std::size_t segments = rows_.size();
+  step.resize(segments);
+  accepted_.assign(segments, 0);
+  moved_.assign(segments, 0);
+  for (std::size_t s = 0; s < segments; ++s) {
+    step[s] = slope[s] < 0.0 ? 1.0 : 0.0;
+    accepted_[s] = step[s] == 0.0;
+  }
+  auto rowsOf = [&](Eigen::MatrixX3d& m, std::size_t s) { return m.middleRows(rows_[s].first, rows_[s].count); };
+  for (int halving = 0; halving <= kMaxHalvings; ++halving) {
+    bool any_trial = false;
+    for (std::size_t s = 0; s < segments; ++s) {
+      if (accepted_[s]) continue;
+      rowsOf(x_trial_, s) = rowsOf(x_cur_, s) + step[s] * rowsOf(direction_, s);
+      any_trial = true;
+    }
+    if (!any_trial) break;
+    backend_.roundToStorage(x_trial_);
+    backend_.write(x, x_trial_);
+    localStepObjectives(c, y, x, t, trial_objective);
+    for (std::size_t s = 0; s < segments; ++s) {
+      if (accepted_[s]) continue;
+      const double scale = segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
+      const double noise = 1e-12 * std::max(std::abs(objective[s]), scale);
+      if (trial_objective[s] <= objective[s] + kArmijo * step[s] * slope[s] + noise) {
+        accepted_[s] = 1;
+        moved_[s] = 1;
+      } else if (halving < kMaxHalvings) {
+        step[s] *= 0.5;
+      } else {
+        accepted_[s] = 1;
+        rowsOf(x_trial_, s) = rowsOf(x_cur_, s);
+      }
+    }
+  }
+  // Slot x and rhs_ must be at the kept positions: a segment that stayed changed slot x in its
+  // trials, so one more local step at them.
+  bool any_stayed = false;
+  for (std::size_t s = 0; s < segments; ++s) any_stayed |= !moved_[s] && step[s] != 0.0;
+  if (any_stayed) {
+    backend_.write(x, x_trial_);
+    localStepObjectives(c, y, x, t, trial_objective);
+  }
+}
+
 int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const IterationControl& control,
                                   std::vector<double>* objective_history) {
   const Eigen::Index n = masses_.size();
@@ -144,10 +198,9 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   if (objective_history) objective_history->assign(1, objective[0]);
 
   int done = 0;
-  accepted_.assign(segments, 0);
-  moved_.assign(segments, 0);
   converged_.assign(segments, 0);
-  std::vector<char>&accepted = accepted_, &moved = moved_, &converged = converged_;
+  const std::vector<char>& moved = moved_;
+  std::vector<char>& converged = converged_;
   auto rowsOf = [&](Eigen::MatrixX3d& m, std::size_t s) { return m.middleRows(rows_[s].first, rows_[s].count); };
   auto forgetSegment = [&](std::size_t s) {
     for (auto& rho : history_rho_) rho[s] = 0.0;
@@ -191,53 +244,11 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
       if (all && done > 1) break;
     }
     // With positive curvature pairs H is positive definite and the direction descends; a slope
-    // >= 0 is round-off (or a converged segment): that segment takes no step this iteration.
-    for (std::size_t s = 0; s < segments; ++s) {
-      step[s] = slope[s] < 0.0 ? 1.0 : 0.0;
-      accepted[s] = step[s] == 0.0;
-      moved[s] = 0;
-      if (step[s] == 0.0) forgetSegment(s);
-    }
-
-    // Backtracking line search, per segment: f(x + a d) <= f(x) + kArmijo a g.d, up to round-off
-    // of the objective (as the accelerated loop: two backends that agree to round-off must take
-    // the same decisions).
-    for (int halving = 0; halving <= kMaxHalvings; ++halving) {
-      bool any_trial = false;
-      for (std::size_t s = 0; s < segments; ++s) {
-        if (accepted[s]) continue;
-        rowsOf(x_trial_, s) = rowsOf(x_cur_, s) + step[s] * rowsOf(direction_, s);
-        any_trial = true;
-      }
-      if (!any_trial) break;
-      backend_.roundToStorage(x_trial_);
-      backend_.write(x, x_trial_);
-      localStepObjectives(c, y, x, t, trial_objective);
-      for (std::size_t s = 0; s < segments; ++s) {
-        if (accepted[s]) continue;
-        const double scale = segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
-        const double noise = 1e-12 * std::max(std::abs(objective[s]), scale);
-        if (trial_objective[s] <= objective[s] + kArmijo * step[s] * slope[s] + noise) {
-          accepted[s] = 1;
-          moved[s] = 1;
-        } else if (halving < kMaxHalvings) {
-          step[s] *= 0.5;
-        } else {
-          // No sufficient decrease along this direction: stay, and restart from the plain step.
-          accepted[s] = 1;
-          rowsOf(x_trial_, s) = rowsOf(x_cur_, s);
-          forgetSegment(s);
-        }
-      }
-    }
-    // Slot x and rhs_ must be at the iterate the loop continues from. A segment that stayed
-    // changed slot x in its trials: one more local step at the kept positions.
-    bool any_stayed = false;
-    for (std::size_t s = 0; s < segments; ++s) any_stayed |= !moved[s] && step[s] != 0.0;
-    if (any_stayed) {
-      backend_.write(x, x_trial_);
-      localStepObjectives(c, y, x, t, trial_objective);
-    }
+    // >= 0 is round-off (or a converged segment). A segment that does not move restarts from the
+    // plain step.
+    lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
+    for (std::size_t s = 0; s < segments; ++s)
+      if (!moved_[s]) forgetSegment(s);
 
     // The curvature pair of the step: s = x_new - x, y = g_new - g, kept where s.y > 0.
     const int slot = (newest + 1) % window;

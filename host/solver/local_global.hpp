@@ -82,6 +82,9 @@ class LocalGlobalSolver {
   int solveLbfgs(double c, int y, int x, double t, const IterationControl& control,
                  std::vector<double>* objective_history);
   void localStepObjectives(double c, int y, int x, double t, std::vector<double>& objective);
+  void lineSearch(double c, int y, int x, double t, const IterationControl& control,
+                  const std::vector<double>& objective, const std::vector<double>& slope, std::vector<double>& step,
+                  std::vector<double>& trial_objective);
   void gradientAtTrial(double c, Eigen::MatrixX3d& g) const;
   void applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
                                   Eigen::MatrixX3d& r);

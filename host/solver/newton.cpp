@@ -5,8 +5,8 @@
 // H <= K_c, so the conjugate gradients on H d = -g preconditioned with the prefactored K_c^-1 start
 // from the plain step's direction and capture the modes where the springs' true stiffness is far
 // below K_c's (a pinned cloth's swing, transverse to taut springs) in a few iterations. Each CG
-// iteration is one solve with the factor and one product with H; a backtracking line search keeps
-// the objective from rising, as L-BFGS's.
+// iteration is one solve with the factor and one product with H; L-BFGS's backtracking line
+// search (lineSearch) keeps the objective from rising.
 #include "elements/element_type.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/local_global.hpp"
@@ -19,8 +19,6 @@
 namespace stabint {
 
 namespace {
-constexpr double kArmijo = 1e-4;
-constexpr int kMaxHalvings = 4;
 // Inexact Newton: CG stops once the residual's K_c^-1 norm has fallen to this fraction of the
 // gradient's, or when the step's share of the iteration budget is spent.
 constexpr double kForcing = 0.05;
@@ -61,14 +59,14 @@ void LocalGlobalSolver::hessianTimes(double c, const Eigen::MatrixX3d& v, Eigen:
 int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const IterationControl& control,
                                    std::vector<double>* objective_history) {
   const Eigen::Index n = masses_.size();
-  if (rows_.empty()) rows_.push_back({0, static_cast<int>(n)});
+  if (rows_.empty()) rows_.push_back({0, static_cast<int>(n)});  // one system: batches refuse Newton-CG
   const bool to_tolerance = control.tolerance > 0.0;
   const int limit = to_tolerance ? control.max_iterations : control.iterations;
   backend_.read(y, y_host_);
   backend_.read(x, x_trial_);
   x_cur_ = x_trial_;
-  std::vector<double>& objective = scalars_[0];
-  std::vector<double>& trial_objective = scalars_[1];
+  std::vector<double>&objective = scalars_[0], &trial_objective = scalars_[1], &slope = scalars_[2],
+  &step = scalars_[6];
   localStepObjectives(c, y, x, t, objective);
   gradientAtTrial(c, gradient_);
   if (objective_history) objective_history->assign(1, objective[0]);
@@ -99,28 +97,10 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
       cg_p_ = cg_z_ + (rz_new / rz) * cg_p_;
       rz = rz_new;
     }
-    const double slope = dot(gradient_, direction_);
-    if (!(slope < 0.0)) break;
-
-    double step = 1.0;
-    bool moved = false;
-    for (int halving = 0; halving <= kMaxHalvings; ++halving) {
-      x_trial_ = x_cur_ + step * direction_;
-      backend_.roundToStorage(x_trial_);
-      backend_.write(x, x_trial_);
-      localStepObjectives(c, y, x, t, trial_objective);
-      const double noise = 1e-12 * std::max(std::abs(objective[0]), control.energy_scale);
-      if (trial_objective[0] <= objective[0] + kArmijo * step * slope + noise) {
-        moved = true;
-        break;
-      }
-      step *= 0.5;
-    }
-    if (!moved) {
-      // No decrease along the Newton direction: stay (slot x and rhs_ back at x_cur_).
-      x_trial_ = x_cur_;
-      backend_.write(x, x_trial_);
-      localStepObjectives(c, y, x, t, trial_objective);
+    segmentDots(gradient_, direction_, slope);
+    lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
+    if (!moved_[0]) {
+      // No decrease along the Newton direction: the solve stays at the accepted iterate.
       if (objective_history) objective_history->push_back(objective[0]);
       break;
     }

@@ -26,15 +26,17 @@ constexpr std::uint32_t kFirstChecksummedVersion = 4;
 // Steps a restored simulator may still take before its int step count would overflow.
 constexpr std::int64_t kMostSteps = std::int64_t(1) << 30;
 
-// FNV-1a, 64 bits, over a byte range: the checksum of version 4 and later.
-std::uint64_t checksum(const char* data, std::size_t size) {
-  std::uint64_t hash = 14695981039346656037ull;
+// FNV-1a, 64 bits: `hash` continued over `size` bytes. The scene fingerprint and the checksum of
+// version 4 and later.
+std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t hash) {
+  const auto* bytes = static_cast<const unsigned char*>(data);
   for (std::size_t i = 0; i < size; ++i) {
-    hash ^= static_cast<unsigned char>(data[i]);
+    hash ^= bytes[i];
     hash *= 1099511628211ull;
   }
   return hash;
 }
+std::uint64_t checksum(const char* data, std::size_t size) { return fnv1a(data, size, 14695981039346656037ull); }
 
 class Writer {
  public:
@@ -84,12 +86,14 @@ class Writer {
 
 class Reader {
  public:
-  Reader(const std::string& bytes, const std::string& origin) : bytes_(bytes), origin_(origin) {}
+  // Reads bytes[0, end) (the payload before a checksum); end defaults to all of them.
+  Reader(const std::string& bytes, const std::string& origin, std::size_t end = std::string::npos)
+      : bytes_(bytes), origin_(origin), end_(std::min(end, bytes.size())) {}
 
   template <typename T>
   T value(const char* what) {
     static_assert(std::is_trivially_copyable_v<T>);
-    if (bytes_.size() - pos_ < sizeof(T)) fail(std::string("truncated at ") + what);
+    if (end_ - pos_ < sizeof(T)) fail(std::string("truncated at ") + what);
     T v;
     std::memcpy(&v, bytes_.data() + pos_, sizeof(T));
     pos_ += sizeof(T);
@@ -166,7 +170,7 @@ class Reader {
     return m;
   }
   void expectEnd() {
-    if (pos_ != bytes_.size()) fail(std::to_string(bytes_.size() - pos_) + " bytes after the end");
+    if (pos_ != end_) fail(std::to_string(end_ - pos_) + " bytes after the end");
   }
   [[noreturn]] void fail(const std::string& what) const {
     throw FileFormatError(origin_, 0, "not a valid stabint checkpoint: " + what);
@@ -175,6 +179,7 @@ class Reader {
  private:
   const std::string& bytes_;
   const std::string& origin_;
+  std::size_t end_;
   std::size_t pos_ = 0;
 };
 
@@ -188,13 +193,11 @@ void checkCount(Reader& in, std::int64_t count, std::size_t bytes, const char* w
 }  // namespace
 
 std::uint64_t sceneFingerprint(const Scene& scene) {
+  // The start value is one digit short of FNV's offset basis; kept, or every saved checkpoint's
+  // fingerprint would change.
   std::uint64_t hash = 1469598103934665603ull;
   auto mix = [&](const double* data, Eigen::Index count) {
-    const auto* bytes = reinterpret_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < static_cast<std::size_t>(count) * sizeof(double); ++i) {
-      hash ^= bytes[i];
-      hash *= 1099511628211ull;
-    }
+    hash = fnv1a(data, static_cast<std::size_t>(count) * sizeof(double), hash);
   };
   mix(scene.masses.data(), scene.masses.size());
   mix(scene.rest_positions.data(), scene.rest_positions.size());
@@ -266,8 +269,8 @@ std::string serializeCheckpoint(const CheckpointData& d) {
   return bytes;
 }
 
-CheckpointData parseCheckpoint(const std::string& all_bytes, const std::string& origin) {
-  Reader header(all_bytes, origin);
+CheckpointData parseCheckpoint(const std::string& bytes, const std::string& origin) {
+  Reader header(bytes, origin);
   for (char c : kMagic)
     if (header.value<char>("the header") != c) header.fail("wrong header");
   const auto version = header.value<std::uint32_t>("the version");
@@ -275,25 +278,23 @@ CheckpointData parseCheckpoint(const std::string& all_bytes, const std::string& 
     header.fail("format version " + std::to_string(version) + ", expected " + std::to_string(kOldestVersion) + " to " +
                 std::to_string(kVersion));
   // Version 4 on: the last 8 bytes are the checksum of the others, checked before any field.
-  std::string checked;
+  std::size_t payload = bytes.size();
   if (version >= kFirstChecksummedVersion) {
     std::uint64_t stored = 0;
-    if (all_bytes.size() < sizeof kMagic + sizeof version + sizeof stored) header.fail("truncated at the checksum");
-    const std::size_t payload = all_bytes.size() - sizeof stored;
-    std::memcpy(&stored, all_bytes.data() + payload, sizeof stored);
-    if (stored != checksum(all_bytes.data(), payload))
+    if (bytes.size() < sizeof kMagic + sizeof version + sizeof stored) header.fail("truncated at the checksum");
+    payload = bytes.size() - sizeof stored;
+    std::memcpy(&stored, bytes.data() + payload, sizeof stored);
+    if (stored != checksum(bytes.data(), payload))
       header.fail("the checksum does not match: the data is corrupted or was changed");
-    checked = all_bytes.substr(0, payload);
   }
-  const std::string& bytes = version >= kFirstChecksummedVersion ? checked : all_bytes;
-  Reader in(bytes, origin);
+  Reader in(bytes, origin, payload);
   for (std::size_t i = 0; i < sizeof kMagic + sizeof version; ++i) in.value<char>("the header");
   CheckpointData d;
   d.scene_fingerprint = in.value<std::uint64_t>("the scene fingerprint");
   d.particles = in.value<std::int64_t>("the particle count");
   d.pins = in.value<std::int64_t>("the pin count");
-  checkCount(in, d.particles, bytes.size(), "particle count");
-  checkCount(in, d.pins, bytes.size(), "pin count");
+  checkCount(in, d.particles, payload, "particle count");
+  checkCount(in, d.pins, payload, "pin count");
   d.time = in.real("the time");
   d.steps = in.value<std::int64_t>("the step count");
   if (d.steps < 0 || d.steps > kMostSteps)
@@ -321,7 +322,7 @@ CheckpointData parseCheckpoint(const std::string& all_bytes, const std::string& 
   if (blocks < 0 || blocks > 64) in.fail("element block count " + std::to_string(blocks) + " out of range");
   for (std::int64_t b = 0; b < blocks; ++b) {
     const auto count = in.value<std::int64_t>("an element count");
-    if (count < 0 || static_cast<std::uint64_t>(count) > bytes.size() / 9)
+    if (count < 0 || static_cast<std::uint64_t>(count) > payload / 9)
       in.fail("element count " + std::to_string(count) + " does not fit the data");
     std::vector<double> stiffness(static_cast<std::size_t>(count));
     for (double& k : stiffness) {
@@ -337,12 +338,12 @@ CheckpointData parseCheckpoint(const std::string& all_bytes, const std::string& 
     // Checked against the scene's collider count when restored (the fingerprint covers them).
     const auto colliders = in.value<std::int64_t>("the collider count");
     constexpr std::size_t kMotionBytes = 11 * sizeof(double) + 1;
-    if (colliders < 0 || static_cast<std::uint64_t>(colliders) > bytes.size() / kMotionBytes)
+    if (colliders < 0 || static_cast<std::uint64_t>(colliders) > payload / kMotionBytes)
       in.fail("collider count " + std::to_string(colliders) + " does not fit the data");
     for (std::int64_t c = 0; c < colliders; ++c) d.forcing.colliders.push_back(in.motion());
     // Entries are checked against the scene's contact set when restored.
     const auto log_size = in.value<std::int64_t>("the contact log size");
-    if (log_size < 0 || static_cast<std::uint64_t>(log_size) > bytes.size() / 4)
+    if (log_size < 0 || static_cast<std::uint64_t>(log_size) > payload / 4)
       in.fail("contact log size " + std::to_string(log_size) + " does not fit the data");
     d.contact_log.resize(static_cast<std::size_t>(log_size));
     for (std::int32_t& entry : d.contact_log) {

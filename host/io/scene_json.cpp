@@ -1132,8 +1132,8 @@ GrabEvent readGrab(const Field& f, const Scene& s, int frame) {
   if (auto id = f.find("id")) g.id = id->string();
   g.vertex = f.member("vertex").particle(s.numParticles());
   const Field stiffness = f.member("stiffness");
+  stiffness.eventValue();  // within 1e150
   g.stiffness = stiffness.positive();
-  stiffness.eventValue();
   if (auto path = f.find("path")) g.path = readPath(*path, frame, "the grab's");
   return g;
 }
@@ -1182,7 +1182,10 @@ ElementEvent readElements(const Field& f, const Scene& s) {
     e.indices.push_back(index);
   }
   if (e.indices.empty()) indices.fail("lists no element");
-  if (auto k = f.find("stiffness")) e.stiffness = (k->eventValue(), k->nonNegative());
+  if (auto k = f.find("stiffness")) {
+    k->eventValue();  // within 1e150
+    e.stiffness = k->nonNegative();
+  }
   if (auto on = f.find("enabled")) {
     if (!on->value().is_boolean()) on->fail(std::string("expected true or false, got ") + on->value().type_name());
     e.enabled = on->value().get<bool>();

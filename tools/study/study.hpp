@@ -59,14 +59,18 @@ StudyScene chainScene(double stiffness = 1e4);
 /// the stiff cloth of issue 8 (key "cloth_stiff", run at h = 1/15).
 StudyScene clothScene(double stretch_stiffness = 1e3);
 constexpr double kStiffClothStretch = 1e6;
+/// The handle cloth's handle frequency in scenes/cloth_handle.json [Hz].
+constexpr double kHandleFrequency = 0.5;
 /// The same tilted cloth as clothScene, n x n, built from triangle strain and bending hinges
 /// instead of springs (ClothModel::Triangles; key "cloth_triangles" for n = 20).
 /// `strain_min` < 1 lets the membrane compress freely down to it (cloth buckles rather than
 /// resisting compression).
 StudyScene triangleClothScene(int n = 20, double strain_stiffness = 1e3, double strain_min = 1.0);
 constexpr double kTriangleClothHinge = 1e-4;  // J: bending hinge stiffness of the study's triangle cloths
-/// scenes/cloth_handle.json: a cloth on a swinging handle in a gusty wind, with damping.
-StudyScene handleClothScene();
+/// scenes/cloth_handle.json: a cloth on a swinging handle in a gusty wind, with damping; the
+/// handle swings at `frequency` Hz (the file's 0.5 Hz keeps the key "handle"; any other is
+/// "handle_<frequency>Hz").
+StudyScene handleClothScene(double frequency = kHandleFrequency);
 /// The tet bar with no pins and no gravity, spinning rigidly at `omega` rad/s about an axis
 /// through its centre of mass. `general`: about the axis (1, 2, 3)/|.| (not a principal axis)
 /// and stretched by 20 % along its length; else about y (end over end), at its rest shape.

@@ -153,10 +153,17 @@ StudyScene triangleClothScene(int n, double strain_stiffness, double strain_min)
   return s;
 }
 
-StudyScene handleClothScene() {
+StudyScene handleClothScene(double frequency) {
   StudyScene s;
-  s.key = "handle";
   s.scene = stabint::loadSceneFile(std::string(STABINT_STUDY_SCENES_DIR) + "/cloth_handle.json");
+  s.key = "handle";
+  if (frequency != kHandleFrequency) {
+    for (stabint::Pin& pin : s.scene.pins)
+      if (pin.target.frequency > 0.0) pin.target.frequency = frequency;
+    std::ostringstream key;
+    key << "handle_" << frequency << "Hz";
+    s.key = key.str();
+  }
   s.params = "cloth_handle.json fingerprint=" + fingerprint(s.scene);
   return s;
 }

@@ -20,6 +20,7 @@ packages=(
   python3-venv python3-dev  # the Python package: .venv and the extension's headers (scripts/python.sh)
   clang libclang-rt-14-dev  # sanitizer build and libFuzzer harnesses (scripts/sanitize.sh, fuzz.sh)
   clang-format           # the tree's style (.clang-format, scripts/format.sh; checked in CI)
+  doxygen                # the API reference of include/stabint/ (scripts/apidocs.sh; checked in CI)
 )
 
 missing=()

@@ -1,6 +1,7 @@
 #pragma once
-// Many independent scenes stepped as one (docs/method.md, "Batches"; the design:
-// docs/batch_design.md): parameter sweeps, training data, crowds of small objects.
+/// @file
+/// Many independent scenes stepped as one (docs/method.md, "Batches"; the design:
+/// docs/batch_design.md): parameter sweeps, training data, crowds of small objects.
 #include <stabint/errors.hpp>
 #include <stabint/scene.hpp>
 #include <stabint/simulator.hpp>
@@ -13,6 +14,7 @@
 
 namespace stabint {
 
+/// What BatchSimulator::step reports: every scene's step report and refusal.
 struct BatchStepReport {
   /// One per scene, as that scene's own Simulator::step would report it, except
   /// energy_evaluations: the batched passes the scene took part in (the forcing's two whenever
@@ -37,12 +39,17 @@ struct BatchStepReport {
 /// products, line search and history are each scene's own.
 class BatchSimulator {
  public:
+  /// Validates and copies the scenes and options; a scene or option outside the constraints
+  /// above is an InvalidInputError.
   BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options);
   ~BatchSimulator();
   BatchSimulator(const BatchSimulator&) = delete;
   BatchSimulator& operator=(const BatchSimulator&) = delete;
+  ///@{
+  /// Movable, not copyable.
   BatchSimulator(BatchSimulator&&) noexcept;
   BatchSimulator& operator=(BatchSimulator&&) noexcept;
+  ///@}
 
   /// Advances every active scene one step. Never throws for a scene that blows up or exceeds
   /// energy_limit: that scene's step is refused (BatchStepReport::refusals), its state kept, and
@@ -50,24 +57,34 @@ class BatchSimulator {
   /// others step on.
   const BatchStepReport& step();
 
-  int size() const;  // number of scenes
+  int size() const;  ///< number of scenes
+  /// False after a refused step of the scene, until setState.
   bool active(int scene) const;
+  ///@{
   /// Scene `scene`'s state (`n_s by 3`, a copy of its rows of allPositions()).
   Eigen::MatrixX3d positions(int scene) const;
   Eigen::MatrixX3d velocities(int scene) const;
+  ///@}
   /// Every scene's positions, one after another (for renderers): scene s's rows start at
   /// firstParticle(s).
   const Eigen::MatrixX3d& allPositions() const;
+  /// The first row of scene `scene` in allPositions().
   int firstParticle(int scene) const;
+  /// The number of particles (rows) of scene `scene`.
   int numParticles(int scene) const;
+  ///@{
   /// The batch's time (every active scene's), and a scene's (that of its last accepted state).
   double time() const;
   double time(int scene) const;
+  ///@}
+  /// The scene's step count (that of its last accepted state).
   int stepCount(int scene) const;
-  double target(int scene) const;        // H* of the scene
-  EnergyReport energy(int scene) const;  // of its current state
-  double energyScale(int scene) const;   // its E_scale (of the scene alone)
+  double target(int scene) const;        ///< H* of the scene
+  EnergyReport energy(int scene) const;  ///< of its current state
+  double energyScale(int scene) const;   ///< its E_scale (of the scene alone)
+  /// The options the batch was built with.
   const SimulatorOptions& options() const;
+  /// The backend in words, as Simulator::backendDescription.
   std::string backendDescription() const;
 
   /// Replaces scene `scene`'s positions and velocities (`n_s by 3`, finite), as

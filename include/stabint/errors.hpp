@@ -1,10 +1,12 @@
 #pragma once
-// Error types of stabint. Everything the library throws derives from stabint::Error, so a
-// program can catch one type; the subtypes let it react to the cause (for example fall back to
-// the CPU reference backend on NoOpenCLDeviceError).
+/// @file
+/// Error types of stabint. Everything the library throws derives from stabint::Error, so a
+/// program can catch one type; the subtypes let it react to the cause (for example fall back to
+/// the CPU reference backend on NoOpenCLDeviceError).
 #include <stdexcept>
 #include <string>
 
+/// Everything of the C++ API: scenes, simulators, batches, loaders and errors.
 namespace stabint {
 
 /// Base of every exception stabint throws.
@@ -24,8 +26,10 @@ class InvalidInputError : public Error {
 /// was readable, the line number.
 class FileFormatError : public Error {
  public:
+  /// The message is "file:line: what" ("file: what" when `line` is 0).
   FileFormatError(const std::string& file, int line, const std::string& what)
       : Error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + what), file_(file), line_(line) {}
+  /// The file's path as it was given.
   const std::string& file() const { return file_; }
   /// 1-based line number, 0 when the error is not tied to a line (e.g. missing file).
   int line() const { return line_; }
@@ -39,6 +43,7 @@ class FileFormatError : public Error {
 /// the last finite state, and the report of the refused step is available from the exception.
 class NonFiniteStateError : public Error {
  public:
+  /// `what` is the message, `step` the index of the refused step.
   NonFiniteStateError(const std::string& what, int step) : Error(what), step_(step) {}
   /// Index of the step that was refused (0 = the first step).
   int step() const { return step_; }
@@ -51,6 +56,7 @@ class NonFiniteStateError : public Error {
 /// a NonFiniteStateError, so that code handling blow-ups handles this early stop too).
 class EnergyLimitError : public NonFiniteStateError {
  public:
+  /// As NonFiniteStateError's constructor: the message and the refused step.
   using NonFiniteStateError::NonFiniteStateError;
 };
 
@@ -77,8 +83,10 @@ class NoOpenCLDeviceError : public OpenCLError {
 /// A kernel program failed to compile; the message contains the full build log.
 class KernelBuildError : public OpenCLError {
  public:
+  /// `what` is the message, `log` the compiler's build log (appended to the message).
   KernelBuildError(const std::string& what, std::string log)
       : OpenCLError(what + "\n--- build log ---\n" + log), log_(std::move(log)) {}
+  /// The compiler's build log alone.
   const std::string& buildLog() const { return log_; }
 
  private:

@@ -1,9 +1,10 @@
 #pragma once
-// Scripted interaction: timed events that a scene file may carry ("events", docs/scene-format.md)
-// and the player that applies them to a running Simulator before each step, so that a grab, a
-// drag, a release, an impulse, an element change or a collider's motion replays, and can be charted and tested,
-// without a window. Every event goes through the Simulator's per-frame input, so its energy is
-// booked by the same rules (docs/method.md, "Per-frame input").
+/// @file
+/// Scripted interaction: timed events that a scene file may carry ("events", docs/scene-format.md)
+/// and the player that applies them to a running Simulator before each step, so that a grab, a
+/// drag, a release, an impulse, an element change or a collider's motion replays, and can be charted and tested,
+/// without a window. Every event goes through the Simulator's per-frame input, so its energy is
+/// booked by the same rules (docs/method.md, "Per-frame input").
 #include <stabint/simulator.hpp>
 
 #include <Eigen/Core>
@@ -19,41 +20,41 @@ namespace stabint {
 /// A keyframe of a dragged handle: its target at the end of step `frame - 1` (i.e. when the
 /// simulator's step count is `frame`).
 struct PathKey {
-  int frame = 0;
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  int frame = 0;                                       ///< the step count at which it is reached
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< m, the target there
 };
 
 /// Grab particle `vertex` with a handle of `stiffness` (Simulator::grab). The handle starts at
 /// the particle's position; with a path it then moves linearly from there to the keyframes in
 /// turn (their frames strictly increasing, after the grab's) and stays at the last one.
 struct GrabEvent {
-  std::string id;  // for the release; may be empty (release by vertex then)
-  int vertex = 0;
-  double stiffness = 0.0;
-  std::vector<PathKey> path;
+  std::string id;             ///< for the release; may be empty (release by vertex then)
+  int vertex = 0;             ///< the grabbed particle
+  double stiffness = 0.0;     ///< N/m, the handle's pin
+  std::vector<PathKey> path;  ///< keyframes of the drag; empty: the handle stays put
 };
 
 /// Release a handle (Simulator::release): the grab with this `id`, or when `id` is empty the
 /// most recent held handle on `vertex`.
 struct ReleaseEvent {
-  std::string id;
-  int vertex = -1;
+  std::string id;   ///< the grab's id; empty: release by `vertex`
+  int vertex = -1;  ///< the particle whose most recent handle is released (when `id` is empty)
 };
 
 /// Add `velocity` to the velocities of `vertices` (Simulator::setVelocities): the kinetic
 /// energy jump is booked as an event.
 struct ImpulseEvent {
-  std::vector<int> vertices;
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  std::vector<int> vertices;                           ///< the particles pushed
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< m/s, added to each one's velocity
 };
 
 /// Change elements of one kind (Simulator::setElementStiffness, setElementEnabled): a new
 /// stiffness, an enabled flag, or both (the stiffness first).
 struct ElementEvent {
-  ElementKind kind = ElementKind::Spring;
-  std::vector<int> indices;
-  std::optional<double> stiffness;
-  std::optional<bool> enabled;
+  ElementKind kind = ElementKind::Spring;  ///< which element list
+  std::vector<int> indices;                ///< indices into that list
+  std::optional<double> stiffness;         ///< the new stiffness, if any
+  std::optional<bool> enabled;             ///< the new enabled flag, if any
 };
 
 /// Move collider `collider` (its index in the scene's list) either along `path`, keyframes of
@@ -63,9 +64,9 @@ struct ElementEvent {
 /// event's frame on (Simulator::setColliderVelocity). Exactly one of the two. A later collider
 /// event for the same collider takes over from where the collider then is.
 struct ColliderEvent {
-  int collider = 0;
-  std::vector<PathKey> path;
-  std::optional<Eigen::Vector3d> velocity;
+  int collider = 0;                         ///< index in Scene::colliders
+  std::vector<PathKey> path;                ///< keyframes of Collider::center (or empty)
+  std::optional<Eigen::Vector3d> velocity;  ///< m/s, the collider's new velocity (or none)
 };
 
 /// What an event does. Extension point: a new kind of event is a new struct here, a case in
@@ -75,8 +76,8 @@ using EventAction = std::variant<GrabEvent, ReleaseEvent, ImpulseEvent, ElementE
 
 /// An action applied before the step whose index is `frame` (0: before the first step).
 struct ScriptedEvent {
-  int frame = 0;
-  EventAction action;
+  int frame = 0;       ///< applied before the step of this index
+  EventAction action;  ///< what it does
 };
 
 /// Plays a list of events on a simulator: call apply(sim) before every sim.step(). The events
@@ -92,9 +93,12 @@ struct ScriptedEvent {
 class EventScript {
  public:
   EventScript() = default;
+  /// Checks the events (see the class) and takes them; throws InvalidInputError.
   explicit EventScript(std::vector<ScriptedEvent> events);
 
+  /// The events, in the order given.
   const std::vector<ScriptedEvent>& events() const { return events_; }
+  /// True when the script has no events.
   bool empty() const { return events_.empty(); }
 
   /// Applies, in list order, every event not applied yet whose frame is at most
@@ -107,10 +111,10 @@ class EventScript {
   int handlePin(const std::string& id) const;
 
  private:
-  // A path being played: a held handle (the pin of its grab) or a moving collider.
+  /// A path being played: a held handle (the pin of its grab) or a moving collider.
   struct Handle {
-    std::size_t event;  // index of its grab or collider event in events_
-    int pin = -1;       // the handle's pin, or the collider's index
+    std::size_t event;  ///< index of its grab or collider event in events_
+    int pin = -1;       ///< the handle's pin, or the collider's index
     int start_frame = 0;
     Eigen::Vector3d start = Eigen::Vector3d::Zero();
   };
@@ -122,8 +126,8 @@ class EventScript {
 
 /// A scene file's scene and its events (an empty list when it has none).
 struct SceneFile {
-  Scene scene;
-  EventScript events;
+  Scene scene;         ///< the scene, validated
+  EventScript events;  ///< its events, ready to play
 };
 
 /// Loads a scene file with its "events" (docs/scene-format.md); errors as loadSceneFile, with

@@ -1,9 +1,10 @@
 #pragma once
-// Mesh loaders. Every error in a file is a FileFormatError that names the file and the line; a
-// material whose density is not > 0 and finite is an InvalidInputError. What a loader derives is
-// checked where it is derived: a coordinate beyond 1e150 in magnitude, an element that is flat
-// (the relative test of validateScene) or whose volume, area or mass share overflows, and a vertex
-// in no element (it would have no mass) are errors at their line.
+/// @file
+/// Mesh loaders. Every error in a file is a FileFormatError that names the file and the line; a
+/// material whose density is not > 0 and finite is an InvalidInputError. What a loader derives is
+/// checked where it is derived: a coordinate beyond 1e150 in magnitude, an element that is flat
+/// (the relative test of validateScene) or whose volume, area or mass share overflows, and a vertex
+/// in no element (it would have no mass) are errors at their line.
 #include <stabint/scene.hpp>
 
 #include <string>
@@ -13,18 +14,19 @@ namespace stabint {
 
 /// Material parameters applied to a loaded mesh.
 struct ClothMaterial {
-  double areal_density = 0.1;      // kg/m^2
-  double stretch_stiffness = 1e3;  // springs along edges (model Springs)
-  double bend_stiffness = 1e1;     // springs across interior edges (model Springs)
-  ClothModel model = ClothModel::Springs;
-  double strain_stiffness = 1e3;  // triangle strain k, N/m (model Triangles)
-  double strain_min = 1.0;
-  double strain_max = 1.0;
-  double hinge_stiffness = 1e-3;  // bending hinge k, J (model Triangles)
+  double areal_density = 0.1;              ///< kg/m^2
+  double stretch_stiffness = 1e3;          ///< springs along edges (model Springs)
+  double bend_stiffness = 1e1;             ///< springs across interior edges (model Springs)
+  ClothModel model = ClothModel::Springs;  ///< springs, or triangle strain and bending hinges
+  double strain_stiffness = 1e3;           ///< triangle strain k, N/m (model Triangles)
+  double strain_min = 1.0;                 ///< triangle strain limits (model Triangles)
+  double strain_max = 1.0;                 ///< triangle strain limits (model Triangles)
+  double hinge_stiffness = 1e-3;           ///< bending hinge k, J (model Triangles)
 };
+/// Material parameters applied to a loaded tet mesh.
 struct SolidMaterial {
-  double density = 1000.0;  // kg/m^3
-  double stiffness = 1e5;
+  double density = 1000.0;  ///< kg/m^3
+  double stiffness = 1e5;   ///< tet strain stiffness (Pa)
 };
 
 /// Loads a Wavefront OBJ triangle mesh as cloth: vertices (`v`), faces (`f`, polygons are
@@ -59,8 +61,10 @@ Scene builtinScene(const std::string& name, const std::string& params_json = "{}
                    const std::string& label = "builtin scene");
 
 /// Names accepted by builtinScene, and the parameter names of one of them (for usage texts).
+///@{
 std::vector<std::string> builtinSceneNames();
 std::vector<std::string> builtinSceneParameters(const std::string& name);
+///@}
 
 /// Writes `scene` as a JSON scene file in the explicit form (no builtin or mesh entries), with
 /// every number written so that loadSceneFile reads back exactly the same scene. Throws

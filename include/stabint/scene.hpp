@@ -1,8 +1,9 @@
 #pragma once
-// The scene model: particles, the elements acting on them (springs, tet strain, triangle strain,
-// bending hinges, pins), gravity, time-dependent force fields, per-body damping and the surface
-// triangles. Matrices are `#particles by 3`, one row per particle. docs/elements.md has the
-// energies.
+/// @file
+/// The scene model: particles, the elements acting on them (springs, tet strain, triangle strain,
+/// bending hinges, pins), gravity, time-dependent force fields, per-body damping and the surface
+/// triangles. Matrices are `#particles by 3`, one row per particle. docs/elements.md has the
+/// energies.
 #include <Eigen/Core>
 
 #include <array>
@@ -13,18 +14,18 @@ namespace stabint {
 
 /// Spring between particles a and b: E = k/2 (|x_a - x_b| - rest_length)^2.
 struct Spring {
-  int a = 0;
-  int b = 0;
-  double rest_length = 0.0;
-  double stiffness = 0.0;
+  int a = 0;                 ///< first particle
+  int b = 0;                 ///< second particle
+  double rest_length = 0.0;  ///< m, >= 0
+  double stiffness = 0.0;    ///< k, N/m
 };
 
 /// Co-rotated strain of a tetrahedron: E = k V/2 ||F - R||_F^2 with F = Ds Dm^-1 and R the
 /// nearest rotation. The rest shape (Dm, V) is taken from Scene::rest_positions, with
 /// Dm = [x1-x0, x2-x0, x3-x0]; the signed rest volume det(Dm)/6 must be positive.
 struct Tet {
-  std::array<int, 4> vertices{0, 0, 0, 0};
-  double stiffness = 0.0;
+  std::array<int, 4> vertices{0, 0, 0, 0};  ///< particles x0..x3, positively oriented at rest
+  double stiffness = 0.0;                   ///< k, Pa
 };
 
 /// Membrane strain of a triangle (Projective Dynamics' strain constraint):
@@ -35,10 +36,10 @@ struct Tet {
 /// possible); wider limits let the triangle stretch or shrink freely by that much. The rest
 /// triangle, from Scene::rest_positions, must not be degenerate.
 struct TriangleStrain {
-  std::array<int, 3> vertices{0, 0, 0};
-  double stiffness = 0.0;   // k, N/m (energy per rest area per unit strain^2)
-  double strain_min = 1.0;  // in [0, 1]
-  double strain_max = 1.0;  // >= 1
+  std::array<int, 3> vertices{0, 0, 0};  ///< particles x0, x1, x2
+  double stiffness = 0.0;                ///< k, N/m (energy per rest area per unit strain^2)
+  double strain_min = 1.0;               ///< in [0, 1]
+  double strain_max = 1.0;               ///< >= 1
 };
 
 /// Bending across the edge (vertices[0], vertices[1]) shared by the triangles
@@ -50,40 +51,44 @@ struct TriangleStrain {
 /// rigid motions change nothing. The rest triangles must not be degenerate, nor folded onto
 /// each other (a rest dihedral angle beyond 90 degrees).
 struct BendingHinge {
-  std::array<int, 4> vertices{0, 0, 0, 0};
-  double stiffness = 0.0;  // k, J
+  std::array<int, 4> vertices{0, 0, 0, 0};  ///< the edge's two particles, then the two opposite ones
+  double stiffness = 0.0;                   ///< k, J
 };
 
 /// Target of a pin: q(t) = position + velocity t + amplitude sin(2 pi frequency t).
 /// A target with zero velocity and zero amplitude is static.
 struct PinTarget {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
-  Eigen::Vector3d amplitude = Eigen::Vector3d::Zero();
-  double frequency = 0.0;  // Hz
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();   ///< m, the target at t = 0 (without the sine)
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();   ///< m/s
+  Eigen::Vector3d amplitude = Eigen::Vector3d::Zero();  ///< m, of the sine
+  double frequency = 0.0;                               ///< Hz
 
+  /// q(t).
   Eigen::Vector3d at(double t) const;
+  /// True when the target moves (a non-zero velocity, or a sine with non-zero amplitude and frequency).
   bool moving() const;
 };
 
 /// Zero-rest-length spring from a particle to a (possibly moving) target:
 /// E = k/2 |x_vertex - q(t)|^2.
 struct Pin {
-  int vertex = 0;
-  double stiffness = 0.0;
-  PinTarget target;
+  int vertex = 0;          ///< the pinned particle
+  double stiffness = 0.0;  ///< k, N/m
+  PinTarget target;        ///< q(t)
 };
 
 /// A force applied to each listed particle (all particles when the list is empty), in newtons:
 /// f(t) = force + rate t + amplitude sin(2 pi frequency t). Treated as the potential -f(t).x.
 struct ForceField {
-  std::vector<int> particles;
-  Eigen::Vector3d force = Eigen::Vector3d::Zero();
-  Eigen::Vector3d rate = Eigen::Vector3d::Zero();
-  Eigen::Vector3d amplitude = Eigen::Vector3d::Zero();
-  double frequency = 0.0;  // Hz
+  std::vector<int> particles;                           ///< where it acts; empty: every particle
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();      ///< N, at t = 0 (without the sine)
+  Eigen::Vector3d rate = Eigen::Vector3d::Zero();       ///< N/s
+  Eigen::Vector3d amplitude = Eigen::Vector3d::Zero();  ///< N, of the sine
+  double frequency = 0.0;                               ///< Hz
 
+  /// f(t).
   Eigen::Vector3d at(double t) const;
+  /// True when f changes with time (a non-zero rate, or a sine with non-zero amplitude and frequency).
   bool timeDependent() const;
 };
 
@@ -98,19 +103,20 @@ enum class ColliderShape { Plane, Sphere, Box, Capsule };
 /// (0: static): its geometry at time t is that at t = 0 moved by velocity * t, until a running
 /// Simulator moves it (Simulator::setColliderPosition, setColliderVelocity).
 struct Collider {
-  ColliderShape shape = ColliderShape::Plane;
+  ColliderShape shape = ColliderShape::Plane;  ///< which of the fields below describe it
   /// Plane: a point of the plane; sphere and box: the center; capsule: one end of its axis.
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();       // plane: the outward normal (length > 0)
-  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  // box (axis-aligned): half sizes, > 0
-  Eigen::Vector3d end = Eigen::Vector3d::Zero();           // capsule: the other end of its axis
-  double radius = 0.0;                                     // sphere and capsule, > 0
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      // m/s
-  double friction = 0.0;                                   // Coulomb coefficient mu >= 0 (0: frictionless)
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();       ///< plane: the outward normal (length > 0)
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< box (axis-aligned): half sizes, > 0
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();           ///< capsule: the other end of its axis
+  double radius = 0.0;                                     ///< sphere and capsule, > 0
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      ///< m/s
+  double friction = 0.0;                                   ///< Coulomb coefficient mu >= 0 (0: frictionless)
   /// Contact weight per unit of particle mass, 1/s^2 (> 0): a particle at rest on a collider
   /// under gravity g sinks about |g| / stiffness into it.
   double stiffness = 1e4;
 
+  /// True when `velocity` is not zero.
   bool moving() const { return !velocity.isZero(0.0); }
 };
 
@@ -118,33 +124,37 @@ struct Collider {
 /// section 6): each velocity moves toward the body's rigid velocity by the factor `damping` in
 /// [0, 1] per step. 0 disables it.
 struct Body {
-  std::string name;
-  std::vector<int> particles;
-  double damping = 0.0;
+  std::string name;            ///< for reports and scene files; may be empty
+  std::vector<int> particles;  ///< the body's particles
+  double damping = 0.0;        ///< in [0, 1] per step
 };
 
 /// A complete simulation scene. Rows of `rest_positions`, `positions` and `velocities`, and
 /// entries of `masses`, are per particle.
 struct Scene {
-  std::string name;
-  Eigen::MatrixX3d rest_positions;  // rest shape used by tets (springs carry their own length)
-  Eigen::MatrixX3d positions;       // initial positions x_0
-  Eigen::MatrixX3d velocities;      // initial velocities v_0
-  Eigen::VectorXd masses;           // lumped masses, > 0 (pinned particles included)
+  std::string name;                 ///< for reports and scene files; may be empty
+  Eigen::MatrixX3d rest_positions;  ///< rest shape used by tets (springs carry their own length)
+  Eigen::MatrixX3d positions;       ///< initial positions x_0
+  Eigen::MatrixX3d velocities;      ///< initial velocities v_0
+  Eigen::VectorXd masses;           ///< lumped masses, > 0 (pinned particles included)
 
+  ///@{
+  /// The elements, one list per kind (docs/elements.md).
   std::vector<Spring> springs;
   std::vector<Tet> tets;
   std::vector<TriangleStrain> triangle_strains;
   std::vector<BendingHinge> bending_hinges;
   std::vector<Pin> pins;
-  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, -9.81, 0.0);  // m/s^2
-  std::vector<ForceField> force_fields;
-  std::vector<Body> bodies;
-  std::vector<Collider> colliders;
+  ///@}
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, -9.81, 0.0);  ///< m/s^2
+  std::vector<ForceField> force_fields;                        ///< time-dependent external forces
+  std::vector<Body> bodies;                                    ///< damping groups
+  std::vector<Collider> colliders;                             ///< rigid obstacles
   /// The surface, for renderers, OBJ output and mass lumping (cloth grids and OBJ meshes fill
   /// it); it exerts no force of its own. May be empty.
   std::vector<std::array<int, 3>> triangles;
 
+  /// Rows of `positions`.
   int numParticles() const { return static_cast<int>(positions.rows()); }
 };
 

@@ -1,5 +1,6 @@
 #pragma once
-// The stepping API: build a Simulator from a Scene and options, call step() once per frame.
+/// @file
+/// The stepping API: build a Simulator from a Scene and options, call step() once per frame.
 #include <stabint/errors.hpp>
 #include <stabint/scene.hpp>
 
@@ -11,98 +12,122 @@ namespace stabint {
 
 /// The six integrators of docs/method.md sections 2 and 3.
 enum class Integrator {
-  ForwardEuler,
-  SymplecticEuler,
-  BackwardEuler,
-  BDF2,
-  ImplicitMidpoint,
-  EnergyBlend,  // the paper's energy-tracking blend of IM with BE or FE
+  ForwardEuler,      ///< FE, for comparison
+  SymplecticEuler,   ///< SE, for comparison
+  BackwardEuler,     ///< BE
+  BDF2,              ///< second-order backward differences (first step BE)
+  ImplicitMidpoint,  ///< IM
+  EnergyBlend,       ///< the paper's energy-tracking blend of IM with BE or FE
 };
-const char* integratorName(Integrator integrator);  // "FE", "SE", "BE", "BDF2", "IM", "blend"
+const char* integratorName(Integrator integrator);  ///< "FE", "SE", "BE", "BDF2", "IM", "blend"
 /// Parses a name as printed by integratorName (case-insensitive); throws InvalidInputError.
 Integrator parseIntegrator(const std::string& name);
+/// Every integrator, in the enum's order.
 std::vector<Integrator> allIntegrators();
 
 /// Where the local step and the energies run. Auto: an OpenCL GPU when there is one, else the
 /// CPU reference (an OpenCL CPU device such as PoCL is not faster than it; take one with
 /// OpenCL); backendDescription() says which and why (docs/method.md, "Backend choice").
-enum class BackendKind { CpuReference, OpenCL, Auto };
-const char* backendName(BackendKind kind);  // "cpu", "opencl", "auto"
+enum class BackendKind {
+  CpuReference,  ///< plain C++ in double on the host: the oracle the OpenCL backend is tested against
+  OpenCL,        ///< OpenCL kernels on the device of SimulatorOptions::opencl
+  Auto           ///< an OpenCL GPU when there is one, else the CPU reference
+};
+const char* backendName(BackendKind kind);  ///< "cpu", "opencl", "auto"
+/// Parses a name as printed by backendName (case-insensitive); throws InvalidInputError.
 BackendKind parseBackend(const std::string& name);
 
-enum class Precision { Double, Float };
+/// Floating-point precision of the OpenCL backend's element data and kernels (the global solve
+/// is always double on the host).
+enum class Precision {
+  Double,  ///< needs cl_khr_fp64 (else UnsupportedPrecisionError)
+  Float    ///< any device
+};
 
 /// Acceleration of the local/global iterations. Every variant keeps the objective monotone: an
 /// accelerated iterate that would raise it is replaced by the plain one.
 enum class Acceleration {
-  None,       // plain local/global iterations
-  Chebyshev,  // Chebyshev semi-iteration (Wang 2015)
-  Anderson,   // Anderson acceleration (Peng et al. 2018)
-  LBFGS,      // L-BFGS with the prefactored K_c as initial Hessian (Liu et al. 2017), line search
-  Newton,     // Newton-CG: springs' projected Hessians, CG preconditioned with K_c, line search
+  None,       ///< plain local/global iterations
+  Chebyshev,  ///< Chebyshev semi-iteration (Wang 2015)
+  Anderson,   ///< Anderson acceleration (Peng et al. 2018)
+  LBFGS,      ///< L-BFGS with the prefactored K_c as initial Hessian (Liu et al. 2017), line search
+  Newton,     ///< Newton-CG: springs' projected Hessians, CG preconditioned with K_c, line search
 };
-const char* accelerationName(Acceleration acceleration);  // "none", "chebyshev", "anderson", "lbfgs", "newton"
+const char* accelerationName(Acceleration acceleration);  ///< "none", "chebyshev", "anderson", "lbfgs", "newton"
 /// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
 Acceleration parseAcceleration(const std::string& name);
 
 /// How the global step of every local/global iteration solves K_c x = rhs (docs/method.md,
 /// "Global solve").
 enum class GlobalSolve {
-  Factor,             // the CHOLMOD factor of K_c on the host: exact (default)
-  ConjugateGradient,  // Jacobi-preconditioned CG warm-started from the current iterate, run by
-                      // the backend: on the OpenCL device with nothing read back per iteration,
-                      // on the host in double for the CPU reference
+  Factor,             ///< the CHOLMOD factor of K_c on the host: exact (default)
+  ConjugateGradient,  ///< Jacobi-preconditioned CG warm-started from the current iterate, run by
+                      ///< the backend: on the OpenCL device with nothing read back per iteration,
+                      ///< on the host in double for the CPU reference
 };
 
 /// The element types of a Scene, one per element list, for the run-time element changes
 /// (Simulator::setElementStiffness, setElementEnabled).
-enum class ElementKind { Spring, Tet, TriangleStrain, BendingHinge, Pin };
+enum class ElementKind {
+  Spring,          ///< Scene::springs
+  Tet,             ///< Scene::tets
+  TriangleStrain,  ///< Scene::triangle_strains
+  BendingHinge,    ///< Scene::bending_hinges
+  Pin              ///< Scene::pins (grabbed handles included)
+};
 /// "spring", "tet", "triangle_strain", "bending_hinge", "pin" (the JSON names, singular).
 const char* elementKindName(ElementKind kind);
 /// Parses a name as printed by elementKindName, or the scene file's list name ("springs",
 /// "tets", "triangle_strains", "bending_hinges", "pins"); throws InvalidInputError.
 ElementKind parseElementKind(const std::string& name);
+/// Every element kind, in the enum's order.
 std::vector<ElementKind> allElementKinds();
 
 /// Which OpenCL device to use. Empty strings fall back to the environment variables
 /// STABINT_OPENCL_PLATFORM and STABINT_OPENCL_DEVICE, then to the first platform and device.
 /// Each selector is either an index ("0") or a case-insensitive substring of the name.
 struct OpenCLOptions {
-  std::string platform;
-  std::string device;
-  Precision precision = Precision::Double;
+  std::string platform;                     ///< platform selector; empty: environment, then the first
+  std::string device;                       ///< device selector; empty: environment, then the first
+  Precision precision = Precision::Double;  ///< of the kernels and the device's data
 };
 
 /// One available OpenCL device, as listed by listOpenCLDevices().
 struct OpenCLDeviceInfo {
-  int platform_index = 0;
-  int device_index = 0;
-  std::string platform_name;
-  std::string device_name;
-  bool fp64 = false;
-  bool gpu = false;  // CL_DEVICE_TYPE_GPU
+  int platform_index = 0;     ///< index for OpenCLOptions::platform
+  int device_index = 0;       ///< index within the platform, for OpenCLOptions::device
+  std::string platform_name;  ///< CL_PLATFORM_NAME
+  std::string device_name;    ///< CL_DEVICE_NAME
+  bool fp64 = false;          ///< has cl_khr_fp64 (Precision::Double works)
+  bool gpu = false;           ///< CL_DEVICE_TYPE_GPU
 };
 /// All devices of all platforms; empty when no OpenCL platform is installed (never throws for
 /// a missing platform).
 std::vector<OpenCLDeviceInfo> listOpenCLDevices();
 
+/// How a Simulator (or BatchSimulator) steps: the integrator, the step, the solver and its
+/// budget, the blend's parameters and the backend. Checked when a simulator is built.
 struct SimulatorOptions {
-  Integrator integrator = Integrator::EnergyBlend;
-  double time_step = 1.0 / 30.0;  // h > 0
+  Integrator integrator = Integrator::EnergyBlend;  ///< the blend by default
+  double time_step = 1.0 / 30.0;                    ///< h > 0
 
   /// Local/global iterations per implicit solve (the real-time budget). When `tolerance` > 0 the
   /// solve instead runs until the relative change of the objective is below it (reference
   /// runs), at most `max_iterations`.
+  ///@{
   int iterations = 10;
   double tolerance = 0.0;
   int max_iterations = 1000;
+  ///@}
   /// Acceleration of every local/global solve; the spectral-radius estimate of the plain
   /// iteration that the Chebyshev recurrence uses (in (0, 1)); the number of past iterates
   /// Anderson acceleration combines (>= 1); the curvature pairs L-BFGS keeps (in [1, 50]).
+  ///@{
   Acceleration acceleration = Acceleration::None;
   double chebyshev_rho = 0.98;
   int anderson_window = 5;
   int lbfgs_history = 5;
+  ///@}
   /// L-BFGS's stopping rule by accuracy (Acceleration::LBFGS only; 0: off): a solve stops once the
   /// gradient of its objective, in the norm of L-BFGS's inverse Hessian (sqrt(g.H g), the Newton
   /// decrement), has fallen to gradient_tolerance times its value at the warm start; `iterations`
@@ -113,17 +138,19 @@ struct SimulatorOptions {
   /// CG iterations (>= 1; a fixed count: the OpenCL device reads nothing back), or, when
   /// `cg_tolerance` > 0, stops earlier once ||rhs - K_c x|| <= cg_tolerance ||rhs|| in every
   /// column (the device then reads back the residual after every CG iteration).
+  ///@{
   GlobalSolve global_solve = GlobalSolve::Factor;
   int cg_iterations = 20;
   double cg_tolerance = 0.0;
+  ///@}
 
   /// Energy-tracking blend (docs/method.md, "The blend").
-  int be_iterations = 3;           // budget of the BE partner solve, warm-started at x_n
-  double energy_tolerance = 1e-3;  // tau = energy_tolerance * (K + E_int + E_scale)
+  int be_iterations = 3;           ///< budget of the BE partner solve, warm-started at x_n
+  double energy_tolerance = 1e-3;  ///< tau = energy_tolerance * (K + E_int + E_scale)
   /// Largest factor by which one step may scale the velocities up to restore missing energy:
   /// energy comes back over a few steps, never as a kinetic jump of a nearly resting body.
   double max_velocity_scale = 2.0;
-  int max_root_evaluations = 12;  // energy evaluations of the root find
+  int max_root_evaluations = 12;  ///< energy evaluations of the root find
 
   /// Energy ceiling, off when 0: a step whose energy H exceeds the tracked target H* by more than
   /// energy_limit * E_scale (energyScale()) is refused with EnergyLimitError, keeping the last
@@ -137,17 +164,18 @@ struct SimulatorOptions {
   /// (or, at its velocity, will be) that close to a collider carries its contact term.
   double contact_tolerance = 1e-2;
 
-  BackendKind backend = BackendKind::CpuReference;
-  OpenCLOptions opencl;
+  BackendKind backend = BackendKind::CpuReference;  ///< where the element work runs
+  OpenCLOptions opencl;                             ///< device and precision (backend OpenCL or Auto)
 };
 
 /// Energies of a state (docs/method.md section 1). `elastic` includes every element's energy
 /// (springs, tets, triangle strain, hinges, pins and contact);
 /// `external` is gravity plus force fields, -sum (m g + f(t)).x.
 struct EnergyReport {
-  double kinetic = 0.0;
-  double elastic = 0.0;
-  double external = 0.0;
+  double kinetic = 0.0;   ///< K(v), J
+  double elastic = 0.0;   ///< E_int(x), J
+  double external = 0.0;  ///< U_ext(x, t), J
+  /// H = K + E_int + U_ext.
   double total() const { return kinetic + elastic + external; }
 };
 
@@ -155,32 +183,41 @@ struct EnergyReport {
 /// right-hand-side assembly, `transfer` host<->device copies, `global` the sparse solves,
 /// `energy` energy reductions, `bookkeeping` everything else of the step.
 struct PhaseTimes {
-  double local = 0.0;
-  double gather = 0.0;
-  double transfer = 0.0;
-  double global = 0.0;
-  double energy = 0.0;
-  double bookkeeping = 0.0;
+  double local = 0.0;        ///< s, element projections
+  double gather = 0.0;       ///< s, right-hand-side assembly
+  double transfer = 0.0;     ///< s, host<->device copies
+  double global = 0.0;       ///< s, sparse solves
+  double energy = 0.0;       ///< s, energy reductions
+  double bookkeeping = 0.0;  ///< s, the rest of the step
+  /// The sum of the phases.
   double total() const { return local + gather + transfer + global + energy + bookkeeping; }
+  /// Adds another report's times, phase by phase.
   PhaseTimes& operator+=(const PhaseTimes& o);
 };
 
 /// What the blend did with the implicit-midpoint candidate (None for the other integrators):
 /// accepted it, blended it with a backward-Euler partner (too much energy), or scaled its
 /// velocities (too little energy).
-enum class BlendBranch { None, ImplicitMidpoint, BackwardEuler, VelocityScale };
-const char* blendBranchName(BlendBranch branch);  // "-", "IM", "BE", "scale"
+enum class BlendBranch {
+  None,              ///< not the blend
+  ImplicitMidpoint,  ///< the IM candidate accepted
+  BackwardEuler,     ///< blended with the BE partner (too much energy)
+  VelocityScale      ///< velocities scaled up (too little energy)
+};
+const char* blendBranchName(BlendBranch branch);  ///< "-", "IM", "BE", "scale"
 
+/// What one step did: its energies, the energy book of H*, the blend's decision, the work done
+/// and the time per phase (Simulator::step, Simulator::lastReport).
 struct StepReport {
-  int step = 0;          // index of this step (0 = first)
-  double time = 0.0;     // time at the end of the step
-  EnergyReport energy;   // H(x_{n+1}, v_{n+1}, t_{n+1}) split by term
-  double target = 0.0;   // tracked target H* after the step (all integrators track it)
-  double forcing = 0.0;  // energy added to H* by time-dependent potentials this step
-  double damping = 0.0;  // kinetic energy removed by damping this step (>= 0)
-  BlendBranch branch = BlendBranch::None;
-  double alpha = 0.0;           // blend weight of the BE partner (0 = pure IM)
-  double velocity_scale = 1.0;  // factor the blend applied to the velocities (1 = none)
+  int step = 0;                            ///< index of this step (0 = first)
+  double time = 0.0;                       ///< time at the end of the step
+  EnergyReport energy;                     ///< H(x_{n+1}, v_{n+1}, t_{n+1}) split by term
+  double target = 0.0;                     ///< tracked target H* after the step (all integrators track it)
+  double forcing = 0.0;                    ///< energy added to H* by time-dependent potentials this step
+  double damping = 0.0;                    ///< kinetic energy removed by damping this step (>= 0)
+  BlendBranch branch = BlendBranch::None;  ///< what the blend did
+  double alpha = 0.0;                      ///< blend weight of the BE partner (0 = pure IM)
+  double velocity_scale = 1.0;             ///< factor the blend applied to the velocities (1 = none)
   /// Energy added to H* by discontinuous input since the previous step (setState, setPositions,
   /// setVelocities): the jump of H it caused, booked as the user's work (docs/method.md).
   double event_energy = 0.0;
@@ -188,11 +225,13 @@ struct StepReport {
   /// from H* like damping; negative when a moving collider drags particles along), and the
   /// energy the final projection out of the colliders removed (<= 0, added to H*; energy it adds
   /// is not booked: the blend takes it out).
+  ///@{
   double friction = 0.0;
   double contact_projection = 0.0;
-  int iterations = 0;          // local/global iterations of all solves in this step
-  int energy_evaluations = 0;  // element energy passes (root find included)
-  PhaseTimes times;
+  ///@}
+  int iterations = 0;          ///< local/global iterations of all solves in this step
+  int energy_evaluations = 0;  ///< element energy passes (root find included)
+  PhaseTimes times;            ///< wall-clock seconds per phase
 };
 
 /// A snapshot of a running simulation: time, step count, state, BDF2 history, the tracked
@@ -207,8 +246,11 @@ struct StepReport {
 /// order.
 class Checkpoint {
  public:
+  /// The simulation time of the snapshot.
   double time() const { return time_; }
+  /// The step count of the snapshot.
   int stepCount() const { return step_count_; }
+  /// The serialized form (what save() writes).
   const std::string& bytes() const { return bytes_; }
   /// Checks the header and sizes; throws FileFormatError naming `origin` and the problem.
   static Checkpoint fromBytes(std::string bytes, const std::string& origin = "checkpoint");
@@ -237,22 +279,31 @@ class Simulator {
   Simulator& operator=(const Simulator&) = delete;
   /// Movable (e.g. into a std::vector); a moved-from Simulator may only be destroyed or
   /// assigned to.
+  ///@{
   Simulator(Simulator&&) noexcept;
   Simulator& operator=(Simulator&&) noexcept;
+  ///@}
 
   /// Advances one time step. Throws NonFiniteStateError (state unchanged) when the step would
   /// produce a non-finite position or velocity, and its subtype EnergyLimitError when the step
   /// would exceed SimulatorOptions::energy_limit.
   const StepReport& step();
 
+  ///@{
+  /// The current state, `n by 3`.
   const Eigen::MatrixX3d& positions() const;
   const Eigen::MatrixX3d& velocities() const;
+  ///@}
+  /// The simulation time of the current state.
   double time() const;
+  /// Steps taken (refused steps not counted).
   int stepCount() const;
-  double target() const;        // H*
-  EnergyReport energy() const;  // of the current state
-  double energyScale() const;   // E_scale used by the blend tolerance
+  double target() const;        ///< H*
+  EnergyReport energy() const;  ///< of the current state
+  double energyScale() const;   ///< E_scale used by the blend tolerance
+  /// The simulator's copy of the scene (element stiffnesses as last set).
   const Scene& scene() const;
+  /// The options it was built with (iterations as last set by setIterations).
   const SimulatorOptions& options() const;
   /// Report of the last completed step (default report before the first step).
   const StepReport& lastReport() const;
@@ -278,7 +329,9 @@ class Simulator {
   /// event: H* moves by the jump of H it causes (reported in the next step's event_energy), and
   /// BDF2 restarts from this state, as a fresh simulator would.
   void setState(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  /// As setState, replacing the positions only.
   void setPositions(const Eigen::MatrixX3d& positions);
+  /// As setState, replacing the velocities only.
   void setVelocities(const Eigen::MatrixX3d& velocities);
   /// Collider `collider` (its index in the scene's list) translates linearly from where it is to
   /// `position` over the next step and stays there (its scene velocity is no longer used).
@@ -293,8 +346,10 @@ class Simulator {
   void setColliderVelocity(int collider, const Eigen::Vector3d& velocity);
   /// Where collider `collider`'s reference point (Collider::center) is at time(), and its
   /// velocity over the last step (its set or scene velocity when it moves on by one).
+  ///@{
   Eigen::Vector3d colliderPosition(int collider) const;
   Eigen::Vector3d colliderVelocity(int collider) const;
+  ///@}
   /// Local/global iteration budget of every later step (>= 1); time, state and H* are kept.
   void setIterations(int iterations);
 
@@ -317,13 +372,18 @@ class Simulator {
   /// and pins, 2 for triangle strain, 3 for tets). Time, state, BDF2 history and H* are kept.
   /// scene() shows the new stiffness. The list form changes several elements at once (all
   /// validated before any changes).
+  ///@{
   void setElementStiffness(ElementKind kind, int index, double stiffness);
   void setElementStiffness(ElementKind kind, const std::vector<int>& indices, double stiffness);
+  ///@}
   /// Disables (weight 0: the element exerts no force and has no energy) or enables an element,
   /// keeping its stiffness; booked and applied as setElementStiffness. A released pin has
   /// stiffness 0, so enabling it does nothing (grab again instead).
+  ///@{
   void setElementEnabled(ElementKind kind, int index, bool enabled);
   void setElementEnabled(ElementKind kind, const std::vector<int>& indices, bool enabled);
+  ///@}
+  /// Whether element `index` of `kind` is enabled.
   bool elementEnabled(ElementKind kind, int index) const;
 
   /// Snapshot of the current simulation (see Checkpoint).

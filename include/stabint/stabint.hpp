@@ -1,5 +1,6 @@
 #pragma once
-// Umbrella header.
+/// @file
+/// Umbrella header.
 #include <stabint/batch.hpp>
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>

@@ -57,7 +57,7 @@ static double chain_max_deviation(stabint_integrator integrator, int frames) {
   return max_dev;
 }
 
-/* The blend tracks H* on the stiff chain where IM alone explodes (README motion table: max
+/* The blend tracks H* on the stiff chain where IM alone explodes (docs/main_job.md, motion table: max
  * |H - H*| 0.3 % of the available energy). Bound: 5 % of the swing energy over 300 frames, a
  * margin of 10x over the measured figure; IM's deviation exceeds it by orders of magnitude, so
  * the bound also shows that the report's fields are the blend's, not zeros. */

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# The API reference: Doxygen over the public headers (include/stabint/, docs/Doxyfile) into
+# build/apidocs/html/index.html. Installs doxygen if missing (scripts/install-deps.sh). Fails on
+# any warning, an undocumented public declaration included (WARN_AS_ERROR = FAIL_ON_WARNINGS), so
+# CI keeps the headers' comments complete.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+command -v doxygen >/dev/null || bash scripts/install-deps.sh
+mkdir -p build/apidocs
+log=build/apidocs/warnings.log
+# Doxygen writes its warnings to stderr; keep them in a log and print them.
+if ! doxygen docs/Doxyfile 2> "$log" || [ -s "$log" ]; then
+  cat "$log" >&2
+  echo "apidocs: $(grep -c . "$log") warning(s); see $log" >&2
+  exit 1
+fi
+echo "apidocs: 0 warnings; build/apidocs/html/index.html"

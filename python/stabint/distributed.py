@@ -187,7 +187,10 @@ def _scene_json(scene: Scene) -> _SceneJson:
 
 def _describe(scene: Any, index: int) -> Any:
     if isinstance(scene, Scene):
-        return _scene_json(scene)
+        try:
+            return _scene_json(scene)  # validates it (a scene file holds valid scenes only)
+        except InvalidInputError as e:
+            raise InvalidInputError(f"sweep: scene {index}: {e}") from e
     if isinstance(scene, BuiltinScene):
         return scene
     if callable(scene):
@@ -197,7 +200,12 @@ def _describe(scene: Any, index: int) -> Any:
 
 
 def _build(description: Any, index: int) -> Scene:
-    scene = description.build() if isinstance(description, (BuiltinScene, _SceneJson)) else description()
+    try:
+        scene = description.build() if isinstance(description, (BuiltinScene, _SceneJson)) else description()
+    except _stabint.FileFormatError as e:  # a builder's unknown parameter, a factory's loader
+        error = _stabint.FileFormatError(f"sweep: scene {index}: {e}")
+        error.file, error.line = e.file, e.line
+        raise error from e
     if not isinstance(scene, Scene):
         raise InvalidInputError(f"sweep: scene {index}: the factory returned {type(scene).__name__}, not a stabint.Scene")
     try:
@@ -215,7 +223,10 @@ def grid(scene: Union[str, BuiltinScene], **axes: Sequence[Any]) -> List[Cell]:
     combination of the axes' values, the first axis varying slowest. An axis named like a
     SimulatorOptions field (``time_step``, ``integrator``, ``iterations``, ...) sets that option;
     any other name is a parameter of the builder (its own parsing checks it in the worker). A
-    scalar instead of a list is an axis of one value. Each cell's ``key`` holds its axis values."""
+    scalar instead of a list is an axis of one value; parameters that are lists themselves
+    (``pinned``) go into the base: ``grid(BuiltinScene("cloth", {"pinned": [0]}), ...)``.
+    Enum options may be given by name (``integrator=["BackwardEuler", "EnergyBlend"]``). Each
+    cell's ``key`` holds its axis values."""
     base = BuiltinScene(scene) if isinstance(scene, str) else scene
     if not isinstance(base, BuiltinScene):
         raise InvalidInputError(f"grid: expected a built-in scene name or a BuiltinScene, got {type(scene).__name__}")
@@ -356,6 +367,8 @@ def _batches(scenes: Sequence[Any], options: Any, frames: int, batch_size: int, 
         except InvalidInputError as e:
             raise InvalidInputError(f"sweep: scene {index}: {e}") from e
         signature = json.dumps(cell_options, sort_keys=True)
+        if signature not in groups:
+            _check_batch_options(cell_options, index)
         groups.setdefault(signature, []).append((index, _describe(cell.scene, index), dict(cell.key), cell_options))
     batches = []
     for members in groups.values():
@@ -364,6 +377,18 @@ def _batches(scenes: Sequence[Any], options: Any, frames: int, batch_size: int, 
             batches.append(_Batch(len(batches), tuple(m[0] for m in chunk), tuple(m[1] for m in chunk),
                                   tuple(m[2] for m in chunk), chunk[0][3], frames, stride, velocities))
     return batches
+
+
+def _check_batch_options(options: Dict[str, Any], index: int) -> None:
+    # Options a BatchSimulator refuses (a tolerance stop, Chebyshev, Anderson, CG) are found here,
+    # before any task is sent, by the library's own check on a one-particle batch. Only for the
+    # CPU reference: an OpenCL choice is checked where the device is, in the worker.
+    if options["backend"] != "CpuReference":
+        return
+    try:
+        BatchSimulator([_stabint.builtin_scene("oscillator")], _options_from_dict(options))
+    except InvalidInputError as e:
+        raise InvalidInputError(f"sweep: scene {index}: {e}") from e
 
 
 def _default_client() -> Any:

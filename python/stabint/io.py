@@ -171,7 +171,8 @@ class VtkSeriesWriter:
 
     ``cells``: a Scene (its tets, else triangles, else springs as lines, else vertices; see
     :func:`vtk_cells`), or meshio-style ``[("triangle", array), ...]`` / ``{"tetra": array}``.
-    ``binary``: base64 binary (zlib) or ASCII ``.vtu``; both are exact.
+    The ``.vtu`` files are meshio's binary (base64, zlib) form: its ASCII form rounds the
+    numbers, the binary one keeps every bit.
 
     Example::
 
@@ -182,11 +183,10 @@ class VtkSeriesWriter:
                 vtk.write(sim.time, sim.positions, sim.velocities)
     """
 
-    def __init__(self, directory: Union[str, os.PathLike], cells: Any, *, binary: bool = True) -> None:
+    def __init__(self, directory: Union[str, os.PathLike], cells: Any) -> None:
         self._meshio = _meshio()
         self.directory = os.fspath(directory)
         self.cells = _as_cells(cells)
-        self.binary = binary
         self.frames: List[Tuple[float, str]] = []
         os.makedirs(self.directory, exist_ok=True)
 
@@ -212,7 +212,7 @@ class VtkSeriesWriter:
         name = f"frame_{len(self.frames):05d}.vtu"
         path = os.path.join(self.directory, name)
         mesh = self._meshio.Mesh(x, self.cells, point_data=data)
-        self._meshio.write(path, mesh, file_format="vtu", binary=self.binary)
+        self._meshio.write(path, mesh, file_format="vtu", binary=True)
         self.frames.append((float(time), name))
         return path
 
@@ -236,7 +236,7 @@ class VtkSeriesWriter:
 
 
 def write_vtk_series(directory: Union[str, os.PathLike], positions: Any, cells: Any, times: Any, *,
-                     velocities: Optional[Any] = None, binary: bool = True) -> str:
+                     velocities: Optional[Any] = None) -> str:
     """Writes a whole trajectory as a VTK time series and returns the ``.pvd`` path:
     ``positions`` (k, n, 3), ``times`` (k,), ``velocities`` (k, n, 3) or None, ``cells`` as for
     :class:`VtkSeriesWriter` (e.g. the Scene). A sweep's result goes straight in:
@@ -251,7 +251,7 @@ def write_vtk_series(directory: Union[str, os.PathLike], positions: Any, cells: 
     v = None if velocities is None else np.asarray(velocities, dtype=np.float64)
     if v is not None and v.shape != x.shape:
         raise InvalidInputError(f"write_vtk_series: velocities have shape {v.shape}, expected {x.shape}")
-    with VtkSeriesWriter(directory, cells, binary=binary) as writer:
+    with VtkSeriesWriter(directory, cells) as writer:
         for k in range(len(x)):
             writer.write(t[k], x[k], None if v is None else v[k])
     return os.path.join(os.fspath(directory), "frames.pvd")

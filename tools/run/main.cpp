@@ -17,7 +17,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <initializer_list>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -369,13 +368,13 @@ class VtkWriter {
     fs::create_directories(dir_);
     // VTK cell types: 10 tetra, 5 triangle, 3 line, 1 vertex.
     if (!scene.tets.empty()) {
-      for (const stabint::Tet& t : scene.tets) addCell(10, {t.vertices.begin(), t.vertices.end()});
+      for (const stabint::Tet& t : scene.tets) addCell(10, t.vertices);
     } else if (!scene.triangles.empty()) {
-      for (const auto& t : scene.triangles) addCell(5, {t.begin(), t.end()});
+      for (const auto& t : scene.triangles) addCell(5, t);
     } else if (!scene.springs.empty()) {
-      for (const stabint::Spring& s : scene.springs) addCell(3, {s.a, s.b});
+      for (const stabint::Spring& s : scene.springs) addCell(3, std::array<int, 2>{s.a, s.b});
     } else {
-      for (int i = 0; i < scene.numParticles(); ++i) addCell(1, {i});
+      for (int i = 0; i < scene.numParticles(); ++i) addCell(1, std::array<int, 1>{i});
     }
   }
 
@@ -435,8 +434,9 @@ class VtkWriter {
   }
 
  private:
-  void addCell(int type, std::initializer_list<int> vertices) {
-    connectivity_.insert(connectivity_.end(), vertices);
+  template <size_t N>
+  void addCell(int type, const std::array<int, N>& vertices) {
+    connectivity_.insert(connectivity_.end(), vertices.begin(), vertices.end());
     offsets_.push_back(static_cast<int>(connectivity_.size()));
     types_.push_back(type);
   }

@@ -187,3 +187,11 @@ def test_the_sweep_example_prints_its_table():
     # example's test; measured here: below 0.3 %).
     assert (be < -1e-3).all()
     assert (np.abs(blend) < 0.01).all()
+
+
+def test_the_core_package_imports_neither_dask_nor_meshio():
+    # Both are optional extras: `import stabint` must work without them, and the submodules
+    # load on first use (stabint.distributed, stabint.io).
+    code = ("import sys, stabint; assert not {'dask', 'distributed', 'meshio'} & set(sys.modules), sys.modules.keys(); "
+            "stabint.distributed.sweep; stabint.io.read_mesh; assert 'dask' in sys.modules and 'meshio' in sys.modules")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=60)

@@ -193,5 +193,5 @@ def test_the_core_package_imports_neither_dask_nor_meshio():
     # Both are optional extras: `import stabint` must work without them, and the submodules
     # load on first use (stabint.distributed, stabint.io).
     code = ("import sys, stabint; assert not {'dask', 'distributed', 'meshio'} & set(sys.modules), sys.modules.keys(); "
-            "stabint.distributed.sweep; stabint.io.read_mesh; assert 'dask' in sys.modules and 'meshio' in sys.modules")
+            "assert callable(stabint.distributed.sweep) and callable(stabint.io.read_mesh)")
     subprocess.run([sys.executable, "-c", code], check=True, timeout=60)

@@ -97,6 +97,12 @@ def read_mesh(path: Union[str, os.PathLike], material: Optional[Union[SolidMater
     if unused.size:
         raise _file_error(path, f"point {unused[0]} is in no {noun} cell ({unused.size} such point(s)): it would "
                                 "have no mass; remove unused points first (e.g. meshio's mesh.remove_orphaned_nodes())")
+    wanted = SolidMaterial if len(tets) else ClothMaterial
+    if material is not None and not isinstance(material, wanted):
+        from . import InvalidInputError
+
+        raise InvalidInputError(f"read_mesh({path!r}): a {noun} mesh takes a {wanted.__name__}, "
+                                f"got {type(material).__name__}")
     with tempfile.TemporaryDirectory(prefix="stabint-read-mesh-") as tmp:
         try:
             if len(tets):
@@ -110,8 +116,6 @@ def read_mesh(path: Union[str, os.PathLike], material: Optional[Union[SolidMater
             prefix = f"{e.file}:{e.line}: " if e.line > 0 else f"{e.file}: "
             message = message[len(prefix):] if message.startswith(prefix) else message
             raise _file_error(path, re.sub(r" \(line \d+\)", "", message)) from e
-        except TypeError as e:
-            raise _file_error(path, f"material: {e}") from e
     if len(tets) and len(triangles):
         scene.triangles = np.ascontiguousarray(triangles, dtype=np.int32)
     scene.name = os.path.splitext(os.path.basename(path))[0]

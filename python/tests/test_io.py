@@ -103,6 +103,9 @@ def test_bad_meshes_are_file_format_errors_naming_the_file(tmp_path):
     mixed[0, [1, 2]] = mixed[0, [2, 1]]
     # The loader's orientation rule (io.hpp), with tets numbered as meshio numbers them.
     refused("mixed.vtu", meshio.Mesh(x, [("tetra", mixed)]), "tet 0: mixed orientation")
+    meshio.write(tmp_path / "bar.vtu", meshio.Mesh(x, [("tetra", tets)]))
+    with pytest.raises(stabint.InvalidInputError, match="a tetra mesh takes a SolidMaterial, got ClothMaterial"):
+        read_mesh(tmp_path / "bar.vtu", stabint.ClothMaterial())
     with pytest.raises(stabint.FileFormatError, match="missing.vtu: meshio cannot read it") as raised:
         read_mesh(tmp_path / "missing.vtu")
     assert raised.value.file == str(tmp_path / "missing.vtu")

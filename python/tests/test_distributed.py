@@ -65,7 +65,12 @@ def local_batch(scenes, frames):
 
 def test_sweep_on_two_workers_equals_the_same_batches_stepped_here_bit_for_bit(client):
     scenes = mixed_scenes()
-    results = sweep(scenes, OPTIONS, FRAMES, batch_size=2, client=client)
+    with distributed.get_task_stream(client) as tasks:
+        results = sweep(scenes, OPTIONS, FRAMES, batch_size=2, client=client)
+    # Three batches, three tasks, run in the worker processes (not in this one).
+    assert len(tasks.data) == 3
+    workers = client.run(os.getpid)
+    assert {t["worker"] for t in tasks.data} <= set(workers) and os.getpid() not in workers.values()
     batches = plan(scenes, OPTIONS, batch_size=2)
     assert batches == [[0, 1], [2, 3], [4]]  # one options group, cut into runs of 2
     assert [r.index for r in results] == list(range(len(scenes)))

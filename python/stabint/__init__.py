@@ -14,6 +14,11 @@ Per-frame input between steps: ``Simulator.set_pin_target``, ``set_external_forc
 events: ``load_scene_file_with_events`` gives a scene and an :class:`EventScript` whose
 ``apply(sim)`` before each step plays them (copy the script with a checkpoint to resume both).
 
+Optional submodules, each behind its own extra and imported only when used:
+``stabint.distributed`` (parameter sweeps of BatchSimulator batches on a Dask cluster,
+``pip install stabint[distributed]``) and ``stabint.io`` (meshes in through meshio, VTK time
+series out, ``pip install stabint[io]``); docs/distributed_and_io.md.
+
 Example::
 
     import stabint
@@ -43,6 +48,18 @@ for _name in ("Error", "InvalidInputError", "FileFormatError", "NonFiniteStateEr
     getattr(_stabint, _name).__module__ = "stabint"
 
 __version__ = "0.1.0"
+
+_SUBMODULES = ("distributed", "io")
+
+
+def __getattr__(name: str) -> Any:
+    # stabint.distributed / stabint.io on first use (PEP 562): `import stabint` must not import
+    # Dask or meshio, which are optional extras.
+    if name in _SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module 'stabint' has no attribute '{name}'")
 
 
 def _builtin(name: str, params: dict[str, Any]) -> Scene:

@@ -1,5 +1,6 @@
 // stabint-run: one scene, one integrator, N frames; per-frame energies and timings as CSV and the
-// deformed mesh as one OBJ per frame. Options are parsed by hand (no dependency for a CLI).
+// deformed mesh as one OBJ per frame and/or a VTK time series (.vtu per frame + .pvd) for
+// ParaView. Options are parsed by hand (no dependency for a CLI).
 #include <nlohmann/json.hpp>
 
 #include <stabint/stabint.hpp>
@@ -46,6 +47,7 @@ struct Options {
   int every = 1;
   std::string csv;
   std::string obj_dir;
+  std::string vtk_dir;
   bool list_devices = false;
   bool help = false;
   bool quiet = false;
@@ -93,8 +95,13 @@ std::string usage() {
        "  --obj-dir DIR             one OBJ per written frame (DIR/frame_00000.obj, ...): vertices,\n"
        "                            surface triangles when known, else tet boundary faces, else\n"
        "                            springs as lines\n"
-       "  --every N                 write every Nth frame to the CSV and OBJ files (default 1; the\n"
-       "                            last frame is always written)\n"
+       "  --vtk DIR                 a VTK time series for ParaView: DIR/frame_00000.vtu, ... (XML\n"
+       "                            UnstructuredGrid, ASCII, positions and velocities to the last\n"
+       "                            bit) and DIR/frames.pvd listing each frame with its time (open\n"
+       "                            the .pvd); cells: the tets, else the surface triangles, else\n"
+       "                            springs as lines, else one vertex per particle\n"
+       "  --every N                 write every Nth frame to the CSV, OBJ and VTK files (default 1;\n"
+       "                            the last frame is always written)\n"
        "  --quiet                   no progress or summary on standard error\n"
        "  --help                    this text\n"
        "\n"
@@ -206,6 +213,8 @@ Options parseArgs(int argc, char** argv) {
         o.csv = value();
       } else if (arg == "--obj-dir") {
         o.obj_dir = value();
+      } else if (arg == "--vtk") {
+        o.vtk_dir = value();
       } else if (arg == "--list-devices") {
         flag();
         o.list_devices = true;
@@ -346,6 +355,97 @@ class ObjWriter {
   std::vector<std::array<int, 2>> lines_;
 };
 
+// A VTK time series (--vtk DIR) for ParaView, written without the VTK library: one XML
+// UnstructuredGrid file per written frame (DIR/frame_00000.vtu, ...) and DIR/frames.pvd, the
+// collection that lists each file with its time. ASCII with 17 significant digits, so that a
+// reader (meshio, ParaView) gets the simulator's doubles back to the last bit; binary would be
+// smaller, but the OBJ frames are text too and a series this tool writes is for looking at.
+// Cells: the tets (volume), else the surface triangles, else the springs as lines, else one
+// vertex per particle, so that every scene shows something.
+class VtkWriter {
+ public:
+  VtkWriter(std::string dir, const stabint::Scene& scene) : dir_(std::move(dir)) {
+    fs::create_directories(dir_);
+    // VTK cell types: 10 tetra, 5 triangle, 3 line, 1 vertex.
+    if (!scene.tets.empty()) {
+      for (const stabint::Tet& t : scene.tets) addCell(10, t.vertices);
+    } else if (!scene.triangles.empty()) {
+      for (const auto& t : scene.triangles) addCell(5, t);
+    } else if (!scene.springs.empty()) {
+      for (const stabint::Spring& s : scene.springs) addCell(3, std::array<int, 2>{s.a, s.b});
+    } else {
+      for (int i = 0; i < scene.numParticles(); ++i) addCell(1, std::array<int, 1>{i});
+    }
+  }
+
+  void write(int frame, double time, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%05d.vtu", frame);
+    const std::string path = (fs::path(dir_) / name).string();
+    errno = 0;
+    std::ofstream out(path);
+    if (!out) throw UsageError("--vtk: cannot write " + path + writeErrorText());
+    const auto rows = [&out](const Eigen::MatrixX3d& m) {
+      char line[96];
+      for (Eigen::Index i = 0; i < m.rows(); ++i) {
+        std::snprintf(line, sizeof(line), "%.17g %.17g %.17g\n", m(i, 0), m(i, 1), m(i, 2));
+        out << line;
+      }
+    };
+    out << "<?xml version=\"1.0\"?>\n"
+           "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+           "header_type=\"UInt64\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\""
+        << x.rows() << "\" NumberOfCells=\"" << types_.size()
+        << "\">\n<PointData Vectors=\"velocity\">\n"
+           "<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    rows(v);
+    out << "</DataArray>\n</PointData>\n<Points>\n"
+           "<DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    rows(x);
+    out << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+    for (int i : connectivity_) out << i << '\n';
+    out << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+    for (int i : offsets_) out << i << '\n';
+    out << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+    for (int i : types_) out << i << '\n';
+    out << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+    out.close();  // a full disk shows only now
+    if (!out) throw UsageError("--vtk: write failed for " + path + writeErrorText());
+    frames_.emplace_back(time, name);
+  }
+
+  // The collection, written once at the end of the run (also after a blow-up or a signal, with
+  // the frames written so far), so that it never lists a file that was not written.
+  void finish() const {
+    const std::string path = (fs::path(dir_) / "frames.pvd").string();
+    errno = 0;
+    std::ofstream out(path);
+    out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+           "<Collection>\n";
+    char line[128];
+    for (const auto& [time, file] : frames_) {
+      std::snprintf(line, sizeof(line), "<DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"%s\"/>\n", time,
+                    file.c_str());
+      out << line;
+    }
+    out << "</Collection>\n</VTKFile>\n";
+    out.close();
+    if (!out) throw UsageError("--vtk: write failed for " + path + writeErrorText());
+  }
+
+ private:
+  template <size_t N>
+  void addCell(int type, const std::array<int, N>& vertices) {
+    connectivity_.insert(connectivity_.end(), vertices.begin(), vertices.end());
+    offsets_.push_back(static_cast<int>(connectivity_.size()));
+    types_.push_back(type);
+  }
+
+  std::string dir_;
+  std::vector<int> connectivity_, offsets_, types_;
+  std::vector<std::pair<double, std::string>> frames_;
+};
+
 // Every write is checked: a full disk (--csv /dev/full) or a closed file must end the run with an
 // error, not exit 0 with nothing written.
 class CsvWriter {
@@ -462,6 +562,8 @@ int run(Options& o) {
   if (!o.csv.empty()) csv.emplace(o.csv);
   std::optional<ObjWriter> obj;
   if (!o.obj_dir.empty()) obj.emplace(o.obj_dir, scene);
+  std::optional<VtkWriter> vtk;
+  if (!o.vtk_dir.empty()) vtk.emplace(o.vtk_dir, scene);
 
   // Frame 0 is the initial state: the reference every energy drift is measured against.
   stabint::StepReport initial;
@@ -470,6 +572,7 @@ int run(Options& o) {
   const double initial_total = initial.energy.total();
   if (csv) csv->row(0, initial);
   if (obj) obj->write(0, sim->positions());
+  if (vtk) vtk->write(0, sim->time(), sim->positions(), sim->velocities());
 
   const auto start = Clock::now();
   auto last_progress = start;
@@ -484,6 +587,9 @@ int run(Options& o) {
       // Keep the last finite frame even when --every skipped it.
       if (csv && last_written != bad - 1 && bad - 1 > 0) csv->row(bad - 1, sim->lastReport());
       if (csv) csv->flush();
+      if (vtk && last_written != bad - 1 && bad - 1 > 0)
+        vtk->write(bad - 1, sim->time(), sim->positions(), sim->velocities());  // as the CSV: the last finite frame
+      if (vtk) vtk->finish();
       const bool limit = dynamic_cast<const stabint::EnergyLimitError*>(&e) != nullptr;
       std::cerr << kProgram << ": error: " << (limit ? "the energy limit was exceeded" : "the state became non-finite")
                 << " at frame " << bad << " (t = " << sim->time() + o.sim.time_step << " s); "
@@ -494,10 +600,12 @@ int run(Options& o) {
     if (frame % o.every == 0 || frame == o.frames || stop_signal != 0) {
       if (csv) csv->row(frame, sim->lastReport());
       if (obj) obj->write(frame, sim->positions());
+      if (vtk) vtk->write(frame, sim->time(), sim->positions(), sim->velocities());
       last_written = frame;
     }
     if (stop_signal != 0) {
       if (csv) csv->flush();
+      if (vtk) vtk->finish();
       std::cerr << kProgram << ": interrupted by " << (stop_signal == SIGINT ? "SIGINT" : "SIGTERM") << " after frame "
                 << frame << (csv ? "; CSV kept up to frame " + std::to_string(frame) : std::string()) << "\n";
       return 128 + stop_signal;
@@ -510,6 +618,7 @@ int run(Options& o) {
     }
   }
   if (csv) csv->flush();
+  if (vtk) vtk->finish();
   if (!o.quiet) {
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
     const double total = sim->energy().total();

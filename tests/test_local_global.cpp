@@ -200,6 +200,27 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
   checkAcceleration(s, newton_ratio, Acceleration::Newton);
 }
 
+// A body at rest in its rest shape with no gravity sits at the solve's minimum: the gradient is
+// zero, so the line search takes no step from the first iteration on, and the body must stay
+// exactly where it is. (The line search used to leave the objective it reports unset when no
+// segment stepped, which read past a vector: a crash of a resting scene.)
+TEST(LineSearch, ABodyAtItsMinimumStaysThere) {
+  TetBarParams p;
+  p.nx = 3;
+  Scene s = makeTetBar(p);
+  s.gravity.setZero();
+  for (Acceleration acceleration : {Acceleration::LBFGS, Acceleration::Newton})
+    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {
+      SimulatorOptions o;
+      o.integrator = integrator;
+      o.acceleration = acceleration;
+      Simulator sim(s, o);
+      for (int i = 0; i < 3; ++i) sim.step();
+      EXPECT_EQ(sim.positions(), s.positions) << accelerationName(acceleration) << " " << integratorName(integrator);
+      EXPECT_EQ(sim.velocities(), s.velocities) << accelerationName(acceleration) << " " << integratorName(integrator);
+    }
+}
+
 // L-BFGS's stopping rule by accuracy: a solve stops once the Newton decrement sqrt(g.H g) has
 // fallen to gradient_tolerance of its value at the warm start. Half the decrement's square
 // estimates the objective's distance to the minimum, so the gap left should shrink about as the

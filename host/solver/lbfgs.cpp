@@ -118,6 +118,8 @@ void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const Itera
                                    std::vector<double>& step, std::vector<double>& trial_objective) {
   const std::size_t segments = rows_.size();
   step.resize(segments);
+  // A segment that takes no step keeps its objective (when none steps, no local step runs).
+  trial_objective = objective;
   accepted_.assign(segments, 0);
   moved_.assign(segments, 0);
   for (std::size_t s = 0; s < segments; ++s) {

@@ -40,7 +40,11 @@ double maxDifference(const std::vector<Eigen::MatrixX3d>& a, const std::vector<E
 // One scene per element kind with a rank of its own (springs and pins 1, tets 3, triangle strain
 // 2, hinges 1): changing stiffnesses and disabling elements before the first step gives the run
 // of a scene built with those stiffnesses (disabled = stiffness 0), to the round-off of the
-// updated factors.
+// updated factors. Plain iterations carry that round-off through the steps unamplified (each is a
+// contraction); L-BFGS's decisions (a line-search halving, a curvature pair kept or dropped) are
+// discontinuous in the iterate, so a round-off difference can flip one and move the run by a
+// fraction of an iteration's update (measured 4.5e-7 m with it): that would test the solver, not
+// the update.
 TEST(ElementChanges, ChangesMatchScenesBuiltThatWay) {
   ClothGridParams cp;
   cp.nx = cp.ny = 8;
@@ -53,6 +57,7 @@ TEST(ElementChanges, ChangesMatchScenesBuiltThatWay) {
     SimulatorOptions o;
     o.integrator = Integrator::BDF2;
     o.iterations = 20;
+    o.acceleration = Acceleration::None;
     Simulator changed(scene, o);
     changed.setElementStiffness(kind, std::vector<int>{0, 3, 4, 3}, 3.0 * (scene.*member)[3].stiffness);
     changed.setElementEnabled(kind, 7, false);

@@ -228,10 +228,10 @@ TEST(Interaction, DraggedClothKeepsSwingingWithTheBlend) {
   run(Integrator::EnergyBlend, gap_blend, k_blend);
   run(Integrator::BackwardEuler, gap_be, k_be);
   // The blend's band: energy_tolerance (1e-3) of K + E_int + E_scale, about 2e-3 E_scale here;
-  // measured 1.1e-3. BE's gap grows to 0.25 E_scale (what it lost), its late motion 0.7 mJ
-  // against the blend's 95 mJ.
+  // measured 1.0e-3 (1.1e-3 with plain iterations). BE's gap grows to 0.083 E_scale (what it
+  // lost; 0.25 with plain iterations, whose unconverged solves damp more).
   EXPECT_LT(gap_blend, 3e-3);
-  EXPECT_GT(gap_be, 0.1);
+  EXPECT_GT(gap_be, 0.05);
   EXPECT_GT(k_blend, 20.0 * k_be) << "blend " << k_blend << " J, BE " << k_be << " J";
 }
 

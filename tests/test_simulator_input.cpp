@@ -40,7 +40,12 @@ TEST(SimulatorInput, BadOptionsNameTheField) {
   expectRejected([](SimulatorOptions& o) { o.anderson_window = 0; }, "anderson_window");
   expectRejected([](SimulatorOptions& o) { o.lbfgs_history = 0; }, "lbfgs_history");
   expectRejected([](SimulatorOptions& o) { o.lbfgs_history = 51; }, "lbfgs_history");
-  expectRejected([](SimulatorOptions& o) { o.gradient_tolerance = 1e-3; }, "gradient_tolerance > 0 needs");
+  expectRejected(
+      [](SimulatorOptions& o) {
+        o.acceleration = Acceleration::Anderson;
+        o.gradient_tolerance = 1e-3;
+      },
+      "gradient_tolerance > 0 needs");
   expectRejected(
       [](SimulatorOptions& o) {
         o.acceleration = Acceleration::LBFGS;

@@ -123,7 +123,7 @@ struct SimulatorOptions {
   /// iteration that the Chebyshev recurrence uses (in (0, 1)); the number of past iterates
   /// Anderson acceleration combines (>= 1); the curvature pairs L-BFGS keeps (in [1, 50]).
   ///@{
-  Acceleration acceleration = Acceleration::None;
+  Acceleration acceleration = Acceleration::LBFGS;
   double chebyshev_rho = 0.98;
   int anderson_window = 5;
   int lbfgs_history = 5;

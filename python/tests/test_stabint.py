@@ -157,12 +157,18 @@ NON_DEFAULT_OPTIONS = dict(
 
 def test_every_option_reaches_the_simulator():
     defaults = stabint.SimulatorOptions()
+    # The acceleration is L-BFGS, the default, because gradient_tolerance needs it; a
+    # non-default solver is checked on its own below.
     for name, value in NON_DEFAULT_OPTIONS.items():
-        assert getattr(defaults, name) != value or name == "backend", name
+        assert getattr(defaults, name) != value or name in ("backend", "acceleration"), name
     sim = stabint.Simulator(stabint.linear_oscillator(), stabint.SimulatorOptions(**NON_DEFAULT_OPTIONS))
     for name, value in NON_DEFAULT_OPTIONS.items():
         assert getattr(sim.options, name) == value, name
     assert sim.options.opencl.precision == stabint.Precision.Double
+    assert defaults.acceleration != stabint.Acceleration.Anderson
+    sim = stabint.Simulator(stabint.linear_oscillator(),
+                            stabint.SimulatorOptions(acceleration=stabint.Acceleration.Anderson))
+    assert sim.options.acceleration == stabint.Acceleration.Anderson
 
 
 def test_report_fields():
@@ -358,7 +364,9 @@ def test_external_forces_push_the_cloth():
     sim.set_external_forces(forces)
     for _ in range(10):
         sim.step()
-    assert sim.positions[low, 0] - unforced > 0.01
+    # Solves converged to 1e-12 move the particle 6.7 mm further; L-BFGS at the default budget
+    # 4.8 mm (plain iterations 26 mm: their unconverged solves let it run away from the cloth).
+    assert sim.positions[low, 0] - unforced > 0.003
 
 
 def test_set_iterations_changes_the_budget_of_later_steps():

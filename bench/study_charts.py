@@ -21,13 +21,14 @@ from matplotlib.colors import ListedColormap  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 INTEGRATORS = ["FE", "SE", "BE", "BDF2", "IM", "blend"]
-# Series with accelerated solves: Anderson ("<integrator>+AA"), L-BFGS ("+LB"), Newton-CG ("+NT").
-ACCELERATED = ["BE+AA", "blend+AA", "BE+LB", "blend+LB", "BE+NT", "blend+NT"]
+# Series with another solver than the default (L-BFGS): plain iterations ("<integrator>+PD"),
+# Anderson ("+AA"), Newton-CG ("+NT").
+ACCELERATED = ["BE+PD", "blend+PD", "BE+AA", "blend+AA", "BE+NT", "blend+NT"]
 COLORS = {"FE": "#8c564b", "SE": "#9467bd", "BE": "#1f77b4", "BDF2": "#2ca02c", "IM": "#d62728",
           "blend": "#ff7f0e", "BE+AA": "#17becf", "blend+AA": "#e377c2",
-          "BE+LB": "#7f7f7f", "blend+LB": "#bcbd22", "BE+NT": "#e7ba52", "blend+NT": "#393b79"}
-MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*", "BE+AA": "P", "blend+AA": "X", "BE+LB": "p",
-           "blend+LB": "h", "BE+NT": "<", "blend+NT": ">"}
+          "BE+PD": "#7f7f7f", "blend+PD": "#bcbd22", "BE+NT": "#e7ba52", "blend+NT": "#393b79"}
+MARKERS = {"FE": "v", "SE": "^", "BE": "s", "BDF2": "D", "IM": "o", "blend": "*", "BE+AA": "P", "blend+AA": "X", "BE+PD": "p",
+           "blend+PD": "h", "BE+NT": "<", "blend+NT": ">"}
 VERDICTS = ["stable", "over-damped", "exploded"]
 VERDICT_COLORS = ["#4daf4a", "#377eb8", "#e41a1c"]
 SCENE_TITLES = {"cloth": "cloth 20x20 (pinned corners)", "tetbar": "tet bar 8x2x2 (pinned at x = 0)",
@@ -495,7 +496,7 @@ def motion_table(results):
     motion = read_csv(results, "motion.csv")
     if not motion:
         return []
-    cols = INTEGRATORS + [c for c in ("blend+AA", "blend+LB", "blend+NT") if any(r["integrator"] == c for r in motion)] + ["reference"]
+    cols = INTEGRATORS + [c for c in ("blend+PD", "blend+AA", "blend+NT") if any(r["integrator"] == c for r in motion)] + ["reference"]
     rows = {(r["scene"], r["integrator"]): r for r in motion}
 
     def line(label, scene, key, digits=3, scale=1.0, until=math.inf):

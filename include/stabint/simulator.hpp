@@ -119,9 +119,11 @@ struct SimulatorOptions {
   double tolerance = 0.0;
   int max_iterations = 1000;
   ///@}
-  /// Acceleration of every local/global solve; the spectral-radius estimate of the plain
-  /// iteration that the Chebyshev recurrence uses (in (0, 1)); the number of past iterates
-  /// Anderson acceleration combines (>= 1); the curvature pairs L-BFGS keeps (in [1, 50]).
+  /// The solver of every local/global solve (default L-BFGS, the most accurate at its cost on
+  /// every scene measured: docs/method.md, "Which solver is the default"; None is plain
+  /// iterations); the spectral-radius estimate of the plain iteration that the Chebyshev
+  /// recurrence uses (in (0, 1)); the number of past iterates Anderson acceleration combines
+  /// (>= 1); the curvature pairs L-BFGS keeps (in [1, 50]).
   ///@{
   Acceleration acceleration = Acceleration::LBFGS;
   double chebyshev_rho = 0.98;

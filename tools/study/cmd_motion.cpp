@@ -179,21 +179,26 @@ struct MotionSeries {
   stabint::Acceleration acceleration;
   std::string label;
 };
-// The blend with each solver: plain iterations, then Anderson, L-BFGS and Newton-CG.
+// The blend with each solver: the default (L-BFGS) first, then plain iterations, Anderson and
+// Newton-CG.
 std::vector<MotionSeries> blendSolverSeries() {
-  std::vector<MotionSeries> series;
+  const stabint::Acceleration standard = stabint::SimulatorOptions{}.acceleration;
+  std::vector<MotionSeries> series{{Integrator::EnergyBlend, standard, "blend"}};
   for (stabint::Acceleration acceleration : {stabint::Acceleration::None, stabint::Acceleration::Anderson,
                                              stabint::Acceleration::LBFGS, stabint::Acceleration::Newton})
-    series.push_back({Integrator::EnergyBlend, acceleration, std::string("blend") + accelerationSuffix(acceleration)});
+    if (acceleration != standard)
+      series.push_back(
+          {Integrator::EnergyBlend, acceleration, std::string("blend") + accelerationSuffix(acceleration)});
   return series;
 }
 
+// Every integrator with the default solver, then the blend with each other solver.
 std::vector<MotionSeries> motionSeries() {
+  const stabint::Acceleration standard = stabint::SimulatorOptions{}.acceleration;
   std::vector<MotionSeries> series;
-  for (Integrator i : stabint::allIntegrators())
-    series.push_back({i, stabint::Acceleration::None, stabint::integratorName(i)});
+  for (Integrator i : stabint::allIntegrators()) series.push_back({i, standard, stabint::integratorName(i)});
   for (const MotionSeries& m : blendSolverSeries())
-    if (m.acceleration != stabint::Acceleration::None) series.push_back(m);
+    if (m.acceleration != standard) series.push_back(m);
   return series;
 }
 

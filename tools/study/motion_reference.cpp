@@ -52,6 +52,9 @@ RunResult referenceRun(const StudyScene& scene, int substeps, int frames) {
   spec.frame_step = scene.frame_step;
   spec.substeps = substeps;
   spec.tolerance = scene.reference_tolerance;
+  // Plain iterations to the tolerance, as the cached references were computed (the key does not
+  // name the solver).
+  spec.acceleration = stabint::Acceleration::None;
   spec.max_iterations = kMaxIterations;
   spec.frames = frames;
   spec.backend = BackendKind::CpuReference;  // the oracle backend, whatever --backend says

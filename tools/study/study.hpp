@@ -100,7 +100,7 @@ std::string cacheDescription(const StudyScene& scene);
 
 struct RunSpec {
   Integrator integrator = Integrator::EnergyBlend;
-  stabint::Acceleration acceleration = stabint::Acceleration::None;
+  stabint::Acceleration acceleration = stabint::SimulatorOptions{}.acceleration;  // the default solver
   double frame_step = 1.0 / 30.0;
   int substeps = 1;  // simulator steps per frame (h = frame_step / substeps)
   int iterations = 10;
@@ -164,7 +164,7 @@ struct RunResult {
 RunResult simulate(const Scene& scene, const RunSpec& spec,
                    const std::function<void(int, const stabint::Simulator&)>& on_frame = {});
 /// The same runs for many scenes at once, one stabint::BatchSimulator for all (the options of
-/// `spec`, which a batch must support: fixed iterations, no acceleration): each run is what
+/// `spec`, which a batch must support: fixed iterations, plain or L-BFGS solves): each run is what
 /// simulate(scenes[s], spec with energy_unit = energy_units[s]) records, to the round-off of the
 /// batch's factor ordering, except the wall clock, which is the batch's divided evenly among its
 /// scenes. A refused scene step is the run's blow-up; a stopped or blown-up scene is no longer
@@ -327,8 +327,9 @@ void runInteraction(const StudyOptions& options);  // cmd_interaction.cpp
 /// Creates the directory (and parents) if needed.
 void ensureDirectory(const std::string& path);
 std::string joinPath(const std::string& dir, const std::string& name);
-/// The label suffix of a series with accelerated solves: "+AA" (Anderson), "+LB" (L-BFGS),
-/// "+CH" (Chebyshev), "" (plain).
+/// The label suffix of a series by its solver: "" for the library's default (L-BFGS), "+PD"
+/// (plain Projective-Dynamics iterations), "+AA" (Anderson), "+LB" (L-BFGS), "+NT" (Newton-CG),
+/// "+CH" (Chebyshev).
 const char* accelerationSuffix(stabint::Acceleration acceleration);
 /// Prints a line prefixed with the elapsed time since program start, flushed.
 void progress(const std::string& message);

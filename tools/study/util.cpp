@@ -18,7 +18,9 @@ std::string joinPath(const std::string& dir, const std::string& name) {
 }
 
 const char* accelerationSuffix(stabint::Acceleration acceleration) {
+  if (acceleration == stabint::SimulatorOptions{}.acceleration) return "";
   switch (acceleration) {
+    case stabint::Acceleration::None: return "+PD";
     case stabint::Acceleration::Anderson: return "+AA";
     case stabint::Acceleration::LBFGS: return "+LB";
     case stabint::Acceleration::Newton: return "+NT";

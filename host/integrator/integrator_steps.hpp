@@ -68,6 +68,12 @@ class IntegratorSteps {
   LocalGlobalSolver& solver_;
 };
 
+/// The blend's BE partner solve: as `candidate`, ending on a plain iteration like the IM
+/// candidate's (IterationControl::plain_last_iteration): the blend combines the two, and the
+/// partner's stiff-mode error would enter the blended state's elastic energy as the candidate's
+/// would.
+IterationControl partnerControl(IterationControl candidate);
+
 /// The work the forcing does in a step (docs/method.md section 4): with p_new and p_old the
 /// potentials of the new and old positions at t + h and t, and new_mid, old_mid theirs at
 /// t + h/2, [U(x_1, t_1) - U(x_1, t_m)] + [U(x_0, t_m) - U(x_0, t_0)] over the pins and the

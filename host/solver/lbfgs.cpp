@@ -210,12 +210,12 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   while (done < limit) {
     // Two-loop recursion: direction_ = -H g with H0 = K_c^-1.
     search_ = gradient_;
-    // [project rule] The last iteration of a budget is a plain one (the direction of the empty
-    // history), as Anderson's is: it smooths the error that the curvature pairs leave in stiff,
-    // high-frequency modes. An IM solve's candidate is x_n + 2 (x_mid - x_n), which doubles that
-    // error into elastic energy; without the plain step the blend could not bring a dragged
-    // cloth back into its energy band (docs/method.md, "L-BFGS").
-    const int pairs = !to_tolerance && done == limit - 1 ? 0 : stored;
+    // [project rule] In an implicit-midpoint solve the last iteration of a budget is a plain one
+    // (the direction of the empty history): it smooths the error that the curvature pairs leave
+    // in stiff, high-frequency modes, which the step's x_1 = 2 x_mid - x_n doubles into elastic
+    // energy; without it the blend could not bring a dragged cloth back into its energy band.
+    // Elsewhere a last L-BFGS step is worth more (docs/method.md, "L-BFGS").
+    const int pairs = control.plain_last_iteration && !to_tolerance && done == limit - 1 ? 0 : stored;
     for (int k = 0; k < pairs; ++k) {
       const int i = (newest - k + window) % window;
       segmentDots(history_s_[std::size_t(i)], search_, dot);

@@ -23,6 +23,7 @@ struct StudyOptions {
   std::string out = "results";
   BackendKind backend = BackendKind::CpuReference;
   bool quick = false;  // smoke-test sizes: fewer frames and cells; never for reported numbers
+  std::string mesh;    // drop: the TetGen mesh (BASE, BASE.node or BASE.ele)
 };
 
 // ---- scenes --------------------------------------------------------------------------------
@@ -317,6 +318,7 @@ void runCrosscheck(const StudyOptions& options);
 void runMotion(const StudyOptions& options);
 void runTeaser(const StudyOptions& options);       // cmd_teaser.cpp
 void runInteraction(const StudyOptions& options);  // cmd_interaction.cpp
+void runDrop(const StudyOptions& options);         // cmd_drop.cpp (needs options.mesh; not in `all`)
 
 // ---- small helpers -------------------------------------------------------------------------
 

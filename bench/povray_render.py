@@ -4,7 +4,8 @@ ground plane that takes the shadow, and a white sky. POV-Ray is a CPU ray tracer
 headless on a machine without a GPU, and it renders the same pixels on every run (antialiasing
 and the area light are not jittered), so the pictures are deterministic.
 
-Only numpy, Pillow (the GIF) and /usr/bin/povray are used; nothing is downloaded.
+Only numpy, Pillow (the GIF; Debian's python3-pil) and /usr/bin/povray are used; nothing is
+downloaded.
 """
 import os
 import shutil
@@ -66,44 +67,63 @@ class View:
         self.soft_shadows = soft_shadows
 
 
+def image_x(view, point):
+    """Where `point` lies across the image of `view`: 0 at the left edge, 1 at the right."""
+    return float((np.asarray(point, float) - view.look_at) @ view.right / view.extent[0] + 0.5)
+
+
 def _vec(v):
     # POV-Ray is left-handed: its z is our -z. Mirroring z maps our right-handed scene to it
     # without changing what the camera sees.
     return f"<{v[0]:.6f},{v[1]:.6f},{-v[2]:.6f}>"
 
 
-def _mesh2(x, triangles, colour, back_colour):
-    n = vertex_normals(x, triangles)
-    lines = ["mesh2 {", f"vertex_vectors {{ {len(x)},"]
-    lines.append(",".join(_vec(p) for p in x))
-    lines.append("}")
-    lines.append(f"normal_vectors {{ {len(n)},")
-    lines.append(",".join(_vec(p) for p in n))
-    lines.append("}")
-    lines.append(f"face_indices {{ {len(triangles)},")
-    lines.append(",".join(f"<{a},{b},{c}>" for a, b, c in triangles))
-    lines.append("}")
+def _mesh2_one(x, n, triangles, colour):
     finish = "finish { ambient 0.0 emission 0.0 diffuse 0.78 specular 0.18 roughness 0.03 }"
-    lines.append(f"texture {{ pigment {{ rgb <{colour[0]:.4f},{colour[1]:.4f},{colour[2]:.4f}> }} {finish} }}")
-    if back_colour is not None:
-        # The other side of an open surface (the cloth): a second colour, so folds read.
-        lines.append(f"interior_texture {{ pigment {{ rgb <{back_colour[0]:.4f},{back_colour[1]:.4f},"
-                     f"{back_colour[2]:.4f}> }} {finish} }}")
-    lines.append("}")
-    return "\n".join(lines)
+    return "\n".join([
+        "mesh2 {",
+        f"vertex_vectors {{ {len(x)},", ",".join(_vec(p) for p in x), "}",
+        f"normal_vectors {{ {len(n)},", ",".join(_vec(p) for p in n), "}",
+        # Wound the other way: the mirrored z (see _vec) reverses every triangle's winding, and
+        # POV-Ray flips a smooth normal that disagrees with the winding's, which shades lit
+        # sides black.
+        f"face_indices {{ {len(triangles)},", ",".join(f"<{a},{c},{b}>" for a, b, c in triangles), "}",
+        f"texture {{ pigment {{ rgb <{colour[0]:.4f},{colour[1]:.4f},{colour[2]:.4f}> }} {finish} }}",
+        "}",
+    ])
+
+
+# Half the thickness of the shell an open surface is drawn as (m): far below what a frame shows.
+SHELL = 0.001
+
+
+def _mesh2(x, triangles, colour, back_colour):
+    """A closed surface as one smooth mesh; an open one (the cloth, `back_colour` given) as a thin
+    shell: the surface moved SHELL along its normals in `colour` and SHELL against them, wound the
+    other way, in `back_colour`. Each side then faces its own normals, so both are lit right and
+    get their own colour, and folds read (one smooth mesh seen from behind shades black)."""
+    n = vertex_normals(x, triangles)
+    if back_colour is None:
+        return _mesh2_one(x, n, triangles, colour)
+    return _mesh2_one(x + SHELL * n, n, triangles, colour) + "\n" + _mesh2_one(
+        x - SHELL * n, -n, triangles[:, ::-1], back_colour)
 
 
 def scene_header(view):
     """Camera, lights, sky and ground of `view`: everything but the surface."""
     eye = view.look_at - view.distance * view.view
     y = np.array([0.0, 1.0, 0.0])
-    # Key light: high, up and to the left of the camera, an area light (4 x 4 samples, not
-    # jittered) so the shadow on the ground is soft and lies close under the body; a fill light
-    # from the right, a third as bright and without shadow; a faint sky light from above.
-    key_dir = -0.5 * view.right + 2.2 * y - 0.6 * view.view
+    # Key light: from the front left, 30 degrees up, so that surfaces facing the camera (a hanging
+    # cloth, which faces down towards it) are lit and the shadow falls behind the body onto the
+    # ground; an area light (4 x 4 samples, not jittered) for a soft shadow. A fill light from the
+    # front right, level, a third as bright and without shadow; faint shadowless lights from
+    # above (the sky) and from below in front (the ground's bounce), so no side goes black.
+    key_dir = -0.6 * view.right + 0.7 * y - 1.0 * view.view
     key_dir /= np.linalg.norm(key_dir)
-    fill_dir = 1.0 * view.right + 0.5 * y - 1.0 * view.view
+    fill_dir = 1.0 * view.right - 1.0 * view.view
     fill_dir /= np.linalg.norm(fill_dir)
+    bounce_dir = -1.0 * y - 0.6 * view.view
+    bounce_dir /= np.linalg.norm(bounce_dir)
     size = view.distance
     key = view.look_at + size * key_dir
     fill = view.look_at + size * fill_dir
@@ -120,10 +140,11 @@ def scene_header(view):
         f"light_source {{ {_vec(key)} rgb 1.0 "
         + (f"area_light {_vec(a1)}, {_vec(a2)}, 4, 4 adaptive 1 circular orient" if view.soft_shadows else "") + " }",
         f"light_source {{ {_vec(fill)} rgb 0.35 shadowless }}",
-        f"light_source {{ {_vec(view.look_at + size * y)} rgb 0.15 shadowless }}",
+        f"light_source {{ {_vec(view.look_at + size * y)} rgb 0.2 shadowless }}",
+        f"light_source {{ {_vec(view.look_at + size * bounce_dir)} rgb 0.18 shadowless }}",
         "background { rgb <0.97,0.97,0.98> }",
-        f"plane {{ y, {view.ground:.6f} texture {{ pigment {{ checker rgb <0.94,0.94,0.93> rgb <0.85,0.85,0.84> "
-        "scale 0.25 } finish { ambient 0.0 diffuse 0.8 } } }",
+        f"plane {{ y, {view.ground:.6f} texture {{ pigment {{ checker rgb <0.97,0.97,0.96> rgb <0.88,0.88,0.87> "
+        "scale 0.25 } finish { ambient 0.0 diffuse 1.0 } } }",
     ])
 
 
@@ -149,10 +170,16 @@ def _render_chunk(view, frames, tmp, first):
                 f.write(_mesh2(np.asarray(x, float), triangles, colour, back) + "\n")
     pov = os.path.join(tmp, "scene.pov")
     with open(pov, "w") as f:
-        f.write(scene_header(view) + '\n#include concat("frame", str(frame_number, 0, 0), ".inc")\n')
+        # A one-frame chunk is no animation to POV-Ray (frame_number stays 0): it names the frame
+        # by a declared F instead, and writes out.png (renamed by render()).
+        f.write(scene_header(view) + '\n#ifndef (F) #declare F = frame_number; #end\n'
+                '#include concat("frame", str(F, 0, 0), ".inc")\n')
     args = [POVRAY, f"+I{pov}", f"+O{os.path.join(tmp, 'out.png')}", f"+W{view.width}", f"+H{view.height}",
-            "+FN", "-D", "-V", "-GA", "Work_Threads=1", f"+KFI{first + 1}", f"+KFF{first + len(frames)}",
-            f"+KI{first + 1}", f"+KF{first + len(frames)}"]
+            "+FN", "-D", "-V", "-GA", "Work_Threads=1"]
+    if len(frames) == 1:
+        args.append(f"Declare=F={first + 1}")
+    else:
+        args += [f"+KFI{first + 1}", f"+KFF{first + len(frames)}", f"+KI{first + 1}", f"+KF{first + len(frames)}"]
     if view.antialias:
         args += [f"+A{view.antialias}", "+AM2", "+R2", "-J"]  # adaptive, not jittered: the same pixels every run
     return subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, cwd=tmp)
@@ -179,7 +206,9 @@ def render(view, frames, out_pngs, jobs=None):
             if proc.returncode != 0:
                 raise RuntimeError(f"povray failed ({proc.returncode}): {err.decode(errors='replace')[-2000:]}")
         written = []
-        for sub, _ in running:
+        for j, (sub, _) in enumerate(running):
+            if os.path.exists(os.path.join(sub, "out.png")):
+                os.rename(os.path.join(sub, "out.png"), os.path.join(sub, f"out{bounds[j] + 1}.png"))
             written += [os.path.join(sub, f) for f in os.listdir(sub) if f.startswith("out") and f.endswith(".png")]
         # POV-Ray numbers the frames out<frame>.png with the frame number zero-padded.
         written.sort(key=lambda f: int(os.path.basename(f)[3:-4]))
@@ -187,3 +216,20 @@ def render(view, frames, out_pngs, jobs=None):
             raise RuntimeError(f"povray wrote {len(written)} frames for {len(frames)}")
         for src, out in zip(written, out_pngs):
             shutil.move(src, out)
+
+
+def save_gif(images, path, frame_ms):
+    """Writes the RGB `images` as a looping GIF with one palette for all frames (so colours do
+    not flicker between frames), taken from the first, middle and last frame side by side, and
+    Floyd-Steinberg dithering (smooth shading without banding). Deterministic."""
+    from PIL import Image
+
+    pick = [images[0], images[len(images) // 2], images[-1]]
+    sample = Image.new("RGB", (sum(im.width for im in pick), max(im.height for im in pick)))
+    x = 0
+    for im in pick:
+        sample.paste(im, (x, 0))
+        x += im.width
+    palette = sample.quantize(colors=256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    frames = [im.quantize(palette=palette, dither=Image.Dither.FLOYDSTEINBERG) for im in images]
+    frames[0].save(path, save_all=True, append_images=frames[1:], duration=frame_ms, loop=0, optimize=False)

@@ -28,11 +28,11 @@ namespace {
 
 // The body: scaled so its longest side is kSize, a rubber-like solid with the tet bar's density
 // and stiffness (a fifth of it lets the thin legs fold flat under the impact).
-constexpr double kSize = 0.6;            // m
-constexpr double kDensity = 1000.0;      // kg/m^3
-constexpr double kStiffness = 3e5;       // Pa
-constexpr double kDropHeight = 0.3;      // m: its lowest point above the ground at the start
-constexpr double kTiltDegrees = 5.0;     // nose down (the trunk points along +x): front feet first, then it rocks
+constexpr double kSize = 0.6;         // m
+constexpr double kDensity = 1000.0;   // kg/m^3
+constexpr double kStiffness = 3e5;    // Pa
+constexpr double kDropHeight = 0.3;   // m: its lowest point above the ground at the start
+constexpr double kTiltDegrees = 5.0;  // nose down (the trunk points along +x): front feet first, then it rocks
 // The ground of `interaction`'s bounce: soft enough that the contact lasts a few steps and the
 // impact depth stays under the contact tolerance (so the final projection does not act and the
 // contact itself is conservative: what the body keeps is the integrator's doing), with friction.
@@ -86,8 +86,7 @@ Scene dropScene(const std::string& mesh) {
   s.rest_positions = ((s.rest_positions.rowwise() - mid) * scale).eval();
   s.masses = stabint::lumpMassesFromTets(s.rest_positions, s.tets, kDensity);
   const double tilt = kTiltDegrees * M_PI / 180.0;
-  const Eigen::Matrix3d turn =
-      Eigen::AngleAxisd(-tilt, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(-tilt, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   s.positions = s.rest_positions * turn.transpose();
   s.positions.col(1).array() += kDropHeight - s.positions.col(1).minCoeff();
   s.velocities.setZero(s.positions.rows(), 3);
@@ -116,8 +115,8 @@ void runDrop(const StudyOptions& options) {
     }
   }
   progress("drop: " + std::to_string(scene.numParticles()) + " particles, " + std::to_string(scene.tets.size()) +
-           " tets, " + std::to_string(surface.size()) + " surface triangles, " +
-           std::to_string(scene.masses.sum()) + " kg");
+           " tets, " + std::to_string(surface.size()) + " surface triangles, " + std::to_string(scene.masses.sum()) +
+           " kg");
   const int frames = options.quick ? 30 : static_cast<int>(kSeconds * 30.0 + 0.5);
   const int late = std::min(frames, static_cast<int>(kLateSeconds * 30.0 + 0.5));
   CsvWriter csv(joinPath(options.out, "drop_energy.csv"),
@@ -133,7 +132,8 @@ void runDrop(const StudyOptions& options) {
     stabint::Simulator sim(scene, o);
     std::ofstream bin(joinPath(options.out, std::string("drop_") + stabint::integratorName(integrator) + ".bin"),
                       std::ios::binary | std::ios::trunc);
-    if (!bin) throw std::runtime_error("cannot write drop_" + std::string(stabint::integratorName(integrator)) + ".bin");
+    if (!bin)
+      throw std::runtime_error("cannot write drop_" + std::string(stabint::integratorName(integrator)) + ".bin");
     writePositions(bin, sim.positions());
     const stabint::EnergyReport e0 = sim.energy();
     const double h0 = e0.total(), com0 = comHeight(sim.positions());

@@ -90,9 +90,15 @@ int main(int argc, char** argv) {
       const char* name;
       void (*run)(const StudyOptions&);
     };
-    const Step steps[] = {{"table", runTable},         {"reference", runReference}, {"sweep", runSweep},
-                          {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck},
-                          {"motion", runMotion},       {"teaser", runTeaser},       {"interaction", runInteraction},
+    const Step steps[] = {{"table", runTable},
+                          {"reference", runReference},
+                          {"sweep", runSweep},
+                          {"stability", runStability},
+                          {"energy", runEnergy},
+                          {"crosscheck", runCrosscheck},
+                          {"motion", runMotion},
+                          {"teaser", runTeaser},
+                          {"interaction", runInteraction},
                           {"drop", runDrop}};
     bool found = false;
     for (const Step& s : steps) {

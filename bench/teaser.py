@@ -40,7 +40,7 @@ FRONT = (0.30, 0.52, 0.75)  # steel blue
 BACK = (0.88, 0.60, 0.30)   # ochre
 VIEW = [-0.35, -0.3, -1.0]  # from the eye to the scene
 GAP = 0.12                  # m between the three cloths' widest extents
-STILL_TIME = 2.0  # s: the cloth has swung through the bottom; BE's folds are gone, the blend's are not
+STILL_TIME = 5.0  # s: BE and BDF2 hang still in their folds; the blend is at the top of its swing
 
 
 def read_energy(results):

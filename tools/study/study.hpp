@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>  // cross products (angular momentum, spinning scenes)
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <map>
@@ -92,6 +93,11 @@ double availableEnergy(const StudyScene& scene);
 /// The text that keys a cached reference of `scene`: its params and every field of its
 /// colliders (none: params alone, so the keys of collider-free scenes are unchanged).
 std::string cacheDescription(const StudyScene& scene);
+
+/// The boundary of a tet mesh whose tets are positively oriented (as the loaders and
+/// validateScene leave them): the faces that only one tet has, wound so that their normals point
+/// out of the body, sorted by their corners (cmd_drop.cpp; the drop's rendered skin).
+std::vector<std::array<int, 3>> tetBoundary(const Scene& scene);
 
 // ---- a recorded run ------------------------------------------------------------------------
 

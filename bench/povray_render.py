@@ -84,9 +84,8 @@ def _mesh2_one(x, n, triangles, colour):
         "mesh2 {",
         f"vertex_vectors {{ {len(x)},", ",".join(_vec(p) for p in x), "}",
         f"normal_vectors {{ {len(n)},", ",".join(_vec(p) for p in n), "}",
-        # Wound the other way: the mirrored z (see _vec) reverses every triangle's winding, and
-        # POV-Ray flips a smooth normal that disagrees with the winding's, which shades lit
-        # sides black.
+        # Wound the other way: mirroring z (see _vec) reverses each triangle's winding, so this
+        # keeps the winding's normal on the side of the given vertex normals.
         f"face_indices {{ {len(triangles)},", ",".join(f"<{a},{c},{b}>" for a, b, c in triangles), "}",
         f"texture {{ pigment {{ rgb <{colour[0]:.4f},{colour[1]:.4f},{colour[2]:.4f}> }} {finish} }}",
         "}",
@@ -100,8 +99,8 @@ SHELL = 0.001
 def _mesh2(x, triangles, colour, back_colour):
     """A closed surface as one smooth mesh; an open one (the cloth, `back_colour` given) as a thin
     shell: the surface moved SHELL along its normals in `colour` and SHELL against them, wound the
-    other way, in `back_colour`. Each side then faces its own normals, so both are lit right and
-    get their own colour, and folds read (one smooth mesh seen from behind shades black)."""
+    other way, in `back_colour`. Each side then faces its own normals, so each is lit and
+    coloured as its own side, and folds that turn the cloth over read."""
     n = vertex_normals(x, triangles)
     if back_colour is None:
         return _mesh2_one(x, n, triangles, colour)
@@ -113,7 +112,7 @@ def scene_header(view):
     """Camera, lights, sky and ground of `view`: everything but the surface."""
     eye = view.look_at - view.distance * view.view
     y = np.array([0.0, 1.0, 0.0])
-    # Key light: from the front left, 30 degrees up, so that surfaces facing the camera (a hanging
+    # Key light: from the front left, about 40 degrees up, so that surfaces facing the camera (a hanging
     # cloth, which faces down towards it) are lit and the shadow falls behind the body onto the
     # ground; an area light (4 x 4 samples, not jittered) for a soft shadow. A fill light from the
     # front right, level, a third as bright and without shadow; faint shadowless lights from

@@ -334,6 +334,17 @@ def chart_interaction(results, charts):
 
 
 def chart_cloth_still(results, charts):
+    """The main job's cloth at the same frame with BE and the blend, rendered with POV-Ray
+    (bench/povray_render.py, as the teaser): smooth normals, key and fill light, the shadow on
+    a ground plane, the cloth's two sides in two colours."""
+    import tempfile
+
+    import numpy as np  # matplotlib depends on numpy
+    from PIL import Image
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import povray_render as pr
+
     stills = []
     for integ in ("BE", "blend"):
         rows = read_csv(results, f"cloth_still_{integ}.csv")
@@ -341,35 +352,40 @@ def chart_cloth_still(results, charts):
             stills.append((integ, rows))
     if not stills:
         return
-    fig = plt.figure(figsize=(6.2 * len(stills), 5.6))
-    all_pts = [(num(r, "x"), num(r, "y"), num(r, "z")) for _, rows in stills for r in rows]
-    lims = [(min(p[a] for p in all_pts), max(p[a] for p in all_pts)) for a in range(3)]
-    for n, (integ, rows) in enumerate(stills):
-        nx, ny = int(rows[0]["nx"]), int(rows[0]["ny"])
-        frame = rows[0]["frame"]
-        grid = {(int(r["i"]), int(r["j"])): r for r in rows}
-        # Plot with the simulation's y (up) as the chart's vertical axis.
-        X = [[num(grid[(i, j)], "x") for i in range(nx)] for j in range(ny)]
-        Y = [[num(grid[(i, j)], "z") for i in range(nx)] for j in range(ny)]
-        Z = [[num(grid[(i, j)], "y") for i in range(nx)] for j in range(ny)]
-        ax = fig.add_subplot(1, len(stills), n + 1, projection="3d")
-        import numpy as np  # matplotlib depends on numpy
-
-        X, Y, Z = np.array(X), np.array(Y), np.array(Z)
-        ax.plot_surface(X, Y, Z, cmap="viridis", edgecolor="#333333", linewidth=0.3, antialiased=True,
-                        rstride=1, cstride=1, alpha=0.95)
-        ax.set_xlim(*lims[0])
-        ax.set_ylim(*lims[2])
-        ax.set_zlim(*lims[1])
-        ax.set_box_aspect((lims[0][1] - lims[0][0], lims[2][1] - lims[2][0], lims[1][1] - lims[1][0]))
-        ax.view_init(elev=18, azim=-60)
-        ax.set_xlabel("x [m]", fontsize=8)
-        ax.set_ylabel("z [m]", fontsize=8)
-        ax.tick_params(labelsize=7)
-        ax.set_title(f"{integ}, frame {frame} (t = {int(frame) / 30:.1f} s); vertical axis: y (up) [m]",
-                     fontsize=10)
-    fig.suptitle("Cloth released 30 degrees below the horizontal, pinned at two corners (h = 1/30 s, "
-                 "10 iterations)", fontsize=10)
+    if not pr.available():
+        print(f"study_charts: cloth_still skipped: {pr.POVRAY} missing (scripts/install-deps.sh)")
+        return
+    nx, ny = int(stills[0][1][0]["nx"]), int(stills[0][1][0]["ny"])
+    frame = stills[0][1][0]["frame"]
+    # The grid's particles in row-major order j*nx + i, two triangles per cell, wound as the
+    # teaser's cloth, so the side facing the camera is blue in both pictures.
+    ij = np.array([(j, i) for j in range(ny - 1) for i in range(nx - 1)])
+    c = ij[:, 0] * nx + ij[:, 1]
+    triangles = np.concatenate([np.stack([c, c + nx + 1, c + 1], 1), np.stack([c, c + nx, c + nx + 1], 1)])
+    xs = []
+    for _, rows in stills:
+        x = np.zeros((nx * ny, 3))
+        for r in rows:
+            x[int(r["j"]) * nx + int(r["i"])] = (num(r, "x"), num(r, "y"), num(r, "z"))
+        xs.append(x[None])
+    direction = np.array([-0.35, -0.3, -1.0])
+    right = np.cross(direction / np.linalg.norm(direction), [0.0, 1.0, 0.0])
+    placed = pr.side_by_side(xs, right / np.linalg.norm(right), 0.15)
+    everything = np.concatenate(placed)
+    view = pr.View(direction, everything, float(everything[..., 1].min()) - 0.08, 1300, 560, antialias=0.1)
+    with tempfile.TemporaryDirectory(prefix="stabint-cloth-") as tmp:
+        png = os.path.join(tmp, "still.png")
+        pr.render(view, [[(p[0], triangles, (0.30, 0.52, 0.75), (0.88, 0.60, 0.30)) for p in placed]], [png])
+        image = np.asarray(Image.open(png).convert("RGB"))
+    fig, ax = plt.subplots(figsize=(12.0, 5.6))
+    ax.imshow(image, interpolation="lanczos")
+    ax.set_axis_off()
+    names = {"BE": "backward Euler", "blend": "energy-tracking blend"}
+    for (integ, _), p in zip(stills, placed):
+        ax.text(pr.image_x(view, p[0].mean(axis=0)) * image.shape[1], 10, names[integ], ha="center", va="top",
+                fontsize=12)
+    ax.set_title(f"Cloth released 30 degrees below the horizontal, pinned at two corners (h = 1/30 s, "
+                 f"10 iterations): frame {frame} (t = {int(frame) / 30:.1f} s)", fontsize=10)
     save(fig, charts, "cloth_still")
 
 

@@ -16,7 +16,10 @@ packages=(
   libbenchmark-dev
   nlohmann-json3-dev     # scene files
   python3-matplotlib     # charts (used through /usr/bin/python3)
-  python3-pil            # the teaser animation (matplotlib's GIF writer)
+  python3-pil            # the teaser's and the drop's GIFs
+  povray                 # renders the teaser and the soft-body drop (CPU ray tracer, headless)
+  tetgen                 # meshes the main job's soft body (scripts/soft_body_mesh.sh)
+  libcgal-demo           # ships the surface it meshes: CGAL's data/meshes/elephant.off (CC0)
   python3-venv python3-dev  # the Python package: .venv and the extension's headers (scripts/python.sh)
   clang libclang-rt-14-dev  # sanitizer build and libFuzzer harnesses (scripts/sanitize.sh, fuzz.sh)
   clang-format           # the tree's style (.clang-format, scripts/format.sh; checked in CI)

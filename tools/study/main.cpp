@@ -11,7 +11,7 @@ namespace {
 
 void usage(std::FILE* to) {
   std::fprintf(to,
-               "usage: stabint-study <command> [--out DIR] [--backend cpu|opencl] [--quick]\n"
+               "usage: stabint-study <command> [--out DIR] [--backend cpu|opencl] [--quick] [--mesh BASE]\n"
                "commands:\n"
                "  table       energy behaviour of every integrator: chain pendulum and cloth, 300 frames\n"
                "              (printed, and energy_table.csv)\n"
@@ -33,12 +33,16 @@ void usage(std::FILE* to) {
                "              BDF2 and the blend: H, H*, the hand's work and the events (interaction.csv);\n"
                "              a tet bar bouncing on the ground: H, H*, friction, final projection (bounce.csv)\n"
                "  all         all of the above in order\n"
+               "  drop        a TetGen soft body (--mesh BASE, made by scripts/soft_body_mesh.sh) dropped on the\n"
+               "              ground with BE, BDF2 and the blend (drop_surface.csv, drop_energy.csv,\n"
+               "              drop_<integrator>.bin); not part of all, which needs no mesher\n"
                "options:\n"
                "  --out DIR          output directory (default results)\n"
                "  --backend NAME     opencl (default; cpu when no OpenCL device exists) or cpu for the\n"
                "                     simulations; references are\n"
                "                     always computed on the CPU reference backend\n"
-               "  --quick            smoke-test sizes (fewer frames and cells); not for reported numbers\n");
+               "  --quick            smoke-test sizes (fewer frames and cells); not for reported numbers\n"
+               "  --mesh BASE        drop: the TetGen mesh BASE.node/BASE.ele\n");
 }
 
 }  // namespace
@@ -66,6 +70,8 @@ int main(int argc, char** argv) {
         backend_given = true;
       } else if (arg == "--quick")
         options.quick = true;
+      else if (arg == "--mesh")
+        options.mesh = value();
       else
         throw stabint::InvalidInputError("unknown option " + arg);
     }
@@ -84,12 +90,20 @@ int main(int argc, char** argv) {
       const char* name;
       void (*run)(const StudyOptions&);
     };
-    const Step steps[] = {{"table", runTable},         {"reference", runReference}, {"sweep", runSweep},
-                          {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck},
-                          {"motion", runMotion},       {"teaser", runTeaser},       {"interaction", runInteraction}};
+    const Step steps[] = {{"table", runTable},
+                          {"reference", runReference},
+                          {"sweep", runSweep},
+                          {"stability", runStability},
+                          {"energy", runEnergy},
+                          {"crosscheck", runCrosscheck},
+                          {"motion", runMotion},
+                          {"teaser", runTeaser},
+                          {"interaction", runInteraction},
+                          {"drop", runDrop}};
     bool found = false;
     for (const Step& s : steps) {
-      if (command != "all" && command != s.name) continue;
+      // `drop` needs a mesh made by an external mesher, so `all` leaves it out.
+      if (command == "all" ? s.run == runDrop : command != s.name) continue;
       found = true;
       progress(std::string("== ") + s.name + " (backend " + stabint::backendName(options.backend) + ", out " +
                options.out + ")");

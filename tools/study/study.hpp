@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>  // cross products (angular momentum, spinning scenes)
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <map>
@@ -23,6 +24,7 @@ struct StudyOptions {
   std::string out = "results";
   BackendKind backend = BackendKind::CpuReference;
   bool quick = false;  // smoke-test sizes: fewer frames and cells; never for reported numbers
+  std::string mesh;    // drop: the TetGen mesh (BASE, BASE.node or BASE.ele)
 };
 
 // ---- scenes --------------------------------------------------------------------------------
@@ -95,6 +97,11 @@ double availableEnergy(const StudyScene& scene);
 /// The text that keys a cached reference of `scene`: its params and every field of its
 /// colliders (none: params alone, so the keys of collider-free scenes are unchanged).
 std::string cacheDescription(const StudyScene& scene);
+
+/// The boundary of a tet mesh whose tets are positively oriented (as the loaders and
+/// validateScene leave them): the faces that only one tet has, wound so that their normals point
+/// out of the body, sorted by their corners (cmd_drop.cpp; the drop's rendered skin).
+std::vector<std::array<int, 3>> tetBoundary(const Scene& scene);
 
 // ---- a recorded run ------------------------------------------------------------------------
 
@@ -321,6 +328,7 @@ void runCrosscheck(const StudyOptions& options);
 void runMotion(const StudyOptions& options);
 void runTeaser(const StudyOptions& options);       // cmd_teaser.cpp
 void runInteraction(const StudyOptions& options);  // cmd_interaction.cpp
+void runDrop(const StudyOptions& options);         // cmd_drop.cpp (needs options.mesh; not in `all`)
 
 // ---- small helpers -------------------------------------------------------------------------
 

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 namespace study {
 namespace {
@@ -207,4 +208,35 @@ TEST(EnergyMetrics, ExplodedAtIsTheFirstFrameBeyondTheThreshold) {
 }
 
 }  // namespace
+// The drop's skin: on the tet bar (8 x 2 x 2 cells) the boundary is closed and consistently
+// wound (every directed edge once, its reverse once) and faces outward (the divergence theorem:
+// sum over faces of centroid . area normal / 3 is the volume, which the tets give directly).
+TEST(TetBoundary, TetBarSkinIsClosedOutwardAndHasTheBarsVolume) {
+  const stabint::Scene bar = stabint::makeTetBar(stabint::TetBarParams{});
+  const std::vector<std::array<int, 3>> skin = tetBoundary(bar);
+  ASSERT_FALSE(skin.empty());
+  std::map<std::pair<int, int>, int> directed;
+  double surface_volume = 0.0;
+  const Eigen::MatrixX3d& x = bar.rest_positions;
+  for (const auto& f : skin) {
+    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
+    const Eigen::Vector3d a = x.row(f[0]), b = x.row(f[1]), c = x.row(f[2]);
+    surface_volume += a.dot(b.cross(c)) / 6.0;
+  }
+  for (const auto& [edge, count] : directed) {
+    EXPECT_EQ(count, 1);
+    EXPECT_EQ(directed.count({edge.second, edge.first}), 1u);
+  }
+  double tet_volume = 0.0;
+  for (const stabint::Tet& t : bar.tets) {
+    const Eigen::Vector3d p0 = x.row(t.vertices[0]);
+    tet_volume +=
+        (Eigen::Vector3d(x.row(t.vertices[1])) - p0)
+            .dot((Eigen::Vector3d(x.row(t.vertices[2])) - p0).cross(Eigen::Vector3d(x.row(t.vertices[3])) - p0)) /
+        6.0;
+  }
+  EXPECT_GT(tet_volume, 0.0);
+  EXPECT_NEAR(surface_volume, tet_volume, 1e-12 * tet_volume);
+}
+
 }  // namespace study

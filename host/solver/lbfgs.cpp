@@ -210,11 +210,12 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   while (done < limit) {
     // Two-loop recursion: direction_ = -H g with H0 = K_c^-1.
     search_ = gradient_;
-    // [project rule] In an implicit-midpoint solve the last iteration of a budget is a plain one
-    // (the direction of the empty history): it smooths the error that the curvature pairs leave
-    // in stiff, high-frequency modes, which the step's x_1 = 2 x_mid - x_n doubles into elastic
+    // [project rule] Where the integrator asks for it (implicit midpoint, BDF2, the blend's
+    // partner) the last iteration of a budget is a plain one (the direction of the empty
+    // history): it smooths the error that the curvature pairs leave in stiff, high-frequency
+    // modes, which IM's x_1 = 2 x_mid - x_n doubles and BDF2's history carries on as elastic
     // energy; without it the blend could not bring a dragged cloth back into its energy band.
-    // Elsewhere a last L-BFGS step is worth more (docs/method.md, "L-BFGS").
+    // In BE the last L-BFGS step is worth more (docs/method.md, "L-BFGS").
     const int pairs = control.plain_last_iteration && !to_tolerance && done == limit - 1 ? 0 : stored;
     for (int k = 0; k < pairs; ++k) {
       const int i = (newest - k + window) % window;

@@ -33,7 +33,7 @@ struct IterationControl {
   int lbfgs_history = 5;            // curvature pairs L-BFGS keeps
   double gradient_tolerance = 0.0;  // L-BFGS: stop at this fraction of the warm start's gradient
   /// L-BFGS: the last iteration of a budget is a plain one (IntegratorSteps sets it for implicit
-  /// midpoint's solves: docs/method.md, "L-BFGS").
+  /// midpoint's and BDF2's solves and the blend's partner: docs/method.md, "L-BFGS").
   bool plain_last_iteration = false;
   GlobalSolve global_solve = GlobalSolve::Factor;
   int cg_iterations = 20;     // CG iterations per global step (at most, with cg_tolerance > 0)

@@ -1,10 +1,70 @@
 #include "integrator/options.hpp"
 
+#include <stabint/options_fields.hpp>
+
 #include <cmath>
+#include <cstddef>
 #include <sstream>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 namespace stabint {
+namespace {
+
+// The field list (stabint/options_fields.hpp) must name every member of the structs, with its
+// type, or the C API, Python and stabint-run would silently miss a field. A member
+// missing from the list changes the count of members an aggregate initializer takes; a wrong
+// type or name fails the is_same checks.
+struct AnyField {
+  template <class T>
+  operator T() const;  // never called: only the initializer's validity is asked
+};
+
+template <class T, class... Args>
+constexpr auto bracesWith(int) -> decltype(void(T{std::declval<Args>()...}), true) {
+  return true;
+}
+template <class T, class... Args>
+constexpr bool bracesWith(...) {
+  return false;
+}
+// The number of members of aggregate T: the most initializers T{...} accepts.
+template <class T, class... Args>
+constexpr std::size_t memberCount() {
+  if constexpr (bracesWith<T, Args..., AnyField>(0))
+    return memberCount<T, Args..., AnyField>();
+  else
+    return sizeof...(Args);
+}
+
+#define STABINT_COUNT_FIELD(type, name, doc) +1
+#define STABINT_COUNT_NESTED(type, name, fields, doc) +1
+#define STABINT_COUNT_SUB(parent, type, name, doc) +1
+static_assert(memberCount<SimulatorOptions>() ==
+                  0 STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_COUNT_FIELD, STABINT_COUNT_NESTED),
+              "STABINT_SIMULATOR_OPTIONS_FIELDS must list every member of SimulatorOptions");
+static_assert(memberCount<OpenCLOptions>() == 0 STABINT_OPENCL_OPTIONS_FIELDS(STABINT_COUNT_SUB, opencl),
+              "STABINT_OPENCL_OPTIONS_FIELDS must list every member of OpenCLOptions");
+#undef STABINT_COUNT_FIELD
+#undef STABINT_COUNT_NESTED
+#undef STABINT_COUNT_SUB
+
+#define STABINT_CHECK_FIELD(type, name, doc)                            \
+  static_assert(std::is_same_v<decltype(SimulatorOptions::name), type>, \
+                "SimulatorOptions::" #name " has another type than its entry in the field list");
+#define STABINT_CHECK_NESTED(type, name, fields, doc) \
+  STABINT_CHECK_FIELD(type, name, doc)                \
+  fields(STABINT_CHECK_SUB, name)
+#define STABINT_CHECK_SUB(parent, type, name, doc)                                        \
+  static_assert(std::is_same_v<decltype(decltype(SimulatorOptions::parent)::name), type>, \
+                #parent "." #name " has another type than its entry in the field list");
+STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_CHECK_FIELD, STABINT_CHECK_NESTED)
+#undef STABINT_CHECK_FIELD
+#undef STABINT_CHECK_NESTED
+#undef STABINT_CHECK_SUB
+
+}  // namespace
 
 void validateOptions(const SimulatorOptions& o) {
   auto fail = [](const std::string& what) { throw InvalidInputError("simulator options: " + what); };

@@ -64,6 +64,12 @@ STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_CHECK_FIELD, STABINT_CHECK_NESTED)
 #undef STABINT_CHECK_NESTED
 #undef STABINT_CHECK_SUB
 
+// Whether an enum holds one of its values, 0 to count - 1 (the counts of simulator.hpp).
+template <class Enum>
+bool inRange(Enum value, int count) {
+  return static_cast<int>(value) >= 0 && static_cast<int>(value) < count;
+}
+
 }  // namespace
 
 void validateOptions(const SimulatorOptions& o) {
@@ -79,12 +85,11 @@ void validateOptions(const SimulatorOptions& o) {
   }
   // An enum from a config file or a binding can hold any integer; an unknown integrator used to
   // run no integrator at all and commit a zero state.
-  if (static_cast<int>(o.integrator) < static_cast<int>(Integrator::ForwardEuler) ||
-      static_cast<int>(o.integrator) > static_cast<int>(Integrator::EnergyBlend))
+  if (!inRange(o.integrator, kIntegratorCount))
     fail("integrator = " + std::to_string(static_cast<int>(o.integrator)) + " is not an Integrator value");
-  if (o.backend != BackendKind::CpuReference && o.backend != BackendKind::OpenCL && o.backend != BackendKind::Auto)
+  if (!inRange(o.backend, kBackendKindCount))
     fail("backend = " + std::to_string(static_cast<int>(o.backend)) + " is not a BackendKind value");
-  if (o.opencl.precision != Precision::Double && o.opencl.precision != Precision::Float)
+  if (!inRange(o.opencl.precision, kPrecisionCount))
     fail("opencl.precision = " + std::to_string(static_cast<int>(o.opencl.precision)) + " is not a Precision value");
   if (!std::isfinite(o.energy_limit) || o.energy_limit < 0.0)
     fail("energy_limit must be finite and >= 0 (0: no limit)");
@@ -95,9 +100,7 @@ void validateOptions(const SimulatorOptions& o) {
   if (!std::isfinite(o.energy_tolerance) || o.energy_tolerance <= 0.0) fail("energy_tolerance must be finite and > 0");
   if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
     fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
-  if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
-      o.acceleration != Acceleration::Anderson && o.acceleration != Acceleration::LBFGS &&
-      o.acceleration != Acceleration::Newton)
+  if (!inRange(o.acceleration, kAccelerationCount))
     fail("acceleration = " + std::to_string(static_cast<int>(o.acceleration)) + " is not an Acceleration value");
   if (o.anderson_window < 1 || o.anderson_window > 50)
     fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
@@ -109,7 +112,7 @@ void validateOptions(const SimulatorOptions& o) {
     fail("gradient_tolerance > 0 needs acceleration = lbfgs (the solve that computes the gradient)");
   if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
     fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
-  if (o.global_solve != GlobalSolve::Factor && o.global_solve != GlobalSolve::ConjugateGradient)
+  if (!inRange(o.global_solve, kGlobalSolveCount))
     fail("global_solve = " + std::to_string(static_cast<int>(o.global_solve)) + " is not a GlobalSolve value");
   if (o.cg_iterations < 1) fail("cg_iterations = " + std::to_string(o.cg_iterations) + " must be >= 1");
   if (!std::isfinite(o.cg_tolerance) || !(o.cg_tolerance >= 0.0 && o.cg_tolerance < 1.0))

@@ -10,6 +10,7 @@
 #include <limits>
 #include <new>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -93,13 +94,150 @@ void requireCapacity(size_t capacity, size_t needed, const char* what) {
   }
 }
 
-// C enums arrive as plain ints: check the range before casting to the C++ enum.
+// ---- options: the C struct <-> SimulatorOptions, generated from the field list -----------------
+// (stabint/options_fields.hpp). The C header is plain C and lists the fields itself; the checks
+// below fail the build when a C field is missing or has another type, or when a C enum's values
+// drift from the C++ enum's.
+
+// The C enum of each C++ enum of the options, and the C++ enum's count (its values run from 0).
 template <class Enum>
-Enum checkedEnum(int value, int count, const char* field) {
-  if (value < 0 || value >= count) {
-    throw stabint::InvalidInputError(std::string("options.") + field + ": invalid value " + std::to_string(value));
+struct CEnum;
+template <>
+struct CEnum<stabint::Integrator> {
+  using type = stabint_integrator;
+  static constexpr int count = stabint::kIntegratorCount;
+};
+template <>
+struct CEnum<stabint::Acceleration> {
+  using type = stabint_acceleration;
+  static constexpr int count = stabint::kAccelerationCount;
+};
+template <>
+struct CEnum<stabint::GlobalSolve> {
+  using type = stabint_global_solve;
+  static constexpr int count = stabint::kGlobalSolveCount;
+};
+template <>
+struct CEnum<stabint::BackendKind> {
+  using type = stabint_backend;
+  static constexpr int count = stabint::kBackendKindCount;
+};
+template <>
+struct CEnum<stabint::Precision> {
+  using type = stabint_precision;
+  static constexpr int count = stabint::kPrecisionCount;
+};
+
+// The C type of a field of C++ type T: the same for int and double, the C enum for an enum, a
+// NUL-terminated string (NULL: empty) for a std::string.
+template <class T, class = void>
+struct CField {
+  using type = T;
+};
+template <class T>
+struct CField<T, std::enable_if_t<std::is_enum_v<T>>> {
+  using type = typename CEnum<T>::type;
+};
+template <>
+struct CField<std::string> {
+  using type = const char*;
+};
+template <class T>
+using CType = typename CField<T>::type;
+
+// Every C enum value equals the C++ one, and each C enum ends where the C++ count says.
+template <class Enum>
+constexpr bool sameValue(int c, Enum cpp) {
+  return c == static_cast<int>(cpp);
+}
+static_assert(sameValue(STABINT_FORWARD_EULER, stabint::Integrator::ForwardEuler) &&
+              sameValue(STABINT_SYMPLECTIC_EULER, stabint::Integrator::SymplecticEuler) &&
+              sameValue(STABINT_BACKWARD_EULER, stabint::Integrator::BackwardEuler) &&
+              sameValue(STABINT_BDF2, stabint::Integrator::BDF2) &&
+              sameValue(STABINT_IMPLICIT_MIDPOINT, stabint::Integrator::ImplicitMidpoint) &&
+              sameValue(STABINT_ENERGY_BLEND, stabint::Integrator::EnergyBlend) &&
+              STABINT_ENERGY_BLEND + 1 == stabint::kIntegratorCount);
+static_assert(sameValue(STABINT_ACCELERATION_NONE, stabint::Acceleration::None) &&
+              sameValue(STABINT_ACCELERATION_CHEBYSHEV, stabint::Acceleration::Chebyshev) &&
+              sameValue(STABINT_ACCELERATION_ANDERSON, stabint::Acceleration::Anderson) &&
+              sameValue(STABINT_ACCELERATION_LBFGS, stabint::Acceleration::LBFGS) &&
+              sameValue(STABINT_ACCELERATION_NEWTON, stabint::Acceleration::Newton) &&
+              STABINT_ACCELERATION_NEWTON + 1 == stabint::kAccelerationCount);
+static_assert(sameValue(STABINT_GLOBAL_SOLVE_FACTOR, stabint::GlobalSolve::Factor) &&
+              sameValue(STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT, stabint::GlobalSolve::ConjugateGradient) &&
+              STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT + 1 == stabint::kGlobalSolveCount);
+static_assert(sameValue(STABINT_BACKEND_CPU, stabint::BackendKind::CpuReference) &&
+              sameValue(STABINT_BACKEND_OPENCL, stabint::BackendKind::OpenCL) &&
+              sameValue(STABINT_BACKEND_AUTO, stabint::BackendKind::Auto) &&
+              STABINT_BACKEND_AUTO + 1 == stabint::kBackendKindCount);
+static_assert(sameValue(STABINT_PRECISION_DOUBLE, stabint::Precision::Double) &&
+              sameValue(STABINT_PRECISION_FLOAT, stabint::Precision::Float) &&
+              STABINT_PRECISION_FLOAT + 1 == stabint::kPrecisionCount);
+static_assert(sameValue(STABINT_BRANCH_NONE, stabint::BlendBranch::None) &&
+              sameValue(STABINT_BRANCH_IMPLICIT_MIDPOINT, stabint::BlendBranch::ImplicitMidpoint) &&
+              sameValue(STABINT_BRANCH_BACKWARD_EULER, stabint::BlendBranch::BackwardEuler) &&
+              sameValue(STABINT_BRANCH_VELOCITY_SCALE, stabint::BlendBranch::VelocityScale));
+
+// Every field of the list is in the C struct, with its C type. A nested struct's fields are
+// spelled <member>_<field> in C (opencl_platform).
+#define STABINT_C_CHECK_FIELD(type, name, doc)                                          \
+  static_assert(std::is_same_v<decltype(stabint_simulator_options::name), CType<type>>, \
+                "stabint_simulator_options::" #name " has the wrong type");
+#define STABINT_C_CHECK_NESTED(type, name, fields, doc) fields(STABINT_C_CHECK_SUB, name)
+#define STABINT_C_CHECK_SUB(parent, type, name, doc)                                               \
+  static_assert(std::is_same_v<decltype(stabint_simulator_options::parent##_##name), CType<type>>, \
+                "stabint_simulator_options::" #parent "_" #name " has the wrong type");
+STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_C_CHECK_FIELD, STABINT_C_CHECK_NESTED)
+#undef STABINT_C_CHECK_FIELD
+#undef STABINT_C_CHECK_NESTED
+#undef STABINT_C_CHECK_SUB
+
+// C -> C++, one field. C enums arrive as plain ints: the range is checked before the cast (the
+// message names the C field).
+void fromC(int value, int& out, const char*) { out = value; }
+void fromC(double value, double& out, const char*) { out = value; }
+void fromC(const char* value, std::string& out, const char*) { out = value ? value : ""; }
+template <class Enum, class = std::enable_if_t<std::is_enum_v<Enum>>>
+void fromC(typename CEnum<Enum>::type value, Enum& out, const char* field) {
+  if (value < 0 || value >= CEnum<Enum>::count) {
+    throw stabint::InvalidInputError(std::string("options.") + field + ": invalid value " +
+                                     std::to_string(static_cast<int>(value)));
   }
-  return static_cast<Enum>(value);
+  out = static_cast<Enum>(value);
+}
+
+// C++ -> C, one field. A string points into `value` (NULL when empty), so the C struct is valid
+// as long as the C++ options it came from.
+void toC(int value, int& out) { out = value; }
+void toC(double value, double& out) { out = value; }
+void toC(const std::string& value, const char*& out) { out = value.empty() ? nullptr : value.c_str(); }
+template <class Enum, class = std::enable_if_t<std::is_enum_v<Enum>>>
+void toC(Enum value, typename CEnum<Enum>::type& out) {
+  out = static_cast<typename CEnum<Enum>::type>(value);
+}
+
+stabint::SimulatorOptions fromC(const stabint_simulator_options& c) {
+  stabint::SimulatorOptions o;
+#define STABINT_FROM_C_FIELD(type, name, doc) fromC(c.name, o.name, #name);
+#define STABINT_FROM_C_NESTED(type, name, fields, doc) fields(STABINT_FROM_C_SUB, name)
+#define STABINT_FROM_C_SUB(parent, type, name, doc) fromC(c.parent##_##name, o.parent.name, #parent "_" #name);
+  STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_FROM_C_FIELD, STABINT_FROM_C_NESTED)
+#undef STABINT_FROM_C_FIELD
+#undef STABINT_FROM_C_NESTED
+#undef STABINT_FROM_C_SUB
+  return o;
+}
+
+stabint_simulator_options toC(const stabint::SimulatorOptions& o) {
+  stabint_simulator_options c{};
+#define STABINT_TO_C_FIELD(type, name, doc) toC(o.name, c.name);
+#define STABINT_TO_C_NESTED(type, name, fields, doc) fields(STABINT_TO_C_SUB, name)
+#define STABINT_TO_C_SUB(parent, type, name, doc) toC(o.parent.name, c.parent##_##name);
+  STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_TO_C_FIELD, STABINT_TO_C_NESTED)
+#undef STABINT_TO_C_FIELD
+#undef STABINT_TO_C_NESTED
+#undef STABINT_TO_C_SUB
+  return c;
 }
 
 stabint_energy toC(const stabint::EnergyReport& e) { return {e.kinetic, e.elastic, e.external, e.total()}; }
@@ -252,30 +390,18 @@ stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t*
 
 void stabint_simulator_options_default(stabint_simulator_options* options) {
   if (options == nullptr) return;
-  const stabint::SimulatorOptions d;  // the C++ defaults are the only source of truth
-  options->integrator = static_cast<stabint_integrator>(d.integrator);
-  options->time_step = d.time_step;
-  options->iterations = d.iterations;
-  options->tolerance = d.tolerance;
-  options->max_iterations = d.max_iterations;
-  options->acceleration = static_cast<stabint_acceleration>(d.acceleration);
-  options->chebyshev_rho = d.chebyshev_rho;
-  options->anderson_window = d.anderson_window;
-  options->lbfgs_history = d.lbfgs_history;
-  options->gradient_tolerance = d.gradient_tolerance;
-  options->be_iterations = d.be_iterations;
-  options->energy_tolerance = d.energy_tolerance;
-  options->max_velocity_scale = d.max_velocity_scale;
-  options->max_root_evaluations = d.max_root_evaluations;
-  options->energy_limit = d.energy_limit;
-  options->contact_tolerance = d.contact_tolerance;
-  options->backend = static_cast<stabint_backend>(d.backend);
-  options->opencl_platform = nullptr;
-  options->opencl_device = nullptr;
-  options->opencl_precision = static_cast<stabint_precision>(d.opencl.precision);
-  options->global_solve = static_cast<stabint_global_solve>(d.global_solve);
-  options->cg_iterations = d.cg_iterations;
-  options->cg_tolerance = d.cg_tolerance;
+  // The C++ defaults are the only source of truth; static, so that a non-empty default string
+  // would stay valid (the OpenCL selectors default to empty: NULL).
+  static const stabint::SimulatorOptions defaults;
+  *options = toC(defaults);
+}
+
+stabint_status stabint_simulator_get_options(const stabint_simulator* sim, stabint_simulator_options* out) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(out, "out");
+    *out = toC(sim->sim.options());
+  });
 }
 
 stabint_status stabint_simulator_create(const stabint_scene* scene, const stabint_simulator_options* options,
@@ -285,30 +411,7 @@ stabint_status stabint_simulator_create(const stabint_scene* scene, const stabin
     require(scene, "scene");
     require(options, "options");
     require(out, "out");
-    stabint::SimulatorOptions o;
-    o.integrator = checkedEnum<stabint::Integrator>(options->integrator, 6, "integrator");
-    o.time_step = options->time_step;
-    o.iterations = options->iterations;
-    o.tolerance = options->tolerance;
-    o.max_iterations = options->max_iterations;
-    o.acceleration = checkedEnum<stabint::Acceleration>(options->acceleration, 5, "acceleration");
-    o.chebyshev_rho = options->chebyshev_rho;
-    o.anderson_window = options->anderson_window;
-    o.lbfgs_history = options->lbfgs_history;
-    o.gradient_tolerance = options->gradient_tolerance;
-    o.be_iterations = options->be_iterations;
-    o.energy_tolerance = options->energy_tolerance;
-    o.max_velocity_scale = options->max_velocity_scale;
-    o.max_root_evaluations = options->max_root_evaluations;
-    o.energy_limit = options->energy_limit;
-    o.contact_tolerance = options->contact_tolerance;
-    o.backend = checkedEnum<stabint::BackendKind>(options->backend, 3, "backend");
-    o.opencl.platform = options->opencl_platform ? options->opencl_platform : "";
-    o.opencl.device = options->opencl_device ? options->opencl_device : "";
-    o.opencl.precision = checkedEnum<stabint::Precision>(options->opencl_precision, 2, "opencl_precision");
-    o.global_solve = checkedEnum<stabint::GlobalSolve>(options->global_solve, 2, "global_solve");
-    o.cg_iterations = options->cg_iterations;
-    o.cg_tolerance = options->cg_tolerance;
+    const stabint::SimulatorOptions o = fromC(*options);
     *out = new stabint_simulator{stabint::Simulator(scene->scene, o)};
   });
 }

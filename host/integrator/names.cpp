@@ -78,6 +78,20 @@ Acceleration parseAcceleration(const std::string& name) {
   throw InvalidInputError("unknown acceleration '" + name + "' (expected none, chebyshev, anderson, lbfgs or newton)");
 }
 
+const char* globalSolveName(GlobalSolve solve) {
+  switch (solve) {
+    case GlobalSolve::Factor: return "factor";
+    case GlobalSolve::ConjugateGradient: return "cg";
+  }
+  return "?";
+}
+
+GlobalSolve parseGlobalSolve(const std::string& name) {
+  for (GlobalSolve g : {GlobalSolve::Factor, GlobalSolve::ConjugateGradient})
+    if (lower(name) == globalSolveName(g)) return g;
+  throw InvalidInputError("unknown global solve '" + name + "' (expected factor or cg)");
+}
+
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
   local += o.local;
   gather += o.gather;

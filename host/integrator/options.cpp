@@ -1,10 +1,76 @@
 #include "integrator/options.hpp"
 
+#include <stabint/options_fields.hpp>
+
 #include <cmath>
+#include <cstddef>
 #include <sstream>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 namespace stabint {
+namespace {
+
+// The field list (stabint/options_fields.hpp) must name every member of the structs, with its
+// type, or the C API, Python and stabint-run would silently miss a field. A member
+// missing from the list changes the count of members an aggregate initializer takes; a wrong
+// type or name fails the is_same checks.
+struct AnyField {
+  template <class T>
+  operator T() const;  // never called: only the initializer's validity is asked
+};
+
+template <class T, class... Args>
+constexpr auto bracesWith(int) -> decltype(void(T{std::declval<Args>()...}), true) {
+  return true;
+}
+template <class T, class... Args>
+constexpr bool bracesWith(...) {
+  return false;
+}
+// The number of members of aggregate T: the most initializers T{...} accepts.
+template <class T, class... Args>
+constexpr std::size_t memberCount() {
+  if constexpr (bracesWith<T, Args..., AnyField>(0))
+    return memberCount<T, Args..., AnyField>();
+  else
+    return sizeof...(Args);
+}
+
+#define STABINT_COUNT_FIELD(type, name, doc) +1
+#define STABINT_COUNT_NESTED(type, name, fields, doc) +1
+#define STABINT_COUNT_SUB(parent, type, name, doc) +1
+static_assert(memberCount<SimulatorOptions>() ==
+                  0 STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_COUNT_FIELD, STABINT_COUNT_NESTED),
+              "STABINT_SIMULATOR_OPTIONS_FIELDS must list every member of SimulatorOptions");
+static_assert(memberCount<OpenCLOptions>() == 0 STABINT_OPENCL_OPTIONS_FIELDS(STABINT_COUNT_SUB, opencl),
+              "STABINT_OPENCL_OPTIONS_FIELDS must list every member of OpenCLOptions");
+#undef STABINT_COUNT_FIELD
+#undef STABINT_COUNT_NESTED
+#undef STABINT_COUNT_SUB
+
+#define STABINT_CHECK_FIELD(type, name, doc)                            \
+  static_assert(std::is_same_v<decltype(SimulatorOptions::name), type>, \
+                "SimulatorOptions::" #name " has another type than its entry in the field list");
+#define STABINT_CHECK_NESTED(type, name, fields, doc) \
+  STABINT_CHECK_FIELD(type, name, doc)                \
+  fields(STABINT_CHECK_SUB, name)
+#define STABINT_CHECK_SUB(parent, type, name, doc)                                        \
+  static_assert(std::is_same_v<decltype(decltype(SimulatorOptions::parent)::name), type>, \
+                #parent "." #name " has another type than its entry in the field list");
+STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_CHECK_FIELD, STABINT_CHECK_NESTED)
+#undef STABINT_CHECK_FIELD
+#undef STABINT_CHECK_NESTED
+#undef STABINT_CHECK_SUB
+
+// Whether an enum holds one of its values, 0 to count - 1 (the counts of simulator.hpp).
+template <class Enum>
+bool inRange(Enum value, int count) {
+  return static_cast<int>(value) >= 0 && static_cast<int>(value) < count;
+}
+
+}  // namespace
 
 void validateOptions(const SimulatorOptions& o) {
   auto fail = [](const std::string& what) { throw InvalidInputError("simulator options: " + what); };
@@ -19,12 +85,11 @@ void validateOptions(const SimulatorOptions& o) {
   }
   // An enum from a config file or a binding can hold any integer; an unknown integrator used to
   // run no integrator at all and commit a zero state.
-  if (static_cast<int>(o.integrator) < static_cast<int>(Integrator::ForwardEuler) ||
-      static_cast<int>(o.integrator) > static_cast<int>(Integrator::EnergyBlend))
+  if (!inRange(o.integrator, kIntegratorCount))
     fail("integrator = " + std::to_string(static_cast<int>(o.integrator)) + " is not an Integrator value");
-  if (o.backend != BackendKind::CpuReference && o.backend != BackendKind::OpenCL && o.backend != BackendKind::Auto)
+  if (!inRange(o.backend, kBackendKindCount))
     fail("backend = " + std::to_string(static_cast<int>(o.backend)) + " is not a BackendKind value");
-  if (o.opencl.precision != Precision::Double && o.opencl.precision != Precision::Float)
+  if (!inRange(o.opencl.precision, kPrecisionCount))
     fail("opencl.precision = " + std::to_string(static_cast<int>(o.opencl.precision)) + " is not a Precision value");
   if (!std::isfinite(o.energy_limit) || o.energy_limit < 0.0)
     fail("energy_limit must be finite and >= 0 (0: no limit)");
@@ -35,9 +100,7 @@ void validateOptions(const SimulatorOptions& o) {
   if (!std::isfinite(o.energy_tolerance) || o.energy_tolerance <= 0.0) fail("energy_tolerance must be finite and > 0");
   if (!(o.max_velocity_scale >= 1.0) || !std::isfinite(o.max_velocity_scale))
     fail("max_velocity_scale = " + std::to_string(o.max_velocity_scale) + " must be finite and >= 1");
-  if (o.acceleration != Acceleration::None && o.acceleration != Acceleration::Chebyshev &&
-      o.acceleration != Acceleration::Anderson && o.acceleration != Acceleration::LBFGS &&
-      o.acceleration != Acceleration::Newton)
+  if (!inRange(o.acceleration, kAccelerationCount))
     fail("acceleration = " + std::to_string(static_cast<int>(o.acceleration)) + " is not an Acceleration value");
   if (o.anderson_window < 1 || o.anderson_window > 50)
     fail("anderson_window = " + std::to_string(o.anderson_window) + " must be in [1, 50]");
@@ -49,7 +112,7 @@ void validateOptions(const SimulatorOptions& o) {
     fail("gradient_tolerance > 0 needs acceleration = lbfgs (the solve that computes the gradient)");
   if (!(o.chebyshev_rho > 0.0 && o.chebyshev_rho < 1.0))
     fail("chebyshev_rho = " + std::to_string(o.chebyshev_rho) + " must be in (0, 1)");
-  if (o.global_solve != GlobalSolve::Factor && o.global_solve != GlobalSolve::ConjugateGradient)
+  if (!inRange(o.global_solve, kGlobalSolveCount))
     fail("global_solve = " + std::to_string(static_cast<int>(o.global_solve)) + " is not a GlobalSolve value");
   if (o.cg_iterations < 1) fail("cg_iterations = " + std::to_string(o.cg_iterations) + " must be >= 1");
   if (!std::isfinite(o.cg_tolerance) || !(o.cg_tolerance >= 0.0 && o.cg_tolerance < 1.0))

@@ -19,6 +19,9 @@ enum class Integrator {
   ImplicitMidpoint,  ///< IM
   EnergyBlend,       ///< the paper's energy-tracking blend of IM with BE or FE
 };
+/// Number of Integrator values (they run from 0): the C API's and bindings' range check. Raise it
+/// with a new value.
+constexpr int kIntegratorCount = 6;
 const char* integratorName(Integrator integrator);  ///< "FE", "SE", "BE", "BDF2", "IM", "blend"
 /// Parses a name as printed by integratorName (case-insensitive); throws InvalidInputError.
 Integrator parseIntegrator(const std::string& name);
@@ -33,6 +36,8 @@ enum class BackendKind {
   OpenCL,        ///< OpenCL kernels on the device of SimulatorOptions::opencl
   Auto           ///< an OpenCL GPU when there is one, else the CPU reference
 };
+/// Number of BackendKind values (they run from 0).
+constexpr int kBackendKindCount = 3;
 const char* backendName(BackendKind kind);  ///< "cpu", "opencl", "auto"
 /// Parses a name as printed by backendName (case-insensitive); throws InvalidInputError.
 BackendKind parseBackend(const std::string& name);
@@ -43,6 +48,8 @@ enum class Precision {
   Double,  ///< needs cl_khr_fp64 (else UnsupportedPrecisionError)
   Float    ///< any device
 };
+/// Number of Precision values (they run from 0).
+constexpr int kPrecisionCount = 2;
 
 /// Acceleration of the local/global iterations. Every variant keeps the objective monotone: an
 /// accelerated iterate that would raise it is replaced by the plain one.
@@ -53,6 +60,8 @@ enum class Acceleration {
   LBFGS,      ///< L-BFGS with the prefactored K_c as initial Hessian (Liu et al. 2017), line search
   Newton,     ///< Newton-CG: springs' projected Hessians, CG preconditioned with K_c, line search
 };
+/// Number of Acceleration values (they run from 0).
+constexpr int kAccelerationCount = 5;
 const char* accelerationName(Acceleration acceleration);  ///< "none", "chebyshev", "anderson", "lbfgs", "newton"
 /// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
 Acceleration parseAcceleration(const std::string& name);
@@ -65,6 +74,11 @@ enum class GlobalSolve {
                       ///< the backend: on the OpenCL device with nothing read back per iteration,
                       ///< on the host in double for the CPU reference
 };
+/// Number of GlobalSolve values (they run from 0).
+constexpr int kGlobalSolveCount = 2;
+const char* globalSolveName(GlobalSolve solve);  ///< "factor", "cg"
+/// Parses a name as printed by globalSolveName (case-insensitive); throws InvalidInputError.
+GlobalSolve parseGlobalSolve(const std::string& name);
 
 /// The element types of a Scene, one per element list, for the run-time element changes
 /// (Simulator::setElementStiffness, setElementEnabled).

@@ -6,5 +6,6 @@
 #include <stabint/errors.hpp>
 #include <stabint/events.hpp>
 #include <stabint/io.hpp>
+#include <stabint/options_fields.hpp>
 #include <stabint/scene.hpp>
 #include <stabint/simulator.hpp>

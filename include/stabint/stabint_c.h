@@ -67,7 +67,7 @@ stabint_status stabint_last_error_status(void);
 /** For a last error of NON_FINITE_STATE or ENERGY_LIMIT, the index of the refused step; else -1. */
 int stabint_last_error_step(void);
 
-/* ---- enumerations (values match the C++ enums' order) ---- */
+/* ---- enumerations (values equal the C++ enums'; the library's build checks them) ---- */
 /** stabint::Integrator. */
 typedef enum stabint_integrator {
   STABINT_FORWARD_EULER = 0,
@@ -147,7 +147,9 @@ stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t*
 /** An opaque simulator (a stabint::Simulator), from stabint_simulator_create. */
 typedef struct stabint_simulator stabint_simulator;
 
-/** The fields of stabint::SimulatorOptions (stabint/simulator.hpp documents each). Fill with
+/** The fields of stabint::SimulatorOptions (stabint/simulator.hpp documents each; a new C++ field
+ * needs its C field here, see stabint/options_fields.hpp: the library does not build without it,
+ * and a nested struct's fields are spelled opencl_platform and so on). Fill with
  * stabint_simulator_options_default() first, then change what you need. */
 typedef struct stabint_simulator_options {
   stabint_integrator integrator;      /**< SimulatorOptions::integrator */
@@ -177,6 +179,9 @@ typedef struct stabint_simulator_options {
 
 /** The C++ defaults (blend, h = 1/30, 10 iterations, CPU reference backend, ...). */
 void stabint_simulator_options_default(stabint_simulator_options* options);
+/** The options a simulator was built with (its iteration budget as last set). The two OpenCL
+ * selectors point into the simulator (valid until it is destroyed), NULL when empty. */
+stabint_status stabint_simulator_get_options(const stabint_simulator* sim, stabint_simulator_options* out);
 
 /** Energies of a state, as stabint::EnergyReport (J). */
 typedef struct stabint_energy {

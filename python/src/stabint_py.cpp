@@ -6,6 +6,7 @@
 // would change under the caller at the next step(), and one into a Scene would dangle when the
 // scene is reassigned. Element lists (scene.springs, scene.pins, ...) are the opposite: opaque
 // list-like views into the scene, so scene.springs.append(...) edits the scene.
+#include <stabint/options_fields.hpp>
 #include <stabint/stabint.hpp>
 
 #include <nanobind/eigen/dense.h>
@@ -395,9 +396,9 @@ void bindSimulator(nb::module_& m) {
                             "OpenCL device choice: index or name substring; empty: "
                             "STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE, then the first.")
       .def(nb::init<>())
-      .def_rw("platform", &OpenCLOptions::platform)
-      .def_rw("device", &OpenCLOptions::device)
-      .def_rw("precision", &OpenCLOptions::precision);
+#define STABINT_PY_SUB(parent, type, name, doc) .def_rw(#name, &OpenCLOptions::name, doc)
+          STABINT_OPENCL_OPTIONS_FIELDS(STABINT_PY_SUB, opencl);
+#undef STABINT_PY_SUB
   nb::class_<OpenCLDeviceInfo>(m, "OpenCLDeviceInfo")
       .def_ro("platform_index", &OpenCLDeviceInfo::platform_index)
       .def_ro("device_index", &OpenCLDeviceInfo::device_index)
@@ -406,72 +407,29 @@ void bindSimulator(nb::module_& m) {
       .def_ro("fp64", &OpenCLDeviceInfo::fp64);
   m.def("list_opencl_devices", &listOpenCLDevices, "Every OpenCL device; empty when none is installed.");
 
+  // Generated from the field list (stabint/options_fields.hpp): one keyword per field, by name,
+  // with the C++ default, and one property per field.
+#define STABINT_PY_PARAM(type, name, ...) , type name
+#define STABINT_PY_SET(type, name, ...) o->name = name;
+#define STABINT_PY_KEYWORD(type, name, ...) , nb::arg(#name) = d.name
+#define STABINT_PY_PROPERTY(type, name, doc) .def_rw(#name, &SimulatorOptions::name, doc)
+#define STABINT_PY_NESTED_PROPERTY(type, name, fields, doc) .def_rw(#name, &SimulatorOptions::name, doc)
   nb::class_<SimulatorOptions>(m, "SimulatorOptions",
                                "Options of a Simulator; every field is documented in stabint/simulator.hpp.")
       .def(
           "__init__",
-          [](SimulatorOptions* o, Integrator integrator, double time_step, int iterations, double tolerance,
-             int max_iterations, Acceleration acceleration, double chebyshev_rho, int anderson_window,
-             int lbfgs_history, double gradient_tolerance, GlobalSolve global_solve, int cg_iterations,
-             double cg_tolerance, int be_iterations, double energy_tolerance, double max_velocity_scale,
-             int max_root_evaluations, double energy_limit, double contact_tolerance, BackendKind backend,
-             const OpenCLOptions& opencl) {
-            // Field by field, by name: a positional initializer would silently misassign a field
-            // inserted between two of the same type.
+          [](SimulatorOptions* o STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_PARAM, STABINT_PY_PARAM)) {
             new (o) SimulatorOptions{};
-            o->integrator = integrator;
-            o->time_step = time_step;
-            o->iterations = iterations;
-            o->tolerance = tolerance;
-            o->max_iterations = max_iterations;
-            o->acceleration = acceleration;
-            o->chebyshev_rho = chebyshev_rho;
-            o->anderson_window = anderson_window;
-            o->lbfgs_history = lbfgs_history;
-            o->gradient_tolerance = gradient_tolerance;
-            o->global_solve = global_solve;
-            o->cg_iterations = cg_iterations;
-            o->cg_tolerance = cg_tolerance;
-            o->be_iterations = be_iterations;
-            o->energy_tolerance = energy_tolerance;
-            o->max_velocity_scale = max_velocity_scale;
-            o->max_root_evaluations = max_root_evaluations;
-            o->energy_limit = energy_limit;
-            o->contact_tolerance = contact_tolerance;
-            o->backend = backend;
-            o->opencl = opencl;
+            STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_SET, STABINT_PY_SET)
           },
-          nb::kw_only(), "integrator"_a = d.integrator, "time_step"_a = d.time_step, "iterations"_a = d.iterations,
-          "tolerance"_a = d.tolerance, "max_iterations"_a = d.max_iterations, "acceleration"_a = d.acceleration,
-          "chebyshev_rho"_a = d.chebyshev_rho, "anderson_window"_a = d.anderson_window,
-          "lbfgs_history"_a = d.lbfgs_history, "gradient_tolerance"_a = d.gradient_tolerance,
-          "global_solve"_a = d.global_solve, "cg_iterations"_a = d.cg_iterations, "cg_tolerance"_a = d.cg_tolerance,
-          "be_iterations"_a = d.be_iterations, "energy_tolerance"_a = d.energy_tolerance,
-          "max_velocity_scale"_a = d.max_velocity_scale, "max_root_evaluations"_a = d.max_root_evaluations,
-          "energy_limit"_a = d.energy_limit, "contact_tolerance"_a = d.contact_tolerance, "backend"_a = d.backend,
-          "opencl"_a = d.opencl,
+          nb::kw_only() STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_KEYWORD, STABINT_PY_KEYWORD),
           "Keyword arguments set the fields of the same names; values are checked when a Simulator is built.")
-      .def_rw("integrator", &SimulatorOptions::integrator)
-      .def_rw("time_step", &SimulatorOptions::time_step)
-      .def_rw("iterations", &SimulatorOptions::iterations)
-      .def_rw("tolerance", &SimulatorOptions::tolerance)
-      .def_rw("max_iterations", &SimulatorOptions::max_iterations)
-      .def_rw("acceleration", &SimulatorOptions::acceleration)
-      .def_rw("chebyshev_rho", &SimulatorOptions::chebyshev_rho)
-      .def_rw("anderson_window", &SimulatorOptions::anderson_window)
-      .def_rw("lbfgs_history", &SimulatorOptions::lbfgs_history)
-      .def_rw("gradient_tolerance", &SimulatorOptions::gradient_tolerance)
-      .def_rw("global_solve", &SimulatorOptions::global_solve)
-      .def_rw("cg_iterations", &SimulatorOptions::cg_iterations)
-      .def_rw("cg_tolerance", &SimulatorOptions::cg_tolerance)
-      .def_rw("be_iterations", &SimulatorOptions::be_iterations)
-      .def_rw("energy_tolerance", &SimulatorOptions::energy_tolerance)
-      .def_rw("max_velocity_scale", &SimulatorOptions::max_velocity_scale)
-      .def_rw("max_root_evaluations", &SimulatorOptions::max_root_evaluations)
-      .def_rw("energy_limit", &SimulatorOptions::energy_limit)
-      .def_rw("contact_tolerance", &SimulatorOptions::contact_tolerance)
-      .def_rw("backend", &SimulatorOptions::backend)
-      .def_rw("opencl", &SimulatorOptions::opencl);
+          STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_PROPERTY, STABINT_PY_NESTED_PROPERTY);
+#undef STABINT_PY_PARAM
+#undef STABINT_PY_SET
+#undef STABINT_PY_KEYWORD
+#undef STABINT_PY_PROPERTY
+#undef STABINT_PY_NESTED_PROPERTY
 
   nb::class_<EnergyReport>(m, "EnergyReport", "Energies of a state, in joules.")
       .def_ro("kinetic", &EnergyReport::kinetic)

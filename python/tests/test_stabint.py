@@ -2,8 +2,10 @@
 
 Run by scripts/python.sh (after ctest in scripts/test.sh) against the installed package."""
 
+import enum
 import math
 import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -152,10 +154,21 @@ NON_DEFAULT_OPTIONS = dict(
     max_iterations=50, acceleration=stabint.Acceleration.LBFGS, chebyshev_rho=0.9,
     anderson_window=3, lbfgs_history=3, gradient_tolerance=1e-3, be_iterations=2, energy_tolerance=1e-2, max_velocity_scale=1.5,
     max_root_evaluations=8, energy_limit=10.0, contact_tolerance=0.05,
+    global_solve=stabint.GlobalSolve.ConjugateGradient, cg_iterations=7, cg_tolerance=1e-6,
     backend=stabint.BackendKind.CpuReference)
 
 
+def option_fields():
+    """The fields of SimulatorOptions as the field list (include/stabint/options_fields.hpp)
+    names them: the list the bindings are generated from."""
+    header = (SCENES.parent / "include" / "stabint" / "options_fields.hpp").read_text()
+    body = header[header.index("#define STABINT_SIMULATOR_OPTIONS_FIELDS"):
+                  header.index("#define STABINT_OPENCL_OPTIONS_FIELDS")]
+    return re.findall(r"^\s*(?:FIELD|NESTED)\([\w:]+, (\w+),", body, re.M)
+
+
 def test_every_option_reaches_the_simulator():
+    assert set(NON_DEFAULT_OPTIONS) | {"opencl"} == set(option_fields())
     defaults = stabint.SimulatorOptions()
     # The acceleration is L-BFGS, the default, because gradient_tolerance needs it; a
     # non-default solver is checked on its own below.
@@ -169,6 +182,50 @@ def test_every_option_reaches_the_simulator():
     sim = stabint.Simulator(stabint.linear_oscillator(),
                             stabint.SimulatorOptions(acceleration=stabint.Acceleration.Anderson))
     assert sim.options.acceleration == stabint.Acceleration.Anderson
+
+
+def changed(value):
+    """A value of the same type other than `value`."""
+    if isinstance(value, enum.Enum):
+        return next(v for v in type(value) if v != value)
+    if isinstance(value, int):
+        return value + 1
+    if isinstance(value, float):
+        return 0.5 * value + 0.25
+    assert isinstance(value, stabint.OpenCLOptions), type(value)
+    opencl = stabint.OpenCLOptions()
+    opencl.platform, opencl.device, opencl.precision = "0", "1", stabint.Precision.Float
+    return opencl
+
+
+def same(a, b):
+    if isinstance(a, stabint.OpenCLOptions):
+        return (a.platform, a.device, a.precision) == (b.platform, b.device, b.precision)
+    return type(a) is type(b) and a == b
+
+
+def test_every_option_field_is_a_keyword_and_a_property_that_round_trips():
+    fields = option_fields()
+    assert len(fields) == 21 and fields[0] == "integrator" and fields[-1] == "opencl"
+    properties = {name for name, attribute in vars(stabint.SimulatorOptions).items() if isinstance(attribute, property)}
+    assert properties == set(fields)
+    defaults = stabint.SimulatorOptions()
+    for name in fields:
+        value = changed(getattr(defaults, name))
+        assert not same(getattr(defaults, name), value), name
+        by_keyword = stabint.SimulatorOptions(**{name: value})
+        assert same(getattr(by_keyword, name), value), name
+        by_property = stabint.SimulatorOptions()
+        setattr(by_property, name, value)
+        assert same(getattr(by_property, name), value), name
+        # The other fields keep their defaults.
+        for other in fields:
+            if other != name:
+                assert same(getattr(by_keyword, other), getattr(defaults, other)), (name, other)
+    with pytest.raises(TypeError):
+        stabint.SimulatorOptions(no_such_option=1)
+    with pytest.raises(TypeError):
+        stabint.SimulatorOptions(stabint.Integrator.BackwardEuler)  # keywords only
 
 
 def test_report_fields():

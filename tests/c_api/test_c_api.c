@@ -88,6 +88,29 @@ static void test_defaults_and_names(void) {
   CHECK(!stabint_status_is(STABINT_OK, STABINT_ERROR));
 }
 
+/* A simulator gives back the options it was built with (tests/test_options_fields.cpp does every
+ * field; this is the C user's view). */
+static void test_options_read_back(void) {
+  stabint_scene* scene = NULL;
+  stabint_simulator* sim = NULL;
+  stabint_simulator_options options;
+  stabint_simulator_options back;
+  CHECK(stabint_scene_create_builtin("oscillator", NULL, &scene) == STABINT_OK);
+  stabint_simulator_options_default(&options);
+  options.lbfgs_history = 7;
+  options.global_solve = STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT;
+  options.opencl_device = "1";
+  CHECK(stabint_simulator_create(scene, &options, &sim) == STABINT_OK);
+  CHECK(stabint_simulator_get_options(sim, &back) == STABINT_OK);
+  CHECK(back.lbfgs_history == 7 && back.global_solve == STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT);
+  CHECK(back.time_step == options.time_step && back.iterations == options.iterations);
+  CHECK(back.opencl_platform == NULL && back.opencl_device != NULL && strcmp(back.opencl_device, "1") == 0);
+  CHECK(stabint_simulator_get_options(NULL, &back) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_get_options(sim, NULL) == STABINT_INVALID_ARGUMENT);
+  stabint_simulator_destroy(sim);
+  stabint_scene_destroy(scene);
+}
+
 static void test_bad_options_are_reported(void) {
   stabint_scene* scene = NULL;
   stabint_simulator* sim = NULL;
@@ -743,6 +766,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   test_defaults_and_names();
+  test_options_read_back();
   test_bad_options_are_reported();
   test_blow_up_is_reported();
   test_buffers_and_triangles();

@@ -3,6 +3,7 @@
 // ParaView. Options are parsed by hand (no dependency for a CLI).
 #include <nlohmann/json.hpp>
 
+#include <stabint/options_fields.hpp>
 #include <stabint/stabint.hpp>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -53,6 +55,131 @@ struct Options {
   bool quiet = false;
 };
 
+// --- simulator options: one flag per field of the field list (stabint/options_fields.hpp) ------
+// Adding a field to SimulatorOptions adds its flag (the field name with '-' for '_') and its help
+// line here; a field of a new type needs its parseValue, shown and placeholder overloads.
+
+// The options a run starts from: the library's defaults, except the backend (auto: a GPU when
+// there is one).
+stabint::SimulatorOptions defaultSimulatorOptions() {
+  stabint::SimulatorOptions o;
+  o.backend = stabint::BackendKind::Auto;
+  return o;
+}
+
+std::string flagOf(const char* field) {
+  std::string flag = std::string("--") + field;
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return flag;
+}
+
+double parseNumber(const std::string& option, const std::string& text) {
+  char* end = nullptr;
+  errno = 0;
+  const double x = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(x)) {
+    throw UsageError(option + ": expected a number, got '" + text + "'");
+  }
+  return x;
+}
+
+int parseInteger(const std::string& option, const std::string& text) {
+  char* end = nullptr;
+  errno = 0;
+  const long x = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || errno == ERANGE || x < INT32_MIN || x > INT32_MAX) {
+    throw UsageError(option + ": expected an integer, got '" + text + "'");
+  }
+  return static_cast<int>(x);
+}
+
+// Reads a flag's value into a field; `flag` is the flag as typed, for the messages.
+void parseValue(const std::string& flag, const std::string& text, int& out) { out = parseInteger(flag, text); }
+void parseValue(const std::string& flag, const std::string& text, double& out) { out = parseNumber(flag, text); }
+void parseValue(const std::string&, const std::string& text, stabint::Integrator& out) {
+  out = stabint::parseIntegrator(text);
+}
+void parseValue(const std::string&, const std::string& text, stabint::Acceleration& out) {
+  out = stabint::parseAcceleration(text);
+}
+void parseValue(const std::string&, const std::string& text, stabint::GlobalSolve& out) {
+  out = stabint::parseGlobalSolve(text);
+}
+void parseValue(const std::string&, const std::string& text, stabint::BackendKind& out) {
+  out = stabint::parseBackend(text);
+}
+
+// A value as the help shows it (the default), and the placeholder of the flag's value.
+std::string shown(int value) { return std::to_string(value); }
+std::string shown(double value) {
+  std::ostringstream s;
+  s << value;
+  return s.str();
+}
+std::string shown(stabint::Integrator value) { return stabint::integratorName(value); }
+std::string shown(stabint::Acceleration value) { return stabint::accelerationName(value); }
+std::string shown(stabint::GlobalSolve value) { return stabint::globalSolveName(value); }
+std::string shown(stabint::BackendKind value) { return stabint::backendName(value); }
+std::string placeholder(int) { return "N"; }
+std::string placeholder(double) { return "X"; }
+std::string placeholder(stabint::Integrator) { return "FE|SE|BE|BDF2|IM|blend"; }
+std::string placeholder(stabint::Acceleration) { return "none|chebyshev|anderson|lbfgs|newton"; }
+std::string placeholder(stabint::GlobalSolve) { return "factor|cg"; }
+std::string placeholder(stabint::BackendKind) { return "cpu|opencl|auto"; }
+
+// Sets the field whose flag is `flag` (--time-step) from the text `value()` returns (called only
+// then: it takes the next argument); `typed` is the flag as the user wrote it (an alias such as
+// --dt). False when no field has that flag. The nested OpenCL options have their own flags
+// (--platform, --device, --precision: --precision also notes that it was given).
+bool setSimulatorOption(stabint::SimulatorOptions& o, const std::string& flag, const std::string& typed,
+                        const std::function<std::string()>& value) {
+#define STABINT_RUN_SET(type, name, doc) \
+  if (flag == flagOf(#name)) {           \
+    parseValue(typed, value(), o.name);  \
+    return true;                         \
+  }
+#define STABINT_RUN_SET_NESTED(type, name, fields, doc)
+  STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_RUN_SET, STABINT_RUN_SET_NESTED)
+#undef STABINT_RUN_SET
+#undef STABINT_RUN_SET_NESTED
+  return false;
+}
+
+// One help line per field, "  --flag VALUE   doc (default X)", wrapped at 100 columns.
+std::string simulatorOptionsHelp() {
+  const stabint::SimulatorOptions d = defaultSimulatorOptions();
+  std::ostringstream s;
+  const auto line = [&s](const std::string& flag, const std::string& text) {
+    constexpr size_t kColumn = 28, kWidth = 100;
+    std::string out = "  " + flag;
+    out += out.size() < kColumn ? std::string(kColumn - out.size(), ' ') : "\n" + std::string(kColumn, ' ');
+    size_t width = out.size() - out.rfind('\n') - 1;
+    std::istringstream words(text);
+    std::string word;
+    bool first = true;
+    while (words >> word) {
+      if (!first && width + 1 + word.size() > kWidth) {
+        out += "\n" + std::string(kColumn, ' ');
+        width = kColumn;
+      } else if (!first) {
+        out += ' ';
+        ++width;
+      }
+      out += word;
+      width += word.size();
+      first = false;
+    }
+    s << out << "\n";
+  };
+#define STABINT_RUN_HELP(type, name, doc) \
+  line(flagOf(#name) + " " + placeholder(d.name), std::string(doc) + " (default " + shown(d.name) + ")");
+#define STABINT_RUN_HELP_NESTED(type, name, fields, doc)
+  STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_RUN_HELP, STABINT_RUN_HELP_NESTED)
+#undef STABINT_RUN_HELP
+#undef STABINT_RUN_HELP_NESTED
+  return s.str();
+}
+
 std::string usage() {
   std::ostringstream s;
   s << "Usage: stabint-run --scene NAME|FILE.json [options]\n"
@@ -63,23 +190,11 @@ std::string usage() {
        "  --scene NAME|FILE.json    built-in scene (oscillator, chain, cloth, tetbar) or a JSON scene\n"
        "                            file (format: docs/scene-format.md)\n"
        "  --param KEY=VALUE         built-in scene parameter, repeatable (nx=50, pinned=[0,49])\n"
-       "Integrator:\n"
-       "  --integrator NAME         FE, SE, BE, BDF2, IM or blend (default blend)\n"
-       "  --dt SECONDS              time step (default 0.0333333)\n"
-       "  --iterations N            local/global iterations per implicit solve (default 10)\n"
-       "  --be-iterations N         iterations of the blend's backward-Euler solve (default 3)\n"
-       "  --acceleration NAME       the solver of every local/global solve: lbfgs (default; L-BFGS\n"
-       "                            on the prefactored system, with a line search), none (plain\n"
-       "                            iterations), chebyshev, anderson (safeguarded acceleration) or\n"
-       "                            newton (Newton-CG, with a line search)\n"
-       "  --tolerance TOL           solve each step to this relative tolerance instead of a fixed\n"
-       "                            iteration budget (default 0: fixed budget)\n"
-       "  --energy-limit L          stop (exit 2) at the first step whose energy exceeds the target\n"
-       "                            H* by more than L * E_scale (default 0: no limit)\n"
-       "Backend:\n"
-       "  --backend cpu|opencl|auto default auto: a GPU when there is one, else the CPU reference\n"
-       "                            (the choice and its reason are printed); opencl runs on the\n"
-       "                            selected device, PoCL included, and never falls back\n"
+       "Simulator options, one per field of SimulatorOptions (include/stabint/simulator.hpp);\n"
+       "--dt is --time-step:\n"
+    << simulatorOptionsHelp()
+    << "Backend (--backend above: auto prints its choice and the reason; opencl runs on the selected\n"
+       "device, PoCL included, and never falls back):\n"
        "  --precision double|float  OpenCL arithmetic (the CPU reference always runs in double)\n"
        "  --platform SEL            OpenCL platform: index or name substring\n"
        "  --device SEL              OpenCL device: index or name substring\n"
@@ -121,29 +236,9 @@ std::string usage() {
 
 // --- option parsing ------------------------------------------------------------------------------
 
-double parseNumber(const std::string& option, const std::string& text) {
-  char* end = nullptr;
-  errno = 0;
-  const double x = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(x)) {
-    throw UsageError(option + ": expected a number, got '" + text + "'");
-  }
-  return x;
-}
-
-int parseInteger(const std::string& option, const std::string& text) {
-  char* end = nullptr;
-  errno = 0;
-  const long x = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno == ERANGE || x < INT32_MIN || x > INT32_MAX) {
-    throw UsageError(option + ": expected an integer, got '" + text + "'");
-  }
-  return static_cast<int>(x);
-}
-
 Options parseArgs(int argc, char** argv) {
   Options o;
-  o.sim.backend = stabint::BackendKind::Auto;
+  o.sim = defaultSimulatorOptions();
   for (int i = 1; i < argc; ++i) {
     std::string arg = argv[i];
     std::optional<std::string> inline_value;
@@ -175,10 +270,6 @@ Options parseArgs(int argc, char** argv) {
         const size_t eq = kv.find('=');
         if (eq == std::string::npos || eq == 0) throw UsageError("--param: expected KEY=VALUE, got '" + kv + "'");
         o.params.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
-      } else if (arg == "--integrator") {
-        o.sim.integrator = stabint::parseIntegrator(value());
-      } else if (arg == "--backend") {
-        o.sim.backend = stabint::parseBackend(value());
       } else if (arg == "--precision") {
         const std::string p = value();
         if (p == "double")
@@ -192,18 +283,7 @@ Options parseArgs(int argc, char** argv) {
         o.sim.opencl.platform = value();
       } else if (arg == "--device") {
         o.sim.opencl.device = value();
-      } else if (arg == "--dt") {
-        o.sim.time_step = parseNumber(arg, value());
-      } else if (arg == "--iterations") {
-        o.sim.iterations = parseInteger(arg, value());
-      } else if (arg == "--be-iterations") {
-        o.sim.be_iterations = parseInteger(arg, value());
-      } else if (arg == "--acceleration") {
-        o.sim.acceleration = stabint::parseAcceleration(value());
-      } else if (arg == "--tolerance") {
-        o.sim.tolerance = parseNumber(arg, value());
-      } else if (arg == "--energy-limit") {
-        o.sim.energy_limit = parseNumber(arg, value());
+      } else if (setSimulatorOption(o.sim, arg == "--dt" ? "--time-step" : arg, arg, value)) {
       } else if (arg == "--frames") {
         o.frames = parseInteger(arg, value());
         if (o.frames < 0) throw UsageError("--frames: must be >= 0, got " + std::to_string(o.frames));

@@ -6,7 +6,7 @@
 // GlobalSolve::ConjugateGradient on a backend that solvesGlobalSystem() (OpenCL: on the device).
 #include "scene/scene_batch.hpp"
 
-#include <stabint/simulator.hpp>
+#include <stabint/types.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>

@@ -6,7 +6,7 @@
 #include <CL/opencl.hpp>
 
 #include <stabint/errors.hpp>
-#include <stabint/simulator.hpp>
+#include <stabint/types.hpp>
 
 #include <string>
 

@@ -8,7 +8,7 @@
 #include "scene/scene_batch.hpp"
 #include "solver/global_system.hpp"
 
-#include <stabint/simulator.hpp>
+#include <stabint/types.hpp>
 
 #include <Eigen/Core>
 

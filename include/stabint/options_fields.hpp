@@ -16,7 +16,7 @@
 /// Each entry is `FIELD(type, name, doc)` (an int, a double or an enum of stabint/simulator.hpp)
 /// or, for a nested options struct, `NESTED(type, name, FIELDS, doc)`, where FIELDS is the
 /// list of the nested struct's fields. Entries are in the struct's order.
-#include <stabint/simulator.hpp>
+#include <stabint/types.hpp>
 
 #include <string>
 

@@ -9,3 +9,4 @@
 #include <stabint/options_fields.hpp>
 #include <stabint/scene.hpp>
 #include <stabint/simulator.hpp>
+#include <stabint/types.hpp>

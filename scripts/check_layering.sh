@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# The layering rule (docs/development.md, "Layering"): the element math, the scene, the solver and
+# the backends sit below the stepping drivers. They take the library's shared types from the leaf
+# header stabint/types.hpp and include neither the stepping facade (stabint/simulator.hpp,
+# batch.hpp, events.hpp, stabint.hpp) nor any header of host/integrator/. Fails, naming the file
+# and line, on an include that breaks it.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+lower=(host/elements host/scene host/solver host/cpu host/opencl host/opencl_disabled host/backend.hpp)
+if violations=$(grep -rnE '#include *[<"](stabint/(simulator|batch|events|stabint)\.hpp|integrator/)' "${lower[@]}"); then
+  echo "$violations" >&2
+  echo "layering: the lines above include the stepping layer from below it (docs/development.md, \"Layering\")" >&2
+  exit 1
+fi
+echo "layering: ok (${lower[*]} include neither the facade nor host/integrator/)"

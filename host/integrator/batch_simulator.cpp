@@ -361,8 +361,7 @@ void BatchSimulator::Impl::blend(double t1, bool forced) {
   // docs/batch_design.md).
   control.iterations = options_.be_iterations;
   backend_->copy(kXPartner, kX);
-  const int be_iterations =
-      steps.backwardEuler(h, t_, kXPartner, kVPartner, partnerControl(control), /*warm_start=*/true);
+  const int be_iterations = steps.backwardEuler(h, t_, kXPartner, kVPartner, endingPlain(control), /*warm_start=*/true);
   backend_->readBoth(kXPartner, x_aux_, kVPartner, v_aux_);
   for (std::size_t s = 0; s < n; ++s) {
     if (!needs_partner[s]) continue;

@@ -34,9 +34,7 @@ int IntegratorSteps::implicitMidpoint(double h, double t, int x_out, int v_out, 
   // The solve finds the midpoint and the step extrapolates it, x_1 = 2 x_mid - x_n, doubling
   // its error: L-BFGS ends on a plain iteration, which smooths the error its curvature pairs
   // leave in stiff modes before that doubling turns it into elastic energy.
-  IterationControl midpoint_control = control;
-  midpoint_control.plain_last_iteration = true;
-  const int done = solver_.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, midpoint_control);
+  const int done = solver_.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, endingPlain(control));
   backend_.combine(v_out, 4.0 / h, x_out, -4.0 / h, kX);
   backend_.combine(v_out, 1.0, v_out, -1.0, kV);
   if (midpoint_out >= 0) backend_.copy(midpoint_out, x_out);
@@ -53,9 +51,7 @@ int IntegratorSteps::bdf2(double h, double t, int x_out, int v_out, const Iterat
   // -1/3) and into v = 3/(2h) (x - ...): L-BFGS's stiff-mode error, left unsmoothed, pumped the
   // teaser's cloth by 0.13 J over 6 s where converged BDF2 loses 0.22 J (with the plain last
   // iteration: loses 0.10 J).
-  IterationControl bdf2_control = control;
-  bdf2_control.plain_last_iteration = true;
-  const int done = solver_.solve(9.0 / (4.0 * h * h), kY, x_out, t + h, bdf2_control);
+  const int done = solver_.solve(9.0 / (4.0 * h * h), kY, x_out, t + h, endingPlain(control));
   backend_.combine(v_out, 1.5 / h, x_out, -1.5 / h, kScratch);
   return done;
 }
@@ -91,9 +87,9 @@ void IntegratorSteps::commit(Integrator integrator, bool& has_history) {
   backend_.copy(kV, kVNew);
 }
 
-IterationControl partnerControl(IterationControl candidate) {
-  candidate.plain_last_iteration = true;
-  return candidate;
+IterationControl endingPlain(IterationControl control) {
+  control.plain_last_iteration = true;
+  return control;
 }
 
 double forcingWork(const PotentialEnergy& p_new, const PotentialEnergy& new_mid, const PotentialEnergy& old_mid,

@@ -68,11 +68,10 @@ class IntegratorSteps {
   LocalGlobalSolver& solver_;
 };
 
-/// The blend's BE partner solve: as `candidate`, ending on a plain iteration like the IM
-/// candidate's (IterationControl::plain_last_iteration): the blend combines the two, and the
-/// partner's stiff-mode error would enter the blended state's elastic energy as the candidate's
-/// would.
-IterationControl partnerControl(IterationControl candidate);
+/// `control` with its budget ending on a plain iteration (IterationControl::plain_last_iteration):
+/// for the solves whose error the step carries on, implicit midpoint's and BDF2's, and the
+/// blend's BE partner, which the blend combines with the IM candidate.
+IterationControl endingPlain(IterationControl control);
 
 /// The work the forcing does in a step (docs/method.md section 4): with p_new and p_old the
 /// potentials of the new and old positions at t + h and t, and new_mid, old_mid theirs at

@@ -113,9 +113,9 @@ struct Simulator::Impl {
     if (!blend_step.judge(x_new, v_new, p_im, vv_im, target_now)) return p_im;
 
     backend->copy(kXPartner, kX);
-    report.iterations += steps_of.backwardEuler(options.time_step, t, kXPartner, kVPartner,
-                                                partnerControl(control(options.be_iterations)),
-                                                /*warm_start=*/true);
+    report.iterations +=
+        steps_of.backwardEuler(options.time_step, t, kXPartner, kVPartner, endingPlain(control(options.be_iterations)),
+                               /*warm_start=*/true);
     // The partner on the host (one wait): the kinetic quadratic, the blended state and the
     // position move are formed there, which saves two device reductions and the reads of the
     // blended state.

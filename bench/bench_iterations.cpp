@@ -188,7 +188,7 @@ TetDeformations tetDeformations(const Scene& s) {
   return out;
 }
 
-enum class RotationMethod { NewtonPolar, JacobiSvd, WarmQuaternion };
+enum class RotationMethod { NewtonPolar, NewtonPolarLanes, JacobiSvd, WarmQuaternion };
 
 /// One step of Mueller et al. 2016 ("A robust method to extract the rotational part of
 /// deformations") from q: q <- exp(w) q with w = sum_i r_i x f_i / |sum_i r_i . f_i|.
@@ -205,9 +205,24 @@ void runRotations(benchmark::State& state, const TetDeformations& input, Rotatio
   const std::size_t count = input.f.size();
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d r;
+  constexpr int W = projections::kLanes;
   for (auto _ : state) {
+    if (method == RotationMethod::NewtonPolarLanes) {
+      // The CPU reference's passes: kLanes matrices side by side (projections::nearestRotations).
+      for (std::size_t e = 0; e + W <= count; e += W) {
+        double m[9][W], rl[9][W];
+        for (int l = 0; l < W; ++l)
+          for (int i = 0; i < 9; ++i) m[i][l] = input.f[e + std::size_t(l)].data()[i];
+        projections::nearestRotations(m, rl);
+        for (int l = 0; l < W; ++l)
+          for (int i = 0; i < 9; ++i) sum.data()[i] += rl[i][l];
+      }
+      benchmark::DoNotOptimize(sum);
+      continue;
+    }
     for (std::size_t e = 0; e < count; ++e) {
       switch (method) {
+        case RotationMethod::NewtonPolarLanes:
         case RotationMethod::NewtonPolar: projections::nearestRotation(input.f[e].data(), r.data()); break;
         case RotationMethod::JacobiSvd: r = projections::nearestRotationBySvd(input.f[e]); break;
         case RotationMethod::WarmQuaternion:
@@ -222,7 +237,8 @@ void runRotations(benchmark::State& state, const TetDeformations& input, Rotatio
   double max_error = 0.0;
   for (std::size_t e = 0; e < count; ++e) {
     const Eigen::Matrix3d exact = projections::nearestRotationBySvd(input.f[e]);
-    if (method == RotationMethod::NewtonPolar) projections::nearestRotation(input.f[e].data(), r.data());
+    if (method == RotationMethod::NewtonPolar || method == RotationMethod::NewtonPolarLanes)
+      projections::nearestRotation(input.f[e].data(), r.data());
     if (method == RotationMethod::JacobiSvd) r = exact;
     if (method == RotationMethod::WarmQuaternion) r = quaternionStep(input.f[e], input.previous[e]).toRotationMatrix();
     max_error = std::max(max_error, (r - exact).norm());
@@ -235,9 +251,10 @@ void runRotations(benchmark::State& state, const TetDeformations& input, Rotatio
 void registerIterationCases() {
   for (const SceneCase& scene : referenceScenes()) {
     if (scene.make().tets.empty()) continue;
-    for (const auto& [label, method] :
-         {std::pair{"newton-polar", RotationMethod::NewtonPolar}, std::pair{"jacobi-svd", RotationMethod::JacobiSvd},
-          std::pair{"warm-quaternion-1", RotationMethod::WarmQuaternion}}) {
+    for (const auto& [label, method] : {std::pair{"newton-polar", RotationMethod::NewtonPolar},
+                                        std::pair{"newton-polar-lanes", RotationMethod::NewtonPolarLanes},
+                                        std::pair{"jacobi-svd", RotationMethod::JacobiSvd},
+                                        std::pair{"warm-quaternion-1", RotationMethod::WarmQuaternion}}) {
       const std::string name = "rotation/" + scene.name + "/" + label;
       const SceneCase c = scene;
       const RotationMethod m = method;

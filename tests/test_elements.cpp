@@ -94,6 +94,38 @@ TEST(Elements, NearestRotationMatchesTheSvdOracle) {
   }
 }
 
+// The CPU reference's passes take rotations kLanes at a time. Each lane must be the one-at-a-time
+// rotation bit for bit, whatever its neighbours do: groups mixing near-rotations (few Newton
+// iterations), large stretches (many), inverted and flat matrices (the eigen-decomposition) and
+// a zero matrix, so that lanes settle, go on and are refused in the same call.
+TEST(Elements, RotationsOfAGroupAreEachLanesOwnBitForBit) {
+  constexpr int W = projections::kLanes;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int group = 0; group < 400; ++group) {
+    double m[9][W], r[9][W];
+    std::array<Eigen::Matrix3d, W> f;
+    for (int l = 0; l < W; ++l) {
+      const int kind = (group + 3 * l) % 6;
+      Eigen::Matrix3d F = randomRotation(rng);
+      if (kind == 1) F += 1e-3 * Eigen::Matrix3d::Random();
+      if (kind == 2) F = F * Eigen::Vector3d(4.0, 0.7, 0.05).asDiagonal();
+      if (kind == 3) F.col(0) *= -1.0;                      // inverted
+      if (kind == 4) F.col(2) = 0.5 * F.col(0) + F.col(1);  // flat
+      if (kind == 5 && group % 7 == 0) F.setZero();
+      for (int i = 0; i < 9; ++i) F(i) += kind == 0 ? 0.3 * u(rng) : 0.0;
+      f[std::size_t(l)] = F;
+      for (int i = 0; i < 9; ++i) m[i][l] = F(i);
+    }
+    projections::nearestRotations(m, r);
+    for (int l = 0; l < W; ++l) {
+      const Eigen::Matrix3d one = projections::nearestRotation(f[std::size_t(l)]);
+      for (int i = 0; i < 9; ++i)
+        ASSERT_EQ(r[i][l], one(i)) << "group " << group << " lane " << l << "\n" << f[std::size_t(l)];
+    }
+  }
+}
+
 TEST(Elements, SphereProjectionHasTheRadiusAndADefinedDegenerateCase) {
   const Eigen::Vector3d d(0.3, -0.4, 1.2);
   const double params_x[5] = {10.0, 0.7, 1.0, 0.0, 0.0}, params_y[5] = {10.0, 0.7, 0.0, 1.0, 0.0};

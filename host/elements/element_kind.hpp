@@ -21,11 +21,13 @@
 // and
 // jsonFields() for the generic JSON form.
 #include "elements/element_type.hpp"
+#include "elements/projections.hpp"
 #include "scene/scene_data.hpp"
 #include "scene/validation.hpp"
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <type_traits>
@@ -78,50 +80,112 @@ struct KindDefaults {
   static std::vector<KindField<Element>> jsonFields() { return {}; }
 };
 
-/// Element e of a Kind's block: A_e x into `ax`, its projection, the energy (returned) and, when
-/// `write`, the contributions w A_e^T p (or w A_e^T (p - A_e x) with `force`) of its K vertices into
-/// `c` (3 per vertex). Plain arrays with compile-time bounds, the same loops as
-/// kernels/element_pass.cl: the compiler unrolls them and keeps A_e x and p_e in registers.
+/// w/2 ||ax - p||^2 of every lane (halfWeightedSquaredDistance's additions, lane by lane).
+template <int Rows>
+inline void halfWeightedSquaredDistances(const double* w, const double (*ax)[projections::kLanes],
+                                         const double (*p)[projections::kLanes], double* energy) {
+  constexpr int W = projections::kLanes;
+  for (int l = 0; l < W; ++l) {
+    double sum = 0.0;
+    for (int i = 0; i < Rows; ++i) sum += (ax[i][l] - p[i][l]) * (ax[i][l] - p[i][l]);
+    energy[l] = 0.5 * w[l] * sum;
+  }
+}
+
+/// Whether a Kind projects a group of lanes itself (projectLanes); without it each lane takes
+/// Kind::project.
+template <class Kind, class = void>
+struct ProjectsLanes : std::false_type {};
 template <class Kind>
-inline double kindElement(const ElementBlock& block, const std::vector<double>& params, const double* xs,
-                          Eigen::Index n, const double* shared, int e, bool write, bool force, double* c) {
+struct ProjectsLanes<Kind, std::void_t<decltype(&Kind::projectLanes)>> : std::true_type {};
+
+/// Kind::project of every lane: p[i][l] from ax[i][l] and prm[i][l], the energies into `energy`.
+template <class Kind>
+inline void kindProjectLanes(const double (*ax)[projections::kLanes], const double (*prm)[projections::kLanes],
+                             double (*p)[projections::kLanes], double* energy) {
+  if constexpr (ProjectsLanes<Kind>::value) {
+    Kind::projectLanes(ax, prm, p, energy);
+  } else {
+    constexpr int R3 = 3 * Kind::kRows;
+    for (int l = 0; l < projections::kLanes; ++l) {
+      double a[R3], q[Kind::kParams], out[R3];
+      for (int i = 0; i < R3; ++i) a[i] = ax[i][l];
+      for (int i = 0; i < Kind::kParams; ++i) q[i] = prm[i][l];
+      energy[l] = Kind::project(a, q, out);
+      for (int i = 0; i < R3; ++i) p[i][l] = out[i];
+    }
+  }
+}
+
+/// Elements [first, first + count) of a Kind's block, count <= kLanes, as one group of lanes
+/// (projections.hpp): A_e x of each, its projection, its energy into energies[e - first] and,
+/// when `write`, the contributions w A_e^T p (or w A_e^T (p - A_e x) with `force`) of its K
+/// vertices into `c` (3 K per element, 3 per vertex). A group of fewer elements fills its other
+/// lanes with its last element, whose results are not stored. Every lane does the same
+/// operations in the same order as kernels/element_pass.cl: a result does not depend on the
+/// group an element falls in (a batch's scenes start their groups anywhere).
+template <class Kind>
+STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const std::vector<double>& params,
+                                              const double* xs, Eigen::Index n, const double* shared, int first,
+                                              int count, bool write, bool force, double* energies, double* c) {
+  constexpr int W = projections::kLanes;
   constexpr int K = Kind::kVertices;
   constexpr int R = Kind::kRows;
   constexpr int P = Kind::kParams;
   constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
-  const int* v = block.vertices.data() + K * e;
-  const double* a = Kind::kSharedCoefficients ? shared : block.coefficients.data() + kStride * e;
-  const double* prm = params.data() + P * e;
+  int e[W];
+  for (int l = 0; l < W; ++l) e[l] = first + (l < count ? l : count - 1);
   // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
   // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
   // exactly x_a - x_b or x_j.
-  double ax[3 * R];
+  double ax[3 * R][W], a[R * K][W];
+  for (int i = 0; i < R * K; ++i)
+    for (int l = 0; l < W; ++l)
+      a[i][l] = Kind::kSharedCoefficients ? shared[i] : block.coefficients[kStride * e[l] + i];
   for (int k = 0; k < K; ++k) {
-    const double x0 = xs[v[k]], x1 = xs[n + v[k]], x2 = xs[2 * n + v[k]];
-    for (int r = 0; r < R; ++r) {
-      const double coefficient = a[K * r + k];
-      ax[3 * r] = k == 0 ? coefficient * x0 : ax[3 * r] + coefficient * x0;
-      ax[3 * r + 1] = k == 0 ? coefficient * x1 : ax[3 * r + 1] + coefficient * x1;
-      ax[3 * r + 2] = k == 0 ? coefficient * x2 : ax[3 * r + 2] + coefficient * x2;
+    double x0[W], x1[W], x2[W];
+    for (int l = 0; l < W; ++l) {
+      const int v = block.vertices[std::size_t(K) * std::size_t(e[l]) + std::size_t(k)];
+      x0[l] = xs[v];
+      x1[l] = xs[n + v];
+      x2[l] = xs[2 * n + v];
+    }
+    for (int r = 0; r < R; ++r)
+      for (int l = 0; l < W; ++l) {
+        const double coefficient = a[K * r + k][l];
+        ax[3 * r][l] = k == 0 ? coefficient * x0[l] : ax[3 * r][l] + coefficient * x0[l];
+        ax[3 * r + 1][l] = k == 0 ? coefficient * x1[l] : ax[3 * r + 1][l] + coefficient * x1[l];
+        ax[3 * r + 2][l] = k == 0 ? coefficient * x2[l] : ax[3 * r + 2][l] + coefficient * x2[l];
+      }
+  }
+  double prm[P][W];
+  for (int i = 0; i < P; ++i)
+    for (int l = 0; l < W; ++l) prm[i][l] = params[std::size_t(P) * std::size_t(e[l]) + std::size_t(i)];
+  double p[3 * R][W], energy[W];
+  kindProjectLanes<Kind>(ax, prm, p, energy);
+  for (int l = 0; l < count; ++l) energies[l] = energy[l];
+  if (!write) return;
+  for (int i = 0; i < 3 * R; ++i)
+    for (int l = 0; l < W; ++l) p[i][l] = prm[0][l] * (force ? p[i][l] - ax[i][l] : p[i][l]);
+  for (int k = 0; k < K; ++k) {
+    double c0[W], c1[W], c2[W];
+    for (int l = 0; l < W; ++l) {
+      c0[l] = a[k][l] * p[0][l];
+      c1[l] = a[k][l] * p[1][l];
+      c2[l] = a[k][l] * p[2][l];
+    }
+    for (int r = 1; r < R; ++r)
+      for (int l = 0; l < W; ++l) {
+        c0[l] += a[K * r + k][l] * p[3 * r][l];
+        c1[l] += a[K * r + k][l] * p[3 * r + 1][l];
+        c2[l] += a[K * r + k][l] * p[3 * r + 2][l];
+      }
+    for (int l = 0; l < count; ++l) {
+      c[3 * (K * l + k)] = c0[l];
+      c[3 * (K * l + k) + 1] = c1[l];
+      c[3 * (K * l + k) + 2] = c2[l];
     }
   }
-  double p[3 * R];
-  const double element_energy = Kind::project(ax, prm, p);
-  if (!write) return element_energy;
-  const double w = prm[0];
-  for (int i = 0; i < 3 * R; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
-  for (int k = 0; k < K; ++k) {
-    double c0 = a[k] * p[0], c1 = a[k] * p[1], c2 = a[k] * p[2];
-    for (int r = 1; r < R; ++r) {
-      c0 += a[K * r + k] * p[3 * r];
-      c1 += a[K * r + k] * p[3 * r + 1];
-      c2 += a[K * r + k] * p[3 * r + 2];
-    }
-    c[3 * k] = c0;
-    c[3 * k + 1] = c1;
-    c[3 * k + 2] = c2;
-  }
-  return element_energy;
 }
 
 /// The shared coefficients of a Kind (unused when each element has its own).
@@ -133,12 +197,13 @@ inline void kindSharedCoefficients(double* shared) {
 }
 
 /// ElementType::pass of a Kind (ElementTypeOf's, and that of types whose elements are not a
-/// Scene list, such as contact): kindElement per element, its contributions added into `out` in
+/// Scene list, such as contact): kindLanes per group, the contributions added into `out` in
 /// element order.
 template <class Kind>
 double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
                 int count, int flags, Eigen::MatrixX3d* out) {
   constexpr int K = Kind::kVertices;
+  constexpr int W = projections::kLanes;
   const bool write = (flags & (kPassProjection | kPassForce)) != 0;
   const bool force = (flags & kPassForce) != 0;
   const Eigen::Index n = x.rows();
@@ -147,35 +212,42 @@ double kindPass(const ElementBlock& block, const std::vector<double>& params, co
   double shared[Kind::kRows * K];
   kindSharedCoefficients<Kind>(shared);
   double energy = 0.0;
-  for (int e = first; e < first + count; ++e) {
-    double c[3 * K];
-    const double element_energy = kindElement<Kind>(block, params, xs, n, shared, e, write, force, c);
-    if (flags & kPassEnergy) energy += element_energy;
-    if (!write) continue;
-    const int* v = block.vertices.data() + K * e;
-    for (int k = 0; k < K; ++k) {
-      os[v[k]] += c[3 * k];
-      os[n + v[k]] += c[3 * k + 1];
-      os[2 * n + v[k]] += c[3 * k + 2];
+  for (int group = first; group < first + count; group += W) {
+    const int size = std::min(W, first + count - group);
+    double c[3 * K * W], energies[W];
+    kindLanes<Kind>(block, params, xs, n, shared, group, size, write, force, energies, c);
+    for (int l = 0; l < size; ++l) {
+      if (flags & kPassEnergy) energy += energies[l];
+      if (!write) continue;
+      const int* v = block.vertices.data() + K * (group + l);
+      for (int k = 0; k < K; ++k) {
+        os[v[k]] += c[3 * (K * l + k)];
+        os[n + v[k]] += c[3 * (K * l + k) + 1];
+        os[2 * n + v[k]] += c[3 * (K * l + k) + 2];
+      }
     }
   }
   return energy;
 }
 
-/// ElementType::elementResults of a Kind: kindElement per element, stored.
+/// ElementType::elementResults of a Kind: kindLanes per group, stored.
 template <class Kind>
 void kindElementResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
                         int first, int count, int flags, double* energies, double* contributions) {
   constexpr int K = Kind::kVertices;
+  constexpr int W = projections::kLanes;
   const bool write = (flags & (kPassProjection | kPassForce)) != 0;
   const bool force = (flags & kPassForce) != 0;
   const bool energy = (flags & kPassEnergy) != 0;
   double shared[Kind::kRows * K];
   kindSharedCoefficients<Kind>(shared);
-  for (int i = 0; i < count; ++i) {
-    const double element_energy = kindElement<Kind>(block, params, x.data(), x.rows(), shared, first + i, write, force,
-                                                    write ? contributions + 3 * K * i : nullptr);
-    if (energy) energies[i] = element_energy;
+  for (int i = 0; i < count; i += W) {
+    const int size = std::min(W, count - i);
+    double group_energies[W];
+    kindLanes<Kind>(block, params, x.data(), x.rows(), shared, first + i, size, write, force, group_energies,
+                    write ? contributions + 3 * K * i : nullptr);
+    if (energy)
+      for (int l = 0; l < size; ++l) energies[i + l] = group_energies[l];
   }
 }
 

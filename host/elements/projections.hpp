@@ -8,7 +8,30 @@
 #include <algorithm>
 #include <cmath>
 
+// The element passes of the CPU reference work on kLanes elements side by side (lanes): each
+// array of a group holds entry i of element l at [i][l], so that every loop over l is one SIMD
+// instruction. The functions that do most of the arithmetic are compiled for AVX-512, AVX2 and
+// the baseline, and the loader picks the widest the machine has (GCC/Clang target_clones on
+// x86-64 Linux): the library stays one portable binary. Every lane does the scalar function's
+// operations in the same order (the build has no FMA contraction: -ffp-contract=off), so a lane's
+// result is the scalar one bit for bit on any machine.
+#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
+    !defined(STABINT_NO_TARGET_CLONES)
+#define STABINT_TARGET_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define STABINT_TARGET_CLONES
+#endif
+// Clang (14) clones no function template: there, templates stay baseline code.
+#if defined(__clang__)
+#define STABINT_TARGET_CLONES_TEMPLATE
+#else
+#define STABINT_TARGET_CLONES_TEMPLATE STABINT_TARGET_CLONES
+#endif
+
 namespace stabint::projections {
+
+/// Elements per group in the CPU reference's passes: AVX-512's width in doubles.
+inline constexpr int kLanes = 8;
 
 /// The projection of an element whose A x = v is one 3-vector held at a length r (springs,
 /// bending hinges), with params = (w, r, unit fallback direction): p = r v/|v|. A v shorter than
@@ -44,6 +67,12 @@ inline Eigen::Vector3d anyOrthogonal(const Eigen::Vector3d& u) {
 /// where the column of the smallest singular value flips (a proper rotation, never a
 /// reflection).
 void nearestRotation(const double* m, double* r);
+
+/// nearestRotation of kLanes matrices at once: m[i][l] is entry i of matrix l, and r likewise.
+/// Lane l is nearestRotation(m_l) bit for bit: the Newton iterations run while any lane has not
+/// settled, and a settled lane keeps its value; lanes that need the eigen-decomposition take it
+/// one by one afterwards.
+void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes]);
 
 inline Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& m) {
   Eigen::Matrix3d r;

@@ -49,6 +49,12 @@ struct TetKind : KindDefaults<Tet> {
     projections::nearestRotation(ax, p);
     return halfWeightedSquaredDistance(params[0], ax, p, 9);
   }
+
+  static void projectLanes(const double (*ax)[projections::kLanes], const double (*params)[projections::kLanes],
+                           double (*p)[projections::kLanes], double* energy) {
+    projections::nearestRotations(ax, p);
+    halfWeightedSquaredDistances<9>(params[0], ax, p, energy);
+  }
 };
 
 }  // namespace

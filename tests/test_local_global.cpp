@@ -302,6 +302,34 @@ TEST_P(LocalGlobalTest, FusedEnergyOfTheLocalStepIsThePotential) {
   EXPECT_GT(fused.internal, 0.0);
 }
 
+// A solve whose last local step was at its result leaves that potential (potentialOfResult), which
+// a step takes instead of an energy pass: it must be the pass's value bit for bit, for L-BFGS,
+// Newton-CG and tracked plain solves, and absent where the solve ends on a global step.
+TEST_P(LocalGlobalTest, PotentialOfTheResultIsTheEnergyPass) {
+  const Scene s = scene();
+  Fixture f(s);
+  const double c = 900.0, t = 0.3;
+  for (Acceleration a : {Acceleration::LBFGS, Acceleration::Newton, Acceleration::None}) {
+    for (bool plain_last : {false, true}) {
+      f.backend->write(kX, inertialTarget(s));
+      f.backend->write(kY, s.positions);
+      IterationControl control{7, 0.0, 7, 1.0, a};
+      control.plain_last_iteration = plain_last;
+      std::vector<double> history;
+      f.solver.solve(c, kY, kX, t, control, a == Acceleration::None ? &history : nullptr);
+      const std::optional<PotentialEnergy>& left = f.solver.potentialOfResult();
+      ASSERT_TRUE(left.has_value()) << static_cast<int>(a);
+      const PotentialEnergy pass = f.backend->potential(kX, t);
+      EXPECT_EQ(left->internal, pass.internal) << static_cast<int>(a);
+      EXPECT_EQ(left->pins, pass.pins) << static_cast<int>(a);
+      EXPECT_EQ(left->external, pass.external) << static_cast<int>(a);
+    }
+  }
+  // A plain solve that does not track its objective ends on a global step.
+  f.solver.solve(c, kY, kX, t, IterationControl{3, 0.0, 3, 1.0});
+  EXPECT_FALSE(f.solver.potentialOfResult().has_value());
+}
+
 TEST(GlobalSystem, FactorsOncePerDistinctC) {
   const Scene s = clothScene();
   Fixture f(s);

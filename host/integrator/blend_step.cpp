@@ -91,8 +91,8 @@ void BlendStep::consider(double beta, const PotentialEnergy& p) {
     best_ = p, best_beta_ = beta, best_g_ = p.total() - potential_wanted_;
 }
 
-void BlendStep::take(const PotentialEnergy& p) {
-  ++report_->energy_evaluations;
+void BlendStep::take(const PotentialEnergy& p, bool evaluated) {
+  if (evaluated) ++report_->energy_evaluations;
   if (stage_ == Stage::Search) {
     evaluations_.push_back({weight_, k_alpha_.at(weight_) + p.total() - target_, p});
     if (evaluations_.size() == 1) {

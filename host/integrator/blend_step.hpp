@@ -72,7 +72,9 @@ class BlendStep {
   /// move of the corrections.
   const Eigen::MatrixX3d& from() const { return *from_; }
   const Eigen::MatrixX3d& partner() const { return x_partner_; }
-  void take(const PotentialEnergy& p);
+  /// `evaluated`: false for a potential the caller had without an energy pass (not counted in
+  /// StepReport::energy_evaluations).
+  void take(const PotentialEnergy& p, bool evaluated = true);
 
   /// The blend's state: (x, v) = (1 - alpha) IM + alpha partner with the alpha of the root find,
   /// rounded to what the backend's slots hold; returns its potential at t + h.

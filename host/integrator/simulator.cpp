@@ -103,8 +103,7 @@ struct Simulator::Impl {
       blend_step.candidateNotFinite();
       backend->copy(kXNew, kX);
       report.iterations += backwardEuler(kXNew, kVNew, options.iterations, /*warm_start=*/true);
-      const PotentialEnergy p_be = backend->potential(kXNew, t1);
-      ++report.energy_evaluations;
+      const PotentialEnergy p_be = potentialOfStep(kXNew, t1, report);
       target_now += forcingWork(kXNew, p_be, report);
       return p_be;
     }
@@ -121,7 +120,7 @@ struct Simulator::Impl {
     // blended state.
     backend->readBoth(kXPartner, blend_step.partnerPositions(), kVPartner, blend_step.partnerVelocities());
     blend_step.partnerRead();
-    evaluateBlendPotentials(t1);  // kXNew holds the IM candidate
+    evaluateBlendPotentials(t1, steps_of.potentialOfStep());  // kXNew holds the IM candidate
     const PotentialEnergy p_blend = blend_step.blend(x_new, v_new, *backend);
     backend->write(kXNew, x_new);
     backend->write(kVNew, v_new);
@@ -129,13 +128,26 @@ struct Simulator::Impl {
   }
 
   // The potentials the blend asks for, at (1 - w) kXNew + w kXPartner (kXNew holds what
-  // BlendStep::from() is).
-  void evaluateBlendPotentials(double t1) {
+  // BlendStep::from() is). At w = 1 the trial is the partner (0 x + 1 y = y, up to the sign of a
+  // zero), whose potential its solve may have left (`partner`): taken without a pass.
+  void evaluateBlendPotentials(double t1, const std::optional<PotentialEnergy>& partner = std::nullopt) {
     while (blend_step.wantsPotential()) {
       const double w = blend_step.weight();
+      if (w == 1.0 && partner) {
+        blend_step.take(*partner, /*evaluated=*/false);
+        continue;
+      }
       backend->combine(kXTrial, 1.0 - w, kXNew, w, kXPartner);
       blend_step.take(backend->potential(kXTrial, t1));
     }
+  }
+
+  // The potential at t1 of the step's new positions in `slot`: from the step's solve where its
+  // last local step was at them, else an energy pass.
+  PotentialEnergy potentialOfStep(int slot, double t1, StepReport& report) {
+    if (const std::optional<PotentialEnergy>& p = steps_of.potentialOfStep()) return *p;
+    ++report.energy_evaluations;
+    return backend->potential(slot, t1);
   }
 
   double tolerance() const { return blendTolerance(options, kinetic, potential, energy_scale); }
@@ -215,8 +227,7 @@ struct Simulator::Impl {
       p_new = blend(target_now, r);
     } else {
       r.iterations = steps_of.step(options.integrator, h, t, has_history, kXNew, kVNew, control(options.iterations));
-      p_new = backend->potential(kXNew, t1);
-      ++r.energy_evaluations;
+      p_new = potentialOfStep(kXNew, t1, r);
       if (std::isfinite(p_new.total())) target_now += forcingWork(kXNew, p_new, r);
     }
 

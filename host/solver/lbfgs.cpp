@@ -77,6 +77,7 @@ void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, st
   objective.resize(rows_.size());
   if (one) {
     objective[0] = inertia(c, x_trial_) + potential.total();
+    result_potential_ = potential;
     return;
   }
   backend_.potentials(x, t, segment_potentials_);

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <vector>
 
 namespace stabint {
@@ -57,6 +58,12 @@ class LocalGlobalSolver {
 
   /// c/2 ||x - y||_M^2 + E_int(x) + U_ext(x, t)
   double objective(double c, int y, int x, double t);
+
+  /// The potential at time t of the positions the last solve left in slot x, when its last
+  /// local step was at them (L-BFGS, Newton-CG and plain solves that track their objective, on
+  /// one scene): equal bit for bit to Backend::potential(x, t), so a step takes it instead of an
+  /// energy pass over the same positions. Empty otherwise.
+  const std::optional<PotentialEnergy>& potentialOfResult() const { return result_potential_; }
 
   /// Accelerated iterates rejected (objective rose) since construction.
   int rejectedAccelerations() const { return rejected_; }
@@ -110,6 +117,7 @@ class LocalGlobalSolver {
   GlobalSystem& system_;
   int scratch_;
   int rejected_ = 0;
+  std::optional<PotentialEnergy> result_potential_;
   int backend_matrix_version_ = -1;  // GlobalSystem::laplacianVersion() of the backend's copy of L
   // Reused across iterations and solves: no per-iteration allocation.
   Eigen::MatrixX3d rhs_, x_host_, y_host_, x_cur_, x_next_;

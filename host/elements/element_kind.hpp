@@ -85,7 +85,7 @@ template <int Rows>
 inline void halfWeightedSquaredDistances(const double* w, const double (*ax)[projections::kLanes],
                                          const double (*p)[projections::kLanes], double* energy) {
   constexpr int W = projections::kLanes;
-  for (int l = 0; l < W; ++l) {
+  STABINT_LANES for (int l = 0; l < W; ++l) {
     double sum = 0.0;
     for (int i = 0; i < Rows; ++i) sum += (ax[i][l] - p[i][l]) * (ax[i][l] - p[i][l]);
     energy[l] = 0.5 * w[l] * sum;
@@ -134,24 +134,23 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
   constexpr int P = Kind::kParams;
   constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
   int e[W];
-  for (int l = 0; l < W; ++l) e[l] = first + (l < count ? l : count - 1);
+  STABINT_LANES for (int l = 0; l < W; ++l) e[l] = first + (l < count ? l : count - 1);
   // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
   // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
   // exactly x_a - x_b or x_j.
   double ax[3 * R][W], a[R * K][W];
   for (int i = 0; i < R * K; ++i)
-    for (int l = 0; l < W; ++l)
-      a[i][l] = Kind::kSharedCoefficients ? shared[i] : block.coefficients[kStride * e[l] + i];
+    STABINT_LANES for (int l = 0; l < W; ++l) a[i][l] =
+        Kind::kSharedCoefficients ? shared[i] : block.coefficients[kStride * e[l] + i];
   for (int k = 0; k < K; ++k) {
     double x0[W], x1[W], x2[W];
-    for (int l = 0; l < W; ++l) {
+    STABINT_LANES for (int l = 0; l < W; ++l) {
       const int v = block.vertices[std::size_t(K) * std::size_t(e[l]) + std::size_t(k)];
       x0[l] = xs[v];
       x1[l] = xs[n + v];
       x2[l] = xs[2 * n + v];
     }
-    for (int r = 0; r < R; ++r)
-      for (int l = 0; l < W; ++l) {
+    for (int r = 0; r < R; ++r) STABINT_LANES for (int l = 0; l < W; ++l) {
         const double coefficient = a[K * r + k][l];
         ax[3 * r][l] = k == 0 ? coefficient * x0[l] : ax[3 * r][l] + coefficient * x0[l];
         ax[3 * r + 1][l] = k == 0 ? coefficient * x1[l] : ax[3 * r + 1][l] + coefficient * x1[l];
@@ -160,22 +159,21 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
   }
   double prm[P][W];
   for (int i = 0; i < P; ++i)
-    for (int l = 0; l < W; ++l) prm[i][l] = params[std::size_t(P) * std::size_t(e[l]) + std::size_t(i)];
+    STABINT_LANES for (int l = 0; l < W; ++l) prm[i][l] = params[std::size_t(P) * std::size_t(e[l]) + std::size_t(i)];
   double p[3 * R][W], energy[W];
   kindProjectLanes<Kind>(ax, prm, p, energy);
   for (int l = 0; l < count; ++l) energies[l] = energy[l];
   if (!write) return;
   for (int i = 0; i < 3 * R; ++i)
-    for (int l = 0; l < W; ++l) p[i][l] = prm[0][l] * (force ? p[i][l] - ax[i][l] : p[i][l]);
+    STABINT_LANES for (int l = 0; l < W; ++l) p[i][l] = prm[0][l] * (force ? p[i][l] - ax[i][l] : p[i][l]);
   for (int k = 0; k < K; ++k) {
     double c0[W], c1[W], c2[W];
-    for (int l = 0; l < W; ++l) {
+    STABINT_LANES for (int l = 0; l < W; ++l) {
       c0[l] = a[k][l] * p[0][l];
       c1[l] = a[k][l] * p[1][l];
       c2[l] = a[k][l] * p[2][l];
     }
-    for (int r = 1; r < R; ++r)
-      for (int l = 0; l < W; ++l) {
+    for (int r = 1; r < R; ++r) STABINT_LANES for (int l = 0; l < W; ++l) {
         c0[l] += a[K * r + k][l] * p[3 * r][l];
         c1[l] += a[K * r + k][l] * p[3 * r + 1][l];
         c2[l] += a[K * r + k][l] * p[3 * r + 2][l];

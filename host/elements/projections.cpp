@@ -77,7 +77,7 @@ bool polarByNewton(const double* m, double* r) {
 /// cofactor() of every lane: c[i][l] and det[l] from x[i][l].
 template <int W>
 inline __attribute__((always_inline)) void cofactors(const double (*x)[W], double (*c)[W], double* det) {
-  for (int l = 0; l < W; ++l) {
+  STABINT_LANES for (int l = 0; l < W; ++l) {
     c[0][l] = x[4][l] * x[8][l] - x[5][l] * x[7][l];
     c[1][l] = x[5][l] * x[6][l] - x[3][l] * x[8][l];
     c[2][l] = x[3][l] * x[7][l] - x[4][l] * x[6][l];
@@ -178,55 +178,55 @@ void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes]) {
   enum : std::int64_t { kIterating = 0, kSettled = 1, kRefused = 2 };
   double x[9][W], c[9][W], det[W], g[W], update2[W];
   std::int64_t state[W], scale[W];
-  for (int l = 0; l < W; ++l) {
+  STABINT_LANES for (int l = 0; l < W; ++l) {
     double m2 = 0.0;
     for (int i = 0; i < 9; ++i) m2 += m[i][l] * m[i][l];
     g[l] = m2;  // ||m||^2 until the first scaling
   }
-  for (int i = 0; i < 9; ++i)
-    for (int l = 0; l < W; ++l) x[i][l] = m[i][l];
+  for (int i = 0; i < 9; ++i) STABINT_LANES for (int l = 0; l < W; ++l) x[i][l] = m[i][l];
   cofactors<W>(x, c, det);
-  for (int l = 0; l < W; ++l) {
+  STABINT_LANES for (int l = 0; l < W; ++l) {
     state[l] = det[l] > kFlatVolume * g[l] * std::sqrt(g[l]) ? kIterating : kRefused;
     scale[l] = 1;
   }
   for (int iteration = 0; iteration < kMaxNewtonIterations; ++iteration) {
     std::int64_t iterating = 0, scaling = 0;
+#if defined(STABINT_OMP_SIMD)
+#pragma omp simd reduction(| : iterating, scaling)
+#endif
     for (int l = 0; l < W; ++l) {
       iterating |= state[l] == kIterating;
       scaling |= state[l] == kIterating && scale[l];
     }
     if (!iterating) break;
-    for (int l = 0; l < W; ++l) {
+    STABINT_LANES for (int l = 0; l < W; ++l) {
       g[l] = 1.0;
       update2[l] = 0.0;
     }
     // The scaling's square roots and division are most of an iteration's cost in SIMD: skipped
     // once no lane scales.
-    if (scaling)
-      for (int l = 0; l < W; ++l) {
+    if (scaling) STABINT_LANES for (int l = 0; l < W; ++l) {
         double x2 = 0.0, c2 = 0.0;
         for (int i = 0; i < 9; ++i) x2 += x[i][l] * x[i][l];
         for (int i = 0; i < 9; ++i) c2 += c[i][l] * c[i][l];
         g[l] = scale[l] ? std::sqrt(std::sqrt(c2 / x2) / det[l]) : 1.0;
       }
-    for (int i = 0; i < 9; ++i)
-      for (int l = 0; l < W; ++l) {
+    for (int i = 0; i < 9; ++i) STABINT_LANES for (int l = 0; l < W; ++l) {
         const double a = 0.5 * g[l], b = 0.5 / (g[l] * det[l]);
         const double next = a * x[i][l] + b * c[i][l];
         update2[l] += (next - x[i][l]) * (next - x[i][l]);
         x[i][l] = state[l] == kIterating ? next : x[i][l];
       }
-    for (int l = 0; l < W; ++l) {
+    STABINT_LANES for (int l = 0; l < W; ++l) {
       const bool settles = state[l] == kIterating && update2[l] < kEpsilon;
       scale[l] = update2[l] > 1e-4;
       state[l] = settles ? kSettled : state[l];
     }
     cofactors<W>(x, c, det);
-    for (int l = 0; l < W; ++l) state[l] = state[l] == kIterating && !(det[l] > 0.0) ? kRefused : state[l];
+    STABINT_LANES for (int l = 0; l < W; ++l) state[l] =
+        state[l] == kIterating && !(det[l] > 0.0) ? kRefused : state[l];
   }
-  for (int i = 0; i < 9; ++i)
-    for (int l = 0; l < W; ++l) r[i][l] = x[i][l];
+  for (int i = 0; i < 9; ++i) STABINT_LANES for (int l = 0; l < W; ++l) r[i][l] = x[i][l];
   for (int l = 0; l < W; ++l) {
     if (state[l] == kSettled) continue;
     double ml[9], rl[9];

@@ -21,6 +21,15 @@
 #else
 #define STABINT_TARGET_CLONES
 #endif
+// Loops over the lanes of a group: vectorized as a whole (the compiler would otherwise unroll
+// these short loops first and vectorize only parts of what is left). The library is built with
+// -fopenmp-simd (the pragma only, no OpenMP runtime) and STABINT_OMP_SIMD; other code that
+// includes this header (tests, benchmarks) gets plain loops.
+#if defined(STABINT_OMP_SIMD)
+#define STABINT_LANES _Pragma("omp simd")
+#else
+#define STABINT_LANES
+#endif
 // Clang (14) clones no function template: there, templates stay baseline code.
 #if defined(__clang__)
 #define STABINT_TARGET_CLONES_TEMPLATE
@@ -51,7 +60,7 @@ inline double ontoSphere(const double* v, const double* params, double* p) {
 /// ontoSphere of every lane of a group (v[c][l], params[i][l]): the same operations lane by lane.
 inline void ontoSpheres(const double (*v)[kLanes], const double (*params)[kLanes], double (*p)[kLanes],
                         double* energy) {
-  for (int l = 0; l < kLanes; ++l) {
+  STABINT_LANES for (int l = 0; l < kLanes; ++l) {
     const double r = params[1][l];
     const double len = std::sqrt(v[0][l] * v[0][l] + v[1][l] * v[1][l] + v[2][l] * v[2][l]);
     const bool degenerate = len < 1e-12 * std::max(r, 1.0);

@@ -6,7 +6,11 @@
 //                                                    from the same checkpoint
 //   frame_pass/<scene>/<local|energy>/threads:N      one element pass of the CPU reference: the
 //                                                    local step with its right-hand side, or an
-//                                                    energy pass
+//                                                    energy pass, at the bar's positions after 10
+//                                                    blend steps (deformed, as in a frame); with
+//                                                    its arithmetic bound (counters flops, the
+//                                                    core's rates, arithmetic_bound, bound_ratio:
+//                                                    below)
 //   frame_solve/<scene>/<one_solve|column_groups>/threads:N
 //                                                    the host's solve of K_c x = rhs alone (manual
 //                                                    time, after a local step): Eigen's one
@@ -16,10 +20,13 @@
 #include "first_step.hpp"
 
 #include "cpu/worker_pool.hpp"
+#include "elements/element_type.hpp"
+#include "elements/projections.hpp"
 
 #include <Eigen/CholmodSupport>
 
 #include <chrono>
+#include <cmath>
 #include <exception>
 
 namespace stabint::bench {
@@ -94,15 +101,103 @@ void runFrame(benchmark::State& state, const std::string& key, BackendChoice bac
   state.SetLabel(f.sim->backendDescription());
 }
 
-// The first-step fixture with the solve as it was before GlobalSystem::solve split its columns.
+// ---- the local step's arithmetic bound ---------------------------------------------------------
+// Operations of one tet in a local step, counted from the code lane by lane (every lane of a
+// group executes them): multiplies and adds, and apart from them the divisions and square roots,
+// which take many cycles each.
+//   A x (kindLanes): 4 vertices x 9 products + 27 sums                               63
+//   rotation set-up (nearestRotations): ||m||^2 18, cofactors 32, flatness test 3     53 + 1 sqrt
+//   per Newton iteration: step weights 2, update and its size 54, cofactors 32        88 + 1 div
+//   per scaled iteration, besides: ||X||^2 and ||C||^2 36                             36 + 2 div, 2 sqrt
+//   energy 29; contributions: w p 9, A^T p 4 x 3 x 5 = 60                             98
+struct TetWork {
+  double muladds = 0.0, divisions = 0.0, roots = 0.0;
+};
+
+// One core's rates of 8-wide multiplies and adds (independent chains, so both pipes stay busy;
+// no fused multiply-add, as in the library's build), divisions and square roots: what the element
+// passes' instructions can reach. Cloned like the passes, so it runs at the width they run at.
+struct VectorRates {
+  double muladds = 0.0, divisions = 0.0, roots = 0.0;  // per second, per core
+};
+STABINT_TARGET_CLONES VectorRates vectorRates(int rounds) {
+  constexpr int W = projections::kLanes;
+  using Clock = std::chrono::steady_clock;
+  double a[8][W], b[8][W];
+  for (int j = 0; j < 8; ++j)
+    for (int l = 0; l < W; ++l) a[j][l] = 1.0 + 1e-3 * (j + l), b[j][l] = 1e-3 * (j - l);
+  VectorRates rates;
+  auto start = Clock::now();
+  for (int r = 0; r < rounds; ++r)
+    for (int j = 0; j < 8; ++j)
+      for (int l = 0; l < W; ++l) {
+        a[j][l] *= 0.9999999;
+        b[j][l] += 1e-9;
+      }
+  rates.muladds = 2.0 * 8 * W * rounds / std::chrono::duration<double>(Clock::now() - start).count();
+  start = Clock::now();
+  for (int r = 0; r < rounds / 8; ++r)
+    for (int j = 0; j < 8; ++j)
+      for (int l = 0; l < W; ++l) a[j][l] = 1.0000001 / a[j][l];
+  rates.divisions = 8.0 * W * (rounds / 8) / std::chrono::duration<double>(Clock::now() - start).count();
+  start = Clock::now();
+  for (int r = 0; r < rounds / 8; ++r)
+    for (int j = 0; j < 8; ++j)
+      for (int l = 0; l < W; ++l) b[j][l] = std::sqrt(b[j][l] + 1.0);
+  rates.roots = 8.0 * W * (rounds / 8) / std::chrono::duration<double>(Clock::now() - start).count();
+  double keep = 0.0;
+  for (int j = 0; j < 8; ++j)
+    for (int l = 0; l < W; ++l) keep += a[j][l] + b[j][l];
+  benchmark::DoNotOptimize(keep);
+  return rates;
+}
+
+// The operations of one tet local step at positions x: each group of 8 tets rotated as the pass
+// does, its Newton iterations counted.
+TetWork tetPassWork(const SceneData& data, const Eigen::MatrixX3d& x) {
+  constexpr int W = projections::kLanes;
+  TetWork work;
+  for (const ElementBlock& block : data.blocks()) {
+    if (std::string(block.type->identifier()) != "tet") continue;
+    for (int first = 0; first < block.count; first += W) {
+      double m[9][W], r[9][W];
+      for (int l = 0; l < W; ++l) {
+        const int e = std::min(first + l, block.count - 1);
+        for (int row = 0; row < 3; ++row)
+          for (int col = 0; col < 3; ++col) {
+            double v = 0.0;
+            for (int k = 0; k < 4; ++k)
+              v += block.coefficients[std::size_t(12 * e + 4 * row + k)] *
+                   x(block.vertices[std::size_t(4 * e + k)], col);
+            m[3 * row + col][l] = v;
+          }
+      }
+      projections::RotationWork group;
+      projections::nearestRotations(m, r, &group);
+      work.muladds += W * (63 + 53 + 98 + 88.0 * group.iterations + 36.0 * group.scaled_iterations);
+      work.divisions += W * (group.iterations + 2.0 * group.scaled_iterations);
+      work.roots += W * (1 + 2.0 * group.scaled_iterations);
+    }
+  }
+  return work;
+}
+
+// The first-step fixture, moved to the bar's positions after 10 blend steps (bent under gravity,
+// as in the frame cases), with the solve as it was before GlobalSystem::solve split its columns.
 struct PassFixture : Fixture {
   explicit PassFixture(const Scene& s) : Fixture(s, BackendChoice::Cpu) {
+    Simulator sim(s, optionsFor(BackendChoice::Cpu, Integrator::EnergyBlend));
+    for (int i = 0; i < 10; ++i) sim.step();
+    const Eigen::MatrixX3d bent = sim.positions();
+    backend->write(kX, bent);
+    tet_work = tetPassWork(data, bent);
     // The solve as it was before GlobalSystem::solve split the columns: one Eigen solve.
     Eigen::SparseMatrix<double> k = system.stiffnessLaplacian();
     for (Eigen::Index j = 0; j < k.rows(); ++j) k.coeffRef(j, j) += kC * system.masses()[j];
     one_solve.compute(k);
   }
   Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> one_solve;
+  TetWork tet_work;
 };
 
 PassFixture* passFixture(benchmark::State& state) {
@@ -114,10 +209,13 @@ PassFixture* passFixture(benchmark::State& state) {
   }
 }
 
+// The arithmetic bound of a pass on `threads` cores: its operations at the measured rates (an
+// energy pass skips the contributions' 69 operations per tet, a small share left in the count).
 void runPass(benchmark::State& state, bool energy_only, int threads) {
   ThreadsFor setting(threads);
   PassFixture* f = passFixture(state);
   if (!f) return;
+  const auto start = std::chrono::steady_clock::now();
   for (auto _ : state) {
     if (energy_only) {
       benchmark::DoNotOptimize(f->backend->potential(kX, kTimeStep));
@@ -126,7 +224,25 @@ void runPass(benchmark::State& state, bool energy_only, int threads) {
       benchmark::DoNotOptimize(f->rhs.data());
     }
   }
+  const double per_pass =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / double(state.iterations());
+  // The fastest of a few short trials: the rates are the machine's, not the neighbours' load.
+  VectorRates rates;
+  for (int trial = 0; trial < 7; ++trial) {
+    const VectorRates r = vectorRates(300'000);
+    rates.muladds = std::max(rates.muladds, r.muladds);
+    rates.divisions = std::max(rates.divisions, r.divisions);
+    rates.roots = std::max(rates.roots, r.roots);
+  }
+  const TetWork& w = f->tet_work;
+  const double bound = (w.muladds / rates.muladds + w.divisions / rates.divisions + w.roots / rates.roots) / threads;
   state.counters["threads"] = threads;
+  state.counters["flops"] = w.muladds + w.divisions + w.roots;
+  state.counters["muladds_per_s"] = rates.muladds;
+  state.counters["divisions_per_s"] = rates.divisions;
+  state.counters["roots_per_s"] = rates.roots;
+  state.counters["arithmetic_bound"] = bound;
+  state.counters["bound_ratio"] = per_pass / bound;
 }
 
 void runSolve(benchmark::State& state, bool column_groups, int threads) {

@@ -173,7 +173,7 @@ void nearestRotation(const double* m, double* r) {
 // polarByNewton lane by lane, then rotationByEigen for the lanes it refuses. A lane's state is a
 // 64-bit integer like its reals, so that the compiler keeps one mask per vector.
 STABINT_TARGET_CLONES
-void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes]) {
+void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes], RotationWork* work) {
   constexpr int W = kLanes;
   enum : std::int64_t { kIterating = 0, kSettled = 1, kRefused = 2 };
   double x[9][W], c[9][W], det[W], g[W], update2[W];
@@ -199,6 +199,10 @@ void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes]) {
       scaling |= state[l] == kIterating && scale[l];
     }
     if (!iterating) break;
+    if (work) {
+      ++work->iterations;
+      work->scaled_iterations += scaling != 0;
+    }
     STABINT_LANES for (int l = 0; l < W; ++l) {
       g[l] = 1.0;
       update2[l] = 0.0;
@@ -229,6 +233,7 @@ void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes]) {
   for (int i = 0; i < 9; ++i) STABINT_LANES for (int l = 0; l < W; ++l) r[i][l] = x[i][l];
   for (int l = 0; l < W; ++l) {
     if (state[l] == kSettled) continue;
+    if (work) ++work->eigen_lanes;
     double ml[9], rl[9];
     for (int i = 0; i < 9; ++i) ml[i] = m[i][l];
     rotationByEigen(ml, rl);

@@ -94,7 +94,13 @@ void nearestRotation(const double* m, double* r);
 /// Lane l is nearestRotation(m_l) bit for bit: the Newton iterations run while any lane has not
 /// settled, and a settled lane keeps its value; lanes that need the eigen-decomposition take it
 /// one by one afterwards.
-void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes]);
+/// `work`, when given, receives what the group ran: the benchmarks count its arithmetic from it.
+struct RotationWork {
+  int iterations = 0;         // Newton iterations of the group (its slowest lane's)
+  int scaled_iterations = 0;  // of which with the scaling's square roots and division
+  int eigen_lanes = 0;        // lanes that took the eigen-decomposition
+};
+void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes], RotationWork* work = nullptr);
 
 inline Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& m) {
   Eigen::Matrix3d r;

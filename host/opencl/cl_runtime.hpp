@@ -5,6 +5,8 @@
 // include/stabint/.
 #include <CL/opencl.hpp>
 
+#include "device_profiles.hpp"
+
 #include <stabint/errors.hpp>
 #include <stabint/types.hpp>
 
@@ -31,7 +33,10 @@ struct SelectedDevice {
   int device_index = 0;
   std::string platform_name;
   std::string device_name;
+  std::string vendor;
+  bool gpu = false;
   bool fp64 = false;
+  const DeviceProfile* profile = nullptr;  // launch sizes and policies (device_profiles.hpp)
 };
 
 /// Picks a device from `options` (platform / device selectors), falling back to the environment

@@ -1,5 +1,7 @@
 #include "device_profiles.hpp"
 
+#include <stabint/errors.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <string>
@@ -98,6 +100,15 @@ const DeviceProfile& deviceProfile(bool gpu, const std::string& vendor, const st
   for (const Row& row : table())
     if (row.gpu == gpu && anyPhrase(row.vendors, vendor_words) && anyPhrase(row.models, name_words)) return row.profile;
   return table().back().profile;  // unreachable: the last GPU row and the first row match anything
+}
+
+const DeviceProfile& deviceProfileNamed(const std::string& name) {
+  std::string names;
+  for (const Row& row : table()) {
+    if (name == row.profile.name) return row.profile;
+    names += std::string(names.empty() ? "" : ", ") + row.profile.name;
+  }
+  throw InvalidInputError("no device profile '" + name + "' (STABINT_OPENCL_PROFILE); the rows: " + names);
 }
 
 }  // namespace stabint

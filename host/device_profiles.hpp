@@ -48,4 +48,9 @@ inline const DeviceProfile& deviceProfile(const OpenCLDeviceInfo& d) {
   return deviceProfile(d.gpu, d.vendor, d.device_name);
 }
 
+/// The row named `name` ("nvidia-gpu"); throws InvalidInputError naming the rows when none is.
+/// For STABINT_OPENCL_PROFILE, which makes a backend use another row's launch sizes (to check a
+/// GPU row's sizes on PoCL, or to compare rows on one device).
+const DeviceProfile& deviceProfileNamed(const std::string& name);
+
 }  // namespace stabint

@@ -192,7 +192,9 @@ TEST(AutoBackend, ChoosesByDeviceAndSizeOnThisMachine) {
       EXPECT_NE(d.find("[auto: a GPU]"), std::string::npos) << d;
     } else {
       EXPECT_EQ(d, "CPU reference (double) [" + expected.reason + "]");
-      if (!gpu) EXPECT_EQ(expected.reason, "auto: no GPU; the OpenCL CPU device is no faster than the CPU reference");
+      if (!gpu) {
+        EXPECT_EQ(expected.reason, "auto: no GPU; the OpenCL CPU device is no faster than the CPU reference");
+      }
     }
   }
 }

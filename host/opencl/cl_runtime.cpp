@@ -206,7 +206,9 @@ SelectedDevice selectDevice(const OpenCLOptions& options) {
       s.vendor = deviceVendor(devices[di]);
       s.gpu = deviceIsGpu(devices[di]);
       s.fp64 = deviceHasFp64(devices[di]);
-      s.profile = &deviceProfile(s.gpu, s.vendor, s.device_name);
+      const std::string forced_profile = selectorFrom("", "STABINT_OPENCL_PROFILE");
+      s.profile =
+          forced_profile.empty() ? &deviceProfile(s.gpu, s.vendor, s.device_name) : &deviceProfileNamed(forced_profile);
       return s;
     }
   }

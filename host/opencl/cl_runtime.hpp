@@ -42,6 +42,7 @@ struct SelectedDevice {
 /// Picks a device from `options` (platform / device selectors), falling back to the environment
 /// variables STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE, then to the first device of the
 /// first platform that has one. A selector is an index or a case-insensitive name substring.
+/// Its profile is the device's row of the device table, or the row STABINT_OPENCL_PROFILE names.
 /// Throws NoOpenCLDeviceError when nothing matches (the message lists what exists).
 SelectedDevice selectDevice(const OpenCLOptions& options);
 

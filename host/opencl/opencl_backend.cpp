@@ -294,10 +294,9 @@ class OpenCLBackend final : public Backend {
   // explicitly, Auto does not pick such a device for it) and the row of launch sizes.
   std::string description() const override {
     const DeviceProfile& profile = *device_.profile;
-    std::string precision = kDouble ? "double" : "float";
-    if (kDouble && !profile.fast_fp64) precision += ": slow fp64 on this GPU, Precision::Float is much faster";
-    return "OpenCL: " + device_.platform_name + " / " + device_.device_name + " (" + precision + ") [device profile " +
-           profile.name + (profile.measured ? "" : ", not yet measured") + "]";
+    return "OpenCL: " + device_.platform_name + " / " + device_.device_name + (kDouble ? " (double)" : " (float)") +
+           " [device profile " + profile.name + (profile.measured ? "" : ", not yet measured") +
+           (kDouble && !profile.fast_fp64 ? "; slow fp64 on this GPU: Precision::Float is much faster" : "") + "]";
   }
 
  private:

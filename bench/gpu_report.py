@@ -19,9 +19,11 @@ STAGES = ("bench-frame", "bench-cg", "bench-scaling", "bench-auto", "bench-batch
 
 
 def load_json(path):
-    """A Google Benchmark JSON file, also when the run was cut short (its finished cases)."""
-    with open(path) as f:
-        text = f.read()
+    """A Google Benchmark JSON file, also when the run was cut short (its finished cases); None
+    when it is missing or holds no finished case."""
+    text = read(path)
+    if not text:
+        return None
     try:
         return json.loads(text)
     except ValueError:

@@ -19,7 +19,7 @@
 # commands); `report` summarises whatever is there.
 #   --quick      the check of the script (a few minutes on PoCL): the benchmarks' quick mode
 #                (STABINT_BENCH_QUICK=1: 0.02 s per case, the scaling families to 71 x 71, the
-#                16k cloth 5 steps), a few batch cases, the OpenCL tests of three files
+#                16k cloth 5 steps), a few batch cases, four groups of OpenCL tests
 #   --device P:D the OpenCL platform and device (indices or name substrings, as
 #                STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE). Default: the first GPU that
 #                stabint-run --list-devices shows, else its first device (PoCL on a machine
@@ -101,7 +101,7 @@ selectDevice() {
   local line
   if [ -n "$device" ]; then
     export STABINT_OPENCL_PLATFORM="${device%%:*}" STABINT_OPENCL_DEVICE="${device#*:}"
-    line="selected with --device $device"
+    line="given with --device $device"
   else
     line="$(grep -m1 'gpu: yes' "$out/devices.txt" || grep -m1 '^platform ' "$out/devices.txt" || true)"
     if [ -z "$line" ]; then
@@ -112,7 +112,7 @@ selectDevice() {
     export STABINT_OPENCL_PLATFORM="$(sed -E 's/^platform ([0-9]+) device ([0-9]+):.*/\1/' <<<"$line")"
     export STABINT_OPENCL_DEVICE="$(sed -E 's/^platform ([0-9]+) device ([0-9]+):.*/\2/' <<<"$line")"
   fi
-  grep -q 'gpu: yes' <<<"$line" || log "no GPU selected: measuring $line"
+  [ -n "$device" ] || grep -q 'gpu: yes' <<<"$line" || log "no GPU found: measuring $line"
   echo "$line" >"$out/device.txt"
   echo "STABINT_OPENCL_PLATFORM=$STABINT_OPENCL_PLATFORM STABINT_OPENCL_DEVICE=$STABINT_OPENCL_DEVICE" >>"$out/device.txt"
 }

@@ -35,8 +35,8 @@ constexpr int kGpuMinElements = 16384;
 // Work-groups on GPUs (not yet measured): 128 work-items (4 NVIDIA warps) for the element pass,
 // whose tet and triangle-strain rotations need many registers; 256 on AMD (4 wavefronts of 64).
 // Reductions and CG: one row per work-item (no minimum), up to 256 groups of 256 (65,536 rows
-// before a work-item takes a second row; the serial sum of 256 partials in every CG group stays
-// well under a microsecond).
+// before a work-item takes a second row; every CG group's serial sum of the partials, 256 loads
+// by three work-items, bounds the count). scripts/gpu_report.sh's bench-rows compares the rows.
 const std::vector<Row>& table() {
   static const std::vector<Row> rows{
       // Any non-GPU device: PoCL's pthread device on the 2-core VM, where these sizes were tuned:

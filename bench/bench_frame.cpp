@@ -4,6 +4,14 @@
 // variants of one scene time the same motion:
 //   frame/<scene>/<integrator>/<backend>/threads:N   Simulator::step(), 30 steps per repetition
 //                                                    from the same checkpoint
+//   frame/cloth128x128/BE-chebyshev-<factor|cg10>/<backend>
+//                                                    the GPU-sized frame: a 128 x 128 spring cloth
+//                                                    (16,384 particles), BE with the Chebyshev
+//                                                    semi-iteration (Wang 2015's GPU projective
+//                                                    dynamics), 10 iterations, the global step by
+//                                                    the host factor or 10 device CG iterations;
+//                                                    30 steps (5 with STABINT_BENCH_QUICK), the
+//                                                    process's default threads
 //   frame_pass/<scene>/<local|energy>/threads:N      one element pass of the CPU reference: the
 //                                                    local step with its right-hand side, or an
 //                                                    energy pass, at the bar's positions after 10
@@ -59,8 +67,8 @@ struct FrameFixture {
   Checkpoint start;
 };
 
-void runFrame(benchmark::State& state, const std::string& key, BackendChoice backend, Integrator integrator,
-              int threads) {
+void runFrame(benchmark::State& state, const std::string& key, const std::function<Scene()>& make,
+              const SimulatorOptions& options, BackendChoice backend, int threads) {
   if (const std::string why = skipReason(backend); !why.empty()) {
     state.SkipWithError(why.c_str());
     return;
@@ -70,8 +78,8 @@ void runFrame(benchmark::State& state, const std::string& key, BackendChoice bac
   try {
     fixture = &cachedFixture<FrameFixture>(key, [&] {
       auto f = std::make_unique<FrameFixture>();
-      f->scene = tetBar().make();
-      f->sim = std::make_unique<Simulator>(f->scene, optionsFor(backend, integrator));
+      f->scene = make();
+      f->sim = std::make_unique<Simulator>(f->scene, options);
       // Past the first steps' factorizations (the blend's BE factor comes with its first BE
       // branch) and kernel builds.
       for (int i = 0; i < 10; ++i) f->sim->step();
@@ -272,12 +280,36 @@ void registerFrameCases() {
       for (int threads : {1, 2}) {
         const std::string base = "frame/" + scene + "/" + integratorName(integrator) + "/" + backendLabel(backend);
         const std::string name = base + "/threads:" + std::to_string(threads);
-        benchmark::RegisterBenchmark(
-            name.c_str(), [=](benchmark::State& state) { runFrame(state, base, backend, integrator, threads); })
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [=](benchmark::State& state) {
+                                       runFrame(
+                                           state, base, [] { return tetBar().make(); }, optionsFor(backend, integrator),
+                                           backend, threads);
+                                     })
             ->Iterations(kFrameSteps)
             ->UseRealTime()
             ->Unit(benchmark::kMillisecond);
       }
+  for (int cg : {0, 10})
+    for (BackendChoice backend : allBackends()) {
+      const std::string name = std::string("frame/cloth128x128/BE-chebyshev-") +
+                               (cg == 0 ? std::string("factor") : "cg" + std::to_string(cg)) + "/" +
+                               backendLabel(backend);
+      SimulatorOptions options = optionsFor(backend, Integrator::BackwardEuler);
+      options.acceleration = Acceleration::Chebyshev;
+      if (cg > 0) {
+        options.global_solve = GlobalSolve::ConjugateGradient;
+        options.cg_iterations = cg;
+      }
+      benchmark::RegisterBenchmark(name.c_str(),
+                                   [=](benchmark::State& state) {
+                                     runFrame(
+                                         state, name, [] { return clothScene(128); }, options, backend, cpuThreads());
+                                   })
+          ->Iterations(quickMode() ? 5 : kFrameSteps)
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond);
+    }
   for (int threads : {1, 2}) {
     const std::string suffix = "/threads:" + std::to_string(threads);
     for (auto [energy_only, label] : {std::pair{false, "local"}, std::pair{true, "energy"}})

@@ -8,6 +8,7 @@
 //   scaling_iteration/cloth/BE/<backend>/side:N       iteration on an N x N cloth
 //   batch/<scene>/BE/cpu/<batch|separate>/scenes:N    N small scenes, one step each
 //   frame/<scene>/<integrator>/<backend>/threads:N    tet-bar steps on N CPU threads (bench_frame.cpp)
+//   frame/cloth128x128/BE-chebyshev-<global>/<backend>  the 16k-particle cloth's steps (GPU-sized)
 // with counters particles, elements, iterations and the phase times (seconds per benchmark
 // iteration): local, gather, transfer, global, energy, bookkeeping. OpenCL cases are reported as
 // errors ("skipped: ...") when no device exists. The default minimum time per case is 0.1 s

@@ -2,9 +2,11 @@
 # Installs the Debian 12 packages stabint needs, but only those that are missing.
 # Idempotent: a second run installs nothing. Nothing is downloaded at build or run time;
 # this script is the only place packages come from (Debian's own archive via apt).
+#   --build-only   only what the library, its tests and benchmarks need to build and run
+#                  (scripts/gpu_report.sh on a bare machine: no charts, renderers, sanitizers)
 set -euo pipefail
 
-packages=(
+build_packages=(
   build-essential cmake pkg-config
   libeigen3-dev          # dense/sparse linear algebra, Eigen/CholmodSupport
   libsuitesparse-dev     # CHOLMOD: the prefactored global system
@@ -15,6 +17,10 @@ packages=(
   libgtest-dev libgmock-dev
   libbenchmark-dev
   nlohmann-json3-dev     # scene files
+  python3                # the reports of scripts/bench.sh and scripts/gpu_report.sh
+)
+packages=(
+  "${build_packages[@]}"
   python3-matplotlib     # charts (used through /usr/bin/python3)
   python3-pil            # the teaser's and the drop's GIFs
   povray                 # renders the teaser and the soft-body drop (CPU ray tracer, headless)
@@ -25,6 +31,12 @@ packages=(
   clang-format           # the tree's style (.clang-format, scripts/format.sh; checked in CI)
   doxygen                # the API reference of include/stabint/ (scripts/apidocs.sh; checked in CI)
 )
+
+case "${1:-}" in
+  --build-only) packages=("${build_packages[@]}") ;;
+  "") ;;
+  *) echo "install-deps: unknown option $1 (--build-only)" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

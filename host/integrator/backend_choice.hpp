@@ -21,12 +21,20 @@ struct BackendSelection {
 /// validation::kMaxMagnitudeFloat on an OpenCL device in float.
 double inputLimit(const BackendSelection& selection);
 
-/// The backend `o` asks for; for BackendKind::Auto, the first GPU of `devices` (with fp64 when
-/// `o.opencl.precision` is Double), else the CPU reference.
-BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<OpenCLDeviceInfo>& devices);
+/// What BackendKind::Auto weighs against a device's threshold (DeviceProfile::auto_min_*).
+struct SceneSize {
+  int particles = 0;
+  int elements = 0;  // elementCount(scene)
+};
+SceneSize sceneSize(const Scene& scene);
+
+/// The backend `o` asks for; for BackendKind::Auto, the first GPU of `devices` whose row of the
+/// device table (device_profiles.hpp) the scene's size reaches, with fast fp64 when
+/// `o.opencl.precision` is Double; else the CPU reference.
+BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<OpenCLDeviceInfo>& devices, SceneSize size);
 
 /// chooseBackend with this machine's OpenCL devices (listed only for BackendKind::Auto).
-BackendSelection selectBackend(const SimulatorOptions& o);
+BackendSelection selectBackend(const SimulatorOptions& o, SceneSize size);
 /// The backend of a selection with `num_slots` slots for `scene` (OpenCLError subtypes for OpenCL
 /// problems), for every simulator: the one place a backend is created.
 std::unique_ptr<Backend> makeBackend(const SceneData& scene, int num_slots, const BackendSelection& selection);

@@ -47,7 +47,7 @@ BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, c
       segments_(std::move(batch.segments)),
       options_(options),
       data_(batch.scene),
-      choice_(selectBackend(options_)),
+      choice_(selectBackend(options_, sceneSize(batch.scene))),
       backend_(makeBackend(data_, kNumDriverSlots, choice_)),
       system_(data_),
       solver_(*backend_, system_, kSolverScratch),

@@ -36,7 +36,7 @@ struct Simulator::Impl {
   Impl(const Scene& s, const SimulatorOptions& o)
       : options((validateOptions(o), o)),
         scene(s),
-        choice(selectBackend(options)),
+        choice(selectBackend(options, sceneSize(s))),
         backend(makeBackend(scene, kNumDriverSlots, choice)),
         system(scene),
         solver(*backend, system, kSolverScratch),

@@ -114,6 +114,17 @@ std::string deviceName(const cl::Device& d) {
   return trimmed(std::string(name.c_str()));
 }
 
+std::string deviceVendor(const cl::Device& d) {
+  std::string vendor;
+  check(d.getInfo(CL_DEVICE_VENDOR, &vendor), "clGetDeviceInfo(CL_DEVICE_VENDOR)");
+  return trimmed(std::string(vendor.c_str()));
+}
+
+bool deviceIsGpu(const cl::Device& d) {
+  cl_device_type type = 0;
+  return d.getInfo(CL_DEVICE_TYPE, &type) == CL_SUCCESS && (type & CL_DEVICE_TYPE_GPU) != 0;
+}
+
 bool deviceHasFp64(const cl::Device& d) {
   std::string extensions;
   check(d.getInfo(CL_DEVICE_EXTENSIONS, &extensions), "clGetDeviceInfo(CL_DEVICE_EXTENSIONS)");
@@ -192,7 +203,12 @@ SelectedDevice selectDevice(const OpenCLOptions& options) {
       s.device_index = di;
       s.platform_name = pname;
       s.device_name = dname;
+      s.vendor = deviceVendor(devices[di]);
+      s.gpu = deviceIsGpu(devices[di]);
       s.fp64 = deviceHasFp64(devices[di]);
+      const std::string forced_profile = selectorFrom("", "STABINT_OPENCL_PROFILE");
+      s.profile =
+          forced_profile.empty() ? &deviceProfile(s.gpu, s.vendor, s.device_name) : &deviceProfileNamed(forced_profile);
       return s;
     }
   }
@@ -291,9 +307,9 @@ std::vector<OpenCLDeviceInfo> listOpenCLDevices() {
       info.device_index = di;
       info.platform_name = pname;
       info.device_name = ocl::deviceName(devices[di]);
+      info.vendor = ocl::deviceVendor(devices[di]);
       info.fp64 = ocl::deviceHasFp64(devices[di]);
-      cl_device_type type = 0;
-      info.gpu = devices[di].getInfo(CL_DEVICE_TYPE, &type) == CL_SUCCESS && (type & CL_DEVICE_TYPE_GPU) != 0;
+      info.gpu = ocl::deviceIsGpu(devices[di]);
       list.push_back(std::move(info));
     }
   }

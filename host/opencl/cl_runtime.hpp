@@ -5,6 +5,8 @@
 // include/stabint/.
 #include <CL/opencl.hpp>
 
+#include "device_profiles.hpp"
+
 #include <stabint/errors.hpp>
 #include <stabint/types.hpp>
 
@@ -31,12 +33,16 @@ struct SelectedDevice {
   int device_index = 0;
   std::string platform_name;
   std::string device_name;
+  std::string vendor;
+  bool gpu = false;
   bool fp64 = false;
+  const DeviceProfile* profile = nullptr;  // launch sizes and policies (device_profiles.hpp)
 };
 
 /// Picks a device from `options` (platform / device selectors), falling back to the environment
 /// variables STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE, then to the first device of the
 /// first platform that has one. A selector is an index or a case-insensitive name substring.
+/// Its profile is the device's row of the device table, or the row STABINT_OPENCL_PROFILE names.
 /// Throws NoOpenCLDeviceError when nothing matches (the message lists what exists).
 SelectedDevice selectDevice(const OpenCLOptions& options);
 

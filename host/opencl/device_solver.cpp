@@ -8,19 +8,11 @@
 #include <type_traits>
 
 namespace stabint::ocl {
-namespace {
-
-constexpr std::size_t kLocalSize = 128;
-// Groups: enough for every compute unit, few enough that each kernel's sum of the partials (done
-// by every group) stays small; each work-item serves several rows beyond that.
-constexpr int kMaxGroups = 64;
-constexpr int kMinRowsPerWorkItem = 4;
-
-}  // namespace
 
 template <typename Real>
 DeviceConjugateGradient<Real>::DeviceConjugateGradient(const cl::Context& context, const cl::Device& device,
-                                                       const cl::CommandQueue& queue, int n, const cl::Buffer& masses)
+                                                       const DeviceProfile& profile, const cl::CommandQueue& queue,
+                                                       int n, const cl::Buffer& masses)
     : context_(context), queue_(queue), n_(n), masses_(masses) {
   constexpr bool kDouble = std::is_same<Real, double>::value;
   std::string source;
@@ -35,16 +27,18 @@ DeviceConjugateGradient<Real>::DeviceConjugateGradient(const cl::Context& contex
   check(err, "clCreateKernel");
   update_ = cl::Kernel(program_, "cg_update", &err);
   check(err, "clCreateKernel");
-  // One local size for the three kernels (the reductions need a power of two).
-  std::size_t limit = kLocalSize;
+  // One local size for the three kernels (the reductions need a power of two), and groups from
+  // the device's row: enough for every compute unit, few enough that each kernel's sum of the
+  // partials (done by every group) stays small; each work-item serves several rows beyond that.
+  std::size_t limit = std::size_t(profile.reduce_local_size);
   for (const cl::Kernel* k : {&start_, &direction_, &update_}) {
     std::size_t allowed = 0;
     check(k->getWorkGroupInfo(device, CL_KERNEL_WORK_GROUP_SIZE, &allowed), "clGetKernelWorkGroupInfo");
     limit = std::min(limit, allowed);
   }
   while (local_ * 2 <= limit) local_ *= 2;
-  const int per_group = kMinRowsPerWorkItem * int(local_);
-  groups_ = std::clamp((n_ + per_group - 1) / per_group, 1, kMaxGroups);
+  const int per_group = profile.min_terms_per_work_item * int(local_);
+  groups_ = std::clamp((n_ + per_group - 1) / per_group, 1, profile.max_reduce_groups);
 
   const std::size_t size3 = 3 * std::size_t(std::max(n_, 1));
   r_ = buffer(size3);

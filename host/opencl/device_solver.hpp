@@ -15,9 +15,10 @@ namespace stabint::ocl {
 template <typename Real>
 class DeviceConjugateGradient {
  public:
-  /// `masses` (n reals) stays owned by the caller and must outlive this object.
-  DeviceConjugateGradient(const cl::Context& context, const cl::Device& device, const cl::CommandQueue& queue, int n,
-                          const cl::Buffer& masses);
+  /// `masses` (n reals) stays owned by the caller and must outlive this object; `profile` gives
+  /// the work-group size and the grid (device_profiles.hpp).
+  DeviceConjugateGradient(const cl::Context& context, const cl::Device& device, const DeviceProfile& profile,
+                          const cl::CommandQueue& queue, int n, const cl::Buffer& masses);
 
   /// Uploads L (symmetric, `n by n`; any storage order): a new matrix, or the same one after a
   /// change (grab, element stiffness), which may also change its pattern.

@@ -95,10 +95,9 @@ std::string dispatcher(const std::vector<const ElementType*>& types) {
 
 }  // namespace
 
-std::string elementProgramSource() {
+std::string elementProgramSource(const std::vector<const ElementType*>& types) {
   std::string source;
   for (const char* file : kCommonFiles) appendFile(source, file);
-  const std::vector<const ElementType*>& types = elementTypes();
   for (const ElementType* type : types) {
     appendFile(source, std::string(type->identifier()) + ".cl");
     source += instance(*type);

@@ -64,8 +64,6 @@ class OpenCLBackend final : public Backend {
     cl_int err = CL_SUCCESS;
     queue_ = cl::CommandQueue(context_, device_.device, CL_QUEUE_PROFILING_ENABLE, &err);
     ocl::check(err, "clCreateCommandQueue");
-    program_ = ocl::cachedProgram(context_, device_.device, ocl::elementProgramSource(),
-                                  std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
 
     // --- resident data -----------------------------------------------------------------------
     for (int s = 0; s < num_slots; ++s) slots_.push_back(zeroBuffer(3 * std::size_t(n_)));
@@ -87,7 +85,7 @@ class OpenCLBackend final : public Backend {
   ~OpenCLBackend() override { queue_.finish(); }
 
   // The element blocks and contribution lists were rebuilt (grab, release): upload them anew and
-  // rebind the kernels (the program stays).
+  // rebind the kernels (the program stays unless an element type appeared, see programTypes).
   void elementsChanged() override {
     ocl::check(queue_.finish(), "clFinish");
     uploadElements();
@@ -210,7 +208,9 @@ class OpenCLBackend final : public Backend {
 
   void setGlobalMatrix(const Eigen::SparseMatrix<double>& laplacian) override {
     const auto start = Clock::now();
-    if (!cg_) cg_ = std::make_unique<ocl::DeviceConjugateGradient<Real>>(context_, device_.device, queue_, n_, masses_);
+    if (!cg_)
+      cg_ = std::make_unique<ocl::DeviceConjugateGradient<Real>>(context_, device_.device, *device_.profile, queue_, n_,
+                                                                 masses_);
     cg_->setMatrix(laplacian);
     times_.transfer += secondsSince(start);
   }
@@ -290,16 +290,17 @@ class OpenCLBackend final : public Backend {
 
   void synchronize() override { ocl::check(queue_.finish(), "clFinish"); }
 
+  // The device, the precision (with a warning where fp64 is slow: the caller asked for double
+  // explicitly, Auto does not pick such a device for it) and the row of launch sizes.
   std::string description() const override {
-    return "OpenCL: " + device_.platform_name + " / " + device_.device_name + (kDouble ? " (double)" : " (float)");
+    const DeviceProfile& profile = *device_.profile;
+    return "OpenCL: " + device_.platform_name + " / " + device_.device_name + (kDouble ? " (double)" : " (float)") +
+           " [device profile " + profile.name + (profile.measured ? "" : ", not yet measured") +
+           (kDouble && !profile.fast_fp64 ? "; slow fp64 on this GPU: Precision::Float is much faster" : "") + "]";
   }
 
  private:
   static constexpr bool kDouble = std::is_same<Real, double>::value;
-  static constexpr int kElementLocalSize = 256;  // larger groups amortise PoCL's per-group cost
-  static constexpr int kReduceLocalSize = 128;
-  static constexpr int kMaxReduceGroups = 64;
-  static constexpr int kMinTermsPerWorkItem = 4;
   // kernels/real.cl's PASS_ENERGY_PER_ELEMENT: an OpenCL-only pass flag (the CPU reference sums
   // a scene's elements with passRange instead).
   static constexpr int kPassEnergyPerElement = 8;
@@ -579,18 +580,36 @@ class OpenCLBackend final : public Backend {
   Launch elementLaunch(const char* name, int count) {
     Launch l;
     l.kernel = makeKernel(name);
-    const std::size_t local = localSize(l.kernel, kElementLocalSize);
+    const std::size_t local = localSize(l.kernel, std::size_t(device_.profile->element_local_size));
     const std::size_t global = (std::size_t(std::max(count, 1)) + local - 1) / local * local;
     l.global = cl::NDRange(global);
     l.local = cl::NDRange(local);
     return l;
   }
 
-  // Groups of the mass-dot reduction over n terms: fixed by the scene size, so every call adds
-  // the same terms in the same order.
-  static int reductionGroups(int count, std::size_t local) {
-    const int per_group = kMinTermsPerWorkItem * int(local);
-    return std::clamp((count + per_group - 1) / per_group, 1, kMaxReduceGroups);
+  // Groups of the mass-dot reduction over n terms: fixed by the scene size and the device's row,
+  // so every call adds the same terms in the same order.
+  int reductionGroups(int count, std::size_t local) const {
+    const int per_group = device_.profile->min_terms_per_work_item * int(local);
+    return std::clamp((count + per_group - 1) / per_group, 1, device_.profile->max_reduce_groups);
+  }
+
+  // The element types the program is built for: those the scene has, and pins always (a grab
+  // adds them to a scene without pins; they cost the program nothing), so that a spring cloth
+  // does not compile the tet and triangle-strain rotations.
+  std::vector<const ElementType*> programTypes() const {
+    std::vector<const ElementType*> types;
+    for (const DeviceBlock& d : blocks_)
+      if (d.block->count > 0 || d.block->type->term() == EnergyTerm::Pins) types.push_back(d.block->type);
+    return types;
+  }
+
+  // The element program for the current types (the process-wide cache makes a repeated set free).
+  void useProgramFor(const std::vector<const ElementType*>& types) {
+    if (program_() != nullptr && types == program_types_) return;
+    program_ = ocl::cachedProgram(context_, device_.device, ocl::elementProgramSource(types),
+                                  std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
+    program_types_ = types;
   }
 
   // Per-element data of the blocks that are new or were rebuilt, and the contribution lists; the
@@ -615,12 +634,14 @@ class OpenCLBackend final : public Backend {
   }
 
   void buildKernels() {
+    const std::vector<const ElementType*> types = programTypes();
+    useProgramFor(types);
     const cl_int n = n_;
     element_pass_ = Launch{};
     mass_dot_ = Launch{};
     // --- the element pass: one work-item per element, one segment of groups per type --------
     element_pass_.kernel = makeKernel("element_pass");
-    element_local_ = localSize(element_pass_.kernel, kElementLocalSize);
+    element_local_ = localSize(element_pass_.kernel, std::size_t(device_.profile->element_local_size));
     element_pass_.local = cl::NDRange(element_local_);
     const auto groupsFor = [&](int count) { return int((std::size_t(count) + element_local_ - 1) / element_local_); };
     segment_groups_.assign(1, 0);
@@ -629,7 +650,7 @@ class OpenCLBackend final : public Backend {
 
     // Both reductions write their per-group partials into one buffer.
     mass_dot_.kernel = makeKernel("mass_dot_partials");
-    const std::size_t reduce_local = localSize(mass_dot_.kernel, kReduceLocalSize);
+    const std::size_t reduce_local = localSize(mass_dot_.kernel, std::size_t(device_.profile->reduce_local_size));
     mass_dot_groups_ = reductionGroups(n_, reduce_local);
     mass_dot_.global = cl::NDRange(reduce_local * std::size_t(mass_dot_groups_));
     mass_dot_.local = cl::NDRange(reduce_local);
@@ -647,8 +668,11 @@ class OpenCLBackend final : public Backend {
     element_pass_.add(element_energies_);
     element_pass_.add(cl::Local(bytes(element_local_)));
     element_pass_.add(cl_int(segment_groups_.back()));
+    // The program's types in the table's order, as blocks_ (a skipped type has no elements, so no
+    // groups: its segment is empty).
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
       const DeviceBlock& d = blocks_[b];
+      if (std::find(types.begin(), types.end(), d.block->type) == types.end()) continue;
       element_pass_.add(
           cl_int4{{segment_groups_[b], segment_groups_[b + 1], d.block->count, d.block->contribution_base}});
       element_pass_.add(d.vertices);
@@ -699,6 +723,7 @@ class OpenCLBackend final : public Backend {
   cl::Context context_;
   cl::CommandQueue queue_;
   cl::Program program_;
+  std::vector<const ElementType*> program_types_;  // the element types program_ was built for
 
   std::vector<cl::Buffer> slots_;
   cl::Buffer masses_, fext_, rhs_, contrib_, offsets_, list_;

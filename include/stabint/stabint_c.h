@@ -82,7 +82,7 @@ typedef enum stabint_integrator {
 typedef enum stabint_backend {
   STABINT_BACKEND_CPU = 0,
   STABINT_BACKEND_OPENCL = 1,
-  STABINT_BACKEND_AUTO = 2, /**< an OpenCL GPU when there is one, else the CPU reference (BackendKind::Auto) */
+  STABINT_BACKEND_AUTO = 2, /**< a GPU for a scene large enough for it, else the CPU (BackendKind::Auto) */
   STABINT_ENUM_INT_WIDE_(STABINT_BACKEND)
 } stabint_backend;
 /** stabint::Precision, of the OpenCL backend. */

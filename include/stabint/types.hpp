@@ -30,13 +30,14 @@ Integrator parseIntegrator(const std::string& name);
 /// Every integrator, in the enum's order.
 std::vector<Integrator> allIntegrators();
 
-/// Where the local step and the energies run. Auto: an OpenCL GPU when there is one, else the
-/// CPU reference (an OpenCL CPU device such as PoCL is not faster than it; take one with
-/// OpenCL); backendDescription() says which and why (docs/method.md, "Backend choice").
+/// Where the local step and the energies run. Auto: an OpenCL GPU when there is one and the scene
+/// is large enough for it (a threshold per device class), else the CPU reference (an OpenCL CPU
+/// device such as PoCL is not faster than it; take one with OpenCL); backendDescription() says
+/// which and why (docs/method.md, "Backend choice").
 enum class BackendKind {
   CpuReference,  ///< plain C++ in double on the host: the oracle the OpenCL backend is tested against
   OpenCL,        ///< OpenCL kernels on the device of SimulatorOptions::opencl
-  Auto           ///< an OpenCL GPU when there is one, else the CPU reference
+  Auto           ///< an OpenCL GPU for a scene large enough for it, else the CPU reference
 };
 /// Number of BackendKind values (they run from 0).
 constexpr int kBackendKindCount = 3;
@@ -114,6 +115,7 @@ struct OpenCLDeviceInfo {
   int device_index = 0;       ///< index within the platform, for OpenCLOptions::device
   std::string platform_name;  ///< CL_PLATFORM_NAME
   std::string device_name;    ///< CL_DEVICE_NAME
+  std::string vendor;         ///< CL_DEVICE_VENDOR (with the name, picks the device's launch sizes)
   bool fp64 = false;          ///< has cl_khr_fp64 (Precision::Double works)
   bool gpu = false;           ///< CL_DEVICE_TYPE_GPU
 };

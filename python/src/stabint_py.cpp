@@ -404,7 +404,9 @@ void bindSimulator(nb::module_& m) {
       .def_ro("device_index", &OpenCLDeviceInfo::device_index)
       .def_ro("platform_name", &OpenCLDeviceInfo::platform_name)
       .def_ro("device_name", &OpenCLDeviceInfo::device_name)
-      .def_ro("fp64", &OpenCLDeviceInfo::fp64);
+      .def_ro("vendor", &OpenCLDeviceInfo::vendor)
+      .def_ro("fp64", &OpenCLDeviceInfo::fp64)
+      .def_ro("gpu", &OpenCLDeviceInfo::gpu);
   m.def("list_opencl_devices", &listOpenCLDevices, "Every OpenCL device; empty when none is installed.");
 
   // Generated from the field list (stabint/options_fields.hpp): one keyword per field, by name,

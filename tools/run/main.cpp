@@ -617,7 +617,8 @@ int listDevices() {
   }
   for (const auto& d : devices) {
     std::cout << "platform " << d.platform_index << " device " << d.device_index << ": " << d.platform_name << " / "
-              << d.device_name << " (fp64: " << (d.fp64 ? "yes" : "no") << ")\n";
+              << d.device_name << " (fp64: " << (d.fp64 ? "yes" : "no") << ", gpu: " << (d.gpu ? "yes" : "no")
+              << ", vendor: " << d.vendor << ")\n";
   }
   return 0;
 }

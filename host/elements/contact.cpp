@@ -178,7 +178,7 @@ class ContactElementType final : public ElementType {
     return energy;
   }
 
-  // Colliders have their own JSON form (host/io/scene_json.cpp).
+  // Colliders have their own JSON form (host/io/json/scene_reader.cpp, scene_writer.cpp).
   std::vector<Field> jsonFields() const override { return {}; }
   void record(const Scene&, int, std::vector<int>&, std::vector<double>&) const override {}
   void appendRecord(Scene&, const std::vector<int>&, const std::vector<double>&) const override {}

@@ -105,9 +105,9 @@ TEST(CpuThreads, TriangleClothIsTheSameOnOneAndTwoThreads) {
   }
 }
 
-// The solve in two column groups (2,009 particles: above the 1,000 from which it splits) is
-// CHOLMOD's solve of all three columns at once, bit for bit, on one thread and on two.
-TEST(CpuThreads, ColumnGroupSolveIsTheOneSolveBitForBit) {
+// The host solve (one pass over the factor for the three columns, on the calling thread) gives
+// the same result bit for bit on one thread and on two, and CHOLMOD's solve to round-off.
+TEST(CpuThreads, GlobalSolveIsTheSameOnOneAndTwoThreads) {
   TetBarParams p;
   p.nx = 40;
   p.ny = 6;
@@ -122,13 +122,19 @@ TEST(CpuThreads, ColumnGroupSolveIsTheOneSolveBitForBit) {
   one.compute(k);
   ASSERT_EQ(one.info(), Eigen::Success);
   const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(scene.numParticles(), 3);
-  const Eigen::MatrixX3d expected = one.solve(rhs);
+  const Eigen::MatrixX3d cholmod = one.solve(rhs);
+  Eigen::MatrixX3d first;
   for (int threads : {1, 2}) {
     ThreadCount setting(threads);
     Eigen::MatrixX3d x;
     system.solve(c, rhs, x);
     ASSERT_EQ(x.rows(), rhs.rows());
-    for (Eigen::Index i = 0; i < x.size(); ++i) ASSERT_EQ(x.data()[i], expected.data()[i]) << threads << " threads";
+    EXPECT_LT((x - cholmod).norm(), 1e-12 * cholmod.norm()) << threads << " threads";
+    if (threads == 1) {
+      first = x;
+      continue;
+    }
+    for (Eigen::Index i = 0; i < x.size(); ++i) ASSERT_EQ(x.data()[i], first.data()[i]) << threads << " threads";
   }
 }
 

@@ -1,7 +1,7 @@
 #include "solver/global_system.hpp"
 
-#include "cpu/worker_pool.hpp"
 #include "scene/scene_data.hpp"
+#include "solver/factor_solve.hpp"
 
 #include <stabint/errors.hpp>
 
@@ -122,33 +122,27 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
   cholmod_factor* l = factors_.find(c)->second->factor();
   const Eigen::Index n = rhs.rows();
   x.resize(n, 3);
-  for (auto& workspace : workspaces_) {
-    if (!workspace) workspace = std::make_unique<SolveWorkspace>();
+  // One pass over the factor for the three columns, on the calling thread, whatever
+  // cpuThreads(): two threads would each read the whole factor, and the pass is bound by that
+  // (docs/bench_summary.md, "Global solve against its bound").
+  if (simplicialSolveApplies(*l)) {
+    solveSimplicial(*l, rhs.data(), x.data(), static_cast<std::size_t>(n), 0, 3, 4, solve_work_);
+    return;
   }
-  // On one thread one solve of the three columns (the factor is read once); on more, two column
-  // groups {x, y} and {z} on two threads (each reads the factor; the factor is only read). Below
-  // kColumnGroupRows the solve takes microseconds, less than handing a task to a worker.
-  constexpr Eigen::Index kColumnGroupRows = 1000;
-  const bool groups = cpuThreads() > 1 && n >= kColumnGroupRows;
-  bool solved[2] = {false, !groups};
-  parallelFor(groups ? 2 : 1, [&](int group) {
-    SolveWorkspace& w = *workspaces_[group];
-    const int first = group == 0 ? 0 : 2, columns = !groups ? 3 : group == 0 ? 2 : 1;
-    cholmod_dense b{};
-    b.nrow = static_cast<std::size_t>(n);
-    b.ncol = static_cast<std::size_t>(columns);
-    b.nzmax = b.nrow * b.ncol;
-    b.d = b.nrow;
-    b.x = const_cast<double*>(rhs.data() + n * first);  // read only
-    b.xtype = CHOLMOD_REAL;
-    b.dtype = CHOLMOD_DOUBLE;
-    solved[group] = cholmod_solve2(CHOLMOD_A, l, &b, nullptr, &w.x, nullptr, &w.y, &w.e, &w.common) != 0;
-    if (solved[group]) {
-      x.middleCols(first, columns) = Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(w.x->x), n, columns);
-    }
-  });
+  // Not reached with the factors made here (simplicial, int, double); kept for safety.
+  if (!workspace_) workspace_ = std::make_unique<SolveWorkspace>();
+  SolveWorkspace& w = *workspace_;
+  cholmod_dense b{};
+  b.nrow = static_cast<std::size_t>(n);
+  b.ncol = 3;
+  b.nzmax = b.nrow * b.ncol;
+  b.d = b.nrow;
+  b.x = const_cast<double*>(rhs.data());  // read only
+  b.xtype = CHOLMOD_REAL;
+  b.dtype = CHOLMOD_DOUBLE;
   // Only a failed allocation makes a solve of a factored positive definite system fail.
-  if (!solved[0] || !solved[1]) throw std::bad_alloc();
+  if (cholmod_solve2(CHOLMOD_A, l, &b, nullptr, &w.x, nullptr, &w.y, &w.e, &w.common) == 0) throw std::bad_alloc();
+  x = Eigen::Map<const Eigen::MatrixX3d>(static_cast<const double*>(w.x->x), n, 3);
 }
 
 int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,

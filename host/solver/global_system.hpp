@@ -29,10 +29,9 @@ class GlobalSystem {
   /// options, e.g. "1/time_step^2"). Nothing is printed (CHOLMOD would print on stdout).
   void factor(double c, const char* c_name = "c");
 
-  /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use.
-  /// With cpuThreads() > 1 (host/cpu/worker_pool.hpp) and at least 1,000 particles, columns x
-  /// and y and column z are two solves on two threads, else one solve: the same arithmetic either
-  /// way (CHOLMOD's simplicial solves treat each column alike), so the same result bit for bit.
+  /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use:
+  /// one pass over the factor for all three columns (host/solver/factor_solve.hpp), on the
+  /// calling thread, so the result does not depend on cpuThreads().
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x);
 
   /// Jacobi-preconditioned conjugate gradients on K_c x = rhs (GlobalSolve::ConjugateGradient on
@@ -125,9 +124,10 @@ class GlobalSystem {
   Eigen::SparseMatrix<double> laplacian_;
   Eigen::VectorXd masses_;
   std::map<double, std::unique_ptr<Factor>> factors_;
-  // One CHOLMOD workspace per concurrent solve: a cholmod_common is not thread-safe, so each
-  // column group solves with its own (cholmod_solve2, which also keeps its X, Y and E buffers
-  // from one solve to the next).
+  // The solve's work buffer (the permuted right-hand side, a row of four doubles per particle),
+  // kept from one solve to the next.
+  std::vector<double> solve_work_;
+  // cholmod_solve2's workspace, for a factor that solveSimplicial does not take (none made here).
   struct SolveWorkspace {
     cholmod_common common;
     cholmod_dense* x = nullptr;
@@ -138,7 +138,7 @@ class GlobalSystem {
     SolveWorkspace(const SolveWorkspace&) = delete;
     SolveWorkspace& operator=(const SolveWorkspace&) = delete;
   };
-  std::unique_ptr<SolveWorkspace> workspaces_[2];
+  std::unique_ptr<SolveWorkspace> workspace_;
 };
 
 }  // namespace stabint

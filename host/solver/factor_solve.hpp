@@ -1,0 +1,34 @@
+#pragma once
+// The global step's triangular solves over CHOLMOD's simplicial factor, the three right-hand-side
+// columns of K_c x = rhs in one pass over the factor (docs/method.md, "Threads on the CPU").
+//
+// Why not cholmod_solve2: its simplicial solve also handles the three columns in one pass, but in
+// scalar code (three loads, products and stores per factor entry) and, for L^T, one dependent
+// chain of subtractions per column; that, not the factor's bytes, bounds it (2.5-4x the time to
+// stream the factor on the development VM, docs/bench_summary.md "Global solve against its
+// bound"). Here a row of the right-hand side is one vector of `lanes` doubles (x, y, z and a zero
+// lane, or two of them), so a factor entry costs one vector load, multiply, subtract (and store),
+// and L^T's sums run on four partial sums.
+//
+// Every lane gets the same operations in the same order whatever `lanes` is: a solve of the three
+// columns as lanes {x, y, z, 0} and one as {x, y} and {z, 0} on two threads give the same result
+// bit for bit.
+#include <cholmod.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace stabint {
+
+/// Whether solveSimplicial can use `factor`: real, double, simplicial, int indices (LL' as
+/// factored, or LDL' after cholmod_updown converted it).
+bool simplicialSolveApplies(const cholmod_factor& factor);
+
+/// Solves P^T L L^T P x = b (or P^T L D L^T P x = b) for `columns` (1 to 4) columns of the
+/// column-major `rhs` (leading dimension `ld`, at least factor.n), from column `first`, into the
+/// same columns of the column-major `x` (leading dimension `ld`). `lanes` (2 or 4, >= columns) is
+/// the vector width; `work` is scratch (resized as needed, kept between calls).
+void solveSimplicial(const cholmod_factor& factor, const double* rhs, double* x, std::size_t ld, int first, int columns,
+                     int lanes, std::vector<double>& work);
+
+}  // namespace stabint

@@ -7,11 +7,13 @@
 //   frame_pass/<scene>/<local|energy>/threads:N      one element pass of the CPU reference: the
 //                                                    local step with its right-hand side, or an
 //                                                    energy pass
-//   frame_solve/<scene>/<one_solve|column_groups>/threads:N
+//   frame_solve/<scene>/<one_solve|library>/threads:N
 //                                                    the host's solve of K_c x = rhs alone (manual
 //                                                    time, after a local step): Eigen's one
-//                                                    CHOLMOD solve of the three columns as before,
-//                                                    or GlobalSystem::solve's two column groups
+//                                                    CHOLMOD solve of the three columns, or
+//                                                    GlobalSystem::solve (one pass over the factor
+//                                                    on the calling thread; it was two column
+//                                                    groups on two threads, "column_groups")
 #include "bench_common.hpp"
 #include "first_step.hpp"
 
@@ -94,10 +96,10 @@ void runFrame(benchmark::State& state, const std::string& key, BackendChoice bac
   state.SetLabel(f.sim->backendDescription());
 }
 
-// The first-step fixture with the solve as it was before GlobalSystem::solve split its columns.
+// The first-step fixture with CHOLMOD's own solve of the three columns beside the library's.
 struct PassFixture : Fixture {
   explicit PassFixture(const Scene& s) : Fixture(s, BackendChoice::Cpu) {
-    // The solve as it was before GlobalSystem::solve split the columns: one Eigen solve.
+    // CHOLMOD's solve through Eigen: one cholmod_solve of the three columns.
     Eigen::SparseMatrix<double> k = system.stiffnessLaplacian();
     for (Eigen::Index j = 0; j < k.rows(); ++j) k.coeffRef(j, j) += kC * system.masses()[j];
     one_solve.compute(k);
@@ -129,7 +131,7 @@ void runPass(benchmark::State& state, bool energy_only, int threads) {
   state.counters["threads"] = threads;
 }
 
-void runSolve(benchmark::State& state, bool column_groups, int threads) {
+void runSolve(benchmark::State& state, bool library, int threads) {
   ThreadsFor setting(threads);
   PassFixture* f = passFixture(state);
   if (!f) return;
@@ -137,7 +139,7 @@ void runSolve(benchmark::State& state, bool column_groups, int threads) {
   for (auto _ : state) {
     f->backend->localStepRhs(kX, kY, kC, kTimeStep, f->rhs);  // what precedes a solve in a step
     const auto start = Clock::now();
-    if (column_groups) {
+    if (library) {
       f->system.solve(kC, f->rhs, f->x);
     } else {
       f->x = f->one_solve.solve(f->rhs);
@@ -170,9 +172,9 @@ void registerFrameCases() {
           [=, energy = energy_only](benchmark::State& state) { runPass(state, energy, threads); })
           ->UseRealTime()
           ->Unit(benchmark::kMicrosecond);
-    for (auto [groups, label] : {std::pair{false, "one_solve"}, std::pair{true, "column_groups"}})
+    for (auto [library, label] : {std::pair{false, "one_solve"}, std::pair{true, "library"}})
       benchmark::RegisterBenchmark(("frame_solve/" + scene + "/" + label + suffix).c_str(),
-                                   [=, split = groups](benchmark::State& state) { runSolve(state, split, threads); })
+                                   [=, ours = library](benchmark::State& state) { runSolve(state, ours, threads); })
           ->UseManualTime()
           ->Unit(benchmark::kMicrosecond);
   }

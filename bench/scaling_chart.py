@@ -11,6 +11,7 @@ breakdown, and the two performance goals (docs/method.md section 3 and the issue
   - one BE iteration on the 50x50 cloth under 0.6 ms on PoCL (OpenCL backend);
   - a blend step at most 30 % slower than a BE step with the same main iteration count (aim, issue 11:
     at most 10 %).
+The global solve variants (global_solve/*) are listed with their memory bound and time/bound.
 Use /usr/bin/python3 (Debian's python3-matplotlib); `python3` on PATH may lack matplotlib.
 """
 import argparse
@@ -106,7 +107,9 @@ def fmt_time(seconds):
         return f"{seconds:.2f} s"
     if seconds >= 1e-3:
         return f"{seconds * 1e3:.2f} ms"
-    return f"{seconds * 1e6:.0f} us"
+    if seconds >= 1e-5:
+        return f"{seconds * 1e6:.0f} us"
+    return f"{seconds * 1e6:.1f} us"
 
 
 def fmt_pct(x):
@@ -324,18 +327,38 @@ def scaling_table(by):
 
 
 def solver_table(by):
+    """global_solve/<scene>/<variant>: each variant's time against its memory bound (bench_solver.cpp:
+    2 factor_bytes / one thread's streaming bandwidth over a buffer of that size, measured in the
+    same case), and against the library's time."""
     gs = by.get("global_solve", {})
     if not gs:
         return []
-    lines = ["## Global solve variants (K_c x = rhs, 3 columns)\n",
-             "| scene | variant | solve | vs library |", "|---|---|---|---|"]
-    for scene in sorted({k[0] for k in gs}):
+    lines = ["## Global solve against its bound (K_c x = rhs, 3 columns)\n",
+             "bound: the factor's bytes (8 bytes of value and 4 of row index per entry, column pointers and "
+             "lengths; supernodal: its dense blocks and indices) read twice, forward and backward, at the "
+             "streaming bandwidth of one thread over a buffer of that size, measured in the same case. "
+             "All three columns in those two passes: a solve per column reads the factor three times "
+             "as often (passes).\n",
+             "| scene | particles | factor entries | factor MB | bandwidth | variant | passes | solve | bound | "
+             "solve/bound | vs library |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def order(scene):
+        digits = [int(x) for x in "".join(ch if ch.isdigit() else " " for ch in scene).split()]
+        return (0 if scene.startswith("cloth") else 1, digits[0] if digits else 0, scene)
+
+    for scene in sorted({k[0] for k in gs}, key=order):
         lib = gs.get((scene, "library"))
-        for (s, variant), c in sorted(gs.items()):
+        for (s, variant), c in sorted(gs.items(), key=lambda kv: kv[0][1] != "library"):
             if s != scene:
                 continue
             rel = f"{c.time / lib.time:.2f}x" if lib else "-"
-            lines.append(f"| {scene} | {variant} | {fmt_time(c.time)} | {rel} |")
+            bound = c.get("bound")
+            ratio = f"{c.time / bound:.2f}" if bound else "-"
+            lines.append(f"| {scene} | {c.get('particles'):.0f} | {c.get('factor_entries'):.0f} | "
+                         f"{c.get('factor_bytes') / 1e6:.2f} | {c.get('bandwidth') / 1e9:.0f} GB/s | {variant} | "
+                         f"{c.get('passes'):.0f} | {fmt_time(c.time)} | {fmt_time(bound) if bound else '-'} | "
+                         f"{ratio} | {rel} |")
     lines.append("")
     return lines
 

@@ -3,12 +3,16 @@
 // columns of K_c x = rhs in one pass over the factor (docs/method.md, "Threads on the CPU").
 //
 // Why not cholmod_solve2: its simplicial solve also handles the three columns in one pass, but in
-// scalar code (three loads, products and stores per factor entry) and, for L^T, one dependent
-// chain of subtractions per column; that, not the factor's bytes, bounds it (2.5-4x the time to
-// stream the factor on the development VM, docs/bench_summary.md "Global solve against its
-// bound"). Here a row of the right-hand side is one vector of `lanes` doubles (x, y, z and a zero
-// lane, or two of them), so a factor entry costs one vector load, multiply, subtract (and store),
-// and L^T's sums run on four partial sums.
+// scalar code (three loads, products and stores per factor entry, blocks of at most three
+// columns) and, for L^T, one dependent chain of subtractions per column; that, not the factor's
+// bytes, bounds it (2-4x the time to stream the factor twice, about twice this solve's time;
+// docs/bench_summary.md "Global solve against its bound"). Here a row of the right-hand side is
+// one vector of `lanes` doubles (x, y, z and a zero lane, or two of them); chained columns of the
+// factor (a supernode: each column has the rows of the one before, less its diagonal) go in
+// blocks of up to 8, whose rows below the block are read and written once for the block; L^T's
+// sums run on several partial sums; 1 / L(j, j) is computed once. Where the CPU has AVX2 and FMA
+// the products are fused multiply-adds (a different rounding from the plain build, so the result
+// depends on the instruction set).
 //
 // Every lane gets the same operations in the same order whatever `lanes` is: a solve of the three
 // columns as lanes {x, y, z, 0} and one as {x, y} and {z, 0} on two threads give the same result

@@ -19,7 +19,8 @@
 // of row index per entry, the column pointers and lengths; supernodal: its dense blocks, row
 // indices and supernode pointers); bandwidth, bytes per second of a streaming sum over a buffer
 // of factor_bytes on one thread, measured in the same case after the solves (a factor that fits
-// a cache gets that cache's bandwidth); bound = 2 factor_bytes / bandwidth, the seconds to read
+// a cache gets that cache's bandwidth; bench/scaling_chart.py takes the fastest measurement among
+// a scene's cases with the same factor); bound = 2 factor_bytes / bandwidth, the seconds to read
 // the factor twice (forward and backward substitution; all three columns in those two passes).
 // A per-column solve reads the factor three times as often (passes counts the reads).
 #include "bench_common.hpp"
@@ -154,7 +155,7 @@ double streamSeconds(double bytes) {
   using Clock = std::chrono::steady_clock;
   double best = std::numeric_limits<double>::infinity(), spent = 0.0;
   benchmark::DoNotOptimize(sum(buffer.data(), words));
-  for (int r = 0; r < 10000 && (r < 10 || spent < 0.02); ++r) {
+  for (int r = 0; r < 100000 && (r < 20 || spent < 0.05); ++r) {
     const auto start = Clock::now();
     benchmark::DoNotOptimize(sum(buffer.data(), words));
     const double t = std::chrono::duration<double>(Clock::now() - start).count();

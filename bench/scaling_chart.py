@@ -336,7 +336,8 @@ def solver_table(by):
     lines = ["## Global solve against its bound (K_c x = rhs, 3 columns)\n",
              "bound: the factor's bytes (8 bytes of value and 4 of row index per entry, column pointers and "
              "lengths; supernodal: its dense blocks and indices) read twice, forward and backward, at the "
-             "streaming bandwidth of one thread over a buffer of that size, measured in the same case. "
+             "streaming bandwidth of one thread over a buffer of that size, measured in each case of the "
+             "scene (the fastest of those measurements for that factor). "
              "All three columns in those two passes: a solve per column reads the factor three times "
              "as often (passes).\n",
              "| scene | particles | factor entries | factor MB | bandwidth | variant | passes | solve | bound | "
@@ -347,16 +348,25 @@ def solver_table(by):
         digits = [int(x) for x in "".join(ch if ch.isdigit() else " " for ch in scene).split()]
         return (0 if scene.startswith("cloth") else 1, digits[0] if digits else 0, scene)
 
+    # One bound per scene and factor (the simplicial variants share theirs): the fastest of the
+    # streaming measurements over a buffer of that size, one per case, so that a case whose
+    # measurement other load disturbed does not get a lenient bound.
+    best_bound = {}
+    for (scene, _), c in gs.items():
+        key = (scene, c.get("factor_bytes"))
+        if c.get("bound") > 0:
+            best_bound[key] = min(best_bound.get(key, float("inf")), c.get("bound"))
     for scene in sorted({k[0] for k in gs}, key=order):
         lib = gs.get((scene, "library"))
         for (s, variant), c in sorted(gs.items(), key=lambda kv: kv[0][1] != "library"):
             if s != scene:
                 continue
             rel = f"{c.time / lib.time:.2f}x" if lib else "-"
-            bound = c.get("bound")
+            bound = best_bound.get((scene, c.get("factor_bytes")), 0.0)
             ratio = f"{c.time / bound:.2f}" if bound else "-"
+            bandwidth = 2.0 * c.get("factor_bytes") / bound if bound else 0.0
             lines.append(f"| {scene} | {c.get('particles'):.0f} | {c.get('factor_entries'):.0f} | "
-                         f"{c.get('factor_bytes') / 1e6:.2f} | {c.get('bandwidth') / 1e9:.0f} GB/s | {variant} | "
+                         f"{c.get('factor_bytes') / 1e6:.2f} | {bandwidth / 1e9:.0f} GB/s | {variant} | "
                          f"{c.get('passes'):.0f} | {fmt_time(c.time)} | {fmt_time(bound) if bound else '-'} | "
                          f"{ratio} | {rel} |")
     lines.append("")

@@ -2,8 +2,8 @@
 // prefactored system, in the ways it can be done, each against its memory bound. The library uses
 // one of them in host/solver/global_system.cpp; these cases are how it was chosen
 // (docs/bench_summary.md, "Global solve against its bound").
-//   global_solve/<scene>/library              GlobalSystem::solve as the library does it (the
-//                                             process's thread count)
+//   global_solve/<scene>/library              GlobalSystem::solve as the library does it (one pass
+//                                             on the calling thread, whatever cpuThreads())
 //   global_solve/<scene>/cholmod-one-pass     cholmod_solve2 of the three columns at once on the
 //                                             simplicial LL' factor (CHOLMOD's scalar solve, the
 //                                             three columns interleaved: one pass over L)
@@ -234,7 +234,6 @@ void runVariant(benchmark::State& state, const SceneCase& scene, const std::stri
     GlobalSystem system(f.data);
     runSolve(state, f, f.simplicial(), 2,
              [&](const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x) { system.solve(kC, b, x); });
-    state.counters["threads"] = cpuThreads();
   } else if (variant == "cholmod-one-pass" || variant == "cholmod-columns") {
     Workspace w;
     const bool columns = variant == "cholmod-columns";

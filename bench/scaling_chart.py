@@ -40,6 +40,7 @@ class Case:
         self.parts = parts
         self.kind = parts[0]
         self.time = entry["real_time"] * UNIT_S[entry.get("time_unit", "ns")]
+        self.cpu_time = entry.get("cpu_time", 0.0) * UNIT_S[entry.get("time_unit", "ns")]
         self.counters = {k: v for k, v in entry.items() if isinstance(v, (int, float))}
         self.counters["iterations_run"] = entry.get("iterations", 1)
         self.label = entry.get("label", "")
@@ -340,9 +341,11 @@ def solver_table(by):
              "scene (the fastest of those measurements for that factor). "
              "All three columns in those two passes: a solve per column reads the factor three times "
              "as often (passes).\n",
+             "`cpu`: the solving thread's CPU time per solve, which other load on a shared machine inflates "
+             "less than the wall time (one-thread variants only).\n",
              "| scene | particles | factor entries | factor MB | bandwidth | variant | passes | solve | bound | "
-             "solve/bound | vs library |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "solve/bound | cpu/bound | vs library |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
 
     def order(scene):
         digits = [int(x) for x in "".join(ch if ch.isdigit() else " " for ch in scene).split()]
@@ -364,11 +367,13 @@ def solver_table(by):
             rel = f"{c.time / lib.time:.2f}x" if lib else "-"
             bound = best_bound.get((scene, c.get("factor_bytes")), 0.0)
             ratio = f"{c.time / bound:.2f}" if bound else "-"
+            one_thread = not variant.endswith("-2t")
+            cpu = f"{c.cpu_time / bound:.2f}" if bound and one_thread and c.cpu_time > 0 else "-"
             bandwidth = 2.0 * c.get("factor_bytes") / bound if bound else 0.0
             lines.append(f"| {scene} | {c.get('particles'):.0f} | {c.get('factor_entries'):.0f} | "
                          f"{c.get('factor_bytes') / 1e6:.2f} | {bandwidth / 1e9:.0f} GB/s | {variant} | "
                          f"{c.get('passes'):.0f} | {fmt_time(c.time)} | {fmt_time(bound) if bound else '-'} | "
-                         f"{ratio} | {rel} |")
+                         f"{ratio} | {cpu} | {rel} |")
     lines.append("")
     return lines
 

@@ -99,7 +99,7 @@ class GlobalSystem {
   void addToDiagonal(const std::vector<int>& vertices, const std::vector<double>& deltas);
 
  private:
-  // Simplicial CHOLMOD: solve() reads its columns directly (factor_solve.hpp), which took 0.2-0.3
+  // Simplicial CHOLMOD: solve() reads its columns directly (factor_solve.hpp), which took 0.1-0.3
   // of the time of CHOLMOD's supernodal solve with Debian's reference BLAS and 0.3-0.6 with
   // OpenBLAS, and cholmod_updown (the rank updates) needs a simplicial factor. The subclass
   // reaches the cholmod_factor that Eigen keeps protected, for the solve and the rank updates.

@@ -15,6 +15,8 @@
 //   global_solve/<scene>/vector-one-pass      solveSimplicial (host/solver/factor_solve.hpp) over
 //                                             the simplicial factor, lanes {x, y, z, 0}, one thread
 //   global_solve/<scene>/vector-groups-2t     the same as lanes {x, y} and {z, 0} on two threads
+//   global_solve/<scene>/vector-subtrees-2t   solveSimplicialSubtrees: the backward pass over two
+//                                             subtrees of the elimination tree on two threads
 // Counters: factor_bytes, what one pass over the factor reads (simplicial: 8 bytes of value and 4
 // of row index per entry, the column pointers and lengths; supernodal: its dense blocks, row
 // indices and supernode pointers); bandwidth, bytes per second of a streaming sum over a buffer
@@ -259,6 +261,19 @@ void runVariant(benchmark::State& state, const SceneCase& scene, const std::stri
     runSolve(state, f, f.simplicial(), 2, [&](const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x) {
       solveSimplicial(*f.simplicial().factor(), b.data(), x.data(), n, 0, 3, 4, work);
     });
+  } else if (variant == "vector-subtrees-2t") {
+    ThreadsFor two(2);
+    std::vector<double> work;
+    const SubtreeSplit split = findSubtreeSplit(*f.simplicial().factor());
+    runSolve(state, f, f.simplicial(), 2, [&](const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x) {
+      solveSimplicialSubtrees(*f.simplicial().factor(), split, b.data(), x.data(), n, work);
+    });
+    const double total = static_cast<double>(f.simplicial().entries());
+    const int* nz = static_cast<const int*>(f.simplicial().factor()->nz);
+    double a = 0, b = 0;
+    for (int j = 0; j < split.b_end; ++j) (j < split.a_end ? a : b) += nz[j];
+    state.counters["subtree_a"] = a / total;  // shares of the factor's entries in the two subtrees
+    state.counters["subtree_b"] = b / total;
   } else if (variant == "vector-groups-2t") {
     ThreadsFor two(2);
     std::vector<double> work[2];
@@ -289,7 +304,7 @@ void registerSolverCases() {
     if (scene.name.rfind("tetbar", 0) == 0) scenes.push_back(scene);
   for (const SceneCase& scene : scenes)
     for (const char* variant : {"library", "cholmod-one-pass", "cholmod-columns", "cholmod-groups-2t",
-                                "cholmod-supernodal", "vector-one-pass", "vector-groups-2t"}) {
+                                "cholmod-supernodal", "vector-one-pass", "vector-groups-2t", "vector-subtrees-2t"}) {
       const std::string name = "global_solve/" + scene.name + "/" + variant;
       benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) { runVariant(state, scene, variant); })
           ->UseRealTime()

@@ -2,6 +2,7 @@
 // CHOLMOD's simplicial factor: CHOLMOD's own solve to round-off on the LL' factor as factored and
 // on the LDL' factor that cholmod_updown leaves, and the same bit for bit whatever the lanes
 // (three columns as {x, y, z, 0}, or as {x, y} and {z, 0}).
+#include "cpu/worker_pool.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/factor_solve.hpp"
 #include "solver/global_system.hpp"
@@ -114,6 +115,32 @@ TEST(FactorSolve, AsCholmodOnTheUpdatedLDLFactor) {
   cholmod_free_sparse(&c, &f.common);
   ASSERT_FALSE(f.factor->is_ll);
   expectSolvesAsCholmod(f, Eigen::MatrixX3d::Random(scene.numParticles(), 3));
+}
+
+// The variant with the backward pass over two subtrees on two threads (measured in
+// bench/bench_solver.cpp): CHOLMOD's solve to round-off, the same bit for bit on one thread and
+// on two.
+TEST(FactorSolve, SubtreeSplitIsTheSameOnOneAndTwoThreads) {
+  ClothGridParams cloth;
+  cloth.nx = cloth.ny = 40;
+  const Scene scene = makeClothGrid(cloth);
+  Factored f(systemOf(scene, 900.0));
+  const SubtreeSplit split = findSubtreeSplit(*f.factor);
+  ASSERT_GT(split.a_end, 0);
+  ASSERT_GT(split.b_end, split.a_end);
+  const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(scene.numParticles(), 3);
+  const Eigen::MatrixX3d expected = f.cholmodSolve(rhs);
+  const std::size_t n = static_cast<std::size_t>(rhs.rows());
+  std::vector<double> work;
+  Eigen::MatrixX3d x[2] = {Eigen::MatrixX3d(rhs.rows(), 3), Eigen::MatrixX3d(rhs.rows(), 3)};
+  const int previous = cpuThreads();
+  for (int threads : {1, 2}) {
+    setCpuThreads(threads);
+    solveSimplicialSubtrees(*f.factor, split, rhs.data(), x[threads - 1].data(), n, work);
+  }
+  setCpuThreads(previous);
+  EXPECT_LT((x[0] - expected).norm(), 1e-12 * expected.norm());
+  for (Eigen::Index i = 0; i < x[0].size(); ++i) ASSERT_EQ(x[0].data()[i], x[1].data()[i]) << i;
 }
 
 }  // namespace

@@ -1,5 +1,8 @@
 #include "solver/factor_solve.hpp"
 
+#include "cpu/worker_pool.hpp"
+
+#include <algorithm>
 #include <cstdint>
 
 #if defined(__x86_64__)
@@ -98,16 +101,36 @@ bool simplicialSolveApplies(const cholmod_factor& factor) {
          factor.itype == CHOLMOD_INT && factor.p != nullptr && factor.nz != nullptr;
 }
 
-void solveSimplicial(const cholmod_factor& factor, const double* rhs, double* x, std::size_t ld, int first, int columns,
-                     int lanes, std::vector<double>& buffer) {
-  const std::size_t n = factor.n;
-  // The rows (vectors of `lanes` doubles) at multiples of their size: from a 64-byte boundary.
+namespace {
+
+// The columns [lo, hi) of the chosen build (passes: 1 forward, 2 backward, 3 both).
+void substituteRange(const cholmod_factor& factor, double* work, double* inverse, int lanes, int passes, int lo,
+                     int hi) {
+#if defined(STABINT_HAVE_FUSED)
+  if (haveFma() && haveAvx512()) {
+    wide::substituteAll(factor, work, inverse, lanes, passes, lo, hi);
+  } else if (haveFma()) {
+    fused::substituteAll(factor, work, inverse, lanes, passes, lo, hi);
+  } else {
+    plain::substituteAll(factor, work, inverse, lanes, passes, lo, hi);
+  }
+#else
+  plain::substituteAll(factor, work, inverse, lanes, passes, lo, hi);
+#endif
+}
+
+// The rows (vectors of `lanes` doubles) at multiples of their size, from a 64-byte boundary of
+// `buffer`, then the n reciprocal diagonal entries.
+double* rowsIn(std::vector<double>& buffer, std::size_t n, int lanes) {
   buffer.resize(std::size_t(lanes + 1) * n + 8);
   const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(buffer.data());
-  double* work = buffer.data() + ((64 - address % 64) % 64) / sizeof(double);
+  return buffer.data() + ((64 - address % 64) % 64) / sizeof(double);
+}
+
+// Row k of the permuted system is row perm[k] of the original; unused lanes are zero.
+void permuteIn(const cholmod_factor& factor, const double* b, std::size_t ld, int columns, int lanes, double* work) {
+  const std::size_t n = factor.n;
   const int* perm = static_cast<const int*>(factor.Perm);
-  // Row k of the permuted system is row perm[k] of the original; unused lanes are zero.
-  const double* b = rhs + ld * std::size_t(first);
   if (lanes == 4 && columns == 3) {  // the library's case, without the per-lane tests
     for (std::size_t k = 0; k < n; ++k) {
       const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
@@ -124,18 +147,11 @@ void solveSimplicial(const cholmod_factor& factor, const double* rhs, double* x,
       for (int c = 0; c < lanes; ++c) w[c] = c < columns ? b[row + ld * std::size_t(c)] : 0.0;
     }
   }
-#if defined(STABINT_HAVE_FUSED)
-  if (haveFma() && haveAvx512()) {
-    wide::substituteAll(factor, work, work + std::size_t(lanes) * n, lanes);
-  } else if (haveFma()) {
-    fused::substituteAll(factor, work, work + std::size_t(lanes) * n, lanes);
-  } else {
-    plain::substituteAll(factor, work, work + std::size_t(lanes) * n, lanes);
-  }
-#else
-  plain::substituteAll(factor, work, work + std::size_t(lanes) * n, lanes);
-#endif
-  double* out = x + ld * std::size_t(first);
+}
+
+void permuteOut(const cholmod_factor& factor, const double* work, std::size_t ld, int columns, int lanes, double* out) {
+  const std::size_t n = factor.n;
+  const int* perm = static_cast<const int*>(factor.Perm);
   if (lanes == 4 && columns == 3) {
     for (std::size_t k = 0; k < n; ++k) {
       const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
@@ -151,6 +167,62 @@ void solveSimplicial(const cholmod_factor& factor, const double* rhs, double* x,
       for (int c = 0; c < columns; ++c) out[row + ld * std::size_t(c)] = w[c];
     }
   }
+}
+
+}  // namespace
+
+void solveSimplicial(const cholmod_factor& factor, const double* rhs, double* x, std::size_t ld, int first, int columns,
+                     int lanes, std::vector<double>& buffer) {
+  const std::size_t n = factor.n;
+  double* work = rowsIn(buffer, n, lanes);
+  permuteIn(factor, rhs + ld * std::size_t(first), ld, columns, lanes, work);
+  substituteRange(factor, work, work + std::size_t(lanes) * n, lanes, 3, 0, static_cast<int>(n));
+  permuteOut(factor, work, ld, columns, lanes, x + ld * std::size_t(first));
+}
+
+SubtreeSplit findSubtreeSplit(const cholmod_factor& factor) {
+  const int n = static_cast<int>(factor.n);
+  const int* p = static_cast<const int*>(factor.p);
+  const int* i = static_cast<const int*>(factor.i);
+  const int* nz = static_cast<const int*>(factor.nz);
+  // Etree parent of column j: its first row below the diagonal. Subtree sizes, children first.
+  std::vector<int> size(static_cast<std::size_t>(n), 1);
+  std::vector<double> before(static_cast<std::size_t>(n) + 1, 0.0);  // entries of the columns < k
+  for (int j = 0; j < n; ++j) {
+    before[j + 1] = before[j] + nz[j];
+    if (nz[j] > 1) size[i[p[j] + 1]] += size[j];
+  }
+  // Postordered (CHOLMOD's default): the subtree of j is the columns [j - size + 1, j].
+  for (int j = 0; j < n; ++j) {
+    if (nz[j] <= 1) continue;
+    const int parent = i[p[j] + 1];
+    if (j < parent - size[parent] + 1) return {0, 0};
+  }
+  SubtreeSplit best{0, 0};
+  double cost = before[n];  // the backward pass on one thread
+  for (int c = 0; c < n; ++c) {
+    const int start = c - size[c] + 1;
+    const double a = before[start], b = before[c + 1] - before[start], top = before[n] - before[c + 1];
+    if (std::max(a, b) + top < cost) {
+      cost = std::max(a, b) + top;
+      best = {start, c + 1};
+    }
+  }
+  return best;
+}
+
+void solveSimplicialSubtrees(const cholmod_factor& factor, const SubtreeSplit& split, const double* rhs, double* x,
+                             std::size_t ld, std::vector<double>& buffer) {
+  const std::size_t n = factor.n;
+  double* work = rowsIn(buffer, n, 4);
+  double* inverse = work + 4 * n;
+  permuteIn(factor, rhs, ld, 3, 4, work);
+  substituteRange(factor, work, inverse, 4, 1, 0, static_cast<int>(n));
+  substituteRange(factor, work, inverse, 4, 2, split.b_end, static_cast<int>(n));
+  parallelFor(2, [&](int part) {
+    substituteRange(factor, work, inverse, 4, 2, part == 0 ? 0 : split.a_end, part == 0 ? split.a_end : split.b_end);
+  });
+  permuteOut(factor, work, ld, 3, 4, x);
 }
 
 }  // namespace stabint

@@ -35,4 +35,21 @@ bool simplicialSolveApplies(const cholmod_factor& factor);
 void solveSimplicial(const cholmod_factor& factor, const double* rhs, double* x, std::size_t ld, int first, int columns,
                      int lanes, std::vector<double>& work);
 
+/// Columns [0, a_end) and [a_end, b_end) of a postordered factor: two disjoint subtrees of its
+/// elimination tree (neither column range holds an ancestor of the other's columns), the columns
+/// from b_end on their common ancestors and the rest. {0, 0}: no split.
+struct SubtreeSplit {
+  int a_end = 0;
+  int b_end = 0;
+};
+/// The split that minimises the backward pass's entries on the longer of two threads plus those
+/// above both subtrees.
+SubtreeSplit findSubtreeSplit(const cholmod_factor& factor);
+/// solveSimplicial for the three columns (lanes {x, y, z, 0}) with the backward pass over the two
+/// subtrees on two threads (parallelFor) after the columns above them: the same arithmetic for
+/// any thread count (not solveSimplicial's: blocks of chained columns end at the split). Measured
+/// against solveSimplicial in bench/bench_solver.cpp (vector-subtrees-2t).
+void solveSimplicialSubtrees(const cholmod_factor& factor, const SubtreeSplit& split, const double* rhs, double* x,
+                             std::size_t ld, std::vector<double>& work);
+
 }  // namespace stabint

@@ -185,19 +185,23 @@ SubtreeSplit findSubtreeSplit(const cholmod_factor& factor) {
   const int* p = static_cast<const int*>(factor.p);
   const int* i = static_cast<const int*>(factor.i);
   const int* nz = static_cast<const int*>(factor.nz);
-  // Etree parent of column j: its first row below the diagonal. Subtree sizes, children first.
-  std::vector<int> size(static_cast<std::size_t>(n), 1);
+  // Etree parent of column j: its first row below the diagonal (after j). Subtree sizes and
+  // smallest columns, children first.
+  std::vector<int> size(static_cast<std::size_t>(n), 1), lowest(static_cast<std::size_t>(n));
   std::vector<double> before(static_cast<std::size_t>(n) + 1, 0.0);  // entries of the columns < k
+  for (int j = 0; j < n; ++j) lowest[j] = j;
   for (int j = 0; j < n; ++j) {
     before[j + 1] = before[j] + nz[j];
-    if (nz[j] > 1) size[i[p[j] + 1]] += size[j];
+    if (nz[j] > 1) {
+      const int parent = i[p[j] + 1];
+      size[parent] += size[j];
+      lowest[parent] = std::min(lowest[parent], lowest[j]);
+    }
   }
-  // Postordered (CHOLMOD's default): the subtree of j is the columns [j - size + 1, j].
-  for (int j = 0; j < n; ++j) {
-    if (nz[j] <= 1) continue;
-    const int parent = i[p[j] + 1];
-    if (j < parent - size[parent] + 1) return {0, 0};
-  }
+  // Postordered (CHOLMOD's default, and cholmod_updown may change the tree): the subtree of every
+  // j must be the columns [j - size + 1, j], else no split.
+  for (int j = 0; j < n; ++j)
+    if (lowest[j] != j - size[j] + 1) return {0, 0};
   SubtreeSplit best{0, 0};
   double cost = before[n];  // the backward pass on one thread
   for (int c = 0; c < n; ++c) {

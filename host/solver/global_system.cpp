@@ -119,14 +119,24 @@ GlobalSystem::SolveWorkspace::~SolveWorkspace() {
 
 void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x) {
   factor(c);
-  cholmod_factor* l = factors_.find(c)->second->factor();
+  Factor& f = *factors_.find(c)->second;
+  cholmod_factor* l = f.factor();
   const Eigen::Index n = rhs.rows();
   x.resize(n, 3);
-  // One pass over the factor for the three columns, on the calling thread, whatever
-  // cpuThreads(): two threads would each read the whole factor, and the pass is bound by that
-  // (docs/bench_summary.md, "Global solve against its bound").
+  // One pass over the factor for the three columns (the columns split over threads would each
+  // read the whole factor; docs/bench_summary.md, "Global solve against its bound"). On large
+  // systems the backward pass goes over two subtrees on two threads, by the size alone, so that
+  // the arithmetic is the same on any thread count.
   if (simplicialSolveApplies(*l)) {
-    solveSimplicial(*l, rhs.data(), x.data(), static_cast<std::size_t>(n), 0, 3, 4, solve_work_);
+    if (n >= kSubtreeRows && !f.split_known) {
+      f.split = findSubtreeSplit(*l);
+      f.split_known = true;
+    }
+    if (n >= kSubtreeRows && f.split.b_end > 0) {
+      solveSimplicialSubtrees(*l, f.split, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
+    } else {
+      solveSimplicial(*l, rhs.data(), x.data(), static_cast<std::size_t>(n), 0, 3, 4, solve_work_);
+    }
     return;
   }
   // Not reached with the factors made here (simplicial, int, double); kept for safety.
@@ -242,6 +252,7 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
       updated = cholmod_updown(delta > 0.0 ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
+    it->second->split_known = false;  // the update may have changed the elimination tree
     // A failed update (out of memory, or a downdate that lost positive definiteness to
     // round-off) leaves the factor unusable: factor that c again on its next use.
     it = updated ? std::next(it) : factors_.erase(it);
@@ -285,6 +296,7 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
       updated = cholmod_updown(update ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
+    it->second->split_known = false;  // the update may have changed the elimination tree
     // As addElementTerm: a failed update leaves the factor unusable; factor it again on next use.
     it = updated ? std::next(it) : factors_.erase(it);
   }

@@ -2,6 +2,8 @@
 // The global step of the local/global solver: K_c = c M + L with L = sum_e w_e A_e^T A_e, an
 // `n by n` scalar matrix shared by x, y and z. Factored once per distinct c with CHOLMOD and
 // reused for every iteration of every step (docs/method.md section 2).
+#include "solver/factor_solve.hpp"
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
@@ -30,9 +32,15 @@ class GlobalSystem {
   void factor(double c, const char* c_name = "c");
 
   /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use:
-  /// one pass over the factor for all three columns (host/solver/factor_solve.hpp), on the
-  /// calling thread, so the result does not depend on cpuThreads().
+  /// one pass over the factor for all three columns (host/solver/factor_solve.hpp). From
+  /// kSubtreeRows particles the backward pass runs over two subtrees of the elimination tree on
+  /// up to two threads (cpuThreads()), the same arithmetic on any thread count, so the same
+  /// result bit for bit.
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x);
+  /// From this many particles solve() splits the backward pass over two subtrees (below it the
+  /// second thread costs more than it saves; docs/bench_summary.md "Global solve against its
+  /// bound").
+  static constexpr Eigen::Index kSubtreeRows = 15000;
 
   /// Jacobi-preconditioned conjugate gradients on K_c x = rhs (GlobalSolve::ConjugateGradient on
   /// the host: the CPU reference of the OpenCL device's CG, the same algorithm in double, Eigen's
@@ -105,6 +113,10 @@ class GlobalSystem {
   // reaches the cholmod_factor that Eigen keeps protected, for the solve and the rank updates.
   struct Factor : Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
     cholmod_factor* factor() { return m_cholmodFactor; }
+    // Where solve() splits the backward pass over two subtrees (at least kSubtreeRows rows),
+    // found on first use and again after a rank update (which may change the tree).
+    SubtreeSplit split;
+    bool split_known = false;
   };
   int factorizations_ = 0;
   int laplacian_version_ = 0;

@@ -47,8 +47,9 @@ struct SubtreeSplit {
 SubtreeSplit findSubtreeSplit(const cholmod_factor& factor);
 /// solveSimplicial for the three columns (lanes {x, y, z, 0}) with the backward pass over the two
 /// subtrees on two threads (parallelFor) after the columns above them: the same arithmetic for
-/// any thread count (not solveSimplicial's: blocks of chained columns end at the split). Measured
-/// against solveSimplicial in bench/bench_solver.cpp (vector-subtrees-2t).
+/// any thread count (not solveSimplicial's: blocks of chained columns end at the split). The
+/// forward pass stays on the calling thread (its updates of the rows above the subtrees would
+/// have to be summed in a fixed order). GlobalSystem::solve's path on large systems.
 void solveSimplicialSubtrees(const cholmod_factor& factor, const SubtreeSplit& split, const double* rhs, double* x,
                              std::size_t ld, std::vector<double>& work);
 

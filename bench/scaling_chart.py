@@ -11,6 +11,7 @@ breakdown, and the two performance goals (docs/method.md section 3 and the issue
   - one BE iteration on the 50x50 cloth under 0.6 ms on PoCL (OpenCL backend);
   - a blend step at most 30 % slower than a BE step with the same main iteration count (aim, issue 11:
     at most 10 %).
+The global solve variants (global_solve/*) are listed with their memory bound and time/bound.
 Use /usr/bin/python3 (Debian's python3-matplotlib); `python3` on PATH may lack matplotlib.
 """
 import argparse
@@ -39,6 +40,7 @@ class Case:
         self.parts = parts
         self.kind = parts[0]
         self.time = entry["real_time"] * UNIT_S[entry.get("time_unit", "ns")]
+        self.cpu_time = entry.get("cpu_time", 0.0) * UNIT_S[entry.get("time_unit", "ns")]
         self.counters = {k: v for k, v in entry.items() if isinstance(v, (int, float))}
         self.counters["iterations_run"] = entry.get("iterations", 1)
         self.label = entry.get("label", "")
@@ -106,7 +108,9 @@ def fmt_time(seconds):
         return f"{seconds:.2f} s"
     if seconds >= 1e-3:
         return f"{seconds * 1e3:.2f} ms"
-    return f"{seconds * 1e6:.0f} us"
+    if seconds >= 1e-5:
+        return f"{seconds * 1e6:.0f} us"
+    return f"{seconds * 1e6:.1f} us"
 
 
 def fmt_pct(x):
@@ -324,18 +328,52 @@ def scaling_table(by):
 
 
 def solver_table(by):
+    """global_solve/<scene>/<variant>: each variant's time against its memory bound (bench_solver.cpp:
+    2 factor_bytes / one thread's streaming bandwidth over a buffer of that size, measured in the
+    same case), and against the library's time."""
     gs = by.get("global_solve", {})
     if not gs:
         return []
-    lines = ["## Global solve variants (K_c x = rhs, 3 columns)\n",
-             "| scene | variant | solve | vs library |", "|---|---|---|---|"]
-    for scene in sorted({k[0] for k in gs}):
+    lines = ["## Global solve against its bound (K_c x = rhs, 3 columns)\n",
+             "bound: the factor's bytes (8 bytes of value and 4 of row index per entry, column pointers and "
+             "lengths; supernodal: its dense blocks and indices) read twice, forward and backward, at the "
+             "streaming bandwidth of one thread over a buffer of that size, measured in each case of the "
+             "scene (the fastest of those measurements for that factor). "
+             "All three columns in those two passes: a solve per column reads the factor three times "
+             "as often (passes).\n",
+             "`cpu`: the solving thread's CPU time per solve, which other load on a shared machine inflates "
+             "less than the wall time (one-thread variants only).\n",
+             "| scene | particles | factor entries | factor MB | bandwidth | variant | passes | solve | bound | "
+             "solve/bound | cpu/bound | vs library |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def order(scene):
+        digits = [int(x) for x in "".join(ch if ch.isdigit() else " " for ch in scene).split()]
+        return (0 if scene.startswith("cloth") else 1, digits[0] if digits else 0, scene)
+
+    # One bound per scene and factor (the simplicial variants share theirs): the fastest of the
+    # streaming measurements over a buffer of that size, one per case, so that a case whose
+    # measurement other load disturbed does not get a lenient bound.
+    best_bound = {}
+    for (scene, _), c in gs.items():
+        key = (scene, c.get("factor_bytes"))
+        if c.get("bound") > 0:
+            best_bound[key] = min(best_bound.get(key, float("inf")), c.get("bound"))
+    for scene in sorted({k[0] for k in gs}, key=order):
         lib = gs.get((scene, "library"))
-        for (s, variant), c in sorted(gs.items()):
+        for (s, variant), c in sorted(gs.items(), key=lambda kv: kv[0][1] != "library"):
             if s != scene:
                 continue
             rel = f"{c.time / lib.time:.2f}x" if lib else "-"
-            lines.append(f"| {scene} | {variant} | {fmt_time(c.time)} | {rel} |")
+            bound = best_bound.get((scene, c.get("factor_bytes")), 0.0)
+            ratio = f"{c.time / bound:.2f}" if bound else "-"
+            one_thread = not variant.endswith("-2t")
+            cpu = f"{c.cpu_time / bound:.2f}" if bound and one_thread and c.cpu_time > 0 else "-"
+            bandwidth = 2.0 * c.get("factor_bytes") / bound if bound else 0.0
+            lines.append(f"| {scene} | {c.get('particles'):.0f} | {c.get('factor_entries'):.0f} | "
+                         f"{c.get('factor_bytes') / 1e6:.2f} | {bandwidth / 1e9:.0f} GB/s | {variant} | "
+                         f"{c.get('passes'):.0f} | {fmt_time(c.time)} | {fmt_time(bound) if bound else '-'} | "
+                         f"{ratio} | {cpu} | {rel} |")
     lines.append("")
     return lines
 

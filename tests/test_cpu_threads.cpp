@@ -105,9 +105,9 @@ TEST(CpuThreads, TriangleClothIsTheSameOnOneAndTwoThreads) {
   }
 }
 
-// The solve in two column groups (2,009 particles: above the 1,000 from which it splits) is
-// CHOLMOD's solve of all three columns at once, bit for bit, on one thread and on two.
-TEST(CpuThreads, ColumnGroupSolveIsTheOneSolveBitForBit) {
+// The host solve (one pass over the factor for the three columns, on the calling thread) gives
+// the same result bit for bit on one thread and on two, and CHOLMOD's solve to round-off.
+TEST(CpuThreads, GlobalSolveIsTheSameOnOneAndTwoThreads) {
   TetBarParams p;
   p.nx = 40;
   p.ny = 6;
@@ -122,13 +122,49 @@ TEST(CpuThreads, ColumnGroupSolveIsTheOneSolveBitForBit) {
   one.compute(k);
   ASSERT_EQ(one.info(), Eigen::Success);
   const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(scene.numParticles(), 3);
-  const Eigen::MatrixX3d expected = one.solve(rhs);
+  const Eigen::MatrixX3d cholmod = one.solve(rhs);
+  Eigen::MatrixX3d first;
   for (int threads : {1, 2}) {
     ThreadCount setting(threads);
     Eigen::MatrixX3d x;
     system.solve(c, rhs, x);
     ASSERT_EQ(x.rows(), rhs.rows());
-    for (Eigen::Index i = 0; i < x.size(); ++i) ASSERT_EQ(x.data()[i], expected.data()[i]) << threads << " threads";
+    EXPECT_LT((x - cholmod).norm(), 1e-12 * cholmod.norm()) << threads << " threads";
+    if (threads == 1) {
+      first = x;
+      continue;
+    }
+    for (Eigen::Index i = 0; i < x.size(); ++i) ASSERT_EQ(x.data()[i], first.data()[i]) << threads << " threads";
+  }
+}
+
+// From GlobalSystem::kSubtreeRows particles the solve's backward pass runs over two subtrees on
+// two threads: the same bit for bit on one thread and on two, before and after a rank update
+// (which turns the factor into LDL' and may change its elimination tree).
+TEST(CpuThreads, SubtreeSolveIsTheSameOnOneAndTwoThreads) {
+  ClothGridParams p;
+  p.nx = p.ny = 125;  // 15,625 particles
+  const Scene scene = makeClothGrid(p);
+  ASSERT_GE(scene.numParticles(), GlobalSystem::kSubtreeRows);
+  const SceneData data(scene);
+  GlobalSystem system(data);
+  const double c = 900.0;
+  const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(scene.numParticles(), 3);
+  for (int round = 0; round < 2; ++round) {
+    Eigen::SparseMatrix<double> k = system.stiffnessLaplacian();
+    for (Eigen::Index j = 0; j < k.rows(); ++j) k.coeffRef(j, j) += c * system.masses()[j];
+    Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> fresh;
+    fresh.compute(k);
+    ASSERT_EQ(fresh.info(), Eigen::Success);
+    const Eigen::MatrixX3d expected = fresh.solve(rhs);
+    Eigen::MatrixX3d x[2];
+    for (int threads : {1, 2}) {
+      ThreadCount setting(threads);
+      system.solve(c, rhs, x[threads - 1]);
+    }
+    EXPECT_LT((x[0] - expected).norm(), 1e-10 * expected.norm()) << "round " << round;
+    for (Eigen::Index i = 0; i < x[0].size(); ++i) ASSERT_EQ(x[0].data()[i], x[1].data()[i]) << "round " << round;
+    system.addToDiagonal(std::vector<int>{17, 4000, 9000}, std::vector<double>{50.0, 80.0, 120.0});
   }
 }
 

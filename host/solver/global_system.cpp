@@ -1,7 +1,7 @@
 #include "solver/global_system.hpp"
 
-#include "cpu/worker_pool.hpp"
 #include "scene/scene_data.hpp"
+#include "solver/factor_solve.hpp"
 
 #include <stabint/errors.hpp>
 
@@ -119,36 +119,40 @@ GlobalSystem::SolveWorkspace::~SolveWorkspace() {
 
 void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x) {
   factor(c);
-  cholmod_factor* l = factors_.find(c)->second->factor();
+  Factor& f = *factors_.find(c)->second;
+  cholmod_factor* l = f.factor();
   const Eigen::Index n = rhs.rows();
   x.resize(n, 3);
-  for (auto& workspace : workspaces_) {
-    if (!workspace) workspace = std::make_unique<SolveWorkspace>();
-  }
-  // On one thread one solve of the three columns (the factor is read once); on more, two column
-  // groups {x, y} and {z} on two threads (each reads the factor; the factor is only read). Below
-  // kColumnGroupRows the solve takes microseconds, less than handing a task to a worker.
-  constexpr Eigen::Index kColumnGroupRows = 1000;
-  const bool groups = cpuThreads() > 1 && n >= kColumnGroupRows;
-  bool solved[2] = {false, !groups};
-  parallelFor(groups ? 2 : 1, [&](int group) {
-    SolveWorkspace& w = *workspaces_[group];
-    const int first = group == 0 ? 0 : 2, columns = !groups ? 3 : group == 0 ? 2 : 1;
-    cholmod_dense b{};
-    b.nrow = static_cast<std::size_t>(n);
-    b.ncol = static_cast<std::size_t>(columns);
-    b.nzmax = b.nrow * b.ncol;
-    b.d = b.nrow;
-    b.x = const_cast<double*>(rhs.data() + n * first);  // read only
-    b.xtype = CHOLMOD_REAL;
-    b.dtype = CHOLMOD_DOUBLE;
-    solved[group] = cholmod_solve2(CHOLMOD_A, l, &b, nullptr, &w.x, nullptr, &w.y, &w.e, &w.common) != 0;
-    if (solved[group]) {
-      x.middleCols(first, columns) = Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(w.x->x), n, columns);
+  // One pass over the factor for the three columns (the columns split over threads would each
+  // read the whole factor; docs/bench_summary.md, "Global solve against its bound"). On large
+  // systems the backward pass goes over two subtrees on two threads, by the size alone, so that
+  // the arithmetic is the same on any thread count.
+  if (simplicialSolveApplies(*l)) {
+    if (n >= kSubtreeRows && !f.split_known) {
+      f.split = findSubtreeSplit(*l);
+      f.split_known = true;
     }
-  });
+    if (n >= kSubtreeRows && f.split.b_end > 0) {
+      solveSimplicialSubtrees(*l, f.split, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
+    } else {
+      solveSimplicial(*l, rhs.data(), x.data(), static_cast<std::size_t>(n), 0, 3, 4, solve_work_);
+    }
+    return;
+  }
+  // Not reached with the factors made here (simplicial, int, double); kept for safety.
+  if (!workspace_) workspace_ = std::make_unique<SolveWorkspace>();
+  SolveWorkspace& w = *workspace_;
+  cholmod_dense b{};
+  b.nrow = static_cast<std::size_t>(n);
+  b.ncol = 3;
+  b.nzmax = b.nrow * b.ncol;
+  b.d = b.nrow;
+  b.x = const_cast<double*>(rhs.data());  // read only
+  b.xtype = CHOLMOD_REAL;
+  b.dtype = CHOLMOD_DOUBLE;
   // Only a failed allocation makes a solve of a factored positive definite system fail.
-  if (!solved[0] || !solved[1]) throw std::bad_alloc();
+  if (cholmod_solve2(CHOLMOD_A, l, &b, nullptr, &w.x, nullptr, &w.y, &w.e, &w.common) == 0) throw std::bad_alloc();
+  x = Eigen::Map<const Eigen::MatrixX3d>(static_cast<const double*>(w.x->x), n, 3);
 }
 
 int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,
@@ -248,6 +252,7 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
       updated = cholmod_updown(delta > 0.0 ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
+    it->second->split_known = false;  // the update may have changed the elimination tree
     // A failed update (out of memory, or a downdate that lost positive definiteness to
     // round-off) leaves the factor unusable: factor that c again on its next use.
     it = updated ? std::next(it) : factors_.erase(it);
@@ -291,6 +296,7 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
       updated = cholmod_updown(update ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
+    it->second->split_known = false;  // the update may have changed the elimination tree
     // As addElementTerm: a failed update leaves the factor unusable; factor it again on next use.
     it = updated ? std::next(it) : factors_.erase(it);
   }

@@ -2,6 +2,8 @@
 // The global step of the local/global solver: K_c = c M + L with L = sum_e w_e A_e^T A_e, an
 // `n by n` scalar matrix shared by x, y and z. Factored once per distinct c with CHOLMOD and
 // reused for every iteration of every step (docs/method.md section 2).
+#include "solver/factor_solve.hpp"
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
@@ -29,11 +31,16 @@ class GlobalSystem {
   /// options, e.g. "1/time_step^2"). Nothing is printed (CHOLMOD would print on stdout).
   void factor(double c, const char* c_name = "c");
 
-  /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use.
-  /// With cpuThreads() > 1 (host/cpu/worker_pool.hpp) and at least 1,000 particles, columns x
-  /// and y and column z are two solves on two threads, else one solve: the same arithmetic either
-  /// way (CHOLMOD's simplicial solves treat each column alike), so the same result bit for bit.
+  /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use:
+  /// one pass over the factor for all three columns (host/solver/factor_solve.hpp). From
+  /// kSubtreeRows particles the backward pass runs over two subtrees of the elimination tree on
+  /// up to two threads (cpuThreads()), the same arithmetic on any thread count, so the same
+  /// result bit for bit.
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x);
+  /// From this many particles solve() splits the backward pass over two subtrees (below it the
+  /// second thread costs more than it saves; docs/bench_summary.md "Global solve against its
+  /// bound").
+  static constexpr Eigen::Index kSubtreeRows = 15000;
 
   /// Jacobi-preconditioned conjugate gradients on K_c x = rhs (GlobalSolve::ConjugateGradient on
   /// the host: the CPU reference of the OpenCL device's CG, the same algorithm in double, Eigen's
@@ -100,11 +107,16 @@ class GlobalSystem {
   void addToDiagonal(const std::vector<int>& vertices, const std::vector<double>& deltas);
 
  private:
-  // Simplicial CHOLMOD: with Debian's reference BLAS its triangular solves beat the supernodal
-  // ones by 2-3x on these sparse, low-fill systems, and PD solves every iteration. The subclass
-  // reaches the cholmod_factor that Eigen keeps protected, for the rank-1 updates.
+  // Simplicial CHOLMOD: solve() reads its columns directly (factor_solve.hpp), which took 0.1-0.3
+  // of the time of CHOLMOD's supernodal solve with Debian's reference BLAS and 0.3-0.6 with
+  // OpenBLAS, and cholmod_updown (the rank updates) needs a simplicial factor. The subclass
+  // reaches the cholmod_factor that Eigen keeps protected, for the solve and the rank updates.
   struct Factor : Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
     cholmod_factor* factor() { return m_cholmodFactor; }
+    // Where solve() splits the backward pass over two subtrees (at least kSubtreeRows rows),
+    // found on first use and again after a rank update (which may change the tree).
+    SubtreeSplit split;
+    bool split_known = false;
   };
   int factorizations_ = 0;
   int laplacian_version_ = 0;
@@ -125,9 +137,10 @@ class GlobalSystem {
   Eigen::SparseMatrix<double> laplacian_;
   Eigen::VectorXd masses_;
   std::map<double, std::unique_ptr<Factor>> factors_;
-  // One CHOLMOD workspace per concurrent solve: a cholmod_common is not thread-safe, so each
-  // column group solves with its own (cholmod_solve2, which also keeps its X, Y and E buffers
-  // from one solve to the next).
+  // The solve's work buffer (the permuted right-hand side, a row of four doubles per particle),
+  // kept from one solve to the next.
+  std::vector<double> solve_work_;
+  // cholmod_solve2's workspace, for a factor that solveSimplicial does not take (none made here).
   struct SolveWorkspace {
     cholmod_common common;
     cholmod_dense* x = nullptr;
@@ -138,7 +151,7 @@ class GlobalSystem {
     SolveWorkspace(const SolveWorkspace&) = delete;
     SolveWorkspace& operator=(const SolveWorkspace&) = delete;
   };
-  std::unique_ptr<SolveWorkspace> workspaces_[2];
+  std::unique_ptr<SolveWorkspace> workspace_;
 };
 
 }  // namespace stabint

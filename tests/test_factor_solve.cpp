@@ -1,0 +1,147 @@
+// solveSimplicial (host/solver/factor_solve.hpp), the global step's triangular solves over
+// CHOLMOD's simplicial factor: CHOLMOD's own solve to round-off on the LL' factor as factored and
+// on the LDL' factor that cholmod_updown leaves, and the same bit for bit whatever the lanes
+// (three columns as {x, y, z, 0}, or as {x, y} and {z, 0}).
+#include "cpu/worker_pool.hpp"
+#include "scene/scene_data.hpp"
+#include "solver/factor_solve.hpp"
+#include "solver/global_system.hpp"
+
+#include <stabint/stabint.hpp>
+
+#include <Eigen/CholmodSupport>
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace stabint {
+namespace {
+
+struct Factored {
+  explicit Factored(const Eigen::SparseMatrix<double>& k) {
+    cholmod_start(&common);
+    common.print = 0;
+    common.supernodal = CHOLMOD_SIMPLICIAL;
+    common.final_ll = 1;
+    cholmod_sparse a =
+        Eigen::viewAsCholmod(Eigen::Ref<Eigen::SparseMatrix<double>>(const_cast<Eigen::SparseMatrix<double>&>(k)));
+    a.stype = -1;
+    factor = cholmod_analyze(&a, &common);
+    cholmod_factorize(&a, factor, &common);
+  }
+  ~Factored() {
+    cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+  Factored(const Factored&) = delete;
+  Factored& operator=(const Factored&) = delete;
+  Eigen::MatrixX3d cholmodSolve(const Eigen::MatrixX3d& rhs) {
+    cholmod_dense b{};
+    b.nrow = static_cast<std::size_t>(rhs.rows());
+    b.ncol = 3;
+    b.nzmax = b.nrow * 3;
+    b.d = b.nrow;
+    b.x = const_cast<double*>(rhs.data());
+    b.xtype = CHOLMOD_REAL;
+    b.dtype = CHOLMOD_DOUBLE;
+    cholmod_dense* x = cholmod_solve(CHOLMOD_A, factor, &b, &common);
+    Eigen::MatrixX3d out = Eigen::Map<const Eigen::MatrixX3d>(static_cast<const double*>(x->x), rhs.rows(), 3);
+    cholmod_free_dense(&x, &common);
+    return out;
+  }
+  cholmod_common common;
+  cholmod_factor* factor = nullptr;
+};
+
+Eigen::SparseMatrix<double> systemOf(const Scene& scene, double c) {
+  const SceneData data(scene);
+  const GlobalSystem system(data);
+  Eigen::SparseMatrix<double> k = system.stiffnessLaplacian();
+  for (Eigen::Index j = 0; j < k.rows(); ++j) k.coeffRef(j, j) += c * system.masses()[j];
+  k.makeCompressed();
+  return k;
+}
+
+void expectSolvesAsCholmod(Factored& f, const Eigen::MatrixX3d& rhs) {
+  ASSERT_TRUE(simplicialSolveApplies(*f.factor));
+  const Eigen::MatrixX3d expected = f.cholmodSolve(rhs);
+  const std::size_t n = static_cast<std::size_t>(rhs.rows());
+  std::vector<double> work;
+  Eigen::MatrixX3d one(rhs.rows(), 3), groups(rhs.rows(), 3);
+  solveSimplicial(*f.factor, rhs.data(), one.data(), n, 0, 3, 4, work);
+  solveSimplicial(*f.factor, rhs.data(), groups.data(), n, 0, 2, 2, work);
+  solveSimplicial(*f.factor, rhs.data(), groups.data(), n, 2, 1, 2, work);
+  EXPECT_LT((one - expected).norm(), 1e-12 * expected.norm());
+  for (Eigen::Index i = 0; i < one.size(); ++i) ASSERT_EQ(one.data()[i], groups.data()[i]) << i;
+}
+
+TEST(FactorSolve, ClothAndTetBarAsCholmodOnTheLLFactor) {
+  TetBarParams bar;
+  bar.nx = 20;
+  bar.ny = 4;
+  bar.nz = 4;
+  ClothGridParams cloth;
+  cloth.nx = cloth.ny = 30;
+  for (const Scene& scene : {makeTetBar(bar), makeClothGrid(cloth)}) {
+    Factored f(systemOf(scene, 900.0));
+    ASSERT_EQ(f.common.status, CHOLMOD_OK);
+    ASSERT_TRUE(f.factor->is_ll);
+    expectSolvesAsCholmod(f, Eigen::MatrixX3d::Random(scene.numParticles(), 3));
+  }
+}
+
+// cholmod_updown turns the LL' factor into LDL' (unit L, D on the diagonal), with columns that
+// may no longer be packed: the solve reads that too.
+TEST(FactorSolve, AsCholmodOnTheUpdatedLDLFactor) {
+  TetBarParams bar;
+  bar.nx = 20;
+  bar.ny = 4;
+  bar.nz = 4;
+  const Scene scene = makeTetBar(bar);
+  Factored f(systemOf(scene, 900.0));
+  const int n = static_cast<int>(f.factor->n);
+  cholmod_sparse* c = cholmod_allocate_sparse(n, 2, 2, 1, 1, 0, CHOLMOD_REAL, &f.common);
+  int* cp = static_cast<int*>(c->p);
+  int* ci = static_cast<int*>(c->i);
+  double* cx = static_cast<double*>(c->x);
+  cp[0] = 0;
+  cp[1] = 1;
+  cp[2] = 2;
+  ci[0] = 3;
+  ci[1] = n / 2;
+  cx[0] = 1e3;
+  cx[1] = 2e2;
+  ASSERT_TRUE(cholmod_updown(1, c, f.factor, &f.common));
+  cholmod_free_sparse(&c, &f.common);
+  ASSERT_FALSE(f.factor->is_ll);
+  expectSolvesAsCholmod(f, Eigen::MatrixX3d::Random(scene.numParticles(), 3));
+}
+
+// The variant with the backward pass over two subtrees on two threads (measured in
+// bench/bench_solver.cpp): CHOLMOD's solve to round-off, the same bit for bit on one thread and
+// on two.
+TEST(FactorSolve, SubtreeSplitIsTheSameOnOneAndTwoThreads) {
+  ClothGridParams cloth;
+  cloth.nx = cloth.ny = 40;
+  const Scene scene = makeClothGrid(cloth);
+  Factored f(systemOf(scene, 900.0));
+  const SubtreeSplit split = findSubtreeSplit(*f.factor);
+  ASSERT_GT(split.a_end, 0);
+  ASSERT_GT(split.b_end, split.a_end);
+  const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(scene.numParticles(), 3);
+  const Eigen::MatrixX3d expected = f.cholmodSolve(rhs);
+  const std::size_t n = static_cast<std::size_t>(rhs.rows());
+  std::vector<double> work;
+  Eigen::MatrixX3d x[2] = {Eigen::MatrixX3d(rhs.rows(), 3), Eigen::MatrixX3d(rhs.rows(), 3)};
+  const int previous = cpuThreads();
+  for (int threads : {1, 2}) {
+    setCpuThreads(threads);
+    solveSimplicialSubtrees(*f.factor, split, rhs.data(), x[threads - 1].data(), n, work);
+  }
+  setCpuThreads(previous);
+  EXPECT_LT((x[0] - expected).norm(), 1e-12 * expected.norm());
+  for (Eigen::Index i = 0; i < x[0].size(); ++i) ASSERT_EQ(x[0].data()[i], x[1].data()[i]) << i;
+}
+
+}  // namespace
+}  // namespace stabint

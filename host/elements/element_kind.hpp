@@ -133,6 +133,9 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
   constexpr int R = Kind::kRows;
   constexpr int P = Kind::kParams;
   constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
+  const int* vertices = block.vertices.data();
+  const double* coefficients = block.coefficients.data();
+  const double* element_params = params.data();
   int e[W];
   STABINT_LANES for (int l = 0; l < W; ++l) e[l] = first + (l < count ? l : count - 1);
   // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
@@ -141,11 +144,11 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
   double ax[3 * R][W], a[R * K][W];
   for (int i = 0; i < R * K; ++i)
     STABINT_LANES for (int l = 0; l < W; ++l) a[i][l] =
-        Kind::kSharedCoefficients ? shared[i] : block.coefficients[kStride * e[l] + i];
+        Kind::kSharedCoefficients ? shared[i] : coefficients[kStride * e[l] + i];
   for (int k = 0; k < K; ++k) {
     double x0[W], x1[W], x2[W];
     STABINT_LANES for (int l = 0; l < W; ++l) {
-      const int v = block.vertices[std::size_t(K) * std::size_t(e[l]) + std::size_t(k)];
+      const int v = vertices[K * e[l] + k];
       x0[l] = xs[v];
       x1[l] = xs[n + v];
       x2[l] = xs[2 * n + v];
@@ -158,8 +161,7 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
       }
   }
   double prm[P][W];
-  for (int i = 0; i < P; ++i)
-    STABINT_LANES for (int l = 0; l < W; ++l) prm[i][l] = params[std::size_t(P) * std::size_t(e[l]) + std::size_t(i)];
+  for (int i = 0; i < P; ++i) STABINT_LANES for (int l = 0; l < W; ++l) prm[i][l] = element_params[P * e[l] + i];
   double p[3 * R][W], energy[W];
   kindProjectLanes<Kind>(ax, prm, p, energy);
   for (int l = 0; l < count; ++l) energies[l] = energy[l];

@@ -126,33 +126,6 @@ TEST(Elements, RotationsOfAGroupAreEachLanesOwnBitForBit) {
   }
 }
 
-// Springs and bending hinges project kLanes at a time too: each lane as ontoSphere, bit for bit,
-// the degenerate (too short) vectors included.
-TEST(Elements, SphereProjectionsOfAGroupAreEachLanesOwnBitForBit) {
-  constexpr int W = projections::kLanes;
-  std::mt19937 rng(9);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (int group = 0; group < 200; ++group) {
-    double v[3][W], params[5][W], p[3][W], energy[W];
-    for (int l = 0; l < W; ++l) {
-      const double size = (group + l) % 5 == 0 ? 1e-14 : 1.0;
-      for (int c = 0; c < 3; ++c) v[c][l] = size * u(rng);
-      params[0][l] = 1e3 * (1.5 + u(rng));
-      params[1][l] = 0.5 + 0.4 * u(rng);
-      const Eigen::Vector3d dir = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
-      for (int c = 0; c < 3; ++c) params[2 + c][l] = dir[c];
-    }
-    projections::ontoSpheres(v, params, p, energy);
-    for (int l = 0; l < W; ++l) {
-      const double one_v[3] = {v[0][l], v[1][l], v[2][l]};
-      const double one_params[5] = {params[0][l], params[1][l], params[2][l], params[3][l], params[4][l]};
-      double one_p[3];
-      ASSERT_EQ(energy[l], projections::ontoSphere(one_v, one_params, one_p)) << "lane " << l;
-      for (int c = 0; c < 3; ++c) ASSERT_EQ(p[c][l], one_p[c]) << "lane " << l;
-    }
-  }
-}
-
 TEST(Elements, SphereProjectionHasTheRadiusAndADefinedDegenerateCase) {
   const Eigen::Vector3d d(0.3, -0.4, 1.2);
   const double params_x[5] = {10.0, 0.7, 1.0, 0.0, 0.0}, params_y[5] = {10.0, 0.7, 0.0, 1.0, 0.0};

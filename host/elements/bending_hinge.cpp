@@ -94,11 +94,6 @@ struct BendingHingeKind : KindDefaults<BendingHinge> {
     return projections::ontoSphere(ax, params, p);
   }
 
-  static void projectLanes(const double (*ax)[projections::kLanes], const double (*params)[projections::kLanes],
-                           double (*p)[projections::kLanes], double* energy) {
-    projections::ontoSpheres(ax, params, p, energy);
-  }
-
   static std::vector<KindField<BendingHinge>> jsonFields() {
     return {{"stiffness", &BendingHinge::stiffness, 0.0, true}};
   }

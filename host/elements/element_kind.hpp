@@ -92,30 +92,15 @@ inline void halfWeightedSquaredDistances(const double* w, const double (*ax)[pro
   }
 }
 
-/// Whether a Kind projects a group of lanes itself (projectLanes); without it each lane takes
-/// Kind::project.
+/// Whether a Kind projects a group of lanes itself (projectLanes): its elements go through the
+/// passes in groups (kindLanes), the others one at a time (kindElement). Lanes pay for the gathers
+/// and the transposes around the projection, which a projection as cheap as a spring's does not
+/// win back (measured: the 20 x 20 cloth's local step took 1.85x as long in lanes); the tet's
+/// rotation does (the tet bar's, 0.5x).
 template <class Kind, class = void>
 struct ProjectsLanes : std::false_type {};
 template <class Kind>
 struct ProjectsLanes<Kind, std::void_t<decltype(&Kind::projectLanes)>> : std::true_type {};
-
-/// Kind::project of every lane: p[i][l] from ax[i][l] and prm[i][l], the energies into `energy`.
-template <class Kind>
-inline void kindProjectLanes(const double (*ax)[projections::kLanes], const double (*prm)[projections::kLanes],
-                             double (*p)[projections::kLanes], double* energy) {
-  if constexpr (ProjectsLanes<Kind>::value) {
-    Kind::projectLanes(ax, prm, p, energy);
-  } else {
-    constexpr int R3 = 3 * Kind::kRows;
-    for (int l = 0; l < projections::kLanes; ++l) {
-      double a[R3], q[Kind::kParams], out[R3];
-      for (int i = 0; i < R3; ++i) a[i] = ax[i][l];
-      for (int i = 0; i < Kind::kParams; ++i) q[i] = prm[i][l];
-      energy[l] = Kind::project(a, q, out);
-      for (int i = 0; i < R3; ++i) p[i][l] = out[i];
-    }
-  }
-}
 
 /// Elements [first, first + count) of a Kind's block, count <= kLanes, as one group of lanes
 /// (projections.hpp): A_e x of each, its projection, its energy into energies[e - first] and,
@@ -163,7 +148,7 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
   double prm[P][W];
   for (int i = 0; i < P; ++i) STABINT_LANES for (int l = 0; l < W; ++l) prm[i][l] = element_params[P * e[l] + i];
   double p[3 * R][W], energy[W];
-  kindProjectLanes<Kind>(ax, prm, p, energy);
+  Kind::projectLanes(ax, prm, p, energy);
   for (int l = 0; l < count; ++l) energies[l] = energy[l];
   if (!write) return;
   for (int i = 0; i < 3 * R; ++i)
@@ -188,6 +173,68 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
   }
 }
 
+/// Element e of a Kind's block, for the kinds without projectLanes: A_e x into `ax`, its
+/// projection, the energy (returned) and, when `write`, the contributions w A_e^T p (or
+/// w A_e^T (p - A_e x) with `force`) of its K vertices into `c` (3 per vertex). Plain arrays with
+/// compile-time bounds, the same loops as kernels/element_pass.cl and kindLanes: the compiler
+/// unrolls them and keeps A_e x and p_e in registers.
+template <class Kind>
+inline double kindElement(const ElementBlock& block, const std::vector<double>& params, const double* xs,
+                          Eigen::Index n, const double* shared, int e, bool write, bool force, double* c) {
+  constexpr int K = Kind::kVertices;
+  constexpr int R = Kind::kRows;
+  constexpr int P = Kind::kParams;
+  constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
+  const int* v = block.vertices.data() + K * e;
+  const double* a = Kind::kSharedCoefficients ? shared : block.coefficients.data() + kStride * e;
+  const double* prm = params.data() + P * e;
+  // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
+  // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
+  // exactly x_a - x_b or x_j.
+  double ax[3 * R];
+  for (int k = 0; k < K; ++k) {
+    const double x0 = xs[v[k]], x1 = xs[n + v[k]], x2 = xs[2 * n + v[k]];
+    for (int r = 0; r < R; ++r) {
+      const double coefficient = a[K * r + k];
+      ax[3 * r] = k == 0 ? coefficient * x0 : ax[3 * r] + coefficient * x0;
+      ax[3 * r + 1] = k == 0 ? coefficient * x1 : ax[3 * r + 1] + coefficient * x1;
+      ax[3 * r + 2] = k == 0 ? coefficient * x2 : ax[3 * r + 2] + coefficient * x2;
+    }
+  }
+  double p[3 * R];
+  const double element_energy = Kind::project(ax, prm, p);
+  if (!write) return element_energy;
+  const double w = prm[0];
+  for (int i = 0; i < 3 * R; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
+  for (int k = 0; k < K; ++k) {
+    double c0 = a[k] * p[0], c1 = a[k] * p[1], c2 = a[k] * p[2];
+    for (int r = 1; r < R; ++r) {
+      c0 += a[K * r + k] * p[3 * r];
+      c1 += a[K * r + k] * p[3 * r + 1];
+      c2 += a[K * r + k] * p[3 * r + 2];
+    }
+    c[3 * k] = c0;
+    c[3 * k + 1] = c1;
+    c[3 * k + 2] = c2;
+  }
+  return element_energy;
+}
+
+/// Elements [first, first + count) of a Kind's block, count <= kLanes, into energies[e - first]
+/// and (when `write`) c + 3 K (e - first): as one group of lanes, or one at a time.
+template <class Kind>
+inline void kindGroup(const ElementBlock& block, const std::vector<double>& params, const double* xs, Eigen::Index n,
+                      const double* shared, int first, int count, bool write, bool force, double* energies, double* c) {
+  if constexpr (ProjectsLanes<Kind>::value) {
+    kindLanes<Kind>(block, params, xs, n, shared, first, count, write, force, energies, c);
+  } else {
+    constexpr int K = Kind::kVertices;
+    for (int i = 0; i < count; ++i)
+      energies[i] =
+          kindElement<Kind>(block, params, xs, n, shared, first + i, write, force, write ? c + 3 * K * i : nullptr);
+  }
+}
+
 /// The shared coefficients of a Kind (unused when each element has its own).
 template <class Kind>
 inline void kindSharedCoefficients(double* shared) {
@@ -197,7 +244,7 @@ inline void kindSharedCoefficients(double* shared) {
 }
 
 /// ElementType::pass of a Kind (ElementTypeOf's, and that of types whose elements are not a
-/// Scene list, such as contact): kindLanes per group, the contributions added into `out` in
+/// Scene list, such as contact): kindGroup per group, the contributions added into `out` in
 /// element order.
 template <class Kind>
 double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
@@ -215,7 +262,7 @@ double kindPass(const ElementBlock& block, const std::vector<double>& params, co
   for (int group = first; group < first + count; group += W) {
     const int size = std::min(W, first + count - group);
     double c[3 * K * W], energies[W];
-    kindLanes<Kind>(block, params, xs, n, shared, group, size, write, force, energies, c);
+    kindGroup<Kind>(block, params, xs, n, shared, group, size, write, force, energies, c);
     for (int l = 0; l < size; ++l) {
       if (flags & kPassEnergy) energy += energies[l];
       if (!write) continue;
@@ -230,7 +277,7 @@ double kindPass(const ElementBlock& block, const std::vector<double>& params, co
   return energy;
 }
 
-/// ElementType::elementResults of a Kind: kindLanes per group, stored.
+/// ElementType::elementResults of a Kind: kindGroup per group, stored.
 template <class Kind>
 void kindElementResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
                         int first, int count, int flags, double* energies, double* contributions) {
@@ -244,7 +291,7 @@ void kindElementResults(const ElementBlock& block, const std::vector<double>& pa
   for (int i = 0; i < count; i += W) {
     const int size = std::min(W, count - i);
     double group_energies[W];
-    kindLanes<Kind>(block, params, x.data(), x.rows(), shared, first + i, size, write, force, group_energies,
+    kindGroup<Kind>(block, params, x.data(), x.rows(), shared, first + i, size, write, force, group_energies,
                     write ? contributions + 3 * K * i : nullptr);
     if (energy)
       for (int l = 0; l < size; ++l) energies[i + l] = group_energies[l];

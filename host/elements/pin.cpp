@@ -48,13 +48,6 @@ struct PinKind : KindDefaults<Pin> {
     for (int c = 0; c < 3; ++c) p[c] = params[1 + c];
     return halfWeightedSquaredDistance(params[0], ax, p, 3);
   }
-
-  static void projectLanes(const double (*ax)[projections::kLanes], const double (*params)[projections::kLanes],
-                           double (*p)[projections::kLanes], double* energy) {
-    for (int c = 0; c < 3; ++c)
-      for (int l = 0; l < projections::kLanes; ++l) p[c][l] = params[1 + c][l];
-    halfWeightedSquaredDistances<3>(params[0], ax, p, energy);
-  }
 };
 
 }  // namespace

@@ -57,19 +57,6 @@ inline double ontoSphere(const double* v, const double* params, double* p) {
   return 0.5 * params[0] * stretch * stretch;
 }
 
-/// ontoSphere of every lane of a group (v[c][l], params[i][l]): the same operations lane by lane.
-inline void ontoSpheres(const double (*v)[kLanes], const double (*params)[kLanes], double (*p)[kLanes],
-                        double* energy) {
-  STABINT_LANES for (int l = 0; l < kLanes; ++l) {
-    const double r = params[1][l];
-    const double len = std::sqrt(v[0][l] * v[0][l] + v[1][l] * v[1][l] + v[2][l] * v[2][l]);
-    const bool degenerate = len < 1e-12 * std::max(r, 1.0);
-    for (int c = 0; c < 3; ++c) p[c][l] = degenerate ? r * params[2 + c][l] : (r / len) * v[c][l];
-    const double stretch = len - r;
-    energy[l] = 0.5 * params[0][l] * stretch * stretch;
-  }
-}
-
 /// A unit vector orthogonal to the unit vector u (crossed with the axis u is least aligned to):
 /// the completion of a basis where the data give no direction.
 inline Eigen::Vector3d anyOrthogonal(const Eigen::Vector3d& u) {

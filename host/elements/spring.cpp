@@ -48,11 +48,6 @@ struct SpringKind : KindDefaults<Spring> {
   static double project(const double* ax, const double* params, double* p) {
     return projections::ontoSphere(ax, params, p);
   }
-
-  static void projectLanes(const double (*ax)[projections::kLanes], const double (*params)[projections::kLanes],
-                           double (*p)[projections::kLanes], double* energy) {
-    projections::ontoSpheres(ax, params, p, energy);
-  }
 };
 
 }  // namespace

@@ -1,11 +1,16 @@
 #include "bench_common.hpp"
 
+#include "cpu/worker_pool.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
 
 namespace stabint::bench {
+
+ThreadsFor::ThreadsFor(int threads) : previous_(cpuThreads()) { setCpuThreads(threads); }
+ThreadsFor::~ThreadsFor() { setCpuThreads(previous_); }
 
 const std::vector<BackendChoice>& allBackends() {
   static const std::vector<BackendChoice> all{BackendChoice::Cpu, BackendChoice::OpenCLDouble,

@@ -52,6 +52,19 @@ void registerFixtureRelease(std::function<void()> release);
 /// the OpenCL runtime is still loaded).
 void releaseAllFixtures();
 
+/// Sets the process's CPU thread count (cpu/worker_pool.hpp) for one case and puts the previous
+/// one back.
+class ThreadsFor {
+ public:
+  explicit ThreadsFor(int threads);
+  ~ThreadsFor();
+  ThreadsFor(const ThreadsFor&) = delete;
+  ThreadsFor& operator=(const ThreadsFor&) = delete;
+
+ private:
+  int previous_;
+};
+
 /// Keeps the fixture of the case that ran last: Google Benchmark calls a case's function several
 /// times (growing iteration counts); the fixture (simulator, backend, factors) is built once.
 /// A different key drops the previous fixture first, so only one lives at a time.

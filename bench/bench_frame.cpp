@@ -45,18 +45,6 @@ namespace {
 using namespace first_step;
 constexpr int kFrameSteps = 30;
 
-// Sets the process's thread count for one case and puts the previous one back.
-class ThreadsFor {
- public:
-  explicit ThreadsFor(int threads) : previous_(cpuThreads()) { setCpuThreads(threads); }
-  ~ThreadsFor() { setCpuThreads(previous_); }
-  ThreadsFor(const ThreadsFor&) = delete;
-  ThreadsFor& operator=(const ThreadsFor&) = delete;
-
- private:
-  int previous_;
-};
-
 const SceneCase& tetBar() {
   for (const SceneCase& scene : referenceScenes())
     if (scene.name == "tetbar50x10x10") return scene;

@@ -169,18 +169,6 @@ double streamSeconds(double bytes) {
   return best;
 }
 
-// Sets the process's thread count for one case and puts the previous one back.
-class ThreadsFor {
- public:
-  explicit ThreadsFor(int threads) : previous_(cpuThreads()) { setCpuThreads(threads); }
-  ~ThreadsFor() { setCpuThreads(previous_); }
-  ThreadsFor(const ThreadsFor&) = delete;
-  ThreadsFor& operator=(const ThreadsFor&) = delete;
-
- private:
-  int previous_;
-};
-
 struct SolverFixture {
   explicit SolverFixture(const Scene& s) : scene(s), data(s), k(systemMatrix(data)), rhs(rightHandSide(data)) {}
   RawFactor& simplicial() {

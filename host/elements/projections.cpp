@@ -176,17 +176,16 @@ STABINT_TARGET_CLONES
 void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes], RotationWork* work) {
   constexpr int W = kLanes;
   enum : std::int64_t { kIterating = 0, kSettled = 1, kRefused = 2 };
-  double x[9][W], c[9][W], det[W], g[W], update2[W];
+  double x[9][W], c[9][W], det[W], m2[W], g[W], update2[W];
   std::int64_t state[W], scale[W];
   STABINT_LANES for (int l = 0; l < W; ++l) {
-    double m2 = 0.0;
-    for (int i = 0; i < 9; ++i) m2 += m[i][l] * m[i][l];
-    g[l] = m2;  // ||m||^2 until the first scaling
+    m2[l] = 0.0;
+    for (int i = 0; i < 9; ++i) m2[l] += m[i][l] * m[i][l];
   }
   for (int i = 0; i < 9; ++i) STABINT_LANES for (int l = 0; l < W; ++l) x[i][l] = m[i][l];
   cofactors<W>(x, c, det);
   STABINT_LANES for (int l = 0; l < W; ++l) {
-    state[l] = det[l] > kFlatVolume * g[l] * std::sqrt(g[l]) ? kIterating : kRefused;
+    state[l] = det[l] > kFlatVolume * m2[l] * std::sqrt(m2[l]) ? kIterating : kRefused;
     scale[l] = 1;
   }
   for (int iteration = 0; iteration < kMaxNewtonIterations; ++iteration) {

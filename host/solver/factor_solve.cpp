@@ -131,41 +131,20 @@ double* rowsIn(std::vector<double>& buffer, std::size_t n, int lanes) {
 void permuteIn(const cholmod_factor& factor, const double* b, std::size_t ld, int columns, int lanes, double* work) {
   const std::size_t n = factor.n;
   const int* perm = static_cast<const int*>(factor.Perm);
-  if (lanes == 4 && columns == 3) {  // the library's case, without the per-lane tests
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
-      double* w = work + 4 * k;
-      w[0] = b[row];
-      w[1] = b[row + ld];
-      w[2] = b[row + 2 * ld];
-      w[3] = 0.0;
-    }
-  } else {
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
-      double* w = work + std::size_t(lanes) * k;
-      for (int c = 0; c < lanes; ++c) w[c] = c < columns ? b[row + ld * std::size_t(c)] : 0.0;
-    }
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
+    double* w = work + std::size_t(lanes) * k;
+    for (int c = 0; c < lanes; ++c) w[c] = c < columns ? b[row + ld * std::size_t(c)] : 0.0;
   }
 }
 
 void permuteOut(const cholmod_factor& factor, const double* work, std::size_t ld, int columns, int lanes, double* out) {
   const std::size_t n = factor.n;
   const int* perm = static_cast<const int*>(factor.Perm);
-  if (lanes == 4 && columns == 3) {
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
-      const double* w = work + 4 * k;
-      out[row] = w[0];
-      out[row + ld] = w[1];
-      out[row + 2 * ld] = w[2];
-    }
-  } else {
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
-      const double* w = work + std::size_t(lanes) * k;
-      for (int c = 0; c < columns; ++c) out[row + ld * std::size_t(c)] = w[c];
-    }
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
+    const double* w = work + std::size_t(lanes) * k;
+    for (int c = 0; c < columns; ++c) out[row + ld * std::size_t(c)] = w[c];
   }
 }
 

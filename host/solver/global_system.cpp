@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstddef>
 #include <iterator>
-#include <new>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -105,18 +104,6 @@ void GlobalSystem::factor(double c, const char* c_name) {
   ++factorizations_;
 }
 
-GlobalSystem::SolveWorkspace::SolveWorkspace() {
-  cholmod_start(&common);
-  common.print = 0;
-}
-
-GlobalSystem::SolveWorkspace::~SolveWorkspace() {
-  cholmod_free_dense(&x, &common);
-  cholmod_free_dense(&y, &common);
-  cholmod_free_dense(&e, &common);
-  cholmod_finish(&common);
-}
-
 void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x) {
   factor(c);
   Factor& f = *factors_.find(c)->second;
@@ -127,32 +114,18 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
   // read the whole factor; docs/bench_summary.md, "Global solve against its bound"). On large
   // systems the backward pass goes over two subtrees on two threads, by the size alone, so that
   // the arithmetic is the same on any thread count.
-  if (simplicialSolveApplies(*l)) {
-    if (n >= kSubtreeRows && !f.split_known) {
-      f.split = findSubtreeSplit(*l);
-      f.split_known = true;
-    }
-    if (n >= kSubtreeRows && f.split.b_end > 0) {
-      solveSimplicialSubtrees(*l, f.split, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
-    } else {
-      solveSimplicial(*l, rhs.data(), x.data(), static_cast<std::size_t>(n), 0, 3, 4, solve_work_);
-    }
-    return;
+  // The factors made here are simplicial, double, int-indexed (Eigen's CholmodSimplicialLLT), and
+  // cholmod_updown keeps them so.
+  if (!simplicialSolveApplies(*l)) throw Error("GlobalSystem::solve: CHOLMOD factor of an unexpected kind");
+  if (n >= kSubtreeRows && !f.split_known) {
+    f.split = findSubtreeSplit(*l);
+    f.split_known = true;
   }
-  // Not reached with the factors made here (simplicial, int, double); kept for safety.
-  if (!workspace_) workspace_ = std::make_unique<SolveWorkspace>();
-  SolveWorkspace& w = *workspace_;
-  cholmod_dense b{};
-  b.nrow = static_cast<std::size_t>(n);
-  b.ncol = 3;
-  b.nzmax = b.nrow * b.ncol;
-  b.d = b.nrow;
-  b.x = const_cast<double*>(rhs.data());  // read only
-  b.xtype = CHOLMOD_REAL;
-  b.dtype = CHOLMOD_DOUBLE;
-  // Only a failed allocation makes a solve of a factored positive definite system fail.
-  if (cholmod_solve2(CHOLMOD_A, l, &b, nullptr, &w.x, nullptr, &w.y, &w.e, &w.common) == 0) throw std::bad_alloc();
-  x = Eigen::Map<const Eigen::MatrixX3d>(static_cast<const double*>(w.x->x), n, 3);
+  if (n >= kSubtreeRows && f.split.b_end > 0) {
+    solveSimplicialSubtrees(*l, f.split, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
+  } else {
+    solveSimplicial(*l, rhs.data(), x.data(), static_cast<std::size_t>(n), 0, 3, 4, solve_work_);
+  }
 }
 
 int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,

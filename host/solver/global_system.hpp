@@ -140,18 +140,6 @@ class GlobalSystem {
   // The solve's work buffer (the permuted right-hand side, a row of four doubles per particle),
   // kept from one solve to the next.
   std::vector<double> solve_work_;
-  // cholmod_solve2's workspace, for a factor that solveSimplicial does not take (none made here).
-  struct SolveWorkspace {
-    cholmod_common common;
-    cholmod_dense* x = nullptr;
-    cholmod_dense* y = nullptr;
-    cholmod_dense* e = nullptr;
-    SolveWorkspace();
-    ~SolveWorkspace();
-    SolveWorkspace(const SolveWorkspace&) = delete;
-    SolveWorkspace& operator=(const SolveWorkspace&) = delete;
-  };
-  std::unique_ptr<SolveWorkspace> workspace_;
 };
 
 }  // namespace stabint

@@ -58,6 +58,14 @@ class Backend {
   /// from the projections the local step has anyway.
   virtual void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
                             PotentialEnergy* energy_at_x = nullptr) = 0;
+  /// The same element pass in its force form, gathered into the gradient of one implicit solve's
+  /// objective c/2 ||x - y||_M^2 + E_int(x) + U_ext(x, t) at `x`:
+  ///   g = c M (x - y) - (m g + f(t)) - sum_e w_e A_e^T (p_e(x) - A_e x),
+  /// returned on the host (what L-BFGS and Newton-CG read per iteration instead of the
+  /// right-hand side: it equals K_c x - rhs, without the cancellation of two large terms and
+  /// without a product with K_c). `energy_at_x` as in localStepRhs.
+  virtual void localStepGradient(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
+                                 PotentialEnergy* energy_at_x = nullptr) = 0;
 
   // ---- the global step on the backend (GlobalSolve::ConjugateGradient; docs/method.md) -------
   // A backend that keeps the global system in its own memory runs the whole local/global

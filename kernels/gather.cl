@@ -29,6 +29,22 @@ __kernel void gather_rhs(const int n, __global const int* offsets, __global cons
   }
 }
 
+/// g_j = c m_j (x_j - y_j) - f_ext_j - sum_e (w_e A_e^T (p_e - A_e x))_j: the gradient of the
+/// solve's objective, from the force form of the element pass
+__kernel void gather_gradient(const int n, __global const int* offsets, __global const int* list,
+                              __global const real* contrib, __global const real* masses,
+                              __global const real* fext, __global const real* x,
+                              __global const real* y, const real c, __global real* gradient) {
+  const int j = get_global_id(0);
+  if (j < n) {
+    SUM_CONTRIBUTIONS(j, sx, sy, sz)
+    const real cm = c * masses[j];
+    gradient[j] = cm * (x[j] - y[j]) - fext[j] - sx;
+    gradient[n + j] = cm * (x[n + j] - y[n + j]) - fext[n + j] - sy;
+    gradient[2 * n + j] = cm * (x[2 * n + j] - y[2 * n + j]) - fext[2 * n + j] - sz;
+  }
+}
+
 /// a_j = (f_ext_j + sum_e (w_e A_e^T (p_e - A_e x))_j) / m_j
 __kernel void gather_accelerations(const int n, __global const int* offsets,
                                    __global const int* list, __global const real* contrib,

@@ -302,6 +302,32 @@ TEST_P(LocalGlobalTest, FusedEnergyOfTheLocalStepIsThePotential) {
   EXPECT_GT(fused.internal, 0.0);
 }
 
+// The gradient L-BFGS and Newton-CG read (the force form of the element pass) is K_c x - rhs, the
+// gradient the right-hand side implies: the same products summed in another order, so they agree
+// to round-off of the larger terms (c M x and rhs, about 1e-16 of them per addition, a few dozen
+// additions per row: 1e-12 leaves room), and its energy is the projection pass's bit for bit.
+TEST_P(LocalGlobalTest, LocalStepGradientIsKcXMinusRhs) {
+  const Scene s = scene();
+  Fixture f(s);
+  const Eigen::MatrixX3d x = inertialTarget(s);
+  f.backend->write(kX, x);
+  f.backend->write(kY, s.positions);
+  for (const double c : {900.0, 3600.0}) {
+    Eigen::MatrixX3d rhs, gradient, kc_x;
+    PotentialEnergy from_rhs, from_gradient;
+    f.backend->localStepRhs(kX, kY, c, 0.3, rhs, &from_rhs);
+    f.backend->localStepGradient(kX, kY, c, 0.3, gradient, &from_gradient);
+    f.system.multiply(c, x, kc_x);
+    const Eigen::MatrixX3d implied = kc_x - rhs;
+    const double scale = std::max(kc_x.cwiseAbs().maxCoeff(), rhs.cwiseAbs().maxCoeff());
+    EXPECT_LE((gradient - implied).cwiseAbs().maxCoeff(), 1e-12 * scale) << "c = " << c;
+    EXPECT_GT(gradient.cwiseAbs().maxCoeff(), 1e-6 * scale);  // a pose away from equilibrium
+    EXPECT_EQ(from_gradient.internal, from_rhs.internal);
+    EXPECT_EQ(from_gradient.pins, from_rhs.pins);
+    EXPECT_EQ(from_gradient.external, from_rhs.external);
+  }
+}
+
 // A solve whose last local step was at its result leaves that potential (potentialOfResult), which
 // a step takes instead of an energy pass: it must be the pass's value bit for bit, for L-BFGS,
 // Newton-CG and tracked plain solves, and absent where the solve ends on a global step.

@@ -110,6 +110,30 @@ TEST_P(OpenCLBackendTest, LocalStepRhsMatchesCpu) {
   }
 }
 
+// The objective's gradient from the force form of the pass (gather_gradient): the CPU's order of
+// operations, so in double it agrees to round-off; in float to float's round-off of the larger
+// terms c M x and c M y it is the difference of (measured against their scale, not the gradient's).
+TEST_P(OpenCLBackendTest, LocalStepGradientMatchesCpu) {
+  for (const Case& c : equivalenceCases()) {
+    SCOPED_TRACE(c.name);
+    Pair p = makePair(c);
+    for (double t : {0.0, 0.37, 1.25}) {
+      for (double cc : {900.0, 3600.0}) {
+        Eigen::MatrixX3d ref, got, rhs;
+        PotentialEnergy ref_energy, energy;
+        p.cpu->localStepGradient(0, 1, cc, t, ref, &ref_energy);
+        p.ocl->localStepGradient(0, 1, cc, t, got, &energy);
+        p.cpu->localStepRhs(0, 1, cc, t, rhs);
+        ASSERT_EQ(got.rows(), ref.rows());
+        const double scale = std::max(rhs.cwiseAbs().maxCoeff(), 1e-300);
+        EXPECT_LE((got - ref).cwiseAbs().maxCoeff() / scale, tol()) << "t = " << t << ", c = " << cc;
+        EXPECT_NEAR(energy.internal, ref_energy.internal, energyTol() * std::max(1.0, std::abs(ref_energy.internal)));
+        EXPECT_NEAR(energy.pins, ref_energy.pins, energyTol() * std::max(1.0, std::abs(ref_energy.pins)));
+      }
+    }
+  }
+}
+
 TEST_P(OpenCLBackendTest, AccelerationsMatchCpu) {
   for (const Case& c : equivalenceCases()) {
     SCOPED_TRACE(c.name);

@@ -59,6 +59,20 @@ class CpuBackend final : public Backend {
     times_.local += secondsSince(start);
   }
 
+  void localStepGradient(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& gradient,
+                         PotentialEnergy* energy_at_x) override {
+    const auto start = Clock::now();
+    // The kernel's order of operations (gather_gradient): c m (x - y) - f_ext - sum of forces.
+    force_.setZero(scene_.numParticles(), 3);
+    const int flags = kPassForce | (energy_at_x ? kPassEnergy : 0);
+    const PotentialEnergy e = elementPass(slots_[x_slot], t, flags, &force_);
+    gradient.resize(scene_.numParticles(), 3);
+    gradient.array() = (slots_[x_slot] - slots_[y_slot]).array().colwise() * (c * scene_.masses().array()) -
+                       externalForces(t).array() - force_.array();
+    if (energy_at_x) *energy_at_x = e;
+    times_.local += secondsSince(start);
+  }
+
   bool computesPerScene() const override { return true; }
   void setSegments(const std::vector<SceneSegment>& segments) override { segments_ = segments; }
 
@@ -254,6 +268,7 @@ class CpuBackend final : public Backend {
   std::vector<const std::vector<double>*> block_params_;
   std::vector<int> element_base_;
   std::vector<double> element_energies_, contributions_;
+  Eigen::MatrixX3d force_;  // localStepGradient's forces, reused
 };
 
 }  // namespace

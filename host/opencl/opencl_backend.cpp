@@ -184,23 +184,13 @@ class OpenCLBackend final : public Backend {
   }
 
   void localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs, PotentialEnergy* energy_at_x) override {
-    checkSlot(x);
-    checkSlot(y);
-    uploadForcing(t, false);
-    const auto start = Clock::now();
-    const bool launched = enqueueElementPass(x, kPassProjection | (energy_at_x ? kPassEnergy : 0));
-    gather_rhs_.bindSlot(gather_rhs_args_.y, y, slots_);
-    gather_rhs_.set(gather_rhs_args_.c, Real(c));
-    enqueue(gather_rhs_, &gather_event_);
-    if (energy_at_x) readPartials(full_groups_, /*blocking=*/false);
-    readMatrix(rhs_, rhs);  // blocking: everything queued above has completed
-    if (energy_at_x) *energy_at_x = sumEnergies();
-    const double wall = secondsSince(start);
-    const double local = launched ? deviceSeconds(element_event_, element_event_) : 0.0;
-    const double gather = deviceSeconds(gather_event_, gather_event_);
-    times_.local += local;
-    times_.gather += gather;
-    times_.transfer += std::max(0.0, wall - local - gather);
+    gatheredLocalStep(kPassProjection, gather_rhs_, gather_rhs_args_, x, y, c, t, rhs, energy_at_x);
+  }
+
+  void localStepGradient(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
+                         PotentialEnergy* energy_at_x) override {
+    gather_gradient_.bindSlot(gather_gradient_args_.x, x, slots_);
+    gatheredLocalStep(kPassForce, gather_gradient_, gather_gradient_args_, x, y, c, t, gradient, energy_at_x);
   }
 
   // ---- the global step on the device (GlobalSolve::ConjugateGradient, device_solver.hpp) ----
@@ -399,6 +389,30 @@ class OpenCLBackend final : public Backend {
     w.data.assign(host, host + count);
     ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, 0, bytes(count), w.data.data(), nullptr, &w.done),
                "clEnqueueWriteBuffer");
+  }
+
+  // The element pass with `flags` (plus the energy when asked for), then `gather` over its
+  // contributions into rhs_, read back to `out`: localStepRhs and localStepGradient.
+  template <class GatherArgs>
+  void gatheredLocalStep(int flags, Launch& gather, const GatherArgs& args, int x, int y, double c, double t,
+                         Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x) {
+    checkSlot(x);
+    checkSlot(y);
+    uploadForcing(t, false);
+    const auto start = Clock::now();
+    const bool launched = enqueueElementPass(x, flags | (energy_at_x ? kPassEnergy : 0));
+    gather.bindSlot(args.y, y, slots_);
+    gather.set(args.c, Real(c));
+    enqueue(gather, &gather_event_);
+    if (energy_at_x) readPartials(full_groups_, /*blocking=*/false);
+    readMatrix(rhs_, out);  // blocking: everything queued above has completed
+    if (energy_at_x) *energy_at_x = sumEnergies();
+    const double wall = secondsSince(start);
+    const double local = launched ? deviceSeconds(element_event_, element_event_) : 0.0;
+    const double gathered = deviceSeconds(gather_event_, gather_event_);
+    times_.local += local;
+    times_.gather += gathered;
+    times_.transfer += std::max(0.0, wall - local - gathered);
   }
 
   void readMatrix(const cl::Buffer& buffer, Eigen::MatrixX3d& host) {
@@ -690,13 +704,18 @@ class OpenCLBackend final : public Backend {
     combine_args_.dst = combine_.addSlot(0, slots_);
 
     gather_rhs_ = elementLaunch("gather_rhs", n_);
+    gather_gradient_ = elementLaunch("gather_gradient", n_);
     gather_accel_ = elementLaunch("gather_accelerations", n_);
-    for (Launch* g : {&gather_rhs_, &gather_accel_}) {
+    for (Launch* g : {&gather_rhs_, &gather_gradient_, &gather_accel_}) {
       g->add(n), g->add(offsets_), g->add(list_), g->add(contrib_), g->add(masses_), g->add(fext_);
     }
     gather_rhs_args_.y = gather_rhs_.addSlot(0, slots_);
     gather_rhs_args_.c = gather_rhs_.add(Real(0));
     gather_rhs_.add(rhs_);
+    gather_gradient_args_.x = gather_gradient_.addSlot(0, slots_);
+    gather_gradient_args_.y = gather_gradient_.addSlot(0, slots_);
+    gather_gradient_args_.c = gather_gradient_.add(Real(0));
+    gather_gradient_.add(rhs_);
     gather_accel_dst_ = gather_accel_.addSlot(0, slots_);
 
     mass_dot_.add(n), mass_dot_.add(masses_);
@@ -740,7 +759,7 @@ class OpenCLBackend final : public Backend {
     cl_uint a, b;
   } segment_mass_dots_args_{};
 
-  Launch element_pass_, mass_dot_, combine_, gather_rhs_, gather_accel_;
+  Launch element_pass_, mass_dot_, combine_, gather_rhs_, gather_gradient_, gather_accel_;
   struct {
     cl_uint x, flags;
   } element_args_{};
@@ -750,6 +769,9 @@ class OpenCLBackend final : public Backend {
   struct {
     cl_uint y, c;
   } gather_rhs_args_{};
+  struct {
+    cl_uint x, y, c;
+  } gather_gradient_args_{};
   struct {
     cl_uint a, b;
   } mass_dot_args_{};

@@ -4,9 +4,15 @@
 // form w/2 ||A x - p(x)||^2 with p(x) the projection onto the element's rest set, whose gradient
 // is w A^T (A x - p(x)); so the local step's right-hand side gives the objective's gradient
 //   g(x) = K_c x - rhs(x),
-// and an iteration costs what a plain one does (one local step with its energy, one solve) plus a
-// sparse product and a few vector operations over the history. With an empty history the
+// which the backend gathers directly from the force form of the same element pass
+// (Backend::localStepGradient): an iteration costs what a plain one does (one local step with its
+// energy, one solve) plus a few fused passes over the history. With an empty history the
 // direction -K_c^-1 g is the plain iteration's step.
+//
+// The two-loop recursion runs on dot products (as in Chen et al. 2014, "Large-scale L-BFGS using
+// MapReduce"): each segment keeps the products s_i.y_j of its pairs, so a direction takes four
+// passes over the vectors (the new pair with its products, q = g - sum a_i y_i, the products
+// y_i.r after the solve, d = -(r + sum (a_i - b_i) s_i)) instead of two per stored pair.
 //
 // Per scene segment (a batch's concatenated scenes, block-diagonal K_c): every dot product, step
 // length and history is the segment's own, so a scene takes the steps it takes alone.
@@ -45,35 +51,12 @@ void LocalGlobalSolver::segmentDots(const Eigen::MatrixX3d& a, const Eigen::Matr
   }
 }
 
-// s.y, y.y and s.s per segment in one pass over the rows.
-void LocalGlobalSolver::curvatureDots(const Eigen::MatrixX3d& s_new, const Eigen::MatrixX3d& y_new,
-                                      std::vector<double>& sy, std::vector<double>& yy, std::vector<double>& ss) const {
-  sy.resize(rows_.size());
-  yy.resize(rows_.size());
-  ss.resize(rows_.size());
-  for (std::size_t s = 0; s < rows_.size(); ++s) {
-    double a = 0.0, b = 0.0, d = 0.0;
-    for (int col = 0; col < 3; ++col) {
-      const auto u = s_new.col(col).segment(rows_[s].first, rows_[s].count);
-      const auto v = y_new.col(col).segment(rows_[s].first, rows_[s].count);
-      for (Eigen::Index r = 0; r < u.size(); ++r) {
-        a += u[r] * v[r];
-        b += v[r] * v[r];
-        d += u[r] * u[r];
-      }
-    }
-    sy[s] = a;
-    yy[s] = b;
-    ss[s] = d;
-  }
-}
-
 // The objective of every segment at the positions x_trial_ (already in slot x), from the local
-// step that also leaves the right-hand side for the gradient there.
+// step that also leaves the gradient there in trial_gradient_.
 void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, std::vector<double>& objective) {
   PotentialEnergy potential;
   const bool one = rows_.size() == 1;
-  backend_.localStepRhs(x, y, c, t, rhs_, one ? &potential : nullptr);
+  backend_.localStepGradient(x, y, c, t, trial_gradient_, one ? &potential : nullptr);
   objective.resize(rows_.size());
   if (one) {
     objective[0] = inertia(c, x_trial_) + potential.total();
@@ -88,12 +71,6 @@ void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, st
         0.5 * c * (d.rowwise().squaredNorm().transpose() * masses_.segment(seg.first, seg.count))(0);
     objective[s] = inertial + segment_potentials_[s].total();
   }
-}
-
-// g = c M x + L x - rhs at the positions x_trial_.
-void LocalGlobalSolver::gradientAtTrial(double c, Eigen::MatrixX3d& g) const {
-  system_.multiply(c, x_trial_, g);
-  g -= rhs_;
 }
 
 void LocalGlobalSolver::applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
@@ -112,7 +89,7 @@ void LocalGlobalSolver::applyInitialInverseHessian(double c, const IterationCont
 // f(x + a d) <= f(x) + kArmijo a g.d up to round-off of the objective (two backends that agree to
 // round-off must take the same decisions), else halved up to kMaxHalvings times. A segment whose
 // slope is not negative takes no step (step 0); one that finds no decrease stays (step != 0).
-// Leaves x_trial_, slot x and rhs_ at the kept positions, their objectives in `trial_objective`
+// Leaves x_trial_, slot x and trial_gradient_ at the kept positions, their objectives in `trial_objective`
 // and the segments that moved in moved_.
 void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const IterationControl& control,
                                    const std::vector<double>& objective, const std::vector<double>& slope,
@@ -154,13 +131,133 @@ void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const Itera
       }
     }
   }
-  // Slot x and rhs_ must be at the kept positions: a segment that stayed changed slot x in its
+  // Slot x and trial_gradient_ must be at the kept positions: a segment that stayed changed slot x in its
   // trials, so one more local step at them.
   bool any_stayed = false;
   for (std::size_t s = 0; s < segments; ++s) any_stayed |= !moved_[s] && step[s] != 0.0;
   if (any_stayed) {
     backend_.write(x, x_trial_);
     localStepObjectives(c, y, x, t, trial_objective);
+  }
+}
+
+namespace {
+
+// The rows of one segment in each of the three columns of an `n by 3` (column-major) matrix, in
+// chunks short enough that the chunk of every vector a fused pass reads stays in cache: f(offset,
+// length) per chunk, the offset into the matrix's data.
+template <class F>
+void forEachChunk(int first, int count, Eigen::Index n, F&& f) {
+  constexpr int kChunk = 512;
+  for (Eigen::Index col = 0; col < 3; ++col)
+    for (int i = 0; i < count; i += kChunk) f(col * n + first + i, std::min(kChunk, count - i));
+}
+
+using Chunk = Eigen::Map<Eigen::VectorXd>;
+using ConstChunk = Eigen::Map<const Eigen::VectorXd>;
+
+}  // namespace
+
+// After an accepted line search: the new pair s = x_trial - x_cur, y = g_trial - g into ring slot
+// `slot`, with s.y, y.y, s.s and its products with the other stored pairs (gram_[seg](i, j) =
+// s_i.y_j) and s_j.g_trial for every stored pair (the next direction's first loop); and then
+// x_cur = x_trial, g = g_trial. One pass over the vectors.
+void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy, std::vector<double>& yy,
+                                  std::vector<double>& ss) {
+  const Eigen::Index n = x_cur_.rows();
+  const int window = static_cast<int>(history_s_.size());
+  Eigen::MatrixX3d& s_new = history_s_[std::size_t(slot)];
+  Eigen::MatrixX3d& y_new = history_y_[std::size_t(slot)];
+  s_new.resize(n, 3);
+  y_new.resize(n, 3);
+  // The ring after this pair: `kept` slots, the new one included.
+  const int kept = std::min(stored + 1, window);
+  sy.assign(rows_.size(), 0.0);
+  yy.assign(rows_.size(), 0.0);
+  ss.assign(rows_.size(), 0.0);
+  for (std::size_t seg = 0; seg < rows_.size(); ++seg) {
+    Eigen::MatrixXd& gram = gram_[seg];
+    std::vector<double>& sg = history_sg_[seg];
+    for (int j = 0; j < window; ++j) gram(slot, j) = gram(j, slot) = sg[std::size_t(j)] = 0.0;
+    forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
+      Chunk s(s_new.data() + o, len), y(y_new.data() + o, len);
+      Chunk x(x_cur_.data() + o, len), g(gradient_.data() + o, len);
+      const ConstChunk x_trial(x_trial_.data() + o, len), g_trial(trial_gradient_.data() + o, len);
+      s = x_trial - x;
+      y = g_trial - g;
+      sy[seg] += s.dot(y);
+      yy[seg] += y.squaredNorm();
+      ss[seg] += s.squaredNorm();
+      for (int k = 0; k < kept; ++k) {
+        const int j = (slot - k + window) % window;
+        const ConstChunk s_j(history_s_[std::size_t(j)].data() + o, len);
+        sg[std::size_t(j)] += s_j.dot(g_trial);
+        if (j == slot) continue;
+        const ConstChunk y_j(history_y_[std::size_t(j)].data() + o, len);
+        gram(slot, j) += s.dot(y_j);
+        gram(j, slot) += s_j.dot(y);
+      }
+      x = x_trial;
+      g = g_trial;
+    });
+    gram(slot, slot) = sy[seg];
+  }
+}
+
+// direction_ = -H g by the two-loop recursion over the newest `pairs` pairs, from the products
+// storePair keeps: q = g - sum a_i y_i (a_i = rho_i s_i.q_i, newest first), r = H0 q,
+// d = -(r + sum (a_i - b_i) s_i) (b_i = rho_i y_i.r_i, oldest first); and each segment's slope g.d.
+void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control, int pairs, int newest,
+                                       std::vector<double>& slope) {
+  const Eigen::Index n = gradient_.rows();
+  const int window = static_cast<int>(history_s_.size());
+  auto slotOf = [&](int k) { return std::size_t((newest - k + window) % window); };  // k-th newest
+  search_.resize(n, 3);
+  for (std::size_t seg = 0; seg < rows_.size(); ++seg) {
+    const Eigen::MatrixXd& gram = gram_[seg];
+    for (int k = 0; k < pairs; ++k) {
+      const std::size_t i = slotOf(k);
+      double sq = history_sg_[seg][i];
+      for (int l = 0; l < k; ++l) sq -= history_alpha_[slotOf(l)][seg] * gram(Eigen::Index(i), Eigen::Index(slotOf(l)));
+      history_alpha_[i][seg] = history_rho_[i][seg] * sq;
+    }
+    forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
+      Chunk q(search_.data() + o, len);
+      q = ConstChunk(gradient_.data() + o, len);
+      for (int k = 0; k < pairs; ++k) {
+        const double a = history_alpha_[slotOf(k)][seg];
+        if (a != 0.0) q -= a * ConstChunk(history_y_[slotOf(k)].data() + o, len);
+      }
+    });
+  }
+  applyInitialInverseHessian(c, control, search_, direction_);
+  std::vector<double>& yr = scalars_[8];
+  slope.assign(rows_.size(), 0.0);
+  for (std::size_t seg = 0; seg < rows_.size(); ++seg) {
+    yr.assign(std::size_t(pairs), 0.0);
+    forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
+      const ConstChunk r(direction_.data() + o, len);
+      for (int k = 0; k < pairs; ++k) yr[std::size_t(k)] += ConstChunk(history_y_[slotOf(k)].data() + o, len).dot(r);
+    });
+    // The coefficient of s_i in d, oldest first; kept in history_alpha_.
+    const Eigen::MatrixXd& gram = gram_[seg];
+    for (int k = pairs - 1; k >= 0; --k) {
+      const std::size_t i = slotOf(k);
+      const double rho = history_rho_[i][seg];
+      double y_r = yr[std::size_t(k)];
+      for (int l = pairs - 1; l > k; --l)
+        y_r += history_alpha_[slotOf(l)][seg] * gram(Eigen::Index(slotOf(l)), Eigen::Index(i));
+      history_alpha_[i][seg] = rho == 0.0 ? 0.0 : history_alpha_[i][seg] - rho * y_r;
+    }
+    forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
+      Chunk d(direction_.data() + o, len);
+      for (int k = pairs - 1; k >= 0; --k) {
+        const double coefficient = history_alpha_[slotOf(k)][seg];
+        if (coefficient != 0.0) d += coefficient * ConstChunk(history_s_[slotOf(k)].data() + o, len);
+      }
+      d = -d;
+      slope[seg] += ConstChunk(gradient_.data() + o, len).dot(d);
+    });
   }
 }
 
@@ -182,6 +279,12 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     history_rho_[std::size_t(i)].assign(segments, 0.0);
     history_alpha_[std::size_t(i)].assign(segments, 0.0);
   }
+  gram_.resize(segments);
+  history_sg_.resize(segments);
+  for (std::size_t s = 0; s < segments; ++s) {
+    gram_[s].setZero(window, window);
+    history_sg_[s].assign(std::size_t(window), 0.0);
+  }
   int stored = 0, newest = -1;  // pairs in the ring, index of the newest
 
   backend_.read(y, y_host_);
@@ -191,7 +294,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   &yy = scalars_[4], &ss = scalars_[5], &step = scalars_[6];
   step.resize(segments);
   localStepObjectives(c, y, x, t, objective);
-  gradientAtTrial(c, gradient_);
+  gradient_ = trial_gradient_;
   // The stopping rule by accuracy (IterationControl::gradient_tolerance): each segment's gradient
   // in the norm of the current inverse Hessian H, sqrt(g.H g) = sqrt(-g.d) (the Newton decrement:
   // half its square estimates the objective's distance to the minimum), against its value at the
@@ -204,13 +307,10 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   converged_.assign(segments, 0);
   const std::vector<char>& moved = moved_;
   std::vector<char>& converged = converged_;
-  auto rowsOf = [&](Eigen::MatrixX3d& m, std::size_t s) { return m.middleRows(rows_[s].first, rows_[s].count); };
   auto forgetSegment = [&](std::size_t s) {
     for (auto& rho : history_rho_) rho[s] = 0.0;
   };
   while (done < limit) {
-    // Two-loop recursion: direction_ = -H g with H0 = K_c^-1.
-    search_ = gradient_;
     // [project rule] Where the integrator asks for it (implicit midpoint, BDF2, the blend's
     // partner) the last iteration of a budget is a plain one (the direction of the empty
     // history): it smooths the error that the curvature pairs leave in stiff, high-frequency
@@ -218,29 +318,8 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     // energy; without it the blend could not bring a dragged cloth back into its energy band.
     // In BE the last L-BFGS step is worth more (docs/method.md, "L-BFGS").
     const int pairs = control.plain_last_iteration && !to_tolerance && done == limit - 1 ? 0 : stored;
-    for (int k = 0; k < pairs; ++k) {
-      const int i = (newest - k + window) % window;
-      segmentDots(history_s_[std::size_t(i)], search_, dot);
-      for (std::size_t s = 0; s < segments; ++s) {
-        const double a = history_rho_[std::size_t(i)][s] * dot[s];
-        history_alpha_[std::size_t(i)][s] = a;
-        if (a != 0.0) rowsOf(search_, s) -= a * rowsOf(history_y_[std::size_t(i)], s);
-      }
-    }
-    applyInitialInverseHessian(c, control, search_, direction_);
-    for (int k = pairs - 1; k >= 0; --k) {
-      const int i = (newest - k + window) % window;
-      segmentDots(history_y_[std::size_t(i)], direction_, dot);
-      for (std::size_t s = 0; s < segments; ++s) {
-        const double rho = history_rho_[std::size_t(i)][s];
-        if (rho == 0.0) continue;
-        rowsOf(direction_, s) +=
-            (history_alpha_[std::size_t(i)][s] - rho * dot[s]) * rowsOf(history_s_[std::size_t(i)], s);
-      }
-    }
-    direction_ = -direction_;
+    lbfgsDirection(c, control, pairs, newest, slope);
     ++done;
-    segmentDots(gradient_, direction_, slope);
     if (by_gradient) {
       if (done == 1) initial_decrement.assign(segments, 0.0);
       bool all = true;
@@ -260,15 +339,9 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     for (std::size_t s = 0; s < segments; ++s)
       if (!moved_[s]) forgetSegment(s);
 
-    // The curvature pair of the step: s = x_new - x, y = g_new - g, kept where s.y > 0.
+    // The curvature pair of the step, kept where s.y > 0.
     const int slot = (newest + 1) % window;
-    Eigen::MatrixX3d& s_new = history_s_[std::size_t(slot)];
-    Eigen::MatrixX3d& y_new = history_y_[std::size_t(slot)];
-    s_new = x_trial_ - x_cur_;
-    y_new = -gradient_;
-    gradientAtTrial(c, gradient_);
-    y_new += gradient_;
-    curvatureDots(s_new, y_new, dot, yy, ss);
+    storePair(slot, stored, dot, yy, ss);
     for (std::size_t s = 0; s < segments; ++s) {
       // Positive curvature keeps H positive definite; a pair at round-off's angle would not.
       const bool curvature = moved[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);
@@ -282,7 +355,6 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     }
     newest = slot;
     stored = std::min(stored + 1, window);
-    x_cur_ = x_trial_;
     if (objective_history) objective_history->push_back(objective[0]);
     if (to_tolerance && std::all_of(converged.begin(), converged.end(), [](char c) { return c != 0; })) break;
   }

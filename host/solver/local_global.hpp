@@ -95,12 +95,11 @@ class LocalGlobalSolver {
   void lineSearch(double c, int y, int x, double t, const IterationControl& control,
                   const std::vector<double>& objective, const std::vector<double>& slope, std::vector<double>& step,
                   std::vector<double>& trial_objective);
-  void gradientAtTrial(double c, Eigen::MatrixX3d& g) const;
+  void storePair(int slot, int stored, std::vector<double>& sy, std::vector<double>& yy, std::vector<double>& ss);
+  void lbfgsDirection(double c, const IterationControl& control, int pairs, int newest, std::vector<double>& slope);
   void applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
                                   Eigen::MatrixX3d& r);
   void segmentDots(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b, std::vector<double>& out) const;
-  void curvatureDots(const Eigen::MatrixX3d& s_new, const Eigen::MatrixX3d& y_new, std::vector<double>& sy,
-                     std::vector<double>& yy, std::vector<double>& ss) const;
   // The global step of the iterate in slot `x`, whose local step was the last one. Factor or host
   // CG: from rhs_ into x_host_, and into slot x unless `to_host` (the caller writes slot x). On
   // the backend: into slot x, and also into x_host_ when `to_host`. The host CG starts from
@@ -122,8 +121,8 @@ class LocalGlobalSolver {
   // Reused across iterations and solves: no per-iteration allocation.
   Eigen::MatrixX3d rhs_, x_host_, y_host_, x_cur_, x_next_;
   Eigen::VectorXd masses_;
-  // L-BFGS: the scene segments (first particle, count), the iterate and its trial, gradient,
-  // search vectors and the ring of curvature pairs with their per-segment 1/(s.y) (0: skipped).
+  // L-BFGS: the scene segments (first particle, count), the iterate and its trial, gradients,
+  // search vectors and the ring of curvature pairs.
   struct Segment {
     int first = 0;
     int count = 0;
@@ -131,10 +130,15 @@ class LocalGlobalSolver {
   std::vector<Segment> rows_;
   std::vector<double> segment_scales_;
   std::vector<PotentialEnergy> segment_potentials_;
-  Eigen::MatrixX3d x_trial_, gradient_, search_, direction_;
+  // gradient_ is the objective's gradient at x_cur_, trial_gradient_ at the positions of the last
+  // local step.
+  Eigen::MatrixX3d x_trial_, gradient_, trial_gradient_, search_, direction_;
   std::vector<Eigen::MatrixX3d> history_s_, history_y_;
-  std::vector<std::vector<double>> history_rho_, history_alpha_;
-  std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
+  // Per ring slot and segment: 1/(s.y) (0: skipped) and the two-loop's coefficient. Per segment:
+  // the products s_i.y_j of the ring's pairs and s_i.g at x_cur_.
+  std::vector<std::vector<double>> history_rho_, history_alpha_, history_sg_;
+  std::vector<Eigen::MatrixXd> gram_;
+  std::vector<double> scalars_[9];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, converged_;
   // Newton-CG: the scene, each spring's transverse coefficient w min(1, r/|u|) and direction at
   // the iterate, the CG vectors.

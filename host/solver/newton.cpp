@@ -68,7 +68,7 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
   std::vector<double>&objective = scalars_[0], &trial_objective = scalars_[1], &slope = scalars_[2],
   &step = scalars_[6];
   localStepObjectives(c, y, x, t, objective);
-  gradientAtTrial(c, gradient_);
+  gradient_ = trial_gradient_;
   if (objective_history) objective_history->assign(1, objective[0]);
   auto dot = [](const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) { return a.cwiseProduct(b).sum(); };
 
@@ -104,7 +104,7 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
       if (objective_history) objective_history->push_back(objective[0]);
       break;
     }
-    gradientAtTrial(c, gradient_);
+    gradient_ = trial_gradient_;
     const double change = std::abs(objective[0] - trial_objective[0]);
     objective[0] = trial_objective[0];
     x_cur_ = x_trial_;

@@ -341,7 +341,11 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
 
     // The curvature pair of the step, kept where s.y > 0.
     const int slot = (newest + 1) % window;
-    storePair(slot, stored, dot, yy, ss);
+    if (done < limit) {
+      storePair(slot, stored, dot, yy, ss);
+    } else {  // the solve's last pair would never be used
+      for (std::vector<double>* v : {&dot, &yy, &ss}) v->assign(segments, 0.0);
+    }
     for (std::size_t s = 0; s < segments; ++s) {
       // Positive curvature keeps H positive definite; a pair at round-off's angle would not.
       const bool curvature = moved[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);

@@ -30,7 +30,8 @@ inline void columnSums(__global const real* partials, int groups, __local real* 
 
 // The group sums of `count` values per work-item (v[0..count)), one tree in local memory for all
 // of them (a barrier per level, not per value), left in scratch[k * local size] for value k.
-// `scratch` holds count * local size reals. The tree is workGroupSum's: a fixed order.
+// `scratch` holds CG_GROUP_SUMS * local size reals (the prelude's; the host sizes it), so
+// count <= CG_GROUP_SUMS. The tree is workGroupSum's: a fixed order.
 inline void groupSums(const real* v, int count, __local real* scratch) {
   const int lid = get_local_id(0), size = get_local_size(0);
   for (int k = 0; k < count; ++k) scratch[k * size + lid] = v[k];
@@ -79,8 +80,8 @@ __kernel void cg_start(const int n, const real c, __global const int* row_start,
     rr += ri * ri;
     bb += bi * bi;
   }
-  const real v[9] = {rz.x, rz.y, rz.z, rr.x, rr.y, rr.z, bb.x, bb.y, bb.z};
-  groupSums(v, 9, scratch);
+  const real v[CG_GROUP_SUMS] = {rz.x, rz.y, rz.z, rr.x, rr.y, rr.z, bb.x, bb.y, bb.z};
+  groupSums(v, CG_GROUP_SUMS, scratch);
   storePartials3(scratch, 0, rz_partials, groups);
   storePartials3(scratch, 3, rr_partials, groups);
   storePartials3(scratch, 6, bb_partials, groups);

@@ -3,12 +3,12 @@
 
 /// The projection of an element whose A x = v is one 3-vector held at a length r (springs,
 /// bending hinges), with params = (w, r, unit fallback direction): p = r v/|v|, along the
-/// fallback when |v| < 1e-12 max(r, 1). Returns the energy w/2 (|v| - r)^2. Written without
-/// branches on scalar components: PoCL then vectorizes the work-item loop.
+/// fallback when |v| < DEGENERATE_LENGTH max(r, 1). Returns the energy w/2 (|v| - r)^2. Written
+/// without branches on scalar components: PoCL then vectorizes the work-item loop.
 inline real ontoSphere(const real* v, __global const real* params, real* p) {
   const real r = params[1];
   const real len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  const bool degenerate = len < (real)1e-12 * fmax(r, (real)1);
+  const bool degenerate = len < DEGENERATE_LENGTH * fmax(r, (real)1);
   const real scale = degenerate ? (real)0 : r / len;
   p[0] = degenerate ? r * params[2] : scale * v[0];
   p[1] = degenerate ? r * params[3] : scale * v[1];
@@ -25,11 +25,10 @@ inline real halfWeightedSquaredDistance(real w, const real* a, const real* b, in
   return (real)0.5 * w * sum;
 }
 
-#define MAX_JACOBI_SWEEPS 20
-// Newton's polar iteration needs det M > 0; below this fraction of ||M||_F^3 the element counts as
-// flat and takes rotationByEigen. The iteration bound is never reached in practice.
-#define FLAT_VOLUME ((real)1e-6)
-#define MAX_NEWTON_ITERATIONS 16
+// Newton's polar iteration needs det M > 0; below FLAT_VOLUME times ||M||_F^3 the element counts
+// as flat and takes rotationByEigen. The bound MAX_NEWTON_ITERATIONS is never reached in practice.
+// (FLAT_VOLUME, NEWTON_SCALING, MAX_NEWTON_ITERATIONS and MAX_JACOBI_SWEEPS are the prelude's:
+// the CPU reference's values, host/kernel_constants.hpp.)
 
 /// c = det(X) X^-T (rows a, b, c of X give the rows b x c, c x a, a x b; the same for columns,
 /// so the layout does not matter); returns det X.
@@ -83,7 +82,7 @@ inline bool polarByNewton(const real* m, real* r) {
       for (int i = 0; i < 9; ++i) r[i] = x[i];
       return true;
     }
-    scale = update2 > (real)1e-4;
+    scale = update2 > NEWTON_SCALING;
     det = cofactor3(x, c);
     if (!(det > 0)) return false;
   }

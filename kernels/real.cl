@@ -1,5 +1,12 @@
 // Precision switch and small helpers shared by every kernel file. The host builds the program
-// with -DSTABINT_DOUBLE or -DSTABINT_FLOAT and prepends this file to the others.
+// with -DSTABINT_DOUBLE or -DSTABINT_FLOAT (ocl::programOptions) and puts this file before the
+// others.
+//
+// The constants the host shares with the kernels (pass flags PASS_*, collider shape codes
+// COLLIDER_*, the collider geometry's and the segment table's layouts, the projections'
+// thresholds, ...) are not defined in any kernel file: ocl::buildProgram puts the prelude
+// generated from host/kernel_constants.hpp before every program's source, so each is declared
+// once, there.
 //
 // Memory layouts:
 //   state slots, external forces, rhs:  n by 3, column-major (all x, then all y, then all z),
@@ -21,16 +28,6 @@ typedef float3 real3;
 #else
 #error "build with -DSTABINT_DOUBLE or -DSTABINT_FLOAT"
 #endif
-
-// What an element pass computes, as bit flags (PassFlags in host/elements/element_type.hpp):
-// per contribution w_e A_e^T p_e (the local step's share of the global right-hand side) or
-// w_e A_e^T (p_e - A_e x) (the element's force, -grad E_e); and per work-group the summed
-// energies w_e/2 ||A_e x - p_e||^2; or each element's energy on its own (PASS_ENERGY_PER_ELEMENT,
-// for the per-scene sums of a batch, segments.cl: a group's sum would mix scenes).
-#define PASS_PROJECTION 1
-#define PASS_FORCE 2
-#define PASS_ENERGY 4
-#define PASS_ENERGY_PER_ELEMENT 8
 
 inline real3 loadRow(__global const real* m, int rows, int i) {
   return (real3)(m[i], m[rows + i], m[2 * rows + i]);

@@ -5,9 +5,10 @@
 // of (a 10-particle chain has 11 elements), and a group's sum over a range of elements, as the
 // single-value reductions form it, would mix neighbouring scenes.
 //
-// The segment table holds, per scene, 2 + 2 B ints: its first particle and particle count, then
-// for each of the B element blocks the first index of its elements' energies (written by
-// element_pass with PASS_ENERGY_PER_ELEMENT) and their count.
+// The segment table holds, per scene, SEGMENT_ROW_HEAD + SEGMENT_ROW_PER_BLOCK B ints (the
+// prelude's layout, host/kernel_constants.hpp): its first particle and particle count, then for
+// each of the B element blocks the first index of its elements' energies (written by element_pass
+// with PASS_ENERGY_PER_ELEMENT) and their count.
 
 /// Kahan's compensated sum: one work-item adds a whole scene's terms in turn, and the
 /// compensation keeps the error at a few units of round-off whatever the scene's size (a plain
@@ -19,8 +20,9 @@ inline void addCompensated(real value, real* sum, real* compensation) {
   *sum = t;
 }
 
-/// out[3 s + 0, 1, 2] = scene s's internal energy, pin energy and external potential at x (the
-/// external one from f_ext . x per vertex, as element_pass's vertex groups form it).
+/// out[SEGMENT_ENERGIES s + SEGMENT_INTERNAL, SEGMENT_PINS, SEGMENT_EXTERNAL] = scene s's internal
+/// energy, pin energy and external potential at x (the external one from f_ext . x per vertex, as
+/// element_pass's vertex groups form it).
 __kernel void segment_energies(const int segments, const int blocks, __global const int* table,
                                __global const int* block_is_pins,
                                __global const real* element_energies, const int n,
@@ -28,10 +30,11 @@ __kernel void segment_energies(const int segments, const int blocks, __global co
                                __global real* out) {
   const int s = get_global_id(0);
   if (s >= segments) return;
-  __global const int* row = table + (2 + 2 * blocks) * s;
+  __global const int* row = table + (SEGMENT_ROW_HEAD + SEGMENT_ROW_PER_BLOCK * blocks) * s;
   real internal = 0, internal_c = 0, pins = 0, pins_c = 0, external = 0, external_c = 0;
   for (int b = 0; b < blocks; ++b) {
-    const int begin = row[2 + 2 * b], end = begin + row[3 + 2 * b];
+    __global const int* range = row + SEGMENT_ROW_HEAD + SEGMENT_ROW_PER_BLOCK * b;
+    const int begin = range[0], end = begin + range[1];
     if (block_is_pins[b]) {
       for (int e = begin; e < end; ++e) addCompensated(element_energies[e], &pins, &pins_c);
     } else {
@@ -41,9 +44,9 @@ __kernel void segment_energies(const int segments, const int blocks, __global co
   const int first = row[0], last = row[0] + row[1];
   for (int j = first; j < last; ++j)
     addCompensated(externalEnergyAt(n, x, fext, j), &external, &external_c);
-  out[3 * s] = internal;
-  out[3 * s + 1] = pins;
-  out[3 * s + 2] = external;
+  out[SEGMENT_ENERGIES * s + SEGMENT_INTERNAL] = internal;
+  out[SEGMENT_ENERGIES * s + SEGMENT_PINS] = pins;
+  out[SEGMENT_ENERGIES * s + SEGMENT_EXTERNAL] = external;
 }
 
 /// out[s] = sum over scene s's particles of m_j a_j . b_j.
@@ -53,7 +56,7 @@ __kernel void segment_mass_dots(const int segments, const int blocks, __global c
                                 __global real* out) {
   const int s = get_global_id(0);
   if (s >= segments) return;
-  __global const int* row = table + (2 + 2 * blocks) * s;
+  __global const int* row = table + (SEGMENT_ROW_HEAD + SEGMENT_ROW_PER_BLOCK * blocks) * s;
   real sum = 0, c = 0;
   const int first = row[0], last = row[0] + row[1];
   for (int j = first; j < last; ++j) addCompensated(massDotTerm(n, masses, a, b, j), &sum, &c);

@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 lower=(host/elements host/scene host/solver host/cpu host/opencl host/opencl_disabled host/backend.hpp host/device_profiles.hpp
-       host/device_profiles.cpp)
+       host/device_profiles.cpp host/kernel_constants.hpp host/kernel_constants.cpp)
 if violations=$(grep -rnE '#include *[<"](stabint/(simulator|batch|events|stabint)\.hpp|integrator/)' "${lower[@]}"); then
   echo "$violations" >&2
   echo "layering: the lines above include the stepping layer from below it (docs/development.md, \"Layering\")" >&2

@@ -18,7 +18,7 @@
 namespace stabint {
 
 void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& position, double* g) {
-  g[0] = static_cast<double>(static_cast<int>(collider.shape));
+  g[kGeometryShape] = static_cast<double>(static_cast<int>(collider.shape));
   const Eigen::Vector3d& center = position;
   Eigen::Vector3d a = Eigen::Vector3d::Zero();
   switch (collider.shape) {
@@ -27,8 +27,8 @@ void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& positio
     case ColliderShape::Capsule: a = collider.end + (position - collider.center); break;
     case ColliderShape::Sphere: break;
   }
-  for (int c = 0; c < 3; ++c) g[1 + c] = center[c], g[4 + c] = a[c];
-  g[7] = collider.radius;
+  for (int c = 0; c < 3; ++c) g[kGeometryCenter + c] = center[c], g[kGeometryA + c] = a[c];
+  g[kGeometryRadius] = collider.radius;
 }
 
 namespace {
@@ -37,7 +37,7 @@ using validation::invalid;
 
 // One vertex, one row, the shared coefficient 1 (A x = x_j).
 struct ContactKind {
-  static constexpr int kParams = 1 + kColliderGeometry;  // w_j, the collider's geometry
+  static constexpr int kParams = kContactGeometry + kColliderGeometry;  // w_j, the collider's geometry
 
   static double project(const double* ax, const double* params, double* p) {
     // Out of the contact set (weight 0) the element does nothing: skip the geometry.
@@ -45,7 +45,7 @@ struct ContactKind {
       for (int c = 0; c < 3; ++c) p[c] = ax[c];
       return 0.0;
     }
-    closestPointOutside(params + 1, ax, p);
+    closestPointOutside(params + kContactGeometry, ax, p);
     return halfWeightedSquaredDistance(params[0], ax, p, 3);
   }
 };
@@ -139,7 +139,7 @@ class ContactElementType final : public ElementType {
     const int n = scene.numParticles();
     const Collider& collider = scene.colliders[static_cast<std::size_t>(e / n)];
     params[0] = collider.stiffness * scene.masses[e % n];
-    colliderGeometryAt(collider, collider.center, params + 1);
+    colliderGeometryAt(collider, collider.center, params + kContactGeometry);
   }
 
   // Colliders are the scene's, not a part's particles': a part's colliders are appended as they are.
@@ -195,7 +195,7 @@ class ContactElementType final : public ElementType {
       colliderGeometryAt(collider, data ? data->colliderPosition(static_cast<int>(c), t) : collider.center, geometry);
       for (int j = 0; j < n; ++j, out += P) {
         out[0] = collider.stiffness * scene.masses[j];
-        for (int i = 0; i < kColliderGeometry; ++i) out[1 + i] = geometry[i];
+        for (int i = 0; i < kColliderGeometry; ++i) out[kContactGeometry + i] = geometry[i];
       }
     }
   }

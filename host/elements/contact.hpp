@@ -3,15 +3,23 @@
 // kernels/contact.cl) and the step's friction and final projection (host/integrator/contact.cpp)
 // share: a collider at time t is kColliderGeometry reals,
 //   shape, center (3), a (3), radius
-// with `a` the unit normal of a plane, the half extents of a box, the other end of a capsule's
-// axis (unused by spheres). docs/method.md, "Contact", has the rules.
+// at the offsets kGeometryShape, kGeometryCenter, kGeometryA and kGeometryRadius
+// (host/kernel_constants.hpp declares them for both sides), with `a` the unit normal of a plane,
+// the half extents of a box, the other end of a capsule's axis (unused by spheres).
+// docs/method.md, "Contact", has the rules.
+#include "kernel_constants.hpp"
+
 #include <stabint/scene.hpp>
 
 #include <cmath>
 
 namespace stabint {
 
-constexpr int kColliderGeometry = 8;
+// The shape codes the kernels compare with (COLLIDER_PLANE, ...) are the ColliderShape values.
+#define STABINT_SHAPE_CODE_MATCHES(kernel_name, host, value) \
+  static_assert(static_cast<int>(host) == (value), #host " must equal the kernels' " #kernel_name);
+STABINT_COLLIDER_SHAPES(STABINT_SHAPE_CODE_MATCHES)
+#undef STABINT_SHAPE_CODE_MATCHES
 
 /// The geometry of `collider` translated so that its reference point (Collider::center) is at
 /// `position` (SceneData::colliderPosition says where that is at a time).
@@ -23,10 +31,10 @@ void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& positio
 /// out through the first of them (x before y before z).
 inline bool closestPointOutside(const double* g, const double* x, double* p) {
   for (int c = 0; c < 3; ++c) p[c] = x[c];
-  const int shape = static_cast<int>(g[0]);
-  const double* center = g + 1;
-  const double* a = g + 4;
-  const double radius = g[7];
+  const int shape = static_cast<int>(g[kGeometryShape]);
+  const double* center = g + kGeometryCenter;
+  const double* a = g + kGeometryA;
+  const double radius = g[kGeometryRadius];
   if (shape == static_cast<int>(ColliderShape::Plane)) {
     const double d = (x[0] - center[0]) * a[0] + (x[1] - center[1]) * a[1] + (x[2] - center[2]) * a[2];
     if (!(d < 0.0)) return false;

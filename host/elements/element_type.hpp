@@ -10,6 +10,8 @@
 //     kernels/<type>.cl.
 // Everything else is generic over the table of types (elementTypes()): the contribution CSR,
 // L = sum w_e A_e^T A_e, the right-hand-side gather, the energy reductions and the kernels.
+#include "kernel_constants.hpp"  // PassFlags: what an element pass computes
+
 #include <stabint/scene.hpp>
 
 #include <Eigen/Core>
@@ -27,13 +29,6 @@ class ElementType;
 /// Which term of the potential an element's energy belongs to: the blend books pins apart
 /// because their targets may move.
 enum class EnergyTerm { Internal, Pins };
-
-/// What an element pass computes, as bit flags (the same values as PASS_* in kernels/real.cl).
-enum PassFlags : int {
-  kPassProjection = 1,  // out += w A^T p: the local step's share of the global right-hand side
-  kPassForce = 2,       // out += w A^T (p - A x) = -grad E_e
-  kPassEnergy = 4,      // returns sum_e w/2 ||A x - p||^2
-};
 
 /// All elements of one type in a scene, in the flat form every backend consumes. Element e has
 /// vertices[K e + k] (k < K), the R by K row-major coefficients of A_e at

@@ -12,13 +12,11 @@ namespace stabint::projections {
 namespace {
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
-// Newton's iteration needs det M > 0; below this fraction of ||M||_F^3 (a cube of the same size
-// has 3^-3/2 = 0.19) the element is treated as flat and takes the eigen-decomposition, which is
-// defined for any M. A bound on the iterations, never reached in practice (scaled Newton needs
-// at most about 9 for any condition number up to 1/epsilon), keeps every call finite.
-constexpr double kFlatVolume = 1e-6;
-constexpr int kMaxNewtonIterations = 16;
-constexpr int kMaxJacobiSweeps = 20;
+// Newton's iteration needs det M > 0; below kFlatVolume times ||M||_F^3 the element is treated as
+// flat and takes the eigen-decomposition, which is defined for any M. A bound on the iterations
+// (kMaxNewtonIterations), never reached in practice (scaled Newton needs at most about 9 for any
+// condition number up to 1/epsilon), keeps every call finite. These bounds are the kernels' too:
+// host/kernel_constants.hpp declares them for both.
 
 /// c = det(X) X^-T for the 3 x 3 X (rows a, b, c give the rows b x c, c x a, a x b; the same
 /// holds for columns, so the layout does not matter); returns det X.
@@ -67,7 +65,7 @@ bool polarByNewton(const double* m, double* r) {
       for (int i = 0; i < 9; ++i) r[i] = x[i];
       return true;
     }
-    scale = update2 > 1e-4;
+    scale = update2 > kNewtonScaling;
     det = cofactor(x, c);
     if (!(det > 0.0)) return false;
   }
@@ -222,7 +220,7 @@ void nearestRotations(const double (*m)[kLanes], double (*r)[kLanes], RotationWo
       }
     STABINT_LANES for (int l = 0; l < W; ++l) {
       const bool settles = state[l] == kIterating && update2[l] < kEpsilon;
-      scale[l] = update2[l] > 1e-4;
+      scale[l] = update2[l] > kNewtonScaling;
       state[l] = settles ? kSettled : state[l];
     }
     cofactors<W>(x, c, det);

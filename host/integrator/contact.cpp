@@ -35,13 +35,13 @@ void forEachContact(const SceneData& scene, double t, const Eigen::MatrixX3d& x,
 bool withinMargin(const double* g, const double* x, double margin) {
   double grown[kColliderGeometry];
   std::copy(g, g + kColliderGeometry, grown);
-  const int shape = static_cast<int>(g[0]);
+  const int shape = static_cast<int>(g[kGeometryShape]);
   if (shape == static_cast<int>(ColliderShape::Plane)) {
-    for (int c = 0; c < 3; ++c) grown[1 + c] += margin * g[4 + c];
+    for (int c = 0; c < 3; ++c) grown[kGeometryCenter + c] += margin * g[kGeometryA + c];
   } else if (shape == static_cast<int>(ColliderShape::Box)) {
-    for (int c = 0; c < 3; ++c) grown[4 + c] += margin;
+    for (int c = 0; c < 3; ++c) grown[kGeometryA + c] += margin;
   } else {
-    grown[7] += margin;
+    grown[kGeometryRadius] += margin;
   }
   double p[3];
   return closestPointOutside(grown, x, p);

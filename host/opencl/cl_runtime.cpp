@@ -1,5 +1,7 @@
 #include "opencl/cl_runtime.hpp"
 
+#include "kernel_constants.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
@@ -256,10 +258,14 @@ cl::Context sharedContext(const cl::Device& device) {
   return context;
 }
 
+std::string programOptions(Precision precision) {
+  return std::string("-cl-std=CL1.2 ") + (precision == Precision::Double ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT");
+}
+
 cl::Program buildProgram(const cl::Context& context, const cl::Device& device, const std::string& source,
                          const std::string& options) {
   cl_int err = CL_SUCCESS;
-  cl::Program program(context, source, false, &err);
+  cl::Program program(context, kernelPrelude() + source, false, &err);
   check(err, "clCreateProgramWithSource");
   err = program.build(std::vector<cl::Device>{device}, options.c_str());
   if (err != CL_SUCCESS) {

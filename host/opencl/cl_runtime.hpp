@@ -53,7 +53,13 @@ void checkPrecisionSupported(Precision precision, bool device_has_fp64, const st
 /// every backend (the cache below is keyed by context).
 cl::Context sharedContext(const cl::Device& device);
 
-/// Compiles `source` for `device` (uncached). Throws KernelBuildError carrying the build log.
+/// The options the library's programs are built with: OpenCL C 1.2 and the precision
+/// kernels/real.cl switches on ("-DSTABINT_DOUBLE" or "-DSTABINT_FLOAT").
+std::string programOptions(Precision precision);
+
+/// Compiles kernelPrelude() (host/kernel_constants.hpp: the constants host and kernels share)
+/// followed by `source` for `device` (uncached), so every program sees the host's values and no
+/// kernel file defines them. Throws KernelBuildError carrying the build log.
 cl::Program buildProgram(const cl::Context& context, const cl::Device& device, const std::string& source,
                          const std::string& options);
 

@@ -1,5 +1,6 @@
 #include "opencl/device_solver.hpp"
 
+#include "kernel_constants.hpp"
 #include "opencl/embedded_kernels.hpp"
 
 #include <algorithm>
@@ -18,8 +19,7 @@ DeviceConjugateGradient<Real>::DeviceConjugateGradient(const cl::Context& contex
   std::string source;
   for (const char* file : {"real.cl", "cg.cl"})
     source += "// ---- " + std::string(file) + " ----\n" + embeddedKernel(file) + "\n";
-  program_ = cachedProgram(context_, device, source,
-                           std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
+  program_ = cachedProgram(context_, device, source, programOptions(kDouble ? Precision::Double : Precision::Float));
   cl_int err = CL_SUCCESS;
   start_ = cl::Kernel(program_, "cg_start", &err);
   check(err, "clCreateKernel");
@@ -101,7 +101,8 @@ int DeviceConjugateGradient<Real>::solve(double c, const cl::Buffer& b, const cl
   if (!have_matrix_) throw Error("DeviceConjugateGradient::solve before setMatrix");
   if (n_ == 0) return 0;
   const cl::NDRange global(local_ * std::size_t(groups_)), local(local_);
-  const cl::LocalSpaceArg scratch = cl::Local(9 * local_ * sizeof(Real));  // groupSums of up to 9 values
+  // groupSums of up to kCgGroupSums values (kernels/cg.cl)
+  const cl::LocalSpaceArg scratch = cl::Local(std::size_t(kCgGroupSums) * local_ * sizeof(Real));
   const auto set = [](cl::Kernel& k, cl_uint index, const auto& value) {
     check(k.setArg(index, value), "clSetKernelArg");
   };

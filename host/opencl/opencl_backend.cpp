@@ -268,11 +268,11 @@ class OpenCLBackend final : public Backend {
       enqueueElementPass(x, kPassEnergyPerElement);
       segment_energies_.bindSlot(segment_energies_x_, x, slots_);
       enqueue(segment_energies_);
-      readSegmentSums(3 * segments_.size());
+      readSegmentSums(kSegmentEnergies * segments_.size());
       for (std::size_t s = 0; s < segments_.size(); ++s) {
-        out[s].internal = double(host_segment_sums_[3 * s]);
-        out[s].pins = double(host_segment_sums_[3 * s + 1]);
-        out[s].external = double(host_segment_sums_[3 * s + 2]);
+        out[s].internal = double(host_segment_sums_[kSegmentEnergies * s + kSegmentInternal]);
+        out[s].pins = double(host_segment_sums_[kSegmentEnergies * s + kSegmentPins]);
+        out[s].external = double(host_segment_sums_[kSegmentEnergies * s + kSegmentExternal]);
       }
     }
     times_.energy += secondsSince(start);
@@ -291,9 +291,6 @@ class OpenCLBackend final : public Backend {
 
  private:
   static constexpr bool kDouble = std::is_same<Real, double>::value;
-  // kernels/real.cl's PASS_ENERGY_PER_ELEMENT: an OpenCL-only pass flag (the CPU reference sums
-  // a scene's elements with passRange instead).
-  static constexpr int kPassEnergyPerElement = 8;
 
   // An element block on the device; the params of a time-dependent type are rewritten whenever
   // the time or the forcing (SceneData's version) changes.
@@ -497,7 +494,8 @@ class OpenCLBackend final : public Backend {
   void uploadSegmentTable() {
     const std::size_t num_blocks = blocks_.size();
     std::vector<cl_int> table;
-    table.reserve(segments_.size() * (2 + 2 * num_blocks));
+    static_assert(kSegmentRowHead == 2 && kSegmentRowPerBlock == 2, "a row below is 2 ints, then 2 per block");
+    table.reserve(segments_.size() * (kSegmentRowHead + kSegmentRowPerBlock * num_blocks));
     for (const SceneSegment& seg : segments_) {
       table.push_back(seg.first_particle);
       table.push_back(seg.num_particles);
@@ -510,8 +508,8 @@ class OpenCLBackend final : public Backend {
     for (const DeviceBlock& d : blocks_) block_is_pins.push_back(d.block->type->term() == EnergyTerm::Pins ? 1 : 0);
     segment_table_ = upload(table);
     block_is_pins_ = upload(block_is_pins);
-    segment_sums_ = zeroBuffer(3 * segments_.size());
-    host_segment_sums_.resize(3 * std::max<std::size_t>(segments_.size(), 1));
+    segment_sums_ = zeroBuffer(kSegmentEnergies * segments_.size());
+    host_segment_sums_.resize(kSegmentEnergies * std::max<std::size_t>(segments_.size(), 1));
 
     const cl_int segments = cl_int(segments_.size()), blocks = cl_int(num_blocks), n = n_;
     segment_energies_ = elementLaunch("segment_energies", int(segments_.size()));
@@ -622,7 +620,7 @@ class OpenCLBackend final : public Backend {
   void useProgramFor(const std::vector<const ElementType*>& types) {
     if (program_() != nullptr && types == program_types_) return;
     program_ = ocl::cachedProgram(context_, device_.device, ocl::elementProgramSource(types),
-                                  std::string("-cl-std=CL1.2 ") + (kDouble ? "-DSTABINT_DOUBLE" : "-DSTABINT_FLOAT"));
+                                  ocl::programOptions(kDouble ? Precision::Double : Precision::Float));
     program_types_ = types;
   }
 

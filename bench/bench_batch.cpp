@@ -86,6 +86,28 @@ void registerBatchCases() {
                 ->Unit(benchmark::kMillisecond);
           }
       }
+  // A Simulator as "a batch of one" (issue 22, docs/batch_design.md): the single-scene overhead of
+  // the batch's driver, one scene stepped as a BatchSimulator of one ("batch") or as a Simulator
+  // ("simulator"), 30 steps from rest. The ratio is what folding the two drivers into one costs a
+  // single scene as the batch is now.
+  std::vector<SceneCase> single = {scenes[0]};
+  for (const SceneCase& reference : referenceScenes()) single.push_back(reference);
+  for (BackendChoice backend : allBackends())
+    for (const SceneCase& scene : single)
+      for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend})
+        for (bool batched : {true, false}) {
+          const std::string name = "batch_of_one/" + scene.name + "/" +
+                                   (integrator == Integrator::BackwardEuler ? "BE" : "blend") + "/" +
+                                   backendLabel(backend) + "/" + (batched ? "batch" : "simulator");
+          benchmark::RegisterBenchmark(
+              name.c_str(),
+              [=](benchmark::State& state) { runBatch(state, name, scene.make, backend, integrator, batched); })
+              ->Arg(1)
+              ->ArgName("scenes")
+              ->Iterations(30)
+              ->UseRealTime()
+              ->Unit(benchmark::kMillisecond);
+        }
 }
 
 }  // namespace stabint::bench

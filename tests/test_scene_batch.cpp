@@ -11,6 +11,8 @@
 #include "elements/element_type.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
+#include "solver/global_system.hpp"
+#include "solver/local_global.hpp"
 
 #include <gtest/gtest.h>
 
@@ -155,6 +157,37 @@ TEST(SceneBatch, CpuPerSceneEnergiesAreEachScenesOwn) {
   EXPECT_NEAR(whole.pins, pins, 1e-13 * std::abs(pins));
   EXPECT_NEAR(whole.external, external, 1e-12 * (std::abs(external) + std::abs(whole.external)));
   EXPECT_NEAR(backend->massDot(1, 1), dot, 1e-13 * dot);
+}
+
+// A batch's L-BFGS solve leaves each scene's potential of its result (the per-segment energies of
+// its last local step), which the batch's BE step and blend partner take instead of an energy
+// pass: it must be Backend::potentials at the result bit for bit.
+TEST(SceneBatch, PotentialsOfAnLbfgsResultAreThePerScenePass) {
+  const std::vector<Scene> scenes = mixedBatchScenes();
+  const SceneBatch batch = concatenateScenes(scenes);
+  const SceneData data(batch.scene);
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 3);
+  backend->setSegments(batch.segments);
+  GlobalSystem system(data);
+  LocalGlobalSolver solver(*backend, system, 2);
+  solver.setSegments(batch.segments, std::vector<double>(scenes.size(), 1.0));
+  backend->write(0, perturbed(batch.scene.positions, 0.02));
+  backend->write(1, batch.scene.positions);
+  const double c = 3600.0, t = 0.7;
+  IterationControl control;
+  control.iterations = 6;
+  control.acceleration = Acceleration::LBFGS;
+  solver.solve(c, 1, 0, t, control);
+  const std::vector<PotentialEnergy>& left = solver.potentialsOfResult();
+  ASSERT_EQ(left.size(), scenes.size());
+  std::vector<PotentialEnergy> pass;
+  backend->potentials(0, t, pass);
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    EXPECT_NE(pass[s].internal, 0.0) << "scene " << s;
+    EXPECT_EQ(left[s].internal, pass[s].internal) << "scene " << s;
+    EXPECT_EQ(left[s].pins, pass[s].pins) << "scene " << s;
+    EXPECT_EQ(left[s].external, pass[s].external) << "scene " << s;
+  }
 }
 
 struct PremiseCase {

@@ -258,9 +258,9 @@ IterationControl BatchSimulator::Impl::iterationControl(int iterations) const {
 void BatchSimulator::Impl::integrate(double t1, bool forced) {
   const double h = options_.time_step;
   const IterationControl control = iterationControl(options_.iterations);
-  const int iterations =
-      IntegratorSteps(*backend_, solver_).step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
-  backend_->potentials(kXNew, t1, p_all_);
+  IntegratorSteps steps(*backend_, solver_);
+  const int iterations = steps.step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
+  const bool evaluated = potentialsOfStep(steps, kXNew, t1);
   if (forced) {
     backend_->potentials(kXNew, t_ + 0.5 * h, new_mid_);
     backend_->potentials(kX, t_ + 0.5 * h, old_mid_);
@@ -271,7 +271,7 @@ void BatchSimulator::Impl::integrate(double t1, bool forced) {
     if (!p.stepping) continue;
     StepReport& r = report_.scenes[s];
     r.iterations = iterations;
-    r.energy_evaluations = 1;
+    r.energy_evaluations = evaluated ? 1 : 0;
     p.x_new = blockOf(x_new_, segments_[s]);
     p.v_new = blockOf(v_new_, segments_[s]);
     p.p_new = p_all_[s];
@@ -335,14 +335,14 @@ void BatchSimulator::Impl::blend(double t1, bool forced) {
     backend_->copy(kXTrial, kX);
     const int iterations = steps.backwardEuler(h, t_, kXTrial, kScratch, control, /*warm_start=*/true);
     backend_->readBoth(kXTrial, x_aux_, kScratch, v_aux_);
-    backend_->potentials(kXTrial, t1, p_all_);
+    const bool evaluated = potentialsOfStep(steps, kXTrial, t1);
     if (forced) backend_->potentials(kXTrial, tm, aux_mid_);
     for (std::size_t s = 0; s < n; ++s) {
       if (!not_finite[s]) continue;
       PerScene& p = per_scene_[s];
       StepReport& r = report_.scenes[s];
       r.iterations += iterations;
-      r.energy_evaluations += 1;
+      r.energy_evaluations += evaluated ? 1 : 0;
       p.x_new = blockOf(x_aux_, segments_[s]);
       p.v_new = blockOf(v_aux_, segments_[s]);
       v_new_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.v_new;  // Simulator's kVNew
@@ -371,7 +371,8 @@ void BatchSimulator::Impl::blend(double t1, bool forced) {
     p.blend.partnerVelocities() = blockOf(v_aux_, segments_[s]);
     p.blend.partnerRead();
   }
-  evaluateBlendPotentials(t1);
+  partner_potentials_ = steps.potentialsOfStep();
+  evaluateBlendPotentials(t1, partner_potentials_);
   for (std::size_t s = 0; s < n; ++s)
     if (needs_partner[s]) {
       PerScene& p = per_scene_[s];
@@ -380,13 +381,29 @@ void BatchSimulator::Impl::blend(double t1, bool forced) {
     }
 }
 
-void BatchSimulator::Impl::evaluateBlendPotentials(double t1) {
-  // Rounds: as many as the scene that needs the most evaluations, not their sum.
+// The potentials of the step's new positions in `slot` at t1, per scene, into p_all_: the step's
+// solve's where its last local step was at them, else an energy pass (returns whether it ran).
+bool BatchSimulator::Impl::potentialsOfStep(const IntegratorSteps& steps, int slot, double t1) {
+  if (steps.potentialsOfStep().size() == segments_.size()) {
+    p_all_ = steps.potentialsOfStep();
+    return false;
+  }
+  backend_->potentials(slot, t1, p_all_);
+  return true;
+}
+
+void BatchSimulator::Impl::evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner) {
+  // Rounds: as many as the scene that needs the most evaluations, not their sum. At w = 1 the
+  // trial is the partner, whose potential its solve may have left (`partner`, per scene): taken
+  // without a pass, as Simulator takes it.
   for (;;) {
     bool any = false;
     for (std::size_t s = 0; s < segments_.size(); ++s) {
-      const BlendStep& b = per_scene_[s].blend;
-      if (!per_scene_[s].stepping || !b.wantsPotential()) continue;
+      BlendStep& b = per_scene_[s].blend;
+      if (!per_scene_[s].stepping) continue;
+      while (b.wantsPotential() && b.weight() == 1.0 && partner.size() == segments_.size())
+        b.take(partner[s], /*evaluated=*/false);
+      if (!b.wantsPotential()) continue;
       if (!any && x_trial_.rows() != x_.rows()) x_trial_ = x_;
       any = true;
       // As Backend::combine(kXTrial, 1 - w, from, w, partner) forms it (bit for bit on the CPU

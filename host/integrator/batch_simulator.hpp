@@ -28,6 +28,8 @@
 
 namespace stabint {
 
+class IntegratorSteps;
+
 // The public class (include/stabint/batch.hpp) is a pointer to this.
 struct BatchSimulator::Impl {
   /// Throws InvalidInputError for a bad scene ("scene <i>: ..."), scenes a batch cannot keep
@@ -73,7 +75,8 @@ struct BatchSimulator::Impl {
   void blend(double t1, bool forced);
   // The potentials every scene's BlendStep asks for, one batched pass per round: the trial
   // positions are formed on the host (no per-scene combine on the backend interface yet).
-  void evaluateBlendPotentials(double t1);
+  void evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner = {});
+  bool potentialsOfStep(const IntegratorSteps& steps, int slot, double t1);
   void refuse(std::size_t s, const std::string& message);
 
   std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping
@@ -89,6 +92,7 @@ struct BatchSimulator::Impl {
   Eigen::MatrixX3d x_aux_, v_aux_;          // host copies of the partner or the full-budget BE solve
   Eigen::MatrixX3d x_trial_;                // the root finds' trial positions
   std::vector<PotentialEnergy> p_all_, new_mid_, old_mid_, aux_mid_;  // per-scene potentials
+  std::vector<PotentialEnergy> partner_potentials_;                   // of the BE partner, when its solve left them
   double t_ = 0.0;                                                    // the batch's time (of the active scenes)
   bool has_history_ = false;                                          // BDF2: (kXPrev, kVPrev) hold the previous step
   std::vector<PerScene> per_scene_;

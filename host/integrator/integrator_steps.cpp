@@ -23,7 +23,7 @@ int IntegratorSteps::backwardEuler(double h, double t, int x_out, int v_out, con
   backend_.combine(kY, 1.0, kX, h, kV);
   if (!warm_start) backend_.copy(x_out, kY);
   const int done = solver_.solve(1.0 / (h * h), kY, x_out, t + h, control);
-  potential_of_step_ = solver_.potentialOfResult();
+  potentials_of_step_ = solver_.potentialsOfResult();
   backend_.combine(v_out, 1.0 / h, x_out, -1.0 / h, kX);  // v = (x* - x_n)/h
   return done;
 }
@@ -36,7 +36,7 @@ int IntegratorSteps::implicitMidpoint(double h, double t, int x_out, int v_out, 
   // its error: L-BFGS ends on a plain iteration, which smooths the error its curvature pairs
   // leave in stiff modes before that doubling turns it into elastic energy.
   const int done = solver_.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, endingPlain(control));
-  potential_of_step_.reset();
+  potentials_of_step_.clear();
   backend_.combine(v_out, 4.0 / h, x_out, -4.0 / h, kX);
   backend_.combine(v_out, 1.0, v_out, -1.0, kV);
   if (midpoint_out >= 0) backend_.copy(midpoint_out, x_out);
@@ -54,13 +54,13 @@ int IntegratorSteps::bdf2(double h, double t, int x_out, int v_out, const Iterat
   // teaser's cloth by 0.13 J over 6 s where converged BDF2 loses 0.22 J (with the plain last
   // iteration: loses 0.10 J).
   const int done = solver_.solve(9.0 / (4.0 * h * h), kY, x_out, t + h, endingPlain(control));
-  potential_of_step_ = solver_.potentialOfResult();
+  potentials_of_step_ = solver_.potentialsOfResult();
   backend_.combine(v_out, 1.5 / h, x_out, -1.5 / h, kScratch);
   return done;
 }
 
 void IntegratorSteps::explicitEuler(double h, double t, int x_out, int v_out, bool symplectic) {
-  potential_of_step_.reset();
+  potentials_of_step_.clear();
   backend_.accelerations(kScratch, kX, t);
   backend_.combine(v_out, 1.0, kV, h, kScratch);
   backend_.combine(x_out, 1.0, kX, h, symplectic ? v_out : kV);

@@ -64,16 +64,16 @@ class IntegratorSteps {
   /// history (kXPrev, kVPrev) and sets `has_history`.
   void commit(Integrator integrator, bool& has_history);
 
-  /// The potential at t + h of the positions the last step left in x_out, where its solve's last
-  /// local step was at them (BE and BDF2 with LocalGlobalSolver::potentialOfResult): bit for bit
-  /// what an energy pass over x_out would give, without the pass. Empty after IM (x_out is then
-  /// 2 x* - x_n) and the explicit steps.
-  const std::optional<PotentialEnergy>& potentialOfStep() const { return potential_of_step_; }
+  /// The potential at t + h of the positions the last step left in x_out, per segment (one for a
+  /// single scene), where its solve's last local step was at them (BE and BDF2 with
+  /// LocalGlobalSolver::potentialsOfResult): bit for bit what an energy pass over x_out would
+  /// give, without the pass. Empty after IM (x_out is then 2 x* - x_n) and the explicit steps.
+  const std::vector<PotentialEnergy>& potentialsOfStep() const { return potentials_of_step_; }
 
  private:
   Backend& backend_;
   LocalGlobalSolver& solver_;
-  std::optional<PotentialEnergy> potential_of_step_;
+  std::vector<PotentialEnergy> potentials_of_step_;
 };
 
 /// `control` with its budget ending on a plain iteration (IterationControl::plain_last_iteration):

@@ -120,7 +120,7 @@ struct Simulator::Impl {
     // blended state.
     backend->readBoth(kXPartner, blend_step.partnerPositions(), kVPartner, blend_step.partnerVelocities());
     blend_step.partnerRead();
-    evaluateBlendPotentials(t1, steps_of.potentialOfStep());  // kXNew holds the IM candidate
+    evaluateBlendPotentials(t1, steps_of.potentialsOfStep());  // kXNew holds the IM candidate
     const PotentialEnergy p_blend = blend_step.blend(x_new, v_new, *backend);
     backend->write(kXNew, x_new);
     backend->write(kVNew, v_new);
@@ -130,11 +130,11 @@ struct Simulator::Impl {
   // The potentials the blend asks for, at (1 - w) kXNew + w kXPartner (kXNew holds what
   // BlendStep::from() is). At w = 1 the trial is the partner (0 x + 1 y = y, up to the sign of a
   // zero), whose potential its solve may have left (`partner`): taken without a pass.
-  void evaluateBlendPotentials(double t1, const std::optional<PotentialEnergy>& partner = std::nullopt) {
+  void evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner = {}) {
     while (blend_step.wantsPotential()) {
       const double w = blend_step.weight();
-      if (w == 1.0 && partner) {
-        blend_step.take(*partner, /*evaluated=*/false);
+      if (w == 1.0 && !partner.empty()) {
+        blend_step.take(partner[0], /*evaluated=*/false);
         continue;
       }
       backend->combine(kXTrial, 1.0 - w, kXNew, w, kXPartner);
@@ -145,7 +145,7 @@ struct Simulator::Impl {
   // The potential at t1 of the step's new positions in `slot`: from the step's solve where its
   // last local step was at them, else an energy pass.
   PotentialEnergy potentialOfStep(int slot, double t1, StepReport& report) {
-    if (const std::optional<PotentialEnergy>& p = steps_of.potentialOfStep()) return *p;
+    if (const std::vector<PotentialEnergy>& p = steps_of.potentialsOfStep(); !p.empty()) return p[0];
     ++report.energy_evaluations;
     return backend->potential(slot, t1);
   }

@@ -60,10 +60,11 @@ void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, st
   objective.resize(rows_.size());
   if (one) {
     objective[0] = inertia(c, x_trial_) + potential.total();
-    result_potential_ = potential;
+    result_potentials_.assign(1, potential);
     return;
   }
   backend_.potentials(x, t, segment_potentials_);
+  result_potentials_ = segment_potentials_;
   for (std::size_t s = 0; s < rows_.size(); ++s) {
     const Segment& seg = rows_[s];
     const auto d = x_trial_.middleRows(seg.first, seg.count) - y_host_.middleRows(seg.first, seg.count);

@@ -54,7 +54,7 @@ void LocalGlobalSolver::globalStep(double c, int x, const IterationControl& cont
 
 int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationControl& control,
                              std::vector<double>* objective_history) {
-  result_potential_.reset();
+  result_potentials_.clear();
   if (control.acceleration == Acceleration::LBFGS) return solveLbfgs(c, y, x, t, control, objective_history);
   if (control.acceleration == Acceleration::Newton) return solveNewton(c, y, x, t, control, objective_history);
   if (control.acceleration != Acceleration::None) return solveAccelerated(c, y, x, t, control, objective_history);
@@ -89,7 +89,7 @@ int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const Iterat
   PotentialEnergy potential;
   auto localStepAndObjective = [&] {
     localStep(c, y, x, t, control, &potential);
-    result_potential_ = potential;
+    if (rows_.size() <= 1) result_potentials_.assign(1, potential);  // a batch's is their sum
     backend_.combine(scratch_, 1.0, x, -1.0, y);
     return 0.5 * c * backend_.massDot(scratch_, scratch_) + potential.total();
   };

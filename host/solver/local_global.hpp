@@ -59,11 +59,12 @@ class LocalGlobalSolver {
   /// c/2 ||x - y||_M^2 + E_int(x) + U_ext(x, t)
   double objective(double c, int y, int x, double t);
 
-  /// The potential at time t of the positions the last solve left in slot x, when its last
-  /// local step was at them (L-BFGS, Newton-CG and plain solves that track their objective, on
-  /// one scene): equal bit for bit to Backend::potential(x, t), so a step takes it instead of an
-  /// energy pass over the same positions. Empty otherwise.
-  const std::optional<PotentialEnergy>& potentialOfResult() const { return result_potential_; }
+  /// The potential at time t of the positions the last solve left in slot x, per segment (one for
+  /// a single scene), when its last local step was at them (L-BFGS and Newton-CG, and plain
+  /// solves that track their objective on one scene): equal bit for bit to Backend::potential(x,
+  /// t) (a batch's: Backend::potentials), so a step takes it instead of an energy pass over the
+  /// same positions. Empty otherwise.
+  const std::vector<PotentialEnergy>& potentialsOfResult() const { return result_potentials_; }
 
   /// Accelerated iterates rejected (objective rose) since construction.
   int rejectedAccelerations() const { return rejected_; }
@@ -116,7 +117,7 @@ class LocalGlobalSolver {
   GlobalSystem& system_;
   int scratch_;
   int rejected_ = 0;
-  std::optional<PotentialEnergy> result_potential_;
+  std::vector<PotentialEnergy> result_potentials_;
   int backend_matrix_version_ = -1;  // GlobalSystem::laplacianVersion() of the backend's copy of L
   // Reused across iterations and solves: no per-iteration allocation.
   Eigen::MatrixX3d rhs_, x_host_, y_host_, x_cur_, x_next_;

@@ -2,12 +2,12 @@
 // inverse Hessian (Liu, Bouaziz and Kavan 2017, "Quasi-Newton Methods for Real-Time Simulation of
 // Hyperelastic Materials"; docs/method.md, "L-BFGS"). Every element has the Projective-Dynamics
 // form w/2 ||A x - p(x)||^2 with p(x) the projection onto the element's rest set, whose gradient
-// is w A^T (A x - p(x)); so the local step's right-hand side gives the objective's gradient
-//   g(x) = K_c x - rhs(x),
-// which the backend gathers directly from the force form of the same element pass
-// (Backend::localStepGradient): an iteration costs what a plain one does (one local step with its
-// energy, one solve) plus a few fused passes over the history. With an empty history the
-// direction -K_c^-1 g is the plain iteration's step.
+// is w A^T (A x - p(x)); so the objective's gradient
+//   g(x) = c M (x - y) - f_ext - sum_e w A^T (p(x) - A x)   (= K_c x - rhs(x))
+// comes from the force form of the local step's element pass (Backend::localStepGradient): an
+// iteration costs what a plain one does (one local step with its energy, one solve) plus a few
+// fused passes over the history. With an empty history the direction -K_c^-1 g is the plain
+// iteration's step.
 //
 // The two-loop recursion runs on dot products (as in Chen et al. 2014, "Large-scale L-BFGS using
 // MapReduce"): each segment keeps the products s_i.y_j of its pairs, so a direction takes four

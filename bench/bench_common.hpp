@@ -107,5 +107,6 @@ void registerContactCases();      // bench_contact.cpp
 void registerHostSolveCases();    // bench_host_solve.cpp
 void registerBatchCases();        // bench_batch.cpp
 void registerFrameCases();        // bench_frame.cpp
+void registerThreadPassCases();   // bench_thread_pass.cpp
 void registerConvergenceCases();  // bench_convergence.cpp
 }  // namespace stabint::bench

@@ -9,6 +9,8 @@
 //   batch/<scene>/BE/cpu/<batch|separate>/scenes:N    N small scenes, one step each
 //   frame/<scene>/<integrator>/<backend>/threads:N    tet-bar steps on N CPU threads (bench_frame.cpp)
 //   frame/cloth128x128/BE-chebyshev-<global>/<backend>  the 16k-particle cloth's steps (GPU-sized)
+//   thread_pass/<scene>/<pass>/threads:N[/<path>]   one CPU element pass on 1 or 2 threads
+//                                                     (bench_thread_pass.cpp)
 // with counters particles, elements, iterations and the phase times (seconds per benchmark
 // iteration): local, gather, transfer, global, energy, bookkeeping. OpenCL cases are reported as
 // errors ("skipped: ...") when no device exists. The default minimum time per case is 0.1 s
@@ -41,6 +43,7 @@ int main(int argc, char** argv) {
   bench::registerHostSolveCases();
   bench::registerBatchCases();
   bench::registerFrameCases();
+  bench::registerThreadPassCases();
   bench::registerConvergenceCases();
   benchmark::RunSpecifiedBenchmarks();
   bench::releaseAllFixtures();  // OpenCL objects go while the runtime is still loaded

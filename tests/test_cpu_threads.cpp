@@ -1,8 +1,10 @@
 // The CPU side's threads (host/cpu/worker_pool.hpp, docs/method.md "Threads on the CPU"): the
 // CPU reference's element passes and the host solve give the same results bit for bit on one
-// thread and on several, on scenes whose passes take the threaded path (at least 2,048 elements)
-// with every element type and the blocks after them that stay on one thread (contact, pins).
+// thread and on several, on scenes whose passes take a threaded path (by the library's choice,
+// and each path forced: host/cpu/cpu_backend.hpp, ThreadedPassPath) with every element type and
+// the blocks after them that stay on one thread (contact, pins).
 #include "contact_scenes.hpp"
+#include "cpu/cpu_backend.hpp"
 #include "cpu/worker_pool.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
@@ -12,7 +14,10 @@
 #include <Eigen/CholmodSupport>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <numeric>
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -26,6 +31,15 @@ class ThreadCount {
 
  private:
   int previous_;
+};
+
+class PathCount {
+ public:
+  explicit PathCount(ThreadedPassPath path) : previous_(threadedPassPath()) { setThreadedPassPath(path); }
+  ~PathCount() { setThreadedPassPath(previous_); }
+
+ private:
+  ThreadedPassPath previous_;
 };
 
 struct Run {
@@ -63,7 +77,7 @@ void expectSameRun(const Run& one, const Run& many) {
   EXPECT_EQ(one.branches, many.branches);
 }
 
-// A pinned tet bar of 2,880 tets (above the threaded-pass threshold) swinging down under gravity
+// A pinned tet bar of 2,880 tets (on threads by the library's choice) swinging down under gravity
 // onto a ground plane: tets in the threaded part, contact and pins after it.
 Scene barOnGround() {
   TetBarParams p;
@@ -75,8 +89,8 @@ Scene barOnGround() {
   return s;
 }
 
-// A 40 x 40 triangle cloth (triangle strain and bending hinges, 3,042 + 4,485 elements) with
-// pinned corners falling onto a sphere.
+// A 40 x 40 triangle cloth (triangle strain and bending hinges, 3,042 + 4,485 elements: on
+// threads by the library's choice) with pinned corners falling onto a sphere.
 Scene triangleClothOnSphere() {
   ClothGridParams p;
   p.nx = 40;
@@ -85,6 +99,134 @@ Scene triangleClothOnSphere() {
   Scene s = makeClothGrid(p);
   s.colliders.push_back(testing::sphereCollider(Eigen::Vector3d(0.5, 0.3, 0.2), 0.2, 1e4));
   return s;
+}
+
+// The scene with its particles renumbered at random: every element then has vertices far apart
+// in the numbering, so the Owned path's vertex ranges cut through most elements (runs of one
+// element, elements computed on several threads).
+Scene shuffled(const Scene& scene, unsigned seed) {
+  const int n = scene.numParticles();
+  std::vector<int> to(static_cast<std::size_t>(n));  // old index -> new
+  std::iota(to.begin(), to.end(), 0);
+  std::shuffle(to.begin(), to.end(), std::mt19937(seed));
+  Scene s = scene;
+  for (int i = 0; i < n; ++i) {
+    const int j = to[static_cast<std::size_t>(i)];
+    s.rest_positions.row(j) = scene.rest_positions.row(i);
+    s.positions.row(j) = scene.positions.row(i);
+    s.velocities.row(j) = scene.velocities.row(i);
+    s.masses[j] = scene.masses[i];
+  }
+  auto map = [&](int& v) { v = to[static_cast<std::size_t>(v)]; };
+  for (Spring& e : s.springs) map(e.a), map(e.b);
+  for (Tet& e : s.tets)
+    for (int& v : e.vertices) map(v);
+  for (TriangleStrain& e : s.triangle_strains)
+    for (int& v : e.vertices) map(v);
+  for (BendingHinge& e : s.bending_hinges)
+    for (int& v : e.vertices) map(v);
+  for (Pin& e : s.pins) map(e.vertex);
+  for (Body& b : s.bodies)
+    for (int& v : b.particles) map(v);
+  for (auto& t : s.triangles)
+    for (int& v : t) map(v);
+  validateScene(s);
+  return s;
+}
+
+// What one pass of each kind gives: the local step's right-hand side with and without the
+// energy, the forces, and an energy pass.
+struct PassResults {
+  Eigen::MatrixX3d rhs, rhs_energy, accelerations;
+  PotentialEnergy at_x, potential;
+};
+
+PassResults passResults(const Scene& scene, const Eigen::MatrixX3d& x) {
+  const SceneData data(scene);
+  auto backend = makeCpuBackend(data, 2);
+  backend->write(0, x);
+  backend->write(1, scene.positions);
+  PassResults r;
+  backend->localStepRhs(0, 1, 900.0, 0.0, r.rhs, nullptr);
+  backend->localStepRhs(0, 1, 900.0, 0.0, r.rhs_energy, &r.at_x);
+  backend->accelerations(1, 0, 0.0);
+  backend->read(1, r.accelerations);
+  r.potential = backend->potential(0, 0.0);
+  return r;
+}
+
+void expectSameMatrix(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b, const char* what) {
+  ASSERT_EQ(a.rows(), b.rows()) << what;
+  for (Eigen::Index i = 0; i < a.size(); ++i) ASSERT_EQ(a.data()[i], b.data()[i]) << what << " entry " << i;
+}
+
+void expectSameEnergy(const PotentialEnergy& a, const PotentialEnergy& b, const char* what) {
+  EXPECT_EQ(a.internal, b.internal) << what;
+  EXPECT_EQ(a.pins, b.pins) << what;
+  EXPECT_EQ(a.external, b.external) << what;
+}
+
+// Every threaded path, forced whatever the size, on 2 and 3 threads gives each pass of the
+// single-threaded one bit for bit: spring and triangle cloths on a sphere (contact and pins after
+// the threaded blocks), a tet bar, and the same scenes renumbered at random.
+TEST(CpuThreads, EveryThreadedPathGivesTheSerialPassBitForBit) {
+  ClothGridParams springs;
+  springs.nx = springs.ny = 24;
+  ClothGridParams triangles;
+  triangles.nx = triangles.ny = 16;
+  triangles.model = ClothModel::Triangles;
+  TetBarParams bar;
+  bar.nx = 10;
+  bar.ny = bar.nz = 3;
+  std::vector<Scene> scenes;
+  for (const ClothGridParams& p : {springs, triangles}) {
+    Scene s = makeClothGrid(p);
+    s.colliders.push_back(testing::sphereCollider(Eigen::Vector3d(0.5, 0.5, 0.0), 0.2, 1e4));
+    scenes.push_back(s);
+  }
+  scenes.push_back(makeTetBar(bar));
+  for (std::size_t i = 0, count = scenes.size(); i < count; ++i)
+    scenes.push_back(shuffled(scenes[i], 7u + unsigned(i)));
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const Scene& scene = scenes[i];
+    // Deformed positions, some inside the sphere (contact elements active).
+    std::mt19937 rng(11u + unsigned(i));
+    std::uniform_real_distribution<double> offset(-0.02, 0.02);
+    Eigen::MatrixX3d x = scene.positions;
+    for (Eigen::Index j = 0; j < x.size(); ++j) x.data()[j] += offset(rng);
+    PassResults serial;
+    {
+      ThreadCount one(1);
+      serial = passResults(scene, x);
+    }
+    for (ThreadedPassPath path : {ThreadedPassPath::Buffered, ThreadedPassPath::Owned})
+      for (int threads : {2, 3}) {
+        SCOPED_TRACE("scene " + std::to_string(i) + (path == ThreadedPassPath::Owned ? " owned " : " buffered ") +
+                     std::to_string(threads) + " threads");
+        ThreadCount setting(threads);
+        PathCount forced(path);
+        const PassResults r = passResults(scene, x);
+        EXPECT_EQ(lastPassPath(), path);
+        expectSameMatrix(serial.rhs, r.rhs, "local step");
+        expectSameMatrix(serial.rhs_energy, r.rhs_energy, "local step with energy");
+        expectSameMatrix(serial.accelerations, r.accelerations, "accelerations");
+        expectSameEnergy(serial.at_x, r.at_x, "local step's energy");
+        expectSameEnergy(serial.potential, r.potential, "energy pass");
+      }
+  }
+}
+
+// Whole runs with the Owned path forced (the library's choice takes it on large cloths): the same
+// bit for bit as on one thread.
+TEST(CpuThreads, OwnedPathRunsAreTheSameOnOneAndTwoThreads) {
+  PathCount forced(ThreadedPassPath::Owned);
+  const Scene bar = barOnGround();
+  expectSameRun(runWith(bar, Integrator::EnergyBlend, 1, 6), runWith(bar, Integrator::EnergyBlend, 2, 6));
+  const Scene cloth = triangleClothOnSphere();
+  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::SymplecticEuler}) {
+    SCOPED_TRACE(integratorName(integrator));
+    expectSameRun(runWith(cloth, integrator, 1, 6), runWith(cloth, integrator, 2, 6));
+  }
 }
 
 TEST(CpuThreads, BlendOnTetBarIsTheSameBitForBitOnOneAndTwoThreads) {

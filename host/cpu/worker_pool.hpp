@@ -18,7 +18,8 @@ void setCpuThreads(int threads);
 /// them, and returns when all have finished. Tasks are handed out in order to whichever thread is
 /// free, so a task must not depend on which thread runs it or on the other tasks. A call made
 /// while another thread's call is running (two simulators stepped from two threads) runs its
-/// tasks on its own thread.
+/// tasks on its own thread. Having run its tasks, the calling thread waits awake (up to 200 us)
+/// for workers still running theirs before it sleeps: waking it would take longer.
 void parallelFor(int tasks, const std::function<void(int)>& task);
 
 }  // namespace stabint

@@ -36,6 +36,10 @@ struct BendingHingeKind : KindDefaults<BendingHinge> {
   static constexpr const char* kIdentifier = "bending_hinge";
   static constexpr int kVertices = 4, kRows = 1;
   static constexpr int kParams = 5;  // w, |K x_rest|, rest direction
+  // One element of a local step on one core, in ns (a length and direction; measured by
+  // thread_pass_kind/*): the CPU reference weighs a pass by it when it decides whether to put
+  // it on threads.
+  static constexpr double kElementNs = 12.0;
 
   static std::array<int*, 4> vertexRefs(BendingHinge& h) {
     return {&h.vertices[0], &h.vertices[1], &h.vertices[2], &h.vertices[3]};

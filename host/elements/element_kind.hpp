@@ -11,6 +11,7 @@
 //   static void check(const Scene&, const Element&, const validation::Owner&);
 //   static void params(const Scene&, const Element&, double* params);     // params[0] = weight
 //   static double project(const double* ax, const double* params, double* p);  // energy
+//   static constexpr double kElementNs;  // one element of a local step on one core, ns (measured)
 // and either
 //   static constexpr std::array<double, kRows * kVertices> kCoefficients;  (kSharedCoefficients)
 // or
@@ -298,6 +299,41 @@ void kindElementResults(const ElementBlock& block, const std::vector<double>& pa
   }
 }
 
+/// ElementType::ownedResults of a Kind: kindGroup per group (the same results as kindPass's),
+/// each contribution added into `out` only when its vertex is in [lo, hi), each energy stored
+/// only when the element's first vertex is.
+template <class Kind>
+void kindOwnedResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
+                      int first, int count, int flags, int lo, int hi, Eigen::MatrixX3d* out, double* energies) {
+  constexpr int K = Kind::kVertices;
+  constexpr int W = projections::kLanes;
+  const bool write = (flags & (kPassProjection | kPassForce)) != 0;
+  const bool force = (flags & kPassForce) != 0;
+  const bool energy = (flags & kPassEnergy) != 0;
+  if (count == 0) return;  // the question whether the type provides it: `out` may be null
+  const Eigen::Index n = x.rows();
+  const double* xs = x.data();
+  double* os = write ? out->data() : nullptr;
+  double shared[Kind::kRows * K];
+  kindSharedCoefficients<Kind>(shared);
+  for (int group = first; group < first + count; group += W) {
+    const int size = std::min(W, first + count - group);
+    double c[3 * K * W], group_energies[W];
+    kindGroup<Kind>(block, params, xs, n, shared, group, size, write, force, group_energies, c);
+    for (int l = 0; l < size; ++l) {
+      const int* v = block.vertices.data() + K * (group + l);
+      if (energy && v[0] >= lo && v[0] < hi) energies[group + l - first] = group_energies[l];
+      if (!write) continue;
+      for (int k = 0; k < K; ++k) {
+        if (v[k] < lo || v[k] >= hi) continue;
+        os[v[k]] += c[3 * (K * l + k)];
+        os[n + v[k]] += c[3 * (K * l + k) + 1];
+        os[2 * n + v[k]] += c[3 * (K * l + k) + 2];
+      }
+    }
+  }
+}
+
 template <class Kind>
 class ElementTypeOf final : public ElementType {
   using Element = typename Kind::Element;
@@ -323,6 +359,7 @@ class ElementTypeOf final : public ElementType {
     return {};
   }
   EnergyTerm term() const override { return Kind::kTerm; }
+  double elementCost() const override { return Kind::kElementNs; }
 
   int count(const Scene& scene) const override { return static_cast<int>(list(scene).size()); }
 
@@ -408,6 +445,12 @@ class ElementTypeOf final : public ElementType {
   bool elementResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
                       int first, int count, int flags, double* energies, double* contributions) const override {
     kindElementResults<Kind>(block, params, x, first, count, flags, energies, contributions);
+    return true;
+  }
+
+  bool ownedResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
+                    int count, int flags, int lo, int hi, Eigen::MatrixX3d* out, double* energies) const override {
+    kindOwnedResults<Kind>(block, params, x, first, count, flags, lo, hi, out, energies);
     return true;
   }
 

@@ -69,6 +69,10 @@ class ElementType {
   /// The R by K coefficients (row-major) every element shares when shape().shared_coefficients.
   virtual std::vector<double> sharedCoefficients() const = 0;
   virtual EnergyTerm term() const = 0;
+  /// Estimated time of one element in a local step on one core, in nanoseconds (Kind::kElementNs,
+  /// measured: bench/bench_thread_pass.cpp): how the CPU reference weighs a pass's work when it
+  /// decides whether to split it over threads (host/cpu/cpu_backend.cpp). 0 for a type without.
+  virtual double elementCost() const { return 0.0; }
 
   // ---- the scene side --------------------------------------------------------------------------
   virtual int count(const Scene& scene) const = 0;
@@ -121,6 +125,19 @@ class ElementType {
   virtual bool elementResults(const ElementBlock& /*block*/, const std::vector<double>& /*params*/,
                               const Eigen::MatrixX3d& /*x*/, int /*first*/, int /*count*/, int /*flags*/,
                               double* /*energies*/, double* /*contributions*/) const {
+    return false;
+  }
+  /// passRange for one thread of a pass split by vertices (host/cpu/cpu_backend.cpp): elements
+  /// [first, first + count) computed as passRange computes them, but only their contributions
+  /// to the vertices in [lo, hi) added into `out` (each vertex's in element order), and with
+  /// kPassEnergy element e's energy written to energies[e - first] when its first vertex is in
+  /// [lo, hi) (else untouched). Threads that own disjoint vertex ranges and each run every
+  /// element touching their range thus add into `out` what passRange adds, every vertex in
+  /// passRange's order. False (nothing done) for a type that does not provide it; a call with
+  /// count 0 asks.
+  virtual bool ownedResults(const ElementBlock& /*block*/, const std::vector<double>& /*params*/,
+                            const Eigen::MatrixX3d& /*x*/, int /*first*/, int /*count*/, int /*flags*/, int /*lo*/,
+                            int /*hi*/, Eigen::MatrixX3d* /*out*/, double* /*energies*/) const {
     return false;
   }
 

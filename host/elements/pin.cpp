@@ -15,6 +15,10 @@ struct PinKind : KindDefaults<Pin> {
   static constexpr const char* kIdentifier = "pin";
   static constexpr int kVertices = 1, kRows = 1;
   static constexpr int kParams = 4;  // k, q(t)
+  // One element of a local step on one core, in ns (a copy of the target; measured by
+  // thread_pass_kind/*): the CPU reference weighs a pass by it when it decides whether to put
+  // it on threads.
+  static constexpr double kElementNs = 3.0;
   static constexpr bool kSharedCoefficients = true;
   static constexpr std::array<double, 1> kCoefficients{1.0};
   static constexpr EnergyTerm kTerm = EnergyTerm::Pins;

@@ -16,6 +16,10 @@ struct SpringKind : KindDefaults<Spring> {
   static constexpr const char* kIdentifier = "spring";
   static constexpr int kVertices = 2, kRows = 1;
   static constexpr int kParams = 5;  // k, r, rest direction (unit, from b to a)
+  // One element of a local step on one core, in ns (its length and direction; measured by
+  // thread_pass_kind/*): the CPU reference weighs a pass by it when it decides whether to put
+  // it on threads.
+  static constexpr double kElementNs = 6.0;
   static constexpr bool kSharedCoefficients = true;
   static constexpr std::array<double, 2> kCoefficients{1.0, -1.0};
 

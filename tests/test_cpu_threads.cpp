@@ -135,10 +135,10 @@ Scene shuffled(const Scene& scene, unsigned seed) {
 }
 
 // What one pass of each kind gives: the local step's right-hand side with and without the
-// energy, the forces, and an energy pass.
+// energy, its gradient form with the energy (L-BFGS's), the forces, and an energy pass.
 struct PassResults {
-  Eigen::MatrixX3d rhs, rhs_energy, accelerations;
-  PotentialEnergy at_x, potential;
+  Eigen::MatrixX3d rhs, rhs_energy, gradient, accelerations;
+  PotentialEnergy at_x, gradient_at_x, potential;
 };
 
 PassResults passResults(const Scene& scene, const Eigen::MatrixX3d& x) {
@@ -149,6 +149,7 @@ PassResults passResults(const Scene& scene, const Eigen::MatrixX3d& x) {
   PassResults r;
   backend->localStepRhs(0, 1, 900.0, 0.0, r.rhs, nullptr);
   backend->localStepRhs(0, 1, 900.0, 0.0, r.rhs_energy, &r.at_x);
+  backend->localStepGradient(0, 1, 900.0, 0.0, r.gradient, &r.gradient_at_x);
   backend->accelerations(1, 0, 0.0);
   backend->read(1, r.accelerations);
   r.potential = backend->potential(0, 0.0);
@@ -209,6 +210,8 @@ TEST(CpuThreads, EveryThreadedPathGivesTheSerialPassBitForBit) {
         EXPECT_EQ(lastPassPath(), path);
         expectSameMatrix(serial.rhs, r.rhs, "local step");
         expectSameMatrix(serial.rhs_energy, r.rhs_energy, "local step with energy");
+        expectSameMatrix(serial.gradient, r.gradient, "local step's gradient with energy");
+        expectSameEnergy(serial.gradient_at_x, r.gradient_at_x, "gradient step's energy");
         expectSameMatrix(serial.accelerations, r.accelerations, "accelerations");
         expectSameEnergy(serial.at_x, r.at_x, "local step's energy");
         expectSameEnergy(serial.potential, r.potential, "energy pass");

@@ -552,7 +552,7 @@ class CpuBackend final : public Backend {
   std::vector<const std::vector<double>*> block_params_;
   std::vector<int> element_base_;
   std::vector<double> element_energies_, contributions_;
-  Eigen::MatrixX3d force_;  // localStepGradient's forces, reused
+  Eigen::MatrixX3d force_;          // localStepGradient's forces, reused
   std::vector<double> block_sums_;  // per block: the sum of its first block_summed_ energies
   std::vector<int> block_summed_;
   OwnedPlan plan_;

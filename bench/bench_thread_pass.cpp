@@ -1,5 +1,5 @@
 // One element pass of the CPU reference on one thread and on two, per scene and size: where a
-// second thread starts to pay for a pass (the rule in host/cpu/cpu_backend.cpp, docs/method.md
+// second thread starts to pay for a pass (the rule in host/cpu/threaded_pass.cpp, docs/method.md
 // section 12). Case names:
 //   thread_pass/<scene>/<pass>/threads:1           the pass on the calling thread
 //   thread_pass/<scene>/<pass>/threads:2/<path>    on two threads, by the path:
@@ -13,7 +13,7 @@
 // positions after 10 BE steps from rest (deformed, as in a run). Every path gives the same
 // results bit for bit, so the variants of one scene time the same arithmetic. Counters:
 // elements, threaded (1 when the pass took a threaded path), and the cost model's estimates on
-// two threads (host/cpu/cpu_backend.cpp): est_serial_us, est_owned_us, est_buffered_us.
+// two threads (host/cpu/threaded_pass.cpp): est_serial_us, est_owned_us, est_buffered_us.
 //   thread_pass_wake/threads:2                      one parallelFor of two tasks, each waiting until
 //                                                   both have started: a worker's wake-up
 //   thread_pass_chain                               a sum of 100,000 energies in order, per element

@@ -15,7 +15,7 @@ std::unique_ptr<Backend> makeCpuBackend(const SceneData& scene, int num_slots);
 /// section 12). Every path gives the single-threaded pass's results bit for bit, so the choice is
 /// one of speed only.
 enum class ThreadedPassPath {
-  Auto,      ///< the default: by the pass's estimated work (cpu_backend.cpp, estimatePass)
+  Auto,      ///< the default: by the pass's estimated work (threaded_pass.cpp, estimatePass)
   Serial,    ///< on the calling thread
   Buffered,  ///< element results to buffers, then gathered per vertex through the CSR
   Owned,     ///< each thread owns a range of vertices and runs every element touching it

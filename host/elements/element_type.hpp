@@ -71,7 +71,7 @@ class ElementType {
   virtual EnergyTerm term() const = 0;
   /// Estimated time of one element in a local step on one core, in nanoseconds (Kind::kElementNs,
   /// measured: bench/bench_thread_pass.cpp): how the CPU reference weighs a pass's work when it
-  /// decides whether to split it over threads (host/cpu/cpu_backend.cpp). 0 for a type without.
+  /// decides whether to split it over threads (host/cpu/threaded_pass.cpp). 0 for a type without.
   virtual double elementCost() const { return 0.0; }
 
   // ---- the scene side --------------------------------------------------------------------------

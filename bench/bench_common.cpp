@@ -105,27 +105,32 @@ std::vector<SceneCase> autoRuleScenes() {
   const std::vector<int> sides = quickMode() ? std::vector<int>{20, 35, 50} : std::vector<int>{20, 35, 50, 71, 100};
   for (ClothModel model : {ClothModel::Springs, ClothModel::Triangles})
     for (int side : sides) {
-      const std::string size = std::to_string(side) + "x" + std::to_string(side);
-      scenes.push_back({(model == ClothModel::Springs ? "springs" : "triangles") + size, [side, model] {
-                          ClothGridParams p;
-                          p.nx = p.ny = side;
-                          p.model = model;
-                          return makeClothGrid(p);
-                        }});
+      scenes.push_back(clothCase(model, side));
     }
   std::vector<std::array<int, 3>> bars{{8, 2, 2}, {16, 4, 4}, {25, 5, 5}, {35, 7, 7}, {49, 9, 9}, {80, 16, 16}};
   if (quickMode()) bars.resize(4);
-  for (const auto& cells : bars)
-    scenes.push_back(
-        {"tetbar" + std::to_string(cells[0]) + "x" + std::to_string(cells[1]) + "x" + std::to_string(cells[2]),
-         [cells] {
-           TetBarParams p;
-           p.nx = cells[0];
-           p.ny = cells[1];
-           p.nz = cells[2];
-           return makeTetBar(p);
-         }});
+  for (const auto& cells : bars) scenes.push_back(tetBarCase(cells[0], cells[1], cells[2]));
   return scenes;
+}
+
+SceneCase clothCase(ClothModel model, int side) {
+  const std::string size = std::to_string(side) + "x" + std::to_string(side);
+  return {(model == ClothModel::Springs ? "springs" : "triangles") + size, [side, model] {
+            ClothGridParams p;
+            p.nx = p.ny = side;
+            p.model = model;
+            return makeClothGrid(p);
+          }};
+}
+
+SceneCase tetBarCase(int nx, int ny, int nz) {
+  return {"tetbar" + std::to_string(nx) + "x" + std::to_string(ny) + "x" + std::to_string(nz), [nx, ny, nz] {
+            TetBarParams p;
+            p.nx = nx;
+            p.ny = ny;
+            p.nz = nz;
+            return makeTetBar(p);
+          }};
 }
 
 namespace {

@@ -46,6 +46,10 @@ bool quickMode();
 /// 100x100 particles and tet bars ("tetbar<cells>") from 8x2x2 to 80x16x16 cells (192 to 122,880
 /// tets). With STABINT_BENCH_QUICK set, only up to 50x50 and 35x7x7.
 std::vector<SceneCase> autoRuleScenes();
+/// "springs<side>x<side>" or "triangles<side>x<side>": makeClothGrid's cloth of that model.
+SceneCase clothCase(ClothModel model, int side);
+/// "tetbar<nx>x<ny>x<nz>": makeTetBar's bar of that many cells.
+SceneCase tetBarCase(int nx, int ny, int nz);
 
 void registerFixtureRelease(std::function<void()> release);
 /// Drops every cached fixture (called before building a new one and at the end of main, while

@@ -38,36 +38,14 @@ namespace {
 
 using namespace first_step;
 
-struct PassScene {
-  std::string name;
-  std::function<Scene()> make;
-};
-
-std::vector<PassScene> passScenes() {
-  std::vector<PassScene> scenes;
+std::vector<SceneCase> passScenes() {
+  std::vector<SceneCase> scenes;
   for (ClothModel model : {ClothModel::Springs, ClothModel::Triangles})
-    for (int side : {50, 100, 200}) {
-      const std::string name = std::string(model == ClothModel::Springs ? "springs" : "triangles") +
-                               std::to_string(side) + "x" + std::to_string(side);
-      scenes.push_back({name, [side, model] {
-                          ClothGridParams p;
-                          p.nx = p.ny = side;
-                          p.model = model;
-                          return makeClothGrid(p);
-                        }});
-    }
+    for (int side : {50, 100, 200}) scenes.push_back(clothCase(model, side));
   for (const std::array<int, 3>& cells :
        {std::array<int, 3>{8, 2, 2}, std::array<int, 3>{12, 3, 3}, std::array<int, 3>{16, 4, 4},
         std::array<int, 3>{25, 5, 5}, std::array<int, 3>{49, 9, 9}})
-    scenes.push_back(
-        {"tetbar" + std::to_string(cells[0]) + "x" + std::to_string(cells[1]) + "x" + std::to_string(cells[2]),
-         [cells] {
-           TetBarParams p;
-           p.nx = cells[0];
-           p.ny = cells[1];
-           p.nz = cells[2];
-           return makeTetBar(p);
-         }});
+    scenes.push_back(tetBarCase(cells[0], cells[1], cells[2]));
   return scenes;
 }
 
@@ -87,7 +65,7 @@ struct PassFixture {
 
 // Every scene's fixture is kept (CPU only, at most some tens of MB each), so that interleaved
 // cases do not rebuild them.
-PassFixture* passFixture(benchmark::State& state, const PassScene& scene) {
+PassFixture* passFixture(benchmark::State& state, const SceneCase& scene) {
   static std::map<std::string, std::unique_ptr<PassFixture>> fixtures;
   static const bool registered = (registerFixtureRelease([] { fixtures.clear(); }), true);
   (void)registered;
@@ -114,7 +92,7 @@ class PathFor {
   ThreadedPassPath previous_;
 };
 
-void runPass(benchmark::State& state, const PassScene& scene, Pass pass, int threads, ThreadedPassPath path) {
+void runPass(benchmark::State& state, const SceneCase& scene, Pass pass, int threads, ThreadedPassPath path) {
   PassFixture* f = passFixture(state, scene);
   if (!f) return;
   ThreadsFor setting(threads);
@@ -142,7 +120,7 @@ void runPass(benchmark::State& state, const PassScene& scene, Pass pass, int thr
 
 // One block's pass alone on the calling thread (ElementType::pass with the local step's flags):
 // the cost per element that the kind declares (Kind::kElementNs), as counter ns_per_element.
-void runBlock(benchmark::State& state, const PassScene& scene, const std::string& kind) {
+void runBlock(benchmark::State& state, const SceneCase& scene, const std::string& kind) {
   PassFixture* f = passFixture(state, scene);
   if (!f) return;
   const ElementBlock* block = nullptr;
@@ -203,7 +181,7 @@ void runChain(benchmark::State& state) {
 void registerThreadPassCases() {
   benchmark::RegisterBenchmark("thread_pass_chain", runChain)->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("thread_pass_wake/threads:2", runWake)->UseRealTime()->Unit(benchmark::kMicrosecond);
-  for (const PassScene& scene : passScenes())
+  for (const SceneCase& scene : passScenes())
     for (auto [pass, label] : {std::pair{Pass::Local, "local"}, std::pair{Pass::LocalEnergy, "local_energy"},
                                std::pair{Pass::Energy, "energy"}}) {
       const std::string base = "thread_pass/" + scene.name + "/" + label;
@@ -218,7 +196,7 @@ void registerThreadPassCases() {
       add(base + "/threads:2/buffered", 2, ThreadedPassPath::Buffered);
       add(base + "/threads:2/owned", 2, ThreadedPassPath::Owned);
     }
-  std::vector<PassScene> scenes = passScenes();
+  std::vector<SceneCase> scenes = passScenes();
   scenes.push_back({"pinned100x100", [] {
                       ClothGridParams p;
                       p.nx = p.ny = 100;
@@ -227,7 +205,7 @@ void registerThreadPassCases() {
                     }});
   for (auto [scene_index, kind] : {std::pair{2, "spring"}, std::pair{5, "triangle_strain"},
                                    std::pair{5, "bending_hinge"}, std::pair{10, "tet"}, std::pair{11, "pin"}}) {
-    const PassScene scene = scenes[size_t(scene_index)];
+    const SceneCase scene = scenes[size_t(scene_index)];
     const std::string identifier = kind;
     auto run = [scene, identifier](benchmark::State& state) { runBlock(state, scene, identifier); };
     benchmark::RegisterBenchmark(("thread_pass_kind/" + scene.name + "/" + identifier).c_str(), run)

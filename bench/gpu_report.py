@@ -249,7 +249,7 @@ def main():
         out += lines
         all_cases.update(cases)
     out += ["## Where the device overtakes the CPU reference", "",
-            "The data for BackendKind::Auto's threshold (DeviceProfile::auto_min_particles, "
+            "The data for BackendKind::Auto's costs (DeviceProfile::auto_*, "
             "host/device_profiles.cpp).", ""]
     out += crossing_lines(all_cases)
     out += ["", "## Rows of launch sizes on this device", "",

@@ -20,55 +20,65 @@ struct Row {
   DeviceProfile profile;
 };
 
-constexpr int kNever = DeviceProfile::kNever;
+constexpr double kNever = DeviceProfile::kNever;
 
-// The GPU rows' Auto threshold (not yet measured): a step of the blend pays about 30 launches and
-// 16 blocking waits, a few hundred microseconds with a GPU driver, and the factor path still
-// solves on the host and copies the right-hand side and the result every iteration. The CPU
-// reference's BE step (10 iterations) takes 0.6 ms at 400 particles and 5 ms at 2,500 on the
-// 2-core VM (docs/bench_summary.md "Auto backend rule"), so the GPU can only pay from a few
-// thousand particles: 4,096 (a 64 x 64 cloth) or 16,384 elements (a 5,000-particle tet bar has
-// 23,814). scripts/gpu_report.sh measures the crossing (auto_* and scaling_* cases).
-constexpr int kGpuMinParticles = 4096;
-constexpr int kGpuMinElements = 16384;
+// The GPU rows' Auto costs, measured on an NVIDIA H200 (OpenCL 3.0, driver 580.159; docs/benchmarks.md
+// "GPU report", scripts/gpu_report.sh's auto_iteration, scaling_iteration and global_step cases):
+// an iteration on the device costs about 60 us at any small size (a BE iteration: 62 us for 81
+// particles); the host factor path adds the positions' and right-hand sides' transfers, which
+// make a spring cloth (6 springs per particle, 36 ns of CPU work) a tie at every size from 1,225
+// to 50,176 particles (0.83-1.40 of the CPU reference), so 40 ns per particle; the device CG adds
+// about 12 us per CG iteration (10 iterations: 176-237 us from 425 to 5,000 particles).
+constexpr double kGpuLaunchUs = 60.0;
+constexpr double kGpuParticleNs = 40.0;
+constexpr double kGpuCgIterationUs = 12.0;
 
-// Work-groups on GPUs (not yet measured): 128 work-items (4 NVIDIA warps) for the element pass,
+// Work-groups on GPUs: 128 work-items (4 NVIDIA warps) for the element pass,
 // whose tet and triangle-strain rotations need many registers; 256 on AMD (4 wavefronts of 64).
 // Reductions and CG: one row per work-item (no minimum), up to 256 groups of 256 (65,536 rows
 // before a work-item takes a second row; every CG group's serial sum of the partials, 256 loads
-// by three work-items, bounds the count). scripts/gpu_report.sh's bench-rows compares the rows.
+// by three work-items, bounds the count). scripts/gpu_report.sh's bench-rows compares the rows: on
+// the H200 the NVIDIA rows' sizes gave the fastest tet bar iteration (641 us in double, against
+// 704-1,010 with the other rows' sizes) and tied on the device CG; measured there, they are
+// defaults on other GPUs.
 const std::vector<Row>& table() {
   static const std::vector<Row> rows{
       // Any non-GPU device: PoCL's pthread device on the 2-core VM, where these sizes were tuned:
       // large element groups amortise PoCL's per-group cost, 64 groups of 128 keep the reductions'
       // partial sums short. The cross-backend tests (1e-9 in double) run on this row.
-      {false, {}, {}, {"cpu", true, 256, 128, 64, 4, true, kNever, kNever}},
+      {false, {}, {}, {"cpu", true, 256, 128, 64, 4, true, kNever, kNever, kNever}},
       // Data-centre GPUs with fp64 at half the fp32 rate (device names: "NVIDIA H100 80GB HBM3",
       // "Tesla V100-SXM2-16GB", "NVIDIA A100-SXM4-40GB").
       {true,
        {"nvidia"},
        {"h100", "h200", "h800", "gh200", "b100", "b200", "a100", "a800", "a30", "v100", "p100", "titan v"},
-       {"nvidia-datacenter-gpu", false, 128, 256, 256, 1, true, kGpuMinParticles, kGpuMinElements}},
+       {"nvidia-datacenter-gpu", true, 128, 256, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
       // GeForce, RTX and Quadro: fp64 at 1/32 (or 1/64) of fp32.
-      {true, {"nvidia"}, {}, {"nvidia-gpu", false, 128, 256, 256, 1, false, kGpuMinParticles, kGpuMinElements}},
+      {true,
+       {"nvidia"},
+       {},
+       {"nvidia-gpu", false, 128, 256, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
       // Instinct (ROCm names the device by its architecture: "gfx90a:sramecc+:xnack-" is MI200).
       {true,
        {"advanced micro devices", "amd"},
        {"instinct", "gfx906", "gfx908", "gfx90a", "gfx940", "gfx941", "gfx942", "gfx950"},
-       {"amd-instinct-gpu", false, 256, 256, 256, 1, true, kGpuMinParticles, kGpuMinElements}},
+       {"amd-instinct-gpu", false, 256, 256, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
       // Radeon: fp64 at 1/16-1/32 of fp32.
       {true,
        {"advanced micro devices", "amd"},
        {},
-       {"amd-gpu", false, 256, 256, 256, 1, false, kGpuMinParticles, kGpuMinElements}},
+       {"amd-gpu", false, 256, 256, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
       {true,
        {"intel"},
        {"data center gpu max"},
-       {"intel-datacenter-gpu", false, 128, 128, 256, 1, true, kGpuMinParticles, kGpuMinElements}},
+       {"intel-datacenter-gpu", false, 128, 128, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
       // Arc and integrated GPUs: fp64 emulated or missing.
-      {true, {"intel"}, {}, {"intel-gpu", false, 128, 128, 256, 1, false, kGpuMinParticles, kGpuMinElements}},
+      {true,
+       {"intel"},
+       {},
+       {"intel-gpu", false, 128, 128, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
       // Any other GPU: cl_khr_fp64 is trusted (its rate is unknown).
-      {true, {}, {}, {"gpu", false, 128, 128, 256, 1, true, kGpuMinParticles, kGpuMinElements}},
+      {true, {}, {}, {"gpu", false, 128, 128, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
   };
   return rows;
 }

@@ -32,13 +32,14 @@ struct DeviceProfile {
   /// OpenCL backend in double says so in its description.
   bool fast_fp64;
 
-  /// BackendKind::Auto takes the device for a scene with at least this many particles or
-  /// elements (kNever: never); below, launches and blocking waits cost more than the CPU
-  /// reference's whole step.
-  int auto_min_particles;
-  int auto_min_elements;
-
-  static constexpr int kNever = std::numeric_limits<int>::max();
+  /// BackendKind::Auto's estimate of one local/global iteration on this device beyond what the
+  /// CPU reference pays too (host/integrator/backend_choice.cpp): a fixed cost for the launches and
+  /// blocking waits, plus, with the host factor, the transfer of every particle's position and
+  /// right-hand side, or, with the device CG, each CG iteration's launches. Infinity: never taken.
+  double auto_launch_us;
+  double auto_particle_ns;
+  double auto_cg_iteration_us;
+  static constexpr double kNever = std::numeric_limits<double>::infinity();
 };
 
 /// The row for a device: its type (GPU or not), CL_DEVICE_VENDOR and CL_DEVICE_NAME. Every

@@ -20,6 +20,8 @@
 #   --quick      the check of the script (a few minutes on PoCL): the benchmarks' quick mode
 #                (STABINT_BENCH_QUICK=1: 0.02 s per case, the scaling families to 71 x 71, the
 #                16k cloth 5 steps), a few batch cases, four groups of OpenCL tests
+#   --bundle F   use the archive of scripts/gpu_bundle.sh (built on a machine with the packages)
+#                instead of the deps and build stages, for a GPU machine that cannot install them
 #   --device P:D the OpenCL platform and device (indices or name substrings, as
 #                STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE). Default: the first GPU that
 #                stabint-run --list-devices shows, else its first device (PoCL on a machine
@@ -36,13 +38,15 @@ cd "$(dirname "$0")/.."
 quick=0
 out=results/gpu
 device=""
+bundle=""
 stages=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1 ;;
     --out) shift; out="${1:?--out needs a folder}" ;;
     --device) shift; device="${1:?--device needs PLATFORM:DEVICE}" ;;
-    -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
+    --bundle) shift; bundle="${1:?--bundle needs the archive of scripts/gpu_bundle.sh}" ;;
+    -h|--help) sed -n '2,36p' "$0"; exit 0 ;;
     deps|build|test|bench|bench-frame|bench-cg|bench-scaling|bench-batch|bench-auto|bench-rows|report) stages+=("$1") ;;
     *) echo "gpu_report: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
@@ -153,7 +157,60 @@ runBench() {
   return 0
 }
 
+# --- a prebuilt bundle (scripts/gpu_bundle.sh) ----------------------------------------------------
+# Unpacks the build at the absolute path its ctest files name: where that path's folder does not
+# exist (a lent machine), it becomes a link to this checkout, whose sources the tests read.
+# Libraries the system has are taken from the system (its C++ runtime may be newer than the
+# carried one, and its OpenCL driver may need that).
+unbundle() {
+  local tmp
+  tmp="$(mktemp -d)"
+  tar -C "$tmp" -xzf "$bundle"
+  local path
+  path="$(cat "$tmp/build_dir.txt")"
+  if [ -d "$path" ]; then
+    log "bundle: $path exists; using it as it is"
+  else
+    local src
+    src="$(dirname "$path")"
+    if [ ! -e "$src" ]; then
+      mkdir -p "$(dirname "$src")"
+      ln -s "$PWD" "$src"
+      log "bundle: linked $src to this checkout"
+    fi
+    [ -d "$src/$(basename "$path")" ] || mv "$tmp/$(basename "$path")" "$src/$(basename "$path")"
+  fi
+  mkdir -p "$out/lib"
+  local lib
+  for lib in "$tmp"/lib/*; do
+    if ldconfig -p 2>/dev/null | grep -q "[[:space:]]$(basename "$lib") "; then continue; fi
+    cp "$lib" "$out/lib/"
+  done
+  export LD_LIBRARY_PATH="$out/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  build_dir="$path"
+  log "bundle: build $path (commit $(cat "$tmp/commit.txt" 2>/dev/null)), carried libraries: $(ls "$out/lib" | tr '\n' ' ')"
+  rm -rf "$tmp"
+}
+
+# The OpenCL tests without ctest (a machine whose CMake has no ctest): each executable, through
+# GoogleTest's filter for the OpenCL cases of the backend suite.
+gtestOpenCL() {
+  local exe status=0 filter
+  for exe in "$build_dir"/tests/test_*; do
+    [ -x "$exe" ] && [ -f "$exe" ] || continue
+    case "$(basename "$exe")" in test_opencl_*) filter='*' ;; *) filter='OpenCL/*' ;; esac
+    [ "$quick" = 1 ] && ! grep -Eq 'auto_backend|opencl_backend|oscillator' <<<"$exe" && continue
+    echo "== $exe --gtest_filter=$filter"
+    (cd "$build_dir/tests" && "$exe" --gtest_filter="$filter") || status=1
+  done
+  return $status
+}
+
 nvidiaIcd
+if [ -n "$bundle" ]; then
+  unbundle
+  stages=($(printf '%s\n' "${stages[@]}" | grep -Evx 'deps|build'))
+fi
 for stage in "${stages[@]}"; do
   case "$stage" in
     deps)
@@ -174,8 +231,13 @@ for stage in "${stages[@]}"; do
       # the benchmarks still run.
       args=(-L opencl --output-on-failure -j "$jobs" --output-junit "$out/ctest-junit.xml")
       [ "$quick" = 1 ] && args+=(-R 'AutoBackend|DeviceProfiles|OpenCLBackend|Oscillator')
-      log "ctest ${args[*]}"
-      (cd "$build_dir" && ctest "${args[@]}") >"$out/ctest.log" 2>&1 || log "OpenCL tests failed ($out/ctest.log)"
+      if [ -z "${STABINT_NO_CTEST:-}" ] && command -v ctest >/dev/null 2>&1; then
+        log "ctest ${args[*]}"
+        (cd "$build_dir" && ctest "${args[@]}") >"$out/ctest.log" 2>&1 || log "OpenCL tests failed ($out/ctest.log)"
+      else
+        log "no ctest: the OpenCL test executables one by one"
+        gtestOpenCL >"$out/ctest.log" 2>&1 || log "OpenCL tests failed ($out/ctest.log)"
+      fi
       tail -3 "$out/ctest.log" >&2
       ;;
     bench-rows)

@@ -21,15 +21,17 @@ struct BackendSelection {
 /// validation::kMaxMagnitudeFloat on an OpenCL device in float.
 double inputLimit(const BackendSelection& selection);
 
-/// What BackendKind::Auto weighs against a device's threshold (DeviceProfile::auto_min_*).
+/// What BackendKind::Auto weighs against a device's costs (DeviceProfile::auto_*).
 struct SceneSize {
   int particles = 0;
-  int elements = 0;  // elementCount(scene)
+  int elements = 0;            // elementCount(scene)
+  double local_step_ns = 0.0;  // the CPU reference's local step on one core: sum of elementCost()
 };
 SceneSize sceneSize(const Scene& scene);
 
-/// The backend `o` asks for; for BackendKind::Auto, the first GPU of `devices` whose row of the
-/// device table (device_profiles.hpp) the scene's size reaches, with fast fp64 when
+/// The backend `o` asks for; for BackendKind::Auto, the first GPU of `devices` on which an
+/// iteration is estimated to cost less than on the CPU reference (its row of the device table,
+/// device_profiles.hpp), with fast fp64 when
 /// `o.opencl.precision` is Double; else the CPU reference.
 BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<OpenCLDeviceInfo>& devices, SceneSize size);
 

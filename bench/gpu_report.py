@@ -15,7 +15,7 @@ import subprocess
 
 UNIT_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 BACKENDS = ("cpu", "opencl-double", "opencl-float")
-STAGES = ("bench-frame", "bench-cg", "bench-scaling", "bench-auto", "bench-batch")
+STAGES = ("bench-frame", "bench-cg", "bench-scaling", "bench-auto", "bench-blend", "bench-solver", "bench-batch")
 
 
 def load_json(path):

@@ -6,7 +6,8 @@
 #   scripts/gpu_report.sh [--quick] [--out DIR] [--device P:D] [STAGE...]
 #
 # STAGEs, in this order by default (all of them): deps build test bench report. `bench` is
-# bench-frame bench-cg bench-scaling bench-auto bench-batch bench-rows (most wanted first;
+# bench-frame bench-cg bench-scaling bench-auto bench-blend bench-solver bench-batch bench-rows
+# (most wanted first;
 # bench-rows times a few OpenCL cases with each row of launch sizes of host/device_profiles.cpp,
 # STABINT_OPENCL_PROFILE, to tune the device's row); each can be given
 # alone, so that every command stays under a lending's 10 minutes (a benchmark stage stops after
@@ -47,7 +48,7 @@ while [ $# -gt 0 ]; do
     --device) shift; device="${1:?--device needs PLATFORM:DEVICE}" ;;
     --bundle) shift; bundle="${1:?--bundle needs the archive of scripts/gpu_bundle.sh}" ;;
     -h|--help) sed -n '2,36p' "$0"; exit 0 ;;
-    deps|build|test|bench|bench-frame|bench-cg|bench-scaling|bench-batch|bench-auto|bench-rows|report) stages+=("$1") ;;
+    deps|build|test|bench|bench-frame|bench-cg|bench-scaling|bench-batch|bench-auto|bench-blend|bench-solver|bench-rows|report) stages+=("$1") ;;
     *) echo "gpu_report: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
   shift
@@ -56,7 +57,7 @@ done
 expanded=()
 for s in "${stages[@]}"; do
   if [ "$s" = bench ]; then
-    expanded+=(bench-frame bench-cg bench-scaling bench-auto bench-batch bench-rows)
+    expanded+=(bench-frame bench-cg bench-scaling bench-auto bench-blend bench-solver bench-batch bench-rows)
   else
     expanded+=("$s")
   fi
@@ -132,6 +133,10 @@ benchFilter() {
     bench-cg) echo '^global_step(_scaling)?/' ;;
     # Cloth 10 x 10 to 224 x 224: where a GPU overtakes the CPU (Auto's threshold).
     bench-scaling) echo '^scaling_(iteration|step)/' ;;
+    # The blend's cost over BE per step (speed issue: at most 1.10 on every backend).
+    bench-blend) echo '^blend_vs_be/' ;;
+    # L-BFGS's and plain PD's time per iteration (convergence issue: at most 1.2x on every backend).
+    bench-solver) echo '^convergence/(peercloth50|tetbar50x10x10)/(plain|lbfgs)/(10|20)/' ;;
     # Many scenes at once against one simulator per scene.
     bench-batch)
       if [ "$quick" = 1 ]; then echo '^batch/cloth10/BE/[^/]+/(batch|separate)/scenes:100/'; else echo '^batch/'; fi ;;

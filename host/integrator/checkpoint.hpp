@@ -29,8 +29,8 @@ struct CheckpointData {
   /// without one) and enabled flag, as run-time changes left them.
   std::vector<std::vector<double>> stiffness;
   std::vector<std::vector<std::uint8_t>> enabled;
-  /// The contact set's changes since the global matrix was last assembled (Simulator::Impl's
-  /// contact_log): e + 1 entering, -(e + 1) leaving, 0 closing a step's batch.
+  /// The contact set's changes since the global matrix was last assembled (ContactResolver::log): e + 1 entering, -(e +
+  /// 1) leaving, 0 closing a step's batch.
   std::vector<std::int32_t> contact_log;
 };
 

@@ -1,5 +1,6 @@
 // The integrator driver (docs/method.md sections 2-8), written once against the Backend interface:
-// y formation, finalisation, the energy-tracking blend, damping and the per-step bookkeeping.
+// y formation, finalisation, the energy-tracking blend, damping, the per-step bookkeeping, events
+// and checkpoints. It calls, rather than holds, contact (ContactResolver).
 #include <stabint/simulator.hpp>
 
 #include "backend.hpp"
@@ -7,10 +8,10 @@
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
 #include "integrator/checkpoint.hpp"
-#include "integrator/contact.hpp"
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
+#include "contact/contact_resolver.hpp"
 #include "scene/scene_data.hpp"
 #include "scene/validation.hpp"
 #include "solver/global_system.hpp"
@@ -42,10 +43,10 @@ struct Simulator::Impl {
         solver(*backend, system, kSolverScratch),
         steps_of(*backend, solver),
         x(s.positions),
-        v(s.velocities) {
+        v(s.velocities),
+        contact(scene, system, *backend, options, t, x, v) {  // the contact set, before anything is factored
     // The implicit systems are factored now, so that masses too small for the stiffnesses are
     // refused here, naming them, rather than failing the first step().
-    initialContactSet();
     solver.setScene(&scene);
     factorIntegratorSystems(system, options.integrator, options.time_step);
     // CG needs no factor: they only validated the systems, and element changes would keep
@@ -158,29 +159,6 @@ struct Simulator::Impl {
 
   bool momentumConserved() const { return stabint::momentumConserved(scene.scene(), scene.hasUserForces()); }
 
-  // Contact after the solve (docs/method.md, "Contact"), on the accepted state: friction takes
-  // kinetic energy out and H* with it, like damping; the final projection moves the positions out
-  // of the colliders and takes the energy that removes out of H*. Returns true when the
-  // velocities changed; p_new follows the positions.
-  bool resolveContact(double t1, double& target_now, PotentialEnergy& p_new, StepReport& report) {
-    const bool rubbed = applyFriction(scene, t1, options.time_step, x_new, v_new, report.friction) > 0;
-    target_now -= report.friction;
-    if (projectOutOfColliders(scene, t1, options.contact_tolerance, x_new) > 0) {
-      backend->write(kXNew, x_new);
-      backend->read(kXNew, x_new);  // what the slot holds (OpenCL float rounds)
-      const PotentialEnergy projected = backend->potential(kXNew, t1);
-      ++report.energy_evaluations;
-      // [project rule] Only the energy the projection removes is booked (an inelastic correction,
-      // like a hard impact); energy it adds, by lifting particles against gravity or stretching
-      // their elements, is the solver's residual and is left to the blend to take out: booked,
-      // it let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
-      report.contact_projection = std::min(0.0, projected.total() - p_new.total());
-      target_now += report.contact_projection;
-      p_new = projected;
-    }
-    return rubbed;
-  }
-
   // The blend's corrections of the accepted state (BlendStep::beginCorrections), on the host
   // copies x_new, v_new; the position move toward the partner evaluates its potentials here.
   // Returns true when the velocities changed; p_new follows the positions.
@@ -237,7 +215,7 @@ struct Simulator::Impl {
       backend->readBoth(kXNew, x_new, kVNew, v_new);
     if (!x_new.allFinite() || !v_new.allFinite()) refuse(nonFiniteState(r.step, t, t1, options.integrator));
     bool velocities_changed = options.integrator == Integrator::EnergyBlend && correctBlendState(target_now, p_new);
-    if (!scene.scene().colliders.empty()) velocities_changed |= resolveContact(t1, target_now, p_new, r);
+    velocities_changed |= contact.resolve(kXNew, t1, x_new, v_new, target_now, p_new, r);
 
     // Damping acts on the accepted velocities; the energy it removes leaves the target too, so
     // the blend never undoes physical damping.
@@ -416,123 +394,10 @@ struct Simulator::Impl {
     changePinsAsEvent(pins);
   }
 
-  // ---- the contact set (docs/method.md, "Contact") -------------------------------------------
-  int contactCount() const {
-    return contact_block < 0 ? 0 : scene.blocks()[static_cast<std::size_t>(contact_block)].count;
-  }
-
-  // Enter a pair while x_j or x_j + h v_j is this close to its collider: the final projection's
-  // depth plus the fall under gravity over one step beyond the prediction.
-  double contactMargin() const {
-    const double h = options.time_step;
-    return options.contact_tolerance + h * h * scene.scene().gravity.norm();
-  }
-
-  // At construction: the pairs near their colliders form the set, the others get weight 0, and L
-  // is assembled from that (before anything is factored).
-  void initialContactSet() {
-    contact_block = scene.blockIndex(contactElementType());
-    if (contactCount() == 0) return;
-    for (int e = 0; e < contactCount(); ++e) scene.setElementEnabled(contact_block, e, false);
-    const ContactSetChange change = contactSetChange(scene, t, options.time_step, contactMargin(), x, v);
-    for (int e : change.entering) scene.setElementEnabled(contact_block, e, true);
-    system.assemble(scene);
-  }
-
-  // Pairs entering and leaving the set: their flags, L and every factor by one rank-k update and
-  // one rank-k downdate (GlobalSystem::addToDiagonal).
-  void changeContactSet(const std::vector<int>& entering, const std::vector<int>& leaving) {
-    const int n = scene.numParticles();
-    std::vector<int> vertices;
-    std::vector<double> deltas;
-    for (int e : entering) {
-      scene.setElementEnabled(contact_block, e, true);
-      vertices.push_back(e % n);
-      deltas.push_back(scene.elementWeight(contact_block, e));
-    }
-    for (int e : leaving) {
-      vertices.push_back(e % n);
-      deltas.push_back(-scene.elementWeight(contact_block, e));
-      scene.setElementEnabled(contact_block, e, false);
-    }
-    system.addToDiagonal(vertices, deltas);
-  }
-
-  // [project rule] A contact set change of more than this many pairs assembles L and refactors
-  // instead of updating: on the 50 x 50 cloth a batched update of both blend factors costs about
-  // as much per pair as 1/400 of a new assembly with both factorizations (docs/method.md,
-  // "Contact"); refactoring a little early also resets the updates' round-off.
-  static constexpr int kMaxContactUpdateColumns = 256;
-  // The log of updates since the last assembly is bounded too (a checkpoint's restore replays it).
-  static constexpr int kMaxContactLogColumns = 4096;
-
-  // The broad phase at the start of a step (and after setState), before anything is solved. A
-  // change of the set updates the factors, or, when it is large (a landing) or the updates since
-  // L was last assembled are many, assembles L and factors it again. Energy: a pair enters or
-  // leaves out of contact (E = 0 both sides), so nothing is booked; one that enters already
-  // inside (it moved farther than the margin) makes H jump by its contact energy, which is not
-  // booked either: the blend takes it out, as it takes the final projection's additions.
+  // The broad phase (ContactResolver::updateSet); a pair that entered inside changed the
+  // potential of x.
   void updateContactSet() {
-    if (contactCount() == 0) return;
-    const ContactSetChange change = contactSetChange(scene, t, options.time_step, contactMargin(), x, v);
-    if (change.empty()) return;
-    const int columns = static_cast<int>(change.entering.size() + change.leaving.size());
-    if (columns > kMaxContactUpdateColumns || contact_log_columns + columns > kMaxContactLogColumns) {
-      for (int e : change.entering) scene.setElementEnabled(contact_block, e, true);
-      for (int e : change.leaving) scene.setElementEnabled(contact_block, e, false);
-      system.assemble(scene);
-      system.refactorAll();
-      contact_log.clear();
-      contact_log_columns = 0;
-    } else {
-      changeContactSet(change.entering, change.leaving);
-      for (int e : change.entering) contact_log.push_back(e + 1);
-      for (int e : change.leaving) contact_log.push_back(-(e + 1));
-      contact_log.push_back(0);
-      contact_log_columns += columns;
-    }
-    if (change.entered_inside) potential = backend->potential(kX, t);
-  }
-
-  // The contact flags before a checkpoint's log (those L was last assembled from), checked
-  // against it; throws for a log that does not fit the flags or the scene.
-  std::vector<std::uint8_t> contactBaseFlags(const CheckpointData& d) const {
-    const auto corrupt = [] {
-      throw InvalidInputError("checkpoint: its contact set changes do not fit its contact set");
-    };
-    if (contactCount() == 0) {
-      if (!d.contact_log.empty()) corrupt();
-      return {};
-    }
-    std::vector<std::uint8_t> flags = d.enabled[static_cast<std::size_t>(contact_block)];
-    if (!d.contact_log.empty() && d.contact_log.back() != 0) corrupt();
-    for (std::size_t i = d.contact_log.size(); i-- > 0;) {
-      const std::int64_t entry = d.contact_log[i];
-      if (entry == 0) continue;
-      const std::int64_t e = (entry > 0 ? entry : -entry) - 1;
-      if (e >= contactCount()) corrupt();
-      std::uint8_t& flag = flags[static_cast<std::size_t>(e)];
-      if ((flag != 0) != (entry > 0)) corrupt();  // it entered: it is in; it left: it is out
-      flag = entry > 0 ? 0 : 1;
-    }
-    return flags;
-  }
-
-  // Replays a checkpoint's log on L and factors assembled from its base flags: the same rank
-  // updates in the same order give the same factors, bit for bit.
-  void replayContactLog(const std::vector<std::int32_t>& log) {
-    std::vector<int> entering, leaving;
-    for (std::int32_t entry : log) {
-      if (entry > 0) entering.push_back(entry - 1);
-      if (entry < 0) leaving.push_back(-entry - 1);
-      if (entry != 0) continue;
-      changeContactSet(entering, leaving);
-      entering.clear();
-      leaving.clear();
-    }
-    contact_log = log;
-    contact_log_columns =
-        static_cast<int>(std::count_if(log.begin(), log.end(), [](std::int32_t entry) { return entry != 0; }));
+    if (contact.updateSet(t, x, v)) potential = backend->potential(kX, t);
   }
 
   // ---- element changes (docs/method.md, "Per-frame input") ----------------------------------
@@ -658,7 +523,7 @@ struct Simulator::Impl {
     backend->read(kXPrev, d.x_prev);
     backend->read(kVPrev, d.v_prev);
     d.forcing = scene.forcingState();
-    d.contact_log = contact_log;
+    d.contact_log = contact.log();
     for (std::size_t b = 0; b < scene.blocks().size(); ++b) {
       const ElementBlock& block = scene.blocks()[b];
       d.stiffness.emplace_back();
@@ -701,7 +566,7 @@ struct Simulator::Impl {
     const std::size_t motions = d.forcing.colliders.size();
     if (motions != 0 && motions != scene.scene().colliders.size())
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");
-    contactBaseFlags(d);  // its checks of the contact log
+    contact.baseFlags(d.enabled, d.contact_log);  // its checks of the contact log
     for (const Pin& p : d.pin_list)
       if (p.vertex >= scene.numParticles())
         throw InvalidInputError("checkpoint: pin vertex " + std::to_string(p.vertex) + " out of range (the scene has " +
@@ -709,19 +574,16 @@ struct Simulator::Impl {
   }
 
   void applyCheckpoint(const CheckpointData& d) {
-    const std::vector<std::uint8_t> contact_base = contactBaseFlags(d);
+    const std::vector<std::uint8_t> contact_base = contact.baseFlags(d.enabled, d.contact_log);
     if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
-    if (contactCount() == 0) {
+    if (contact.count() == 0) {
       restoreElements(d, nullptr);
       applyLaplacianFromScene();
     } else {
       // With colliders, L is assembled and factored from the flags of the checkpoint's last
-      // assembly and its contact set changes since are replayed, so that the run continues bit
-      // for bit (rank updates on other factors would differ in round-off).
+      // assembly and its contact set changes since are replayed (ContactResolver::restore).
       restoreElements(d, &contact_base);
-      system.assemble(scene);
-      system.refactorAll();
-      replayContactLog(d.contact_log);
+      contact.restore(d.contact_log);
     }
     backend->write(kX, d.x);
     backend->write(kV, d.v);
@@ -750,7 +612,7 @@ struct Simulator::Impl {
       const int bi = static_cast<int>(b);
       for (int e = 0; e < block.count; ++e) {
         const double k = d.stiffness[b][static_cast<std::size_t>(e)];
-        const bool on = (contact_flags && bi == contact_block ? *contact_flags : d.enabled[b])[std::size_t(e)] != 0;
+        const bool on = (contact_flags && bi == contact.block() ? *contact_flags : d.enabled[b])[std::size_t(e)] != 0;
         const bool k_differs = block.type->hasStiffness() && block.type->stiffness(scene.scene(), e) != k;
         if (!k_differs && scene.elementEnabled(bi, e) == on) continue;
         const double w_old = scene.elementWeight(bi, e);
@@ -788,11 +650,7 @@ struct Simulator::Impl {
   bool new_state_on_host = false;     // the blend left (x_new, v_new) equal to (kXNew, kVNew)
   double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
   StepReport report;
-  int contact_block = -1;  // the contact element type's block
-  // The contact set's changes since L was last assembled, in order: e + 1 for pair e entering,
-  // -(e + 1) for one leaving, 0 closing each step's batch; checkpoints carry it (restore).
-  std::vector<std::int32_t> contact_log;
-  int contact_log_columns = 0;  // its nonzero entries
+  ContactResolver contact;
 };
 
 void Simulator::setElementStiffness(ElementKind kind, int index, double stiffness) {

@@ -12,6 +12,8 @@
 
 namespace stabint {
 
+class ContactResolver;
+
 struct CheckpointData {
   std::uint64_t scene_fingerprint = 0;  // sceneFingerprint() of the scene it belongs to
   std::int64_t particles = 0, pins = 0;
@@ -37,6 +39,11 @@ struct CheckpointData {
 /// FNV-1a over the masses, rest positions and colliders (every field): tells a checkpoint of
 /// another scene apart.
 std::uint64_t sceneFingerprint(const Scene& scene);
+
+/// What a restore can check before it changes anything: InvalidInputError unless `d` belongs to
+/// `scene` (particles, fingerprint, element and collider counts, its contact log as `contact`
+/// reads it, pin vertices).
+void checkRestorable(const CheckpointData& d, const SceneData& scene, const ContactResolver& contact);
 
 std::string serializeCheckpoint(const CheckpointData& data);
 /// Throws FileFormatError(origin, 0, ...) for a wrong header, version, or truncated/oversized data.

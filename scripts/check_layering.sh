@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# The layering rule (docs/development.md, "Layering"): the element math, the scene, the solver and
-# the backends sit below the stepping drivers. They take the library's shared types from the leaf
+# The layering rule (docs/development.md, "Layering"): the element math, the scene, the solver,
+# the backends and contact resolution sit below the stepping drivers (contact/ there so that both
+# drivers can hold a ContactResolver). They take the library's shared types from the leaf
 # header stabint/types.hpp and include neither the stepping facade (stabint/simulator.hpp,
 # batch.hpp, events.hpp, stabint.hpp) nor any header of host/integrator/. Fails, naming the file
 # and line, on an include that breaks it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-lower=(host/elements host/scene host/solver host/cpu host/opencl host/opencl_disabled host/backend.hpp host/device_profiles.hpp
+lower=(host/elements host/scene host/solver host/contact host/cpu host/opencl host/opencl_disabled host/backend.hpp host/device_profiles.hpp
        host/device_profiles.cpp host/kernel_constants.hpp host/kernel_constants.cpp)
 if violations=$(grep -rnE '#include *[<"](stabint/(simulator|batch|events|stabint)\.hpp|integrator/)' "${lower[@]}"); then
   echo "$violations" >&2

@@ -1,7 +1,7 @@
 // Contact (docs/method.md, "Contact"): one element per (collider, particle) pair,
 //   E = w_j/2 |x_j - p_j|^2,   p_j = the closest point of the collider's outside to x_j,
 // so E = 0 and p_j = x_j out of contact. A x = x_j (coefficient [1]), w_j = stiffness * m_j for
-// the pairs of the contact set (the broad phase of host/integrator/contact.cpp enables them),
+// the pairs of the contact set (the broad phase of host/contact/ enables them),
 // 0 for the others, which then neither enter the global matrix nor pull their particle toward
 // its previous iterate. The elements are not a Scene list: they are every particle against every
 // collider, so this type implements ElementType itself, with the generic pass's (kindPass)

@@ -1,6 +1,6 @@
 #pragma once
 // Collider geometry, in the one form the contact element (host/elements/contact.cpp,
-// kernels/contact.cl) and the step's friction and final projection (host/integrator/contact.cpp)
+// kernels/contact.cl) and the step's broad phase, friction and final projection (host/contact/)
 // share: a collider at time t is kColliderGeometry reals,
 //   shape, center (3), a (3), radius
 // at the offsets kGeometryShape, kGeometryCenter, kGeometryA and kGeometryRadius

@@ -1,5 +1,7 @@
 #include "integrator/checkpoint.hpp"
 
+#include "contact/contact_resolver.hpp"
+#include "elements/element_type.hpp"
 #include "io/text_reader.hpp"
 #include "out_of_memory.hpp"
 #include "scene/validation.hpp"
@@ -228,6 +230,29 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
     mix(fields, static_cast<Eigen::Index>(std::size(fields)));
   }
   return hash;
+}
+
+void checkRestorable(const CheckpointData& d, const SceneData& scene, const ContactResolver& contact) {
+  if (d.particles != scene.numParticles() || d.scene_fingerprint != sceneFingerprint(scene.scene()))
+    throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
+                            " particles, or other masses, rest shape or colliders)");
+  const std::size_t num_blocks = scene.blocks().size();
+  bool same_elements = d.stiffness.size() == num_blocks;
+  for (std::size_t b = 0; same_elements && b < num_blocks; ++b) {
+    const ElementBlock& block = scene.blocks()[b];
+    const std::size_t count =
+        block.type == &pinElementType() ? d.pin_list.size() : static_cast<std::size_t>(block.count);
+    same_elements = d.stiffness[b].size() == count;
+  }
+  if (!same_elements) throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
+  const std::size_t motions = d.forcing.colliders.size();
+  if (motions != 0 && motions != scene.scene().colliders.size())
+    throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");
+  contact.baseFlags(d.enabled, d.contact_log);  // its checks of the contact log
+  for (const Pin& p : d.pin_list)
+    if (p.vertex >= scene.numParticles())
+      throw InvalidInputError("checkpoint: pin vertex " + std::to_string(p.vertex) + " out of range (the scene has " +
+                              std::to_string(scene.numParticles()) + " particles)");
 }
 
 std::string serializeCheckpoint(const CheckpointData& d) {

@@ -12,6 +12,8 @@
 
 namespace stabint {
 
+class ContactResolver;
+
 struct CheckpointData {
   std::uint64_t scene_fingerprint = 0;  // sceneFingerprint() of the scene it belongs to
   std::int64_t particles = 0, pins = 0;
@@ -29,14 +31,19 @@ struct CheckpointData {
   /// without one) and enabled flag, as run-time changes left them.
   std::vector<std::vector<double>> stiffness;
   std::vector<std::vector<std::uint8_t>> enabled;
-  /// The contact set's changes since the global matrix was last assembled (Simulator::Impl's
-  /// contact_log): e + 1 entering, -(e + 1) leaving, 0 closing a step's batch.
+  /// The contact set's changes since the global matrix was last assembled (ContactResolver::log): e + 1 entering, -(e +
+  /// 1) leaving, 0 closing a step's batch.
   std::vector<std::int32_t> contact_log;
 };
 
 /// FNV-1a over the masses, rest positions and colliders (every field): tells a checkpoint of
 /// another scene apart.
 std::uint64_t sceneFingerprint(const Scene& scene);
+
+/// What a restore can check before it changes anything: InvalidInputError unless `d` belongs to
+/// `scene` (particles, fingerprint, element and collider counts, its contact log as `contact`
+/// reads it, pin vertices).
+void checkRestorable(const CheckpointData& d, const SceneData& scene, const ContactResolver& contact);
 
 std::string serializeCheckpoint(const CheckpointData& data);
 /// Throws FileFormatError(origin, 0, ...) for a wrong header, version, or truncated/oversized data.

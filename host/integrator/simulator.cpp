@@ -1,18 +1,21 @@
 // The integrator driver (docs/method.md sections 2-8), written once against the Backend interface:
-// y formation, finalisation, the energy-tracking blend, damping and the per-step bookkeeping.
+// y formation, finalisation, the energy-tracking blend, damping, the per-step bookkeeping, events
+// and checkpoints. It calls, rather than holds, contact (ContactResolver), per-frame input
+// (FrameInput) and element changes (ElementChanges).
 #include <stabint/simulator.hpp>
 
 #include "backend.hpp"
 #include "out_of_memory.hpp"
+#include "contact/contact_resolver.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
 #include "integrator/checkpoint.hpp"
-#include "integrator/contact.hpp"
 #include "integrator/damping.hpp"
+#include "integrator/element_changes.hpp"
+#include "integrator/frame_input.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
 #include "scene/scene_data.hpp"
-#include "scene/validation.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 
@@ -20,7 +23,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <map>
 #include <vector>
 
 namespace stabint {
@@ -42,10 +44,12 @@ struct Simulator::Impl {
         solver(*backend, system, kSolverScratch),
         steps_of(*backend, solver),
         x(s.positions),
-        v(s.velocities) {
+        v(s.velocities),
+        contact(scene, system, *backend, options, t, x, v),  // the contact set, before anything is factored
+        elements(scene, system, *backend),
+        input(scene, options.time_step, inputLimit(choice)) {
     // The implicit systems are factored now, so that masses too small for the stiffnesses are
     // refused here, naming them, rather than failing the first step().
-    initialContactSet();
     solver.setScene(&scene);
     factorIntegratorSystems(system, options.integrator, options.time_step);
     // CG needs no factor: they only validated the systems, and element changes would keep
@@ -158,29 +162,6 @@ struct Simulator::Impl {
 
   bool momentumConserved() const { return stabint::momentumConserved(scene.scene(), scene.hasUserForces()); }
 
-  // Contact after the solve (docs/method.md, "Contact"), on the accepted state: friction takes
-  // kinetic energy out and H* with it, like damping; the final projection moves the positions out
-  // of the colliders and takes the energy that removes out of H*. Returns true when the
-  // velocities changed; p_new follows the positions.
-  bool resolveContact(double t1, double& target_now, PotentialEnergy& p_new, StepReport& report) {
-    const bool rubbed = applyFriction(scene, t1, options.time_step, x_new, v_new, report.friction) > 0;
-    target_now -= report.friction;
-    if (projectOutOfColliders(scene, t1, options.contact_tolerance, x_new) > 0) {
-      backend->write(kXNew, x_new);
-      backend->read(kXNew, x_new);  // what the slot holds (OpenCL float rounds)
-      const PotentialEnergy projected = backend->potential(kXNew, t1);
-      ++report.energy_evaluations;
-      // [project rule] Only the energy the projection removes is booked (an inelastic correction,
-      // like a hard impact); energy it adds, by lifting particles against gravity or stretching
-      // their elements, is the solver's residual and is left to the blend to take out: booked,
-      // it let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
-      report.contact_projection = std::min(0.0, projected.total() - p_new.total());
-      target_now += report.contact_projection;
-      p_new = projected;
-    }
-    return rubbed;
-  }
-
   // The blend's corrections of the accepted state (BlendStep::beginCorrections), on the host
   // copies x_new, v_new; the position move toward the partner evaluates its potentials here.
   // Returns true when the velocities changed; p_new follows the positions.
@@ -237,7 +218,7 @@ struct Simulator::Impl {
       backend->readBoth(kXNew, x_new, kVNew, v_new);
     if (!x_new.allFinite() || !v_new.allFinite()) refuse(nonFiniteState(r.step, t, t1, options.integrator));
     bool velocities_changed = options.integrator == Integrator::EnergyBlend && correctBlendState(target_now, p_new);
-    if (!scene.scene().colliders.empty()) velocities_changed |= resolveContact(t1, target_now, p_new, r);
+    velocities_changed |= contact.resolve(kXNew, t1, x_new, v_new, target_now, p_new, r);
 
     // Damping acts on the accepted velocities; the energy it removes leaves the target too, so
     // the blend never undoes physical damping.
@@ -272,60 +253,19 @@ struct Simulator::Impl {
     return report;
   }
 
-  // ---- per-frame input (docs/method.md, "Per-frame input") ------------------------------------
-  void checkState(const Eigen::MatrixX3d& m, const char* field) const {
-    validation::checkInputRows(m, scene.numParticles(), field, inputLimit());
-  }
-  double inputLimit() const { return stabint::inputLimit(choice); }
-
-  void checkPin(int pin) const {
-    const int pins = static_cast<int>(scene.scene().pins.size());
-    if (pin < 0 || pin >= pins)
-      throw InvalidInputError("pin " + std::to_string(pin) + " out of range (the scene has " + std::to_string(pins) +
-                              " pins)");
+  // ---- discontinuous events: setState, grab, release, element changes ------------------------
+  // H* and the pending event energy move by the jump of H from h_before (the user's work);
+  // `kinetic` and `potential` are already those of the new state.
+  void bookEvent(double h_before) {
+    const double event = kinetic + potential.total() - h_before;
+    target += event;
+    pending_event_energy += event;
   }
 
-  void setPinTarget(int pin, const Eigen::Vector3d& q) {
-    checkPin(pin);
-    validation::checkInputVector(q, "pin " + std::to_string(pin) + ": target", inputLimit());
-    scene.rampPinTarget(pin, q, t, t + options.time_step);
-  }
-
-  void checkCollider(int collider) const {
-    const int colliders = static_cast<int>(scene.scene().colliders.size());
-    if (collider < 0 || collider >= colliders)
-      throw InvalidInputError("collider " + std::to_string(collider) + " out of range (the scene has " +
-                              std::to_string(colliders) + " colliders)");
-  }
-
-  // The bound of the scene's coordinates and speeds (validateScene): beyond it the contact
-  // energies overflow.
-  void checkColliderVector(int collider, const Eigen::Vector3d& value, const char* what) const {
-    checkCollider(collider);
-    if (!value.allFinite() || !(value.cwiseAbs().maxCoeff() <= validation::kMaxMagnitude))
-      throw InvalidInputError("collider " + std::to_string(collider) + ": " + what +
-                              " is not finite or exceeds 1e150 in magnitude");
-  }
-
-  void setColliderPosition(int collider, const Eigen::Vector3d& position) {
-    checkColliderVector(collider, position, "position");
-    scene.rampColliderPosition(collider, position, t, t + options.time_step);
-  }
-
-  void setColliderVelocity(int collider, const Eigen::Vector3d& velocity) {
-    checkColliderVector(collider, velocity, "velocity");
-    scene.setColliderVelocity(collider, velocity, t);
-  }
-
-  void setExternalForces(const Eigen::MatrixX3d& f) {
-    checkState(f, "external forces");
-    scene.rampUserForces(f, t, t + options.time_step);
-  }
-
-  // A discontinuous event: H* moves by the jump of H (the user's work), BDF2 restarts.
+  // A new state: the contact set follows it, BDF2 restarts.
   void setState(const Eigen::MatrixX3d& x_set, const Eigen::MatrixX3d& v_set) {
-    checkState(x_set, "positions");
-    checkState(v_set, "velocities");
+    input.checkRows(x_set, "positions");
+    input.checkRows(v_set, "velocities");
     const double h_before = kinetic + potential.total();
     backend->write(kX, x_set);
     backend->write(kV, v_set);
@@ -335,311 +275,41 @@ struct Simulator::Impl {
     updateContactSet();  // so that the event books the contact energy of the new positions
     potential = backend->potential(kX, t);
     kinetic = kineticEnergy(v);
-    const double event = kinetic + potential.total() - h_before;
-    target += event;
-    pending_event_energy += event;
+    bookEvent(h_before);
     has_history = false;
   }
 
-  static bool samePins(const std::vector<Pin>& a, const std::vector<Pin>& b) {
-    return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const Pin& p, const Pin& q) {
-      return p.vertex == q.vertex && p.stiffness == q.stiffness && p.target.position == q.target.position &&
-             p.target.velocity == q.target.velocity && p.target.amplitude == q.target.amplitude &&
-             p.target.frequency == q.target.frequency;
-    });
-  }
-
-  // A new pin set (validated first: nothing changes when it throws): the element blocks and the
-  // backends follow, and the factors get one rank-1 update per particle whose pin stiffness
-  // changed. The caller books the energy.
-  void changePins(const std::vector<Pin>& pins) {
-    std::map<int, double> delta;
-    for (const Pin& p : scene.scene().pins) delta[p.vertex] -= p.stiffness;
-    for (const Pin& p : pins) delta[p.vertex] += p.stiffness;
-    scene.setPins(pins);
-    backend->elementsChanged();
-    const double one = 1.0;
-    for (const auto& [vertex, k] : delta) {
-      if (k == 0.0) continue;
-      if (system.changeIsHuge(&vertex, 1, &one, 1, k))
-        laplacian_from_scene = true;
-      else
-        system.addToDiagonal(vertex, k);
-    }
-    applyLaplacianFromScene();
-  }
-
-  // After changes of which one was too large for an update of L and the factors
-  // (GlobalSystem::changeIsHuge): L assembled from the scene's weights and every factor again.
-  void applyLaplacianFromScene() {
-    if (!laplacian_from_scene) return;
-    laplacian_from_scene = false;
-    system.assemble(scene);
-    system.refactorAll();
-  }
-
-  // Grab and release: the pin set changes, and H* moves by the jump of H it causes.
-  void changePinsAsEvent(const std::vector<Pin>& pins) {
+  // A change of the elements (`change`, which validates before it changes anything) as an event.
+  template <typename Change>
+  void changeElementsAsEvent(Change&& change) {
     const double h_before = kinetic + potential.total();
-    changePins(pins);
+    change();
     potential = backend->potential(kX, t);
-    const double event = kinetic + potential.total() - h_before;
-    target += event;
-    pending_event_energy += event;
+    bookEvent(h_before);
   }
 
   int grab(int vertex, double stiffness) {
-    if (vertex < 0 || vertex >= scene.numParticles())
-      throw InvalidInputError("grab: vertex " + std::to_string(vertex) + " out of range (the scene has " +
-                              std::to_string(scene.numParticles()) + " particles)");
-    if (!std::isfinite(stiffness) || !(stiffness > 0.0) || !(stiffness <= validation::kMaxMagnitude))
-      throw InvalidInputError("grab: stiffness " + validation::cat(stiffness) + " must be finite, > 0 and at most " +
-                              validation::cat(validation::kMaxMagnitude));
-    std::vector<Pin> pins = scene.scene().pins;
-    Pin handle;
-    handle.vertex = vertex;
-    handle.stiffness = stiffness;
-    handle.target.position = x.row(vertex).transpose();
-    pins.push_back(handle);
-    changePinsAsEvent(pins);
+    const std::vector<Pin> pins = input.pinsAfterGrab(vertex, stiffness, x);
+    changeElementsAsEvent([&] { elements.changePins(pins); });
     return static_cast<int>(pins.size()) - 1;
   }
 
   void release(int pin) {
-    checkPin(pin);
-    std::vector<Pin> pins = scene.scene().pins;
-    if (pins[pin].stiffness == 0.0)
-      throw InvalidInputError("release: pin " + std::to_string(pin) + " is already released (stiffness 0)");
-    pins[pin].stiffness = 0.0;
-    pins[pin].target = PinTarget{};  // a released pin does no work
-    pins[pin].target.position = scene.pinTarget(pin, t);
-    changePinsAsEvent(pins);
+    const std::vector<Pin> pins = input.pinsAfterRelease(pin, t);
+    changeElementsAsEvent([&] { elements.changePins(pins); });
   }
 
-  // ---- the contact set (docs/method.md, "Contact") -------------------------------------------
-  int contactCount() const {
-    return contact_block < 0 ? 0 : scene.blocks()[static_cast<std::size_t>(contact_block)].count;
+  void changeElements(ElementKind kind, const std::vector<int>& indices, const double* stiffness, bool enabled) {
+    changeElementsAsEvent([&] { elements.change(kind, indices, stiffness, enabled); });
   }
 
-  // Enter a pair while x_j or x_j + h v_j is this close to its collider: the final projection's
-  // depth plus the fall under gravity over one step beyond the prediction.
-  double contactMargin() const {
-    const double h = options.time_step;
-    return options.contact_tolerance + h * h * scene.scene().gravity.norm();
-  }
-
-  // At construction: the pairs near their colliders form the set, the others get weight 0, and L
-  // is assembled from that (before anything is factored).
-  void initialContactSet() {
-    contact_block = scene.blockIndex(contactElementType());
-    if (contactCount() == 0) return;
-    for (int e = 0; e < contactCount(); ++e) scene.setElementEnabled(contact_block, e, false);
-    const ContactSetChange change = contactSetChange(scene, t, options.time_step, contactMargin(), x, v);
-    for (int e : change.entering) scene.setElementEnabled(contact_block, e, true);
-    system.assemble(scene);
-  }
-
-  // Pairs entering and leaving the set: their flags, L and every factor by one rank-k update and
-  // one rank-k downdate (GlobalSystem::addToDiagonal).
-  void changeContactSet(const std::vector<int>& entering, const std::vector<int>& leaving) {
-    const int n = scene.numParticles();
-    std::vector<int> vertices;
-    std::vector<double> deltas;
-    for (int e : entering) {
-      scene.setElementEnabled(contact_block, e, true);
-      vertices.push_back(e % n);
-      deltas.push_back(scene.elementWeight(contact_block, e));
-    }
-    for (int e : leaving) {
-      vertices.push_back(e % n);
-      deltas.push_back(-scene.elementWeight(contact_block, e));
-      scene.setElementEnabled(contact_block, e, false);
-    }
-    system.addToDiagonal(vertices, deltas);
-  }
-
-  // [project rule] A contact set change of more than this many pairs assembles L and refactors
-  // instead of updating: on the 50 x 50 cloth a batched update of both blend factors costs about
-  // as much per pair as 1/400 of a new assembly with both factorizations (docs/method.md,
-  // "Contact"); refactoring a little early also resets the updates' round-off.
-  static constexpr int kMaxContactUpdateColumns = 256;
-  // The log of updates since the last assembly is bounded too (a checkpoint's restore replays it).
-  static constexpr int kMaxContactLogColumns = 4096;
-
-  // The broad phase at the start of a step (and after setState), before anything is solved. A
-  // change of the set updates the factors, or, when it is large (a landing) or the updates since
-  // L was last assembled are many, assembles L and factors it again. Energy: a pair enters or
-  // leaves out of contact (E = 0 both sides), so nothing is booked; one that enters already
-  // inside (it moved farther than the margin) makes H jump by its contact energy, which is not
-  // booked either: the blend takes it out, as it takes the final projection's additions.
+  // The broad phase (ContactResolver::updateSet); a pair that entered inside changed the
+  // potential of x.
   void updateContactSet() {
-    if (contactCount() == 0) return;
-    const ContactSetChange change = contactSetChange(scene, t, options.time_step, contactMargin(), x, v);
-    if (change.empty()) return;
-    const int columns = static_cast<int>(change.entering.size() + change.leaving.size());
-    if (columns > kMaxContactUpdateColumns || contact_log_columns + columns > kMaxContactLogColumns) {
-      for (int e : change.entering) scene.setElementEnabled(contact_block, e, true);
-      for (int e : change.leaving) scene.setElementEnabled(contact_block, e, false);
-      system.assemble(scene);
-      system.refactorAll();
-      contact_log.clear();
-      contact_log_columns = 0;
-    } else {
-      changeContactSet(change.entering, change.leaving);
-      for (int e : change.entering) contact_log.push_back(e + 1);
-      for (int e : change.leaving) contact_log.push_back(-(e + 1));
-      contact_log.push_back(0);
-      contact_log_columns += columns;
-    }
-    if (change.entered_inside) potential = backend->potential(kX, t);
+    if (contact.updateSet(t, x, v)) potential = backend->potential(kX, t);
   }
 
-  // The contact flags before a checkpoint's log (those L was last assembled from), checked
-  // against it; throws for a log that does not fit the flags or the scene.
-  std::vector<std::uint8_t> contactBaseFlags(const CheckpointData& d) const {
-    const auto corrupt = [] {
-      throw InvalidInputError("checkpoint: its contact set changes do not fit its contact set");
-    };
-    if (contactCount() == 0) {
-      if (!d.contact_log.empty()) corrupt();
-      return {};
-    }
-    std::vector<std::uint8_t> flags = d.enabled[static_cast<std::size_t>(contact_block)];
-    if (!d.contact_log.empty() && d.contact_log.back() != 0) corrupt();
-    for (std::size_t i = d.contact_log.size(); i-- > 0;) {
-      const std::int64_t entry = d.contact_log[i];
-      if (entry == 0) continue;
-      const std::int64_t e = (entry > 0 ? entry : -entry) - 1;
-      if (e >= contactCount()) corrupt();
-      std::uint8_t& flag = flags[static_cast<std::size_t>(e)];
-      if ((flag != 0) != (entry > 0)) corrupt();  // it entered: it is in; it left: it is out
-      flag = entry > 0 ? 0 : 1;
-    }
-    return flags;
-  }
-
-  // Replays a checkpoint's log on L and factors assembled from its base flags: the same rank
-  // updates in the same order give the same factors, bit for bit.
-  void replayContactLog(const std::vector<std::int32_t>& log) {
-    std::vector<int> entering, leaving;
-    for (std::int32_t entry : log) {
-      if (entry > 0) entering.push_back(entry - 1);
-      if (entry < 0) leaving.push_back(-entry - 1);
-      if (entry != 0) continue;
-      changeContactSet(entering, leaving);
-      entering.clear();
-      leaving.clear();
-    }
-    contact_log = log;
-    contact_log_columns =
-        static_cast<int>(std::count_if(log.begin(), log.end(), [](std::int32_t entry) { return entry != 0; }));
-  }
-
-  // ---- element changes (docs/method.md, "Per-frame input") ----------------------------------
-  // The block of an element kind, by the type's identifier (the names agree by construction).
-  int elementBlock(ElementKind kind) const {
-    if (static_cast<int>(kind) < static_cast<int>(ElementKind::Spring) ||
-        static_cast<int>(kind) > static_cast<int>(ElementKind::Pin))
-      throw InvalidInputError("element kind " + std::to_string(static_cast<int>(kind)) +
-                              " is not an ElementKind value");
-    for (std::size_t b = 0; b < scene.blocks().size(); ++b)
-      if (std::string(scene.blocks()[b].type->identifier()) == elementKindName(kind)) return static_cast<int>(b);
-    throw InvalidInputError(std::string("element kind ") + elementKindName(kind) + " has no element type");
-  }
-
-  void checkElement(int block, int index, const char* call) const {
-    const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
-    if (index < 0 || index >= b.count)
-      throw InvalidInputError(std::string(call) + ": " + b.type->name() + " " + std::to_string(index) +
-                              " out of range (the scene has " + std::to_string(b.count) + ")");
-  }
-
-  // L and its factors follow a change of element e's weight from w_old to its current one by
-  // the element's term (w - w_old) A^T A: a rank-R update or downdate, or (`how` Deferred) a
-  // change of L whose factors the caller refactors.
-  void updateSystem(int block, int e, double w_old,
-                    GlobalSystem::FactorChange how = GlobalSystem::FactorChange::RankUpdate) {
-    const double w_new = scene.elementWeight(block, e);
-    if (w_new == w_old) return;
-    const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
-    const ElementShape shape = b.type->shape();
-    const std::size_t stride = shape.shared_coefficients ? 0 : std::size_t(shape.rows * shape.vertices);
-    const int* vertices = &b.vertices[std::size_t(shape.vertices) * std::size_t(e)];
-    const double* a = b.coefficients.data() + stride * std::size_t(e);
-    // A huge change is left to applyLaplacianFromScene, which the caller runs after all changes.
-    if (system.changeIsHuge(vertices, shape.vertices, a, shape.rows, w_new - w_old))
-      laplacian_from_scene = true;
-    else
-      system.addElementTerm(vertices, shape.vertices, a, shape.rows, w_new - w_old, how);
-  }
-
-  // [project rule] A change of more than this many rank-1 columns (elements times rows of A_e)
-  // refactors instead of updating: an update costs 1/28 (spring of the 50 x 50 cloth) to 1/15
-  // (tet of a 3,264-particle bar) of a refactorization (docs/method.md, "Per-frame input"), so
-  // a few tens of columns break even.
-  static constexpr int kMaxUpdateColumns = 64;
-
-  // setElementStiffness (`stiffness` given) or setElementEnabled: everything is validated before
-  // L changes; then a discontinuous event whose jump of H moves H* alike.
-  void changeElements(ElementKind kind, std::vector<int> indices, const double* stiffness, bool enabled) {
-    const char* call = stiffness ? "setElementStiffness" : "setElementEnabled";
-    const int block = elementBlock(kind);
-    const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
-    for (int e : indices) checkElement(block, e, call);
-    // An index listed twice is changed once (its term would otherwise enter L twice).
-    std::sort(indices.begin(), indices.end());
-    indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
-    if (stiffness && !b.type->hasStiffness())
-      throw InvalidInputError(std::string(call) + ": a " + b.type->name() + " has no stiffness");
-    if (stiffness && (!std::isfinite(*stiffness) || !(*stiffness >= 0.0) || !(*stiffness <= validation::kMaxMagnitude)))
-      throw InvalidInputError(std::string(call) + ": " + b.type->name() + " stiffness " + validation::cat(*stiffness) +
-                              " must be finite, >= 0 and at most " + validation::cat(validation::kMaxMagnitude));
-    std::vector<double> w_old, k_old;
-    std::vector<bool> on_old;
-    for (int e : indices) {
-      w_old.push_back(scene.elementWeight(block, e));
-      k_old.push_back(b.type->stiffness(scene.scene(), e));
-      on_old.push_back(scene.elementEnabled(block, e));
-    }
-    if (stiffness) {
-      for (int e : indices) scene.setElementStiffness(block, e, *stiffness);
-      // The weight is k times a rest volume, area or inverse area: it must stay finite too. A
-      // refusal puts the old stiffnesses back (their params are recomputed bit for bit).
-      for (std::size_t i = 0; i < indices.size(); ++i) {
-        if (std::isfinite(scene.elementWeight(block, indices[i]))) continue;
-        const int bad = indices[i];
-        for (std::size_t j = indices.size(); j-- > 0;) scene.setElementStiffness(block, indices[j], k_old[j]);
-        throw InvalidInputError(std::string(call) + ": " + b.type->name() + " " + std::to_string(bad) + ": stiffness " +
-                                std::to_string(*stiffness) + " gives a weight that is not finite");
-      }
-    } else {
-      for (int e : indices) scene.setElementEnabled(block, e, enabled);
-    }
-    const double h_before = kinetic + potential.total();
-    const bool refactor = indices.size() * std::size_t(b.type->shape().rows) > std::size_t(kMaxUpdateColumns);
-    const auto how = refactor ? GlobalSystem::FactorChange::Deferred : GlobalSystem::FactorChange::RankUpdate;
-    try {
-      for (std::size_t i = 0; i < indices.size(); ++i) updateSystem(block, indices[i], w_old[i], how);
-      if (refactor && !laplacian_from_scene) system.refactorAll();
-      applyLaplacianFromScene();
-    } catch (const Error&) {
-      // The new system does not factor (a stiffness too large for the masses, as the constructor
-      // refuses it): the old stiffnesses and flags go back, with L and the factors from them.
-      for (std::size_t i = indices.size(); i-- > 0;) {
-        scene.setElementStiffness(block, indices[i], k_old[i]);
-        scene.setElementEnabled(block, indices[i], on_old[i]);
-      }
-      laplacian_from_scene = false;
-      system.assemble(scene);
-      system.refactorAll();
-      throw;
-    }
-    potential = backend->potential(kX, t);
-    const double event = kinetic + potential.total() - h_before;
-    target += event;
-    pending_event_energy += event;
-  }
-
+  // ---- checkpoints ------------------------------------------------------------------------------
   CheckpointData checkpointData() const {
     CheckpointData d;
     d.scene_fingerprint = sceneFingerprint(scene.scene());
@@ -658,16 +328,8 @@ struct Simulator::Impl {
     backend->read(kXPrev, d.x_prev);
     backend->read(kVPrev, d.v_prev);
     d.forcing = scene.forcingState();
-    d.contact_log = contact_log;
-    for (std::size_t b = 0; b < scene.blocks().size(); ++b) {
-      const ElementBlock& block = scene.blocks()[b];
-      d.stiffness.emplace_back();
-      d.enabled.emplace_back();
-      for (int e = 0; e < block.count; ++e) {
-        d.stiffness.back().push_back(block.type->stiffness(scene.scene(), e));
-        d.enabled.back().push_back(scene.elementEnabled(static_cast<int>(b), e) ? 1 : 0);
-      }
-    }
+    d.contact_log = contact.log();
+    elements.save(d);
     return d;
   }
 
@@ -675,7 +337,7 @@ struct Simulator::Impl {
   // (checkRestorable); what only applying shows (a pin set the scene refuses, stiffnesses whose
   // system does not factor) puts the state taken before back, through the same path.
   void restore(const CheckpointData& d) {
-    checkRestorable(d);
+    checkRestorable(d, scene, contact);
     const CheckpointData before = checkpointData();
     try {
       applyCheckpoint(d);
@@ -685,43 +347,15 @@ struct Simulator::Impl {
     }
   }
 
-  void checkRestorable(const CheckpointData& d) const {
-    if (d.particles != scene.numParticles() || d.scene_fingerprint != sceneFingerprint(scene.scene()))
-      throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
-                              " particles, or other masses, rest shape or colliders)");
-    const std::size_t num_blocks = scene.blocks().size();
-    bool same_elements = d.stiffness.size() == num_blocks;
-    for (std::size_t b = 0; same_elements && b < num_blocks; ++b) {
-      const ElementBlock& block = scene.blocks()[b];
-      const std::size_t count =
-          block.type == &pinElementType() ? d.pin_list.size() : static_cast<std::size_t>(block.count);
-      same_elements = d.stiffness[b].size() == count;
-    }
-    if (!same_elements) throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
-    const std::size_t motions = d.forcing.colliders.size();
-    if (motions != 0 && motions != scene.scene().colliders.size())
-      throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");
-    contactBaseFlags(d);  // its checks of the contact log
-    for (const Pin& p : d.pin_list)
-      if (p.vertex >= scene.numParticles())
-        throw InvalidInputError("checkpoint: pin vertex " + std::to_string(p.vertex) + " out of range (the scene has " +
-                                std::to_string(scene.numParticles()) + " particles)");
-  }
-
   void applyCheckpoint(const CheckpointData& d) {
-    const std::vector<std::uint8_t> contact_base = contactBaseFlags(d);
-    if (!samePins(d.pin_list, scene.scene().pins)) changePins(d.pin_list);
-    if (contactCount() == 0) {
-      restoreElements(d, nullptr);
-      applyLaplacianFromScene();
+    const std::vector<std::uint8_t> contact_base = contact.baseFlags(d.enabled, d.contact_log);
+    if (contact.count() == 0) {
+      elements.restore(d, contact.block(), nullptr);
     } else {
       // With colliders, L is assembled and factored from the flags of the checkpoint's last
-      // assembly and its contact set changes since are replayed, so that the run continues bit
-      // for bit (rank updates on other factors would differ in round-off).
-      restoreElements(d, &contact_base);
-      system.assemble(scene);
-      system.refactorAll();
-      replayContactLog(d.contact_log);
+      // assembly and its contact set changes since are replayed (ContactResolver::restore).
+      elements.restore(d, contact.block(), &contact_base);
+      contact.restore(d.contact_log);
     }
     backend->write(kX, d.x);
     backend->write(kV, d.v);
@@ -740,27 +374,6 @@ struct Simulator::Impl {
     report = StepReport{};
   }
 
-  // The stiffnesses and enabled flags of a checkpoint (counts checked by restore): elements that
-  // differ are changed as setElementStiffness would, without an event (H* is restored). With
-  // `contact_flags` the contact block takes those flags and L and the factors are left to the
-  // caller, who assembles and factors them again.
-  void restoreElements(const CheckpointData& d, const std::vector<std::uint8_t>* contact_flags) {
-    for (std::size_t b = 0; b < scene.blocks().size(); ++b) {
-      const ElementBlock& block = scene.blocks()[b];
-      const int bi = static_cast<int>(b);
-      for (int e = 0; e < block.count; ++e) {
-        const double k = d.stiffness[b][static_cast<std::size_t>(e)];
-        const bool on = (contact_flags && bi == contact_block ? *contact_flags : d.enabled[b])[std::size_t(e)] != 0;
-        const bool k_differs = block.type->hasStiffness() && block.type->stiffness(scene.scene(), e) != k;
-        if (!k_differs && scene.elementEnabled(bi, e) == on) continue;
-        const double w_old = scene.elementWeight(bi, e);
-        if (k_differs) scene.setElementStiffness(bi, e, k);
-        if (scene.elementEnabled(bi, e) != on) scene.setElementEnabled(bi, e, on);
-        if (!contact_flags) updateSystem(bi, e, w_old);
-      }
-    }
-  }
-
   // Nothing was committed: the slots kX/kV and the host copies still hold the last finite state.
   [[noreturn]] static void refuse(const StepRefusal& refusal) {
     if (refusal.energy_limit) throw EnergyLimitError(refusal.message, refusal.step);
@@ -769,7 +382,6 @@ struct Simulator::Impl {
 
   SimulatorOptions options;
   SceneData scene;
-  bool laplacian_from_scene = false;  // a change since the last assembly was too large to update
   BackendSelection choice;
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
@@ -788,11 +400,9 @@ struct Simulator::Impl {
   bool new_state_on_host = false;     // the blend left (x_new, v_new) equal to (kXNew, kVNew)
   double pending_event_energy = 0.0;  // booked by discontinuous input since the last step
   StepReport report;
-  int contact_block = -1;  // the contact element type's block
-  // The contact set's changes since L was last assembled, in order: e + 1 for pair e entering,
-  // -(e + 1) for one leaving, 0 closing each step's batch; checkpoints carry it (restore).
-  std::vector<std::int32_t> contact_log;
-  int contact_log_columns = 0;  // its nonzero entries
+  ContactResolver contact;  // the contact set; friction and the final projection after the solve
+  ElementChanges elements;  // pins, stiffnesses and flags, with L and its factors
+  FrameInput input;         // checks and ramps the user's input
 };
 
 void Simulator::setElementStiffness(ElementKind kind, int index, double stiffness) {
@@ -808,8 +418,8 @@ void Simulator::setElementEnabled(ElementKind kind, const std::vector<int>& indi
   impl_->changeElements(kind, indices, nullptr, enabled);
 }
 bool Simulator::elementEnabled(ElementKind kind, int index) const {
-  const int block = impl_->elementBlock(kind);
-  impl_->checkElement(block, index, "elementEnabled");
+  const int block = impl_->elements.block(kind);
+  impl_->elements.checkIndex(block, index, "elementEnabled");
   return impl_->scene.elementEnabled(block, index);
 }
 
@@ -839,24 +449,26 @@ std::string Simulator::backendDescription() const {
   return impl_->backend->description() + (reason.empty() ? "" : " [" + reason + "]");
 }
 
-void Simulator::setPinTarget(int pin, const Eigen::Vector3d& target) { impl_->setPinTarget(pin, target); }
+void Simulator::setPinTarget(int pin, const Eigen::Vector3d& target) {
+  impl_->input.setPinTarget(pin, target, impl_->t);
+}
 Eigen::Vector3d Simulator::pinTarget(int pin) const {
-  impl_->checkPin(pin);
+  impl_->input.checkPin(pin);
   return impl_->scene.pinTarget(pin, impl_->t);
 }
-void Simulator::setExternalForces(const Eigen::MatrixX3d& forces) { impl_->setExternalForces(forces); }
+void Simulator::setExternalForces(const Eigen::MatrixX3d& forces) { impl_->input.setExternalForces(forces, impl_->t); }
 void Simulator::setColliderPosition(int collider, const Eigen::Vector3d& position) {
-  impl_->setColliderPosition(collider, position);
+  impl_->input.setColliderPosition(collider, position, impl_->t);
 }
 void Simulator::setColliderVelocity(int collider, const Eigen::Vector3d& velocity) {
-  impl_->setColliderVelocity(collider, velocity);
+  impl_->input.setColliderVelocity(collider, velocity, impl_->t);
 }
 Eigen::Vector3d Simulator::colliderPosition(int collider) const {
-  impl_->checkCollider(collider);
+  impl_->input.checkCollider(collider);
   return impl_->scene.colliderPosition(collider, impl_->t);
 }
 Eigen::Vector3d Simulator::colliderVelocity(int collider) const {
-  impl_->checkCollider(collider);
+  impl_->input.checkCollider(collider);
   return impl_->scene.colliderVelocity(collider, impl_->t);
 }
 void Simulator::setState(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {

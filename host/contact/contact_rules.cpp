@@ -1,4 +1,4 @@
-#include "integrator/contact.hpp"
+#include "contact/contact_rules.hpp"
 
 #include "elements/contact.hpp"
 #include "elements/element_type.hpp"

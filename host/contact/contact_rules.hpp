@@ -1,8 +1,9 @@
 #pragma once
-// What the step does for contact (docs/method.md, "Contact"): before the solve, the broad phase
-// that picks the (collider, particle) pairs whose contact element is active; after it, Coulomb
-// friction on the velocities and the final projection of the positions. The contact energy
-// itself is an element (host/elements/contact.cpp) and acts inside every solve.
+// The contact rules per (collider, particle) pair (docs/method.md, "Contact"), stateless: the
+// broad phase that picks the pairs whose contact element is active, Coulomb friction on the
+// velocities and the final projection of the positions. ContactResolver (contact_resolver.hpp)
+// applies them in the step; the contact energy itself is an element (host/elements/contact.cpp)
+// and acts inside every solve.
 #include <Eigen/Core>
 
 #include <vector>

@@ -1,0 +1,79 @@
+#pragma once
+// Contact resolution in the step (docs/method.md, "Contact"), one unit a stepping driver holds
+// and calls: before the solve, the contact set (which (collider, particle) contact elements are
+// active) kept by the broad phase, with L and the factors following it; after the solve,
+// friction and the final projection on the accepted state; for checkpoints, the log of the set's
+// changes that lets a restore rebuild the factors bit for bit. The per-pair rules are
+// contact_rules.hpp's; the contact energy itself is an element (host/elements/contact.cpp,
+// kernels/contact.cl) that acts inside every solve. It sits below the drivers (it includes
+// neither them nor the facade: scripts/check_layering.sh), so that the batch can hold one too.
+#include "backend.hpp"
+
+#include <stabint/types.hpp>
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <vector>
+
+namespace stabint {
+
+class GlobalSystem;
+class SceneData;
+
+class ContactResolver {
+ public:
+  /// The set at time t from (x, v): the pairs near their colliders are in, the others get weight
+  /// 0, and L is assembled from that (before anything is factored).
+  ContactResolver(SceneData& scene, GlobalSystem& system, Backend& backend, const SimulatorOptions& options, double t,
+                  const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
+
+  /// The number of (collider, particle) pairs: 0 without colliders.
+  int count() const;
+  /// The contact element type's block in the scene (-1 without one).
+  int block() const { return block_; }
+
+  /// The broad phase at the start of a step from (x, v) at time t (and after setState), before
+  /// anything is solved. A change of the set updates the factors, or, when it is large (a
+  /// landing) or the updates since L was last assembled are many, assembles L and factors it
+  /// again. Energy: a pair enters or leaves out of contact (E = 0 both sides), so nothing is
+  /// booked; one that enters already inside (it moved farther than the margin) makes H jump by
+  /// its contact energy, which is not booked either: the blend takes it out, as it takes the
+  /// final projection's additions. Returns true in that case: the potential of x changed.
+  bool updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
+
+  /// After the solve, on the accepted state's host copies (x, v) at t1, whose positions the
+  /// backend's `x_slot` holds too: friction takes kinetic energy out and `target` (H*) with it,
+  /// like damping; the final projection moves the positions out of the colliders (the slot
+  /// follows) and takes the energy that removes out of `target`. Books both in `report`; `p`
+  /// follows the positions. Returns true when the velocities changed.
+  bool resolve(int x_slot, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target, PotentialEnergy& p,
+               StepReport& report);
+
+  /// The set's changes since L was last assembled, in order: e + 1 for pair e entering, -(e + 1)
+  /// for one leaving, 0 closing each step's batch; checkpoints carry it.
+  const std::vector<std::int32_t>& log() const { return log_; }
+  /// The contact flags before a checkpoint's `log` (those L was last assembled from), from its
+  /// per-block `enabled` flags, checked against them; throws InvalidInputError for a log that
+  /// does not fit the flags or the scene.
+  std::vector<std::uint8_t> baseFlags(const std::vector<std::vector<std::uint8_t>>& enabled,
+                                      const std::vector<std::int32_t>& log) const;
+  /// A checkpoint's set, with the scene's contact flags set to its baseFlags: L assembled and
+  /// every factor computed from them, then `log` replayed on them, so that the run continues bit
+  /// for bit (rank updates on other factors would differ in round-off).
+  void restore(const std::vector<std::int32_t>& log);
+
+ private:
+  double margin() const;
+  void changeSet(const std::vector<int>& entering, const std::vector<int>& leaving);
+
+  SceneData& scene_;
+  GlobalSystem& system_;
+  Backend& backend_;
+  double time_step_, tolerance_;
+  int block_ = -1;
+  std::vector<std::int32_t> log_;
+  int log_columns_ = 0;  // the log's nonzero entries
+};
+
+}  // namespace stabint

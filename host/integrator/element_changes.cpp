@@ -1,0 +1,182 @@
+#include "integrator/element_changes.hpp"
+
+#include "elements/element_type.hpp"
+#include "scene/scene_data.hpp"
+#include "scene/validation.hpp"
+
+#include <stabint/errors.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+namespace stabint {
+namespace {
+
+// [project rule] A change of more than this many rank-1 columns (elements times rows of A_e)
+// refactors instead of updating: an update costs 1/28 (spring of the 50 x 50 cloth) to 1/15
+// (tet of a 3,264-particle bar) of a refactorization (docs/method.md, "Per-frame input"), so
+// a few tens of columns break even.
+constexpr int kMaxUpdateColumns = 64;
+
+bool samePins(const std::vector<Pin>& a, const std::vector<Pin>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const Pin& p, const Pin& q) {
+    return p.vertex == q.vertex && p.stiffness == q.stiffness && p.target.position == q.target.position &&
+           p.target.velocity == q.target.velocity && p.target.amplitude == q.target.amplitude &&
+           p.target.frequency == q.target.frequency;
+  });
+}
+
+}  // namespace
+
+ElementChanges::ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend)
+    : scene_(scene), system_(system), backend_(backend) {}
+
+int ElementChanges::block(ElementKind kind) const {
+  if (static_cast<int>(kind) < static_cast<int>(ElementKind::Spring) ||
+      static_cast<int>(kind) > static_cast<int>(ElementKind::Pin))
+    throw InvalidInputError("element kind " + std::to_string(static_cast<int>(kind)) + " is not an ElementKind value");
+  for (std::size_t b = 0; b < scene_.blocks().size(); ++b)
+    if (std::string(scene_.blocks()[b].type->identifier()) == elementKindName(kind)) return static_cast<int>(b);
+  throw InvalidInputError(std::string("element kind ") + elementKindName(kind) + " has no element type");
+}
+
+void ElementChanges::checkIndex(int block, int index, const char* call) const {
+  const ElementBlock& b = scene_.blocks()[static_cast<std::size_t>(block)];
+  if (index < 0 || index >= b.count)
+    throw InvalidInputError(std::string(call) + ": " + b.type->name() + " " + std::to_string(index) +
+                            " out of range (the scene has " + std::to_string(b.count) + ")");
+}
+
+// L and its factors follow a change of element e's weight from w_old to its current one by the
+// element's term (w - w_old) A^T A: a rank-R update or downdate, or (`how` Deferred) a change of
+// L whose factors the caller refactors.
+void ElementChanges::updateSystem(int block, int e, double w_old, GlobalSystem::FactorChange how) {
+  const double w_new = scene_.elementWeight(block, e);
+  if (w_new == w_old) return;
+  const ElementBlock& b = scene_.blocks()[static_cast<std::size_t>(block)];
+  const ElementShape shape = b.type->shape();
+  const std::size_t stride = shape.shared_coefficients ? 0 : std::size_t(shape.rows * shape.vertices);
+  const int* vertices = &b.vertices[std::size_t(shape.vertices) * std::size_t(e)];
+  const double* a = b.coefficients.data() + stride * std::size_t(e);
+  // A huge change is left to applyLaplacianFromScene, which the caller runs after all changes.
+  if (system_.changeIsHuge(vertices, shape.vertices, a, shape.rows, w_new - w_old))
+    laplacian_from_scene_ = true;
+  else
+    system_.addElementTerm(vertices, shape.vertices, a, shape.rows, w_new - w_old, how);
+}
+
+// After changes of which one was too large for an update of L and the factors
+// (GlobalSystem::changeIsHuge): L assembled from the scene's weights and every factor again.
+void ElementChanges::applyLaplacianFromScene() {
+  if (!laplacian_from_scene_) return;
+  laplacian_from_scene_ = false;
+  system_.assemble(scene_);
+  system_.refactorAll();
+}
+
+void ElementChanges::change(ElementKind kind, std::vector<int> indices, const double* stiffness, bool enabled) {
+  const char* call = stiffness ? "setElementStiffness" : "setElementEnabled";
+  const int block = this->block(kind);
+  const ElementBlock& b = scene_.blocks()[static_cast<std::size_t>(block)];
+  for (int e : indices) checkIndex(block, e, call);
+  // An index listed twice is changed once (its term would otherwise enter L twice).
+  std::sort(indices.begin(), indices.end());
+  indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
+  if (stiffness && !b.type->hasStiffness())
+    throw InvalidInputError(std::string(call) + ": a " + b.type->name() + " has no stiffness");
+  if (stiffness && (!std::isfinite(*stiffness) || !(*stiffness >= 0.0) || !(*stiffness <= validation::kMaxMagnitude)))
+    throw InvalidInputError(std::string(call) + ": " + b.type->name() + " stiffness " + validation::cat(*stiffness) +
+                            " must be finite, >= 0 and at most " + validation::cat(validation::kMaxMagnitude));
+  std::vector<double> w_old, k_old;
+  std::vector<bool> on_old;
+  for (int e : indices) {
+    w_old.push_back(scene_.elementWeight(block, e));
+    k_old.push_back(b.type->stiffness(scene_.scene(), e));
+    on_old.push_back(scene_.elementEnabled(block, e));
+  }
+  if (stiffness) {
+    for (int e : indices) scene_.setElementStiffness(block, e, *stiffness);
+    // The weight is k times a rest volume, area or inverse area: it must stay finite too. A
+    // refusal puts the old stiffnesses back (their params are recomputed bit for bit).
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+      if (std::isfinite(scene_.elementWeight(block, indices[i]))) continue;
+      const int bad = indices[i];
+      for (std::size_t j = indices.size(); j-- > 0;) scene_.setElementStiffness(block, indices[j], k_old[j]);
+      throw InvalidInputError(std::string(call) + ": " + b.type->name() + " " + std::to_string(bad) + ": stiffness " +
+                              std::to_string(*stiffness) + " gives a weight that is not finite");
+    }
+  } else {
+    for (int e : indices) scene_.setElementEnabled(block, e, enabled);
+  }
+  const bool refactor = indices.size() * std::size_t(b.type->shape().rows) > std::size_t(kMaxUpdateColumns);
+  const auto how = refactor ? GlobalSystem::FactorChange::Deferred : GlobalSystem::FactorChange::RankUpdate;
+  try {
+    for (std::size_t i = 0; i < indices.size(); ++i) updateSystem(block, indices[i], w_old[i], how);
+    if (refactor && !laplacian_from_scene_) system_.refactorAll();
+    applyLaplacianFromScene();
+  } catch (const Error&) {
+    // The new system does not factor (a stiffness too large for the masses, as the constructor
+    // refuses it): the old stiffnesses and flags go back, with L and the factors from them.
+    for (std::size_t i = indices.size(); i-- > 0;) {
+      scene_.setElementStiffness(block, indices[i], k_old[i]);
+      scene_.setElementEnabled(block, indices[i], on_old[i]);
+    }
+    laplacian_from_scene_ = false;
+    system_.assemble(scene_);
+    system_.refactorAll();
+    throw;
+  }
+}
+
+void ElementChanges::changePins(const std::vector<Pin>& pins) {
+  std::map<int, double> delta;
+  for (const Pin& p : scene_.scene().pins) delta[p.vertex] -= p.stiffness;
+  for (const Pin& p : pins) delta[p.vertex] += p.stiffness;
+  scene_.setPins(pins);
+  backend_.elementsChanged();
+  const double one = 1.0;
+  for (const auto& [vertex, k] : delta) {
+    if (k == 0.0) continue;
+    if (system_.changeIsHuge(&vertex, 1, &one, 1, k))
+      laplacian_from_scene_ = true;
+    else
+      system_.addToDiagonal(vertex, k);
+  }
+  applyLaplacianFromScene();
+}
+
+void ElementChanges::save(CheckpointData& d) const {
+  for (std::size_t b = 0; b < scene_.blocks().size(); ++b) {
+    const ElementBlock& block = scene_.blocks()[b];
+    d.stiffness.emplace_back();
+    d.enabled.emplace_back();
+    for (int e = 0; e < block.count; ++e) {
+      d.stiffness.back().push_back(block.type->stiffness(scene_.scene(), e));
+      d.enabled.back().push_back(scene_.elementEnabled(static_cast<int>(b), e) ? 1 : 0);
+    }
+  }
+}
+
+void ElementChanges::restore(const CheckpointData& d, int contact_block,
+                             const std::vector<std::uint8_t>* contact_flags) {
+  if (!samePins(d.pin_list, scene_.scene().pins)) changePins(d.pin_list);
+  for (std::size_t b = 0; b < scene_.blocks().size(); ++b) {
+    const ElementBlock& block = scene_.blocks()[b];
+    const int bi = static_cast<int>(b);
+    for (int e = 0; e < block.count; ++e) {
+      const double k = d.stiffness[b][static_cast<std::size_t>(e)];
+      const bool on = (contact_flags && bi == contact_block ? *contact_flags : d.enabled[b])[std::size_t(e)] != 0;
+      const bool k_differs = block.type->hasStiffness() && block.type->stiffness(scene_.scene(), e) != k;
+      if (!k_differs && scene_.elementEnabled(bi, e) == on) continue;
+      const double w_old = scene_.elementWeight(bi, e);
+      if (k_differs) scene_.setElementStiffness(bi, e, k);
+      if (scene_.elementEnabled(bi, e) != on) scene_.setElementEnabled(bi, e, on);
+      if (!contact_flags) updateSystem(bi, e, w_old);
+    }
+  }
+  if (!contact_flags) applyLaplacianFromScene();
+}
+
+}  // namespace stabint

@@ -1,0 +1,59 @@
+#pragma once
+// Run-time changes of the elements (docs/method.md, "Per-frame input"): stiffnesses, enabled
+// flags and the pin set, each validated before anything changes, with L and its factors
+// following the changed weights, by rank updates or, past a size, by a new assembly and
+// factorization; and the same changes when a checkpoint is restored. The driver books the jump
+// of H these cause as an event; the contact set's changes are ContactResolver's.
+#include "backend.hpp"
+#include "integrator/checkpoint.hpp"
+#include "solver/global_system.hpp"
+
+#include <stabint/types.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace stabint {
+
+class SceneData;
+
+class ElementChanges {
+ public:
+  ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend);
+
+  /// The block of an element kind, by the type's identifier (the names agree by construction);
+  /// InvalidInputError for a value that is no ElementKind or a kind without a type.
+  int block(ElementKind kind) const;
+  /// InvalidInputError, naming `call`, for an element index out of the block's range.
+  void checkIndex(int block, int index, const char* call) const;
+
+  /// setElementStiffness (`stiffness` given) or setElementEnabled (`enabled`) of `indices`:
+  /// everything is validated before L changes; a system that does not factor puts the old
+  /// stiffnesses and flags back and throws.
+  void change(ElementKind kind, std::vector<int> indices, const double* stiffness, bool enabled);
+
+  /// A new pin set (validated first: nothing changes when it throws): the element blocks and
+  /// the backends follow, and the factors get one rank-1 update per particle whose pin
+  /// stiffness changed.
+  void changePins(const std::vector<Pin>& pins);
+
+  /// Every element's stiffness and enabled flag, into a checkpoint.
+  void save(CheckpointData& d) const;
+  /// A checkpoint's pin set, stiffnesses and enabled flags (counts checked by the caller):
+  /// elements that differ are changed as change() would, without an event (H* is restored).
+  /// With `contact_flags` the contact block (`contact_block`) takes those flags and L and the
+  /// factors are left to the caller, who assembles and factors them again.
+  void restore(const CheckpointData& d, int contact_block, const std::vector<std::uint8_t>* contact_flags);
+
+ private:
+  void updateSystem(int block, int e, double w_old,
+                    GlobalSystem::FactorChange how = GlobalSystem::FactorChange::RankUpdate);
+  void applyLaplacianFromScene();
+
+  SceneData& scene_;
+  GlobalSystem& system_;
+  Backend& backend_;
+  bool laplacian_from_scene_ = false;  // a change since the last assembly was too large to update
+};
+
+}  // namespace stabint

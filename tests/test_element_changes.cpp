@@ -5,6 +5,7 @@
 #include <stabint/stabint.hpp>
 
 #include "../fuzz/checkpoint_properties.hpp"
+#include "elements/element_type.hpp"
 #include "cloth_and_twin.hpp"
 #include "temp_dir_test.hpp"
 #include "triangle_cloth_scene.hpp"
@@ -174,6 +175,26 @@ TEST(ElementChanges, BadCallsAreNamedAndChangeNothing) {
   EXPECT_EQ(parseElementKind("triangle_strains"), ElementKind::TriangleStrain);
   EXPECT_EQ(parseElementKind("Tet"), ElementKind::Tet);
   EXPECT_THROW(parseElementKind("collider"), InvalidInputError);
+}
+
+// The element table comes from STABINT_ELEMENT_KINDS: every kind's type is in it, in the list's
+// order, under the kind's name, and the library's own contact type sits before the pins, which
+// stay last (grab and release rebuild only the last block).
+TEST(ElementKinds, TheElementTableFollowsTheKindList) {
+  const std::vector<const ElementType*>& table = elementTypes();
+  ASSERT_EQ(table.size(), std::size_t(kElementKindCount) + 1);
+  EXPECT_EQ(table.back(), &elementType(ElementKind::Pin));
+  EXPECT_STREQ(table[table.size() - 2]->identifier(), "contact");
+  std::size_t position = 0;
+  for (ElementKind kind : allElementKinds()) {
+    if (kind == ElementKind::Pin) ++position;  // past the contact type
+    EXPECT_EQ(table[position], &elementType(kind)) << elementKindName(kind);
+    EXPECT_STREQ(elementType(kind).identifier(), elementKindName(kind));
+    EXPECT_EQ(parseElementKind(elementKindName(kind)), kind);
+    ++position;
+  }
+  EXPECT_THROW(elementType(static_cast<ElementKind>(kElementKindCount)), InvalidInputError);
+  EXPECT_STREQ(elementKindName(static_cast<ElementKind>(kElementKindCount)), "?");
 }
 
 class ElementCheckpointTest : public testing::TempDirTest {};

@@ -33,7 +33,7 @@ double area(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vec
 struct BendingHingeKind : KindDefaults<BendingHinge> {
   static constexpr auto kList = &Scene::bending_hinges;
   static constexpr const char* kName = "bending hinge";
-  static constexpr const char* kIdentifier = "bending_hinge";
+  static constexpr const char* kIdentifier = elementKindName(ElementKind::BendingHinge);
   static constexpr int kVertices = 4, kRows = 1;
   static constexpr int kParams = 5;  // w, |K x_rest|, rest direction
   // One element of a local step on one core, in ns (a length and direction; measured by
@@ -105,7 +105,8 @@ struct BendingHingeKind : KindDefaults<BendingHinge> {
 
 }  // namespace
 
-const ElementType& bendingHingeElementType() {
+template <>
+const ElementType& elementTypeOf<ElementKind::BendingHinge>() {
   static const ElementTypeOf<BendingHingeKind> type;
   return type;
 }

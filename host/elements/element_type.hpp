@@ -13,6 +13,7 @@
 #include "kernel_constants.hpp"  // PassFlags: what an element pass computes
 
 #include <stabint/scene.hpp>
+#include <stabint/types.hpp>
 
 #include <Eigen/Core>
 
@@ -158,8 +159,18 @@ class ElementType {
 
 /// Every element type, in the order of the contribution numbering and of the kernels' segments.
 const std::vector<const ElementType*>& elementTypes();
+/// The type of an element kind users reach (STABINT_ELEMENT_KINDS), defined in the type's file.
+template <ElementKind K>
+const ElementType& elementTypeOf();
+#define STABINT_ELEMENT_TYPE_DECLARATION(kind, name) \
+  template <>                                        \
+  const ElementType& elementTypeOf<ElementKind::kind>();
+STABINT_ELEMENT_KINDS(STABINT_ELEMENT_TYPE_DECLARATION)
+#undef STABINT_ELEMENT_TYPE_DECLARATION
+/// The same for a run-time kind; throws InvalidInputError for a value outside the enum.
+const ElementType& elementType(ElementKind kind);
 /// The pin type, for what the element set changes at run time (grab and release).
-const ElementType& pinElementType();
+inline const ElementType& pinElementType() { return elementTypeOf<ElementKind::Pin>(); }
 /// The contact type, whose elements the contact set enables and disables at run time.
 const ElementType& contactElementType();
 

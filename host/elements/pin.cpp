@@ -12,7 +12,7 @@ using validation::invalid;
 struct PinKind : KindDefaults<Pin> {
   static constexpr auto kList = &Scene::pins;
   static constexpr const char* kName = "pin";
-  static constexpr const char* kIdentifier = "pin";
+  static constexpr const char* kIdentifier = elementKindName(ElementKind::Pin);
   static constexpr int kVertices = 1, kRows = 1;
   static constexpr int kParams = 4;  // k, q(t)
   // One element of a local step on one core, in ns (a copy of the target; measured by
@@ -56,7 +56,8 @@ struct PinKind : KindDefaults<Pin> {
 
 }  // namespace
 
-const ElementType& pinElementType() {
+template <>
+const ElementType& elementTypeOf<ElementKind::Pin>() {
   static const ElementTypeOf<PinKind> type;
   return type;
 }

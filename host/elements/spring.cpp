@@ -13,7 +13,7 @@ using validation::invalid;
 struct SpringKind : KindDefaults<Spring> {
   static constexpr auto kList = &Scene::springs;
   static constexpr const char* kName = "spring";
-  static constexpr const char* kIdentifier = "spring";
+  static constexpr const char* kIdentifier = elementKindName(ElementKind::Spring);
   static constexpr int kVertices = 2, kRows = 1;
   static constexpr int kParams = 5;  // k, r, rest direction (unit, from b to a)
   // One element of a local step on one core, in ns (its length and direction; measured by
@@ -56,7 +56,8 @@ struct SpringKind : KindDefaults<Spring> {
 
 }  // namespace
 
-const ElementType& springElementType() {
+template <>
+const ElementType& elementTypeOf<ElementKind::Spring>() {
   static const ElementTypeOf<SpringKind> type;
   return type;
 }

@@ -21,7 +21,7 @@ Eigen::Matrix3d restEdges(const Scene& scene, const Tet& tet) {
 struct TetKind : KindDefaults<Tet> {
   static constexpr auto kList = &Scene::tets;
   static constexpr const char* kName = "tet";
-  static constexpr const char* kIdentifier = "tet";
+  static constexpr const char* kIdentifier = elementKindName(ElementKind::Tet);
   static constexpr int kVertices = 4, kRows = 3;
   static constexpr int kParams = 1;  // k V
   // One element of a local step on one core, in ns (a polar decomposition, 8 in SIMD lanes; measured by
@@ -63,7 +63,8 @@ struct TetKind : KindDefaults<Tet> {
 
 }  // namespace
 
-const ElementType& tetElementType() {
+template <>
+const ElementType& elementTypeOf<ElementKind::Tet>() {
   static const ElementTypeOf<TetKind> type;
   return type;
 }

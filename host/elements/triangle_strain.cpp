@@ -32,7 +32,7 @@ Eigen::Matrix2d restEdges2d(const Scene& scene, const TriangleStrain& t) {
 struct TriangleStrainKind : KindDefaults<TriangleStrain> {
   static constexpr auto kList = &Scene::triangle_strains;
   static constexpr const char* kName = "triangle strain";
-  static constexpr const char* kIdentifier = "triangle_strain";
+  static constexpr const char* kIdentifier = elementKindName(ElementKind::TriangleStrain);
   static constexpr int kVertices = 3, kRows = 2;
   static constexpr int kParams = 3;  // k A, s_min, s_max
   // One element of a local step on one core, in ns (a 3 x 2 singular value decomposition; measured by
@@ -104,7 +104,8 @@ struct TriangleStrainKind : KindDefaults<TriangleStrain> {
 
 }  // namespace
 
-const ElementType& triangleStrainElementType() {
+template <>
+const ElementType& elementTypeOf<ElementKind::TriangleStrain>() {
   static const ElementTypeOf<TriangleStrainKind> type;
   return type;
 }

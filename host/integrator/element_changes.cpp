@@ -33,14 +33,7 @@ bool samePins(const std::vector<Pin>& a, const std::vector<Pin>& b) {
 ElementChanges::ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend)
     : scene_(scene), system_(system), backend_(backend) {}
 
-int ElementChanges::block(ElementKind kind) const {
-  if (static_cast<int>(kind) < static_cast<int>(ElementKind::Spring) ||
-      static_cast<int>(kind) > static_cast<int>(ElementKind::Pin))
-    throw InvalidInputError("element kind " + std::to_string(static_cast<int>(kind)) + " is not an ElementKind value");
-  for (std::size_t b = 0; b < scene_.blocks().size(); ++b)
-    if (std::string(scene_.blocks()[b].type->identifier()) == elementKindName(kind)) return static_cast<int>(b);
-  throw InvalidInputError(std::string("element kind ") + elementKindName(kind) + " has no element type");
-}
+int ElementChanges::block(ElementKind kind) const { return scene_.blockIndex(elementType(kind)); }
 
 void ElementChanges::checkIndex(int block, int index, const char* call) const {
   const ElementBlock& b = scene_.blocks()[static_cast<std::size_t>(block)];

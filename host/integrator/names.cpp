@@ -102,20 +102,10 @@ PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
   return *this;
 }
 
-const char* elementKindName(ElementKind kind) {
-  switch (kind) {
-    case ElementKind::Spring: return "spring";
-    case ElementKind::Tet: return "tet";
-    case ElementKind::TriangleStrain: return "triangle_strain";
-    case ElementKind::BendingHinge: return "bending_hinge";
-    case ElementKind::Pin: return "pin";
-  }
-  return "?";
-}
-
 std::vector<ElementKind> allElementKinds() {
-  return {ElementKind::Spring, ElementKind::Tet, ElementKind::TriangleStrain, ElementKind::BendingHinge,
-          ElementKind::Pin};
+  std::vector<ElementKind> kinds;
+  for (int k = 0; k < kElementKindCount; ++k) kinds.push_back(static_cast<ElementKind>(k));
+  return kinds;
 }
 
 ElementKind parseElementKind(const std::string& name) {
@@ -123,8 +113,13 @@ ElementKind parseElementKind(const std::string& name) {
     const std::string singular = elementKindName(k);
     if (lower(name) == singular || lower(name) == singular + "s") return k;
   }
-  throw InvalidInputError("unknown element kind '" + name +
-                          "' (expected spring, tet, triangle_strain, bending_hinge or pin, or their plurals)");
+  std::string names;
+  for (ElementKind k : allElementKinds())
+    names += std::string(names.empty()                             ? ""
+                         : k == ElementKind(kElementKindCount - 1) ? " or "
+                                                                   : ", ") +
+             elementKindName(k);
+  throw InvalidInputError("unknown element kind '" + name + "' (expected " + names + ", or their plurals)");
 }
 
 }  // namespace stabint

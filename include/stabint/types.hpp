@@ -83,17 +83,45 @@ const char* globalSolveName(GlobalSolve solve);  ///< "factor", "cg"
 /// Parses a name as printed by globalSolveName (case-insensitive); throws InvalidInputError.
 GlobalSolve parseGlobalSolve(const std::string& name);
 
-/// The element types of a Scene, one per element list, for the run-time element changes
-/// (Simulator::setElementStiffness, setElementEnabled).
+/// The element types a user reaches by ElementKind, one line each, `KIND(Enumerator, name)`: the
+/// enumerator, and the type's name in JSON and messages, whose plural is its Scene list
+/// (Scene::springs). The enum, the names and the library's table of element types (its order,
+/// that of the contribution numbering) come from this list; pins stay last (grab and release
+/// rebuild only the last block). Adding an element type users can reach is one line here beside
+/// its own files (docs/elements.md, "How to add an element type").
+#define STABINT_ELEMENT_KINDS(KIND)       \
+  KIND(Spring, "spring")                  \
+  KIND(Tet, "tet")                        \
+  KIND(TriangleStrain, "triangle_strain") \
+  KIND(BendingHinge, "bending_hinge")     \
+  KIND(Pin, "pin")
+
+/// The element types of a Scene, one per element list (Spring: Scene::springs, Tet: tets,
+/// TriangleStrain: triangle_strains, BendingHinge: bending_hinges, Pin: pins, grabbed handles
+/// included), for the run-time element changes (Simulator::setElementStiffness,
+/// setElementEnabled). From STABINT_ELEMENT_KINDS.
 enum class ElementKind {
-  Spring,          ///< Scene::springs
-  Tet,             ///< Scene::tets
-  TriangleStrain,  ///< Scene::triangle_strains
-  BendingHinge,    ///< Scene::bending_hinges
-  Pin              ///< Scene::pins (grabbed handles included)
+/// @cond
+#define STABINT_ELEMENT_KIND_ENUMERATOR(kind, name) kind,
+  /// @endcond
+  STABINT_ELEMENT_KINDS(STABINT_ELEMENT_KIND_ENUMERATOR)
+#undef STABINT_ELEMENT_KIND_ENUMERATOR
 };
-/// "spring", "tet", "triangle_strain", "bending_hinge", "pin" (the JSON names, singular).
-const char* elementKindName(ElementKind kind);
+/// Number of ElementKind values (they run from 0; pins are last).
+constexpr int kElementKindCount = static_cast<int>(ElementKind::Pin) + 1;
+/// "spring", "tet", "triangle_strain", "bending_hinge", "pin" (the JSON names, singular); "?"
+/// for a value outside the enum.
+constexpr const char* elementKindName(ElementKind kind) {
+  switch (kind) {
+    /// @cond
+#define STABINT_ELEMENT_KIND_CASE(kind, name) \
+  case ElementKind::kind: return name;
+    STABINT_ELEMENT_KINDS(STABINT_ELEMENT_KIND_CASE)
+#undef STABINT_ELEMENT_KIND_CASE
+    /// @endcond
+  }
+  return "?";
+}
 /// Parses a name as printed by elementKindName, or the scene file's list name ("springs",
 /// "tets", "triangle_strains", "bending_hinges", "pins"); throws InvalidInputError.
 ElementKind parseElementKind(const std::string& name);

@@ -189,13 +189,11 @@ void bindEnums(nb::module_& m) {
   nb::enum_<ClothModel>(m, "ClothModel")
       .value("Springs", ClothModel::Springs)
       .value("Triangles", ClothModel::Triangles);
-  nb::enum_<ElementKind>(m, "ElementKind",
-                         "An element list of a Scene, for set_element_stiffness and set_element_enabled.")
-      .value("Spring", ElementKind::Spring)
-      .value("Tet", ElementKind::Tet)
-      .value("TriangleStrain", ElementKind::TriangleStrain)
-      .value("BendingHinge", ElementKind::BendingHinge)
-      .value("Pin", ElementKind::Pin);
+  auto element_kind = nb::enum_<ElementKind>(
+      m, "ElementKind", "An element list of a Scene, for set_element_stiffness and set_element_enabled.");
+#define STABINT_PY_ELEMENT_KIND(kind, name) element_kind.value(#kind, ElementKind::kind);
+  STABINT_ELEMENT_KINDS(STABINT_PY_ELEMENT_KIND)
+#undef STABINT_PY_ELEMENT_KIND
 
   m.def("integrator_name", &integratorName, "'FE', 'SE', 'BE', 'BDF2', 'IM' or 'blend'.");
   m.def("parse_integrator", &parseIntegrator, "name"_a,

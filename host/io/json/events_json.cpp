@@ -3,6 +3,8 @@
 // eventToJson, and a case in EventScript::apply.
 #include "io/json/json_internal.hpp"
 
+#include "elements/element_type.hpp"
+
 #include <stabint/errors.hpp>
 
 #include <cstddef>
@@ -15,18 +17,6 @@
 namespace stabint::io {
 
 namespace {
-
-// An element list index of `kind` in scene `s`.
-int elementCount(const Scene& s, ElementKind kind) {
-  switch (kind) {
-    case ElementKind::Spring: return static_cast<int>(s.springs.size());
-    case ElementKind::Tet: return static_cast<int>(s.tets.size());
-    case ElementKind::TriangleStrain: return static_cast<int>(s.triangle_strains.size());
-    case ElementKind::BendingHinge: return static_cast<int>(s.bending_hinges.size());
-    case ElementKind::Pin: return static_cast<int>(s.pins.size());
-  }
-  return 0;
-}
 
 // A path: keyframes [frame, x, y, z] with frames increasing after the event's (`owner`'s).
 std::vector<PathKey> readPath(const Field& path, int frame, const char* owner) {
@@ -94,7 +84,7 @@ ElementEvent readElements(const Field& f, const Scene& s) {
     kind.fail(error.what());
   }
   const Field indices = f.member("indices");
-  const int count = elementCount(s, e.kind);
+  const int count = elementType(e.kind).count(s);
   for (size_t i = 0; i < indices.size(); ++i) {
     const int index = indices[i].integer();
     if (index < 0 || index >= count)

@@ -58,26 +58,6 @@ TEST(SceneBatchContact, EachCollidersParticlesAreItsScenes) {
   EXPECT_EQ(all.count, 4 * scenes[0].numParticles() + 1 * scenes[2].numParticles());
 }
 
-// A collider's particle range is validated like any scene value, naming the collider.
-TEST(SceneBatchContact, RefusesAColliderOnParticlesTheSceneLacks) {
-  Scene scene = testing::horizontalCloth(4, 0.0);
-  scene.colliders.push_back(testing::groundPlane(-1.0, 1e4));
-  scene.colliders.back().first_particle = -1;
-  scene.colliders.back().num_particles = 2;
-  try {
-    validateScene(scene);
-    ADD_FAILURE() << "a collider on particle -1 accepted";
-  } catch (const InvalidInputError& e) {
-    EXPECT_NE(std::string(e.what()).find("collider 0: first_particle -1 and num_particles 2"), std::string::npos)
-        << e.what();
-  }
-  scene.colliders.back().first_particle = 0;
-  scene.colliders.back().num_particles = -2;
-  EXPECT_THROW(validateScene(scene), InvalidInputError);
-  scene.colliders.back().num_particles = scene.numParticles();
-  EXPECT_NO_THROW(validateScene(scene));
-}
-
 SimulatorOptions contactOptions(Integrator integrator) {
   SimulatorOptions options;
   options.integrator = integrator;

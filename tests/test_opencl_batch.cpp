@@ -199,6 +199,35 @@ struct BatchCase {
   int steps;
 };
 
+// A scene's step report on the device against the CPU batch's: the energy booked in the step
+// (forcing, damping, friction, the contact projection), the target and the energies within `tol`.
+void expectBookedAndEnergiesNear(const StepReport& g, const StepReport& w, double tol) {
+  EXPECT_NEAR(g.forcing, w.forcing, tol);
+  EXPECT_NEAR(g.damping, w.damping, tol);
+  EXPECT_NEAR(g.friction, w.friction, tol);
+  EXPECT_NEAR(g.contact_projection, w.contact_projection, tol);
+  EXPECT_NEAR(g.target, w.target, tol);
+  EXPECT_NEAR(g.energy.kinetic, w.energy.kinetic, tol);
+  EXPECT_NEAR(g.energy.elastic, w.energy.elastic, tol);
+  EXPECT_NEAR(g.energy.external, w.energy.external, tol);
+}
+
+// One step of the OpenCL batch and of the CPU batch: no refusal on the device, every scene's step
+// and time the CPU batch's and its report within `tol` of the scene's E_scale
+// (expectBookedAndEnergiesNear). Returns the CPU batch's report.
+const BatchStepReport& stepBothAndExpectNear(BatchSimulator& opencl, BatchSimulator& cpu, double tol, int step) {
+  const BatchStepReport got = opencl.step();
+  const BatchStepReport& want = cpu.step();
+  for (std::size_t s = 0; s < want.scenes.size(); ++s) {
+    SCOPED_TRACE("scene " + std::to_string(s) + " step " + std::to_string(step));
+    EXPECT_TRUE(got.refusals[s].empty()) << got.refusals[s];
+    EXPECT_EQ(got.scenes[s].step, want.scenes[s].step);
+    EXPECT_EQ(got.scenes[s].time, want.scenes[s].time);
+    expectBookedAndEnergiesNear(got.scenes[s], want.scenes[s], tol * cpu.energyScale(int(s)));
+  }
+  return want;
+}
+
 SimulatorOptions batchOptions(const BatchCase& c, BackendKind backend, Precision precision) {
   SimulatorOptions o;
   o.integrator = c.integrator;
@@ -226,22 +255,8 @@ TEST_P(OpenCLBatchSimulator, EverySceneFollowsTheCpuBatch) {
     BatchSimulator cpu(scenes, batchOptions(c, BackendKind::CpuReference, precision));
     double forcing = 0.0, damping = 0.0;
     for (int step = 0; step < c.steps; ++step) {
-      const BatchStepReport got = opencl.step();
-      const BatchStepReport& want = cpu.step();
-      for (std::size_t s = 0; s < scenes.size(); ++s) {
-        SCOPED_TRACE("scene " + std::to_string(s) + " step " + std::to_string(step));
-        EXPECT_TRUE(got.refusals[s].empty()) << got.refusals[s];
-        const StepReport& g = got.scenes[s];
-        const StepReport& w = want.scenes[s];
-        const double scale = cpu.energyScale(int(s));
-        EXPECT_EQ(g.step, w.step);
-        EXPECT_EQ(g.time, w.time);
-        EXPECT_NEAR(g.forcing, w.forcing, tol * scale);
-        EXPECT_NEAR(g.damping, w.damping, tol * scale);
-        EXPECT_NEAR(g.target, w.target, tol * scale);
-        EXPECT_NEAR(g.energy.kinetic, w.energy.kinetic, tol * scale);
-        EXPECT_NEAR(g.energy.elastic, w.energy.elastic, tol * scale);
-        EXPECT_NEAR(g.energy.external, w.energy.external, tol * scale);
+      const BatchStepReport& want = stepBothAndExpectNear(opencl, cpu, tol, step);
+      for (const StepReport& w : want.scenes) {
         forcing += std::abs(w.forcing);
         damping += w.damping;
       }
@@ -419,12 +434,7 @@ TEST(OpenCLBatchSimulator, BlendFollowsTheCpuBatch) {
         EXPECT_EQ(g.iterations, w.iterations);
         EXPECT_NEAR(g.alpha, w.alpha, precision == Precision::Double ? 1e-8 : tol);
         EXPECT_NEAR(g.velocity_scale, w.velocity_scale, precision == Precision::Double ? 1e-8 : tol);
-        EXPECT_NEAR(g.forcing, w.forcing, tol * scale);
-        EXPECT_NEAR(g.damping, w.damping, tol * scale);
-        EXPECT_NEAR(g.target, w.target, tol * scale);
-        EXPECT_NEAR(g.energy.kinetic, w.energy.kinetic, tol * scale);
-        EXPECT_NEAR(g.energy.elastic, w.energy.elastic, tol * scale);
-        EXPECT_NEAR(g.energy.external, w.energy.external, tol * scale);
+        expectBookedAndEnergiesNear(g, w, tol * scale);
         const Eigen::MatrixX3d x = cpu.positions(int(s)), v = cpu.velocities(int(s));
         EXPECT_LE(testing::relativeError(opencl.positions(int(s)), x), tol);
         const double v_scale = std::max(v.cwiseAbs().maxCoeff(), x.cwiseAbs().maxCoeff() / c.time_step);
@@ -499,6 +509,38 @@ TEST(OpenCLBatchSimulator, RefusesTheSceneTheCpuBatchRefuses) {
     const double v_scale =
         std::max(cpu.velocities(0).cwiseAbs().maxCoeff(), cpu.positions(0).cwiseAbs().maxCoeff() / c.time_step);
     EXPECT_LE((opencl.velocities(0) - cpu.velocities(0)).cwiseAbs().maxCoeff(), tol * v_scale);
+  }
+}
+
+// ---- colliders on OpenCL ---------------------------------------------------------------------
+
+// The contact batch (three scenes in one space, each scene's colliders on its own particles only:
+// tests/test_batch_contact.cpp) steps on the device as the CPU batch does, to the cross-backend
+// tolerance of the contact tests (test_opencl_contact.cpp): positions relative to their size,
+// friction, the contact projection, target and energies relative to the scene's E_scale, for the
+// integrators those tests compare across backends. The device's contact pass runs over the
+// concatenation's pairs, which are each scene's own.
+TEST(OpenCLBatchSimulator, ContactFollowsTheCpuBatch) {
+  const std::vector<Scene> scenes = testing::contactBatchScenes();
+  for (Precision precision : availablePrecisions()) {
+    const double tol = crossBackendTolerance(precision);
+    for (Integrator integrator : testing::crossBackendIntegrators(precision)) {
+      SCOPED_TRACE(std::string(precisionName(precision)) + " " + integratorName(integrator));
+      const BatchCase c{integrator, 1.0 / 60.0, 40};
+      BatchSimulator opencl(scenes, batchOptions(c, BackendKind::OpenCL, precision));
+      BatchSimulator cpu(scenes, batchOptions(c, BackendKind::CpuReference, precision));
+      std::vector<double> friction(scenes.size(), 0.0);
+      for (int step = 0; step < c.steps; ++step) {
+        const BatchStepReport& want = stepBothAndExpectNear(opencl, cpu, tol, step);
+        for (std::size_t s = 0; s < scenes.size(); ++s) {
+          EXPECT_LT(testing::relativeError(opencl.positions(int(s)), cpu.positions(int(s))), tol)
+              << "scene " << s << " step " << step;
+          friction[s] += want.scenes[s].friction;
+        }
+      }
+      EXPECT_GT(friction[0], 0.0) << "the first cloth must reach its colliders within the run";
+      EXPECT_GT(friction[2], 0.0) << "the bar must slide on its ground";
+    }
   }
 }
 

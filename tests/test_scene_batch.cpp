@@ -27,7 +27,11 @@
 namespace stabint {
 namespace {
 
+using testing::expectSameReport;
+using testing::expectSameState;
 using testing::mixedBatchScenes;
+using testing::setStateInBoth;
+using testing::stepAndExpectSame;
 using testing::typeIndex;
 
 TEST(SceneBatch, SegmentsLocateEveryScenesParticlesAndElements) {
@@ -96,7 +100,9 @@ TEST(SceneBatch, RefusesWhatItCannotKeepApartNamingTheScene) {
   expectRefusedNaming(scenes, "scene 2: gravity");
   scenes = mixedBatchScenes();
   scenes[1].colliders.push_back(Collider{});
-  expectRefusedNaming(scenes, "scene 1: has colliders");
+  scenes[1].colliders.back().first_particle = 2;
+  scenes[1].colliders.back().num_particles = scenes[1].numParticles();  // one past the scene's last
+  expectRefusedNaming(scenes, "scene 1: collider 0: first_particle 2 and num_particles");
   scenes = mixedBatchScenes();
   scenes[3].masses[0] = -1.0;
   expectRefusedNaming(scenes, "scene 3: ");
@@ -469,32 +475,6 @@ SimulatorOptions blendOptions() {
   return options;
 }
 
-void expectSameReport(const StepReport& got, const StepReport& own, double scale, const std::string& where) {
-  EXPECT_EQ(got.branch, own.branch) << where;
-  EXPECT_EQ(got.step, own.step) << where;
-  EXPECT_EQ(got.time, own.time) << where;
-  EXPECT_EQ(got.iterations, own.iterations) << where;
-  EXPECT_NEAR(got.alpha, own.alpha, 1e-9) << where;
-  EXPECT_NEAR(got.velocity_scale, own.velocity_scale, 1e-9) << where;
-  EXPECT_NEAR(got.forcing, own.forcing, 1e-12 * scale) << where;
-  EXPECT_NEAR(got.damping, own.damping, 1e-12 * scale) << where;
-  EXPECT_NEAR(got.event_energy, own.event_energy, 1e-12 * scale) << where;
-  EXPECT_NEAR(got.target, own.target, 1e-12 * scale) << where;
-  EXPECT_NEAR(got.energy.kinetic, own.energy.kinetic, 1e-12 * scale) << where;
-  EXPECT_NEAR(got.energy.elastic, own.energy.elastic, 1e-12 * scale) << where;
-  EXPECT_NEAR(got.energy.external, own.energy.external, 1e-12 * scale) << where;
-}
-
-void expectSameState(const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v, const Simulator& own,
-                     const std::string& where) {
-  // The factor's ordering of a block may differ from the scene alone's (round-off, see the premise).
-  const Eigen::MatrixX3d& x0 = own.scene().positions;
-  const double size = (x0.colwise().maxCoeff() - x0.colwise().minCoeff()).norm();
-  const double speed = own.velocities().cwiseAbs().maxCoeff();
-  EXPECT_LE((x - own.positions()).cwiseAbs().maxCoeff(), 1e-9 * size) << where;
-  EXPECT_LE((v - own.velocities()).cwiseAbs().maxCoeff(), 1e-9 * (speed + size / own.options().time_step)) << where;
-}
-
 // Every scene of a blend batch takes the branch its own Simulator takes, step by step, with its
 // alpha, velocity scale, forcing, damping, target and energies, and follows its trajectory: the
 // decisions, root finds and corrections are per scene (one energy pass per round for all), the
@@ -593,27 +573,8 @@ TEST(BatchSimulatorBlend, SetStateIsAnEventOfOneScene) {
   const int moved = 1;
   const Eigen::MatrixX3d x = perturbed(alone[moved].positions(), 0.01);
   const Eigen::MatrixX3d v = perturbed(alone[moved].velocities(), 0.3);
-  std::vector<double> targets;
-  for (int s = 0; s < batch.size(); ++s) targets.push_back(batch.target(s));
-  batch.setState(moved, x, v);
-  alone[std::size_t(moved)].setState(x, v);
-  for (int s = 0; s < batch.size(); ++s) {
-    if (s == moved) {
-      EXPECT_NE(batch.target(s), targets[std::size_t(s)]);
-      EXPECT_NEAR(batch.target(s), alone[std::size_t(s)].target(), 1e-12 * alone[std::size_t(s)].energyScale());
-    } else {
-      EXPECT_EQ(batch.target(s), targets[std::size_t(s)]) << "scene " << s;
-    }
-  }
-  for (int step = 0; step < 10; ++step) {
-    const BatchStepReport& report = batch.step();
-    for (std::size_t s = 0; s < scenes.size(); ++s) {
-      const StepReport& own = alone[s].step();
-      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
-      expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
-      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
-    }
-  }
+  setStateInBoth(batch, alone, moved, x, v);
+  for (int step = 0; step < 10; ++step) stepAndExpectSame(batch, alone, "step " + std::to_string(step));
   // Bad input changes nothing and names the scene.
   const double before = batch.target(2);
   EXPECT_THROW(batch.setState(2, x, v), InvalidInputError);  // scene 1's row count
@@ -648,13 +609,7 @@ TEST(BatchSimulatorBlend, APinDraggedInOneSceneIsBookedInItsTargetOnly) {
     const Eigen::Vector3d q = scenes[dragged].pins[0].target.position + Eigen::Vector3d(0.01 * step, 0.0, 0.0);
     batch.setPinTarget(dragged, 0, q);
     alone[std::size_t(dragged)].setPinTarget(0, q);
-    const BatchStepReport& report = batch.step();
-    for (std::size_t s = 0; s < scenes.size(); ++s) {
-      const StepReport& own = alone[s].step();
-      const std::string where = "scene " + std::to_string(s) + " step " + std::to_string(step);
-      expectSameReport(report.scenes[s], own, alone[s].energyScale(), where);
-      expectSameState(batch.positions(int(s)), batch.velocities(int(s)), alone[s], where);
-    }
+    const BatchStepReport& report = stepAndExpectSame(batch, alone, "step " + std::to_string(step));
     work += std::abs(report.scenes[std::size_t(dragged)].forcing);
   }
   EXPECT_GT(work, 0.0);

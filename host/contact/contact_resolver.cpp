@@ -33,7 +33,7 @@ ContactResolver::ContactResolver(SceneData& scene, GlobalSystem& system, Backend
       block_(scene.blockIndex(contactElementType())) {
   if (count() == 0) return;
   for (int e = 0; e < count(); ++e) scene_.setElementEnabled(block_, e, false);
-  const ContactSetChange change = contactSetChange(scene_, t, time_step_, margin(), x, v);
+  const ContactSetChange change = contactSetChange(scene_, wholeScene(scene_), t, time_step_, margin(), x, v);
   for (int e : change.entering) scene_.setElementEnabled(block_, e, true);
   system_.assemble(scene_);
 }
@@ -47,16 +47,16 @@ double ContactResolver::margin() const { return tolerance_ + time_step_ * time_s
 // Pairs entering and leaving the set: their flags, L and every factor by one rank-k update and
 // one rank-k downdate (GlobalSystem::addToDiagonal).
 void ContactResolver::changeSet(const std::vector<int>& entering, const std::vector<int>& leaving) {
-  const int n = scene_.numParticles();
+  const std::vector<int>& particle = scene_.blocks()[static_cast<std::size_t>(block_)].vertices;
   std::vector<int> vertices;
   std::vector<double> deltas;
   for (int e : entering) {
     scene_.setElementEnabled(block_, e, true);
-    vertices.push_back(e % n);
+    vertices.push_back(particle[static_cast<std::size_t>(e)]);
     deltas.push_back(scene_.elementWeight(block_, e));
   }
   for (int e : leaving) {
-    vertices.push_back(e % n);
+    vertices.push_back(particle[static_cast<std::size_t>(e)]);
     deltas.push_back(-scene_.elementWeight(block_, e));
     scene_.setElementEnabled(block_, e, false);
   }
@@ -64,9 +64,22 @@ void ContactResolver::changeSet(const std::vector<int>& entering, const std::vec
 }
 
 bool ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
-  if (count() == 0) return false;
-  const ContactSetChange change = contactSetChange(scene_, t, time_step_, margin(), x, v);
-  if (change.empty()) return false;
+  return updateSet(t, x, v, {wholeScene(scene_)})[0] != 0;
+}
+
+std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
+                                             const std::vector<ContactPart>& parts) {
+  std::vector<char> entered_inside(parts.size(), 0);
+  if (count() == 0) return entered_inside;
+  // The parts' changes as one (ascending: parts in order, each a contiguous run of pairs).
+  ContactSetChange change;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    ContactSetChange part = contactSetChange(scene_, parts[i], t, time_step_, margin(), x, v);
+    change.entering.insert(change.entering.end(), part.entering.begin(), part.entering.end());
+    change.leaving.insert(change.leaving.end(), part.leaving.begin(), part.leaving.end());
+    entered_inside[i] = part.entered_inside ? 1 : 0;
+  }
+  if (change.empty()) return entered_inside;
   const int columns = static_cast<int>(change.entering.size() + change.leaving.size());
   if (columns > kMaxContactUpdateColumns || log_columns_ + columns > kMaxContactLogColumns) {
     for (int e : change.entering) scene_.setElementEnabled(block_, e, true);
@@ -82,28 +95,41 @@ bool ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x, const Eigen
     log_.push_back(0);
     log_columns_ += columns;
   }
-  return change.entered_inside;
+  return entered_inside;
 }
 
 bool ContactResolver::resolve(int x_slot, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target,
                               PotentialEnergy& p, StepReport& report) {
-  if (scene_.scene().colliders.empty()) return false;
-  const bool rubbed = applyFriction(scene_, t1, time_step_, x, v, report.friction) > 0;
-  target -= report.friction;
-  if (projectOutOfColliders(scene_, t1, tolerance_, x) > 0) {
+  const Resolved resolved = applyFrictionAndProjection(wholeScene(scene_), t1, x, v, target, report);
+  if (resolved.positions_moved) {
     backend_.write(x_slot, x);
     backend_.read(x_slot, x);  // what the slot holds (OpenCL float rounds)
-    const PotentialEnergy projected = backend_.potential(x_slot, t1);
-    ++report.energy_evaluations;
-    // [project rule] Only the energy the projection removes is booked (an inelastic correction,
-    // like a hard impact); energy it adds, by lifting particles against gravity or stretching
-    // their elements, is the solver's residual and is left to the blend to take out: booked,
-    // it let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
-    report.contact_projection = std::min(0.0, projected.total() - p.total());
-    target += report.contact_projection;
-    p = projected;
+    bookProjection(backend_.potential(x_slot, t1), p, target, report);
   }
-  return rubbed;
+  return resolved.velocities_changed;
+}
+
+ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const ContactPart& part, double t1,
+                                                                      Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
+                                                                      double& target, StepReport& report) const {
+  Resolved resolved;
+  if (part.colliders.count == 0) return resolved;
+  resolved.velocities_changed = applyFriction(scene_, part, t1, time_step_, x, v, report.friction) > 0;
+  target -= report.friction;
+  resolved.positions_moved = projectOutOfColliders(scene_, part, t1, tolerance_, x) > 0;
+  return resolved;
+}
+
+void ContactResolver::bookProjection(const PotentialEnergy& projected, PotentialEnergy& p, double& target,
+                                     StepReport& report) {
+  ++report.energy_evaluations;
+  // [project rule] Only the energy the projection removes is booked (an inelastic correction,
+  // like a hard impact); energy it adds, by lifting particles against gravity or stretching
+  // their elements, is the solver's residual and is left to the blend to take out: booked,
+  // it let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
+  report.contact_projection = std::min(0.0, projected.total() - p.total());
+  target += report.contact_projection;
+  p = projected;
 }
 
 std::vector<std::uint8_t> ContactResolver::baseFlags(const std::vector<std::vector<std::uint8_t>>& enabled,

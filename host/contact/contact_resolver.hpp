@@ -8,6 +8,7 @@
 // kernels/contact.cl) that acts inside every solve. It sits below the drivers (it includes
 // neither them nor the facade: scripts/check_layering.sh), so that the batch can hold one too.
 #include "backend.hpp"
+#include "contact/contact_rules.hpp"  // ContactPart
 
 #include <stabint/types.hpp>
 
@@ -41,14 +42,34 @@ class ContactResolver {
   /// its contact energy, which is not booked either: the blend takes it out, as it takes the
   /// final projection's additions. Returns true in that case: the potential of x changed.
   bool updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
+  /// updateSet for the pairs of `parts` only (a batch's active scenes: the pairs of the others
+  /// stay as they are), from the whole scene's (x, v), with one change of L and the factors for
+  /// all; entry i of the result is updateSet's for parts[i] (a pair of it entered inside).
+  std::vector<char> updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
+                              const std::vector<ContactPart>& parts);
 
   /// After the solve, on the accepted state's host copies (x, v) at t1, whose positions the
-  /// backend's `x_slot` holds too: friction takes kinetic energy out and `target` (H*) with it,
-  /// like damping; the final projection moves the positions out of the colliders (the slot
-  /// follows) and takes the energy that removes out of `target`. Books both in `report`; `p`
-  /// follows the positions. Returns true when the velocities changed.
+  /// backend's `x_slot` holds too: friction and the final projection
+  /// (applyFrictionAndProjection), the slot following the positions, whose potential then books
+  /// the projection (bookProjection). Returns true when the velocities changed.
   bool resolve(int x_slot, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target, PotentialEnergy& p,
                StepReport& report);
+
+  /// resolve's host part, for `part` on its host copies (x, v) of the accepted state at t1:
+  /// friction takes kinetic energy out of v and out of `target` (H*) with it, like damping
+  /// (report.friction); the final projection moves the positions out of the colliders. When it
+  /// moved them (`positions_moved`), their potential is the caller's to evaluate (a batch: one
+  /// pass for every scene) and to book with bookProjection.
+  struct Resolved {
+    bool velocities_changed = false;
+    bool positions_moved = false;
+  };
+  Resolved applyFrictionAndProjection(const ContactPart& part, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
+                                      double& target, StepReport& report) const;
+  /// Books the final projection of a part whose potential went from `p` to `projected` (one
+  /// energy evaluation): the energy it removed leaves `target` (report.contact_projection); `p`
+  /// becomes `projected`.
+  static void bookProjection(const PotentialEnergy& projected, PotentialEnergy& p, double& target, StepReport& report);
 
   /// The set's changes since L was last assembled, in order: e + 1 for pair e entering, -(e + 1)
   /// for one leaving, 0 closing each step's batch; checkpoints carry it.

@@ -11,21 +11,23 @@
 namespace stabint {
 namespace {
 
-// Calls visit(c, j, p, depth) for each particle j inside collider c at time t, with p the
-// closest point outside and depth = |p - x_j| > 0.
+// Calls visit(c, j, r, p, depth) for each particle j (row r of x) of `part` inside collider c at
+// time t, with p the closest point outside and depth = |p - x_j| > 0.
 template <typename Visit>
-void forEachContact(const SceneData& scene, double t, const Eigen::MatrixX3d& x, Visit&& visit) {
-  const std::vector<Collider>& colliders = scene.scene().colliders;
-  for (std::size_t c = 0; c < colliders.size(); ++c) {
+void forEachContact(const SceneData& scene, const ContactPart& part, double t, const Eigen::MatrixX3d& x,
+                    Visit&& visit) {
+  for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
     double g[kColliderGeometry];
-    scene.colliderGeometry(static_cast<int>(c), t, g);
-    for (Eigen::Index j = 0; j < x.rows(); ++j) {
-      const double xj[3] = {x(j, 0), x(j, 1), x(j, 2)};
+    scene.colliderGeometry(c, t, g);
+    const IndexRange particles = colliderParticles(scene.scene(), c);
+    for (int j = particles.first; j < particles.end(); ++j) {
+      const Eigen::Index r = j - part.first_row;
+      const double xj[3] = {x(r, 0), x(r, 1), x(r, 2)};
       double p[3];
       if (!closestPointOutside(g, xj, p)) continue;
       const Eigen::Vector3d pj(p[0], p[1], p[2]);
-      const double depth = (pj - x.row(j).transpose()).norm();
-      if (depth > 0.0) visit(c, j, pj, depth);
+      const double depth = (pj - x.row(r).transpose()).norm();
+      if (depth > 0.0) visit(c, j, r, pj, depth);
     }
   }
 }
@@ -54,20 +56,24 @@ constexpr double kLeaveMargins = 8.0;
 
 }  // namespace
 
-ContactSetChange contactSetChange(const SceneData& scene, double t, double h, double margin, const Eigen::MatrixX3d& x,
-                                  const Eigen::MatrixX3d& v) {
+ContactPart wholeScene(const SceneData& scene) {
+  return ContactPart{IndexRange{0, static_cast<int>(scene.scene().colliders.size())}, 0};
+}
+
+ContactSetChange contactSetChange(const SceneData& scene, const ContactPart& part, double t, double h, double margin,
+                                  const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
   ContactSetChange change;
-  const std::vector<Collider>& colliders = scene.scene().colliders;
   const int block = scene.blockIndex(contactElementType());
-  const int n = scene.numParticles();
-  for (std::size_t c = 0; c < colliders.size(); ++c) {
+  int e = firstContactElement(scene.scene(), part.colliders.first);
+  for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
     double now[kColliderGeometry], next[kColliderGeometry];
-    scene.colliderGeometry(static_cast<int>(c), t, now);
-    scene.colliderGeometry(static_cast<int>(c), t + h, next);
-    for (int j = 0; j < n; ++j) {
-      const int e = static_cast<int>(c) * n + j;
-      const double xj[3] = {x(j, 0), x(j, 1), x(j, 2)};
-      const double predicted[3] = {x(j, 0) + h * v(j, 0), x(j, 1) + h * v(j, 1), x(j, 2) + h * v(j, 2)};
+    scene.colliderGeometry(c, t, now);
+    scene.colliderGeometry(c, t + h, next);
+    const IndexRange particles = colliderParticles(scene.scene(), c);
+    for (int j = particles.first; j < particles.end(); ++j, ++e) {
+      const Eigen::Index r = j - part.first_row;
+      const double xj[3] = {x(r, 0), x(r, 1), x(r, 2)};
+      const double predicted[3] = {x(r, 0) + h * v(r, 0), x(r, 1) + h * v(r, 1), x(r, 2) + h * v(r, 2)};
       if (scene.elementEnabled(block, e)) {
         if (!withinMargin(now, xj, kLeaveMargins * margin) && !withinMargin(next, predicted, kLeaveMargins * margin))
           change.leaving.push_back(e);
@@ -81,32 +87,33 @@ ContactSetChange contactSetChange(const SceneData& scene, double t, double h, do
   return change;
 }
 
-int applyFriction(const SceneData& scene, double t, double h, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
-                  double& removed) {
+int applyFriction(const SceneData& scene, const ContactPart& part, double t, double h, const Eigen::MatrixX3d& x,
+                  Eigen::MatrixX3d& v, double& removed) {
   const std::vector<Collider>& colliders = scene.scene().colliders;
   const Eigen::VectorXd& m = scene.masses();
   removed = 0.0;
   int changed = 0;
-  forEachContact(scene, t, x, [&](std::size_t c, Eigen::Index j, const Eigen::Vector3d& p, double depth) {
-    const Collider& collider = colliders[c];
+  forEachContact(scene, part, t, x, [&](int c, int j, Eigen::Index r, const Eigen::Vector3d& p, double depth) {
+    const Collider& collider = colliders[static_cast<std::size_t>(c)];
     if (collider.friction == 0.0) return;
-    const Eigen::Vector3d normal = (p - x.row(j).transpose()) / depth;
-    const Eigen::Vector3d before = v.row(j).transpose();
-    const Eigen::Vector3d relative = before - scene.colliderVelocity(static_cast<int>(c), t);
+    const Eigen::Vector3d normal = (p - x.row(r).transpose()) / depth;
+    const Eigen::Vector3d before = v.row(r).transpose();
+    const Eigen::Vector3d relative = before - scene.colliderVelocity(c, t);
     const Eigen::Vector3d tangential = relative - relative.dot(normal) * normal;
     const double speed = tangential.norm();
     if (!(speed > 0.0)) return;
     // J / m_j = h w_j d / m_j = h stiffness d: the contact force's impulse over the step.
     const double limit = collider.friction * h * collider.stiffness * depth;
     const Eigen::Vector3d after = before - std::min(1.0, limit / speed) * tangential;
-    v.row(j) = after.transpose();
+    v.row(r) = after.transpose();
     removed += 0.5 * m[j] * (before.squaredNorm() - after.squaredNorm());
     ++changed;
   });
   return changed;
 }
 
-int projectOutOfColliders(const SceneData& scene, double t, double tolerance, Eigen::MatrixX3d& x) {
+int projectOutOfColliders(const SceneData& scene, const ContactPart& part, double t, double tolerance,
+                          Eigen::MatrixX3d& x) {
   // A particle pushed out of one collider into another is pushed out of that one in the next
   // sweep; three sweeps settle any corner of two or three shapes we have met, and the last
   // sweep's result stands.
@@ -114,10 +121,10 @@ int projectOutOfColliders(const SceneData& scene, double t, double tolerance, Ei
   int moves = 0;
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     int moved = 0;
-    forEachContact(scene, t, x, [&](std::size_t, Eigen::Index j, const Eigen::Vector3d& p, double depth) {
+    forEachContact(scene, part, t, x, [&](int, int, Eigen::Index r, const Eigen::Vector3d& p, double depth) {
       if (!(depth > tolerance)) return;
       // Straight toward p, stopping `tolerance` short of it.
-      x.row(j) = (p + (x.row(j).transpose() - p) * (tolerance / depth)).transpose();
+      x.row(r) = (p + (x.row(r).transpose() - p) * (tolerance / depth)).transpose();
       ++moved;
     });
     moves += moved;

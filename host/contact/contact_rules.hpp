@@ -4,6 +4,8 @@
 // velocities and the final projection of the positions. ContactResolver (contact_resolver.hpp)
 // applies them in the step; the contact energy itself is an element (host/elements/contact.cpp)
 // and acts inside every solve.
+#include "elements/contact.hpp"  // IndexRange
+
 #include <Eigen/Core>
 
 #include <vector>
@@ -12,9 +14,20 @@ namespace stabint {
 
 class SceneData;
 
-/// The broad phase's change of the contact set at the start of a step of length h from (x, v)
-/// at time t. Contact element e = c n + j (collider c, particle j) is active when its flag in
-/// the scene's contact block is set. A pair enters when x_j (against collider c at t) or its
+/// Which pairs a rule looks at: those of `colliders` (every collider of the scene, or one batch
+/// scene's), each collider with its particles; the host copies it reads have particle
+/// first_row + r in row r (0 for the whole scene, the scene's first particle for one batch scene's
+/// own rows).
+struct ContactPart {
+  IndexRange colliders;
+  int first_row = 0;
+};
+/// Every collider of the scene, on the scene's whole host copies.
+ContactPart wholeScene(const SceneData& scene);
+
+/// The broad phase's change of the contact set of `part` at the start of a step of length h from
+/// (x, v) at time t. A contact element (firstContactElement) is active when its flag in the
+/// scene's contact block is set. A pair enters when x_j (against collider c at t) or its
 /// prediction x_j + h v_j (against c at t + h) is within `margin` of the collider, inside
 /// included; it leaves only when both are farther than 8 margins (hysteresis, so the set and the
 /// global matrix change rarely).
@@ -23,22 +36,23 @@ struct ContactSetChange {
   bool entered_inside = false;         // a pair entered with x_j already inside: E jumps from 0
   bool empty() const { return entering.empty() && leaving.empty(); }
 };
-ContactSetChange contactSetChange(const SceneData& scene, double t, double h, double margin, const Eigen::MatrixX3d& x,
-                                  const Eigen::MatrixX3d& v);
+ContactSetChange contactSetChange(const SceneData& scene, const ContactPart& part, double t, double h, double margin,
+                                  const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
 /// Coulomb friction at the end of a step of length h, on the velocities `v` of the particles in
-/// contact at positions `x` at time t: for each (collider, particle) in contact, the tangential
+/// contact at positions `x` at time t: for each (collider, particle) of `part` in contact, the tangential
 /// velocity relative to the collider's shrinks by at most mu times the normal impulse
 /// J = h w_j d (d the depth, w_j the contact weight) over m_j, and never reverses. Returns the
 /// number of velocities changed; `removed` receives the kinetic energy removed (negative when a
 /// moving collider drags a particle along).
-int applyFriction(const SceneData& scene, double t, double h, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
-                  double& removed);
+int applyFriction(const SceneData& scene, const ContactPart& part, double t, double h, const Eigen::MatrixX3d& x,
+                  Eigen::MatrixX3d& v, double& removed);
 
-/// The final projection: every particle deeper than `tolerance` inside a collider at time t is
+/// The final projection over `part`: every particle deeper than `tolerance` inside a collider at time t is
 /// moved straight out to depth `tolerance` (velocities unchanged), colliders in order, repeated
 /// while that pushes a particle into an earlier one (at most a few sweeps). Returns the number of
 /// moves.
-int projectOutOfColliders(const SceneData& scene, double t, double tolerance, Eigen::MatrixX3d& x);
+int projectOutOfColliders(const SceneData& scene, const ContactPart& part, double t, double tolerance,
+                          Eigen::MatrixX3d& x);
 
 }  // namespace stabint

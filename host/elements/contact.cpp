@@ -1,13 +1,14 @@
-// Contact (docs/method.md, "Contact"): one element per (collider, particle) pair,
+// Contact (docs/method.md, "Contact"): one element per (collider, particle) pair, each collider
+// with the particles it acts on (every particle of the scene, or its own scene's in a batch),
 //   E = w_j/2 |x_j - p_j|^2,   p_j = the closest point of the collider's outside to x_j,
 // so E = 0 and p_j = x_j out of contact. A x = x_j (coefficient [1]), w_j = stiffness * m_j for
 // the pairs of the contact set (the broad phase of host/contact/ enables them),
 // 0 for the others, which then neither enter the global matrix nor pull their particle toward
-// its previous iterate. The elements are not a Scene list: they are every particle against every
-// collider, so this type implements ElementType itself, with the generic pass's (kindPass)
-// arithmetic over the pairs of the set. Its params depend on time when a collider moves, like a
-// pin's target, and its energy is booked with the pins' (EnergyTerm::Pins) so that the forcing
-// rule books a moving collider's work.
+// its previous iterate. The elements are not a Scene list: they are every collider against its
+// particles (firstContactElement numbers them), so this type implements ElementType itself,
+// with the generic pass's (kindPass) arithmetic over the pairs of the set. Its params depend on
+// time when a collider moves, like a pin's target, and its energy is booked with the pins'
+// (EnergyTerm::Pins) so that the forcing rule books a moving collider's work.
 #include "elements/contact.hpp"
 
 #include "elements/element_kind.hpp"
@@ -29,6 +30,18 @@ void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& positio
   }
   for (int c = 0; c < 3; ++c) g[kGeometryCenter + c] = center[c], g[kGeometryA + c] = a[c];
   g[kGeometryRadius] = collider.radius;
+}
+
+IndexRange colliderParticles(const Scene& scene, int c) {
+  const Collider& collider = scene.colliders[static_cast<std::size_t>(c)];
+  if (collider.num_particles < 0) return {0, scene.numParticles()};
+  return {collider.first_particle, collider.num_particles};
+}
+
+int firstContactElement(const Scene& scene, int c) {
+  int first = 0;
+  for (int i = 0; i < c; ++i) first += colliderParticles(scene, i).count;
+  return first;
 }
 
 namespace {
@@ -73,6 +86,11 @@ void checkCollider(const Scene& scene, const Collider& c, const validation::Owne
   // w_j = stiffness m_j enters the global matrix: it must be a finite number for every particle.
   if (scene.masses.size() > 0 && !std::isfinite(c.stiffness * scene.masses.maxCoeff()))
     invalid(owner, ": stiffness ", c.stiffness, " times the largest mass is not finite");
+  const int n = scene.numParticles();
+  const bool all_particles = c.num_particles == -1;
+  if (!all_particles && (c.num_particles < 0 || c.first_particle < 0 || c.first_particle > n - c.num_particles))
+    invalid(owner, ": first_particle ", c.first_particle, " and num_particles ", c.num_particles,
+            " do not name particles of the scene's ", n, " (num_particles -1: every particle)");
   switch (c.shape) {
     case ColliderShape::Plane:
       validation::checkFinite(c.normal, owner, "normal");
@@ -102,7 +120,7 @@ class ContactElementType final : public ElementType {
   EnergyTerm term() const override { return EnergyTerm::Pins; }
 
   int count(const Scene& scene) const override {
-    return static_cast<int>(scene.colliders.size()) * scene.numParticles();
+    return firstContactElement(scene, static_cast<int>(scene.colliders.size()));
   }
 
   void validate(const Scene& scene) const override {
@@ -110,16 +128,17 @@ class ContactElementType final : public ElementType {
       checkCollider(scene, scene.colliders[i], validation::Owner{"collider", i});
   }
 
-  // Element e = c n + j: particle j against collider c.
+  // Collider by collider, each over its particles (firstContactElement).
   ElementBlock build(const Scene& scene) const override {
-    const int n = scene.numParticles();
     ElementBlock block;
     block.type = this;
     block.count = count(scene);
     block.coefficients = {1.0};
     block.vertices.reserve(block.count);
-    for (std::size_t c = 0; c < scene.colliders.size(); ++c)
-      for (int j = 0; j < n; ++j) block.vertices.push_back(j);
+    for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
+      const IndexRange particles = colliderParticles(scene, static_cast<int>(c));
+      for (int j = particles.first; j < particles.end(); ++j) block.vertices.push_back(j);
+    }
     writeParams(scene, nullptr, 0.0, block.params);
     return block;
   }
@@ -129,22 +148,34 @@ class ContactElementType final : public ElementType {
     writeParams(data.scene(), &data, t, params);
     // Pairs out of the contact set have weight 0 (SceneData::setElementEnabled).
     const int block = data.blockIndex(*this);
-    for (int e = 0; e < count(data.scene()); ++e)
+    const int pairs = count(data.scene());
+    for (int e = 0; e < pairs; ++e)
       if (!data.elementEnabled(block, e)) params[std::size_t(P) * std::size_t(e)] = 0.0;
   }
 
   // The params of pair e as build() writes them (SceneData::setElementEnabled puts them back when
   // the pair enters the contact set).
+  // (A walk over the colliders: a contact set change enters pairs one by one, and batches have
+  // one or two colliders per scene.)
   void elementParams(const Scene& scene, int e, double* params) const override {
-    const int n = scene.numParticles();
-    const Collider& collider = scene.colliders[static_cast<std::size_t>(e / n)];
-    params[0] = collider.stiffness * scene.masses[e % n];
+    int c = 0;
+    IndexRange particles = colliderParticles(scene, 0);
+    for (; e >= particles.count; particles = colliderParticles(scene, ++c)) e -= particles.count;
+    const Collider& collider = scene.colliders[static_cast<std::size_t>(c)];
+    params[0] = collider.stiffness * scene.masses[particles.first + e];
     colliderGeometryAt(collider, collider.center, params + kContactGeometry);
   }
 
-  // Colliders are the scene's, not a part's particles': a part's colliders are appended as they are.
-  void appendShifted(Scene& into, const Scene& part, int) const override {
-    into.colliders.insert(into.colliders.end(), part.colliders.begin(), part.colliders.end());
+  // A part's colliders act on the part's particles only, shifted with them: in a batch
+  // (concatenateScenes) one scene's colliders must not touch another scene's particles.
+  void appendShifted(Scene& into, const Scene& part, int offset) const override {
+    for (std::size_t c = 0; c < part.colliders.size(); ++c) {
+      Collider collider = part.colliders[c];
+      const IndexRange particles = colliderParticles(part, static_cast<int>(c));
+      collider.first_particle = particles.first + offset;
+      collider.num_particles = particles.count;
+      into.colliders.push_back(collider);
+    }
   }
 
   double project(const double* ax, const double* params, double* p) const override {
@@ -186,14 +217,15 @@ class ContactElementType final : public ElementType {
  private:
   // The colliders where `data`'s motion has them at t (without it: where the scene puts them).
   static void writeParams(const Scene& scene, const SceneData* data, double t, std::vector<double>& params) {
-    const int n = scene.numParticles();
-    params.resize(std::size_t(P) * scene.colliders.size() * std::size_t(n));
+    const int colliders = static_cast<int>(scene.colliders.size());
+    params.resize(std::size_t(P) * std::size_t(firstContactElement(scene, colliders)));
     double* out = params.data();
-    for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
-      const Collider& collider = scene.colliders[c];
+    for (int c = 0; c < colliders; ++c) {
+      const Collider& collider = scene.colliders[static_cast<std::size_t>(c)];
       double geometry[kColliderGeometry];
-      colliderGeometryAt(collider, data ? data->colliderPosition(static_cast<int>(c), t) : collider.center, geometry);
-      for (int j = 0; j < n; ++j, out += P) {
+      colliderGeometryAt(collider, data ? data->colliderPosition(c, t) : collider.center, geometry);
+      const IndexRange particles = colliderParticles(scene, c);
+      for (int j = particles.first; j < particles.end(); ++j, out += P) {
         out[0] = collider.stiffness * scene.masses[j];
         for (int i = 0; i < kColliderGeometry; ++i) out[kContactGeometry + i] = geometry[i];
       }

@@ -21,6 +21,22 @@ namespace stabint {
 STABINT_COLLIDER_SHAPES(STABINT_SHAPE_CODE_MATCHES)
 #undef STABINT_SHAPE_CODE_MATCHES
 
+/// A range of indices [first, first + count): the particles a collider acts on, the colliders of
+/// one scene of a batch.
+struct IndexRange {
+  int first = 0;
+  int count = 0;
+  int end() const { return first + count; }
+};
+
+/// The particles collider `c` of a validated `scene` acts on (Collider::first_particle and
+/// num_particles; every particle of the scene when num_particles is -1).
+IndexRange colliderParticles(const Scene& scene, int c);
+/// The contact elements (docs/method.md, "Contact") pair each collider with its particles,
+/// collider by collider, each over its particles in order: (collider c, particle
+/// colliderParticles(c).first + k) is element firstContactElement(scene, c) + k.
+int firstContactElement(const Scene& scene, int c);
+
 /// The geometry of `collider` translated so that its reference point (Collider::center) is at
 /// `position` (SceneData::colliderPosition says where that is at a time).
 void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& position, double* geometry);

@@ -54,6 +54,7 @@ BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, c
       x_(batch.scene.positions),
       v_(batch.scene.velocities),
       v_slot_(batch.scene.velocities),
+      contact_(data_, system_, *backend_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
       per_scene_(segments_.size()) {
   // Any backend with per-scene energies steps a batch (the OpenCL backend once it has them).
   if (!backend_->computesPerScene())
@@ -119,6 +120,9 @@ void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions
   // The slots may hold less precision (a float device): the host copies are what they hold.
   backend_->readBoth(kX, x_, kV, v_slot_);
   v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
+  // The scene's contact set follows, so that the event books the contact energy of the new
+  // positions; the potential is evaluated below anyway.
+  contact_.updateSet(t_, x_, v_, {contactPart(std::size_t(scene), 0)});
   std::vector<PotentialEnergy> potentials;
   backend_->potentials(kX, t_, potentials);
   p.potential = potentials[std::size_t(scene)];
@@ -169,6 +173,7 @@ const BatchStepReport& BatchSimulator::Impl::step() {
     p.target_now = p.target;
     if (!p.active) report_.refusals[s] = "inactive since a refused step";
   }
+  updateContactSets();
   // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
   // exactly 0 (its terms at t_m and t_1 are the same numbers).
   const bool forced = data_.forcingChangesDuring(t_, t1);
@@ -189,6 +194,7 @@ const BatchStepReport& BatchSimulator::Impl::step() {
     for (PerScene& p : per_scene_)
       if (p.stepping) p.velocities_changed = p.blend.finishCorrections(p.x_new, p.v_new, p.p_new, *backend_);
   }
+  resolveContact(t1);
   for (std::size_t s = 0; s < n; ++s) {
     PerScene& p = per_scene_[s];
     StepReport& r = report_.scenes[s];
@@ -419,6 +425,58 @@ void BatchSimulator::Impl::evaluateBlendPotentials(double t1, const std::vector<
       BlendStep& b = per_scene_[s].blend;
       if (per_scene_[s].stepping && b.wantsPotential()) b.take(p_all_[s]);
     }
+  }
+}
+
+ContactPart BatchSimulator::Impl::contactPart(std::size_t s, int first_row) const {
+  const SceneSegment& seg = segments_[s];
+  return ContactPart{IndexRange{seg.first_collider, seg.num_colliders}, first_row};
+}
+
+void BatchSimulator::Impl::updateContactSets() {
+  if (contact_.count() == 0) return;
+  std::vector<std::size_t> scenes;
+  std::vector<ContactPart> parts;
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    if (!per_scene_[s].stepping || segments_[s].num_colliders == 0) continue;
+    scenes.push_back(s);
+    parts.push_back(contactPart(s, 0));
+  }
+  const std::vector<char> entered_inside = contact_.updateSet(t_, x_, v_, parts);
+  if (std::find(entered_inside.begin(), entered_inside.end(), 1) == entered_inside.end()) return;
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kX, t_, potentials);
+  for (std::size_t i = 0; i < scenes.size(); ++i)
+    if (entered_inside[i]) per_scene_[scenes[i]].potential = potentials[scenes[i]];
+}
+
+void BatchSimulator::Impl::resolveContact(double t1) {
+  if (contact_.count() == 0) return;
+  std::vector<char> projected(segments_.size(), 0);
+  bool any = false;
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    PerScene& p = per_scene_[s];
+    if (!p.stepping) continue;
+    const ContactResolver::Resolved resolved = contact_.applyFrictionAndProjection(
+        contactPart(s, segments_[s].first_particle), t1, p.x_new, p.v_new, p.target_now, report_.scenes[s]);
+    p.velocities_changed = p.velocities_changed || resolved.velocities_changed;
+    if (!resolved.positions_moved) continue;
+    if (!any && x_trial_.rows() != x_.rows()) x_trial_ = x_;
+    any = true;
+    projected[s] = 1;
+    x_trial_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.x_new;
+  }
+  if (!any) return;
+  // The projected positions as a slot holds them (a float device rounds), and their potentials.
+  backend_->write(kXTrial, x_trial_);
+  backend_->read(kXTrial, x_trial_);
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kXTrial, t1, potentials);
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    if (!projected[s]) continue;
+    PerScene& p = per_scene_[s];
+    p.x_new = blockOf(x_trial_, segments_[s]);
+    ContactResolver::bookProjection(potentials[s], p.p_new, p.target_now, report_.scenes[s]);
   }
 }
 

@@ -4,11 +4,13 @@
 // target H*, blend decisions, damping, forcing and refusal.
 //
 // Supported for now: every integrator, the blend included (its per-scene decisions in lockstep:
-// blend_step.hpp), on any backend that computes per-scene energies (today the CPU reference),
-// with a fixed iteration count and the factor (the
+// blend_step.hpp), colliders (each scene's on its own particles: one ContactResolver for the
+// batch, its energies booked per scene), on any backend that computes per-scene energies (the
+// CPU reference and OpenCL), with a fixed iteration count and the factor (the
 // controls that sum over the whole batch, a tolerance stop, acceleration and CG, are refused:
 // they would couple the scenes, and one scene's NaN would reach the others through them).
 #include "backend.hpp"
+#include "contact/contact_resolver.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
 #include "scene/scene_batch.hpp"
@@ -77,6 +79,15 @@ struct BatchSimulator::Impl {
   // positions are formed on the host (no per-scene combine on the backend interface yet).
   void evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner = {});
   bool potentialsOfStep(const IntegratorSteps& steps, int slot, double t1);
+  // Scene s's colliders on host copies whose row 0 is particle `first_row` (0: the batch's).
+  ContactPart contactPart(std::size_t s, int first_row) const;
+  // The broad phase of the stepping scenes at the step's start from (x_, v_), as Simulator's (an
+  // inactive scene's set stays as its refusal left it): a scene with a pair that entered inside
+  // gets its potential again.
+  void updateContactSets();
+  // Friction and the final projection of every stepping scene on its candidate, booked in its
+  // own target, as Simulator's after its corrections; one energy pass for the projected scenes.
+  void resolveContact(double t1);
   void refuse(std::size_t s, const std::string& message);
 
   std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping
@@ -89,6 +100,7 @@ struct BatchSimulator::Impl {
   LocalGlobalSolver solver_;
   Eigen::MatrixX3d x_, v_, x_new_, v_new_;  // host copies of the whole batch (v_new_: kVNew's)
   Eigen::MatrixX3d v_slot_;                 // what kV holds (see step())
+  ContactResolver contact_;                 // every scene's colliders, each on its own particles
   Eigen::MatrixX3d x_aux_, v_aux_;          // host copies of the partner or the full-budget BE solve
   Eigen::MatrixX3d x_trial_;                // the root finds' trial positions
   std::vector<PotentialEnergy> p_all_, new_mid_, old_mid_, aux_mid_;  // per-scene potentials

@@ -228,6 +228,12 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
                              c.friction,
                              c.stiffness};
     mix(fields, static_cast<Eigen::Index>(std::size(fields)));
+    // A collider on some particles only; one on all of them (the default) mixes nothing more, so
+    // checkpoints written before colliders had particle ranges still match.
+    if (c.num_particles != -1) {
+      const double particles[] = {static_cast<double>(c.first_particle), static_cast<double>(c.num_particles)};
+      mix(particles, 2);
+    }
   }
   return hash;
 }

@@ -55,8 +55,6 @@ SceneBatch concatenateScenes(const std::vector<Scene>& scenes) {
     } catch (const InvalidInputError& e) {
       throw InvalidInputError(which + e.what());
     }
-    if (!scenes[i].colliders.empty())
-      throw InvalidInputError(which + "has colliders; a scene batch has none yet (each would act on every scene)");
     if (scenes[i].gravity != scenes.front().gravity)
       throw InvalidInputError(which + "gravity differs from scene 0's; the scenes of a batch share one gravity");
   }
@@ -71,6 +69,8 @@ SceneBatch concatenateScenes(const std::vector<Scene>& scenes) {
     SceneSegment segment;
     segment.first_particle = batch.scene.numParticles();
     segment.num_particles = s.numParticles();
+    segment.first_collider = static_cast<int>(batch.scene.colliders.size());
+    segment.num_colliders = static_cast<int>(s.colliders.size());
     for (const ElementType* type : elementTypes()) {
       segment.first_element.push_back(type->count(batch.scene));
       segment.num_elements.push_back(type->count(s));

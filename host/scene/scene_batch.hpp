@@ -12,8 +12,9 @@ namespace stabint {
 
 /// Appends `part` after the particles of `into`: positions, masses, every element type's list
 /// (ElementType::appendShifted), force fields ("all particles" becomes the part's own), bodies
-/// and triangles, with particle indices shifted. Gravity and colliders stay `into`'s. The scene
-/// files' "parts" and concatenateScenes both build with it.
+/// and triangles, with particle indices shifted, and colliders, which act on the part's particles
+/// only (Collider::first_particle, num_particles). Gravity stays `into`'s. The scene files'
+/// "parts" and concatenateScenes both build with it.
 void appendScene(Scene& into, const Scene& part);
 
 /// Where one scene lies in a concatenation.
@@ -25,6 +26,10 @@ struct SceneSegment {
   /// SceneData block, which keeps the list's order).
   std::vector<int> first_element;
   std::vector<int> num_elements;
+  /// The scene's colliders are [first_collider, first_collider + num_colliders) of the
+  /// concatenation's, acting on the scene's particles only.
+  int first_collider = 0;
+  int num_colliders = 0;
 };
 
 struct SceneBatch {
@@ -33,9 +38,9 @@ struct SceneBatch {
 };
 
 /// Validates every scene (InvalidInputError "scene <i>: ...") and concatenates them. The batch
-/// needs one gravity (Scene has one) and no colliders (every collider would act on every scene's
-/// particles): both are refused, naming the scene, until the batch has per-segment gravity and
-/// colliders (docs/batch_design.md, "Segments").
+/// needs one gravity (Scene has one): a scene whose gravity differs is refused, naming it, until
+/// the batch has per-segment gravity (docs/batch_design.md, "Segments"). Each scene's colliders
+/// act on its own particles only.
 SceneBatch concatenateScenes(const std::vector<Scene>& scenes);
 
 }  // namespace stabint

@@ -29,11 +29,18 @@ struct BatchStepReport {
 /// Steps many scenes with one integrator and one set of options: one local/global solve and one
 /// block-diagonal factor for all (no element couples two scenes), and per scene its own energies,
 /// target H*, blend decisions, forcing, damping and refusals, so that every scene follows the
-/// trajectory its own Simulator would (to the round-off of the factor's ordering).
+/// trajectory its own Simulator would (to the round-off of the factor's ordering and, with
+/// colliders, of the contact set's updates of the one factor: docs/batch_design.md, "Colliders").
+///
+/// Colliders: each scene's colliders act on that scene's particles only, wherever the scenes lie
+/// in space, with the scene's own collider motion (Collider::velocity); its contact set, friction
+/// and final projection are its own Simulator's, and what friction and the projection remove
+/// leaves that scene's H* only. (Moving a collider at run time, as
+/// Simulator::setColliderPosition does, is not in the batch yet.)
 ///
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
-/// scene valid and with the same gravity, no colliders, the CPU reference backend (or one that
-/// computes per-scene energies), a fixed iteration count with the factor (no tolerance stop, no
+/// scene valid and with the same gravity, a backend that computes per-scene energies (the CPU
+/// reference and OpenCL), a fixed iteration count with the factor (no tolerance stop, no
 /// Chebyshev or Anderson acceleration, no CG: they sum over the whole batch, and one scene's
 /// blow-up would reach the others through them). Acceleration::LBFGS runs per scene: its dot
 /// products, line search and history are each scene's own.

@@ -95,8 +95,8 @@ struct ForceField {
 /// Shape of a Collider.
 enum class ColliderShape { Plane, Sphere, Box, Capsule };
 
-/// A rigid obstacle that no particle may enter (docs/method.md, "Contact"). Every particle of
-/// the scene collides with every collider through the contact energy
+/// A rigid obstacle that no particle may enter (docs/method.md, "Contact"). The particles it acts
+/// on (every particle of the scene by default) collide with it through the contact energy
 /// E = w_j/2 |x_j - p_j|^2, p_j the closest point of the collider's outside (x_j itself out of
 /// contact, so E = 0 there), w_j = stiffness * m_j while the particle is near the collider (the
 /// contact set, chosen at each step's start; 0 elsewhere). The collider translates with `velocity`
@@ -115,6 +115,11 @@ struct Collider {
   /// Contact weight per unit of particle mass, 1/s^2 (> 0): a particle at rest on a collider
   /// under gravity g sinks about |g| / stiffness into it.
   double stiffness = 1e4;
+  /// The particles it acts on: `num_particles` of them from `first_particle` on, or, when
+  /// num_particles is -1 (the default), every particle of the scene. A batch
+  /// (include/stabint/batch.hpp) gives each scene's colliders that scene's particles.
+  int first_particle = 0;
+  int num_particles = -1;
 
   /// True when `velocity` is not zero.
   bool moving() const { return !velocity.isZero(0.0); }

@@ -145,6 +145,10 @@ ordered sceneToJson(const Scene& s) {
       if (c.moving()) e["velocity"] = vec(c.velocity);
       e["friction"] = c.friction;
       e["stiffness"] = c.stiffness;
+      if (c.num_particles != -1) {  // -1: every particle, the default
+        e["first_particle"] = c.first_particle;
+        e["num_particles"] = c.num_particles;
+      }
       a.push_back(std::move(e));
     }
     doc["colliders"] = std::move(a);

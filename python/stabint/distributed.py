@@ -23,8 +23,8 @@ dict of :class:`stabint.SimulatorOptions` fields, enums by name.
 Batches and options: a BatchSimulator has one set of options for all its scenes (one time step,
 integrator and iteration count: one ``c M + L`` per solve, docs/batch_design.md), so cells are
 first grouped by their full options, in order of first appearance, and each group is cut into
-batches of at most ``batch_size`` scenes. Scenes of one batch must also share gravity and have no
-colliders (the batch refuses them with ``InvalidInputError``).
+batches of at most ``batch_size`` scenes. Scenes of one batch must also share gravity (the batch
+refuses others with ``InvalidInputError``); each scene's colliders act on its own particles only.
 
 Determinism (what the tests check): a batch on a worker gives the same numbers, bit for bit, as
 the same BatchSimulator stepped in this process (the CPU reference is deterministic, whatever its
@@ -416,7 +416,7 @@ def sweep(scenes: Sequence[Any], options: Union[SimulatorOptions, Mapping[str, A
 
     Bad input raises InvalidInputError naming the scene or batch: an empty list, an object that
     is not a scene description, an unknown option field, a scene that does not validate, or a
-    batch the BatchSimulator refuses (differing gravity, colliders, a tolerance stop, Chebyshev,
+    batch the BatchSimulator refuses (differing gravity, a tolerance stop, Chebyshev,
     Anderson or CG). Errors raised in a worker reach the caller with their own class."""
     _check_counts(frames, batch_size, stride)
     batches = _batches(scenes, options, frames, batch_size, stride, velocities)

@@ -1,0 +1,178 @@
+// The OpenCL backend's element passes, gathers and reductions, and the global step on the device.
+#include "opencl/opencl_backend_class.hpp"
+
+namespace stabint::ocl {
+
+template <typename Real>
+double OpenCLBackend<Real>::massDot(int a, int b) {
+  checkSlot(a);
+  checkSlot(b);
+  const auto start = Clock::now();
+  mass_dot_.bindSlot(mass_dot_args_.a, a, slots_);
+  mass_dot_.bindSlot(mass_dot_args_.b, b, slots_);
+  enqueue(mass_dot_);
+  readPartials(mass_dot_groups_);
+  const double sum = sumPartials(0, mass_dot_groups_);
+  times_.energy += secondsSince(start);
+  return sum;
+}
+
+template <typename Real>
+PotentialEnergy OpenCLBackend<Real>::potential(int x, double t) {
+  checkSlot(x);
+  uploadForcing(t, false);
+  const auto start = Clock::now();
+  enqueueElementPass(x, kPassEnergy);
+  readPartials(full_groups_);
+  const PotentialEnergy e = sumEnergies();
+  times_.energy += secondsSince(start);
+  return e;
+}
+
+// Timing without extra waits: the element pass and the gather are queued back to back and
+// the host waits once (blocking read or clFinish). The local and gather phases are the
+// device's own durations (event profiling); the rest of the wall time (command submission,
+// wake-up, the copy itself) is booked as transfer, or as local where nothing is copied.
+template <typename Real>
+void OpenCLBackend<Real>::accelerations(int dst, int x, double t) {
+  checkSlot(dst);
+  checkSlot(x);
+  uploadForcing(t, false);
+  const auto start = Clock::now();
+  enqueueElementPass(x, kPassForce);
+  gather_accel_.bindSlot(gather_accel_dst_, dst, slots_);
+  enqueue(gather_accel_, &gather_event_);
+  ocl::check(queue_.finish(), "clFinish");
+  const double wall = secondsSince(start);
+  const double gather = deviceSeconds(gather_event_, gather_event_);
+  times_.gather += gather;
+  times_.local += std::max(0.0, wall - gather);
+}
+
+template <typename Real>
+void OpenCLBackend<Real>::localStepRhs(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
+                                       PotentialEnergy* energy_at_x) {
+  gatheredLocalStep(kPassProjection, gather_rhs_, gather_rhs_args_, x, y, c, t, rhs, energy_at_x);
+}
+
+template <typename Real>
+void OpenCLBackend<Real>::localStepGradient(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
+                                            PotentialEnergy* energy_at_x) {
+  gather_gradient_.bindSlot(gather_gradient_args_.x, x, slots_);
+  gatheredLocalStep(kPassForce, gather_gradient_, gather_gradient_args_, x, y, c, t, gradient, energy_at_x);
+}
+
+template <typename Real>
+void OpenCLBackend<Real>::setGlobalMatrix(const Eigen::SparseMatrix<double>& laplacian) {
+  const auto start = Clock::now();
+  if (!cg_)
+    cg_ = std::make_unique<ocl::DeviceConjugateGradient<Real>>(context_, device_.device, *device_.profile, queue_, n_,
+                                                               masses_);
+  cg_->setMatrix(laplacian);
+  times_.transfer += secondsSince(start);
+}
+
+// localStepRhs without the read of the right-hand side: queued, no wait unless the energy is
+// asked for (then the only wait is the read of the energy partials).
+template <typename Real>
+void OpenCLBackend<Real>::localStep(int x, int y, double c, double t, PotentialEnergy* energy_at_x) {
+  checkSlot(x);
+  checkSlot(y);
+  uploadForcing(t, false);
+  const auto start = Clock::now();
+  enqueueElementPass(x, kPassProjection | (energy_at_x ? kPassEnergy : 0));
+  gather_rhs_.bindSlot(gather_rhs_args_.y, y, slots_);
+  gather_rhs_.set(gather_rhs_args_.c, Real(c));
+  enqueue(gather_rhs_);
+  if (energy_at_x) {
+    readPartials(full_groups_);
+    *energy_at_x = sumEnergies();
+    times_.local += secondsSince(start);
+  }
+}
+
+template <typename Real>
+int OpenCLBackend<Real>::solveGlobal(double c, int x, int iterations, double tolerance) {
+  checkSlot(x);
+  if (!cg_) throw Error("OpenCL backend: solveGlobal before setGlobalMatrix");
+  return cg_->solve(c, rhs_, slots_[x], iterations, tolerance);
+}
+
+template <typename Real>
+template <class GatherArgs>
+void OpenCLBackend<Real>::gatheredLocalStep(int flags, Launch& gather, const GatherArgs& args, int x, int y, double c,
+                                            double t, Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x) {
+  checkSlot(x);
+  checkSlot(y);
+  uploadForcing(t, false);
+  const auto start = Clock::now();
+  const bool launched = enqueueElementPass(x, flags | (energy_at_x ? kPassEnergy : 0));
+  gather.bindSlot(args.y, y, slots_);
+  gather.set(args.c, Real(c));
+  enqueue(gather, &gather_event_);
+  if (energy_at_x) readPartials(full_groups_, /*blocking=*/false);
+  readMatrix(rhs_, out);  // blocking: everything queued above has completed
+  if (energy_at_x) *energy_at_x = sumEnergies();
+  const double wall = secondsSince(start);
+  const double local = launched ? deviceSeconds(element_event_, element_event_) : 0.0;
+  const double gathered = deviceSeconds(gather_event_, gather_event_);
+  times_.local += local;
+  times_.gather += gathered;
+  times_.transfer += std::max(0.0, wall - local - gathered);
+}
+
+// Partials [first, last) added in group order (a fixed order: deterministic).
+template <typename Real>
+double OpenCLBackend<Real>::sumPartials(int first, int last) const {
+  double sum = 0.0;
+  for (int g = first; g < last; ++g) sum += double(host_partials_[g]);
+  return sum;
+}
+
+// The energies of a full element pass, segment by segment.
+template <typename Real>
+PotentialEnergy OpenCLBackend<Real>::sumEnergies() const {
+  PotentialEnergy e;
+  for (std::size_t s = 0; s < blocks_.size(); ++s) {
+    const double sum = sumPartials(segment_groups_[s], segment_groups_[s + 1]);
+    (blocks_[s].block->type->term() == EnergyTerm::Pins ? e.pins : e.internal) += sum;
+  }
+  e.external = sumPartials(segment_groups_[blocks_.size()], full_groups_);
+  return e;
+}
+
+template <typename Real>
+void OpenCLBackend<Real>::enqueue(const Launch& launch, cl::Event* event) {
+  ocl::check(queue_.enqueueNDRangeKernel(launch.kernel, cl::NullRange, launch.global, launch.local, nullptr, event),
+             "clEnqueueNDRangeKernel");
+}
+
+// Seconds from the start of `first` to the end of `last` on the device (both complete).
+template <typename Real>
+double OpenCLBackend<Real>::deviceSeconds(const cl::Event& first, const cl::Event& last) {
+  cl_ulong begin = 0, end = 0;
+  ocl::check(first.getProfilingInfo(CL_PROFILING_COMMAND_START, &begin), "clGetEventProfilingInfo");
+  ocl::check(last.getProfilingInfo(CL_PROFILING_COMMAND_END, &end), "clGetEventProfilingInfo");
+  return end > begin ? double(end - begin) * 1e-9 : 0.0;
+}
+
+// Queues the element pass at positions `x` with `flags`: the element segments, plus the
+// vertex segment (external potential) when energies are asked for. Returns false when there
+// was nothing to launch (no elements, no energy).
+template <typename Real>
+bool OpenCLBackend<Real>::enqueueElementPass(int x, int flags) {
+  const int groups = (flags & kPassEnergy) ? full_groups_ : segment_groups_[blocks_.size()];
+  if (groups == 0) return false;
+  element_pass_.bindSlot(element_args_.x, x, slots_);
+  element_pass_.set(element_args_.flags, cl_int(flags));
+  ocl::check(queue_.enqueueNDRangeKernel(element_pass_.kernel, cl::NullRange,
+                                         cl::NDRange(element_local_ * std::size_t(groups)), element_pass_.local,
+                                         nullptr, &element_event_),
+             "clEnqueueNDRangeKernel");
+  return true;
+}
+
+template class OpenCLBackend<double>;
+template class OpenCLBackend<float>;
+
+}  // namespace stabint::ocl

@@ -1,0 +1,127 @@
+// The OpenCL backend's per-scene sums for a batch (kernels/segments.cl).
+#include "opencl/opencl_backend_class.hpp"
+
+namespace stabint::ocl {
+
+template <typename Real>
+void OpenCLBackend<Real>::setSegments(const std::vector<SceneSegment>& segments) {
+  const std::string misfit = segmentsMisfit(segments);
+  if (!misfit.empty()) throw InvalidInputError(misfit);
+  segments_ = segments;
+  segments_misfit_.clear();
+  uploadSegmentTable();
+}
+
+// One launch and one read of one real per scene.
+template <typename Real>
+void OpenCLBackend<Real>::massDots(int a, int b, std::vector<double>& out) {
+  checkSlot(a);
+  checkSlot(b);
+  checkSegmentsFit();
+  const auto start = Clock::now();
+  out.resize(segments_.size());
+  if (!segments_.empty()) {
+    segment_mass_dots_.bindSlot(segment_mass_dots_args_.a, a, slots_);
+    segment_mass_dots_.bindSlot(segment_mass_dots_args_.b, b, slots_);
+    enqueue(segment_mass_dots_);
+    readSegmentSums(segments_.size());
+    for (std::size_t s = 0; s < segments_.size(); ++s) out[s] = double(host_segment_sums_[s]);
+  }
+  times_.energy += secondsSince(start);
+}
+
+// The element pass writing each element's energy, the per-scene sums, one read (one wait).
+template <typename Real>
+void OpenCLBackend<Real>::potentials(int x, double t, std::vector<PotentialEnergy>& out) {
+  checkSlot(x);
+  checkSegmentsFit();
+  uploadForcing(t, false);
+  const auto start = Clock::now();
+  out.assign(segments_.size(), PotentialEnergy{});
+  if (!segments_.empty()) {
+    enqueueElementPass(x, kPassEnergyPerElement);
+    segment_energies_.bindSlot(segment_energies_x_, x, slots_);
+    enqueue(segment_energies_);
+    readSegmentSums(kSegmentEnergies * segments_.size());
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      out[s].internal = double(host_segment_sums_[kSegmentEnergies * s + kSegmentInternal]);
+      out[s].pins = double(host_segment_sums_[kSegmentEnergies * s + kSegmentPins]);
+      out[s].external = double(host_segment_sums_[kSegmentEnergies * s + kSegmentExternal]);
+    }
+  }
+  times_.energy += secondsSince(start);
+}
+
+// The kernels index buffers with the table, so a table that does not fit this scene is refused
+// rather than read out of bounds on the device: why it does not fit, or "".
+template <typename Real>
+std::string OpenCLBackend<Real>::segmentsMisfit(const std::vector<SceneSegment>& segments) const {
+  const std::size_t num_blocks = blocks_.size();
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    const SceneSegment& seg = segments[s];
+    const std::string which = "OpenCL backend: segment " + std::to_string(s) + ": ";
+    if (seg.first_particle < 0 || seg.num_particles < 0 || seg.first_particle > n_ - seg.num_particles)
+      return which + "particles outside the scene's " + std::to_string(n_);
+    if (seg.first_element.size() != num_blocks || seg.num_elements.size() != num_blocks)
+      return which + "element ranges for " + std::to_string(seg.first_element.size()) + " types, the scene has " +
+             std::to_string(num_blocks);
+    for (std::size_t b = 0; b < num_blocks; ++b)
+      if (seg.first_element[b] < 0 || seg.num_elements[b] < 0 ||
+          seg.first_element[b] > blocks_[b].block->count - seg.num_elements[b])
+        return which + "elements of " + blocks_[b].block->type->name() + " outside the scene's " +
+               std::to_string(blocks_[b].block->count);
+  }
+  return "";
+}
+
+// Per-scene calls need segments that fit the current elements (after setPins changed them, the
+// caller sets the new segments).
+template <typename Real>
+void OpenCLBackend<Real>::checkSegmentsFit() const {
+  if (!segments_misfit_.empty()) throw InvalidInputError(segments_misfit_ + " (setSegments after setPins)");
+}
+
+// The segment table of kernels/segments.cl for the current element layout: per segment its
+// particle range, then per block the range of its elements' energies, which element_pass
+// writes at the element's global id (block b's element e at segment_groups_[b] groups + e).
+// Built again by buildKernels when the blocks change (elementsChanged).
+template <typename Real>
+void OpenCLBackend<Real>::uploadSegmentTable() {
+  const std::size_t num_blocks = blocks_.size();
+  std::vector<cl_int> table;
+  static_assert(kSegmentRowHead == 2 && kSegmentRowPerBlock == 2, "a row below is 2 ints, then 2 per block");
+  table.reserve(segments_.size() * (kSegmentRowHead + kSegmentRowPerBlock * num_blocks));
+  for (const SceneSegment& seg : segments_) {
+    table.push_back(seg.first_particle);
+    table.push_back(seg.num_particles);
+    for (std::size_t b = 0; b < num_blocks; ++b) {
+      table.push_back(cl_int(std::size_t(segment_groups_[b]) * element_local_) + seg.first_element[b]);
+      table.push_back(seg.num_elements[b]);
+    }
+  }
+  std::vector<cl_int> block_is_pins;
+  for (const DeviceBlock& d : blocks_) block_is_pins.push_back(d.block->type->term() == EnergyTerm::Pins ? 1 : 0);
+  segment_table_ = upload(table);
+  block_is_pins_ = upload(block_is_pins);
+  segment_sums_ = zeroBuffer(kSegmentEnergies * segments_.size());
+  host_segment_sums_.resize(kSegmentEnergies * std::max<std::size_t>(segments_.size(), 1));
+
+  const cl_int segments = cl_int(segments_.size()), blocks = cl_int(num_blocks), n = n_;
+  segment_energies_ = elementLaunch("segment_energies", int(segments_.size()));
+  segment_energies_.add(segments), segment_energies_.add(blocks), segment_energies_.add(segment_table_);
+  segment_energies_.add(block_is_pins_), segment_energies_.add(element_energies_), segment_energies_.add(n);
+  segment_energies_x_ = segment_energies_.addSlot(0, slots_);
+  segment_energies_.add(fext_), segment_energies_.add(segment_sums_);
+
+  segment_mass_dots_ = elementLaunch("segment_mass_dots", int(segments_.size()));
+  segment_mass_dots_.add(segments), segment_mass_dots_.add(blocks), segment_mass_dots_.add(segment_table_);
+  segment_mass_dots_.add(n), segment_mass_dots_.add(masses_);
+  segment_mass_dots_args_.a = segment_mass_dots_.addSlot(0, slots_);
+  segment_mass_dots_args_.b = segment_mass_dots_.addSlot(0, slots_);
+  segment_mass_dots_.add(segment_sums_);
+}
+
+template class OpenCLBackend<double>;
+template class OpenCLBackend<float>;
+
+}  // namespace stabint::ocl

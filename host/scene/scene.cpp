@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <cstddef>
 #include <optional>
@@ -296,6 +297,26 @@ Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const
     invalid("tet ", failure->element, ": ", failure->what);
   }
   return withMinimumMass(std::move(masses), min_mass);
+}
+
+std::vector<std::array<int, 3>> tetSurface(const std::vector<Tet>& tets) {
+  // For a positive tet (0, 1, 2, 3) the outward faces are (0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3).
+  static constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> seen;  // sorted corners -> count, wound face
+  for (const Tet& t : tets) {
+    for (const auto& f : kFaces) {
+      const std::array<int, 3> face{t.vertices[f[0]], t.vertices[f[1]], t.vertices[f[2]]};
+      std::array<int, 3> key = face;
+      std::sort(key.begin(), key.end());
+      auto& entry = seen[key];
+      ++entry.first;
+      entry.second = face;
+    }
+  }
+  std::vector<std::array<int, 3>> surface;
+  for (const auto& [key, entry] : seen)
+    if (entry.first == 1) surface.push_back(entry.second);
+  return surface;
 }
 
 Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,

@@ -190,6 +190,11 @@ double signedVolume(const Eigen::MatrixX3d& rest_positions, const std::array<int
 Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const std::vector<Tet>& tets, double density,
                                    double min_mass = 1e-6);
 
+/// The surface of a tet mesh whose tets are positively oriented (as validateScene and the mesh
+/// loaders require): the faces that only one tet has, wound so that their normals point out of
+/// the body, sorted by their corners (the same list on every run). For renderers and OBJ output.
+std::vector<std::array<int, 3>> tetSurface(const std::vector<Tet>& tets);
+
 /// Lumped masses from a triangle surface: each triangle gives areal_density * area / 3 to each
 /// of its vertices. Particles touched by no triangle get `min_mass`. Throws as lumpMassesFromTets.
 Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,

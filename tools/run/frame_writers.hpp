@@ -17,15 +17,11 @@
 
 namespace stabint_run {
 
-// Faces for the OBJ frames of a tet mesh: the triangles that belong to exactly one tet, wound
-// outward (tets have positive rest volume).
-std::vector<std::array<int, 3>> tetBoundary(const std::vector<stabint::Tet>& tets);
-
 class ObjWriter {
  public:
   ObjWriter(std::string dir, const stabint::Scene& scene) : dir_(std::move(dir)) {
     std::filesystem::create_directories(dir_);
-    triangles_ = scene.triangles.empty() ? tetBoundary(scene.tets) : scene.triangles;
+    triangles_ = scene.triangles.empty() ? stabint::tetSurface(scene.tets) : scene.triangles;
     if (triangles_.empty()) {
       for (const stabint::Spring& s : scene.springs) lines_.push_back({s.a, s.b});
     }

@@ -79,34 +79,12 @@ Scene dropScene(const std::string& mesh) {
 
 }  // namespace
 
-// Boundary faces of a positively oriented tet mesh: the faces only one tet has, wound so that
-// their normal points out of that tet (for a positive tet (0, 1, 2, 3) the outward faces are
-// (0, 2, 1), (0, 1, 3), (0, 3, 2) and (1, 2, 3)). Sorted, so the file is the same on every run.
-std::vector<std::array<int, 3>> tetBoundary(const Scene& scene) {
-  static constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> seen;  // sorted corners -> count, wound face
-  for (const stabint::Tet& t : scene.tets) {
-    for (const auto& f : kFaces) {
-      const std::array<int, 3> face{t.vertices[f[0]], t.vertices[f[1]], t.vertices[f[2]]};
-      std::array<int, 3> key = face;
-      std::sort(key.begin(), key.end());
-      auto& entry = seen[key];
-      ++entry.first;
-      entry.second = face;
-    }
-  }
-  std::vector<std::array<int, 3>> out;
-  for (const auto& [key, entry] : seen)
-    if (entry.first == 1) out.push_back(entry.second);
-  return out;
-}
-
 void runDrop(const StudyOptions& options) {
   if (options.mesh.empty())
     throw stabint::InvalidInputError("drop needs --mesh BASE (a TetGen .node/.ele pair; scripts/soft_body_mesh.sh)");
   ensureDirectory(options.out);
   const Scene scene = dropScene(options.mesh);
-  const std::vector<std::array<int, 3>> surface = tetBoundary(scene);
+  const std::vector<std::array<int, 3>> surface = stabint::tetSurface(scene.tets);
   {
     CsvWriter tri(joinPath(options.out, "drop_surface.csv"), {"a", "b", "c"});
     for (const auto& t : surface) {

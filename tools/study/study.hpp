@@ -98,11 +98,6 @@ double availableEnergy(const StudyScene& scene);
 /// colliders (none: params alone, so the keys of collider-free scenes are unchanged).
 std::string cacheDescription(const StudyScene& scene);
 
-/// The boundary of a tet mesh whose tets are positively oriented (as the loaders and
-/// validateScene leave them): the faces that only one tet has, wound so that their normals point
-/// out of the body, sorted by their corners (cmd_drop.cpp; the drop's rendered skin).
-std::vector<std::array<int, 3>> tetBoundary(const Scene& scene);
-
 // ---- a recorded run ------------------------------------------------------------------------
 
 struct RunSpec {

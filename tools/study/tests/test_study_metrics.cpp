@@ -213,7 +213,7 @@ TEST(EnergyMetrics, ExplodedAtIsTheFirstFrameBeyondTheThreshold) {
 // sum over faces of centroid . area normal / 3 is the volume, which the tets give directly).
 TEST(TetBoundary, TetBarSkinIsClosedOutwardAndHasTheBarsVolume) {
   const stabint::Scene bar = stabint::makeTetBar(stabint::TetBarParams{});
-  const std::vector<std::array<int, 3>> skin = tetBoundary(bar);
+  const std::vector<std::array<int, 3>> skin = stabint::tetSurface(bar.tets);
   ASSERT_FALSE(skin.empty());
   std::map<std::pair<int, int>, int> directed;
   double surface_volume = 0.0;

@@ -334,6 +334,7 @@ void kindElementResults(const ElementBlock& block, const std::vector<double>& pa
     double group_energies[projections::kLanes];
     double* out = write ? contributions + 3 * K * i : nullptr;
     if constexpr (ProjectsLanes<Kind>::value) {
+      // The buffered pass's contributions are element by element (the gather reads them so).
       double c[3 * Kind::kVertices * projections::kLanes];
       kindGroup<Kind>(block, params, x.data(), x.rows(), shared, group, lo, hi, write, force, group_energies, c);
       if (write)

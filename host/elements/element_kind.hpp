@@ -103,38 +103,56 @@ struct ProjectsLanes : std::false_type {};
 template <class Kind>
 struct ProjectsLanes<Kind, std::void_t<decltype(&Kind::projectLanes)>> : std::true_type {};
 
-/// Elements [first, first + count) of a Kind's block, count <= kLanes, as one group of lanes
-/// (projections.hpp): A_e x of each, its projection, its energy into energies[e - first] and,
-/// when `write`, the contributions w A_e^T p (or w A_e^T (p - A_e x) with `force`) of its K
-/// vertices into `c` (3 K per element, 3 per vertex). A group of fewer elements fills its other
-/// lanes with its last element, whose results are not stored. Every lane does the same
-/// operations in the same order as kernels/element_pass.cl: a result does not depend on the
-/// group an element falls in (a batch's scenes start their groups anywhere).
+/// `per` entries of each element of `flat` (element e's at [per e]) in the lane layout of
+/// ElementBlock::lane_vertices and lane_coefficients.
+template <class T>
+std::vector<T> laneLayout(const std::vector<T>& flat, int count, int per) {
+  constexpr int W = projections::kLanes;
+  const int groups = (count + W - 1) / W;
+  std::vector<T> lanes(std::size_t(groups) * per * W);
+  for (int g = 0; g < groups; ++g)
+    for (int i = 0; i < per; ++i)
+      for (int l = 0; l < W; ++l)
+        lanes[(std::size_t(g) * per + i) * W + l] = flat[std::size_t(per) * std::min(W * g + l, count - 1) + i];
+  return lanes;
+}
+
+/// The group of lanes of a Kind's block that starts at element `group` (a multiple of kLanes,
+/// projections.hpp), for its lanes [lo, hi): A_e x of each element, its projection, its energy
+/// into energies[l - lo] and, when `write`, the contributions w A_e^T p (or w A_e^T (p - A_e x)
+/// with `force`) of its K vertices into c, lane-major (contributionAt). The group reads its
+/// vertices and coefficients from the block's lane layout; lanes outside [lo, hi) compute
+/// elements whose results are not stored (past the block's end: its last element). Every lane
+/// does the same operations in the same order as kernels/element_pass.cl: a result does not
+/// depend on the lanes around it.
 template <class Kind>
 STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const std::vector<double>& params,
-                                              const double* xs, Eigen::Index n, const double* shared, int first,
-                                              int count, bool write, bool force, double* energies, double* c) {
+                                              const double* xs, Eigen::Index n, const double* shared, int group, int lo,
+                                              int hi, bool write, bool force, double* energies, double* c) {
   constexpr int W = projections::kLanes;
   constexpr int K = Kind::kVertices;
   constexpr int R = Kind::kRows;
   constexpr int P = Kind::kParams;
-  constexpr int kStride = Kind::kSharedCoefficients ? 0 : R * K;  // coefficients per element
-  const int* vertices = block.vertices.data();
-  const double* coefficients = block.coefficients.data();
+  const int* vertices = block.lane_vertices.data() + std::size_t(group) * K;
   const double* element_params = params.data();
   int e[W];
-  STABINT_LANES for (int l = 0; l < W; ++l) e[l] = first + (l < count ? l : count - 1);
+  STABINT_LANES for (int l = 0; l < W; ++l) e[l] = std::min(group + l, block.count - 1);
+  // The coefficients are read where they lie (a copy to the stack costs more than the loads).
+  double shared_lanes[Kind::kSharedCoefficients ? R * K : 1][W];
+  const double(*a)[W] = shared_lanes;
+  if constexpr (Kind::kSharedCoefficients) {
+    for (int i = 0; i < R * K; ++i) STABINT_LANES for (int l = 0; l < W; ++l) shared_lanes[i][l] = shared[i];
+  } else {
+    a = reinterpret_cast<const double(*)[W]>(block.lane_coefficients.data() + std::size_t(group) * R * K);
+  }
   // Sums start from their first term, not from 0: 0.0 + x cannot be folded to x (it differs
   // for x = -0.0), and with the shared coefficients +-1 of springs and pins this loop is then
   // exactly x_a - x_b or x_j.
-  double ax[3 * R][W], a[R * K][W];
-  for (int i = 0; i < R * K; ++i)
-    STABINT_LANES for (int l = 0; l < W; ++l) a[i][l] =
-        Kind::kSharedCoefficients ? shared[i] : coefficients[kStride * e[l] + i];
+  double ax[3 * R][W];
   for (int k = 0; k < K; ++k) {
     double x0[W], x1[W], x2[W];
     STABINT_LANES for (int l = 0; l < W; ++l) {
-      const int v = vertices[K * e[l] + k];
+      const int v = vertices[W * k + l];
       x0[l] = xs[v];
       x1[l] = xs[n + v];
       x2[l] = xs[2 * n + v];
@@ -150,7 +168,7 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
   for (int i = 0; i < P; ++i) STABINT_LANES for (int l = 0; l < W; ++l) prm[i][l] = element_params[P * e[l] + i];
   double p[3 * R][W], energy[W];
   Kind::projectLanes(ax, prm, p, energy);
-  for (int l = 0; l < count; ++l) energies[l] = energy[l];
+  for (int l = lo; l < hi; ++l) energies[l - lo] = energy[l];
   if (!write) return;
   for (int i = 0; i < 3 * R; ++i)
     STABINT_LANES for (int l = 0; l < W; ++l) p[i][l] = prm[0][l] * (force ? p[i][l] - ax[i][l] : p[i][l]);
@@ -166,10 +184,12 @@ STABINT_TARGET_CLONES_TEMPLATE void kindLanes(const ElementBlock& block, const s
         c1[l] += a[K * r + k][l] * p[3 * r + 1][l];
         c2[l] += a[K * r + k][l] * p[3 * r + 2][l];
       }
-    for (int l = 0; l < count; ++l) {
-      c[3 * (K * l + k)] = c0[l];
-      c[3 * (K * l + k) + 1] = c1[l];
-      c[3 * (K * l + k) + 2] = c2[l];
+    // Whole vectors: the consumers read them back lane by lane, which costs loads, where storing
+    // them element by element here cost a store per value.
+    STABINT_LANES for (int l = 0; l < W; ++l) {
+      c[3 * W * k + l] = c0[l];
+      c[3 * W * k + W + l] = c1[l];
+      c[3 * W * k + 2 * W + l] = c2[l];
     }
   }
 }
@@ -221,19 +241,40 @@ inline double kindElement(const ElementBlock& block, const std::vector<double>& 
   return element_energy;
 }
 
-/// Elements [first, first + count) of a Kind's block, count <= kLanes, into energies[e - first]
-/// and (when `write`) c + 3 K (e - first): as one group of lanes, or one at a time.
+/// Where kindGroup leaves coordinate j of the contribution to vertex k of element group + lo + i
+/// in its `c`: lane-major for the kinds that project lanes (3 K kLanes values), element by element
+/// from lane lo on for the others (3 K (hi - lo)).
+template <class Kind>
+constexpr int contributionAt(int lo, int i, int k, int j) {
+  if constexpr (ProjectsLanes<Kind>::value) return (3 * k + j) * projections::kLanes + lo + i;
+  return 3 * (Kind::kVertices * i + k) + j;
+}
+
+/// Elements [group + lo, group + hi) of a Kind's block (group a multiple of kLanes, hi <= kLanes)
+/// into energies[l - lo] and (when `write`) c (contributionAt): as one group of lanes, or one at
+/// a time.
 template <class Kind>
 inline void kindGroup(const ElementBlock& block, const std::vector<double>& params, const double* xs, Eigen::Index n,
-                      const double* shared, int first, int count, bool write, bool force, double* energies, double* c) {
+                      const double* shared, int group, int lo, int hi, bool write, bool force, double* energies,
+                      double* c) {
   if constexpr (ProjectsLanes<Kind>::value) {
-    kindLanes<Kind>(block, params, xs, n, shared, first, count, write, force, energies, c);
+    kindLanes<Kind>(block, params, xs, n, shared, group, lo, hi, write, force, energies, c);
   } else {
     constexpr int K = Kind::kVertices;
-    for (int i = 0; i < count; ++i)
-      energies[i] =
-          kindElement<Kind>(block, params, xs, n, shared, first + i, write, force, write ? c + 3 * K * i : nullptr);
+    for (int l = lo; l < hi; ++l)
+      energies[l - lo] = kindElement<Kind>(block, params, xs, n, shared, group + l, write, force,
+                                           write ? c + 3 * K * (l - lo) : nullptr);
   }
+}
+
+/// Calls f(group, lo, hi) for the groups of lanes (aligned at multiples of kLanes) that cover
+/// elements [first, first + count), with each group's lanes [lo, hi) in that range, in element
+/// order.
+template <class F>
+inline void forEachGroup(int first, int count, F&& f) {
+  constexpr int W = projections::kLanes;
+  for (int group = first - first % W; group < first + count; group += W)
+    f(group, std::max(first - group, 0), std::min(first + count - group, W));
 }
 
 /// The shared coefficients of a Kind (unused when each element has its own).
@@ -251,7 +292,6 @@ template <class Kind>
 double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
                 int count, int flags, Eigen::MatrixX3d* out) {
   constexpr int K = Kind::kVertices;
-  constexpr int W = projections::kLanes;
   const bool write = (flags & (kPassProjection | kPassForce)) != 0;
   const bool force = (flags & kPassForce) != 0;
   const Eigen::Index n = x.rows();
@@ -260,21 +300,22 @@ double kindPass(const ElementBlock& block, const std::vector<double>& params, co
   double shared[Kind::kRows * K];
   kindSharedCoefficients<Kind>(shared);
   double energy = 0.0;
-  for (int group = first; group < first + count; group += W) {
-    const int size = std::min(W, first + count - group);
-    double c[3 * K * W], energies[W];
-    kindGroup<Kind>(block, params, xs, n, shared, group, size, write, force, energies, c);
-    for (int l = 0; l < size; ++l) {
+  forEachGroup(first, count, [&](int group, int lo, int hi) {
+    // (Kind's and projections' constants spelled out: GCC 12 fails on the enclosing function's
+    // constexpr locals in a lambda's array bounds.)
+    double c[3 * Kind::kVertices * projections::kLanes], energies[projections::kLanes];
+    kindGroup<Kind>(block, params, xs, n, shared, group, lo, hi, write, force, energies, c);
+    for (int l = 0; l < hi - lo; ++l) {
       if (flags & kPassEnergy) energy += energies[l];
       if (!write) continue;
-      const int* v = block.vertices.data() + K * (group + l);
+      const int* v = block.vertices.data() + K * (group + lo + l);
       for (int k = 0; k < K; ++k) {
-        os[v[k]] += c[3 * (K * l + k)];
-        os[n + v[k]] += c[3 * (K * l + k) + 1];
-        os[2 * n + v[k]] += c[3 * (K * l + k) + 2];
+        os[v[k]] += c[contributionAt<Kind>(lo, l, k, 0)];
+        os[n + v[k]] += c[contributionAt<Kind>(lo, l, k, 1)];
+        os[2 * n + v[k]] += c[contributionAt<Kind>(lo, l, k, 2)];
       }
     }
-  }
+  });
   return energy;
 }
 
@@ -283,20 +324,29 @@ template <class Kind>
 void kindElementResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
                         int first, int count, int flags, double* energies, double* contributions) {
   constexpr int K = Kind::kVertices;
-  constexpr int W = projections::kLanes;
   const bool write = (flags & (kPassProjection | kPassForce)) != 0;
   const bool force = (flags & kPassForce) != 0;
   const bool energy = (flags & kPassEnergy) != 0;
   double shared[Kind::kRows * K];
   kindSharedCoefficients<Kind>(shared);
-  for (int i = 0; i < count; i += W) {
-    const int size = std::min(W, count - i);
-    double group_energies[W];
-    kindGroup<Kind>(block, params, x.data(), x.rows(), shared, first + i, size, write, force, group_energies,
-                    write ? contributions + 3 * K * i : nullptr);
+  forEachGroup(first, count, [&](int group, int lo, int hi) {
+    const int i = group + lo - first;  // the group's first element in the outputs
+    double group_energies[projections::kLanes];
+    double* out = write ? contributions + 3 * K * i : nullptr;
+    if constexpr (ProjectsLanes<Kind>::value) {
+      // The buffered pass's contributions are element by element (the gather reads them so).
+      double c[3 * Kind::kVertices * projections::kLanes];
+      kindGroup<Kind>(block, params, x.data(), x.rows(), shared, group, lo, hi, write, force, group_energies, c);
+      if (write)
+        for (int l = 0; l < hi - lo; ++l)
+          for (int k = 0; k < K; ++k)
+            for (int j = 0; j < 3; ++j) out[3 * (K * l + k) + j] = c[contributionAt<Kind>(lo, l, k, j)];
+    } else {
+      kindGroup<Kind>(block, params, x.data(), x.rows(), shared, group, lo, hi, write, force, group_energies, out);
+    }
     if (energy)
-      for (int l = 0; l < size; ++l) energies[i + l] = group_energies[l];
-  }
+      for (int l = 0; l < hi - lo; ++l) energies[i + l] = group_energies[l];
+  });
 }
 
 /// ElementType::ownedResults of a Kind: kindGroup per group (the same results as kindPass's),
@@ -306,7 +356,6 @@ template <class Kind>
 void kindOwnedResults(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x,
                       int first, int count, int flags, int lo, int hi, Eigen::MatrixX3d* out, double* energies) {
   constexpr int K = Kind::kVertices;
-  constexpr int W = projections::kLanes;
   const bool write = (flags & (kPassProjection | kPassForce)) != 0;
   const bool force = (flags & kPassForce) != 0;
   const bool energy = (flags & kPassEnergy) != 0;
@@ -316,22 +365,22 @@ void kindOwnedResults(const ElementBlock& block, const std::vector<double>& para
   double* os = write ? out->data() : nullptr;
   double shared[Kind::kRows * K];
   kindSharedCoefficients<Kind>(shared);
-  for (int group = first; group < first + count; group += W) {
-    const int size = std::min(W, first + count - group);
-    double c[3 * K * W], group_energies[W];
-    kindGroup<Kind>(block, params, xs, n, shared, group, size, write, force, group_energies, c);
-    for (int l = 0; l < size; ++l) {
-      const int* v = block.vertices.data() + K * (group + l);
-      if (energy && v[0] >= lo && v[0] < hi) energies[group + l - first] = group_energies[l];
+  forEachGroup(first, count, [&](int group, int lane_lo, int lane_hi) {
+    double c[3 * Kind::kVertices * projections::kLanes], group_energies[projections::kLanes];
+    kindGroup<Kind>(block, params, xs, n, shared, group, lane_lo, lane_hi, write, force, group_energies, c);
+    for (int l = 0; l < lane_hi - lane_lo; ++l) {
+      const int e = group + lane_lo + l;
+      const int* v = block.vertices.data() + K * e;
+      if (energy && v[0] >= lo && v[0] < hi) energies[e - first] = group_energies[l];
       if (!write) continue;
       for (int k = 0; k < K; ++k) {
         if (v[k] < lo || v[k] >= hi) continue;
-        os[v[k]] += c[3 * (K * l + k)];
-        os[n + v[k]] += c[3 * (K * l + k) + 1];
-        os[2 * n + v[k]] += c[3 * (K * l + k) + 2];
+        os[v[k]] += c[contributionAt<Kind>(lane_lo, l, k, 0)];
+        os[n + v[k]] += c[contributionAt<Kind>(lane_lo, l, k, 1)];
+        os[2 * n + v[k]] += c[contributionAt<Kind>(lane_lo, l, k, 2)];
       }
     }
-  }
+  });
 }
 
 template <class Kind>
@@ -386,6 +435,13 @@ class ElementTypeOf final : public ElementType {
       for (int v : vertexTuple(elements[e])) block.vertices.push_back(v);
       if constexpr (!Kind::kSharedCoefficients) Kind::coefficients(scene, elements[e], &block.coefficients[R * K * e]);
       Kind::params(scene, elements[e], &block.params[P * e]);
+    }
+    if constexpr (ProjectsLanes<Kind>::value) {
+      if (block.count > 0) {
+        block.lane_vertices = laneLayout(block.vertices, block.count, K);
+        if constexpr (!Kind::kSharedCoefficients)
+          block.lane_coefficients = laneLayout(block.coefficients, block.count, R * K);
+      }
     }
     return block;
   }

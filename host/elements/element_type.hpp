@@ -41,6 +41,14 @@ struct ElementBlock {
   int count = 0;
   std::vector<int> vertices;
   std::vector<double> coefficients;
+  /// The same vertices and (per-element) coefficients in the CPU reference's lane layout, for
+  /// the types that project a group of elements at once (projections::kLanes elements, the
+  /// groups aligned at multiples of kLanes): entry i of element kLanes g + l at
+  /// [(I g + i) kLanes + l], I = K or R K entries per element, the last group padded with the
+  /// block's last element. A group then loads each entry of all its lanes as one vector instead of
+  /// gathering it; empty for the other types.
+  std::vector<int> lane_vertices;
+  std::vector<double> lane_coefficients;
   std::vector<double> params;
   int contribution_base = 0;
   int revision = 0;  // incremented when the block is rebuilt at run time (SceneData::setPins)

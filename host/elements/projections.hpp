@@ -12,8 +12,8 @@
 #include <cmath>
 
 // The element passes of the CPU reference work on kLanes elements side by side (lanes): each
-// array of a group holds entry i of element l at [i][l], so that every loop over l is one SIMD
-// instruction. The functions that do most of the arithmetic are compiled for AVX-512, AVX2 and
+// array of a group holds entry i of element l at [i][l], so that every loop over l is a few whole
+// SIMD instructions. The functions that do most of the arithmetic are compiled for AVX-512, AVX2 and
 // the baseline, and the loader picks the widest the machine has (GCC/Clang target_clones on
 // x86-64 Linux): the library stays one portable binary. Every lane does the scalar function's
 // operations in the same order (the build has no FMA contraction: -ffp-contract=off), so a lane's
@@ -42,8 +42,11 @@
 
 namespace stabint::projections {
 
-/// Elements per group in the CPU reference's passes: AVX-512's width in doubles.
-inline constexpr int kLanes = 8;
+/// Elements per group in the CPU reference's passes: two AVX-512 vectors of doubles. The rotation's
+/// Newton steps are chains of dependent divisions and square roots; two independent vectors per
+/// step keep the core's pipelines busy where one waits on its chain, which pays for the lanes
+/// that iterate only because the group's slowest does.
+inline constexpr int kLanes = 16;
 
 /// The projection of an element whose A x = v is one 3-vector held at a length r (springs,
 /// bending hinges), with params = (w, r, unit fallback direction): p = r v/|v|. A v shorter than

@@ -46,6 +46,8 @@ TEST(EnumTables, EveryNameParsesBackToItsValue) {
   expectNamesRoundTrip(globalSolveName, parseGlobalSolve, kGlobalSolveCount);
   expectNamesRoundTrip(elementKindName, parseElementKind, kElementKindCount);
   expectNamesRoundTrip(blendBranchName, parseBlendBranch, kBlendBranchCount);
+  expectNamesRoundTrip(colliderShapeName, parseColliderShape, kColliderShapeCount);
+  expectNamesRoundTrip(clothModelName, parseClothModel, kClothModelCount);
   EXPECT_EQ(allIntegrators().size(), static_cast<size_t>(kIntegratorCount));
   EXPECT_EQ(allElementKinds().size(), static_cast<size_t>(kElementKindCount));
 }

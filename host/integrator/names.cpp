@@ -56,6 +56,12 @@ std::vector<ElementKind> allElementKinds() { return allValues<ElementKind>(kElem
 BlendBranch parseBlendBranch(const std::string& name) {
   return parseName(name, blendBranchName, kBlendBranchCount, "blend branch");
 }
+ColliderShape parseColliderShape(const std::string& name) {
+  return parseName(name, colliderShapeName, kColliderShapeCount, "collider shape");
+}
+ClothModel parseClothModel(const std::string& name) {
+  return parseName(name, clothModelName, kClothModelCount, "cloth model");
+}
 
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
   local += o.local;

@@ -177,14 +177,8 @@ void bindEnums(nb::module_& m) {
   STABINT_PY_ENUM(GlobalSolve, STABINT_GLOBAL_SOLVES, "How the global step solves K_c x = rhs.")
   STABINT_PY_ENUM(BlendBranch, STABINT_BLEND_BRANCHES,
                   "What the blend did with the IM candidate (None_: 'None' is a Python keyword).")
-  nb::enum_<ColliderShape>(m, "ColliderShape")
-      .value("Plane", ColliderShape::Plane)
-      .value("Sphere", ColliderShape::Sphere)
-      .value("Box", ColliderShape::Box)
-      .value("Capsule", ColliderShape::Capsule);
-  nb::enum_<ClothModel>(m, "ClothModel")
-      .value("Springs", ClothModel::Springs)
-      .value("Triangles", ClothModel::Triangles);
+  STABINT_PY_ENUM(ColliderShape, STABINT_COLLIDER_SHAPE_VALUES, "Shape of a Collider.")
+  STABINT_PY_ENUM(ClothModel, STABINT_CLOTH_MODELS, "How a cloth resists deformation.")
   STABINT_PY_ENUM(ElementKind, STABINT_ELEMENT_KINDS,
                   "An element list of a Scene, for set_element_stiffness and set_element_enabled.")
 #undef STABINT_PY_ENUM

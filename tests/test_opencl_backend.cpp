@@ -293,7 +293,7 @@ TEST_P(OpenCLBackendTest, PhaseTimersAccumulate) {
 
 INSTANTIATE_TEST_SUITE_P(Precisions, OpenCLBackendTest, ::testing::Values(Precision::Double, Precision::Float),
                          [](const ::testing::TestParamInfo<Precision>& info) {
-                           return std::string(testing::precisionName(info.param));
+                           return std::string(precisionName(info.param));
                          });
 
 }  // namespace

@@ -29,7 +29,6 @@ namespace {
 using testing::availablePrecisions;
 using testing::crossBackendTolerance;
 using testing::openclOptions;
-using testing::precisionName;
 using testing::typeIndex;
 
 // The same terms summed in another order (a tree per work-group and the groups on the host, or

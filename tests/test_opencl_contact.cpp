@@ -49,8 +49,8 @@ TEST(OpenCLContact, ClothOnCollidersMatchesCpu) {
       const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 30);
       double friction = 0.0;
       for (std::size_t i = 0; i < ref.x.size(); ++i) {
-        const std::string what = std::string(integratorName(integrator)) + " " + testing::precisionName(precision) +
-                                 " step " + std::to_string(i);
+        const std::string what =
+            std::string(integratorName(integrator)) + " " + precisionName(precision) + " step " + std::to_string(i);
         EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
         EXPECT_NEAR(got.reports[i].friction, ref.reports[i].friction, tol * ref.energy_scale) << what;
         EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << what;
@@ -78,8 +78,8 @@ TEST(OpenCLContact, CollidersMovedAtRunTimeMatchCpu) {
       const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 30, input);
       double forcing = 0.0;
       for (std::size_t i = 0; i < ref.x.size(); ++i) {
-        const std::string what = std::string(integratorName(integrator)) + " " + testing::precisionName(precision) +
-                                 " step " + std::to_string(i);
+        const std::string what =
+            std::string(integratorName(integrator)) + " " + precisionName(precision) + " step " + std::to_string(i);
         EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
         EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << what;
         EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << what;
@@ -103,8 +103,7 @@ TEST(OpenCLContact, CheckpointsContinueBitForBit) {
     for (int i = 0; i < 10; ++i) original.push_back((sim.step(), sim.positions()));
     Simulator other(scene, o);
     other.restore(c);
-    for (int i = 0; i < 10; ++i)
-      EXPECT_EQ((other.step(), other.positions()), original[i]) << testing::precisionName(precision);
+    for (int i = 0; i < 10; ++i) EXPECT_EQ((other.step(), other.positions()), original[i]) << precisionName(precision);
   }
 }
 

@@ -204,7 +204,7 @@ TEST(OpenCLGlobalCg, ToleranceStopsEarly) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Precisions, OpenCLGlobalCgTest, ::testing::Values(Precision::Double, Precision::Float),
-                         [](const auto& info) { return testing::precisionName(info.param); });
+                         [](const auto& info) { return precisionName(info.param); });
 
 }  // namespace
 }  // namespace stabint

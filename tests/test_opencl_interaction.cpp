@@ -57,8 +57,8 @@ TEST(OpenCLInteraction, DrivenClothMatchesCpu) {
       const DrivenRun got = drivenRun(d, BackendKind::OpenCL, precision);
       ASSERT_EQ(got.x.size(), ref.x.size());
       for (size_t i = 0; i < ref.x.size(); ++i) {
-        const std::string what = std::string(integratorName(integrator)) + " " + testing::precisionName(precision) +
-                                 " step " + std::to_string(i);
+        const std::string what =
+            std::string(integratorName(integrator)) + " " + precisionName(precision) + " step " + std::to_string(i);
         EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
         EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << what;
         EXPECT_NEAR(got.reports[i].event_energy, ref.reports[i].event_energy, tol * ref.energy_scale) << what;
@@ -111,7 +111,7 @@ TEST(OpenCLInteraction, ElementChangesMatchCpu) {
     const auto got = run(BackendKind::OpenCL, precision, got_reports);
     const double scale = Simulator(cloth, {}).energyScale();
     for (std::size_t i = 0; i < ref.size(); ++i) {
-      const std::string what = std::string(testing::precisionName(precision)) + " step " + std::to_string(i);
+      const std::string what = std::string(precisionName(precision)) + " step " + std::to_string(i);
       EXPECT_LT(relativeError(got[i], ref[i]), tol) << what;
       // Re-enabling the stiff pin after the corner fell books 700 J (500 E_scale): float's
       // error is relative to that energy, not to E_scale, and twice the positions' (the energy
@@ -158,7 +158,7 @@ TEST(OpenCLInteraction, ScriptedEventsMatchCpu) {
     const auto ref = run(BackendKind::CpuReference, Precision::Double);
     const auto got = run(BackendKind::OpenCL, precision);
     for (std::size_t i = 0; i < ref.size(); ++i)
-      EXPECT_LT(relativeError(got[i], ref[i]), tol) << testing::precisionName(precision) << " step " << i;
+      EXPECT_LT(relativeError(got[i], ref[i]), tol) << precisionName(precision) << " step " << i;
   }
 }
 
@@ -173,10 +173,10 @@ TEST(OpenCLInteraction, CheckpointsContinueBitForBit) {
       const Checkpoint c = sim.checkpoint();
       const std::vector<Eigen::MatrixX3d> original = d.run(sim, 10);
       sim.restore(c);
-      EXPECT_EQ(d.run(sim, 10), original) << integratorName(integrator) << " " << testing::precisionName(precision);
+      EXPECT_EQ(d.run(sim, 10), original) << integratorName(integrator) << " " << precisionName(precision);
       Simulator other(d.scene, d.options);
       other.restore(c);
-      EXPECT_EQ(d.run(other, 10), original) << integratorName(integrator) << " " << testing::precisionName(precision);
+      EXPECT_EQ(d.run(other, 10), original) << integratorName(integrator) << " " << precisionName(precision);
     }
   }
 }

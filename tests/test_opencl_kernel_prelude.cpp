@@ -54,7 +54,7 @@ std::string valuesKernel() {
 
 template <typename Real>
 void expectDeviceValues(const ocl::SelectedDevice& device, Precision precision) {
-  SCOPED_TRACE(testing::precisionName(precision));
+  SCOPED_TRACE(precisionName(precision));
   const cl::Context context = ocl::sharedContext(device.device);
   const cl::Program program = ocl::buildProgram(context, device.device, valuesKernel(), ocl::programOptions(precision));
   std::vector<cl_int> ints;

@@ -40,8 +40,6 @@ inline OpenCLOptions openclOptions(Precision precision) {
   return o;
 }
 
-inline const char* precisionName(Precision p) { return p == Precision::Double ? "double" : "float"; }
-
 /// The precisions an OpenCL device here runs (double, then float), for tests that loop over
 /// them; each missing one is reported as skipped on stdout.
 inline std::vector<Precision> availablePrecisions() {

@@ -99,34 +99,31 @@ void requireCapacity(size_t capacity, size_t needed, const char* what) {
 // below fail the build when a C field is missing or has another type, or when a C enum's values
 // drift from the C++ enum's.
 
-// The C enum of each C++ enum of the options, and the C++ enum's count (its values run from 0).
+// The C enum of each public C++ enum with its count (its values run from 0), and the check,
+// generated from the enum's list (stabint/types.hpp), that every C enumerator equals its C++
+// value: a value added to the list without its C enumerator, or a C value that drifts, fails the
+// build here. With the values equal, a conversion either way is a cast.
 template <class Enum>
 struct CEnum;
-template <>
-struct CEnum<stabint::Integrator> {
-  using type = stabint_integrator;
-  static constexpr int count = stabint::kIntegratorCount;
-};
-template <>
-struct CEnum<stabint::Acceleration> {
-  using type = stabint_acceleration;
-  static constexpr int count = stabint::kAccelerationCount;
-};
-template <>
-struct CEnum<stabint::GlobalSolve> {
-  using type = stabint_global_solve;
-  static constexpr int count = stabint::kGlobalSolveCount;
-};
-template <>
-struct CEnum<stabint::BackendKind> {
-  using type = stabint_backend;
-  static constexpr int count = stabint::kBackendKindCount;
-};
-template <>
-struct CEnum<stabint::Precision> {
-  using type = stabint_precision;
-  static constexpr int count = stabint::kPrecisionCount;
-};
+#define STABINT_C_ENUM(cpp_enum, c_enum, LIST)              \
+  template <>                                               \
+  struct CEnum<stabint::cpp_enum> {                         \
+    using Enum = stabint::cpp_enum;                         \
+    using type = c_enum;                                    \
+    static constexpr int count = 0 LIST(STABINT_ENUM_ONE_); \
+    LIST(STABINT_C_SAME_VALUE)                              \
+  };
+#define STABINT_C_SAME_VALUE(enumerator, name, doc, c_enumerator)                     \
+  static_assert(static_cast<int>(c_enumerator) == static_cast<int>(Enum::enumerator), \
+                #c_enumerator " differs from the C++ value " #enumerator);
+STABINT_C_ENUM(Integrator, stabint_integrator, STABINT_INTEGRATORS)
+STABINT_C_ENUM(BackendKind, stabint_backend, STABINT_BACKENDS)
+STABINT_C_ENUM(Precision, stabint_precision, STABINT_PRECISIONS)
+STABINT_C_ENUM(Acceleration, stabint_acceleration, STABINT_ACCELERATIONS)
+STABINT_C_ENUM(GlobalSolve, stabint_global_solve, STABINT_GLOBAL_SOLVES)
+STABINT_C_ENUM(BlendBranch, stabint_blend_branch, STABINT_BLEND_BRANCHES)
+#undef STABINT_C_ENUM
+#undef STABINT_C_SAME_VALUE
 
 // The C type of a field of C++ type T: the same for int and double, the C enum for an enum, a
 // NUL-terminated string (NULL: empty) for a std::string.
@@ -145,39 +142,6 @@ struct CField<std::string> {
 template <class T>
 using CType = typename CField<T>::type;
 
-// Every C enum value equals the C++ one, and each C enum ends where the C++ count says.
-template <class Enum>
-constexpr bool sameValue(int c, Enum cpp) {
-  return c == static_cast<int>(cpp);
-}
-static_assert(sameValue(STABINT_FORWARD_EULER, stabint::Integrator::ForwardEuler) &&
-              sameValue(STABINT_SYMPLECTIC_EULER, stabint::Integrator::SymplecticEuler) &&
-              sameValue(STABINT_BACKWARD_EULER, stabint::Integrator::BackwardEuler) &&
-              sameValue(STABINT_BDF2, stabint::Integrator::BDF2) &&
-              sameValue(STABINT_IMPLICIT_MIDPOINT, stabint::Integrator::ImplicitMidpoint) &&
-              sameValue(STABINT_ENERGY_BLEND, stabint::Integrator::EnergyBlend) &&
-              STABINT_ENERGY_BLEND + 1 == stabint::kIntegratorCount);
-static_assert(sameValue(STABINT_ACCELERATION_NONE, stabint::Acceleration::None) &&
-              sameValue(STABINT_ACCELERATION_CHEBYSHEV, stabint::Acceleration::Chebyshev) &&
-              sameValue(STABINT_ACCELERATION_ANDERSON, stabint::Acceleration::Anderson) &&
-              sameValue(STABINT_ACCELERATION_LBFGS, stabint::Acceleration::LBFGS) &&
-              sameValue(STABINT_ACCELERATION_NEWTON, stabint::Acceleration::Newton) &&
-              STABINT_ACCELERATION_NEWTON + 1 == stabint::kAccelerationCount);
-static_assert(sameValue(STABINT_GLOBAL_SOLVE_FACTOR, stabint::GlobalSolve::Factor) &&
-              sameValue(STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT, stabint::GlobalSolve::ConjugateGradient) &&
-              STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT + 1 == stabint::kGlobalSolveCount);
-static_assert(sameValue(STABINT_BACKEND_CPU, stabint::BackendKind::CpuReference) &&
-              sameValue(STABINT_BACKEND_OPENCL, stabint::BackendKind::OpenCL) &&
-              sameValue(STABINT_BACKEND_AUTO, stabint::BackendKind::Auto) &&
-              STABINT_BACKEND_AUTO + 1 == stabint::kBackendKindCount);
-static_assert(sameValue(STABINT_PRECISION_DOUBLE, stabint::Precision::Double) &&
-              sameValue(STABINT_PRECISION_FLOAT, stabint::Precision::Float) &&
-              STABINT_PRECISION_FLOAT + 1 == stabint::kPrecisionCount);
-static_assert(sameValue(STABINT_BRANCH_NONE, stabint::BlendBranch::None) &&
-              sameValue(STABINT_BRANCH_IMPLICIT_MIDPOINT, stabint::BlendBranch::ImplicitMidpoint) &&
-              sameValue(STABINT_BRANCH_BACKWARD_EULER, stabint::BlendBranch::BackwardEuler) &&
-              sameValue(STABINT_BRANCH_VELOCITY_SCALE, stabint::BlendBranch::VelocityScale));
-
 // Every field of the list is in the C struct, with its C type. A nested struct's fields are
 // spelled <member>_<field> in C (opencl_platform).
 #define STABINT_C_CHECK_FIELD(type, name, doc)                                          \
@@ -192,6 +156,17 @@ STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_C_CHECK_FIELD, STABINT_C_CHECK_NESTED)
 #undef STABINT_C_CHECK_NESTED
 #undef STABINT_C_CHECK_SUB
 
+// Whether a C enum value (any int) is a value of the C++ enum.
+template <class Enum>
+bool isValue(typename CEnum<Enum>::type value) {
+  return value >= 0 && value < CEnum<Enum>::count;
+}
+// The C++ name of a C enum value; NULL for any other int.
+template <class Enum>
+const char* nameOf(typename CEnum<Enum>::type value, const char* (*name)(Enum)) {
+  return isValue<Enum>(value) ? name(static_cast<Enum>(value)) : nullptr;
+}
+
 // C -> C++, one field. C enums arrive as plain ints: the range is checked before the cast (the
 // message names the C field).
 void fromC(int value, int& out, const char*) { out = value; }
@@ -199,7 +174,7 @@ void fromC(double value, double& out, const char*) { out = value; }
 void fromC(const char* value, std::string& out, const char*) { out = value ? value : ""; }
 template <class Enum, class = std::enable_if_t<std::is_enum_v<Enum>>>
 void fromC(typename CEnum<Enum>::type value, Enum& out, const char* field) {
-  if (value < 0 || value >= CEnum<Enum>::count) {
+  if (!isValue<Enum>(value)) {
     throw stabint::InvalidInputError(std::string("options.") + field + ": invalid value " +
                                      std::to_string(static_cast<int>(value)));
   }
@@ -250,7 +225,7 @@ stabint_step_report toC(const stabint::StepReport& r) {
   c.target = r.target;
   c.forcing = r.forcing;
   c.damping = r.damping;
-  c.branch = static_cast<stabint_blend_branch>(r.branch);
+  toC(r.branch, c.branch);
   c.alpha = r.alpha;
   c.velocity_scale = r.velocity_scale;
   c.event_energy = r.event_energy;
@@ -341,13 +316,11 @@ stabint_status stabint_last_error_status(void) { return last_error.status; }
 int stabint_last_error_step(void) { return last_error.step; }
 
 const char* stabint_integrator_name(stabint_integrator integrator) {
-  if (integrator < 0 || integrator > STABINT_ENERGY_BLEND) return nullptr;
-  return stabint::integratorName(static_cast<stabint::Integrator>(integrator));
+  return nameOf<stabint::Integrator>(integrator, stabint::integratorName);
 }
 
 const char* stabint_blend_branch_name(stabint_blend_branch branch) {
-  if (branch < 0 || branch > STABINT_BRANCH_VELOCITY_SCALE) return nullptr;
-  return stabint::blendBranchName(static_cast<stabint::BlendBranch>(branch));
+  return nameOf<stabint::BlendBranch>(branch, stabint::blendBranchName);
 }
 
 stabint_status stabint_scene_create_builtin(const char* name, const char* params_json, stabint_scene** out) {

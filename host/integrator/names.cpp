@@ -1,4 +1,5 @@
-// Names of the public enums and small value-type helpers of simulator.hpp.
+// The parsers of the public enums' names and small value-type helpers of simulator.hpp. The names
+// themselves come from the enums' lists (stabint/types.hpp).
 #include <stabint/simulator.hpp>
 
 #include <algorithm>
@@ -10,86 +11,56 @@ std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
   return s;
 }
+
+// The value of an enum with `count` values named by `nameOf` whose name is `name` in any case
+// (or, with `plurals`, that name plus "s"); else InvalidInputError "unknown <what> '<name>'
+// (expected a, b or c)", the names in the enum's order.
+template <class Enum>
+Enum parseName(const std::string& name, const char* (*nameOf)(Enum), int count, const std::string& what,
+               bool plurals = false) {
+  for (int i = 0; i < count; ++i) {
+    const Enum value = static_cast<Enum>(i);
+    const std::string candidate = lower(nameOf(value));
+    if (lower(name) == candidate || (plurals && lower(name) == candidate + "s")) return value;
+  }
+  throw InvalidInputError("unknown " + what + " '" + name + "' (expected " + enumNames(nameOf, count) +
+                          (plurals ? ", or their plurals)" : ")"));
+}
+
+template <class Enum>
+std::vector<Enum> allValues(int count) {
+  std::vector<Enum> values;
+  for (int i = 0; i < count; ++i) values.push_back(static_cast<Enum>(i));
+  return values;
+}
 }  // namespace
 
-const char* integratorName(Integrator integrator) {
-  switch (integrator) {
-    case Integrator::ForwardEuler: return "FE";
-    case Integrator::SymplecticEuler: return "SE";
-    case Integrator::BackwardEuler: return "BE";
-    case Integrator::BDF2: return "BDF2";
-    case Integrator::ImplicitMidpoint: return "IM";
-    case Integrator::EnergyBlend: return "blend";
-  }
-  return "?";
-}
-
-std::vector<Integrator> allIntegrators() {
-  return {Integrator::ForwardEuler, Integrator::SymplecticEuler,  Integrator::BackwardEuler,
-          Integrator::BDF2,         Integrator::ImplicitMidpoint, Integrator::EnergyBlend};
-}
-
 Integrator parseIntegrator(const std::string& name) {
-  for (Integrator i : allIntegrators())
-    if (lower(name) == lower(integratorName(i))) return i;
-  throw InvalidInputError("unknown integrator '" + name + "' (expected FE, SE, BE, BDF2, IM or blend)");
+  return parseName(name, integratorName, kIntegratorCount, "integrator");
 }
-
-const char* backendName(BackendKind kind) {
-  switch (kind) {
-    case BackendKind::OpenCL: return "opencl";
-    case BackendKind::Auto: return "auto";
-    default: return "cpu";
-  }
+std::vector<Integrator> allIntegrators() { return allValues<Integrator>(kIntegratorCount); }
+BackendKind parseBackend(const std::string& name) { return parseName(name, backendName, kBackendKindCount, "backend"); }
+Precision parsePrecision(const std::string& name) {
+  return parseName(name, precisionName, kPrecisionCount, "precision");
 }
-
-BackendKind parseBackend(const std::string& name) {
-  if (lower(name) == "cpu") return BackendKind::CpuReference;
-  if (lower(name) == "opencl") return BackendKind::OpenCL;
-  if (lower(name) == "auto") return BackendKind::Auto;
-  throw InvalidInputError("unknown backend '" + name + "' (expected cpu, opencl or auto)");
-}
-
-const char* blendBranchName(BlendBranch branch) {
-  switch (branch) {
-    case BlendBranch::None: return "-";
-    case BlendBranch::ImplicitMidpoint: return "IM";
-    case BlendBranch::BackwardEuler: return "BE";
-    case BlendBranch::VelocityScale: return "scale";
-  }
-  return "?";
-}
-
-const char* accelerationName(Acceleration acceleration) {
-  switch (acceleration) {
-    case Acceleration::None: return "none";
-    case Acceleration::Chebyshev: return "chebyshev";
-    case Acceleration::Anderson: return "anderson";
-    case Acceleration::LBFGS: return "lbfgs";
-    case Acceleration::Newton: return "newton";
-  }
-  return "?";
-}
-
 Acceleration parseAcceleration(const std::string& name) {
-  for (Acceleration a :
-       {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS, Acceleration::Newton})
-    if (lower(name) == accelerationName(a)) return a;
-  throw InvalidInputError("unknown acceleration '" + name + "' (expected none, chebyshev, anderson, lbfgs or newton)");
+  return parseName(name, accelerationName, kAccelerationCount, "acceleration");
 }
-
-const char* globalSolveName(GlobalSolve solve) {
-  switch (solve) {
-    case GlobalSolve::Factor: return "factor";
-    case GlobalSolve::ConjugateGradient: return "cg";
-  }
-  return "?";
-}
-
 GlobalSolve parseGlobalSolve(const std::string& name) {
-  for (GlobalSolve g : {GlobalSolve::Factor, GlobalSolve::ConjugateGradient})
-    if (lower(name) == globalSolveName(g)) return g;
-  throw InvalidInputError("unknown global solve '" + name + "' (expected factor or cg)");
+  return parseName(name, globalSolveName, kGlobalSolveCount, "global solve");
+}
+ElementKind parseElementKind(const std::string& name) {
+  return parseName(name, elementKindName, kElementKindCount, "element kind", true);
+}
+std::vector<ElementKind> allElementKinds() { return allValues<ElementKind>(kElementKindCount); }
+BlendBranch parseBlendBranch(const std::string& name) {
+  return parseName(name, blendBranchName, kBlendBranchCount, "blend branch");
+}
+ColliderShape parseColliderShape(const std::string& name) {
+  return parseName(name, colliderShapeName, kColliderShapeCount, "collider shape");
+}
+ClothModel parseClothModel(const std::string& name) {
+  return parseName(name, clothModelName, kClothModelCount, "cloth model");
 }
 
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
@@ -100,26 +71,6 @@ PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
   energy += o.energy;
   bookkeeping += o.bookkeeping;
   return *this;
-}
-
-std::vector<ElementKind> allElementKinds() {
-  std::vector<ElementKind> kinds;
-  for (int k = 0; k < kElementKindCount; ++k) kinds.push_back(static_cast<ElementKind>(k));
-  return kinds;
-}
-
-ElementKind parseElementKind(const std::string& name) {
-  for (ElementKind k : allElementKinds()) {
-    const std::string singular = elementKindName(k);
-    if (lower(name) == singular || lower(name) == singular + "s") return k;
-  }
-  std::string names;
-  for (ElementKind k : allElementKinds())
-    names += std::string(names.empty()                             ? ""
-                         : k == ElementKind(kElementKindCount - 1) ? " or "
-                                                                   : ", ") +
-             elementKindName(k);
-  throw InvalidInputError("unknown element kind '" + name + "' (expected " + names + ", or their plurals)");
 }
 
 }  // namespace stabint

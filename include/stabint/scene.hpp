@@ -4,6 +4,8 @@
 /// bending hinges, pins), gravity, time-dependent force fields, per-body damping and the surface
 /// triangles. Matrices are `#particles by 3`, one row per particle. docs/elements.md has the
 /// energies.
+#include <stabint/enum_list.hpp>
+
 #include <Eigen/Core>
 
 #include <array>
@@ -92,8 +94,26 @@ struct ForceField {
   bool timeDependent() const;
 };
 
-/// Shape of a Collider.
-enum class ColliderShape { Plane, Sphere, Box, Capsule };
+/// The collider shapes, `X(Enumerator, "name", "doc")` (stabint/enum_list.hpp): the name is the
+/// scene file's "shape", the doc says which fields of Collider describe it. The kernels compare
+/// with these values.
+#define STABINT_COLLIDER_SHAPE_VALUES(X)                                                        \
+  X(Plane, "plane", "the half-space behind a plane: a point `center` and the outward `normal`") \
+  X(Sphere, "sphere", "a ball: `center`, `radius`")                                             \
+  X(Box, "box", "an axis-aligned box: `center`, `half_extents`")                                \
+  X(Capsule, "capsule", "the points within `radius` of the segment from `center` to `end`")
+
+/// Shape of a Collider (what each is: STABINT_COLLIDER_SHAPE_VALUES).
+enum class ColliderShape { STABINT_COLLIDER_SHAPE_VALUES(STABINT_ENUMERATOR_) };
+/// Number of ColliderShape values (they run from 0).
+constexpr int kColliderShapeCount = 0 STABINT_COLLIDER_SHAPE_VALUES(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_COLLIDER_SHAPE_VALUES ("plane", "sphere", ...); "?" for a value outside
+/// the enum.
+constexpr const char* colliderShapeName(ColliderShape shape) {
+  return enumName_(shape, {STABINT_COLLIDER_SHAPE_VALUES(STABINT_ENUM_NAME_)});
+}
+/// Parses a name as printed by colliderShapeName (case-insensitive); throws InvalidInputError.
+ColliderShape parseColliderShape(const std::string& name);
 
 /// A rigid obstacle that no particle may enter (docs/method.md, "Contact"). The particles it acts
 /// on (every particle of the scene by default) collide with it through the contact energy
@@ -208,10 +228,24 @@ std::vector<Spring> clothSpringsFromTriangles(const Eigen::MatrixX3d& rest_posit
                                               const std::vector<std::array<int, 3>>& triangles,
                                               double stretch_stiffness, double bend_stiffness);
 
-/// How a cloth resists deformation: springs (along edges and across interior edges; the grid
-/// builder adds shear springs) or triangle elements (a TriangleStrain per surface triangle and
-/// a BendingHinge per interior edge).
-enum class ClothModel { Springs, Triangles };
+/// The cloth models, `X(Enumerator, "name", "doc")` (stabint/enum_list.hpp): the name is the
+/// scene file's "model".
+#define STABINT_CLOTH_MODELS(X)                                                                                \
+  X(Springs, "springs", "springs along edges and across interior edges (the grid builder adds shear springs)") \
+  X(Triangles, "triangles", "a TriangleStrain per surface triangle and a BendingHinge per interior edge")
+
+/// How a cloth resists deformation: springs or triangle elements (what each is:
+/// STABINT_CLOTH_MODELS).
+enum class ClothModel { STABINT_CLOTH_MODELS(STABINT_ENUMERATOR_) };
+/// Number of ClothModel values (they run from 0).
+constexpr int kClothModelCount = 0 STABINT_CLOTH_MODELS(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_CLOTH_MODELS ("springs", "triangles"); "?" for a value outside the
+/// enum.
+constexpr const char* clothModelName(ClothModel model) {
+  return enumName_(model, {STABINT_CLOTH_MODELS(STABINT_ENUM_NAME_)});
+}
+/// Parses a name as printed by clothModelName (case-insensitive); throws InvalidInputError.
+ClothModel parseClothModel(const std::string& name);
 
 /// The triangle-element cloth on `scene.triangles`: appends triangleStrainsFromTriangles and
 /// bendingHingesFromTriangles of them.

@@ -67,7 +67,9 @@ stabint_status stabint_last_error_status(void);
 /** For a last error of NON_FINITE_STATE or ENERGY_LIMIT, the index of the refused step; else -1. */
 int stabint_last_error_step(void);
 
-/* ---- enumerations (values equal the C++ enums'; the library's build checks them) ---- */
+/* ---- enumerations: values equal the C++ enums'. Each C++ enum is generated from its list in
+ * stabint/types.hpp (STABINT_INTEGRATORS, ...), whose entries name their C enumerator here; the
+ * library's build checks every one against its C++ value. ---- */
 /** stabint::Integrator. */
 typedef enum stabint_integrator {
   STABINT_FORWARD_EULER = 0,
@@ -115,7 +117,8 @@ typedef enum stabint_blend_branch {
   STABINT_ENUM_INT_WIDE_(STABINT_BRANCH)
 } stabint_blend_branch;
 
-/** "FE", "SE", "BE", "BDF2", "IM", "blend"; "-", "IM", "BE", "scale"; NULL for a bad value. */
+/** The C++ names (stabint::integratorName, blendBranchName: "FE", "blend", ...; "-", "IM", ...);
+ * NULL for any other int. */
 /** @{ */
 const char* stabint_integrator_name(stabint_integrator integrator);
 const char* stabint_blend_branch_name(stabint_blend_branch branch);

@@ -4,6 +4,7 @@
 /// and element kinds (with their names, parsers and counts), the options, and what a step
 /// reports. A leaf header: the solver and the backends include it, never the stepping facade
 /// stabint/simulator.hpp (docs/development.md, "Layering").
+#include <stabint/enum_list.hpp>
 #include <stabint/errors.hpp>
 #include <stabint/scene.hpp>
 
@@ -12,74 +13,110 @@
 
 namespace stabint {
 
-/// The six integrators of docs/method.md sections 2 and 3.
-enum class Integrator {
-  ForwardEuler,      ///< FE, for comparison
-  SymplecticEuler,   ///< SE, for comparison
-  BackwardEuler,     ///< BE
-  BDF2,              ///< second-order backward differences (first step BE)
-  ImplicitMidpoint,  ///< IM
-  EnergyBlend,       ///< the paper's energy-tracking blend of IM with BE or FE
-};
-/// Number of Integrator values (they run from 0): the C API's and bindings' range check. Raise it
-/// with a new value.
-constexpr int kIntegratorCount = 6;
-const char* integratorName(Integrator integrator);  ///< "FE", "SE", "BE", "BDF2", "IM", "blend"
+// The enums below come from their lists (stabint/enum_list.hpp), `X(Enumerator, "name", "doc",
+// C enumerator)`: the last is the value's name in the C API (stabint/stabint_c.h), which the
+// library's build checks against the C++ value; ElementKind's list has only the first two fields.
+
+/// The integrators of docs/method.md sections 2 and 3, `X(Enumerator, "name", "doc", C enumerator)`.
+#define STABINT_INTEGRATORS(X)                                                           \
+  X(ForwardEuler, "FE", "forward Euler, for comparison", STABINT_FORWARD_EULER)          \
+  X(SymplecticEuler, "SE", "symplectic Euler, for comparison", STABINT_SYMPLECTIC_EULER) \
+  X(BackwardEuler, "BE", "backward Euler", STABINT_BACKWARD_EULER)                       \
+  X(BDF2, "BDF2", "second-order backward differences (first step BE)", STABINT_BDF2)     \
+  X(ImplicitMidpoint, "IM", "implicit midpoint", STABINT_IMPLICIT_MIDPOINT)              \
+  X(EnergyBlend, "blend", "the paper's energy-tracking blend of IM with BE or FE", STABINT_ENERGY_BLEND)
+
+/// The six integrators of docs/method.md sections 2 and 3; what each is: STABINT_INTEGRATORS.
+enum class Integrator { STABINT_INTEGRATORS(STABINT_ENUMERATOR_) };
+/// Number of Integrator values (they run from 0): the C API's and bindings' range check.
+constexpr int kIntegratorCount = 0 STABINT_INTEGRATORS(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_INTEGRATORS ("FE", "blend", ...); "?" for a value outside the enum.
+constexpr const char* integratorName(Integrator integrator) {
+  return enumName_(integrator, {STABINT_INTEGRATORS(STABINT_ENUM_NAME_)});
+}
 /// Parses a name as printed by integratorName (case-insensitive); throws InvalidInputError.
 Integrator parseIntegrator(const std::string& name);
 /// Every integrator, in the enum's order.
 std::vector<Integrator> allIntegrators();
 
-/// Where the local step and the energies run. Auto: an OpenCL GPU when there is one and the scene
-/// is large enough for it (a threshold per device class), else the CPU reference (an OpenCL CPU
-/// device such as PoCL is not faster than it; take one with OpenCL); backendDescription() says
-/// which and why (docs/method.md, "Backend choice").
-enum class BackendKind {
-  CpuReference,  ///< plain C++ in double on the host: the oracle the OpenCL backend is tested against
-  OpenCL,        ///< OpenCL kernels on the device of SimulatorOptions::opencl
-  Auto           ///< an OpenCL GPU for a scene large enough for it, else the CPU reference
-};
+/// The backends, `X(Enumerator, "name", "doc", C enumerator)`.
+#define STABINT_BACKENDS(X)                                                                                  \
+  X(CpuReference, "cpu", "plain C++ in double on the host: the oracle the OpenCL backend is tested against", \
+    STABINT_BACKEND_CPU)                                                                                     \
+  X(OpenCL, "opencl", "OpenCL kernels on the device of SimulatorOptions::opencl", STABINT_BACKEND_OPENCL)    \
+  X(Auto, "auto", "an OpenCL GPU for a scene large enough for it, else the CPU reference", STABINT_BACKEND_AUTO)
+
+/// Where the local step and the energies run (what each value is: STABINT_BACKENDS). Auto: an
+/// OpenCL GPU when there is one and the scene is large enough for it (a threshold per device
+/// class), else the CPU reference (an OpenCL CPU device such as PoCL is not faster than it; take
+/// one with OpenCL); backendDescription() says which and why (docs/method.md, "Backend choice").
+enum class BackendKind { STABINT_BACKENDS(STABINT_ENUMERATOR_) };
 /// Number of BackendKind values (they run from 0).
-constexpr int kBackendKindCount = 3;
-const char* backendName(BackendKind kind);  ///< "cpu", "opencl", "auto"
+constexpr int kBackendKindCount = 0 STABINT_BACKENDS(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_BACKENDS ("cpu", "opencl", ...); "?" for a value outside the enum.
+constexpr const char* backendName(BackendKind kind) { return enumName_(kind, {STABINT_BACKENDS(STABINT_ENUM_NAME_)}); }
 /// Parses a name as printed by backendName (case-insensitive); throws InvalidInputError.
 BackendKind parseBackend(const std::string& name);
 
-/// Floating-point precision of the OpenCL backend's element data and kernels (the global solve
-/// is always double on the host).
-enum class Precision {
-  Double,  ///< needs cl_khr_fp64 (else UnsupportedPrecisionError)
-  Float    ///< any device
-};
-/// Number of Precision values (they run from 0).
-constexpr int kPrecisionCount = 2;
+/// The precisions, `X(Enumerator, "name", "doc", C enumerator)`.
+#define STABINT_PRECISIONS(X)                                                                         \
+  X(Double, "double", "needs cl_khr_fp64 (else UnsupportedPrecisionError)", STABINT_PRECISION_DOUBLE) \
+  X(Float, "float", "any device", STABINT_PRECISION_FLOAT)
 
-/// Acceleration of the local/global iterations. Every variant keeps the objective monotone: an
-/// accelerated iterate that would raise it is replaced by the plain one.
-enum class Acceleration {
-  None,       ///< plain local/global iterations
-  Chebyshev,  ///< Chebyshev semi-iteration (Wang 2015)
-  Anderson,   ///< Anderson acceleration (Peng et al. 2018)
-  LBFGS,      ///< L-BFGS with the prefactored K_c as initial Hessian (Liu et al. 2017), line search
-  Newton,     ///< Newton-CG: springs' projected Hessians, CG preconditioned with K_c, line search
-};
+/// Floating-point precision of the OpenCL backend's element data and kernels (the global solve
+/// is always double on the host); what each value needs: STABINT_PRECISIONS.
+enum class Precision { STABINT_PRECISIONS(STABINT_ENUMERATOR_) };
+/// Number of Precision values (they run from 0).
+constexpr int kPrecisionCount = 0 STABINT_PRECISIONS(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_PRECISIONS ("double", ...); "?" for a value outside the enum.
+constexpr const char* precisionName(Precision precision) {
+  return enumName_(precision, {STABINT_PRECISIONS(STABINT_ENUM_NAME_)});
+}
+/// Parses a name as printed by precisionName (case-insensitive); throws InvalidInputError.
+Precision parsePrecision(const std::string& name);
+
+/// The accelerations, `X(Enumerator, "name", "doc", C enumerator)`.
+#define STABINT_ACCELERATIONS(X)                                                                         \
+  X(None, "none", "plain local/global iterations", STABINT_ACCELERATION_NONE)                            \
+  X(Chebyshev, "chebyshev", "Chebyshev semi-iteration (Wang 2015)", STABINT_ACCELERATION_CHEBYSHEV)      \
+  X(Anderson, "anderson", "Anderson acceleration (Peng et al. 2018)", STABINT_ACCELERATION_ANDERSON)     \
+  X(LBFGS, "lbfgs", "L-BFGS with the prefactored K_c as initial Hessian (Liu et al. 2017), line search", \
+    STABINT_ACCELERATION_LBFGS)                                                                          \
+  X(Newton, "newton", "Newton-CG: springs' projected Hessians, CG preconditioned with K_c, line search", \
+    STABINT_ACCELERATION_NEWTON)
+
+/// Acceleration of the local/global iterations (what each value is: STABINT_ACCELERATIONS).
+/// Every variant keeps the objective monotone: an accelerated iterate that would raise it is
+/// replaced by the plain one.
+enum class Acceleration { STABINT_ACCELERATIONS(STABINT_ENUMERATOR_) };
 /// Number of Acceleration values (they run from 0).
-constexpr int kAccelerationCount = 5;
-const char* accelerationName(Acceleration acceleration);  ///< "none", "chebyshev", "anderson", "lbfgs", "newton"
+constexpr int kAccelerationCount = 0 STABINT_ACCELERATIONS(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_ACCELERATIONS ("none", "lbfgs", ...); "?" for a value outside the
+/// enum.
+constexpr const char* accelerationName(Acceleration acceleration) {
+  return enumName_(acceleration, {STABINT_ACCELERATIONS(STABINT_ENUM_NAME_)});
+}
 /// Parses a name as printed by accelerationName (case-insensitive); throws InvalidInputError.
 Acceleration parseAcceleration(const std::string& name);
 
+/// The global solves, `X(Enumerator, "name", "doc", C enumerator)`.
+#define STABINT_GLOBAL_SOLVES(X)                                                                             \
+  X(Factor, "factor", "the CHOLMOD factor of K_c on the host: exact (default)", STABINT_GLOBAL_SOLVE_FACTOR) \
+  X(ConjugateGradient, "cg",                                                                                 \
+    "Jacobi-preconditioned CG warm-started from the current iterate, run by the backend: on the OpenCL "     \
+    "device with nothing read back per iteration, on the host in double for the CPU reference",              \
+    STABINT_GLOBAL_SOLVE_CONJUGATE_GRADIENT)
+
 /// How the global step of every local/global iteration solves K_c x = rhs (docs/method.md,
-/// "Global solve").
-enum class GlobalSolve {
-  Factor,             ///< the CHOLMOD factor of K_c on the host: exact (default)
-  ConjugateGradient,  ///< Jacobi-preconditioned CG warm-started from the current iterate, run by
-                      ///< the backend: on the OpenCL device with nothing read back per iteration,
-                      ///< on the host in double for the CPU reference
-};
+/// "Global solve"; what each value is: STABINT_GLOBAL_SOLVES).
+enum class GlobalSolve { STABINT_GLOBAL_SOLVES(STABINT_ENUMERATOR_) };
 /// Number of GlobalSolve values (they run from 0).
-constexpr int kGlobalSolveCount = 2;
-const char* globalSolveName(GlobalSolve solve);  ///< "factor", "cg"
+constexpr int kGlobalSolveCount = 0 STABINT_GLOBAL_SOLVES(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_GLOBAL_SOLVES ("factor", "cg", ...); "?" for a value outside the
+/// enum.
+constexpr const char* globalSolveName(GlobalSolve solve) {
+  return enumName_(solve, {STABINT_GLOBAL_SOLVES(STABINT_ENUM_NAME_)});
+}
 /// Parses a name as printed by globalSolveName (case-insensitive); throws InvalidInputError.
 GlobalSolve parseGlobalSolve(const std::string& name);
 
@@ -100,30 +137,16 @@ GlobalSolve parseGlobalSolve(const std::string& name);
 /// TriangleStrain: triangle_strains, BendingHinge: bending_hinges, Pin: pins, grabbed handles
 /// included), for the run-time element changes (Simulator::setElementStiffness,
 /// setElementEnabled). From STABINT_ELEMENT_KINDS.
-enum class ElementKind {
-/// @cond
-#define STABINT_ELEMENT_KIND_ENUMERATOR(kind, name) kind,
-  /// @endcond
-  STABINT_ELEMENT_KINDS(STABINT_ELEMENT_KIND_ENUMERATOR)
-#undef STABINT_ELEMENT_KIND_ENUMERATOR
-};
+enum class ElementKind { STABINT_ELEMENT_KINDS(STABINT_ENUMERATOR_) };
 /// Number of ElementKind values (they run from 0; pins are last).
-constexpr int kElementKindCount = static_cast<int>(ElementKind::Pin) + 1;
-/// "spring", "tet", "triangle_strain", "bending_hinge", "pin" (the JSON names, singular); "?"
-/// for a value outside the enum.
+constexpr int kElementKindCount = 0 STABINT_ELEMENT_KINDS(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_ELEMENT_KINDS ("spring", "tet", ...: the JSON names, singular);
+/// "?" for a value outside the enum.
 constexpr const char* elementKindName(ElementKind kind) {
-  switch (kind) {
-    /// @cond
-#define STABINT_ELEMENT_KIND_CASE(kind, name) \
-  case ElementKind::kind: return name;
-    STABINT_ELEMENT_KINDS(STABINT_ELEMENT_KIND_CASE)
-#undef STABINT_ELEMENT_KIND_CASE
-    /// @endcond
-  }
-  return "?";
+  return enumName_(kind, {STABINT_ELEMENT_KINDS(STABINT_ENUM_NAME_)});
 }
-/// Parses a name as printed by elementKindName, or the scene file's list name ("springs",
-/// "tets", "triangle_strains", "bending_hinges", "pins"); throws InvalidInputError.
+/// Parses a name as printed by elementKindName, or the scene file's list name, its plural
+/// ("springs", "tets", ...); case-insensitive; throws InvalidInputError.
 ElementKind parseElementKind(const std::string& name);
 /// Every element kind, in the enum's order.
 std::vector<ElementKind> allElementKinds();
@@ -243,16 +266,25 @@ struct PhaseTimes {
   PhaseTimes& operator+=(const PhaseTimes& o);
 };
 
+/// The blend's branches, `X(Enumerator, "name", "doc", C enumerator)`.
+#define STABINT_BLEND_BRANCHES(X)                                                                        \
+  X(None, "-", "not the blend", STABINT_BRANCH_NONE)                                                     \
+  X(ImplicitMidpoint, "IM", "the IM candidate accepted", STABINT_BRANCH_IMPLICIT_MIDPOINT)               \
+  X(BackwardEuler, "BE", "blended with the BE partner (too much energy)", STABINT_BRANCH_BACKWARD_EULER) \
+  X(VelocityScale, "scale", "velocities scaled up (too little energy)", STABINT_BRANCH_VELOCITY_SCALE)
+
 /// What the blend did with the implicit-midpoint candidate (None for the other integrators):
 /// accepted it, blended it with a backward-Euler partner (too much energy), or scaled its
-/// velocities (too little energy).
-enum class BlendBranch {
-  None,              ///< not the blend
-  ImplicitMidpoint,  ///< the IM candidate accepted
-  BackwardEuler,     ///< blended with the BE partner (too much energy)
-  VelocityScale      ///< velocities scaled up (too little energy)
-};
-const char* blendBranchName(BlendBranch branch);  ///< "-", "IM", "BE", "scale"
+/// velocities (too little energy); from STABINT_BLEND_BRANCHES.
+enum class BlendBranch { STABINT_BLEND_BRANCHES(STABINT_ENUMERATOR_) };
+/// Number of BlendBranch values (they run from 0).
+constexpr int kBlendBranchCount = 0 STABINT_BLEND_BRANCHES(STABINT_ENUM_ONE_);
+/// The value's name in STABINT_BLEND_BRANCHES ("-", "IM", ...); "?" for a value outside the enum.
+constexpr const char* blendBranchName(BlendBranch branch) {
+  return enumName_(branch, {STABINT_BLEND_BRANCHES(STABINT_ENUM_NAME_)});
+}
+/// Parses a name as printed by blendBranchName (case-insensitive); throws InvalidInputError.
+BlendBranch parseBlendBranch(const std::string& name);
 
 /// What one step did: its energies, the energy book of H*, the blend's decision, the work done
 /// and the time per phase (Simulator::step, Simulator::lastReport).

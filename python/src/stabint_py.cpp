@@ -153,49 +153,39 @@ void bindErrors(nb::module_& m) {
   nb::register_exception_translator(translate);
 }
 
-void bindEnums(nb::module_& m) {
-  nb::enum_<Integrator>(m, "Integrator", "The six integrators (docs/method.md sections 2 and 3).")
-      .value("ForwardEuler", Integrator::ForwardEuler)
-      .value("SymplecticEuler", Integrator::SymplecticEuler)
-      .value("BackwardEuler", Integrator::BackwardEuler)
-      .value("BDF2", Integrator::BDF2)
-      .value("ImplicitMidpoint", Integrator::ImplicitMidpoint)
-      .value("EnergyBlend", Integrator::EnergyBlend, "The energy-tracking blend of IM with BE.");
-  nb::enum_<BackendKind>(m, "BackendKind")
-      .value("CpuReference", BackendKind::CpuReference)
-      .value("OpenCL", BackendKind::OpenCL)
-      .value("Auto", BackendKind::Auto);
-  nb::enum_<Precision>(m, "Precision").value("Double", Precision::Double).value("Float", Precision::Float);
-  nb::enum_<Acceleration>(m, "Acceleration")
-      .value("None_", Acceleration::None, "Plain local/global iterations ('None' is a Python keyword).")
-      .value("Chebyshev", Acceleration::Chebyshev)
-      .value("Anderson", Acceleration::Anderson)
-      .value("LBFGS", Acceleration::LBFGS)
-      .value("Newton", Acceleration::Newton);
-  nb::enum_<GlobalSolve>(m, "GlobalSolve")
-      .value("Factor", GlobalSolve::Factor, "The CHOLMOD factor on the host (exact).")
-      .value("ConjugateGradient", GlobalSolve::ConjugateGradient,
-             "Jacobi-preconditioned CG warm-started from the current iterate, run by the backend.");
-  nb::enum_<BlendBranch>(m, "BlendBranch", "What the blend did with the IM candidate.")
-      .value("None_", BlendBranch::None, "Not a blend step.")
-      .value("ImplicitMidpoint", BlendBranch::ImplicitMidpoint)
-      .value("BackwardEuler", BlendBranch::BackwardEuler)
-      .value("VelocityScale", BlendBranch::VelocityScale);
-  nb::enum_<ColliderShape>(m, "ColliderShape")
-      .value("Plane", ColliderShape::Plane)
-      .value("Sphere", ColliderShape::Sphere)
-      .value("Box", ColliderShape::Box)
-      .value("Capsule", ColliderShape::Capsule);
-  nb::enum_<ClothModel>(m, "ClothModel")
-      .value("Springs", ClothModel::Springs)
-      .value("Triangles", ClothModel::Triangles);
-  auto element_kind = nb::enum_<ElementKind>(
-      m, "ElementKind", "An element list of a Scene, for set_element_stiffness and set_element_enabled.");
-#define STABINT_PY_ELEMENT_KIND(kind, name) element_kind.value(#kind, ElementKind::kind);
-  STABINT_ELEMENT_KINDS(STABINT_PY_ELEMENT_KIND)
-#undef STABINT_PY_ELEMENT_KIND
+// A C++ enumerator's name as Python's: "None" is a keyword, so that value is None_.
+const char* pythonName(const char* enumerator) { return std::strcmp(enumerator, "None") == 0 ? "None_" : enumerator; }
 
-  m.def("integrator_name", &integratorName, "'FE', 'SE', 'BE', 'BDF2', 'IM' or 'blend'.");
+// Python's enum `cpp_enum` with the values of its list (stabint/types.hpp): the enumerators'
+// names and, where the list has one, each value's doc (its third field).
+#define STABINT_PY_ENUM(cpp_enum, LIST, doc)           \
+  {                                                    \
+    using Enum = cpp_enum;                             \
+    auto py_enum = nb::enum_<Enum>(m, #cpp_enum, doc); \
+    LIST(STABINT_PY_VALUE)                             \
+  }
+#define STABINT_PY_VALUE(enumerator, ...) \
+  py_enum.value(pythonName(#enumerator), Enum::enumerator, STABINT_PY_SECOND(__VA_ARGS__, nullptr, ));
+#define STABINT_PY_SECOND(first, second, ...) second
+
+void bindEnums(nb::module_& m) {
+  STABINT_PY_ENUM(Integrator, STABINT_INTEGRATORS, "The six integrators (docs/method.md sections 2 and 3).")
+  STABINT_PY_ENUM(BackendKind, STABINT_BACKENDS, "Where the local step and the energies run.")
+  STABINT_PY_ENUM(Precision, STABINT_PRECISIONS, "Floating-point precision of the OpenCL backend.")
+  STABINT_PY_ENUM(Acceleration, STABINT_ACCELERATIONS,
+                  "Acceleration of the local/global iterations (None_: 'None' is a Python keyword).")
+  STABINT_PY_ENUM(GlobalSolve, STABINT_GLOBAL_SOLVES, "How the global step solves K_c x = rhs.")
+  STABINT_PY_ENUM(BlendBranch, STABINT_BLEND_BRANCHES,
+                  "What the blend did with the IM candidate (None_: 'None' is a Python keyword).")
+  STABINT_PY_ENUM(ColliderShape, STABINT_COLLIDER_SHAPE_VALUES, "Shape of a Collider.")
+  STABINT_PY_ENUM(ClothModel, STABINT_CLOTH_MODELS, "How a cloth resists deformation.")
+  STABINT_PY_ENUM(ElementKind, STABINT_ELEMENT_KINDS,
+                  "An element list of a Scene, for set_element_stiffness and set_element_enabled.")
+#undef STABINT_PY_ENUM
+#undef STABINT_PY_VALUE
+#undef STABINT_PY_SECOND
+
+  m.def("integrator_name", &integratorName, "The integrator's name: 'FE', 'blend', ...");
   m.def("parse_integrator", &parseIntegrator, "name"_a,
         "Integrator from a name as integrator_name prints it (any case).");
   m.def("backend_name", &backendName);

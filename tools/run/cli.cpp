@@ -79,10 +79,29 @@ std::string shown(stabint::GlobalSolve value) { return stabint::globalSolveName(
 std::string shown(stabint::BackendKind value) { return stabint::backendName(value); }
 std::string placeholder(int) { return "N"; }
 std::string placeholder(double) { return "X"; }
-std::string placeholder(stabint::Integrator) { return "FE|SE|BE|BDF2|IM|blend"; }
-std::string placeholder(stabint::Acceleration) { return "none|chebyshev|anderson|lbfgs|newton"; }
-std::string placeholder(stabint::GlobalSolve) { return "factor|cg"; }
-std::string placeholder(stabint::BackendKind) { return "cpu|opencl|auto"; }
+std::string placeholder(stabint::Integrator) {
+  return stabint::enumNames(stabint::integratorName, stabint::kIntegratorCount, "|", "|");
+}
+std::string placeholder(stabint::Acceleration) {
+  return stabint::enumNames(stabint::accelerationName, stabint::kAccelerationCount, "|", "|");
+}
+std::string placeholder(stabint::GlobalSolve) {
+  return stabint::enumNames(stabint::globalSolveName, stabint::kGlobalSolveCount, "|", "|");
+}
+std::string placeholder(stabint::BackendKind) {
+  return stabint::enumNames(stabint::backendName, stabint::kBackendKindCount, "|", "|");
+}
+std::string placeholder(stabint::Precision) {
+  return stabint::enumNames(stabint::precisionName, stabint::kPrecisionCount, "|", "|");
+}
+
+// --precision's value: a name as precisionName prints it, exactly (the case too).
+stabint::Precision precision(const std::string& text) {
+  for (int i = 0; i < stabint::kPrecisionCount; ++i)
+    if (text == stabint::precisionName(static_cast<stabint::Precision>(i))) return static_cast<stabint::Precision>(i);
+  throw UsageError("--precision: expected " + stabint::enumNames(stabint::precisionName, stabint::kPrecisionCount) +
+                   ", got '" + text + "'");
+}
 
 // Sets the field whose flag is `flag` (--time-step) from the text `value()` returns (called only
 // then: it takes the next argument); `typed` is the flag as the user wrote it (an alias such as
@@ -154,7 +173,8 @@ std::string usage() {
     << simulatorOptionsHelp()
     << "Backend (--backend above: auto prints its choice and the reason; opencl runs on the selected\n"
        "device, PoCL included, and never falls back):\n"
-       "  --precision double|float  OpenCL arithmetic (the CPU reference always runs in double)\n"
+    << "  --precision " << placeholder(stabint::Precision{})
+    << "  OpenCL arithmetic (the CPU reference always runs in double)\n"
        "  --platform SEL            OpenCL platform: index or name substring\n"
        "  --device SEL              OpenCL device: index or name substring\n"
        "  --list-devices            list the OpenCL devices and exit\n"
@@ -230,13 +250,7 @@ Options parseArgs(int argc, char** argv) {
         if (eq == std::string::npos || eq == 0) throw UsageError("--param: expected KEY=VALUE, got '" + kv + "'");
         o.params.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
       } else if (arg == "--precision") {
-        const std::string p = value();
-        if (p == "double")
-          o.sim.opencl.precision = stabint::Precision::Double;
-        else if (p == "float")
-          o.sim.opencl.precision = stabint::Precision::Float;
-        else
-          throw UsageError("--precision: expected double or float, got '" + p + "'");
+        o.sim.opencl.precision = precision(value());
         o.precision_explicit = true;
       } else if (arg == "--platform") {
         o.sim.opencl.platform = value();

@@ -66,12 +66,11 @@ void visitParams(Visit&& v, TetBarParams& p) {
 
 }  // namespace
 
-// "springs" or "triangles".
+// A name as clothModelName prints it ("springs", "triangles").
 ClothModel clothModel(const Field& f) {
   const std::string name = f.string();
-  if (name == "springs") return ClothModel::Springs;
-  if (name == "triangles") return ClothModel::Triangles;
-  f.fail("unknown cloth model '" + shown(name) + "' (expected springs or triangles)");
+  if (const std::optional<ClothModel> model = valueNamed(name, clothModelName, kClothModelCount)) return *model;
+  f.fail("unknown cloth model '" + shown(name) + "' (expected " + enumNames(clothModelName, kClothModelCount) + ")");
 }
 
 namespace {

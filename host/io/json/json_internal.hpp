@@ -27,8 +27,14 @@ using ordered = nlohmann::ordered_json;
 inline constexpr const char* kFormatName = "stabint-scene";
 inline constexpr int kFormatVersion = 1;
 
-// Collider shape names, indexed by ColliderShape: read and written.
-inline constexpr const char* const kColliderShapes[] = {"plane", "sphere", "box", "capsule"};
+// The value of an enum (count values named by nameOf: colliderShapeName, ...) whose name is
+// exactly `name`, as scene files spell it; none when no value has it.
+template <class Enum>
+std::optional<Enum> valueNamed(const std::string& name, const char* (*nameOf)(Enum), int count) {
+  for (int i = 0; i < count; ++i)
+    if (name == nameOf(static_cast<Enum>(i))) return static_cast<Enum>(i);
+  return std::nullopt;
+}
 
 // --- field.cpp ------------------------------------------------------------------------------------
 
@@ -90,7 +96,7 @@ json parseJson(const std::string& text, const std::string& file);
 
 // --- builtin_scenes.cpp ---------------------------------------------------------------------------
 
-// "springs" or "triangles".
+// A name as clothModelName prints it ("springs", "triangles").
 ClothModel clothModel(const Field& f);
 // Built-in scene `name` with the builder parameters in `params` (an object; `extra` keys belong
 // to the caller); `name_field` is named when the name is unknown.

@@ -446,10 +446,11 @@ void readColliders(const Field& list, Scene& s) {
     Collider c;
     const Field shape = e.member("shape");
     const std::string name = shape.string();
-    const auto* found = std::find(std::begin(kColliderShapes), std::end(kColliderShapes), name);
-    if (found == std::end(kColliderShapes))
-      shape.fail("unknown collider shape \"" + shown(name) + "\" (plane, sphere, box or capsule)");
-    c.shape = static_cast<ColliderShape>(found - std::begin(kColliderShapes));
+    const std::optional<ColliderShape> found = valueNamed(name, colliderShapeName, kColliderShapeCount);
+    if (!found)
+      shape.fail("unknown collider shape \"" + shown(name) + "\" (" +
+                 enumNames(colliderShapeName, kColliderShapeCount) + ")");
+    c.shape = *found;
     c.center = vectorOr(e, "center");
     if (auto f = e.find("normal")) c.normal = f->vector3();
     if (auto f = e.find("radius")) c.radius = f->number();

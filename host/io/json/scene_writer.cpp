@@ -136,7 +136,7 @@ ordered sceneToJson(const Scene& s) {
     ordered a = ordered::array();
     for (const Collider& c : s.colliders) {
       ordered e;
-      e["shape"] = kColliderShapes[static_cast<int>(c.shape)];  // validated by saveSceneFile
+      e["shape"] = colliderShapeName(c.shape);  // validated by saveSceneFile
       e["center"] = vec(c.center);
       if (c.shape == ColliderShape::Plane) e["normal"] = vec(c.normal);
       if (c.shape == ColliderShape::Box) e["half_extents"] = vec(c.half_extents);

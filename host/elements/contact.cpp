@@ -63,20 +63,9 @@ struct ContactKind {
   }
 };
 
-const char* shapeName(ColliderShape shape) {
-  switch (shape) {
-    case ColliderShape::Plane: return "plane";
-    case ColliderShape::Sphere: return "sphere";
-    case ColliderShape::Box: return "box";
-    case ColliderShape::Capsule: return "capsule";
-  }
-  return "?";
-}
-
 void checkCollider(const Scene& scene, const Collider& c, const validation::Owner& owner) {
   const int shape = static_cast<int>(c.shape);
-  if (shape < static_cast<int>(ColliderShape::Plane) || shape > static_cast<int>(ColliderShape::Capsule))
-    invalid(owner, ": shape ", shape, " is not a ColliderShape value");
+  if (shape < 0 || shape >= kColliderShapeCount) invalid(owner, ": shape ", shape, " is not a ColliderShape value");
   validation::checkFinite(c.center, owner, "center");
   validation::checkFinite(c.velocity, owner, "velocity");
   if (!std::isfinite(c.friction) || !(c.friction >= 0.0) || !(c.friction <= validation::kMaxMagnitude))
@@ -104,7 +93,8 @@ void checkCollider(const Scene& scene, const Collider& c, const validation::Owne
     case ColliderShape::Capsule: validation::checkFinite(c.end, owner, "end"); [[fallthrough]];
     case ColliderShape::Sphere:
       validation::checkFinite(c.radius, owner, "radius");
-      if (!(c.radius > 0.0)) invalid(owner, ": radius ", c.radius, " of the ", shapeName(c.shape), " must be > 0");
+      if (!(c.radius > 0.0))
+        invalid(owner, ": radius ", c.radius, " of the ", colliderShapeName(c.shape), " must be > 0");
       break;
   }
 }

@@ -44,12 +44,13 @@ std::vector<Integrator> allIntegrators();
   X(CpuReference, "cpu", "plain C++ in double on the host: the oracle the OpenCL backend is tested against", \
     STABINT_BACKEND_CPU)                                                                                     \
   X(OpenCL, "opencl", "OpenCL kernels on the device of SimulatorOptions::opencl", STABINT_BACKEND_OPENCL)    \
-  X(Auto, "auto", "an OpenCL GPU for a scene large enough for it, else the CPU reference", STABINT_BACKEND_AUTO)
+  X(Auto, "auto", "an OpenCL GPU where an iteration of the scene costs less there, else the CPU reference",  \
+    STABINT_BACKEND_AUTO)
 
 /// Where the local step and the energies run (what each value is: STABINT_BACKENDS). Auto: an
-/// OpenCL GPU when there is one and the scene is large enough for it (a threshold per device
-/// class), else the CPU reference (an OpenCL CPU device such as PoCL is not faster than it; take
-/// one with OpenCL); backendDescription() says which and why (docs/method.md, "Backend choice").
+/// OpenCL GPU when there is one and an iteration of the scene is estimated to cost less there
+/// (costs per device class, measured on an H200), else the CPU reference (an OpenCL CPU device such as PoCL is not
+/// faster than it; take one with OpenCL); backendDescription() says which and why (docs/method.md, "Backend choice").
 enum class BackendKind { STABINT_BACKENDS(STABINT_ENUMERATOR_) };
 /// Number of BackendKind values (they run from 0).
 constexpr int kBackendKindCount = 0 STABINT_BACKENDS(STABINT_ENUM_ONE_);

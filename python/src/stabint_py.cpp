@@ -277,7 +277,8 @@ void bindElements(nb::module_& m) {
       .def_rw("particles", &Body::particles)
       .def_rw("damping", &Body::damping);
   nb::class_<Collider>(m, "Collider",
-                       "A rigid obstacle every particle collides with (docs/method.md, 'Contact'); the fields "
+                       "A rigid obstacle the scene's particles, or a range of them, collide with (docs/method.md, "
+                       "'Contact'); the fields "
                        "are documented in stabint/scene.hpp.")
       .def(nb::init<>())
       .def_rw("shape", &Collider::shape)
@@ -289,6 +290,10 @@ void bindElements(nb::module_& m) {
       .def_rw("velocity", &Collider::velocity, "Translation in m/s (0: static).")
       .def_rw("friction", &Collider::friction, "Coulomb coefficient mu >= 0.")
       .def_rw("stiffness", &Collider::stiffness, "Contact weight per unit of particle mass, 1/s^2 (> 0).")
+      .def_rw("first_particle", &Collider::first_particle,
+              "The first particle it acts on (with num_particles; a batch sets each scene's).")
+      .def_rw("num_particles", &Collider::num_particles,
+              "How many particles from first_particle it acts on; -1 (default): every particle.")
       .def("moving", &Collider::moving);
 
   nb::bind_vector<std::vector<Spring>>(m, "SpringList");

@@ -581,6 +581,38 @@ def test_grab_drag_and_release_book_their_energy():
         sim.release(len(scene.pins) + 1)
 
 
+def test_a_collider_on_a_range_of_particles_lets_the_others_through():
+    # Two free particles side by side above the ground; the ground acts on the first only, so
+    # the second falls as without colliders (the C++ test Contact.AColliderOnSomeParticles...).
+    scene = stabint.Scene()
+    scene.positions = np.array([[0.0, 0.05, 0.0], [1.0, 0.05, 0.0]])
+    scene.rest_positions = scene.positions
+    scene.velocities = np.zeros((2, 3))
+    scene.masses = np.array([1.0, 1.0])
+    ground = stabint.Collider()
+    ground.shape = stabint.ColliderShape.Plane
+    ground.first_particle, ground.num_particles = 0, 1
+    scene.colliders.append(ground)
+    assert (scene.colliders[0].first_particle, scene.colliders[0].num_particles) == (0, 1)
+    free = stabint.Scene(scene)
+    free.colliders.clear()
+    options = stabint.SimulatorOptions(integrator=stabint.Integrator.BackwardEuler, contact_tolerance=0.01)
+    held, falling = stabint.Simulator(scene, options), stabint.Simulator(free, options)
+    for _ in range(30):
+        held.step()
+        falling.step()
+    x, x_free = held.positions, falling.positions
+    assert x[0, 1] > -0.01  # on the ground, within the contact tolerance
+    assert x_free[1, 1] < -3.0  # a second of free fall from 0.05 m
+    assert x[1] == pytest.approx(x_free[1], abs=1e-12)
+    bad = stabint.Scene(scene)
+    wrong = bad.colliders[0]
+    wrong.first_particle, wrong.num_particles = 1, 2
+    bad.colliders[0] = wrong
+    with pytest.raises(stabint.InvalidInputError, match="collider 0"):
+        stabint.Simulator(bad, options)
+
+
 def test_colliders_book_friction_and_refuse_other_checkpoints():
     # tests/test_contact.cpp's FrictionStopsASlidingBarAndReportsTheEnergy through the bindings:
     # the default tet bar (62.5 kg) slides on the ground at 2 m/s with mu = 0.5 and stops.

@@ -138,8 +138,10 @@ struct Collider {
   /// The particles it acts on: `num_particles` of them from `first_particle` on, or, when
   /// num_particles is -1 (the default), every particle of the scene. A batch
   /// (include/stabint/batch.hpp) gives each scene's colliders that scene's particles.
+  ///@{
   int first_particle = 0;
   int num_particles = -1;
+  ///@}
 
   /// True when `velocity` is not zero.
   bool moving() const { return !velocity.isZero(0.0); }

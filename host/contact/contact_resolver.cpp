@@ -102,8 +102,8 @@ bool ContactResolver::resolve(int x_slot, double t1, Eigen::MatrixX3d& x, Eigen:
                               PotentialEnergy& p, StepReport& report) {
   const Resolved resolved = applyFrictionAndProjection(wholeScene(scene_), t1, x, v, target, report);
   if (resolved.positions_moved) {
+    backend_.roundToStorage(x);  // what the slot holds (OpenCL float rounds), without a read
     backend_.write(x_slot, x);
-    backend_.read(x_slot, x);  // what the slot holds (OpenCL float rounds)
     bookProjection(backend_.potential(x_slot, t1), p, target, report);
   }
   return resolved.velocities_changed;

@@ -51,7 +51,7 @@ std::string microseconds(double us) { return std::to_string(static_cast<long lon
 // and transfers (data per device class, DeviceProfile::auto_* in host/device_profiles.cpp, measured
 // on an H200) against the local step's element work (each element type's measured cost) and, with
 // GlobalSolve::ConjugateGradient, the host CG. So tets and triangle strains, whose rotations cost
-// 50-90 ns each, take a GPU from about 1,500 elements, and a spring cloth, whose 6 springs per
+// 35-90 ns each, take a GPU from about 1,500-2,000 elements, and a spring cloth, whose 6 springs per
 // particle cost about what their transfers do, stays on the CPU reference unless it solves by CG.
 // A GPU whose fp64 is slow (consumer GPUs, 1/32-1/64 of fp32) is not taken for double: the CPU
 // reference in double beats it; Precision::Float, or BackendKind::OpenCL explicitly, uses it.

@@ -468,8 +468,8 @@ void BatchSimulator::Impl::resolveContact(double t1) {
   }
   if (!any) return;
   // The projected positions as a slot holds them (a float device rounds), and their potentials.
+  backend_->roundToStorage(x_trial_);
   backend_->write(kXTrial, x_trial_);
-  backend_->read(kXTrial, x_trial_);
   std::vector<PotentialEnergy> potentials;
   backend_->potentials(kXTrial, t1, potentials);
   for (std::size_t s = 0; s < segments_.size(); ++s) {

@@ -15,4 +15,9 @@ if violations=$(grep -rnE '#include *[<"](stabint/(simulator|batch|events|stabin
   echo "layering: the lines above include the stepping layer from below it (docs/development.md, \"Layering\")" >&2
   exit 1
 fi
+if violations=$(grep -rnE '#include *"scene/' host/elements); then
+  echo "$violations" >&2
+  echo "layering: host/elements reads a running scene through RunningScene, never scene/ (docs/development.md, \"Layering\")" >&2
+  exit 1
+fi
 echo "layering: ok (${lower[*]} include neither the facade nor host/integrator/)"

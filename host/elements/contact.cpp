@@ -12,7 +12,6 @@
 #include "elements/contact.hpp"
 
 #include "elements/element_kind.hpp"
-#include "scene/scene_data.hpp"
 
 #include <cmath>
 
@@ -133,8 +132,8 @@ class ContactElementType final : public ElementType {
     return block;
   }
 
-  bool timeDependent(const SceneData& data) const override { return data.hasMovingColliders(); }
-  void paramsAt(const SceneData& data, double t, std::vector<double>& params) const override {
+  bool timeDependent(const RunningScene& data) const override { return data.hasMovingColliders(); }
+  void paramsAt(const RunningScene& data, double t, std::vector<double>& params) const override {
     writeParams(data.scene(), &data, t, params);
     // Pairs out of the contact set have weight 0 (SceneData::setElementEnabled).
     const int block = data.blockIndex(*this);
@@ -206,7 +205,7 @@ class ContactElementType final : public ElementType {
 
  private:
   // The colliders where `data`'s motion has them at t (without it: where the scene puts them).
-  static void writeParams(const Scene& scene, const SceneData* data, double t, std::vector<double>& params) {
+  static void writeParams(const Scene& scene, const RunningScene* data, double t, std::vector<double>& params) {
     const int colliders = static_cast<int>(scene.colliders.size());
     params.resize(std::size_t(P) * std::size_t(firstContactElement(scene, colliders)));
     double* out = params.data();

@@ -17,14 +17,13 @@
 // or
 //   static void coefficients(const Scene&, const Element&, double* a);    // R by K, row-major
 // plus, to differ from KindDefaults: kTerm, kMayDependOnTime with
-//   static bool timeDependent(const SceneData&);
-//   static void paramsAt(const SceneData&, int element, double t, double* params);
+//   static bool timeDependent(const RunningScene&);
+//   static void paramsAt(const RunningScene&, int element, double t, double* params);
 // and
 // jsonFields() for the generic JSON form.
 #include "elements/element_type.hpp"
 #include "elements/projections.hpp"
-#include "scene/scene_data.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <Eigen/Core>
 
@@ -446,13 +445,13 @@ class ElementTypeOf final : public ElementType {
     return block;
   }
 
-  bool timeDependent(const SceneData& data) const override {
+  bool timeDependent(const RunningScene& data) const override {
     if constexpr (Kind::kMayDependOnTime) return Kind::timeDependent(data);
     (void)data;
     return false;
   }
 
-  void paramsAt(const SceneData& data, double t, std::vector<double>& params) const override {
+  void paramsAt(const RunningScene& data, double t, std::vector<double>& params) const override {
     const std::vector<Element>& elements = list(data.scene());
     params.resize(P * elements.size());
     const int block = data.blockIndex(*this);

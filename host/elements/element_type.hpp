@@ -23,9 +23,28 @@
 
 namespace stabint {
 
-class SceneData;
-
 class ElementType;
+
+/// What an element type reads of a running simulation, beyond its scene: which elements are
+/// enabled and where the forcing has moved pins and colliders at a time. SceneData implements
+/// it; the element types see only this, so that they sit below the scene layer (docs/
+/// development.md, "Layering").
+class RunningScene {
+ public:
+  virtual const Scene& scene() const = 0;
+  /// Index of `type`'s block (the order of elementTypes()).
+  virtual int blockIndex(const ElementType& type) const = 0;
+  virtual bool elementEnabled(int block, int element) const = 0;
+  /// Pin targets move (by the scene's law or the user's ramps); then pinTarget gives them.
+  virtual bool hasMovingPins() const = 0;
+  virtual Eigen::Vector3d pinTarget(int pin, double t) const = 0;
+  /// Colliders move (by their scene velocity or at run time); then colliderPosition gives them.
+  virtual bool hasMovingColliders() const = 0;
+  virtual Eigen::Vector3d colliderPosition(int collider, double t) const = 0;
+
+ protected:
+  ~RunningScene() = default;
+};
 
 /// Which term of the potential an element's energy belongs to: the blend books pins apart
 /// because their targets may move.
@@ -93,8 +112,8 @@ class ElementType {
   /// True when the params depend on time (pins with moving or user-driven targets); then
   /// paramsAt gives them. Both read the forcing of `data`, which a running simulation may change
   /// (SceneData::forcingVersion()).
-  virtual bool timeDependent(const SceneData& data) const = 0;
-  virtual void paramsAt(const SceneData& data, double t, std::vector<double>& params) const = 0;
+  virtual bool timeDependent(const RunningScene& data) const = 0;
+  virtual void paramsAt(const RunningScene& data, double t, std::vector<double>& params) const = 0;
   /// Appends the elements of `part` to `into`, with vertex indices shifted by `offset`.
   virtual void appendShifted(Scene& into, const Scene& part, int offset) const = 0;
 

@@ -35,9 +35,9 @@ struct PinKind : KindDefaults<Pin> {
     validation::checkFinite(pin.target.frequency, owner, "target frequency");
   }
 
-  static bool timeDependent(const SceneData& data) { return data.hasMovingPins(); }
+  static bool timeDependent(const RunningScene& data) { return data.hasMovingPins(); }
   // The target comes from the forcing (the scene's law, or the user's ramp once one was set).
-  static void paramsAt(const SceneData& data, int pin, double t, double* p) {
+  static void paramsAt(const RunningScene& data, int pin, double t, double* p) {
     write(data.scene().pins[pin].stiffness, data.pinTarget(pin, t), p);
   }
   static void params(const Scene&, const Pin& pin, double* p) { write(pin.stiffness, pin.target.at(0.0), p); }

@@ -1,6 +1,6 @@
 #include "integrator/backend_choice.hpp"
 
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include "device_profiles.hpp"
 #include "elements/element_type.hpp"

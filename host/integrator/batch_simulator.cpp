@@ -5,7 +5,7 @@
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
 #include "out_of_memory.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 #include "elements/element_type.hpp"
 #include "io/text_reader.hpp"
 #include "out_of_memory.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <stabint/simulator.hpp>
 

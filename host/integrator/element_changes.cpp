@@ -2,7 +2,7 @@
 
 #include "elements/element_type.hpp"
 #include "scene/scene_data.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <stabint/errors.hpp>
 

@@ -1,6 +1,6 @@
 #include "integrator/frame_input.hpp"
 
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <stabint/errors.hpp>
 

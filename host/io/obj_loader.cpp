@@ -4,7 +4,7 @@
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
 #include "scene/lumping.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <stabint/io.hpp>
 

@@ -2,7 +2,7 @@
 #include "out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
 #include "io/text_reader.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <stabint/io.hpp>
 

@@ -1,5 +1,5 @@
 #include "io/text_reader.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <cerrno>
 #include <charconv>

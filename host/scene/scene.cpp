@@ -5,7 +5,7 @@
 
 #include "elements/element_type.hpp"
 #include "scene/lumping.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <Eigen/Dense>
 

@@ -25,13 +25,13 @@ struct ContributionCsr {
   int numContributions = 0;
 };
 
-class SceneData {
+class SceneData final : public RunningScene {
  public:
   /// Validates (validateScene) and precomputes. Throws InvalidInputError.
   explicit SceneData(const Scene& scene);
 
   int numParticles() const { return n_; }
-  const Scene& scene() const { return scene_; }
+  const Scene& scene() const override { return scene_; }
   const Eigen::VectorXd& masses() const { return scene_.masses; }
   /// One block per element type, in the order of elementTypes() (empty ones included).
   const std::vector<ElementBlock>& blocks() const { return blocks_; }
@@ -40,24 +40,24 @@ class SceneData {
   /// External force m_j g + sum of force fields + the user's forces at time t, `n by 3`.
   void externalForces(double t, Eigen::MatrixX3d& out) const;
   /// Target of pin i at time t: the user's ramp once one was set, else the scene's law q(t).
-  Eigen::Vector3d pinTarget(int pin, double t) const;
+  Eigen::Vector3d pinTarget(int pin, double t) const override;
   /// Pin targets q(t), `#pins by 3`.
   void pinTargets(double t, Eigen::MatrixX3d& out) const;
   /// True when pins move or force fields change with time (the blend then books forcing).
   bool hasTimeDependentForcing() const { return hasMovingPins() || hasTimeDependentForces() || hasMovingColliders(); }
   /// A collider moves by its scene velocity or was driven at run time: the contact params depend
   /// on time and the collider does work.
-  bool hasMovingColliders() const { return moving_colliders_ || driven_colliders_ > 0; }
+  bool hasMovingColliders() const override { return moving_colliders_ || driven_colliders_ > 0; }
   /// Where collider c's reference point (Collider::center) is at time t, and how fast it moves
   /// there (over the step ending at t when t ends a ramp).
-  Eigen::Vector3d colliderPosition(int collider, double t) const;
+  Eigen::Vector3d colliderPosition(int collider, double t) const override;
   Eigen::Vector3d colliderVelocity(int collider, double t) const;
   /// The collider's geometry (host/elements/contact.hpp) at time t.
   void colliderGeometry(int collider, double t, double* geometry) const;
   /// Pin targets or external forces that may change with time: a pin law that moves, a force
   /// field that varies, or any user ramp (their params are then evaluated per time).
   bool hasTimeDependentForces() const { return time_dependent_fields_ || user_forces_.active; }
-  bool hasMovingPins() const { return moving_pins_ || ramped_pins_ > 0; }
+  bool hasMovingPins() const override { return moving_pins_ || ramped_pins_ > 0; }
   /// setExternalForces was called: the scene no longer conserves momentum.
   bool hasUserForces() const { return user_forces_.active; }
   /// True when the forcing differs anywhere between t0 and t1 (so a step over [t0, t1] does work
@@ -90,13 +90,13 @@ class SceneData {
 
   // ---- element stiffness and enabled flags (Simulator::setElementStiffness, setElementEnabled) --
   /// Index of `type`'s block in blocks().
-  int blockIndex(const ElementType& type) const;
+  int blockIndex(const ElementType& type) const override;
   /// Sets element `element` of block `block`'s stiffness in the scene and its params (checked by
   /// the caller). Its weight stays 0 while it is disabled.
   void setElementStiffness(int block, int element, double stiffness);
   /// A disabled element keeps its stiffness and has weight 0.
   void setElementEnabled(int block, int element, bool enabled);
-  bool elementEnabled(int block, int element) const {
+  bool elementEnabled(int block, int element) const override {
     const std::vector<std::uint8_t>& flags = enabled_[static_cast<std::size_t>(block)];
     return flags.empty() || flags[static_cast<std::size_t>(element)] != 0;
   }

@@ -3,7 +3,7 @@
 #include "io/json/json_internal.hpp"
 
 #include "io/text_reader.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <stabint/errors.hpp>
 

@@ -8,7 +8,7 @@
 #include "io/text_reader.hpp"
 #include "scene/lumping.hpp"
 #include "scene/scene_batch.hpp"
-#include "scene/validation.hpp"
+#include "validation.hpp"
 
 #include <stabint/errors.hpp>
 #include <stabint/io.hpp>

@@ -5,7 +5,9 @@
 //
 // Supported for now: every integrator, the blend included (its per-scene decisions in lockstep:
 // blend_step.hpp), colliders (each scene's on its own particles: one ContactResolver for the
-// batch, its energies booked per scene), on any backend that computes per-scene energies (the
+// batch, its energies booked per scene), per-frame input of one scene (batch_input.cpp:
+// Simulator's FrameInput on the scene's segment), on any
+// backend that computes per-scene energies (the
 // CPU reference and OpenCL), with a fixed iteration count and the factor (the
 // controls that sum over the whole batch, a tolerance stop, acceleration and CG, are refused:
 // they would couple the scenes, and one scene's NaN would reach the others through them).
@@ -13,6 +15,8 @@
 #include "contact/contact_resolver.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
+#include "integrator/frame_input.hpp"
+#include "integrator/input_scope.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
@@ -38,9 +42,18 @@ struct BatchSimulator::Impl {
   /// apart (concatenateScenes) or options it does not support yet.
   Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options);
 
-  void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
-  void setPinTarget(int scene, int pin, const Eigen::Vector3d& target);
   const BatchStepReport& step();
+
+  // ---- per-frame input of one scene (batch_input.cpp) ---------------------------------------
+  // Simulator's FrameInput on the scene's segment: its indices and rows; the events are booked in
+  // its H* only.
+  /// The scene's scope for `call` (InvalidInputError for a scene out of range).
+  InputScope scope(int scene, const char* call) const;
+  FrameInput frameInput(int scene, const char* call);
+  void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  void setExternalForces(int scene, const Eigen::MatrixX3d& forces);
+  // H* and the pending event energy of the scene move by the jump of H from h_before.
+  void bookEvent(int scene, double h_before);
 
   int size() const { return static_cast<int>(segments_.size()); }
   /// Throws InvalidInputError unless 0 <= scene < size().
@@ -58,6 +71,7 @@ struct BatchSimulator::Impl {
     double target = 0.0;
     double energy_scale = 0.0;
     bool momentum_conserved = false;
+    bool has_user_forces = false;       // setExternalForces was called for the scene
     double pending_event_energy = 0.0;  // booked by setState since the last step
     // This step's.
     bool stepping = false;            // active, and not refused so far in this step

@@ -33,10 +33,20 @@ struct BatchStepReport {
 /// colliders, of the contact set's updates of the one factor: docs/batch_design.md, "Colliders").
 ///
 /// Colliders: each scene's colliders act on that scene's particles only, wherever the scenes lie
-/// in space, with the scene's own collider motion (Collider::velocity); its contact set, friction
-/// and final projection are its own Simulator's, and what friction and the projection remove
-/// leaves that scene's H* only. (Moving a collider at run time, as
-/// Simulator::setColliderPosition does, is not in the batch yet.)
+/// in space, with the scene's own collider motion (Collider::velocity, or setColliderPosition and
+/// setColliderVelocity); its contact set, friction and final projection are its own Simulator's,
+/// and what friction and the projection remove leaves that scene's H* only.
+///
+/// Per-frame input (docs/method.md, "Per-frame input"): every input call of Simulator, with a
+/// leading `scene` argument and the scene's own indices (its particles, pins, colliders and
+/// elements, numbered from 0 as in the scene passed in). Each has the semantics of Simulator's
+/// call on that scene alone: ramps over the next step, events, the forcing rule, all booked in
+/// that scene's H* only. Bad input (a
+/// scene or index out of range, a value Simulator refuses) is an InvalidInputError naming the
+/// call, the scene and the field or index ("setPinTarget: scene 2: pin 4 out of range ..."), and
+/// changes nothing. A scene that is inactive after a refused step takes input as an active one
+/// does: ramps follow the batch's time(), and it acts on all of it
+/// once setState reactivates it; the getters report values at the batch's time().
 ///
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
 /// scene valid and with the same gravity, a backend that computes per-scene energies (the CPU
@@ -100,10 +110,30 @@ class BatchSimulator {
   /// Refused for BDF2 (whose restart would take every scene back to a BE step). Bad input:
   /// InvalidInputError naming the scene, nothing changed.
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
-  /// Pin `pin` of scene `scene` (its index in that scene's list) moves its target linearly to
-  /// `target` over the next step and stays there, as Simulator::setPinTarget: the work is booked
-  /// by the forcing rule in that scene's H* only.
+  /// Pin `pin` of scene `scene` (its index in that scene's list, grabbed pins included) moves its
+  /// target linearly to `target` over the next step and stays there, as Simulator::setPinTarget:
+  /// the work is booked by the forcing rule in that scene's H* only.
   void setPinTarget(int scene, int pin, const Eigen::Vector3d& target);
+  /// Current target of a pin of scene `scene`, as Simulator::pinTarget.
+  Eigen::Vector3d pinTarget(int scene, int pin) const;
+  /// Scene `scene`'s per-particle external forces (`n_s by 3`), as Simulator::setExternalForces:
+  /// ramped over the next step, persisting until the next call, booked by the forcing rule in that
+  /// scene's H* only. The batch keeps one ramp for all particles, so another scene's forces, when
+  /// set in the same frame, are evaluated within the step as `(1 - s) f + s f`: equal to its
+  /// own Simulator's to round-off, not bit for bit.
+  void setExternalForces(int scene, const Eigen::MatrixX3d& forces);
+  /// Collider `collider` of scene `scene` (its index in that scene's list) translates to
+  /// `position` over the next step, as Simulator::setColliderPosition.
+  void setColliderPosition(int scene, int collider, const Eigen::Vector3d& position);
+  /// Collider `collider` of scene `scene` moves on with `velocity`, as
+  /// Simulator::setColliderVelocity.
+  void setColliderVelocity(int scene, int collider, const Eigen::Vector3d& velocity);
+  /// Where collider `collider` of scene `scene` is at time() and its velocity, as
+  /// Simulator::colliderPosition and Simulator::colliderVelocity.
+  ///@{
+  Eigen::Vector3d colliderPosition(int scene, int collider) const;
+  Eigen::Vector3d colliderVelocity(int scene, int collider) const;
+  ///@}
 
  private:
   struct Impl;

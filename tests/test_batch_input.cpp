@@ -1,0 +1,242 @@
+// Per-frame input of a batch (docs/method.md, "Batches"; include/stabint/batch.hpp): input given
+// to one scene makes that scene follow its own Simulator given the same input, step by step
+// (state, energies, target, forcing and events), while the other scenes follow their own
+// Simulators, which get none; bad input names the call, the scene and the index, and changes
+// nothing. The standard is the batch tests' (batch_scenes.hpp): states to 1e-9 of the scene's
+// size, energies and what a step books to 1e-12 of the scene's E_scale, the same branches. Where
+// pins or element weights change, the batch's one factor is updated or refactored where each
+// scene's own is, but an update of one scene's block changes the arithmetic of the whole factor
+// (cholmod_updown turns it into an LDL' factor; a refactorization is of the whole batch), so the
+// scenes differ from their own Simulators by round-off from then on: here by less than 1e-13 of
+// E_scale after grabs and up to a few 1e-13 after element changes. (A stiffer scene amplifies such round-off
+// more: the pinned chain of mixedBatchScenes, a 1e6 N/m pin on 12.5 g, moves by 1.6e-12 of its
+// E_scale in 45 BE steps when its own Simulator's factor gets an update and a downdate that leave
+// L as it was.)
+#include <stabint/batch.hpp>
+#include <stabint/builders.hpp>
+#include <stabint/errors.hpp>
+#include <stabint/simulator.hpp>
+
+#include "batch_scenes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace stabint {
+namespace {
+
+using testing::contactBatchScenes;
+using testing::mixedBatchScenes;
+using testing::stepAndExpectSame;
+
+// A chain without pins released with its links stretched by about `stretch` and moving at about
+// `speed`: it conserves momentum until it is pushed or grabbed.
+Scene freeChain(double stiffness, double stretch, double speed) {
+  ChainPendulumParams params;
+  params.particles = 6;
+  params.stiffness = stiffness;
+  Scene chain = makeChainPendulum(params);
+  chain.pins.clear();
+  for (int j = 0; j < chain.numParticles(); ++j)
+    for (int k = 0; k < 3; ++k) {
+      chain.positions(j, k) += stretch * std::sin(1.7 * j + 2.3 * k + 0.4);
+      chain.velocities(j, k) = speed * std::sin(1.3 * j - 0.7 * k);
+    }
+  return chain;
+}
+
+// Three different scenes: a soft free chain, the damped cloth with its two pinned corners, the tet
+// bar with its pinned end. Input to the first two moves the pins of the later ones in the batch's
+// pin list.
+std::vector<Scene> inputScenes() {
+  const std::vector<Scene> mixed = mixedBatchScenes();
+  return {freeChain(1e2, 0.01, 0.5), mixed[1], mixed[2]};
+}
+
+SimulatorOptions inputOptions(Integrator integrator) {
+  SimulatorOptions options;
+  options.integrator = integrator;
+  options.time_step = 1.0 / 60.0;
+  options.iterations = 5;
+  return options;
+}
+
+// The batch of `scenes` and each scene's own Simulator.
+struct BatchAndOwn {
+  BatchAndOwn(const std::vector<Scene>& scenes, const SimulatorOptions& options) : batch(scenes, options) {
+    for (const Scene& s : scenes) alone.emplace_back(s, options);
+  }
+  /// One step of both, compared (stepAndExpectSame).
+  const BatchStepReport& step(int step) { return stepAndExpectSame(batch, alone, "step " + std::to_string(step)); }
+  BatchSimulator batch;
+  std::vector<Simulator> alone;
+};
+
+// A per-particle force that changes from frame to frame (newtons, about the weight of the
+// particles of these scenes).
+Eigen::MatrixX3d gust(int particles, int frame, double size) {
+  Eigen::MatrixX3d f(particles, 3);
+  for (int j = 0; j < particles; ++j)
+    f.row(j) << size * std::sin(0.3 * frame + j), 0.5 * size, size * std::cos(0.2 * frame - 0.5 * j);
+  return f;
+}
+
+class BatchInput : public ::testing::TestWithParam<Integrator> {};
+
+// Forces set every frame on the free chain and, in some of the same frames, on the cloth follow
+// each scene's own Simulator given the same forces; the bar, given none, follows its own. The
+// forces then persist. The pushed chain no longer conserves momentum (the blend's corrections
+// follow its own Simulator's).
+TEST_P(BatchInput, ExternalForcesActOnTheirSceneOnly) {
+  const std::vector<Scene> scenes = inputScenes();
+  BatchAndOwn both(scenes, inputOptions(GetParam()));
+  std::vector<double> work(scenes.size(), 0.0);
+  for (int step = 0; step < 40; ++step) {
+    if (step < 30) {
+      const Eigen::MatrixX3d chain = gust(scenes[0].numParticles(), step, 0.05);
+      both.batch.setExternalForces(0, chain);
+      both.alone[0].setExternalForces(chain);
+    }
+    if (step >= 10 && step < 30 && step % 3 == 0) {
+      const Eigen::MatrixX3d cloth = gust(scenes[1].numParticles(), step, 0.02);
+      both.batch.setExternalForces(1, cloth);
+      both.alone[1].setExternalForces(cloth);
+    }
+    const BatchStepReport& report = both.step(step);
+    for (std::size_t s = 0; s < scenes.size(); ++s) work[s] += std::abs(report.scenes[s].forcing);
+  }
+  EXPECT_GT(work[0], 0.0);
+  EXPECT_GT(work[1], 0.0);
+}
+
+// A box dragged along a path by setColliderPosition in one scene and a ground lifted and stopped
+// by setColliderVelocity in another push their own scenes only, each as its own Simulator given
+// the same calls; the getters report what the scene's own Simulator reports, bit for bit.
+TEST_P(BatchInput, ColliderMotionActsOnItsSceneOnly) {
+  const std::vector<Scene> scenes = contactBatchScenes();
+  BatchAndOwn both(scenes, inputOptions(GetParam()));
+  const int box = 2, ground = 0;  // scene 0's box (clothOnColliders), scene 2's ground
+  ASSERT_EQ(scenes[0].colliders[box].shape, ColliderShape::Box);
+  double work = 0.0;
+  for (int step = 0; step < 40; ++step) {
+    const Eigen::Vector3d p =
+        scenes[0].colliders[box].center + Eigen::Vector3d(0.02 * step, 0.1 * std::sin(0.2 * step), 0.0);
+    both.batch.setColliderPosition(0, box, p);
+    both.alone[0].setColliderPosition(box, p);
+    if (step == 10 || step == 20) {
+      const Eigen::Vector3d v(0.0, step == 10 ? 0.2 : 0.0, 0.0);
+      both.batch.setColliderVelocity(2, ground, v);
+      both.alone[2].setColliderVelocity(ground, v);
+    }
+    const BatchStepReport& report = both.step(step);
+    work += std::abs(report.scenes[0].forcing) + std::abs(report.scenes[2].forcing);
+    for (int s : {0, 2})
+      for (int c = 0; c < int(scenes[std::size_t(s)].colliders.size()); ++c) {
+        EXPECT_EQ(both.batch.colliderPosition(s, c), both.alone[std::size_t(s)].colliderPosition(c));
+        EXPECT_EQ(both.batch.colliderVelocity(s, c), both.alone[std::size_t(s)].colliderVelocity(c));
+      }
+  }
+  EXPECT_GT(work, 0.0);
+  // The ground was lifted by 0.2 m/s for ten steps, then stopped.
+  EXPECT_NEAR(both.batch.colliderPosition(2, ground).y(), scenes[2].colliders[ground].center.y() + 0.2 * 10 / 60.0,
+              1e-12);
+  EXPECT_EQ(both.batch.colliderVelocity(2, ground), Eigen::Vector3d::Zero());
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, BatchInput,
+                         ::testing::Values(Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint,
+                                           Integrator::EnergyBlend),
+                         [](const ::testing::TestParamInfo<Integrator>& info) {
+                           return std::string(integratorName(info.param));
+                         });
+
+// Everything a refused call could have changed: every scene's state, time, target, energies, pin
+// targets and pin flags.
+struct Snapshot {
+  explicit Snapshot(const BatchSimulator& batch) {
+    for (int s = 0; s < batch.size(); ++s) {
+      x.push_back(batch.positions(s));
+      v.push_back(batch.velocities(s));
+      target.push_back(batch.target(s));
+      energy.push_back(batch.energy(s).total());
+    }
+  }
+  void expectSame(const BatchSimulator& batch, const std::string& what) const {
+    for (int s = 0; s < batch.size(); ++s) {
+      const std::size_t i = std::size_t(s);
+      EXPECT_EQ(batch.positions(s), x[i]) << what << ": scene " << s;
+      EXPECT_EQ(batch.velocities(s), v[i]) << what << ": scene " << s;
+      EXPECT_EQ(batch.target(s), target[i]) << what << ": scene " << s;
+      EXPECT_EQ(batch.energy(s).total(), energy[i]) << what << ": scene " << s;
+    }
+  }
+  std::vector<Eigen::MatrixX3d> x, v;
+  std::vector<double> target, energy;
+};
+
+// `call` is refused with an InvalidInputError whose message has `message` (which names the call,
+// the scene and the field or index), and the batch is as before.
+void expectRefused(const BatchSimulator& batch, const std::function<void()>& call, const std::string& message) {
+  const Snapshot before(batch);
+  try {
+    call();
+    ADD_FAILURE() << "accepted; expected \"" << message << "\"";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+  }
+  before.expectSame(batch, message);
+}
+
+// Bad input to every call: a scene out of range, an index out of the scene's range (though inside
+// the batch's lists), a value Simulator refuses. Each names the call, the scene and the field or
+// index, and changes nothing: afterwards every scene still follows its own Simulator, which got
+// none of it.
+TEST(BatchInputErrors, BadInputNamesTheSceneAndChangesNothing) {
+  const std::vector<Scene> scenes = inputScenes();
+  BatchAndOwn both(scenes, inputOptions(Integrator::EnergyBlend));
+  BatchSimulator& b = both.batch;
+  for (int step = 0; step < 3; ++step) both.step(step);
+  const int n1 = scenes[1].numParticles();
+  const std::string pins2 = std::to_string(scenes[2].pins.size());
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  Eigen::MatrixX3d bad_forces = Eigen::MatrixX3d::Zero(n1, 3);
+  bad_forces(4, 1) = NAN;
+
+  expectRefused(
+      b, [&] { b.setExternalForces(3, bad_forces); }, "setExternalForces: scene 3 out of range");
+  expectRefused(
+      b, [&] { b.setExternalForces(1, Eigen::MatrixX3d::Zero(n1 + 1, 3)); },
+      "setExternalForces: scene 1: external forces: " + std::to_string(n1 + 1) + " rows");
+  expectRefused(
+      b, [&] { b.setExternalForces(1, bad_forces); }, "setExternalForces: scene 1: external forces: row 4");
+  expectRefused(
+      b, [&] { b.setPinTarget(2, int(scenes[2].pins.size()), zero); },
+      "setPinTarget: scene 2: pin " + pins2 + " out of range (the scene has " + pins2 + " pins)");
+  expectRefused(
+      b, [&] { b.setPinTarget(1, 0, Eigen::Vector3d(0.0, 1e151, 0.0)); }, "setPinTarget: scene 1: pin 0: target");
+  expectRefused(
+      b, [&] { b.pinTarget(-1, 0); }, "pinTarget: scene -1 out of range");
+  expectRefused(
+      b, [&] { b.pinTarget(0, 0); }, "pinTarget: scene 0: pin 0 out of range (the scene has 0 pins)");
+  expectRefused(
+      b, [&] { b.setColliderPosition(1, 0, zero); },
+      "setColliderPosition: scene 1: collider 0 out of range (the scene has 0 colliders)");
+  expectRefused(
+      b, [&] { b.setColliderVelocity(1, -1, zero); }, "setColliderVelocity: scene 1: collider -1 out of range");
+  expectRefused(
+      b, [&] { b.colliderPosition(2, 0); }, "colliderPosition: scene 2: collider 0 out of range");
+  expectRefused(
+      b, [&] { b.colliderVelocity(5, 0); }, "colliderVelocity: scene 5 out of range");
+  for (int step = 3; step < 13; ++step) both.step(step);
+}
+
+}  // namespace
+}  // namespace stabint

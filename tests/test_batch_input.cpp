@@ -151,12 +151,94 @@ TEST_P(BatchInput, ColliderMotionActsOnItsSceneOnly) {
   EXPECT_EQ(both.batch.colliderVelocity(2, ground), Eigen::Vector3d::Zero());
 }
 
+// Grabs, drags and releases in the first two scenes, while a pin of the bar is dragged every
+// frame: the pins after a grab move in the batch's pin list, and their ramps go with them. Every
+// scene follows its own Simulator given the same calls; grab returns the index its own Simulator
+// returns.
+TEST_P(BatchInput, GrabAndReleaseAreEventsOfTheirScene) {
+  const std::vector<Scene> scenes = inputScenes();
+  BatchAndOwn both(scenes, inputOptions(GetParam()));
+  BatchSimulator& batch = both.batch;
+  std::vector<Simulator>& alone = both.alone;
+  const Eigen::Vector3d bar_pin = scenes[2].pins[0].target.position;
+  int chain_handle = -1, cloth_handle = -1;
+  Eigen::Vector3d chain_grabbed_at = Eigen::Vector3d::Zero();
+  std::vector<double> events(scenes.size(), 0.0);
+  for (int step = 0; step < 50; ++step) {
+    const Eigen::Vector3d q = bar_pin + Eigen::Vector3d(0.0, 0.0005 * step, 0.0);
+    batch.setPinTarget(2, 0, q);
+    alone[2].setPinTarget(0, q);
+    if (step == 8) {
+      chain_handle = batch.grab(0, 5, 2e3);
+      EXPECT_EQ(chain_handle, alone[0].grab(5, 2e3));
+      chain_grabbed_at = batch.positions(0).row(5).transpose();
+    }
+    if (step > 8 && step < 30) {
+      const Eigen::Vector3d hand = chain_grabbed_at + Eigen::Vector3d(0.0, 0.01 * (step - 8), 0.005 * (step - 8));
+      batch.setPinTarget(0, chain_handle, hand);
+      alone[0].setPinTarget(chain_handle, hand);
+    }
+    if (step == 30) {
+      batch.release(0, chain_handle);
+      alone[0].release(chain_handle);
+    }
+    if (step == 34) {
+      cloth_handle = batch.grab(1, 12, 5e2);
+      EXPECT_EQ(cloth_handle, alone[1].grab(12, 5e2));
+    }
+    if (step == 42) {
+      batch.release(1, 0);  // a pin of the scene itself
+      alone[1].release(0);
+    }
+    const BatchStepReport& report = both.step(step);
+    for (std::size_t s = 0; s < scenes.size(); ++s) events[s] += std::abs(report.scenes[s].event_energy);
+    for (std::size_t s = 1; s < scenes.size(); ++s)
+      for (int pin = 0; pin < int(alone[s].scene().pins.size()); ++pin) {
+        // A grabbed pin's target is where its particle was, which agrees to the state's round-off.
+        EXPECT_LT((batch.pinTarget(int(s), pin) - alone[s].pinTarget(pin)).cwiseAbs().maxCoeff(), 1e-12)
+            << "scene " << s << " pin " << pin;
+      }
+  }
+  EXPECT_EQ(chain_handle, 0);
+  EXPECT_EQ(cloth_handle, 2);
+  // The releases were events of their scenes (the bar's drag is forcing, no event).
+  EXPECT_GT(events[0], 0.0);
+  EXPECT_GT(events[1], 0.0);
+  EXPECT_EQ(events[2], 0.0);
+}
+
 INSTANTIATE_TEST_SUITE_P(Integrators, BatchInput,
                          ::testing::Values(Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint,
                                            Integrator::EnergyBlend),
                          [](const ::testing::TestParamInfo<Integrator>& info) {
                            return std::string(integratorName(info.param));
                          });
+
+// The blend keeps a scene's momenta while the scene conserves them (no pins, fields, colliders or
+// user forces) and stops once input makes it not: stiff free chains, released stretched, whose IM
+// candidates gain energy so that the blend corrects them, one pushed from step 5 on, one grabbed
+// at step 5 and held. Each follows its own Simulator given the same input, the corrections
+// included.
+TEST(BatchInputBlend, InputEndsASceneConservingMomentumAsInItsOwnSimulator) {
+  const std::vector<Scene> scenes = {freeChain(1e4, 0.05, 2.0), freeChain(1e4, 0.04, 1.5), mixedBatchScenes()[1]};
+  BatchAndOwn both(scenes, inputOptions(Integrator::EnergyBlend));
+  std::vector<int> corrected(scenes.size(), 0);
+  for (int step = 0; step < 30; ++step) {
+    if (step >= 5) {
+      const Eigen::MatrixX3d push = gust(scenes[0].numParticles(), step, 0.05);
+      both.batch.setExternalForces(0, push);
+      both.alone[0].setExternalForces(push);
+    }
+    if (step == 5) {
+      EXPECT_EQ(both.batch.grab(1, 2, 1e3), both.alone[1].grab(2, 1e3));
+    }
+    const BatchStepReport& report = both.step(step);
+    for (std::size_t s = 0; s < scenes.size(); ++s)
+      if (step >= 5 && report.scenes[s].branch != BlendBranch::ImplicitMidpoint) ++corrected[s];
+  }
+  EXPECT_GT(corrected[0], 0);
+  EXPECT_GT(corrected[1], 0);
+}
 
 // Everything a refused call could have changed: every scene's state, time, target, energies, pin
 // targets and pin flags.
@@ -235,6 +317,25 @@ TEST(BatchInputErrors, BadInputNamesTheSceneAndChangesNothing) {
       b, [&] { b.colliderPosition(2, 0); }, "colliderPosition: scene 2: collider 0 out of range");
   expectRefused(
       b, [&] { b.colliderVelocity(5, 0); }, "colliderVelocity: scene 5 out of range");
+  expectRefused(
+      b, [&] { b.grab(1, n1, 1e3); },
+      "grab: scene 1: vertex " + std::to_string(n1) + " out of range (the scene has " + std::to_string(n1) +
+          " particles)");
+  expectRefused(
+      b, [&] { b.grab(1, 0, -1.0); }, "grab: scene 1: stiffness -1");
+  expectRefused(
+      b, [&] { b.grab(1, 0, INFINITY); }, "grab: scene 1: stiffness inf");
+  expectRefused(
+      b, [&] { b.grab(9, 0, 1e3); }, "grab: scene 9 out of range");
+  expectRefused(
+      b, [&] { b.release(2, -1); }, "release: scene 2: pin -1 out of range (the scene has " + pins2 + " pins)");
+  expectRefused(
+      b, [&] { b.release(0, 0); }, "release: scene 0: pin 0 out of range (the scene has 0 pins)");
+  // A release of a released pin, after a release that was accepted.
+  b.release(1, 0);
+  both.alone[1].release(0);
+  expectRefused(
+      b, [&] { b.release(1, 0); }, "release: scene 1: pin 0 is already released");
   for (int step = 3; step < 13; ++step) both.step(step);
 }
 

@@ -1,8 +1,9 @@
-// The batch's per-frame input (docs/method.md, "Batches"): each call is Simulator's (FrameInput)
-// on one scene's segment, with the scene's indices, and what it books is booked in that scene's H*
-// only.
+// The batch's per-frame input and element changes (docs/method.md, "Batches"): each call is
+// Simulator's (FrameInput, ElementChanges) on one scene's segment, with the scene's indices, and
+// what it books is booked in that scene's H* only.
 #include "integrator/batch_simulator.hpp"
 
+#include "elements/element_type.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/integrator_steps.hpp"
 
@@ -19,6 +20,10 @@ InputScope BatchSimulator::Impl::scope(int scene, const char* call) const {
 
 FrameInput BatchSimulator::Impl::frameInput(int scene, const char* call) {
   return FrameInput(data_, options_.time_step, inputLimit(choice_), scope(scene, call));
+}
+
+ElementChanges BatchSimulator::Impl::elementChanges(int scene, const char* call) {
+  return ElementChanges(data_, system_, *backend_, scope(scene, call));
 }
 
 void BatchSimulator::Impl::bookEvent(int scene, double h_before) {
@@ -68,6 +73,49 @@ void BatchSimulator::Impl::setExternalForces(int scene, const Eigen::MatrixX3d& 
   p.momentum_conserved = momentumConserved(scenes_[std::size_t(scene)], p.has_user_forces);
 }
 
+template <typename Change>
+void BatchSimulator::Impl::changeElementsAsEvent(int scene, Change&& change) {
+  const PerScene& p = per_scene_[std::size_t(scene)];
+  const double h_before = p.kinetic + p.potential.total();
+  change();
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kX, t_, potentials);
+  per_scene_[std::size_t(scene)].potential = potentials[std::size_t(scene)];
+  bookEvent(scene, h_before);
+  pinsChanged(scene);
+}
+
+int BatchSimulator::Impl::grab(int scene, int vertex, double stiffness) {
+  const InputRange own = scope(scene, "grab").pins(data_);
+  const std::vector<Pin> pins = frameInput(scene, "grab").pinsAfterGrab(vertex, stiffness, x_);
+  changeElementsAsEvent(scene, [&] {
+    elementChanges(scene, "grab").changePins(pins, own.first + own.count);
+    // The new pin ends the scene's pin range: the later scenes' ranges move on by one.
+    const std::size_t pin_block = std::size_t(data_.blockIndex(pinElementType()));
+    ++segments_[std::size_t(scene)].num_elements[pin_block];
+    for (std::size_t s = std::size_t(scene) + 1; s < segments_.size(); ++s) ++segments_[s].first_element[pin_block];
+    backend_->setSegments(segments_);
+  });
+  return own.count;
+}
+
+void BatchSimulator::Impl::release(int scene, int pin) {
+  const std::vector<Pin> pins = frameInput(scene, "release").pinsAfterRelease(pin, t_);
+  changeElementsAsEvent(scene, [&] { elementChanges(scene, "release").changePins(pins); });
+}
+
+void BatchSimulator::Impl::pinsChanged(int scene) {
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  const std::size_t pin_block = std::size_t(data_.blockIndex(pinElementType()));
+  const std::vector<Pin>& all = data_.scene().pins;
+  Scene& own = scenes_[std::size_t(scene)];
+  own.pins.assign(all.begin() + seg.first_element[pin_block],
+                  all.begin() + seg.first_element[pin_block] + seg.num_elements[pin_block]);
+  for (Pin& pin : own.pins) pin.vertex -= seg.first_particle;
+  PerScene& p = per_scene_[std::size_t(scene)];
+  p.momentum_conserved = momentumConserved(own, p.has_user_forces);
+}
+
 // ---- the public class's input ----------------------------------------------------------------
 
 void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
@@ -94,4 +142,6 @@ Eigen::Vector3d BatchSimulator::colliderPosition(int scene, int collider) const 
 Eigen::Vector3d BatchSimulator::colliderVelocity(int scene, int collider) const {
   return impl_->frameInput(scene, "colliderVelocity").colliderVelocity(collider, impl_->t_);
 }
+int BatchSimulator::grab(int scene, int vertex, double stiffness) { return impl_->grab(scene, vertex, stiffness); }
+void BatchSimulator::release(int scene, int pin) { impl_->release(scene, pin); }
 }  // namespace stabint

@@ -5,8 +5,8 @@
 //
 // Supported for now: every integrator, the blend included (its per-scene decisions in lockstep:
 // blend_step.hpp), colliders (each scene's on its own particles: one ContactResolver for the
-// batch, its energies booked per scene), per-frame input of one scene (batch_input.cpp:
-// Simulator's FrameInput on the scene's segment), on any
+// batch, its energies booked per scene), per-frame input, grab and release of one scene
+// (batch_input.cpp: Simulator's FrameInput and ElementChanges on the scene's segment), on any
 // backend that computes per-scene energies (the
 // CPU reference and OpenCL), with a fixed iteration count and the factor (the
 // controls that sum over the whole batch, a tolerance stop, acceleration and CG, are refused:
@@ -15,6 +15,7 @@
 #include "contact/contact_resolver.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
+#include "integrator/element_changes.hpp"
 #include "integrator/frame_input.hpp"
 #include "integrator/input_scope.hpp"
 #include "scene/scene_batch.hpp"
@@ -44,16 +45,26 @@ struct BatchSimulator::Impl {
 
   const BatchStepReport& step();
 
-  // ---- per-frame input of one scene (batch_input.cpp) ---------------------------------------
-  // Simulator's FrameInput on the scene's segment: its indices and rows; the events are booked in
-  // its H* only.
+  // ---- per-frame input, grab and release of one scene (batch_input.cpp) ------------------------
+  // Simulator's FrameInput and ElementChanges on the scene's segment: its indices, its rows, its
+  // block of the factor; the events are booked in its H* only.
   /// The scene's scope for `call` (InvalidInputError for a scene out of range).
   InputScope scope(int scene, const char* call) const;
   FrameInput frameInput(int scene, const char* call);
+  ElementChanges elementChanges(int scene, const char* call);
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
   void setExternalForces(int scene, const Eigen::MatrixX3d& forces);
+  int grab(int scene, int vertex, double stiffness);
+  void release(int scene, int pin);
+  // A change of the scene's pins (`change`, which validates before it changes anything) as an
+  // event of that scene, as Simulator's.
+  template <typename Change>
+  void changeElementsAsEvent(int scene, Change&& change);
   // H* and the pending event energy of the scene move by the jump of H from h_before.
   void bookEvent(int scene, double h_before);
+  // The scene's own copy follows the batch's pins (a grab, a release), and
+  // with it whether the scene conserves momentum.
+  void pinsChanged(int scene);
 
   int size() const { return static_cast<int>(segments_.size()); }
   /// Throws InvalidInputError unless 0 <= scene < size().
@@ -72,7 +83,7 @@ struct BatchSimulator::Impl {
     double energy_scale = 0.0;
     bool momentum_conserved = false;
     bool has_user_forces = false;       // setExternalForces was called for the scene
-    double pending_event_energy = 0.0;  // booked by setState since the last step
+    double pending_event_energy = 0.0;  // booked by setState, grab and release since the last step
     // This step's.
     bool stepping = false;            // active, and not refused so far in this step
     bool velocities_changed = false;  // the host copy v_new differs from kVNew's rows
@@ -104,7 +115,7 @@ struct BatchSimulator::Impl {
   void resolveContact(double t1);
   void refuse(std::size_t s, const std::string& message);
 
-  std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping
+  std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping, its pins as the batch's
   std::vector<SceneSegment> segments_;
   SimulatorOptions options_;
   SceneData data_;

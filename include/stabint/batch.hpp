@@ -41,11 +41,12 @@ struct BatchStepReport {
 /// leading `scene` argument and the scene's own indices (its particles, pins, colliders and
 /// elements, numbered from 0 as in the scene passed in). Each has the semantics of Simulator's
 /// call on that scene alone: ramps over the next step, events, the forcing rule, all booked in
-/// that scene's H* only. Bad input (a
+/// that scene's H* only; grab and release update that scene's block of the one factor as
+/// Simulator updates its own (rank updates, or a refactorization past a size). Bad input (a
 /// scene or index out of range, a value Simulator refuses) is an InvalidInputError naming the
-/// call, the scene and the field or index ("setPinTarget: scene 2: pin 4 out of range ..."), and
+/// call, the scene and the field or index ("grab: scene 2: vertex 40 out of range ..."), and
 /// changes nothing. A scene that is inactive after a refused step takes input as an active one
-/// does: ramps follow the batch's time(), and it acts on all of it
+/// does: ramps follow the batch's time(), events are booked in its H*, and it acts on all of it
 /// once setState reactivates it; the getters report values at the batch's time().
 ///
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
@@ -134,6 +135,13 @@ class BatchSimulator {
   Eigen::Vector3d colliderPosition(int scene, int collider) const;
   Eigen::Vector3d colliderVelocity(int scene, int collider) const;
   ///@}
+
+  /// Attaches a handle to particle `vertex` of scene `scene`, as Simulator::grab: a new pin,
+  /// returned as its index in that scene's pins (the scene's last; the later scenes' pins keep
+  /// their own indices). The factor's block of that scene gets the rank-1 update.
+  int grab(int scene, int vertex, double stiffness);
+  /// Detaches pin `pin` of scene `scene`, as Simulator::release: an event of that scene.
+  void release(int scene, int pin);
 
  private:
   struct Impl;

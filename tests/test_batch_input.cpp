@@ -151,10 +151,10 @@ TEST_P(BatchInput, ColliderMotionActsOnItsSceneOnly) {
   EXPECT_EQ(both.batch.colliderVelocity(2, ground), Eigen::Vector3d::Zero());
 }
 
-// Grabs, drags and releases in the first two scenes, while a pin of the bar is dragged every
-// frame: the pins after a grab move in the batch's pin list, and their ramps go with them. Every
-// scene follows its own Simulator given the same calls; grab returns the index its own Simulator
-// returns.
+// Grabs, drags and releases in the first two scenes, while a pin of the bar is dragged every frame
+// and one of the cloth's pins is disabled: the pins after a grab move in the batch's pin list, and
+// their ramps and flags go with them. Every scene follows its own Simulator given the same calls;
+// grab returns the index its own Simulator returns.
 TEST_P(BatchInput, GrabAndReleaseAreEventsOfTheirScene) {
   const std::vector<Scene> scenes = inputScenes();
   BatchAndOwn both(scenes, inputOptions(GetParam()));
@@ -168,6 +168,10 @@ TEST_P(BatchInput, GrabAndReleaseAreEventsOfTheirScene) {
     const Eigen::Vector3d q = bar_pin + Eigen::Vector3d(0.0, 0.0005 * step, 0.0);
     batch.setPinTarget(2, 0, q);
     alone[2].setPinTarget(0, q);
+    if (step == 4) {
+      batch.setElementEnabled(1, ElementKind::Pin, 1, false);
+      alone[1].setElementEnabled(ElementKind::Pin, 1, false);
+    }
     if (step == 8) {
       chain_handle = batch.grab(0, 5, 2e3);
       EXPECT_EQ(chain_handle, alone[0].grab(5, 2e3));
@@ -197,14 +201,70 @@ TEST_P(BatchInput, GrabAndReleaseAreEventsOfTheirScene) {
         // A grabbed pin's target is where its particle was, which agrees to the state's round-off.
         EXPECT_LT((batch.pinTarget(int(s), pin) - alone[s].pinTarget(pin)).cwiseAbs().maxCoeff(), 1e-12)
             << "scene " << s << " pin " << pin;
+        EXPECT_EQ(batch.elementEnabled(int(s), ElementKind::Pin, pin), alone[s].elementEnabled(ElementKind::Pin, pin));
       }
   }
   EXPECT_EQ(chain_handle, 0);
   EXPECT_EQ(cloth_handle, 2);
+  EXPECT_FALSE(batch.elementEnabled(1, ElementKind::Pin, 1));
   // The releases were events of their scenes (the bar's drag is forcing, no event).
   EXPECT_GT(events[0], 0.0);
   EXPECT_GT(events[1], 0.0);
   EXPECT_EQ(events[2], 0.0);
+}
+
+// Stiffness changes and disabled elements in each scene, a single element, a short list (rank
+// updates of the factor) and a list of more than 64 columns (a refactorization of the whole
+// factor), each an event of its scene as in its own Simulator.
+TEST_P(BatchInput, ElementChangesAreEventsOfTheirScene) {
+  const std::vector<Scene> scenes = inputScenes();
+  BatchAndOwn both(scenes, inputOptions(GetParam()));
+  BatchSimulator& batch = both.batch;
+  std::vector<Simulator>& alone = both.alone;
+  ASSERT_GE(scenes[1].springs.size(), 70u);
+  std::vector<int> many_springs;
+  for (int i = 0; i < 70; ++i) many_springs.push_back(i);
+  const std::vector<int> tets = {0, 1, 2};
+  const double spring_k = scenes[1].springs[3].stiffness;
+  const std::vector<std::function<void()>> changes = {
+      [&] {
+        batch.setElementStiffness(1, ElementKind::Spring, 3, 0.1 * spring_k);
+        alone[1].setElementStiffness(ElementKind::Spring, 3, 0.1 * spring_k);
+      },
+      [&] {
+        batch.setElementEnabled(2, ElementKind::Tet, tets, false);
+        alone[2].setElementEnabled(ElementKind::Tet, tets, false);
+      },
+      [&] {
+        batch.setElementStiffness(1, ElementKind::Spring, many_springs, 2.0 * spring_k);
+        alone[1].setElementStiffness(ElementKind::Spring, many_springs, 2.0 * spring_k);
+      },
+      [&] {
+        batch.setElementStiffness(0, ElementKind::Spring, 2, 0.2 * scenes[0].springs[2].stiffness);
+        alone[0].setElementStiffness(ElementKind::Spring, 2, 0.2 * scenes[0].springs[2].stiffness);
+      },
+      [&] {
+        batch.setElementEnabled(2, ElementKind::Tet, tets, true);
+        alone[2].setElementEnabled(ElementKind::Tet, tets, true);
+      },
+      [&] {
+        batch.setElementStiffness(2, ElementKind::Pin, 0, 1e5);
+        alone[2].setElementStiffness(ElementKind::Pin, 0, 1e5);
+      },
+      [&] {
+        batch.setElementEnabled(0, ElementKind::Spring, 0, false);
+        alone[0].setElementEnabled(ElementKind::Spring, 0, false);
+      },
+  };
+  std::vector<double> events(scenes.size(), 0.0);
+  for (int step = 0; step < 50; ++step) {
+    if (step % 6 == 3 && std::size_t(step / 6) < changes.size()) changes[std::size_t(step / 6)]();
+    const BatchStepReport& report = both.step(step);
+    for (std::size_t s = 0; s < scenes.size(); ++s) events[s] += std::abs(report.scenes[s].event_energy);
+  }
+  for (std::size_t s = 0; s < scenes.size(); ++s) EXPECT_GT(events[s], 0.0) << "scene " << s;
+  EXPECT_FALSE(batch.elementEnabled(0, ElementKind::Spring, 0));
+  EXPECT_TRUE(batch.elementEnabled(2, ElementKind::Tet, 1));
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, BatchInput,
@@ -287,6 +347,7 @@ TEST(BatchInputErrors, BadInputNamesTheSceneAndChangesNothing) {
   BatchSimulator& b = both.batch;
   for (int step = 0; step < 3; ++step) both.step(step);
   const int n1 = scenes[1].numParticles();
+  const int springs1 = int(scenes[1].springs.size());
   const std::string pins2 = std::to_string(scenes[2].pins.size());
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   Eigen::MatrixX3d bad_forces = Eigen::MatrixX3d::Zero(n1, 3);
@@ -331,12 +392,90 @@ TEST(BatchInputErrors, BadInputNamesTheSceneAndChangesNothing) {
       b, [&] { b.release(2, -1); }, "release: scene 2: pin -1 out of range (the scene has " + pins2 + " pins)");
   expectRefused(
       b, [&] { b.release(0, 0); }, "release: scene 0: pin 0 out of range (the scene has 0 pins)");
+  expectRefused(
+      b, [&] { b.setElementStiffness(1, ElementKind::Spring, springs1, 1.0); },
+      "setElementStiffness: scene 1: spring " + std::to_string(springs1) + " out of range (the scene has " +
+          std::to_string(springs1) + ")");
+  expectRefused(
+      b,
+      [&] {
+        b.setElementStiffness(1, ElementKind::Spring, std::vector<int>{0, 1, -2}, 1.0);
+      },
+      "setElementStiffness: scene 1: spring -2 out of range");
+  expectRefused(
+      b, [&] { b.setElementStiffness(1, ElementKind::Spring, 0, -3.0); },
+      "setElementStiffness: scene 1: spring stiffness -3");
+  expectRefused(
+      b, [&] { b.setElementStiffness(0, ElementKind::Tet, 0, 1.0); },
+      "setElementStiffness: scene 0: tet 0 out of range (the scene has 0)");
+  expectRefused(
+      b, [&] { b.setElementStiffness(1, static_cast<ElementKind>(99), 0, 1.0); },
+      "setElementStiffness: scene 1: element kind 99");
+  expectRefused(
+      b,
+      [&] {
+        b.setElementEnabled(2, ElementKind::Tet, std::vector<int>{0, 1000}, false);
+      },
+      "setElementEnabled: scene 2: tet 1000 out of range");
+  expectRefused(
+      b, [&] { b.setElementEnabled(-2, ElementKind::Tet, 0, false); }, "setElementEnabled: scene -2 out of range");
+  expectRefused(
+      b, [&] { b.elementEnabled(2, ElementKind::Spring, 0); },
+      "elementEnabled: scene 2: spring 0 out of range (the scene has 0)");
   // A release of a released pin, after a release that was accepted.
   b.release(1, 0);
   both.alone[1].release(0);
   expectRefused(
       b, [&] { b.release(1, 0); }, "release: scene 1: pin 0 is already released");
+  EXPECT_TRUE(b.elementEnabled(1, ElementKind::Spring, 0));
   for (int step = 3; step < 13; ++step) both.step(step);
+}
+
+// A scene that is inactive after a refused step takes input as an active one does, and acts on it
+// once setState reactivates it: here the stiff chain of BatchSimulator.OneScenesRefusalLeaves...
+// (SE explodes on its pin) is softened while refused and restarted from rest, after which it
+// follows a Simulator of the softened chain started from the same state.
+TEST(BatchInputInactive, ARefusedSceneTakesInputAndActsOnItAfterSetState) {
+  ChainPendulumParams soft, stiff;
+  soft.stiffness = 10.0;
+  soft.pin_stiffness = 100.0;
+  stiff.particles = 6;
+  const std::vector<Scene> scenes = {makeChainPendulum(soft), makeChainPendulum(stiff)};
+  SimulatorOptions options;
+  options.integrator = Integrator::SymplecticEuler;
+  options.time_step = 1e-3;
+  options.energy_limit = 1.0;
+  BatchSimulator batch(scenes, options);
+  int step = 0;
+  for (; step < 200 && batch.active(1); ++step) batch.step();
+  ASSERT_FALSE(batch.active(1)) << "the stiff chain was never refused";
+  const Eigen::MatrixX3d kept = batch.positions(1);
+  batch.setElementStiffness(1, ElementKind::Pin, 0, soft.pin_stiffness);
+  batch.setElementStiffness(1, ElementKind::Spring, std::vector<int>{0, 1, 2, 3, 4}, soft.stiffness);
+  batch.setExternalForces(1, Eigen::MatrixX3d::Zero(scenes[1].numParticles(), 3));
+  const int handle = batch.grab(1, 5, 50.0);
+  EXPECT_EQ(handle, 1);
+  batch.release(1, handle);
+  batch.step();
+  EXPECT_FALSE(batch.active(1));
+  EXPECT_EQ(batch.positions(1), kept);
+
+  Scene softened = scenes[1];
+  softened.pins[0].stiffness = soft.pin_stiffness;
+  for (Spring& spring : softened.springs) spring.stiffness = soft.stiffness;
+  const Eigen::MatrixX3d x0 = scenes[1].positions, v0 = Eigen::MatrixX3d::Zero(x0.rows(), 3);
+  batch.setState(1, x0, v0);
+  EXPECT_TRUE(batch.active(1));
+  Simulator own(softened, options);
+  own.setExternalForces(Eigen::MatrixX3d::Zero(x0.rows(), 3));
+  own.grab(5, 50.0);
+  own.release(1);
+  for (int i = 0; i < 100; ++i) {
+    const BatchStepReport& report = batch.step();
+    own.step();
+    ASSERT_TRUE(report.refusals[1].empty()) << "step " << i << ": " << report.refusals[1];
+    testing::expectSameState(batch.positions(1), batch.velocities(1), own, "step " + std::to_string(i));
+  }
 }
 
 }  // namespace

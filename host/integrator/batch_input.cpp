@@ -104,6 +104,12 @@ void BatchSimulator::Impl::release(int scene, int pin) {
   changeElementsAsEvent(scene, [&] { elementChanges(scene, "release").changePins(pins); });
 }
 
+void BatchSimulator::Impl::changeElements(int scene, ElementKind kind, const std::vector<int>& indices,
+                                          const double* stiffness, bool enabled) {
+  const char* call = stiffness ? "setElementStiffness" : "setElementEnabled";
+  changeElementsAsEvent(scene, [&] { elementChanges(scene, call).change(kind, indices, stiffness, enabled); });
+}
+
 void BatchSimulator::Impl::pinsChanged(int scene) {
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const std::size_t pin_block = std::size_t(data_.blockIndex(pinElementType()));
@@ -144,4 +150,21 @@ Eigen::Vector3d BatchSimulator::colliderVelocity(int scene, int collider) const 
 }
 int BatchSimulator::grab(int scene, int vertex, double stiffness) { return impl_->grab(scene, vertex, stiffness); }
 void BatchSimulator::release(int scene, int pin) { impl_->release(scene, pin); }
+void BatchSimulator::setElementStiffness(int scene, ElementKind kind, int index, double stiffness) {
+  impl_->changeElements(scene, kind, {index}, &stiffness, true);
+}
+void BatchSimulator::setElementStiffness(int scene, ElementKind kind, const std::vector<int>& indices,
+                                         double stiffness) {
+  impl_->changeElements(scene, kind, indices, &stiffness, true);
+}
+void BatchSimulator::setElementEnabled(int scene, ElementKind kind, int index, bool enabled) {
+  impl_->changeElements(scene, kind, {index}, nullptr, enabled);
+}
+void BatchSimulator::setElementEnabled(int scene, ElementKind kind, const std::vector<int>& indices, bool enabled) {
+  impl_->changeElements(scene, kind, indices, nullptr, enabled);
+}
+bool BatchSimulator::elementEnabled(int scene, ElementKind kind, int index) const {
+  return impl_->elementChanges(scene, "elementEnabled").enabled(kind, index);
+}
+
 }  // namespace stabint

@@ -5,7 +5,7 @@
 //
 // Supported for now: every integrator, the blend included (its per-scene decisions in lockstep:
 // blend_step.hpp), colliders (each scene's on its own particles: one ContactResolver for the
-// batch, its energies booked per scene), per-frame input, grab and release of one scene
+// batch, its energies booked per scene), per-frame input and element changes of one scene
 // (batch_input.cpp: Simulator's FrameInput and ElementChanges on the scene's segment), on any
 // backend that computes per-scene energies (the
 // CPU reference and OpenCL), with a fixed iteration count and the factor (the
@@ -45,7 +45,7 @@ struct BatchSimulator::Impl {
 
   const BatchStepReport& step();
 
-  // ---- per-frame input, grab and release of one scene (batch_input.cpp) ------------------------
+  // ---- per-frame input and element changes of one scene (batch_input.cpp) ----------------------
   // Simulator's FrameInput and ElementChanges on the scene's segment: its indices, its rows, its
   // block of the factor; the events are booked in its H* only.
   /// The scene's scope for `call` (InvalidInputError for a scene out of range).
@@ -56,13 +56,15 @@ struct BatchSimulator::Impl {
   void setExternalForces(int scene, const Eigen::MatrixX3d& forces);
   int grab(int scene, int vertex, double stiffness);
   void release(int scene, int pin);
-  // A change of the scene's pins (`change`, which validates before it changes anything) as an
+  void changeElements(int scene, ElementKind kind, const std::vector<int>& indices, const double* stiffness,
+                      bool enabled);
+  // A change of the scene's elements (`change`, which validates before it changes anything) as an
   // event of that scene, as Simulator's.
   template <typename Change>
   void changeElementsAsEvent(int scene, Change&& change);
   // H* and the pending event energy of the scene move by the jump of H from h_before.
   void bookEvent(int scene, double h_before);
-  // The scene's own copy follows the batch's pins (a grab, a release), and
+  // The scene's own copy follows the batch's pins (a grab, a release, a pin's stiffness), and
   // with it whether the scene conserves momentum.
   void pinsChanged(int scene);
 
@@ -83,7 +85,7 @@ struct BatchSimulator::Impl {
     double energy_scale = 0.0;
     bool momentum_conserved = false;
     bool has_user_forces = false;       // setExternalForces was called for the scene
-    double pending_event_energy = 0.0;  // booked by setState, grab and release since the last step
+    double pending_event_energy = 0.0;  // booked by setState and element changes since the last step
     // This step's.
     bool stepping = false;            // active, and not refused so far in this step
     bool velocities_changed = false;  // the host copy v_new differs from kVNew's rows

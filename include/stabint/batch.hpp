@@ -41,13 +41,14 @@ struct BatchStepReport {
 /// leading `scene` argument and the scene's own indices (its particles, pins, colliders and
 /// elements, numbered from 0 as in the scene passed in). Each has the semantics of Simulator's
 /// call on that scene alone: ramps over the next step, events, the forcing rule, all booked in
-/// that scene's H* only; grab and release update that scene's block of the one factor as
+/// that scene's H* only; pin and element changes update that scene's block of the one factor as
 /// Simulator updates its own (rank updates, or a refactorization past a size). Bad input (a
 /// scene or index out of range, a value Simulator refuses) is an InvalidInputError naming the
 /// call, the scene and the field or index ("grab: scene 2: vertex 40 out of range ..."), and
 /// changes nothing. A scene that is inactive after a refused step takes input as an active one
 /// does: ramps follow the batch's time(), events are booked in its H*, and it acts on all of it
-/// once setState reactivates it; the getters report values at the batch's time().
+/// once setState reactivates it (so a sweep can, say, soften an exploded scene before restarting
+/// it); the getters report values at the batch's time().
 ///
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
 /// scene valid and with the same gravity, a backend that computes per-scene energies (the CPU
@@ -142,6 +143,20 @@ class BatchSimulator {
   int grab(int scene, int vertex, double stiffness);
   /// Detaches pin `pin` of scene `scene`, as Simulator::release: an event of that scene.
   void release(int scene, int pin);
+  /// Element `index` (or `indices`) of `kind` of scene `scene` (its index in that scene's list)
+  /// gets `stiffness`, as Simulator::setElementStiffness: an event of that scene, its block of
+  /// the factor updated.
+  ///@{
+  void setElementStiffness(int scene, ElementKind kind, int index, double stiffness);
+  void setElementStiffness(int scene, ElementKind kind, const std::vector<int>& indices, double stiffness);
+  ///@}
+  /// Disables or enables elements of scene `scene`, as Simulator::setElementEnabled.
+  ///@{
+  void setElementEnabled(int scene, ElementKind kind, int index, bool enabled);
+  void setElementEnabled(int scene, ElementKind kind, const std::vector<int>& indices, bool enabled);
+  ///@}
+  /// Whether element `index` of `kind` of scene `scene` is enabled.
+  bool elementEnabled(int scene, ElementKind kind, int index) const;
 
  private:
   struct Impl;

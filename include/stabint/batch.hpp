@@ -30,15 +30,17 @@ struct BatchStepReport {
 /// block-diagonal factor for all (no element couples two scenes), and per scene its own energies,
 /// target H*, blend decisions, forcing, damping and refusals, so that every scene follows the
 /// trajectory its own Simulator would (to the round-off of the factor's ordering and, with
-/// colliders, of the contact set's updates of the one factor: docs/batch_design.md, "Colliders").
+/// colliders, pin or element changes, of the updates of the one factor: docs/batch_design.md,
+/// "Colliders" and "Per-scene input").
 ///
 /// Colliders: each scene's colliders act on that scene's particles only, wherever the scenes lie
 /// in space, with the scene's own collider motion (Collider::velocity, or setColliderPosition and
 /// setColliderVelocity); its contact set, friction and final projection are its own Simulator's,
 /// and what friction and the projection remove leaves that scene's H* only.
 ///
-/// Per-frame input (docs/method.md, "Per-frame input"): every input call of Simulator, with a
-/// leading `scene` argument and the scene's own indices (its particles, pins, colliders and
+/// Per-frame input (docs/method.md, "Per-frame input"): every input call of Simulator (but
+/// setPositions and setVelocities: setState; and setIterations: the options are the batch's), with
+/// a leading `scene` argument and the scene's own indices (its particles, pins, colliders and
 /// elements, numbered from 0 as in the scene passed in). Each has the semantics of Simulator's
 /// call on that scene alone: ramps over the next step, events, the forcing rule, all booked in
 /// that scene's H* only; pin and element changes update that scene's block of the one factor as

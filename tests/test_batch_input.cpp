@@ -23,7 +23,6 @@
 
 #include <Eigen/Core>
 
-#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <functional>
@@ -93,8 +92,8 @@ class BatchInput : public ::testing::TestWithParam<Integrator> {};
 
 // Forces set every frame on the free chain and, in some of the same frames, on the cloth follow
 // each scene's own Simulator given the same forces; the bar, given none, follows its own. The
-// forces then persist. The pushed chain no longer conserves momentum (the blend's corrections
-// follow its own Simulator's).
+// forces then persist. (That a pushed scene stops conserving momentum for the blend is
+// BatchInputBlend's.)
 TEST_P(BatchInput, ExternalForcesActOnTheirSceneOnly) {
   const std::vector<Scene> scenes = inputScenes();
   BatchAndOwn both(scenes, inputOptions(GetParam()));

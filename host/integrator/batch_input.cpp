@@ -74,7 +74,8 @@ void BatchSimulator::Impl::setExternalForces(int scene, const Eigen::MatrixX3d& 
 }
 
 template <typename Change>
-void BatchSimulator::Impl::changeElementsAsEvent(int scene, Change&& change) {
+void BatchSimulator::Impl::changeElementsAsEvent(int scene, const char* call, Change&& change) {
+  checkScene(scene, call);
   const PerScene& p = per_scene_[std::size_t(scene)];
   const double h_before = p.kinetic + p.potential.total();
   change();
@@ -88,7 +89,7 @@ void BatchSimulator::Impl::changeElementsAsEvent(int scene, Change&& change) {
 int BatchSimulator::Impl::grab(int scene, int vertex, double stiffness) {
   const InputRange own = scope(scene, "grab").pins(data_);
   const std::vector<Pin> pins = frameInput(scene, "grab").pinsAfterGrab(vertex, stiffness, x_);
-  changeElementsAsEvent(scene, [&] {
+  changeElementsAsEvent(scene, "grab", [&] {
     elementChanges(scene, "grab").changePins(pins, own.first + own.count);
     // The new pin ends the scene's pin range: the later scenes' ranges move on by one.
     const std::size_t pin_block = std::size_t(data_.blockIndex(pinElementType()));
@@ -101,13 +102,13 @@ int BatchSimulator::Impl::grab(int scene, int vertex, double stiffness) {
 
 void BatchSimulator::Impl::release(int scene, int pin) {
   const std::vector<Pin> pins = frameInput(scene, "release").pinsAfterRelease(pin, t_);
-  changeElementsAsEvent(scene, [&] { elementChanges(scene, "release").changePins(pins); });
+  changeElementsAsEvent(scene, "release", [&] { elementChanges(scene, "release").changePins(pins); });
 }
 
 void BatchSimulator::Impl::changeElements(int scene, ElementKind kind, const std::vector<int>& indices,
                                           const double* stiffness, bool enabled) {
   const char* call = stiffness ? "setElementStiffness" : "setElementEnabled";
-  changeElementsAsEvent(scene, [&] { elementChanges(scene, call).change(kind, indices, stiffness, enabled); });
+  changeElementsAsEvent(scene, call, [&] { elementChanges(scene, call).change(kind, indices, stiffness, enabled); });
 }
 
 void BatchSimulator::Impl::pinsChanged(int scene) {

@@ -59,9 +59,9 @@ struct BatchSimulator::Impl {
   void changeElements(int scene, ElementKind kind, const std::vector<int>& indices, const double* stiffness,
                       bool enabled);
   // A change of the scene's elements (`change`, which validates before it changes anything) as an
-  // event of that scene, as Simulator's.
+  // event of that scene, as Simulator's; a scene out of range is refused first, naming `call`.
   template <typename Change>
-  void changeElementsAsEvent(int scene, Change&& change);
+  void changeElementsAsEvent(int scene, const char* call, Change&& change);
   // H* and the pending event energy of the scene move by the jump of H from h_before.
   void bookEvent(int scene, double h_before);
   // The scene's own copy follows the batch's pins (a grab, a release, a pin's stiffness), and

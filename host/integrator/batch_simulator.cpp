@@ -1,11 +1,9 @@
 #include "integrator/batch_simulator.hpp"
 
-#include "elements/element_type.hpp"
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
 #include "out_of_memory.hpp"
-#include "validation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -97,58 +95,6 @@ void BatchSimulator::Impl::checkScene(int scene, const char* call) const {
   if (scene < 0 || scene >= size())
     throw InvalidInputError(std::string(call) + ": scene " + std::to_string(scene) + " out of range (the batch has " +
                             std::to_string(size()) + " scenes)");
-}
-
-void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
-  checkScene(scene, "setState");
-  const SceneSegment& seg = segments_[std::size_t(scene)];
-  const std::string where = "setState: scene " + std::to_string(scene) + ": ";
-  const double limit = inputLimit(choice_);
-  validation::checkInputRows(positions, seg.num_particles, where + "positions", limit);
-  validation::checkInputRows(velocities, seg.num_particles, where + "velocities", limit);
-  if (options_.integrator == Integrator::BDF2)
-    throw InvalidInputError(where +
-                            "BDF2 would restart every scene of the batch with a BE step; not supported in a batch yet");
-  PerScene& p = per_scene_[std::size_t(scene)];
-  const double h_before = p.kinetic + p.potential.total();
-  // The other scenes' rows of kV stay what they are (v_slot_, which may differ from their host
-  // copies by round-off, as a Simulator's do).
-  x_.middleRows(seg.first_particle, seg.num_particles) = positions;
-  v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;
-  backend_->write(kX, x_);
-  backend_->write(kV, v_slot_);
-  // The slots may hold less precision (a float device): the host copies are what they hold.
-  backend_->readBoth(kX, x_, kV, v_slot_);
-  v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
-  // The scene's contact set follows, so that the event books the contact energy of the new
-  // positions; the potential is evaluated below anyway.
-  contact_.updateSet(t_, x_, v_, {contactPart(std::size_t(scene), 0)});
-  std::vector<PotentialEnergy> potentials;
-  backend_->potentials(kX, t_, potentials);
-  p.potential = potentials[std::size_t(scene)];
-  p.kinetic = kineticEnergy(scene, v_);
-  const double event = p.kinetic + p.potential.total() - h_before;
-  p.target += event;
-  p.pending_event_energy += event;
-  if (!p.active) {
-    p.active = true;
-    p.time = t_;
-  }
-}
-
-void BatchSimulator::Impl::setPinTarget(int scene, int pin, const Eigen::Vector3d& q) {
-  checkScene(scene, "setPinTarget");
-  // The pins are a block like the others: scene s's are its segment's range of the pin type
-  // (fixed while the batch has no grab or release).
-  const std::vector<const ElementType*>& types = elementTypes();
-  const std::size_t type = std::size_t(std::find(types.begin(), types.end(), &pinElementType()) - types.begin());
-  const SceneSegment& seg = segments_[std::size_t(scene)];
-  const std::string where = "setPinTarget: scene " + std::to_string(scene) + ": pin " + std::to_string(pin);
-  if (pin < 0 || pin >= seg.num_elements[type])
-    throw InvalidInputError(where + " out of range (the scene has " + std::to_string(seg.num_elements[type]) +
-                            " pins)");
-  validation::checkInputVector(q, where + ": target", inputLimit(choice_));
-  data_.rampPinTarget(seg.first_element[type] + pin, q, t_, t_ + options_.time_step);
 }
 
 void BatchSimulator::Impl::refuse(std::size_t s, const std::string& message) {
@@ -539,11 +485,4 @@ std::string BatchSimulator::backendDescription() const {
   const std::string& reason = impl_->choice_.reason;
   return impl_->backend_->description() + (reason.empty() ? "" : " [" + reason + "]");
 }
-void BatchSimulator::setPinTarget(int scene, int pin, const Eigen::Vector3d& target) {
-  impl_->setPinTarget(scene, pin, target);
-}
-void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
-  impl_->setState(scene, positions, velocities);
-}
-
 }  // namespace stabint

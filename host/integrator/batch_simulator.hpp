@@ -5,7 +5,9 @@
 //
 // Supported for now: every integrator, the blend included (its per-scene decisions in lockstep:
 // blend_step.hpp), colliders (each scene's on its own particles: one ContactResolver for the
-// batch, its energies booked per scene), on any backend that computes per-scene energies (the
+// batch, its energies booked per scene), per-frame input and element changes of one scene
+// (batch_input.cpp: Simulator's FrameInput and ElementChanges on the scene's segment), on any
+// backend that computes per-scene energies (the
 // CPU reference and OpenCL), with a fixed iteration count and the factor (the
 // controls that sum over the whole batch, a tolerance stop, acceleration and CG, are refused:
 // they would couple the scenes, and one scene's NaN would reach the others through them).
@@ -13,6 +15,9 @@
 #include "contact/contact_resolver.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
+#include "integrator/element_changes.hpp"
+#include "integrator/frame_input.hpp"
+#include "integrator/input_scope.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
@@ -38,9 +43,30 @@ struct BatchSimulator::Impl {
   /// apart (concatenateScenes) or options it does not support yet.
   Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options);
 
-  void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
-  void setPinTarget(int scene, int pin, const Eigen::Vector3d& target);
   const BatchStepReport& step();
+
+  // ---- per-frame input and element changes of one scene (batch_input.cpp) ----------------------
+  // Simulator's FrameInput and ElementChanges on the scene's segment: its indices, its rows, its
+  // block of the factor; the events are booked in its H* only.
+  /// The scene's scope for `call` (InvalidInputError for a scene out of range).
+  InputScope scope(int scene, const char* call) const;
+  FrameInput frameInput(int scene, const char* call);
+  ElementChanges elementChanges(int scene, const char* call);
+  void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  void setExternalForces(int scene, const Eigen::MatrixX3d& forces);
+  int grab(int scene, int vertex, double stiffness);
+  void release(int scene, int pin);
+  void changeElements(int scene, ElementKind kind, const std::vector<int>& indices, const double* stiffness,
+                      bool enabled);
+  // A change of the scene's elements (`change`, which validates before it changes anything) as an
+  // event of that scene, as Simulator's; a scene out of range is refused first, naming `call`.
+  template <typename Change>
+  void changeElementsAsEvent(int scene, const char* call, Change&& change);
+  // H* and the pending event energy of the scene move by the jump of H from h_before.
+  void bookEvent(int scene, double h_before);
+  // The scene's own copy follows the batch's pins (a grab, a release, a pin's stiffness), and
+  // with it whether the scene conserves momentum.
+  void pinsChanged(int scene);
 
   int size() const { return static_cast<int>(segments_.size()); }
   /// Throws InvalidInputError unless 0 <= scene < size().
@@ -58,7 +84,8 @@ struct BatchSimulator::Impl {
     double target = 0.0;
     double energy_scale = 0.0;
     bool momentum_conserved = false;
-    double pending_event_energy = 0.0;  // booked by setState since the last step
+    bool has_user_forces = false;       // setExternalForces was called for the scene
+    double pending_event_energy = 0.0;  // booked by setState and element changes since the last step
     // This step's.
     bool stepping = false;            // active, and not refused so far in this step
     bool velocities_changed = false;  // the host copy v_new differs from kVNew's rows
@@ -90,7 +117,7 @@ struct BatchSimulator::Impl {
   void resolveContact(double t1);
   void refuse(std::size_t s, const std::string& message);
 
-  std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping
+  std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping, its pins as the batch's
   std::vector<SceneSegment> segments_;
   SimulatorOptions options_;
   SceneData data_;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <utility>
 
 namespace stabint {
 namespace {
@@ -30,16 +31,30 @@ bool samePins(const std::vector<Pin>& a, const std::vector<Pin>& b) {
 
 }  // namespace
 
-ElementChanges::ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend)
-    : scene_(scene), system_(system), backend_(backend) {}
+ElementChanges::ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend, InputScope scope)
+    : scene_(scene), system_(system), backend_(backend), scope_(std::move(scope)) {}
 
-int ElementChanges::block(ElementKind kind) const { return scene_.blockIndex(elementType(kind)); }
+int ElementChanges::block(ElementKind kind) const {
+  if (scope_.wholeScene()) return scene_.blockIndex(elementType(kind));
+  try {
+    return scene_.blockIndex(elementType(kind));
+  } catch (const InvalidInputError& e) {
+    throw InvalidInputError(scope_.where() + e.what());
+  }
+}
 
 void ElementChanges::checkIndex(int block, int index, const char* call) const {
   const ElementBlock& b = scene_.blocks()[static_cast<std::size_t>(block)];
-  if (index < 0 || index >= b.count)
-    throw InvalidInputError(std::string(call) + ": " + b.type->name() + " " + std::to_string(index) +
-                            " out of range (the scene has " + std::to_string(b.count) + ")");
+  const int count = scope_.elements(scene_, block).count;
+  if (index < 0 || index >= count)
+    throw InvalidInputError(scope_.where(call) + b.type->name() + " " + std::to_string(index) +
+                            " out of range (the scene has " + std::to_string(count) + ")");
+}
+
+bool ElementChanges::enabled(ElementKind kind, int index) const {
+  const int block = this->block(kind);
+  checkIndex(block, index, "elementEnabled");
+  return scene_.elementEnabled(block, scope_.elements(scene_, block).first + index);
 }
 
 // L and its factors follow a change of element e's weight from w_old to its current one by the
@@ -78,10 +93,13 @@ void ElementChanges::change(ElementKind kind, std::vector<int> indices, const do
   std::sort(indices.begin(), indices.end());
   indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
   if (stiffness && !b.type->hasStiffness())
-    throw InvalidInputError(std::string(call) + ": a " + b.type->name() + " has no stiffness");
+    throw InvalidInputError(scope_.where(call) + "a " + b.type->name() + " has no stiffness");
   if (stiffness && (!std::isfinite(*stiffness) || !(*stiffness >= 0.0) || !(*stiffness <= validation::kMaxMagnitude)))
-    throw InvalidInputError(std::string(call) + ": " + b.type->name() + " stiffness " + validation::cat(*stiffness) +
+    throw InvalidInputError(scope_.where(call) + b.type->name() + " stiffness " + validation::cat(*stiffness) +
                             " must be finite, >= 0 and at most " + validation::cat(validation::kMaxMagnitude));
+  // The scope's indices as the scene's.
+  const int first = scope_.elements(scene_, block).first;
+  for (int& e : indices) e += first;
   std::vector<double> w_old, k_old;
   std::vector<bool> on_old;
   for (int e : indices) {
@@ -95,9 +113,9 @@ void ElementChanges::change(ElementKind kind, std::vector<int> indices, const do
     // refusal puts the old stiffnesses back (their params are recomputed bit for bit).
     for (std::size_t i = 0; i < indices.size(); ++i) {
       if (std::isfinite(scene_.elementWeight(block, indices[i]))) continue;
-      const int bad = indices[i];
+      const int bad = indices[i] - first;
       for (std::size_t j = indices.size(); j-- > 0;) scene_.setElementStiffness(block, indices[j], k_old[j]);
-      throw InvalidInputError(std::string(call) + ": " + b.type->name() + " " + std::to_string(bad) + ": stiffness " +
+      throw InvalidInputError(scope_.where(call) + b.type->name() + " " + std::to_string(bad) + ": stiffness " +
                               std::to_string(*stiffness) + " gives a weight that is not finite");
     }
   } else {
@@ -123,11 +141,29 @@ void ElementChanges::change(ElementKind kind, std::vector<int> indices, const do
   }
 }
 
-void ElementChanges::changePins(const std::vector<Pin>& pins) {
+void ElementChanges::changePins(const std::vector<Pin>& pins, int inserted) {
   std::map<int, double> delta;
   for (const Pin& p : scene_.scene().pins) delta[p.vertex] -= p.stiffness;
   for (const Pin& p : pins) delta[p.vertex] += p.stiffness;
+  // setPins keeps ramps and flags by index: the pins after an inserted one take theirs along.
+  const int old_count = static_cast<int>(scene_.scene().pins.size());
+  const bool shifts = inserted >= 0 && inserted < old_count;
+  const int pin_block = scene_.blockIndex(pinElementType());
+  SceneData::ForcingState forcing;
+  std::vector<bool> flags;
+  if (shifts) {
+    forcing = scene_.forcingState();
+    forcing.pins.insert(forcing.pins.begin() + inserted, SceneData::Ramp{});
+    for (int i = 0; i < old_count; ++i) flags.push_back(scene_.elementEnabled(pin_block, i));
+    flags.insert(flags.begin() + inserted, true);  // a grabbed pin is enabled
+  }
   scene_.setPins(pins);
+  if (shifts) {
+    scene_.setForcingState(forcing);
+    for (int i = inserted; i < static_cast<int>(pins.size()); ++i)
+      if (scene_.elementEnabled(pin_block, i) != flags[static_cast<std::size_t>(i)])
+        scene_.setElementEnabled(pin_block, i, flags[static_cast<std::size_t>(i)]);
+  }
   backend_.elementsChanged();
   const double one = 1.0;
   for (const auto& [vertex, k] : delta) {

@@ -3,9 +3,11 @@
 // flags and the pin set, each validated before anything changes, with L and its factors
 // following the changed weights, by rank updates or, past a size, by a new assembly and
 // factorization; and the same changes when a checkpoint is restored. The driver books the jump
-// of H these cause as an event; the contact set's changes are ContactResolver's.
+// of H these cause as an event; the contact set's changes are ContactResolver's. A batch changes
+// one scene's elements through the same code (InputScope: its indices and messages).
 #include "backend.hpp"
 #include "integrator/checkpoint.hpp"
+#include "integrator/input_scope.hpp"
 #include "solver/global_system.hpp"
 
 #include <stabint/types.hpp>
@@ -19,13 +21,16 @@ class SceneData;
 
 class ElementChanges {
  public:
-  ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend);
+  /// Element indices and messages are the scope's (the whole scene by default).
+  ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend, InputScope scope = {});
 
   /// The block of an element kind, by the type's identifier (the names agree by construction);
   /// InvalidInputError for a value that is no ElementKind or a kind without a type.
   int block(ElementKind kind) const;
-  /// InvalidInputError, naming `call`, for an element index out of the block's range.
+  /// InvalidInputError, naming `call`, for an element index out of the scope's range of the block.
   void checkIndex(int block, int index, const char* call) const;
+  /// Whether element `index` of `kind` is enabled (elementEnabled).
+  bool enabled(ElementKind kind, int index) const;
 
   /// setElementStiffness (`stiffness` given) or setElementEnabled (`enabled`) of `indices`:
   /// everything is validated before L changes; a system that does not factor puts the old
@@ -34,8 +39,10 @@ class ElementChanges {
 
   /// A new pin set (validated first: nothing changes when it throws): the element blocks and
   /// the backends follow, and the factors get one rank-1 update per particle whose pin
-  /// stiffness changed.
-  void changePins(const std::vector<Pin>& pins);
+  /// stiffness changed. `inserted`: the index of a pin inserted before others (a grab in a
+  /// batch's scene that is not the last), whose ramps and enabled flags move with their pins;
+  /// -1 when every pin keeps its index.
+  void changePins(const std::vector<Pin>& pins, int inserted = -1);
 
   /// Every element's stiffness and enabled flag, into a checkpoint.
   void save(CheckpointData& d) const;
@@ -53,6 +60,7 @@ class ElementChanges {
   SceneData& scene_;
   GlobalSystem& system_;
   Backend& backend_;
+  InputScope scope_;
   bool laplacian_from_scene_ = false;  // a change since the last assembly was too large to update
 };
 

@@ -6,27 +6,28 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 
 namespace stabint {
 
-FrameInput::FrameInput(SceneData& scene, double time_step, double limit)
-    : scene_(scene), time_step_(time_step), limit_(limit) {}
+FrameInput::FrameInput(SceneData& scene, double time_step, double limit, InputScope scope)
+    : scene_(scene), time_step_(time_step), limit_(limit), scope_(std::move(scope)) {}
 
 void FrameInput::checkRows(const Eigen::MatrixX3d& m, const char* field) const {
-  validation::checkInputRows(m, scene_.numParticles(), field, limit_);
+  validation::checkInputRows(m, scope_.particles(scene_).count, scope_.where() + field, limit_);
 }
 
 void FrameInput::checkPin(int pin) const {
-  const int pins = static_cast<int>(scene_.scene().pins.size());
+  const int pins = scope_.pins(scene_).count;
   if (pin < 0 || pin >= pins)
-    throw InvalidInputError("pin " + std::to_string(pin) + " out of range (the scene has " + std::to_string(pins) +
-                            " pins)");
+    throw InvalidInputError(scope_.where() + "pin " + std::to_string(pin) + " out of range (the scene has " +
+                            std::to_string(pins) + " pins)");
 }
 
 void FrameInput::checkCollider(int collider) const {
-  const int colliders = static_cast<int>(scene_.scene().colliders.size());
+  const int colliders = scope_.colliders(scene_).count;
   if (collider < 0 || collider >= colliders)
-    throw InvalidInputError("collider " + std::to_string(collider) + " out of range (the scene has " +
+    throw InvalidInputError(scope_.where() + "collider " + std::to_string(collider) + " out of range (the scene has " +
                             std::to_string(colliders) + " colliders)");
 }
 
@@ -35,55 +36,84 @@ void FrameInput::checkCollider(int collider) const {
 void FrameInput::checkColliderVector(int collider, const Eigen::Vector3d& value, const char* what) const {
   checkCollider(collider);
   if (!value.allFinite() || !(value.cwiseAbs().maxCoeff() <= validation::kMaxMagnitude))
-    throw InvalidInputError("collider " + std::to_string(collider) + ": " + what +
+    throw InvalidInputError(scope_.where() + "collider " + std::to_string(collider) + ": " + what +
                             " is not finite or exceeds 1e150 in magnitude");
 }
 
 void FrameInput::setPinTarget(int pin, const Eigen::Vector3d& q, double t) {
   checkPin(pin);
-  validation::checkInputVector(q, "pin " + std::to_string(pin) + ": target", limit_);
-  scene_.rampPinTarget(pin, q, t, t + time_step_);
+  validation::checkInputVector(q, scope_.where() + "pin " + std::to_string(pin) + ": target", limit_);
+  scene_.rampPinTarget(scope_.pins(scene_).first + pin, q, t, t + time_step_);
 }
 
 void FrameInput::setColliderPosition(int collider, const Eigen::Vector3d& position, double t) {
   checkColliderVector(collider, position, "position");
-  scene_.rampColliderPosition(collider, position, t, t + time_step_);
+  scene_.rampColliderPosition(scope_.colliders(scene_).first + collider, position, t, t + time_step_);
 }
 
 void FrameInput::setColliderVelocity(int collider, const Eigen::Vector3d& velocity, double t) {
   checkColliderVector(collider, velocity, "velocity");
-  scene_.setColliderVelocity(collider, velocity, t);
+  scene_.setColliderVelocity(scope_.colliders(scene_).first + collider, velocity, t);
 }
 
 void FrameInput::setExternalForces(const Eigen::MatrixX3d& forces, double t) {
   checkRows(forces, "external forces");
-  scene_.rampUserForces(forces, t, t + time_step_);
+  const InputRange rows = scope_.particles(scene_);
+  if (rows.count == scene_.numParticles()) {
+    scene_.rampUserForces(forces, t, t + time_step_);
+    return;
+  }
+  // One ramp holds every particle's forces: the other rows go on to the values they were given
+  // (a scene set earlier in this frame keeps its ramp over the same step).
+  const SceneData::Ramp& current = scene_.userForces();
+  Eigen::MatrixX3d all = current.active ? current.end : Eigen::MatrixX3d::Zero(scene_.numParticles(), 3);
+  all.middleRows(rows.first, rows.count) = forces;
+  scene_.rampUserForces(all, t, t + time_step_);
+}
+
+Eigen::Vector3d FrameInput::pinTarget(int pin, double t) const {
+  checkPin(pin);
+  return scene_.pinTarget(scope_.pins(scene_).first + pin, t);
+}
+
+Eigen::Vector3d FrameInput::colliderPosition(int collider, double t) const {
+  checkCollider(collider);
+  return scene_.colliderPosition(scope_.colliders(scene_).first + collider, t);
+}
+
+Eigen::Vector3d FrameInput::colliderVelocity(int collider, double t) const {
+  checkCollider(collider);
+  return scene_.colliderVelocity(scope_.colliders(scene_).first + collider, t);
 }
 
 std::vector<Pin> FrameInput::pinsAfterGrab(int vertex, double stiffness, const Eigen::MatrixX3d& x) const {
-  if (vertex < 0 || vertex >= scene_.numParticles())
-    throw InvalidInputError("grab: vertex " + std::to_string(vertex) + " out of range (the scene has " +
-                            std::to_string(scene_.numParticles()) + " particles)");
+  const InputRange particles = scope_.particles(scene_);
+  if (vertex < 0 || vertex >= particles.count)
+    throw InvalidInputError(scope_.where("grab") + "vertex " + std::to_string(vertex) +
+                            " out of range (the scene has " + std::to_string(particles.count) + " particles)");
   if (!std::isfinite(stiffness) || !(stiffness > 0.0) || !(stiffness <= validation::kMaxMagnitude))
-    throw InvalidInputError("grab: stiffness " + validation::cat(stiffness) + " must be finite, > 0 and at most " +
-                            validation::cat(validation::kMaxMagnitude));
+    throw InvalidInputError(scope_.where("grab") + "stiffness " + validation::cat(stiffness) +
+                            " must be finite, > 0 and at most " + validation::cat(validation::kMaxMagnitude));
   std::vector<Pin> pins = scene_.scene().pins;
   Pin handle;
-  handle.vertex = vertex;
+  handle.vertex = particles.first + vertex;
   handle.stiffness = stiffness;
-  handle.target.position = x.row(vertex).transpose();
-  pins.push_back(handle);
+  handle.target.position = x.row(handle.vertex).transpose();
+  const InputRange own = scope_.pins(scene_);
+  pins.insert(pins.begin() + (own.first + own.count), handle);
   return pins;
 }
 
 std::vector<Pin> FrameInput::pinsAfterRelease(int pin, double t) const {
   checkPin(pin);
+  const int i = scope_.pins(scene_).first + pin;
   std::vector<Pin> pins = scene_.scene().pins;
-  if (pins[pin].stiffness == 0.0)
-    throw InvalidInputError("release: pin " + std::to_string(pin) + " is already released (stiffness 0)");
-  pins[pin].stiffness = 0.0;
-  pins[pin].target = PinTarget{};  // a released pin does no work
-  pins[pin].target.position = scene_.pinTarget(pin, t);
+  if (pins[i].stiffness == 0.0)
+    throw InvalidInputError(scope_.where("release") + "pin " + std::to_string(pin) +
+                            " is already released (stiffness 0)");
+  pins[i].stiffness = 0.0;
+  pins[i].target = PinTarget{};  // a released pin does no work
+  pins[i].target.position = scene_.pinTarget(i, t);
   return pins;
 }
 

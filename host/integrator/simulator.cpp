@@ -417,11 +417,7 @@ void Simulator::setElementEnabled(ElementKind kind, int index, bool enabled) {
 void Simulator::setElementEnabled(ElementKind kind, const std::vector<int>& indices, bool enabled) {
   impl_->changeElements(kind, indices, nullptr, enabled);
 }
-bool Simulator::elementEnabled(ElementKind kind, int index) const {
-  const int block = impl_->elements.block(kind);
-  impl_->elements.checkIndex(block, index, "elementEnabled");
-  return impl_->scene.elementEnabled(block, index);
-}
+bool Simulator::elementEnabled(ElementKind kind, int index) const { return impl_->elements.enabled(kind, index); }
 
 Simulator::Simulator(const Scene& scene, const SimulatorOptions& options)
     : impl_(reportingOutOfMemory("Simulator", [&] { return std::make_unique<Impl>(scene, options); })) {}
@@ -452,10 +448,7 @@ std::string Simulator::backendDescription() const {
 void Simulator::setPinTarget(int pin, const Eigen::Vector3d& target) {
   impl_->input.setPinTarget(pin, target, impl_->t);
 }
-Eigen::Vector3d Simulator::pinTarget(int pin) const {
-  impl_->input.checkPin(pin);
-  return impl_->scene.pinTarget(pin, impl_->t);
-}
+Eigen::Vector3d Simulator::pinTarget(int pin) const { return impl_->input.pinTarget(pin, impl_->t); }
 void Simulator::setExternalForces(const Eigen::MatrixX3d& forces) { impl_->input.setExternalForces(forces, impl_->t); }
 void Simulator::setColliderPosition(int collider, const Eigen::Vector3d& position) {
   impl_->input.setColliderPosition(collider, position, impl_->t);
@@ -464,12 +457,10 @@ void Simulator::setColliderVelocity(int collider, const Eigen::Vector3d& velocit
   impl_->input.setColliderVelocity(collider, velocity, impl_->t);
 }
 Eigen::Vector3d Simulator::colliderPosition(int collider) const {
-  impl_->input.checkCollider(collider);
-  return impl_->scene.colliderPosition(collider, impl_->t);
+  return impl_->input.colliderPosition(collider, impl_->t);
 }
 Eigen::Vector3d Simulator::colliderVelocity(int collider) const {
-  impl_->input.checkCollider(collider);
-  return impl_->scene.colliderVelocity(collider, impl_->t);
+  return impl_->input.colliderVelocity(collider, impl_->t);
 }
 void Simulator::setState(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   impl_->setState(positions, velocities);

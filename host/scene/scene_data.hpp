@@ -136,6 +136,8 @@ class SceneData final : public RunningScene {
     std::vector<ColliderMotion> colliders;  // one per collider; empty: the scene's laws
   };
   ForcingState forcingState() const { return ForcingState{pin_ramps_, user_forces_, collider_motion_}; }
+  /// The user's forces' ramp alone (inactive before the first rampUserForces).
+  const Ramp& userForces() const { return user_forces_; }
   /// Replaces the forcing with a saved one of the same scene (sizes checked by the caller).
   void setForcingState(const ForcingState& state);
 

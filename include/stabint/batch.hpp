@@ -30,13 +30,27 @@ struct BatchStepReport {
 /// block-diagonal factor for all (no element couples two scenes), and per scene its own energies,
 /// target H*, blend decisions, forcing, damping and refusals, so that every scene follows the
 /// trajectory its own Simulator would (to the round-off of the factor's ordering and, with
-/// colliders, of the contact set's updates of the one factor: docs/batch_design.md, "Colliders").
+/// colliders, pin or element changes, of the updates of the one factor: docs/batch_design.md,
+/// "Colliders" and "Per-scene input").
 ///
 /// Colliders: each scene's colliders act on that scene's particles only, wherever the scenes lie
-/// in space, with the scene's own collider motion (Collider::velocity); its contact set, friction
-/// and final projection are its own Simulator's, and what friction and the projection remove
-/// leaves that scene's H* only. (Moving a collider at run time, as
-/// Simulator::setColliderPosition does, is not in the batch yet.)
+/// in space, with the scene's own collider motion (Collider::velocity, or setColliderPosition and
+/// setColliderVelocity); its contact set, friction and final projection are its own Simulator's,
+/// and what friction and the projection remove leaves that scene's H* only.
+///
+/// Per-frame input (docs/method.md, "Per-frame input"): every input call of Simulator (but
+/// setPositions and setVelocities: setState; and setIterations: the options are the batch's), with
+/// a leading `scene` argument and the scene's own indices (its particles, pins, colliders and
+/// elements, numbered from 0 as in the scene passed in). Each has the semantics of Simulator's
+/// call on that scene alone: ramps over the next step, events, the forcing rule, all booked in
+/// that scene's H* only; pin and element changes update that scene's block of the one factor as
+/// Simulator updates its own (rank updates, or a refactorization past a size). Bad input (a
+/// scene or index out of range, a value Simulator refuses) is an InvalidInputError naming the
+/// call, the scene and the field or index ("grab: scene 2: vertex 40 out of range ..."), and
+/// changes nothing. A scene that is inactive after a refused step takes input as an active one
+/// does: ramps follow the batch's time(), events are booked in its H*, and it acts on all of it
+/// once setState reactivates it (so a sweep can, say, soften an exploded scene before restarting
+/// it); the getters report values at the batch's time().
 ///
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
 /// scene valid and with the same gravity, a backend that computes per-scene energies (the CPU
@@ -100,10 +114,51 @@ class BatchSimulator {
   /// Refused for BDF2 (whose restart would take every scene back to a BE step). Bad input:
   /// InvalidInputError naming the scene, nothing changed.
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
-  /// Pin `pin` of scene `scene` (its index in that scene's list) moves its target linearly to
-  /// `target` over the next step and stays there, as Simulator::setPinTarget: the work is booked
-  /// by the forcing rule in that scene's H* only.
+  /// Pin `pin` of scene `scene` (its index in that scene's list, grabbed pins included) moves its
+  /// target linearly to `target` over the next step and stays there, as Simulator::setPinTarget:
+  /// the work is booked by the forcing rule in that scene's H* only.
   void setPinTarget(int scene, int pin, const Eigen::Vector3d& target);
+  /// Current target of a pin of scene `scene`, as Simulator::pinTarget.
+  Eigen::Vector3d pinTarget(int scene, int pin) const;
+  /// Scene `scene`'s per-particle external forces (`n_s by 3`), as Simulator::setExternalForces:
+  /// ramped over the next step, persisting until the next call, booked by the forcing rule in that
+  /// scene's H* only. The batch keeps one ramp for all particles, so another scene's forces, when
+  /// set in the same frame, are evaluated within the step as `(1 - s) f + s f`: equal to its
+  /// own Simulator's to round-off, not bit for bit.
+  void setExternalForces(int scene, const Eigen::MatrixX3d& forces);
+  /// Collider `collider` of scene `scene` (its index in that scene's list) translates to
+  /// `position` over the next step, as Simulator::setColliderPosition.
+  void setColliderPosition(int scene, int collider, const Eigen::Vector3d& position);
+  /// Collider `collider` of scene `scene` moves on with `velocity`, as
+  /// Simulator::setColliderVelocity.
+  void setColliderVelocity(int scene, int collider, const Eigen::Vector3d& velocity);
+  /// Where collider `collider` of scene `scene` is at time() and its velocity, as
+  /// Simulator::colliderPosition and Simulator::colliderVelocity.
+  ///@{
+  Eigen::Vector3d colliderPosition(int scene, int collider) const;
+  Eigen::Vector3d colliderVelocity(int scene, int collider) const;
+  ///@}
+
+  /// Attaches a handle to particle `vertex` of scene `scene`, as Simulator::grab: a new pin,
+  /// returned as its index in that scene's pins (the scene's last; the later scenes' pins keep
+  /// their own indices). The factor's block of that scene gets the rank-1 update.
+  int grab(int scene, int vertex, double stiffness);
+  /// Detaches pin `pin` of scene `scene`, as Simulator::release: an event of that scene.
+  void release(int scene, int pin);
+  /// Element `index` (or `indices`) of `kind` of scene `scene` (its index in that scene's list)
+  /// gets `stiffness`, as Simulator::setElementStiffness: an event of that scene, its block of
+  /// the factor updated.
+  ///@{
+  void setElementStiffness(int scene, ElementKind kind, int index, double stiffness);
+  void setElementStiffness(int scene, ElementKind kind, const std::vector<int>& indices, double stiffness);
+  ///@}
+  /// Disables or enables elements of scene `scene`, as Simulator::setElementEnabled.
+  ///@{
+  void setElementEnabled(int scene, ElementKind kind, int index, bool enabled);
+  void setElementEnabled(int scene, ElementKind kind, const std::vector<int>& indices, bool enabled);
+  ///@}
+  /// Whether element `index` of `kind` of scene `scene` is enabled.
+  bool elementEnabled(int scene, ElementKind kind, int index) const;
 
  private:
   struct Impl;

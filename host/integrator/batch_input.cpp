@@ -1,0 +1,171 @@
+// The batch's per-frame input and element changes (docs/method.md, "Batches"): each call is
+// Simulator's (FrameInput, ElementChanges) on one scene's segment, with the scene's indices, and
+// what it books is booked in that scene's H* only.
+#include "integrator/batch_simulator.hpp"
+
+#include "elements/element_type.hpp"
+#include "integrator/backend_choice.hpp"
+#include "integrator/integrator_steps.hpp"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace stabint {
+
+InputScope BatchSimulator::Impl::scope(int scene, const char* call) const {
+  checkScene(scene, call);
+  return InputScope(segments_[std::size_t(scene)], scene, call);
+}
+
+FrameInput BatchSimulator::Impl::frameInput(int scene, const char* call) {
+  return FrameInput(data_, options_.time_step, inputLimit(choice_), scope(scene, call));
+}
+
+ElementChanges BatchSimulator::Impl::elementChanges(int scene, const char* call) {
+  return ElementChanges(data_, system_, *backend_, scope(scene, call));
+}
+
+void BatchSimulator::Impl::bookEvent(int scene, double h_before) {
+  PerScene& p = per_scene_[std::size_t(scene)];
+  const double event = p.kinetic + p.potential.total() - h_before;
+  p.target += event;
+  p.pending_event_energy += event;
+}
+
+void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+  const FrameInput input = frameInput(scene, "setState");
+  input.checkRows(positions, "positions");
+  input.checkRows(velocities, "velocities");
+  if (options_.integrator == Integrator::BDF2)
+    throw InvalidInputError(scope(scene, "setState").where() +
+                            "BDF2 would restart every scene of the batch with a BE step; not supported in a batch yet");
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  PerScene& p = per_scene_[std::size_t(scene)];
+  const double h_before = p.kinetic + p.potential.total();
+  // The other scenes' rows of kV stay what they are (v_slot_, which may differ from their host
+  // copies by round-off, as a Simulator's do).
+  x_.middleRows(seg.first_particle, seg.num_particles) = positions;
+  v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;
+  backend_->write(kX, x_);
+  backend_->write(kV, v_slot_);
+  // The slots may hold less precision (a float device): the host copies are what they hold.
+  backend_->readBoth(kX, x_, kV, v_slot_);
+  v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
+  // The scene's contact set follows, so that the event books the contact energy of the new
+  // positions; the potential is evaluated below anyway.
+  contact_.updateSet(t_, x_, v_, {contactPart(std::size_t(scene), 0)});
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kX, t_, potentials);
+  p.potential = potentials[std::size_t(scene)];
+  p.kinetic = kineticEnergy(scene, v_);
+  bookEvent(scene, h_before);
+  if (!p.active) {
+    p.active = true;
+    p.time = t_;
+  }
+}
+
+void BatchSimulator::Impl::setExternalForces(int scene, const Eigen::MatrixX3d& forces) {
+  frameInput(scene, "setExternalForces").setExternalForces(forces, t_);
+  PerScene& p = per_scene_[std::size_t(scene)];
+  p.has_user_forces = true;
+  p.momentum_conserved = momentumConserved(scenes_[std::size_t(scene)], p.has_user_forces);
+}
+
+template <typename Change>
+void BatchSimulator::Impl::changeElementsAsEvent(int scene, const char* call, Change&& change) {
+  checkScene(scene, call);
+  const PerScene& p = per_scene_[std::size_t(scene)];
+  const double h_before = p.kinetic + p.potential.total();
+  change();
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kX, t_, potentials);
+  per_scene_[std::size_t(scene)].potential = potentials[std::size_t(scene)];
+  bookEvent(scene, h_before);
+  pinsChanged(scene);
+}
+
+int BatchSimulator::Impl::grab(int scene, int vertex, double stiffness) {
+  const InputRange own = scope(scene, "grab").pins(data_);
+  const std::vector<Pin> pins = frameInput(scene, "grab").pinsAfterGrab(vertex, stiffness, x_);
+  changeElementsAsEvent(scene, "grab", [&] {
+    elementChanges(scene, "grab").changePins(pins, own.first + own.count);
+    // The new pin ends the scene's pin range: the later scenes' ranges move on by one.
+    const std::size_t pin_block = std::size_t(data_.blockIndex(pinElementType()));
+    ++segments_[std::size_t(scene)].num_elements[pin_block];
+    for (std::size_t s = std::size_t(scene) + 1; s < segments_.size(); ++s) ++segments_[s].first_element[pin_block];
+    backend_->setSegments(segments_);
+  });
+  return own.count;
+}
+
+void BatchSimulator::Impl::release(int scene, int pin) {
+  const std::vector<Pin> pins = frameInput(scene, "release").pinsAfterRelease(pin, t_);
+  changeElementsAsEvent(scene, "release", [&] { elementChanges(scene, "release").changePins(pins); });
+}
+
+void BatchSimulator::Impl::changeElements(int scene, ElementKind kind, const std::vector<int>& indices,
+                                          const double* stiffness, bool enabled) {
+  const char* call = stiffness ? "setElementStiffness" : "setElementEnabled";
+  changeElementsAsEvent(scene, call, [&] { elementChanges(scene, call).change(kind, indices, stiffness, enabled); });
+}
+
+void BatchSimulator::Impl::pinsChanged(int scene) {
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  const std::size_t pin_block = std::size_t(data_.blockIndex(pinElementType()));
+  const std::vector<Pin>& all = data_.scene().pins;
+  Scene& own = scenes_[std::size_t(scene)];
+  own.pins.assign(all.begin() + seg.first_element[pin_block],
+                  all.begin() + seg.first_element[pin_block] + seg.num_elements[pin_block]);
+  for (Pin& pin : own.pins) pin.vertex -= seg.first_particle;
+  PerScene& p = per_scene_[std::size_t(scene)];
+  p.momentum_conserved = momentumConserved(own, p.has_user_forces);
+}
+
+// ---- the public class's input ----------------------------------------------------------------
+
+void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+  impl_->setState(scene, positions, velocities);
+}
+void BatchSimulator::setPinTarget(int scene, int pin, const Eigen::Vector3d& target) {
+  impl_->frameInput(scene, "setPinTarget").setPinTarget(pin, target, impl_->t_);
+}
+Eigen::Vector3d BatchSimulator::pinTarget(int scene, int pin) const {
+  return impl_->frameInput(scene, "pinTarget").pinTarget(pin, impl_->t_);
+}
+void BatchSimulator::setExternalForces(int scene, const Eigen::MatrixX3d& forces) {
+  impl_->setExternalForces(scene, forces);
+}
+void BatchSimulator::setColliderPosition(int scene, int collider, const Eigen::Vector3d& position) {
+  impl_->frameInput(scene, "setColliderPosition").setColliderPosition(collider, position, impl_->t_);
+}
+void BatchSimulator::setColliderVelocity(int scene, int collider, const Eigen::Vector3d& velocity) {
+  impl_->frameInput(scene, "setColliderVelocity").setColliderVelocity(collider, velocity, impl_->t_);
+}
+Eigen::Vector3d BatchSimulator::colliderPosition(int scene, int collider) const {
+  return impl_->frameInput(scene, "colliderPosition").colliderPosition(collider, impl_->t_);
+}
+Eigen::Vector3d BatchSimulator::colliderVelocity(int scene, int collider) const {
+  return impl_->frameInput(scene, "colliderVelocity").colliderVelocity(collider, impl_->t_);
+}
+int BatchSimulator::grab(int scene, int vertex, double stiffness) { return impl_->grab(scene, vertex, stiffness); }
+void BatchSimulator::release(int scene, int pin) { impl_->release(scene, pin); }
+void BatchSimulator::setElementStiffness(int scene, ElementKind kind, int index, double stiffness) {
+  impl_->changeElements(scene, kind, {index}, &stiffness, true);
+}
+void BatchSimulator::setElementStiffness(int scene, ElementKind kind, const std::vector<int>& indices,
+                                         double stiffness) {
+  impl_->changeElements(scene, kind, indices, &stiffness, true);
+}
+void BatchSimulator::setElementEnabled(int scene, ElementKind kind, int index, bool enabled) {
+  impl_->changeElements(scene, kind, {index}, nullptr, enabled);
+}
+void BatchSimulator::setElementEnabled(int scene, ElementKind kind, const std::vector<int>& indices, bool enabled) {
+  impl_->changeElements(scene, kind, indices, nullptr, enabled);
+}
+bool BatchSimulator::elementEnabled(int scene, ElementKind kind, int index) const {
+  return impl_->elementChanges(scene, "elementEnabled").enabled(kind, index);
+}
+
+}  // namespace stabint

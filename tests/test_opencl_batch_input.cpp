@@ -1,0 +1,88 @@
+// Per-frame input of a batch on OpenCL (docs/method.md, "Batches"): the device batch given the
+// same calls as the CPU batch, which follows each scene's own Simulator given them
+// (tests/test_batch_input.cpp), follows it to the cross-backend tolerance.
+#include <stabint/batch.hpp>
+#include <stabint/errors.hpp>
+
+#include "batch_scenes.hpp"
+#include "opencl_batch_support.hpp"
+#include "test_opencl_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace stabint {
+namespace {
+
+using testing::availablePrecisions;
+using testing::BatchCase;
+using testing::batchOptions;
+using testing::crossBackendTolerance;
+using testing::stepBothAndExpectNear;
+
+// Per-frame input of one scene (include/stabint/batch.hpp) on the device as on the CPU batch, which
+// follows each scene's own Simulator given the same calls (tests/test_batch_input.cpp): forces on
+// the cloth, a grab of it (the later scenes' pins move in the pin list) dragged and released, one
+// of its pins disabled, the bar's tets softened, a list of the cloth's springs stiffened (a
+// refactorization), the chain's pin dragged; then the contact batch with a box dragged in one scene
+// and a ground moved in another. Every scene within the cross-backend tolerance of the CPU batch,
+// for the integrators those tests compare across backends.
+TEST(OpenCLBatchSimulator, InputFollowsTheCpuBatch) {
+  const std::vector<Scene> mixed = testing::mixedBatchScenes();
+  const std::vector<Scene> scenes = {mixed[1], mixed[2], mixed[0]};
+  const Scene& cloth = scenes[0];
+  std::vector<int> springs;
+  for (int i = 0; i < 70; ++i) springs.push_back(i);
+  const std::function<void(BatchSimulator&, int)> input = [&](BatchSimulator& batch, int step) {
+    if (step < 20) {
+      Eigen::MatrixX3d f(cloth.numParticles(), 3);
+      for (int j = 0; j < f.rows(); ++j) f.row(j) << 0.02 * std::sin(0.3 * step + j), 0.01, 0.02 * std::cos(0.2 * step);
+      batch.setExternalForces(0, f);
+    }
+    batch.setPinTarget(2, 0, scenes[2].pins[0].target.position + Eigen::Vector3d(0.003 * step, 0.0, 0.0));
+    if (step == 3) batch.setElementEnabled(0, ElementKind::Pin, 1, false);
+    if (step == 5) {
+      EXPECT_EQ(batch.grab(0, 12, 5e2), 2);
+    }
+    if (step > 5 && step < 20)
+      batch.setPinTarget(0, 2, cloth.positions.row(12).transpose() + Eigen::Vector3d(0.0, 0.01 * step, 0.0));
+    if (step == 8)
+      batch.setElementStiffness(1, ElementKind::Tet, std::vector<int>{0, 1, 2}, 0.5 * scenes[1].tets[0].stiffness);
+    if (step == 12) batch.setElementStiffness(0, ElementKind::Spring, springs, 2.0 * cloth.springs[0].stiffness);
+    if (step == 20) batch.release(0, 2);
+  };
+  const std::vector<Scene> contact = testing::contactBatchScenes();
+  const std::function<void(BatchSimulator&, int)> move_colliders = [&](BatchSimulator& batch, int step) {
+    batch.setColliderPosition(0, 2, contact[0].colliders[2].center + Eigen::Vector3d(0.02 * step, 0.0, 0.0));
+    if (step == 10) batch.setColliderVelocity(2, 0, Eigen::Vector3d(0.0, 0.2, 0.0));
+    if (step == 20) batch.setColliderVelocity(2, 0, Eigen::Vector3d::Zero());
+  };
+  for (Precision precision : availablePrecisions()) {
+    const double tol = crossBackendTolerance(precision);
+    for (Integrator integrator : testing::crossBackendIntegrators(precision)) {
+      SCOPED_TRACE(std::string(precisionName(precision)) + " " + integratorName(integrator));
+      const BatchCase c{integrator, 1.0 / 60.0, 30};
+      for (const bool colliders : {false, true}) {
+        const std::vector<Scene>& batch_scenes = colliders ? contact : scenes;
+        BatchSimulator opencl(batch_scenes, batchOptions(c, BackendKind::OpenCL, precision));
+        BatchSimulator cpu(batch_scenes, batchOptions(c, BackendKind::CpuReference, precision));
+        for (int step = 0; step < c.steps; ++step) {
+          for (BatchSimulator* batch : {&opencl, &cpu}) (colliders ? move_colliders : input)(*batch, step);
+          stepBothAndExpectNear(opencl, cpu, tol, step);
+          for (int s = 0; s < cpu.size(); ++s)
+            EXPECT_LT(testing::relativeError(opencl.positions(s), cpu.positions(s)), tol)
+                << "scene " << s << " step " << step;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace stabint

@@ -3,6 +3,7 @@
 // struct's order (the count is checked by the build, host/c_api/field_tables.cpp), and the C
 // API's reports, converted from the tables, carry the same values as the C++ reports of the same
 // run taken from stabint::Simulator directly.
+#include <stabint/events_io_fields.hpp>
 #include <stabint/stabint.hpp>
 #include <stabint/stabint_c.h>
 
@@ -64,6 +65,15 @@ TEST(FieldTables, ListTheMembersInTheStructsOrder) {
   expectTableInStructOrder<EnergyReport>("EnergyReport");
   expectTableInStructOrder<PhaseTimes>("PhaseTimes");
   expectTableInStructOrder<StepReport>("StepReport");
+  expectTableInStructOrder<PathKey>("PathKey");
+  expectTableInStructOrder<GrabEvent>("GrabEvent");
+  expectTableInStructOrder<ReleaseEvent>("ReleaseEvent");
+  expectTableInStructOrder<ImpulseEvent>("ImpulseEvent");
+  expectTableInStructOrder<ElementEvent>("ElementEvent");
+  expectTableInStructOrder<ColliderEvent>("ColliderEvent");
+  expectTableInStructOrder<ScriptedEvent>("ScriptedEvent");
+  expectTableInStructOrder<ClothMaterial>("ClothMaterial");
+  expectTableInStructOrder<SolidMaterial>("SolidMaterial");
 }
 
 // The fields Python and the C API see, written out here by hand: a field added to a struct and

@@ -3,6 +3,7 @@
 // constructor, properties and repr and from the C conversions of the reports, silently; here it
 // changes the count of members an aggregate initializer takes and fails the build. (Names are
 // checked by the lists' own expansion, `&Struct::name`; types come from the struct.)
+#include <stabint/events_io_fields.hpp>
 #include <stabint/stabint.hpp>
 
 #include <cstddef>
@@ -62,6 +63,15 @@ STABINT_CHECK_STRUCT(OpenCLDeviceInfo)
 STABINT_CHECK_STRUCT(EnergyReport)
 STABINT_CHECK_STRUCT(PhaseTimes)
 STABINT_CHECK_STRUCT(StepReport)
+STABINT_CHECK_STRUCT(PathKey)
+STABINT_CHECK_STRUCT(GrabEvent)
+STABINT_CHECK_STRUCT(ReleaseEvent)
+STABINT_CHECK_STRUCT(ImpulseEvent)
+STABINT_CHECK_STRUCT(ElementEvent)
+STABINT_CHECK_STRUCT(ColliderEvent)
+STABINT_CHECK_STRUCT(ScriptedEvent)
+STABINT_CHECK_STRUCT(ClothMaterial)
+STABINT_CHECK_STRUCT(SolidMaterial)
 #undef STABINT_CHECK_STRUCT
 
 }  // namespace

@@ -1,68 +1,29 @@
 // Scripted events (include/stabint/events.hpp, docs/scene-format.md "Events"): the event
 // structs, EventScript and the scene files with events.
-#include "common.hpp"
+#include "fields.hpp"
 
+#include <array>
 #include <utility>
 
 namespace stabint::py {
 
 using namespace nb::literals;
 
+// A keyframe's position may also be a sequence of three numbers (see bindExtras).
+template <>
+void bindExtras(nb::class_<PathKey>& c) {
+  c.def(
+      "__init__",
+      [](PathKey* k, int frame, const std::array<double, 3>& p) {
+        new (k) PathKey{frame, Eigen::Vector3d(p[0], p[1], p[2])};
+      },
+      "frame"_a, "position"_a, "The same with the position as a sequence of three numbers.");
+}
+
 void bindEvents(nb::module_& m) {
-  nb::class_<PathKey>(m, "PathKey", "A keyframe of a path: the position at the end of step `frame - 1`.")
-      .def(nb::init<>())
-      .def(
-          "__init__",
-          [](PathKey* k, int frame, const Eigen::Vector3d& position) {
-            new (k) PathKey{frame, position};
-          },
-          "frame"_a, "position"_a)
-      .def(
-          "__init__",
-          [](PathKey* k, int frame, const std::array<double, 3>& p) {
-            new (k) PathKey{frame, Eigen::Vector3d(p[0], p[1], p[2])};
-          },
-          "frame"_a, "position"_a, "The same with the position as a sequence of three numbers.")
-      .def_rw("frame", &PathKey::frame)
-      .def_rw("position", &PathKey::position);
-  nb::class_<GrabEvent>(m, "GrabEvent", "Grab particle `vertex` with a handle of `stiffness`, dragged along `path`.")
-      .def(nb::init<>())
-      .def_rw("id", &GrabEvent::id)
-      .def_rw("vertex", &GrabEvent::vertex)
-      .def_rw("stiffness", &GrabEvent::stiffness)
-      .def_rw("path", &GrabEvent::path);
-  nb::class_<ReleaseEvent>(m, "ReleaseEvent", "Release the grab `id`, or (id empty) the last handle on `vertex`.")
-      .def(nb::init<>())
-      .def_rw("id", &ReleaseEvent::id)
-      .def_rw("vertex", &ReleaseEvent::vertex);
-  nb::class_<ImpulseEvent>(m, "ImpulseEvent", "Add `velocity` to the velocities of `vertices`.")
-      .def(nb::init<>())
-      .def_rw("vertices", &ImpulseEvent::vertices)
-      .def_rw("velocity", &ImpulseEvent::velocity);
-  nb::class_<ElementEvent>(m, "ElementEvent", "Set the stiffness and/or the enabled flag of elements of `kind`.")
-      .def(nb::init<>())
-      .def_rw("kind", &ElementEvent::kind)
-      .def_rw("indices", &ElementEvent::indices)
-      .def_rw("stiffness", &ElementEvent::stiffness)
-      .def_rw("enabled", &ElementEvent::enabled);
-  nb::class_<ColliderEvent>(m, "ColliderEvent",
-                            "Move collider `collider` along `path` (Simulator.set_collider_position each frame) or "
-                            "with `velocity` (Simulator.set_collider_velocity); exactly one of the two.")
-      .def(nb::init<>())
-      .def_rw("collider", &ColliderEvent::collider)
-      .def_rw("path", &ColliderEvent::path)
-      .def_rw("velocity", &ColliderEvent::velocity);
-  nb::class_<ScriptedEvent>(m, "ScriptedEvent", "An action applied before step `frame` (0: before the first).")
-      .def(nb::init<>())
-      .def(
-          "__init__",
-          [](ScriptedEvent* e, int frame, const EventAction& action) {
-            new (e) ScriptedEvent{frame, action};
-          },
-          "frame"_a, "action"_a)
-      .def_rw("frame", &ScriptedEvent::frame)
-      .def_rw("action", &ScriptedEvent::action,
-              "A GrabEvent, ReleaseEvent, ImpulseEvent, ElementEvent or ColliderEvent (a copy: assign it back).");
+  // The events from their tables (stabint/events_io_fields.hpp); ScriptedEvent's action brings
+  // every kind of event, and GrabEvent's path PathKey.
+  bindStruct<ScriptedEvent>(m);
   nb::class_<EventScript>(m, "EventScript",
                           "Plays timed events on a simulator: call apply(sim) before every sim.step(). Its progress "
                           "(events applied, handles held, collider paths under way) is not part of a Checkpoint: "

@@ -7,6 +7,7 @@
 
 #include "common.hpp"
 
+#include <stabint/events_io_fields.hpp>
 #include <stabint/field_list.hpp>
 
 #include <cstddef>
@@ -14,6 +15,7 @@
 #include <tuple>
 #include <type_traits>
 #include <utility>
+#include <variant>
 #include <vector>
 
 namespace stabint::py {
@@ -43,6 +45,8 @@ STABINT_PY_STRUCT(Tet, 2, 2, false)
 STABINT_PY_STRUCT(TriangleStrain, 4, 2, false)
 STABINT_PY_STRUCT(BendingHinge, 2, 2, false)
 STABINT_PY_STRUCT(Pin, 2, 3, false)
+STABINT_PY_STRUCT(PathKey, 2, 2, false)
+STABINT_PY_STRUCT(ScriptedEvent, 2, 2, false)
 STABINT_PY_STRUCT(OpenCLDeviceInfo, 0, 0, true)
 STABINT_PY_STRUCT(EnergyReport, 0, 0, true)
 STABINT_PY_STRUCT(PhaseTimes, 0, 0, true)
@@ -68,6 +72,10 @@ template <class T>
 struct IsVector<std::vector<T>> : std::true_type {
   using element = T;
 };
+template <class T>
+struct IsVariant : std::false_type {};
+template <class... T>
+struct IsVariant<std::variant<T...>> : std::true_type {};
 
 template <class T>
 void defineStruct(nb::module_& m);
@@ -83,18 +91,26 @@ void bindStruct(nb::module_& m) {
   defineStruct<T>(m);
 }
 
-// A field of a struct whose type has a table, or a list of them (Scene::springs), needs that
-// class, and the list its opaque list class (SpringList), before the property is made.
+template <class V>
+void bindFieldType(nb::module_& m);
+template <class... T>
+void bindAlternatives(nb::module_& m, std::variant<T...>*) {
+  (bindFieldType<T>(m), ...);
+}
+
+// A field of a struct whose type has a table, or a list or variant of them, needs those classes
+// before its property and its default are made; a list that is opaque (common.hpp: the Scene's,
+// views) also its list class (SpringList); other lists (GrabEvent::path) are Python lists, copies.
 template <class V>
 void bindFieldType(nb::module_& m) {
   if constexpr (HasFieldTable<V>::value) {
     bindStruct<V>(m);
+  } else if constexpr (IsVariant<V>::value) {
+    bindAlternatives(m, static_cast<V*>(nullptr));
   } else if constexpr (IsVector<V>::value) {
     using E = typename IsVector<V>::element;
-    if constexpr (HasFieldTable<E>::value) {
-      static_assert(nb::detail::is_base_caster_v<nb::detail::make_caster<V>>,
-                    "a list of structs is a view into its struct: add its NB_MAKE_OPAQUE to common.hpp");
-      bindStruct<E>(m);
+    bindFieldType<E>(m);
+    if constexpr (HasFieldTable<E>::value && nb::detail::is_base_caster_v<nb::detail::make_caster<V>>) {
       static bool bound = false;
       if (!bound) {
         bound = true;

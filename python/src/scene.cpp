@@ -53,20 +53,9 @@ void bindScene(nb::module_& m) {
       "cloth_grid_triangles", [](int nx, int ny) { return trianglesCopy(clothGridTriangles(nx, ny)); }, "nx"_a, "ny"_a,
       "The (m, 3) triangles of cloth_grid's nx by ny grid.");
 
-  nb::class_<ClothMaterial>(m, "ClothMaterial", "Material of a loaded cloth mesh.")
-      .def(nb::init<>())
-      .def_rw("areal_density", &ClothMaterial::areal_density)
-      .def_rw("stretch_stiffness", &ClothMaterial::stretch_stiffness)
-      .def_rw("bend_stiffness", &ClothMaterial::bend_stiffness)
-      .def_rw("model", &ClothMaterial::model)
-      .def_rw("strain_stiffness", &ClothMaterial::strain_stiffness)
-      .def_rw("strain_min", &ClothMaterial::strain_min)
-      .def_rw("strain_max", &ClothMaterial::strain_max)
-      .def_rw("hinge_stiffness", &ClothMaterial::hinge_stiffness);
-  nb::class_<SolidMaterial>(m, "SolidMaterial", "Material of a loaded tet mesh.")
-      .def(nb::init<>())
-      .def_rw("density", &SolidMaterial::density)
-      .def_rw("stiffness", &SolidMaterial::stiffness);
+  // The materials from their tables (stabint/events_io_fields.hpp), before the loaders' defaults.
+  bindStruct<ClothMaterial>(m);
+  bindStruct<SolidMaterial>(m);
   m.def("load_obj_cloth", &loadObjCloth, "path"_a, "material"_a = ClothMaterial(),
         "A Wavefront OBJ triangle mesh as cloth. Raises FileFormatError (file, line).");
   m.def("load_tetgen", &loadTetGen, "base_path"_a, "material"_a = SolidMaterial(),

@@ -18,6 +18,17 @@ from stabint import ColliderShape
 
 ZERO = [0.0, 0.0, 0.0]
 
+
+class Nested:
+    """The expected fields of a nested struct (Pin.target, ScriptedEvent.action, ...)."""
+
+    def __init__(self, cls, **fields):
+        self.cls, self.fields = cls, fields
+
+
+TARGET = Nested(stabint.PinTarget, position=ZERO, velocity=ZERO, amplitude=ZERO, frequency=0.0)
+GRAB = Nested(stabint.GrabEvent, id="", vertex=0, stiffness=0.0, path=[])
+
 # Each constructible class with a table: its fields and the C++ default of each, in the struct's
 # order.
 DEFAULTS = {
@@ -25,14 +36,35 @@ DEFAULTS = {
     stabint.Tet: dict(vertices=[0, 0, 0, 0], stiffness=0.0),
     stabint.TriangleStrain: dict(vertices=[0, 0, 0], stiffness=0.0, strain_min=1.0, strain_max=1.0),
     stabint.BendingHinge: dict(vertices=[0, 0, 0, 0], stiffness=0.0),
-    stabint.PinTarget: dict(position=ZERO, velocity=ZERO, amplitude=ZERO, frequency=0.0),
-    stabint.Pin: dict(vertex=0, stiffness=0.0,
-                      target=dict(position=ZERO, velocity=ZERO, amplitude=ZERO, frequency=0.0)),
+    stabint.PinTarget: TARGET.fields,
+    stabint.Pin: dict(vertex=0, stiffness=0.0, target=TARGET),
     stabint.ForceField: dict(particles=[], force=ZERO, rate=ZERO, amplitude=ZERO, frequency=0.0),
     stabint.Body: dict(name="", particles=[], damping=0.0),
     stabint.Collider: dict(shape=ColliderShape.Plane, center=ZERO, normal=[0.0, 1.0, 0.0], half_extents=ZERO,
                            end=ZERO, radius=0.0, velocity=ZERO, friction=0.0, stiffness=1e4, first_particle=0,
                            num_particles=-1),
+    stabint.PathKey: dict(frame=0, position=ZERO),
+    stabint.GrabEvent: GRAB.fields,
+    stabint.ReleaseEvent: dict(id="", vertex=-1),
+    stabint.ImpulseEvent: dict(vertices=[], velocity=ZERO),
+    stabint.ElementEvent: dict(kind=stabint.ElementKind.Spring, indices=[], stiffness=None, enabled=None),
+    stabint.ColliderEvent: dict(collider=0, path=[], velocity=None),
+    stabint.ScriptedEvent: dict(frame=0, action=GRAB),
+    stabint.ClothMaterial: dict(areal_density=0.1, stretch_stiffness=1e3, bend_stiffness=1e1,
+                                model=stabint.ClothModel.Springs, strain_stiffness=1e3, strain_min=1.0,
+                                strain_max=1.0, hinge_stiffness=1e-3),
+    stabint.SolidMaterial: dict(density=1000.0, stiffness=1e5),
+}
+
+# Values that changed() cannot make from the default: optional fields (None) and lists of structs.
+CHANGED = {
+    (stabint.ElementEvent, "stiffness"): 2.5,
+    (stabint.ElementEvent, "enabled"): False,
+    (stabint.ColliderEvent, "velocity"): [0.5, 0.0, -1.0],
+    (stabint.ColliderEvent, "path"): [Nested(stabint.PathKey, frame=4, position=[1.0, 2.0, 3.0])],
+    (stabint.GrabEvent, "path"): [Nested(stabint.PathKey, frame=2, position=[0.0, 1.0, 0.0]),
+                                  Nested(stabint.PathKey, frame=7, position=[0.0, 2.0, 0.0])],
+    (stabint.ScriptedEvent, "action"): Nested(stabint.ImpulseEvent, vertices=[1, 2], velocity=[0.0, 0.0, 1.0]),
 }
 
 # The constructors of before the tables keep their positional, required arguments; a Pin's target
@@ -43,6 +75,8 @@ REQUIRED = {
     stabint.TriangleStrain: ["vertices", "stiffness"],
     stabint.BendingHinge: ["vertices", "stiffness"],
     stabint.Pin: ["vertex", "stiffness", "target"],
+    stabint.PathKey: ["frame", "position"],
+    stabint.ScriptedEvent: ["frame", "action"],
 }
 
 # The read-only reports: their fields, and the computed `total`.
@@ -65,39 +99,42 @@ def properties(cls):
     return {name for name, value in vars(cls).items() if isinstance(value, property)}
 
 
-def pin_target(fields):
-    target = stabint.PinTarget()
-    for name, value in fields.items():
-        setattr(target, name, value)
-    return target
-
-
 def python_value(value):
-    # An expected value as the binding takes it: a nested struct's fields as the struct, a vector
-    # of floats as a numpy array.
-    if isinstance(value, dict):
-        return pin_target({name: python_value(v) for name, v in value.items()})
+    # An expected value as the binding takes it: a nested struct as the struct, a vector of floats
+    # as a numpy array (as the properties take them).
+    if isinstance(value, Nested):
+        obj = value.cls()
+        for name, v in value.fields.items():
+            setattr(obj, name, python_value(v))
+        return obj
     if isinstance(value, list) and value and isinstance(value[0], float):
         return np.array(value)
+    if isinstance(value, list):
+        return [python_value(v) for v in value]
     return value
 
 
 def same(actual, expected):
-    if isinstance(expected, dict):  # a nested struct's fields
-        get = dict.get if isinstance(actual, dict) else getattr
-        return all(same(get(actual, name), value) for name, value in expected.items())
-    if isinstance(expected, (str, enum.Enum)):
+    if isinstance(expected, Nested):
+        return type(actual) is expected.cls and all(same(getattr(actual, name), value)
+                                                   for name, value in expected.fields.items())
+    if expected is None or isinstance(expected, (str, bool, enum.Enum)):
         return type(actual) is type(expected) and actual == expected
+    if isinstance(expected, list) and expected and isinstance(expected[0], Nested):
+        return len(actual) == len(expected) and all(same(a, e) for a, e in zip(actual, expected))
     actual, expected = np.asarray(actual), np.asarray(expected)
     return actual.shape == expected.shape and bool(np.all(actual == expected))
 
 
-def changed(value):
+def changed(cls, name, value):
     # A valid value other than `value`, of the same kind.
-    if isinstance(value, dict):
-        return dict(value, position=np.array([1.0, 2.0, 3.0]), frequency=2.5)
+    if (cls, name) in CHANGED:
+        return CHANGED[cls, name]
+    if isinstance(value, Nested):
+        first = next(iter(value.fields))
+        return Nested(value.cls, **dict(value.fields, **{first: changed(value.cls, first, value.fields[first])}))
     if isinstance(value, enum.Enum):
-        return ColliderShape.Sphere
+        return next(v for v in type(value) if v != value)
     if isinstance(value, str):
         return "changed"
     if isinstance(value, bool):
@@ -110,7 +147,7 @@ def changed(value):
         return [2, 5]
     if isinstance(value[0], int):
         return list(range(1, len(value) + 1))
-    return np.array([1.5, -2.0, 3.25])  # vectors are numpy arrays in and out, as the properties take them
+    return [1.5, -2.0, 3.25]
 
 
 @pytest.mark.parametrize("cls", list(DEFAULTS), ids=lambda cls: cls.__name__)
@@ -131,7 +168,7 @@ def test_every_field_round_trips_through_its_keyword_and_its_property(cls):
     fields = DEFAULTS[cls]
     required = {name: python_value(fields[name]) for name in REQUIRED.get(cls, [])}
     for name, value in fields.items():
-        new = changed(value)
+        new = changed(cls, name, value)
         assert not same(new, value), name
         by_keyword = cls(**dict(required, **{name: python_value(new)}))
         assert same(getattr(by_keyword, name), new), name
@@ -155,7 +192,10 @@ def test_the_old_element_constructors_keep_their_arguments():
     assert stabint.BendingHinge([0, 1, 2, 3], 2.0).stiffness == 2.0
     pin = stabint.Pin(4, 100.0, np.array([1.0, 2.0, 3.0]))
     assert pin.vertex == 4 and list(pin.target.position) == [1.0, 2.0, 3.0]
-    for call in (lambda: stabint.Spring(1, 2), lambda: stabint.Tet([0, 1, 2, 3]), lambda: stabint.Pin(4, 100.0),
+    assert list(stabint.PathKey(3, [1.0, 2.0, 3.0]).position) == [1.0, 2.0, 3.0]
+    assert stabint.PathKey(3, np.array([1.0, 2.0, 3.0])).frame == 3
+    assert isinstance(stabint.ScriptedEvent(2, stabint.ReleaseEvent()).action, stabint.ReleaseEvent)
+    for call in (lambda: stabint.ScriptedEvent(2), lambda: stabint.Spring(1, 2), lambda: stabint.Tet([0, 1, 2, 3]), lambda: stabint.Pin(4, 100.0),
                  lambda: stabint.Collider(ColliderShape.Sphere)):  # missing, or keyword-only
         with pytest.raises(TypeError):
             call()

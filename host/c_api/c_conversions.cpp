@@ -105,6 +105,25 @@ void toC(const PhaseTimes& value, stabint_phase_times& out);
                 "the C struct's field " #name " is missing or has another type than the C++ one's"); \
   toC(cpp.name, c.name);
 
+// The other direction: a C report struct has no field its list lacks. A struct made of the
+// list's fields with their C types, in the list's order (plus the C struct's computed `total`),
+// has the C struct's size; a C field the list lacks (which would stay zero) changes the size
+// unless it fits into padding.
+#define STABINT_C_MIRROR_FIELD(name, doc) CType<decltype(Struct::name)> name;
+#define STABINT_C_SAME_SIZE(c_struct, cpp_struct, LIST, extra) \
+  struct Mirror_##c_struct {                                   \
+    using Struct = cpp_struct;                                 \
+    LIST(STABINT_C_MIRROR_FIELD)                               \
+    extra                                                      \
+  };                                                           \
+  static_assert(sizeof(Mirror_##c_struct) == sizeof(c_struct), \
+                #c_struct " has a field that " #LIST " lacks, or its fields in another order");
+STABINT_C_SAME_SIZE(stabint_energy, EnergyReport, STABINT_ENERGY_REPORT_FIELDS, double total;)
+STABINT_C_SAME_SIZE(stabint_phase_times, PhaseTimes, STABINT_PHASE_TIMES_FIELDS, double total;)
+STABINT_C_SAME_SIZE(stabint_step_report, StepReport, STABINT_STEP_REPORT_FIELDS, )
+#undef STABINT_C_MIRROR_FIELD
+#undef STABINT_C_SAME_SIZE
+
 void toC(const PhaseTimes& cpp, stabint_phase_times& c) {
   STABINT_PHASE_TIMES_FIELDS(STABINT_TO_C_REPORT_FIELD)
   c.total = cpp.total();  // computed, not a field

@@ -21,37 +21,46 @@
 namespace stabint::py {
 
 // How a struct's generated class differs from the default: every field a keyword argument with
-// the C++ default, read-write properties.
+// the C++ default, read-write properties. Fields are named by a list "a, b, c", which must be the
+// struct's first fields in order (checked when its constructor is made).
 template <class T>
 struct PyStruct {
-  static constexpr bool read_only = false;      // read-only properties, no constructor (reports)
-  static constexpr std::size_t positional = 0;  // leading fields that may also be passed by position
-  static constexpr std::size_t required = 0;    // leading fields without a default
+  static constexpr bool read_only = false;       // read-only properties, no constructor (reports)
+  static constexpr const char* positional = "";  // leading fields that may also be passed by position
+  static constexpr const char* required = "";    // leading fields without a default
 };
 // The element constructors of before the tables take their fields by position and require them,
 // as they did (Spring(a, b, rest_length, stiffness), TriangleStrain(vertices, stiffness,
 // strain_min=1.0, strain_max=1.0), ...); a Pin's target is a keyword (its position is the
 // third positional argument of the constructor Pin(vertex, stiffness, position)). A new struct
-// takes keywords only, so that a field inserted into it cannot shift the arguments of a call.
+// takes keywords only, so that a field inserted into it cannot shift the arguments of a call;
+// for these, a field inserted among the named ones fails the build.
 #define STABINT_PY_STRUCT(type, positional_, required_, read_only_) \
   template <>                                                       \
   struct PyStruct<type> {                                           \
     static constexpr bool read_only = read_only_;                   \
-    static constexpr std::size_t positional = positional_;          \
-    static constexpr std::size_t required = required_;              \
+    static constexpr const char* positional = positional_;          \
+    static constexpr const char* required = required_;              \
   };
-STABINT_PY_STRUCT(Spring, 4, 4, false)
-STABINT_PY_STRUCT(Tet, 2, 2, false)
-STABINT_PY_STRUCT(TriangleStrain, 4, 2, false)
-STABINT_PY_STRUCT(BendingHinge, 2, 2, false)
-STABINT_PY_STRUCT(Pin, 2, 3, false)
-STABINT_PY_STRUCT(PathKey, 2, 2, false)
-STABINT_PY_STRUCT(ScriptedEvent, 2, 2, false)
-STABINT_PY_STRUCT(OpenCLDeviceInfo, 0, 0, true)
-STABINT_PY_STRUCT(EnergyReport, 0, 0, true)
-STABINT_PY_STRUCT(PhaseTimes, 0, 0, true)
-STABINT_PY_STRUCT(StepReport, 0, 0, true)
+STABINT_PY_STRUCT(Spring, "a, b, rest_length, stiffness", "a, b, rest_length, stiffness", false)
+STABINT_PY_STRUCT(Tet, "vertices, stiffness", "vertices, stiffness", false)
+STABINT_PY_STRUCT(TriangleStrain, "vertices, stiffness, strain_min, strain_max", "vertices, stiffness", false)
+STABINT_PY_STRUCT(BendingHinge, "vertices, stiffness", "vertices, stiffness", false)
+STABINT_PY_STRUCT(Pin, "vertex, stiffness", "vertex, stiffness, target", false)
+STABINT_PY_STRUCT(PathKey, "frame, position", "frame, position", false)
+STABINT_PY_STRUCT(ScriptedEvent, "frame, action", "frame, action", false)
+STABINT_PY_STRUCT(OpenCLDeviceInfo, "", "", true)
+STABINT_PY_STRUCT(EnergyReport, "", "", true)
+STABINT_PY_STRUCT(PhaseTimes, "", "", true)
+STABINT_PY_STRUCT(StepReport, "", "", true)
 #undef STABINT_PY_STRUCT
+
+// The number of names in a list "a, b, c".
+constexpr std::size_t countNames(const char* list) {
+  std::size_t n = *list ? 1 : 0;
+  for (; *list; ++list) n += *list == ',';
+  return n;
+}
 
 // What a struct's class has beyond its fields; specialized where the struct is bound.
 template <class T>
@@ -65,6 +74,27 @@ template <class T, std::size_t I>
 using FieldType = std::decay_t<decltype(std::declval<const T&>().*(fieldOf<T, I>().member))>;
 template <class T>
 constexpr std::size_t kFieldCount = std::tuple_size_v<std::decay_t<decltype(FieldTable<T>::fields)>>;
+
+// Whether `list` ("a, b") names T's first fields, in order.
+template <class T, std::size_t... I>
+constexpr bool leadingNamesAre(const char* list, std::index_sequence<I...>) {
+  const char* names[] = {fieldOf<T, I>().name..., ""};
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < countNames(list); ++i) {
+    if (i >= sizeof...(I)) return false;
+    for (const char* c = names[i]; *c; ++c, ++at)
+      if (list[at] != *c) return false;
+    if (list[at] == ',' && list[at + 1] == ' ')
+      at += 2;
+    else if (list[at] != 0)
+      return false;
+  }
+  return list[at] == 0;
+}
+template <class T>
+constexpr bool leadingNamesAre(const char* list) {
+  return leadingNamesAre<T>(list, std::make_index_sequence<kFieldCount<T>>());
+}
 
 template <class T>
 struct IsVector : std::false_type {};
@@ -162,7 +192,7 @@ void bindProperties(nb::module_& m, nb::class_<T>& c) {
 // The argument of field I, keyword-only from `positional` on.
 template <class T, std::size_t I, class Argument>
 auto inPlace(Argument argument) {
-  if constexpr (I == PyStruct<T>::positional)
+  if constexpr (I == countNames(PyStruct<T>::positional))
     return std::make_tuple(nb::kw_only(), std::move(argument));
   else
     return std::make_tuple(std::move(argument));
@@ -171,7 +201,7 @@ auto inPlace(Argument argument) {
 template <class T, std::size_t I>
 auto argumentOf(const T& defaults) {
   const nb::arg name(pythonName(fieldOf<T, I>().name));
-  if constexpr (I < PyStruct<T>::required)
+  if constexpr (I < countNames(PyStruct<T>::required))
     return inPlace<T, I>(name);
   else
     return inPlace<T, I>(name = defaults.*(fieldOf<T, I>().member));
@@ -180,6 +210,9 @@ auto argumentOf(const T& defaults) {
 // T(field=value, ...): a default-constructed T with the given fields set.
 template <class T, std::size_t... I>
 void bindConstructor(nb::class_<T>& c, std::index_sequence<I...>) {
+  static_assert(leadingNamesAre<T>(PyStruct<T>::positional) && leadingNamesAre<T>(PyStruct<T>::required),
+                "PyStruct names fields that are not the struct's first ones: a field was inserted among them, "
+                "which would shift the arguments of the Python constructor");
   const T defaults{};
   std::apply(
       [&](auto&&... arguments) {

@@ -3,8 +3,10 @@
 /// The scene model: particles, the elements acting on them (springs, tet strain, triangle strain,
 /// bending hinges, pins), gravity, time-dependent force fields, per-body damping and the surface
 /// triangles. Matrices are `#particles by 3`, one row per particle. docs/elements.md has the
-/// energies.
+/// energies. Each struct has its field list, `FIELD(name, "doc")` in the struct's order, from which
+/// the bindings are generated (stabint/field_list.hpp).
 #include <stabint/enum_list.hpp>
+#include <stabint/field_list.hpp>
 
 #include <Eigen/Core>
 
@@ -22,6 +24,16 @@ struct Spring {
   double stiffness = 0.0;    ///< k, N/m
 };
 
+/// The fields of Spring, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_SPRING_FIELDS(FIELD) \
+  FIELD(a, "first particle")         \
+  FIELD(b, "second particle")        \
+  FIELD(rest_length, "m, >= 0")      \
+  FIELD(stiffness, "k, N/m")
+/// @cond
+STABINT_FIELD_TABLE_(Spring, STABINT_SPRING_FIELDS, "E = k/2 (|x_a - x_b| - rest_length)^2.")
+/// @endcond
+
 /// Co-rotated strain of a tetrahedron: E = k V/2 ||F - R||_F^2 with F = Ds Dm^-1 and R the
 /// nearest rotation. The rest shape (Dm, V) is taken from Scene::rest_positions, with
 /// Dm = [x1-x0, x2-x0, x3-x0]; the signed rest volume det(Dm)/6 must be positive.
@@ -29,6 +41,14 @@ struct Tet {
   std::array<int, 4> vertices{0, 0, 0, 0};  ///< particles x0..x3, positively oriented at rest
   double stiffness = 0.0;                   ///< k, Pa
 };
+
+/// The fields of Tet, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_TET_FIELDS(FIELD)                                  \
+  FIELD(vertices, "particles x0..x3, positively oriented at rest") \
+  FIELD(stiffness, "k, Pa")
+/// @cond
+STABINT_FIELD_TABLE_(Tet, STABINT_TET_FIELDS, "Co-rotated strain of a tetrahedron against the scene's rest positions.")
+/// @endcond
 
 /// Membrane strain of a triangle (Projective Dynamics' strain constraint):
 /// E = k A/2 ||F - P||_F^2 with F = Ds Dm^-1 the 3 by 2 deformation gradient against the rest
@@ -44,6 +64,17 @@ struct TriangleStrain {
   double strain_max = 1.0;               ///< >= 1
 };
 
+/// The fields of TriangleStrain, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_TRIANGLE_STRAIN_FIELDS(FIELD)                         \
+  FIELD(vertices, "particles x0, x1, x2")                             \
+  FIELD(stiffness, "k, N/m (energy per rest area per unit strain^2)") \
+  FIELD(strain_min, "in [0, 1]")                                      \
+  FIELD(strain_max, ">= 1")
+/// @cond
+STABINT_FIELD_TABLE_(TriangleStrain, STABINT_TRIANGLE_STRAIN_FIELDS,
+                     "Membrane strain of a triangle, singular values kept in [strain_min, strain_max].")
+/// @endcond
+
 /// Bending across the edge (vertices[0], vertices[1]) shared by the triangles
 /// (vertices[0], vertices[1], vertices[2]) and (vertices[1], vertices[0], vertices[3]):
 /// E = w/2 (|K x| - |K x_rest|)^2 with K x = sum_i K_i x_i the cotangent-weight discrete Laplacian
@@ -56,6 +87,14 @@ struct BendingHinge {
   std::array<int, 4> vertices{0, 0, 0, 0};  ///< the edge's two particles, then the two opposite ones
   double stiffness = 0.0;                   ///< k, J
 };
+
+/// The fields of BendingHinge, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_BENDING_HINGE_FIELDS(FIELD)                               \
+  FIELD(vertices, "the edge's two particles, then the two opposite ones") \
+  FIELD(stiffness, "k, J")
+/// @cond
+STABINT_FIELD_TABLE_(BendingHinge, STABINT_BENDING_HINGE_FIELDS, "Bending across the edge (vertices[0], vertices[1]).")
+/// @endcond
 
 /// Target of a pin: q(t) = position + velocity t + amplitude sin(2 pi frequency t).
 /// A target with zero velocity and zero amplitude is static.
@@ -71,6 +110,17 @@ struct PinTarget {
   bool moving() const;
 };
 
+/// The fields of PinTarget, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_PIN_TARGET_FIELDS(FIELD)                       \
+  FIELD(position, "m, the target at t = 0 (without the sine)") \
+  FIELD(velocity, "m/s")                                       \
+  FIELD(amplitude, "m, of the sine")                           \
+  FIELD(frequency, "Hz")
+/// @cond
+STABINT_FIELD_TABLE_(PinTarget, STABINT_PIN_TARGET_FIELDS,
+                     "q(t) = position + velocity t + amplitude sin(2 pi frequency t).")
+/// @endcond
+
 /// Zero-rest-length spring from a particle to a (possibly moving) target:
 /// E = k/2 |x_vertex - q(t)|^2.
 struct Pin {
@@ -78,6 +128,16 @@ struct Pin {
   double stiffness = 0.0;  ///< k, N/m
   PinTarget target;        ///< q(t)
 };
+
+/// The fields of Pin, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_PIN_FIELDS(FIELD)      \
+  FIELD(vertex, "the pinned particle") \
+  FIELD(stiffness, "k, N/m")           \
+  FIELD(target, "q(t)")
+/// @cond
+STABINT_FIELD_TABLE_(Pin, STABINT_PIN_FIELDS,
+                     "Zero-rest-length spring from a particle to a target: E = k/2 |x - q(t)|^2.")
+/// @endcond
 
 /// A force applied to each listed particle (all particles when the list is empty), in newtons:
 /// f(t) = force + rate t + amplitude sin(2 pi frequency t). Treated as the potential -f(t).x.
@@ -93,6 +153,18 @@ struct ForceField {
   /// True when f changes with time (a non-zero rate, or a sine with non-zero amplitude and frequency).
   bool timeDependent() const;
 };
+
+/// The fields of ForceField, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_FORCE_FIELD_FIELDS(FIELD)                  \
+  FIELD(particles, "where it acts; empty: every particle") \
+  FIELD(force, "N, at t = 0 (without the sine)")           \
+  FIELD(rate, "N/s")                                       \
+  FIELD(amplitude, "N, of the sine")                       \
+  FIELD(frequency, "Hz")
+/// @cond
+STABINT_FIELD_TABLE_(ForceField, STABINT_FORCE_FIELD_FIELDS,
+                     "f(t) = force + rate t + amplitude sin(2 pi frequency t) on `particles` (all when empty).")
+/// @endcond
 
 /// The collider shapes, `X(Enumerator, "name", "doc")` (stabint/enum_list.hpp): the name is the
 /// scene file's "shape", the doc says which fields of Collider describe it. The kernels compare
@@ -147,6 +219,25 @@ struct Collider {
   bool moving() const { return !velocity.isZero(0.0); }
 };
 
+/// The fields of Collider, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_COLLIDER_FIELDS(FIELD)                                                                   \
+  FIELD(shape, "which of the fields below describe it")                                                  \
+  FIELD(center, "plane: a point of it; sphere and box: the center; capsule: one end of its axis")        \
+  FIELD(normal, "plane: the outward normal (length > 0)")                                                \
+  FIELD(half_extents, "box (axis-aligned): half sizes, > 0")                                             \
+  FIELD(end, "capsule: the other end of its axis")                                                       \
+  FIELD(radius, "sphere and capsule, > 0")                                                               \
+  FIELD(velocity, "translation in m/s (0: static)")                                                      \
+  FIELD(friction, "Coulomb coefficient mu >= 0 (0: frictionless)")                                       \
+  FIELD(stiffness, "contact weight per unit of particle mass, 1/s^2 (> 0)")                              \
+  FIELD(first_particle, "the first particle it acts on (with num_particles; a batch sets each scene's)") \
+  FIELD(num_particles, "how many particles from first_particle it acts on; -1 (default): every particle")
+/// @cond
+STABINT_FIELD_TABLE_(
+    Collider, STABINT_COLLIDER_FIELDS,
+    "A rigid obstacle the scene's particles, or a range of them, collide with (docs/method.md, 'Contact').")
+/// @endcond
+
 /// A group of particles damped together by momentum-preserving velocity damping (docs/method.md
 /// section 6): each velocity moves toward the body's rigid velocity by the factor `damping` in
 /// [0, 1] per step. 0 disables it.
@@ -155,6 +246,15 @@ struct Body {
   std::vector<int> particles;  ///< the body's particles
   double damping = 0.0;        ///< in [0, 1] per step
 };
+
+/// The fields of Body, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_BODY_FIELDS(FIELD)                         \
+  FIELD(name, "for reports and scene files; may be empty") \
+  FIELD(particles, "the body's particles")                 \
+  FIELD(damping, "in [0, 1] per step")
+/// @cond
+STABINT_FIELD_TABLE_(Body, STABINT_BODY_FIELDS, "Particles damped together (momentum-preserving), damping in [0, 1].")
+/// @endcond
 
 /// A complete simulation scene. Rows of `rest_positions`, `positions` and `velocities`, and
 /// entries of `masses`, are per particle.
@@ -184,6 +284,27 @@ struct Scene {
   /// Rows of `positions`.
   int numParticles() const { return static_cast<int>(positions.rows()); }
 };
+
+/// The fields of Scene, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_SCENE_FIELDS(FIELD)                                             \
+  FIELD(name, "for reports and scene files; may be empty")                      \
+  FIELD(rest_positions, "(n, 3) rest shape used by tets, triangles and hinges") \
+  FIELD(positions, "(n, 3) initial positions")                                  \
+  FIELD(velocities, "(n, 3) initial velocities")                                \
+  FIELD(masses, "(n,) lumped masses, > 0")                                      \
+  FIELD(springs, "the springs")                                                 \
+  FIELD(tets, "the tets")                                                       \
+  FIELD(triangle_strains, "the triangle strains")                               \
+  FIELD(bending_hinges, "the bending hinges")                                   \
+  FIELD(pins, "the pins")                                                       \
+  FIELD(gravity, "(3,) gravity in m/s^2")                                       \
+  FIELD(force_fields, "time-dependent external forces")                         \
+  FIELD(bodies, "damping groups")                                               \
+  FIELD(colliders, "rigid obstacles")                                           \
+  FIELD(triangles, "(m, 3) surface triangles for rendering and mass lumping; no force of their own")
+/// @cond
+STABINT_FIELD_TABLE_(Scene, STABINT_SCENE_FIELDS, "A simulation scene.")
+/// @endcond
 
 /// Checks a scene: matrix shapes agree, all values finite, masses > 0, indices in range, no
 /// element using a particle twice, stiffness >= 0, rest lengths >= 0, rest volumes > 0, rest

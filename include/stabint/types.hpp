@@ -171,6 +171,21 @@ struct OpenCLDeviceInfo {
   bool fp64 = false;          ///< has cl_khr_fp64 (Precision::Double works)
   bool gpu = false;           ///< CL_DEVICE_TYPE_GPU
 };
+
+/// The fields of OpenCLDeviceInfo, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_OPENCL_DEVICE_INFO_FIELDS(FIELD)                             \
+  FIELD(platform_index, "index for OpenCLOptions.platform")                  \
+  FIELD(device_index, "index within the platform, for OpenCLOptions.device") \
+  FIELD(platform_name, "CL_PLATFORM_NAME")                                   \
+  FIELD(device_name, "CL_DEVICE_NAME")                                       \
+  FIELD(vendor, "CL_DEVICE_VENDOR")                                          \
+  FIELD(fp64, "has cl_khr_fp64 (Precision.Double works)")                    \
+  FIELD(gpu, "CL_DEVICE_TYPE_GPU")
+/// @cond
+STABINT_FIELD_TABLE_(OpenCLDeviceInfo, STABINT_OPENCL_DEVICE_INFO_FIELDS,
+                     "One available OpenCL device, as listed by list_opencl_devices().")
+/// @endcond
+
 /// All devices of all platforms; empty when no OpenCL platform is installed (never throws for
 /// a missing platform).
 std::vector<OpenCLDeviceInfo> listOpenCLDevices();
@@ -251,6 +266,15 @@ struct EnergyReport {
   double total() const { return kinetic + elastic + external; }
 };
 
+/// The fields of EnergyReport, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_ENERGY_REPORT_FIELDS(FIELD)                               \
+  FIELD(kinetic, "K(v), J")                                               \
+  FIELD(elastic, "springs, tets, triangles, hinges, pins and contact, J") \
+  FIELD(external, "gravity and force fields, J")
+/// @cond
+STABINT_FIELD_TABLE_(EnergyReport, STABINT_ENERGY_REPORT_FIELDS, "Energies of a state, in joules.")
+/// @endcond
+
 /// Wall-clock seconds per phase. `local` is the per-element projection, `gather` the per-vertex
 /// right-hand-side assembly, `transfer` host<->device copies, `global` the sparse solves,
 /// `energy` energy reductions, `bookkeeping` everything else of the step.
@@ -266,6 +290,18 @@ struct PhaseTimes {
   /// Adds another report's times, phase by phase.
   PhaseTimes& operator+=(const PhaseTimes& o);
 };
+
+/// The fields of PhaseTimes, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_PHASE_TIMES_FIELDS(FIELD)      \
+  FIELD(local, "s, element projections")       \
+  FIELD(gather, "s, right-hand-side assembly") \
+  FIELD(transfer, "s, host<->device copies")   \
+  FIELD(global, "s, sparse solves")            \
+  FIELD(energy, "s, energy reductions")        \
+  FIELD(bookkeeping, "s, the rest of the step")
+/// @cond
+STABINT_FIELD_TABLE_(PhaseTimes, STABINT_PHASE_TIMES_FIELDS, "Wall-clock seconds per phase of a step.")
+/// @endcond
 
 /// The blend's branches, `X(Enumerator, "name", "doc", C enumerator)`.
 #define STABINT_BLEND_BRANCHES(X)                                                                        \
@@ -314,5 +350,27 @@ struct StepReport {
   int energy_evaluations = 0;  ///< element energy passes (root find included)
   PhaseTimes times;            ///< wall-clock seconds per phase
 };
+
+/// The fields of StepReport, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
+#define STABINT_STEP_REPORT_FIELDS(FIELD)                                                                     \
+  FIELD(step, "index of the step (0 = first)")                                                                \
+  FIELD(time, "time at the end of the step")                                                                  \
+  FIELD(energy, "H of the new state, split by term")                                                          \
+  FIELD(target, "tracked target H* after the step")                                                           \
+  FIELD(forcing, "energy added to H* by time-dependent potentials")                                           \
+  FIELD(damping, "kinetic energy removed by damping (>= 0)")                                                  \
+  FIELD(branch, "what the blend did")                                                                         \
+  FIELD(alpha, "blend weight of the BE partner (0 = pure IM)")                                                \
+  FIELD(velocity_scale, "factor the blend applied to the velocities (1 = none)")                              \
+  FIELD(event_energy, "energy added to H* by set_state/set_positions/set_velocities since the previous step") \
+  FIELD(friction, "kinetic energy friction removed (negative when a moving collider drags particles along)")  \
+  FIELD(contact_projection, "energy the final projection out of the colliders removed (<= 0, added to H*)")   \
+  FIELD(iterations, "local/global iterations of all solves of the step")                                      \
+  FIELD(energy_evaluations, "element energy passes (root find included)")                                     \
+  FIELD(times, "wall-clock seconds per phase")
+/// @cond
+STABINT_FIELD_TABLE_(StepReport, STABINT_STEP_REPORT_FIELDS,
+                     "What one step did (a copy: later steps do not change it).")
+/// @endcond
 
 }  // namespace stabint

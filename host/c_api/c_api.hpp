@@ -1,0 +1,123 @@
+// Shared by the C API's source files (include/stabint/stabint_c.h over the C++ API): the handles'
+// definitions, guarded() and its argument checks, and the conversions between the C structs and
+// enums and the C++ ones (c_conversions.cpp). Every entry point that can fail runs its body
+// through guarded(), which turns every exception into a status code and the thread's last-error
+// message, so that no exception unwinds into C frames.
+#pragma once
+
+#include <stabint/stabint.hpp>
+#include <stabint/stabint_c.h>
+
+#include <new>
+#include <stdexcept>
+#include <string>
+
+struct stabint_scene {
+  stabint::Scene scene;
+};
+struct stabint_simulator {
+  stabint::Simulator sim;
+};
+struct stabint_checkpoint {
+  stabint::Checkpoint checkpoint;
+};
+
+namespace stabint::c_api {
+
+// Raised by the C layer itself for API misuse (NULL handles, short buffers).
+struct ArgumentError {
+  std::string text;
+};
+
+// Records `status` with the message "<class_name>: <text>" (and the step of a refused step) as
+// the thread's last error; returns `status`.
+stabint_status fail(stabint_status status, const char* class_name, const std::string& text, int step = -1);
+
+// Most specific class first: each catch below must precede the catches of its bases.
+template <class Body>
+stabint_status guarded(Body&& body) noexcept {
+  try {
+    body();
+    return STABINT_OK;
+  } catch (const ArgumentError& e) {
+    return fail(STABINT_INVALID_ARGUMENT, "InvalidArgument", e.text);
+  } catch (const EnergyLimitError& e) {
+    return fail(STABINT_ENERGY_LIMIT, "EnergyLimitError", e.what(), e.step());
+  } catch (const NonFiniteStateError& e) {
+    return fail(STABINT_NON_FINITE_STATE, "NonFiniteStateError", e.what(), e.step());
+  } catch (const InvalidInputError& e) {
+    return fail(STABINT_INVALID_INPUT, "InvalidInputError", e.what());
+  } catch (const FileFormatError& e) {
+    return fail(STABINT_FILE_FORMAT, "FileFormatError", e.what());
+  } catch (const NoOpenCLDeviceError& e) {
+    return fail(STABINT_NO_OPENCL_DEVICE, "NoOpenCLDeviceError", e.what());
+  } catch (const KernelBuildError& e) {
+    return fail(STABINT_KERNEL_BUILD, "KernelBuildError", e.what());
+  } catch (const UnsupportedPrecisionError& e) {
+    return fail(STABINT_UNSUPPORTED_PRECISION, "UnsupportedPrecisionError", e.what());
+  } catch (const OpenCLError& e) {
+    return fail(STABINT_OPENCL, "OpenCLError", e.what());
+  } catch (const OutOfMemoryError& e) {
+    return fail(STABINT_OUT_OF_MEMORY, "OutOfMemoryError", e.what());
+  } catch (const Error& e) {
+    return fail(STABINT_ERROR, "Error", e.what());
+  } catch (const std::bad_alloc&) {
+    return fail(STABINT_OUT_OF_MEMORY, "OutOfMemory", "allocation failed");
+  } catch (const std::exception& e) {
+    return fail(STABINT_INTERNAL, "InternalError", e.what());
+  } catch (...) {
+    return fail(STABINT_INTERNAL, "InternalError", "unknown exception");
+  }
+}
+
+template <class T>
+void require(const T* pointer, const char* what) {
+  if (pointer == nullptr) throw ArgumentError{std::string(what) + " is NULL"};
+}
+
+inline void requireCapacity(size_t capacity, size_t needed, const char* what) {
+  if (capacity < needed) {
+    throw ArgumentError{std::string(what) + ": buffer holds " + std::to_string(capacity) + " values, " +
+                        std::to_string(needed) + " needed"};
+  }
+}
+
+// The C enum of each public C++ enum with its count (its values run from 0); c_conversions.cpp
+// checks, from the enum's list, that every C enumerator equals its C++ value, so that a
+// conversion either way is a cast.
+template <class Enum>
+struct CEnum;
+#define STABINT_C_ENUM(cpp_enum, c_enum, LIST)              \
+  template <>                                               \
+  struct CEnum<cpp_enum> {                                  \
+    using Enum = cpp_enum;                                  \
+    using type = c_enum;                                    \
+    static constexpr int count = 0 LIST(STABINT_ENUM_ONE_); \
+  };
+STABINT_C_ENUM(Integrator, stabint_integrator, STABINT_INTEGRATORS)
+STABINT_C_ENUM(BackendKind, stabint_backend, STABINT_BACKENDS)
+STABINT_C_ENUM(Precision, stabint_precision, STABINT_PRECISIONS)
+STABINT_C_ENUM(Acceleration, stabint_acceleration, STABINT_ACCELERATIONS)
+STABINT_C_ENUM(GlobalSolve, stabint_global_solve, STABINT_GLOBAL_SOLVES)
+STABINT_C_ENUM(BlendBranch, stabint_blend_branch, STABINT_BLEND_BRANCHES)
+#undef STABINT_C_ENUM
+
+// Whether a C enum value (any int) is a value of the C++ enum.
+template <class Enum>
+bool isValue(typename CEnum<Enum>::type value) {
+  return value >= 0 && value < CEnum<Enum>::count;
+}
+// The C++ name of a C enum value; NULL for any other int.
+template <class Enum>
+const char* nameOf(typename CEnum<Enum>::type value, const char* (*name)(Enum)) {
+  return isValue<Enum>(value) ? name(static_cast<Enum>(value)) : nullptr;
+}
+
+// The conversions of the structs, generated from their field lists (c_conversions.cpp). A
+// string of the C options points into the C++ options it came from.
+SimulatorOptions fromC(const stabint_simulator_options& c);
+stabint_simulator_options toC(const SimulatorOptions& o);
+stabint_energy toC(const EnergyReport& e);
+stabint_step_report toC(const StepReport& r);
+
+}  // namespace stabint::c_api

@@ -1,0 +1,78 @@
+// The build's check of the field lists (stabint/field_list.hpp): every list names every data
+// member of its struct. A member missing from a list would be missing from Python's keyword
+// constructor, properties and repr and from the C conversions of the reports, silently; here it
+// changes the count of members an aggregate initializer takes and fails the build. (Names are
+// checked by the lists' own expansion, `&Struct::name`; types come from the struct.)
+#include <stabint/events_io_fields.hpp>
+#include <stabint/stabint.hpp>
+
+#include <cstddef>
+#include <tuple>
+#include <utility>
+
+namespace stabint {
+namespace {
+
+struct AnyField {
+  template <class T>
+  operator T() const;  // never called: only the initializer's validity is asked
+};
+
+// Counting members means asking whether T{AnyField, ...} with fewer initializers than members is
+// valid, which clang's -Wmissing-field-initializers reports inside the unevaluated decltype.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+template <class T, class... Args>
+constexpr auto bracesWith(int) -> decltype(void(T{std::declval<Args>()...}), true) {
+  return true;
+}
+template <class T, class... Args>
+constexpr bool bracesWith(...) {
+  return false;
+}
+// The number of members of aggregate T: the most initializers T{...} accepts.
+template <class T, class... Args>
+constexpr std::size_t memberCount() {
+  if constexpr (bracesWith<T, Args..., AnyField>(0))
+    return memberCount<T, Args..., AnyField>();
+  else
+    return sizeof...(Args);
+}
+#pragma GCC diagnostic pop
+
+template <class T>
+constexpr bool listsEveryMember() {
+  return std::tuple_size_v<decltype(FieldTable<T>::fields)> == memberCount<T>();
+}
+
+// The element types come from their list (STABINT_ELEMENT_KINDS), so a new one is checked here
+// without a line of its own.
+#define STABINT_CHECK_KIND(kind, name) \
+  static_assert(listsEveryMember<kind>(), "the field list of " #kind " must name every member of the struct");
+STABINT_ELEMENT_KINDS(STABINT_CHECK_KIND)
+#undef STABINT_CHECK_KIND
+
+#define STABINT_CHECK_STRUCT(type) \
+  static_assert(listsEveryMember<type>(), "the field list of " #type " must name every member of the struct");
+STABINT_CHECK_STRUCT(PinTarget)
+STABINT_CHECK_STRUCT(ForceField)
+STABINT_CHECK_STRUCT(Collider)
+STABINT_CHECK_STRUCT(Body)
+STABINT_CHECK_STRUCT(Scene)
+STABINT_CHECK_STRUCT(OpenCLDeviceInfo)
+STABINT_CHECK_STRUCT(EnergyReport)
+STABINT_CHECK_STRUCT(PhaseTimes)
+STABINT_CHECK_STRUCT(StepReport)
+STABINT_CHECK_STRUCT(PathKey)
+STABINT_CHECK_STRUCT(GrabEvent)
+STABINT_CHECK_STRUCT(ReleaseEvent)
+STABINT_CHECK_STRUCT(ImpulseEvent)
+STABINT_CHECK_STRUCT(ElementEvent)
+STABINT_CHECK_STRUCT(ColliderEvent)
+STABINT_CHECK_STRUCT(ScriptedEvent)
+STABINT_CHECK_STRUCT(ClothMaterial)
+STABINT_CHECK_STRUCT(SolidMaterial)
+#undef STABINT_CHECK_STRUCT
+
+}  // namespace
+}  // namespace stabint

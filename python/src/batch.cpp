@@ -1,0 +1,68 @@
+// BatchSimulator (include/stabint/batch.hpp): many independent scenes stepped together. One
+// method per .def below, in the order of batch.hpp: a new method of the batch is one more .def.
+#include "common.hpp"
+
+#include <array>
+
+namespace stabint::py {
+
+using namespace nb::literals;
+
+void bindBatch(nb::module_& m) {
+  nb::class_<BatchStepReport>(m, "BatchStepReport", "What one BatchSimulator.step did, scene by scene.")
+      .def_ro("scenes", &BatchStepReport::scenes,
+              "One StepReport per scene, as its own Simulator.step would report it (a refused or inactive "
+              "scene's describes its kept state).")
+      .def_ro("refusals", &BatchStepReport::refusals,
+              "Per scene: '' when it stepped, else why its step was refused (the message its own Simulator "
+              "would have raised) or that it is inactive since a refused step.");
+  nb::class_<BatchSimulator>(m, "BatchSimulator",
+                             "Steps many independent scenes with one set of options: one solve and one block-diagonal "
+                             "factor for all, and per scene its own energies, target, blend decisions and refusals "
+                             "(docs/method.md, \"Batches\"). The scenes are validated and copied at construction.")
+      .def(nb::init<const std::vector<Scene>&, const SimulatorOptions&>(), "scenes"_a, "options"_a = SimulatorOptions(),
+           "Raises InvalidInputError naming the scene (\"scene 3: ...\") for a bad scene, scenes with different "
+           "gravity or with colliders, or options a batch does not support (a tolerance stop, Chebyshev or Anderson "
+           "acceleration, CG).")
+      .def(
+          "step", [](BatchSimulator& b) { return b.step(); }, nb::call_guard<nb::gil_scoped_release>(),
+          "Advances every active scene one step and returns the BatchStepReport. Never raises for a scene that "
+          "blows up: its step is refused (report.refusals), its state kept, and it stays inactive until set_state.")
+      .def("__len__", &BatchSimulator::size)
+      .def_prop_ro("size", &BatchSimulator::size, "Number of scenes.")
+      .def("active", &BatchSimulator::active, "scene"_a, "False once a step of the scene was refused.")
+      .def(
+          "positions", [](const BatchSimulator& b, int s) { return rowsCopy(b.positions(s)); }, "scene"_a,
+          nb::rv_policy::move, "(n_s, 3) positions of one scene (a copy).")
+      .def(
+          "velocities", [](const BatchSimulator& b, int s) { return rowsCopy(b.velocities(s)); }, "scene"_a,
+          nb::rv_policy::move, "(n_s, 3) velocities of one scene (a copy).")
+      .def_prop_ro(
+          "all_positions", [](const BatchSimulator& b) { return rowsCopy(b.allPositions()); }, nb::rv_policy::move,
+          "Every scene's positions one after another (a copy); scene s's rows start at first_particle(s).")
+      .def("first_particle", &BatchSimulator::firstParticle, "scene"_a)
+      .def("num_particles", &BatchSimulator::numParticles, "scene"_a)
+      .def_prop_ro("time", nb::overload_cast<>(&BatchSimulator::time, nb::const_), "The batch's time.")
+      .def("scene_time", nb::overload_cast<int>(&BatchSimulator::time, nb::const_), "scene"_a,
+           "Time of the scene's last accepted state.")
+      .def("step_count", &BatchSimulator::stepCount, "scene"_a)
+      .def("target", &BatchSimulator::target, "scene"_a, "H* of the scene.")
+      .def("energy", &BatchSimulator::energy, "scene"_a, "Energies of the scene's current state.")
+      .def("energy_scale", &BatchSimulator::energyScale, "scene"_a, "E_scale of the scene alone.")
+      .def_prop_ro(
+          "options", [](const BatchSimulator& b) { return b.options(); }, "A copy of the options.")
+      .def_prop_ro("backend_description", &BatchSimulator::backendDescription)
+      .def("set_state", &BatchSimulator::setState, "scene"_a, "positions"_a, "velocities"_a,
+           "Replaces one scene's positions and velocities ((n_s, 3) each, finite), booked in that scene's H* "
+           "only; a refused scene steps again. Raises InvalidInputError naming the scene for bad input.")
+      .def(
+          "set_pin_target",
+          [](BatchSimulator& b, int scene, int pin, const std::array<double, 3>& target) {
+            b.setPinTarget(scene, pin, Eigen::Vector3d(target[0], target[1], target[2]));
+          },
+          "scene"_a, "pin"_a, "target"_a,
+          "Pin `pin` of scene `scene` (an index into that scene's pins) moves linearly to `target` (x, y, z) over "
+          "the next step and stays there, as Simulator.set_pin_target: its work is booked in that scene's H* only.");
+}
+
+}  // namespace stabint::py

@@ -1,0 +1,69 @@
+// The scene's classes: the elements and the other parts of a Scene, generated from their field
+// tables (stabint/scene.hpp, through fields.hpp), Scene itself, the builders and the loaders.
+#include "fields.hpp"
+
+namespace stabint::py {
+
+using namespace nb::literals;
+
+// What the scene's structs have beyond their fields (see bindExtras).
+template <>
+void bindExtras(nb::class_<PinTarget>& c) {
+  c.def("at", &PinTarget::at, "t"_a).def("moving", &PinTarget::moving);
+}
+template <>
+void bindExtras(nb::class_<Pin>& c) {
+  c.def(
+      "__init__",
+      [](Pin* p, int vertex, double k, const Eigen::Vector3d& position) {
+        new (p) Pin{vertex, k, PinTarget{}};
+        p->target.position = position;
+      },
+      "vertex"_a, "stiffness"_a, "position"_a, "A static pin at `position`.");
+}
+template <>
+void bindExtras(nb::class_<ForceField>& c) {
+  c.def("at", &ForceField::at, "t"_a);
+}
+template <>
+void bindExtras(nb::class_<Collider>& c) {
+  c.def("moving", &Collider::moving);
+}
+
+void bindScene(nb::module_& m) {
+  nb::class_<Scene> scene(m, "Scene",
+                          "A simulation scene. Array properties return copies (assign to change them); "
+                          "element lists (springs, tets, pins, ...) are views: append to edit the scene.");
+  scene.def(nb::init<>()).def(nb::init<const Scene&>(), "other"_a, "A deep copy.");
+  // Its fields from its table, and with them the classes of the elements and of the other parts
+  // and their lists (SpringList, ...): a new element type's list in the table is all it takes.
+  bindProperties(m, scene);
+  scene.def_prop_ro("num_particles", &Scene::numParticles)
+      .def(
+          "validate", [](const Scene& s) { validateScene(s); },
+          "Raises InvalidInputError naming the first offending element or field.");
+
+  m.def("builtin_scene", &builtinScene, "name"_a, "params_json"_a = "{}", "label"_a = "builtin scene",
+        "A built-in scene ('oscillator', 'chain', 'cloth', 'tetbar') with its builder's parameters as a "
+        "JSON object text; prefer the shortcuts cloth_grid(**params) etc. Raises FileFormatError for an "
+        "unknown name or parameter.");
+  m.def("builtin_scene_names", &builtinSceneNames);
+  m.def("builtin_scene_parameters", &builtinSceneParameters, "name"_a);
+  m.def(
+      "cloth_grid_triangles", [](int nx, int ny) { return trianglesCopy(clothGridTriangles(nx, ny)); }, "nx"_a, "ny"_a,
+      "The (m, 3) triangles of cloth_grid's nx by ny grid.");
+
+  // The materials from their tables (stabint/events_io_fields.hpp), before the loaders' defaults.
+  bindStruct<ClothMaterial>(m);
+  bindStruct<SolidMaterial>(m);
+  m.def("load_obj_cloth", &loadObjCloth, "path"_a, "material"_a = ClothMaterial(),
+        "A Wavefront OBJ triangle mesh as cloth. Raises FileFormatError (file, line).");
+  m.def("load_tetgen", &loadTetGen, "base_path"_a, "material"_a = SolidMaterial(),
+        "A TetGen mesh from <base_path>.node and <base_path>.ele.");
+  m.def("load_medit", &loadMedit, "path"_a, "material"_a = SolidMaterial(), "A Medit .mesh file.");
+  m.def("load_scene_file", &loadSceneFile, "path"_a, "A JSON scene file (docs/scene-format.md), validated.");
+  m.def("save_scene_file", &saveSceneFile, "scene"_a, "path"_a,
+        "Writes the scene as an explicit JSON scene file that load_scene_file reads back exactly.");
+}
+
+}  // namespace stabint::py

@@ -75,8 +75,11 @@ std::vector<const ElementType*> OpenCLBackend<Real>::programTypes() const {
 template <typename Real>
 void OpenCLBackend<Real>::useProgramFor(const std::vector<const ElementType*>& types) {
   if (program_() != nullptr && types == program_types_) return;
-  program_ = ocl::cachedProgram(context_, device_.device, ocl::elementProgramSource(types),
-                                ocl::programOptions(kDouble ? Precision::Double : Precision::Float));
+  // A CPU device runs a group's work-items as loops between barriers: its group sums take one
+  // region instead of a tree of barriers (kernels/reduce.cl).
+  std::string options = ocl::programOptions(kDouble ? Precision::Double : Precision::Float);
+  if (!device_.gpu) options += " -DSTABINT_GROUP_SUM_SERIAL";
+  program_ = ocl::cachedProgram(context_, device_.device, ocl::elementProgramSource(types), options);
   program_types_ = types;
 }
 

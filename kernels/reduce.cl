@@ -1,6 +1,7 @@
 // Deterministic work-group sums: each work-item first adds a fixed subset of the terms (one
 // element in the element pass, a strided subset in mass_dot_partials), then the group adds the work-items' sums with a tree in local
-// memory, with a barrier at every level; the host adds the per-group partials in a fixed order.
+// memory, with a barrier at every level (on a CPU device one work-item adds them: below); the host
+// adds the per-group partials in a fixed order.
 // The local size must be a power of 2; every work-item of the group must call this.
 
 /// Sum of `value` over the work-group (valid in every work-item). `scratch` holds local-size reals.

@@ -144,12 +144,13 @@ void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const Itera
 
 namespace {
 
-// The history's passes are a few multiply-adds per value read, so their speed is that of the
-// dot products' accumulation: Eigen's (two SSE2 accumulators, the library's baseline) waits on
-// its additions' latency. These kernels keep kLanes independent sums, compiled for AVX-512, AVX2
-// and the baseline (the loader picks the widest the machine has), each lane adding its values in
-// index order and the lanes then summed in a fixed tree: the same bits on any machine (the build
-// has no FMA contraction). The updates (q -= a y, d += c s) do Eigen's arithmetic, value by value.
+// The history's passes are a few multiply-adds per value read. Eigen's dot at the library's
+// baseline (two SSE2 sums) waits on its additions' latency; these kernels keep kLanes independent
+// sums, compiled for AVX-512, AVX2 and the baseline (the loader picks the widest the machine has),
+// each lane adding its values in index order and the lanes then summed in a fixed tree: the same
+// bits on any machine (the build has no FMA contraction). The updates (q -= a y, d += c s) do
+// Eigen's arithmetic, value by value. What the passes cost now is memory traffic: the vectors come
+// from the last-level cache (docs/benchmarks.md, "L-BFGS's cost per iteration on the peer cloth").
 #if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(__clang__) && \
     !defined(STABINT_NO_TARGET_CLONES)
 #define STABINT_HISTORY_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))

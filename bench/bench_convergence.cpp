@@ -13,8 +13,22 @@
 // Counters: rms_error [m] (RMS over particles of the distance to the converged run after the
 // last frame), iterations_per_frame (as the steps report them), us_per_iteration (the case's
 // time per frame over its iterations per frame).
+//   solve_phases/<scene>/<solver>/<backend>  one BE solve of 20 iterations from the same state
+//             (the scene's rest positions one step of free fall on), the LocalGlobalSolver driven
+//             directly; per iteration: us_per_iteration, the backend's phase times (local,
+//             global, energy, transfer, ...) and host = the rest (L-BFGS's vector work on the
+//             host, the line search's bookkeeping). What an L-BFGS iteration costs more than a
+//             plain one, phase by phase (docs/benchmarks.md, "L-BFGS's cost per iteration").
 #include "bench_common.hpp"
 
+#include "backend.hpp"
+#include "cpu/cpu_backend.hpp"
+#include "opencl/opencl_backend.hpp"
+#include "scene/scene_data.hpp"
+#include "solver/global_system.hpp"
+#include "solver/local_global.hpp"
+
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <map>
@@ -112,9 +126,83 @@ void runConvergence(benchmark::State& state, const ConvergenceScene& c, Accelera
   }
 }
 
+struct PhaseFixture {
+  enum { kX, kY, kScratch, kSlots };
+  static constexpr double kH = 1.0 / 30.0;
+  PhaseFixture(const Scene& s, BackendChoice choice)
+      : scene(s),
+        data(s),
+        backend(choice == BackendChoice::Cpu
+                    ? makeCpuBackend(data, kSlots)
+                    : makeOpenCLBackend(data, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl)),
+        system(data),
+        solver(*backend, system, kScratch) {
+    y = s.positions;
+    for (Eigen::Index j = 0; j < y.rows(); ++j) y.row(j) += (kH * kH * s.gravity).transpose();
+  }
+  Scene scene;
+  SceneData data;
+  std::unique_ptr<Backend> backend;
+  GlobalSystem system;
+  LocalGlobalSolver solver;
+  Eigen::MatrixX3d y;
+};
+
+void runSolvePhases(benchmark::State& state, const ConvergenceScene& c, Acceleration solver, BackendChoice choice) {
+  if (const std::string why = skipReason(choice); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  PhaseFixture* fixture = nullptr;
+  try {
+    fixture = &cachedFixture<PhaseFixture>("solve_phases/" + c.name + "/" + backendLabel(choice),
+                                           [&] { return std::make_unique<PhaseFixture>(c.make(), choice); });
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  PhaseFixture& f = *fixture;
+  IterationControl control;
+  control.iterations = control.max_iterations = 20;
+  control.acceleration = solver;
+  const double cc = 1.0 / (PhaseFixture::kH * PhaseFixture::kH);
+  auto once = [&] {
+    f.backend->write(PhaseFixture::kY, f.y);
+    f.backend->write(PhaseFixture::kX, f.y);
+    return f.solver.solve(cc, PhaseFixture::kY, PhaseFixture::kX, 0.0, control);
+  };
+  once();  // the factorization, the first launches
+  f.backend->times() = PhaseTimes{};
+  double iterations = 0.0, seconds = 0.0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    iterations += once();
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  const PhaseTimes& t = f.backend->times();
+  auto perIteration = [&](double s) { return 1e6 * s / std::max(iterations, 1.0); };
+  state.counters["us_per_iteration"] = perIteration(seconds);
+  state.counters["local"] = perIteration(t.local);
+  state.counters["global"] = perIteration(t.global);
+  state.counters["energy"] = perIteration(t.energy);
+  state.counters["transfer"] = perIteration(t.transfer + t.gather);
+  state.counters["host"] = perIteration(seconds - t.total());
+  setSizeCounters(state, f.scene);
+}
+
 }  // namespace
 
 void registerConvergenceCases() {
+  for (const ConvergenceScene& c : convergenceScenes())
+    for (const auto& [label, solver] :
+         {std::pair{"plain", Acceleration::None}, std::pair{"lbfgs", Acceleration::LBFGS}})
+      for (BackendChoice backend : allBackends()) {
+        const std::string name = "solve_phases/" + c.name + "/" + label + "/" + backendLabel(backend);
+        const Acceleration s = solver;
+        benchmark::RegisterBenchmark(name.c_str(), [c, s, backend](benchmark::State& state) {
+          runSolvePhases(state, c, s, backend);
+        })->UseRealTime();
+      }
   for (const ConvergenceScene& c : convergenceScenes())
     for (const auto& [label, solver] :
          {std::pair{"plain", Acceleration::None}, std::pair{"anderson", Acceleration::Anderson},

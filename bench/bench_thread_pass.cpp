@@ -7,7 +7,8 @@
 //       buffered  forced: per-element results to buffers, gathered per vertex through the CSR
 //       owned     forced: each thread owns a range of vertices and runs the elements on it
 // <pass>: local (the local step with its right-hand side: plain PD's), local_energy (the same
-// with the energy at x: L-BFGS's local step) or energy (an energy pass: the blend's root finds).
+// with the energy at x), gradient_energy (the force form with the objective's gradient and the
+// energy at x: L-BFGS's local step) or energy (an energy pass: the blend's root finds).
 // Scenes: spring cloths (structural, shear and bending springs) and triangle cloths (triangle
 // strain and bending hinges) of 50 x 50 to 200 x 200 particles, tet bars of 192 to 23,814 tets;
 // positions after 10 BE steps from rest (deformed, as in a run). Every path gives the same
@@ -79,7 +80,7 @@ PassFixture* passFixture(benchmark::State& state, const SceneCase& scene) {
   }
 }
 
-enum class Pass { Local, LocalEnergy, Energy };
+enum class Pass { Local, LocalEnergy, GradientEnergy, Energy };
 
 class PathFor {
  public:
@@ -102,6 +103,7 @@ void runPass(benchmark::State& state, const SceneCase& scene, Pass pass, int thr
     switch (pass) {
       case Pass::Local: f->backend->localStepRhs(kX, kY, kC, kTimeStep, f->rhs, nullptr); break;
       case Pass::LocalEnergy: f->backend->localStepRhs(kX, kY, kC, kTimeStep, f->rhs, &e); break;
+      case Pass::GradientEnergy: f->backend->localStepGradient(kX, kY, kC, kTimeStep, f->rhs, &e); break;
       case Pass::Energy: e = f->backend->potential(kX, kTimeStep); break;
     }
     benchmark::DoNotOptimize(f->rhs.data());
@@ -109,9 +111,10 @@ void runPass(benchmark::State& state, const SceneCase& scene, Pass pass, int thr
   }
   state.counters["elements"] = elementCount(f->scene);
   state.counters["threaded"] = lastPassPath() == ThreadedPassPath::Serial ? 0 : 1;
-  const int flags = pass == Pass::Local         ? kPassProjection
-                    : pass == Pass::LocalEnergy ? kPassProjection | kPassEnergy
-                                                : kPassEnergy;
+  const int flags = pass == Pass::Local            ? kPassProjection
+                    : pass == Pass::LocalEnergy    ? kPassProjection | kPassEnergy
+                    : pass == Pass::GradientEnergy ? kPassForce | kPassEnergy
+                                                   : kPassEnergy;
   const ThreadedPassEstimate est = estimateThreadedPass(f->data, flags, 2);
   state.counters["est_serial_us"] = 1e6 * est.serial;
   state.counters["est_owned_us"] = 1e6 * est.owned;
@@ -183,7 +186,7 @@ void registerThreadPassCases() {
   benchmark::RegisterBenchmark("thread_pass_wake/threads:2", runWake)->UseRealTime()->Unit(benchmark::kMicrosecond);
   for (const SceneCase& scene : passScenes())
     for (auto [pass, label] : {std::pair{Pass::Local, "local"}, std::pair{Pass::LocalEnergy, "local_energy"},
-                               std::pair{Pass::Energy, "energy"}}) {
+                               std::pair{Pass::GradientEnergy, "gradient_energy"}, std::pair{Pass::Energy, "energy"}}) {
       const std::string base = "thread_pass/" + scene.name + "/" + label;
       auto add = [&](const std::string& name, int threads, ThreadedPassPath path) {
         benchmark::RegisterBenchmark(

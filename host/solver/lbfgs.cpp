@@ -144,6 +144,122 @@ void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const Itera
 
 namespace {
 
+// The history's passes are a few multiply-adds per value read. Eigen's dot at the library's
+// baseline (two SSE2 sums) waits on its additions' latency; these kernels keep kLanes independent
+// sums, compiled for AVX-512, AVX2 and the baseline (the loader picks the widest the machine has),
+// each lane adding its values in index order and the lanes then summed in a fixed tree: the same
+// bits on any machine (the build has no FMA contraction). The updates (q -= a y, d += c s) do
+// Eigen's arithmetic, value by value. What the passes cost now is memory traffic: the vectors come
+// from the last-level cache (docs/benchmarks.md, "L-BFGS's cost per iteration on the peer cloth").
+#if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(__clang__) && \
+    !defined(STABINT_NO_TARGET_CLONES)
+#define STABINT_HISTORY_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define STABINT_HISTORY_CLONES
+#endif
+#if defined(STABINT_OMP_SIMD)
+#define STABINT_HISTORY_LANES _Pragma("omp simd")
+#else
+#define STABINT_HISTORY_LANES
+#endif
+
+constexpr int kLanes = 16;
+
+// The lanes' sums in a fixed tree.
+inline double laneSum(const double* acc) {
+  double half[kLanes / 2];
+  for (int l = 0; l < kLanes / 2; ++l) half[l] = acc[l] + acc[l + kLanes / 2];
+  double quarter[kLanes / 4];
+  for (int l = 0; l < kLanes / 4; ++l) quarter[l] = half[l] + half[l + kLanes / 4];
+  return (quarter[0] + quarter[2]) + (quarter[1] + quarter[3]);
+}
+
+// Value i of a pass goes to lane i % kLanes, in both the whole groups and the tail.
+STABINT_HISTORY_CLONES
+double dot(int len, const double* __restrict a, const double* __restrict b) {
+  double acc[kLanes] = {};
+  int i = 0;
+  for (; i + kLanes <= len; i += kLanes)
+    STABINT_HISTORY_LANES for (int l = 0; l < kLanes; ++l) acc[l] += a[i + l] * b[i + l];
+  for (int l = 0; i + l < len; ++l) acc[l] += a[i + l] * b[i + l];
+  return laneSum(acc);
+}
+
+// The new pair: s = x_trial - x, y = g_trial - g, then x = x_trial, g = g_trial; out = s.y, y.y,
+// s.s, s.g_trial.
+STABINT_HISTORY_CLONES
+void newPair(int len, const double* __restrict x_trial, const double* __restrict g_trial, double* __restrict x,
+             double* __restrict g, double* __restrict s, double* __restrict y, double* out) {
+  double sy[kLanes] = {}, yy[kLanes] = {}, ss[kLanes] = {}, sg[kLanes] = {};
+  auto body = [&](int i, int l) {
+    const double si = x_trial[i] - x[i], yi = g_trial[i] - g[i];
+    s[i] = si;
+    y[i] = yi;
+    x[i] = x_trial[i];
+    g[i] = g_trial[i];
+    sy[l] += si * yi;
+    yy[l] += yi * yi;
+    ss[l] += si * si;
+    sg[l] += si * g_trial[i];
+  };
+  int i = 0;
+  for (; i + kLanes <= len; i += kLanes) STABINT_HISTORY_LANES for (int l = 0; l < kLanes; ++l) body(i + l, l);
+  for (int l = 0; i + l < len; ++l) body(i + l, l);
+  out[0] = laneSum(sy);
+  out[1] = laneSum(yy);
+  out[2] = laneSum(ss);
+  out[3] = laneSum(sg);
+}
+
+// An older pair j against the new one: out = s.y_j, s_j.y, s_j.g_trial.
+STABINT_HISTORY_CLONES
+void pairProducts(int len, const double* __restrict s, const double* __restrict y, const double* __restrict g_trial,
+                  const double* __restrict s_j, const double* __restrict y_j, double* out) {
+  double a[kLanes] = {}, b[kLanes] = {}, c[kLanes] = {};
+  int i = 0;
+  for (; i + kLanes <= len; i += kLanes) STABINT_HISTORY_LANES for (int l = 0; l < kLanes; ++l) {
+      a[l] += s[i + l] * y_j[i + l];
+      b[l] += s_j[i + l] * y[i + l];
+      c[l] += s_j[i + l] * g_trial[i + l];
+    }
+  for (int l = 0; i + l < len; ++l) {
+    a[l] += s[i + l] * y_j[i + l];
+    b[l] += s_j[i + l] * y[i + l];
+    c[l] += s_j[i + l] * g_trial[i + l];
+  }
+  out[0] = laneSum(a);
+  out[1] = laneSum(b);
+  out[2] = laneSum(c);
+}
+
+// q -= a v (Eigen's q - a * v, value by value).
+STABINT_HISTORY_CLONES
+void subtractScaled(int len, double* __restrict q, double a, const double* __restrict v) {
+  STABINT_HISTORY_LANES for (int i = 0; i < len; ++i) q[i] = q[i] - a * v[i];
+}
+
+// d += a v.
+STABINT_HISTORY_CLONES
+void addScaled(int len, double* __restrict d, double a, const double* __restrict v) {
+  STABINT_HISTORY_LANES for (int i = 0; i < len; ++i) d[i] = d[i] + a * v[i];
+}
+
+// d = -d; returns g.d.
+STABINT_HISTORY_CLONES
+double negateAndSlope(int len, double* __restrict d, const double* __restrict g) {
+  double acc[kLanes] = {};
+  int i = 0;
+  for (; i + kLanes <= len; i += kLanes) STABINT_HISTORY_LANES for (int l = 0; l < kLanes; ++l) {
+      d[i + l] = -d[i + l];
+      acc[l] += g[i + l] * d[i + l];
+    }
+  for (int l = 0; i + l < len; ++l) {
+    d[i + l] = -d[i + l];
+    acc[l] += g[i + l] * d[i + l];
+  }
+  return laneSum(acc);
+}
+
 // The rows of one segment in each of the three columns of an `n by 3` (column-major) matrix, in
 // chunks short enough that the chunk of every vector a fused pass reads stays in cache: f(offset,
 // length) per chunk, the offset into the matrix's data.
@@ -153,9 +269,6 @@ void forEachChunk(int first, int count, Eigen::Index n, F&& f) {
   for (Eigen::Index col = 0; col < 3; ++col)
     for (int i = 0; i < count; i += kChunk) f(col * n + first + i, std::min(kChunk, count - i));
 }
-
-using Chunk = Eigen::Map<Eigen::VectorXd>;
-using ConstChunk = Eigen::Map<const Eigen::VectorXd>;
 
 }  // namespace
 
@@ -181,25 +294,24 @@ void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy,
     std::vector<double>& sg = history_sg_[seg];
     for (int j = 0; j < window; ++j) gram(slot, j) = gram(j, slot) = sg[std::size_t(j)] = 0.0;
     forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
-      Chunk s(s_new.data() + o, len), y(y_new.data() + o, len);
-      Chunk x(x_cur_.data() + o, len), g(gradient_.data() + o, len);
-      const ConstChunk x_trial(x_trial_.data() + o, len), g_trial(trial_gradient_.data() + o, len);
-      s = x_trial - x;
-      y = g_trial - g;
-      sy[seg] += s.dot(y);
-      yy[seg] += y.squaredNorm();
-      ss[seg] += s.squaredNorm();
-      for (int k = 0; k < kept; ++k) {
+      double* s = s_new.data() + o;
+      double* y = y_new.data() + o;
+      const double* g_trial = trial_gradient_.data() + o;
+      double sums[4];
+      newPair(len, x_trial_.data() + o, g_trial, x_cur_.data() + o, gradient_.data() + o, s, y, sums);
+      sy[seg] += sums[0];
+      yy[seg] += sums[1];
+      ss[seg] += sums[2];
+      sg[std::size_t(slot)] += sums[3];
+      for (int k = 1; k < kept; ++k) {
         const int j = (slot - k + window) % window;
-        const ConstChunk s_j(history_s_[std::size_t(j)].data() + o, len);
-        sg[std::size_t(j)] += s_j.dot(g_trial);
-        if (j == slot) continue;
-        const ConstChunk y_j(history_y_[std::size_t(j)].data() + o, len);
-        gram(slot, j) += s.dot(y_j);
-        gram(j, slot) += s_j.dot(y);
+        double products[3];
+        pairProducts(len, s, y, g_trial, history_s_[std::size_t(j)].data() + o, history_y_[std::size_t(j)].data() + o,
+                     products);
+        gram(slot, j) += products[0];
+        gram(j, slot) += products[1];
+        sg[std::size_t(j)] += products[2];
       }
-      x = x_trial;
-      g = g_trial;
     });
     gram(slot, slot) = sy[seg];
   }
@@ -223,11 +335,11 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
       history_alpha_[i][seg] = history_rho_[i][seg] * sq;
     }
     forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
-      Chunk q(search_.data() + o, len);
-      q = ConstChunk(gradient_.data() + o, len);
+      double* q = search_.data() + o;
+      std::copy_n(gradient_.data() + o, len, q);
       for (int k = 0; k < pairs; ++k) {
         const double a = history_alpha_[slotOf(k)][seg];
-        if (a != 0.0) q -= a * ConstChunk(history_y_[slotOf(k)].data() + o, len);
+        if (a != 0.0) subtractScaled(len, q, a, history_y_[slotOf(k)].data() + o);
       }
     });
   }
@@ -237,8 +349,8 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
   for (std::size_t seg = 0; seg < rows_.size(); ++seg) {
     yr.assign(std::size_t(pairs), 0.0);
     forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
-      const ConstChunk r(direction_.data() + o, len);
-      for (int k = 0; k < pairs; ++k) yr[std::size_t(k)] += ConstChunk(history_y_[slotOf(k)].data() + o, len).dot(r);
+      const double* r = direction_.data() + o;
+      for (int k = 0; k < pairs; ++k) yr[std::size_t(k)] += dot(len, history_y_[slotOf(k)].data() + o, r);
     });
     // The coefficient of s_i in d, oldest first; kept in history_alpha_.
     const Eigen::MatrixXd& gram = gram_[seg];
@@ -251,13 +363,12 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
       history_alpha_[i][seg] = rho == 0.0 ? 0.0 : history_alpha_[i][seg] - rho * y_r;
     }
     forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
-      Chunk d(direction_.data() + o, len);
+      double* d = direction_.data() + o;
       for (int k = pairs - 1; k >= 0; --k) {
         const double coefficient = history_alpha_[slotOf(k)][seg];
-        if (coefficient != 0.0) d += coefficient * ConstChunk(history_s_[slotOf(k)].data() + o, len);
+        if (coefficient != 0.0) addScaled(len, d, coefficient, history_s_[slotOf(k)].data() + o);
       }
-      d = -d;
-      slope[seg] += ConstChunk(gradient_.data() + o, len).dot(d);
+      slope[seg] += negateAndSlope(len, d, gradient_.data() + o);
     });
   }
 }

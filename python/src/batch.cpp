@@ -62,7 +62,39 @@ void bindBatch(nb::module_& m) {
           },
           "scene"_a, "pin"_a, "target"_a,
           "Pin `pin` of scene `scene` (an index into that scene's pins) moves linearly to `target` (x, y, z) over "
-          "the next step and stays there, as Simulator.set_pin_target: its work is booked in that scene's H* only.");
+          "the next step and stays there, as Simulator.set_pin_target: its work is booked in that scene's H* only.")
+      .def("pin_target", &BatchSimulator::pinTarget, "scene"_a, "pin"_a, "(3,) current target of a pin of the scene.")
+      .def("set_external_forces", &BatchSimulator::setExternalForces, "scene"_a, "forces"_a,
+           "(n_s, 3) per-particle forces of one scene, as Simulator.set_external_forces (booked in its H* only).")
+      .def(
+          "set_collider_position",
+          [](BatchSimulator& b, int scene, int collider, const std::array<double, 3>& p) {
+            b.setColliderPosition(scene, collider, Eigen::Vector3d(p[0], p[1], p[2]));
+          },
+          "scene"_a, "collider"_a, "position"_a, "As Simulator.set_collider_position, for one scene's collider.")
+      .def(
+          "set_collider_velocity",
+          [](BatchSimulator& b, int scene, int collider, const std::array<double, 3>& v) {
+            b.setColliderVelocity(scene, collider, Eigen::Vector3d(v[0], v[1], v[2]));
+          },
+          "scene"_a, "collider"_a, "velocity"_a, "As Simulator.set_collider_velocity, for one scene's collider.")
+      .def("collider_position", &BatchSimulator::colliderPosition, "scene"_a, "collider"_a)
+      .def("collider_velocity", &BatchSimulator::colliderVelocity, "scene"_a, "collider"_a)
+      .def("grab", &BatchSimulator::grab, "scene"_a, "vertex"_a, "stiffness"_a,
+           "As Simulator.grab, in one scene; returns the new pin's index in that scene's pins.")
+      .def("release", &BatchSimulator::release, "scene"_a, "pin"_a, "As Simulator.release, in one scene.")
+      .def("set_element_stiffness",
+           nb::overload_cast<int, ElementKind, const std::vector<int>&, double>(&BatchSimulator::setElementStiffness),
+           "scene"_a, "kind"_a, "indices"_a, "stiffness"_a, "As Simulator.set_element_stiffness, in one scene.")
+      .def("set_element_stiffness",
+           nb::overload_cast<int, ElementKind, int, double>(&BatchSimulator::setElementStiffness), "scene"_a, "kind"_a,
+           "index"_a, "stiffness"_a)
+      .def("set_element_enabled",
+           nb::overload_cast<int, ElementKind, const std::vector<int>&, bool>(&BatchSimulator::setElementEnabled),
+           "scene"_a, "kind"_a, "indices"_a, "enabled"_a, "As Simulator.set_element_enabled, in one scene.")
+      .def("set_element_enabled", nb::overload_cast<int, ElementKind, int, bool>(&BatchSimulator::setElementEnabled),
+           "scene"_a, "kind"_a, "index"_a, "enabled"_a)
+      .def("element_enabled", &BatchSimulator::elementEnabled, "scene"_a, "kind"_a, "index"_a);
 }
 
 }  // namespace stabint::py

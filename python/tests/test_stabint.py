@@ -808,6 +808,26 @@ def test_a_batch_steps_every_scene_as_its_own_simulator_and_refuses_per_scene():
     with pytest.raises(stabint.InvalidInputError):
         batch.set_pin_target(3, 0, target)
 
+    # Forces, a grab and a spring disabled in scene 2 (the cloth) only, each as in its own Simulator:
+    # the same trajectory to the batch's round-off (a factor updated per scene: 1e-9 of the size).
+    forces = np.zeros((scenes[2].positions.shape[0], 3))
+    forces[5] = (0.0, 0.0, 0.2)
+    batch.set_external_forces(2, forces)
+    alone[2].set_external_forces(forces)
+    assert batch.grab(2, 7, 50.0) == alone[2].grab(7, 50.0)
+    batch.set_element_enabled(2, stabint.ElementKind.Spring, 3, False)
+    alone[2].set_element_enabled(stabint.ElementKind.Spring, 3, False)
+    assert not batch.element_enabled(2, stabint.ElementKind.Spring, 3)
+    for _ in range(10):
+        batch.step()
+        for sim in alone:
+            sim.step()
+    for i, sim in enumerate(alone):
+        size = np.ptp(scenes[i].positions, axis=0).max()
+        assert np.abs(batch.positions(i) - sim.positions).max() <= 1e-9 * size
+    with pytest.raises(stabint.InvalidInputError, match="scene 2"):
+        batch.grab(2, 10_000, 50.0)
+
     # Symplectic Euler is unstable on the stiff chain (omega h ~ 30 > 2) and stable on a soft one:
     # the stiff scene's step is refused with the message its own Simulator raises, its state kept,
     # and the soft scene steps on.

@@ -47,6 +47,9 @@ constexpr bool listsEveryMember() {
 
 // The element types come from their list (STABINT_ELEMENT_KINDS), so a new one is checked here
 // without a line of its own.
+// Clang instantiates std::optional<Eigen::Vector3d>'s converting constructor from AnyField as a
+// hard error, not a substitution failure; the GCC build (CI's main build) runs the checks.
+#if !defined(__clang__)
 #define STABINT_CHECK_KIND(kind, name) \
   static_assert(listsEveryMember<kind>(), "the field list of " #kind " must name every member of the struct");
 STABINT_ELEMENT_KINDS(STABINT_CHECK_KIND)
@@ -73,6 +76,7 @@ STABINT_CHECK_STRUCT(ScriptedEvent)
 STABINT_CHECK_STRUCT(ClothMaterial)
 STABINT_CHECK_STRUCT(SolidMaterial)
 #undef STABINT_CHECK_STRUCT
+#endif  // !defined(__clang__)
 
 }  // namespace
 }  // namespace stabint

@@ -9,6 +9,8 @@
 #include <type_traits>
 #include <utility>
 
+#include "member_count.hpp"
+
 namespace stabint {
 namespace {
 
@@ -16,45 +18,7 @@ namespace {
 // type, or the C API, Python and stabint-run would silently miss a field. A member
 // missing from the list changes the count of members an aggregate initializer takes; a wrong
 // type or name fails the is_same checks.
-struct AnyField {
-  template <class T>
-  operator T() const;  // never called: only the initializer's validity is asked
-};
-
-// Counting members means asking whether T{AnyField, ...} with fewer initializers than members is
-// valid, which clang's -Wmissing-field-initializers reports inside the unevaluated decltype.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-
-template <class T, class... Args>
-constexpr auto bracesWith(int) -> decltype(void(T{std::declval<Args>()...}), true) {
-  return true;
-}
-template <class T, class... Args>
-constexpr bool bracesWith(...) {
-  return false;
-}
-// The number of members of aggregate T: the most initializers T{...} accepts.
-template <class T, class... Args>
-constexpr std::size_t memberCount() {
-  if constexpr (bracesWith<T, Args..., AnyField>(0))
-    return memberCount<T, Args..., AnyField>();
-  else
-    return sizeof...(Args);
-}
-
-#define STABINT_COUNT_FIELD(type, name, doc) +1
-#define STABINT_COUNT_NESTED(type, name, fields, doc) +1
-#define STABINT_COUNT_SUB(parent, type, name, doc) +1
-static_assert(memberCount<SimulatorOptions>() ==
-                  0 STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_COUNT_FIELD, STABINT_COUNT_NESTED),
-              "STABINT_SIMULATOR_OPTIONS_FIELDS must list every member of SimulatorOptions");
-static_assert(memberCount<OpenCLOptions>() == 0 STABINT_OPENCL_OPTIONS_FIELDS(STABINT_COUNT_SUB, opencl),
-              "STABINT_OPENCL_OPTIONS_FIELDS must list every member of OpenCLOptions");
-#undef STABINT_COUNT_FIELD
-#undef STABINT_COUNT_NESTED
-#undef STABINT_COUNT_SUB
-#pragma GCC diagnostic pop
+using member_count::memberCount;
 
 #define STABINT_CHECK_FIELD(type, name, doc)                            \
   static_assert(std::is_same_v<decltype(SimulatorOptions::name), type>, \

@@ -8,6 +8,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "simd.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -18,27 +20,6 @@
 // x86-64 Linux): the library stays one portable binary. Every lane does the scalar function's
 // operations in the same order (the build has no FMA contraction: -ffp-contract=off), so a lane's
 // result is the scalar one bit for bit on any machine.
-#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
-    !defined(STABINT_NO_TARGET_CLONES)
-#define STABINT_TARGET_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define STABINT_TARGET_CLONES
-#endif
-// Loops over the lanes of a group: vectorized as a whole (the compiler would otherwise unroll
-// these short loops first and vectorize only parts of what is left). The library is built with
-// -fopenmp-simd (the pragma only, no OpenMP runtime) and STABINT_OMP_SIMD; other code that
-// includes this header (tests, benchmarks) gets plain loops.
-#if defined(STABINT_OMP_SIMD)
-#define STABINT_LANES _Pragma("omp simd")
-#else
-#define STABINT_LANES
-#endif
-// Clang (14) clones no function template: there, templates stay baseline code.
-#if defined(__clang__)
-#define STABINT_TARGET_CLONES_TEMPLATE
-#else
-#define STABINT_TARGET_CLONES_TEMPLATE STABINT_TARGET_CLONES
-#endif
 
 namespace stabint::projections {
 

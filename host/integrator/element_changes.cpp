@@ -35,7 +35,6 @@ ElementChanges::ElementChanges(SceneData& scene, GlobalSystem& system, Backend& 
     : scene_(scene), system_(system), backend_(backend), scope_(std::move(scope)) {}
 
 int ElementChanges::block(ElementKind kind) const {
-  if (scope_.wholeScene()) return scene_.blockIndex(elementType(kind));
   try {
     return scene_.blockIndex(elementType(kind));
   } catch (const InvalidInputError& e) {

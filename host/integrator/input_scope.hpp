@@ -28,8 +28,6 @@ class InputScope {
   InputScope(const SceneSegment& segment, int scene, const char* call)
       : segment_(&segment), where_(std::string(call) + ": scene " + std::to_string(scene) + ": ") {}
 
-  bool wholeScene() const { return segment_ == nullptr; }
-
   InputRange particles(const SceneData& data) const {
     return segment_ ? InputRange{segment_->first_particle, segment_->num_particles}
                     : InputRange{0, data.numParticles()};

@@ -18,6 +18,8 @@
 // length and history is the segment's own, so a scene takes the steps it takes alone.
 #include "solver/local_global.hpp"
 
+#include "simd.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -151,17 +153,6 @@ namespace {
 // bits on any machine (the build has no FMA contraction). The updates (q -= a y, d += c s) do
 // Eigen's arithmetic, value by value. What the passes cost now is memory traffic: the vectors come
 // from the last-level cache (docs/benchmarks.md, "L-BFGS's cost per iteration on the peer cloth").
-#if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(__clang__) && \
-    !defined(STABINT_NO_TARGET_CLONES)
-#define STABINT_HISTORY_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define STABINT_HISTORY_CLONES
-#endif
-#if defined(STABINT_OMP_SIMD)
-#define STABINT_HISTORY_LANES _Pragma("omp simd")
-#else
-#define STABINT_HISTORY_LANES
-#endif
 
 constexpr int kLanes = 16;
 
@@ -175,19 +166,18 @@ inline double laneSum(const double* acc) {
 }
 
 // Value i of a pass goes to lane i % kLanes, in both the whole groups and the tail.
-STABINT_HISTORY_CLONES
+STABINT_TARGET_CLONES
 double dot(int len, const double* __restrict a, const double* __restrict b) {
   double acc[kLanes] = {};
   int i = 0;
-  for (; i + kLanes <= len; i += kLanes)
-    STABINT_HISTORY_LANES for (int l = 0; l < kLanes; ++l) acc[l] += a[i + l] * b[i + l];
+  for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) acc[l] += a[i + l] * b[i + l];
   for (int l = 0; i + l < len; ++l) acc[l] += a[i + l] * b[i + l];
   return laneSum(acc);
 }
 
 // The new pair: s = x_trial - x, y = g_trial - g, then x = x_trial, g = g_trial; out = s.y, y.y,
 // s.s, s.g_trial.
-STABINT_HISTORY_CLONES
+STABINT_TARGET_CLONES
 void newPair(int len, const double* __restrict x_trial, const double* __restrict g_trial, double* __restrict x,
              double* __restrict g, double* __restrict s, double* __restrict y, double* out) {
   double sy[kLanes] = {}, yy[kLanes] = {}, ss[kLanes] = {}, sg[kLanes] = {};
@@ -203,7 +193,7 @@ void newPair(int len, const double* __restrict x_trial, const double* __restrict
     sg[l] += si * g_trial[i];
   };
   int i = 0;
-  for (; i + kLanes <= len; i += kLanes) STABINT_HISTORY_LANES for (int l = 0; l < kLanes; ++l) body(i + l, l);
+  for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) body(i + l, l);
   for (int l = 0; i + l < len; ++l) body(i + l, l);
   out[0] = laneSum(sy);
   out[1] = laneSum(yy);
@@ -212,12 +202,12 @@ void newPair(int len, const double* __restrict x_trial, const double* __restrict
 }
 
 // An older pair j against the new one: out = s.y_j, s_j.y, s_j.g_trial.
-STABINT_HISTORY_CLONES
+STABINT_TARGET_CLONES
 void pairProducts(int len, const double* __restrict s, const double* __restrict y, const double* __restrict g_trial,
                   const double* __restrict s_j, const double* __restrict y_j, double* out) {
   double a[kLanes] = {}, b[kLanes] = {}, c[kLanes] = {};
   int i = 0;
-  for (; i + kLanes <= len; i += kLanes) STABINT_HISTORY_LANES for (int l = 0; l < kLanes; ++l) {
+  for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) {
       a[l] += s[i + l] * y_j[i + l];
       b[l] += s_j[i + l] * y[i + l];
       c[l] += s_j[i + l] * g_trial[i + l];
@@ -233,23 +223,23 @@ void pairProducts(int len, const double* __restrict s, const double* __restrict 
 }
 
 // q -= a v (Eigen's q - a * v, value by value).
-STABINT_HISTORY_CLONES
+STABINT_TARGET_CLONES
 void subtractScaled(int len, double* __restrict q, double a, const double* __restrict v) {
-  STABINT_HISTORY_LANES for (int i = 0; i < len; ++i) q[i] = q[i] - a * v[i];
+  STABINT_LANES for (int i = 0; i < len; ++i) q[i] = q[i] - a * v[i];
 }
 
 // d += a v.
-STABINT_HISTORY_CLONES
+STABINT_TARGET_CLONES
 void addScaled(int len, double* __restrict d, double a, const double* __restrict v) {
-  STABINT_HISTORY_LANES for (int i = 0; i < len; ++i) d[i] = d[i] + a * v[i];
+  STABINT_LANES for (int i = 0; i < len; ++i) d[i] = d[i] + a * v[i];
 }
 
 // d = -d; returns g.d.
-STABINT_HISTORY_CLONES
+STABINT_TARGET_CLONES
 double negateAndSlope(int len, double* __restrict d, const double* __restrict g) {
   double acc[kLanes] = {};
   int i = 0;
-  for (; i + kLanes <= len; i += kLanes) STABINT_HISTORY_LANES for (int l = 0; l < kLanes; ++l) {
+  for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) {
       d[i + l] = -d[i + l];
       acc[l] += g[i + l] * d[i + l];
     }

@@ -46,39 +46,39 @@ const std::vector<Row>& table() {
       // Any non-GPU device: PoCL's pthread device on the 2-core VM, where these sizes were tuned:
       // large element groups amortise PoCL's per-group cost, 64 groups of 128 keep the reductions'
       // partial sums short. The cross-backend tests (1e-9 in double) run on this row.
-      {false, {}, {}, {"cpu", true, 256, 128, 64, 4, true, kNever, kNever, kNever}},
+      {false, {}, {}, {"cpu", true, 256, 128, 64, 4, true, kNever, kNever, kNever, true}},
       // Data-centre GPUs with fp64 at half the fp32 rate (device names: "NVIDIA H100 80GB HBM3",
       // "Tesla V100-SXM2-16GB", "NVIDIA A100-SXM4-40GB").
       {true,
        {"nvidia"},
        {"h100", "h200", "h800", "gh200", "b100", "b200", "a100", "a800", "a30", "v100", "p100", "titan v"},
-       {"nvidia-datacenter-gpu", true, 128, 256, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
+       {"nvidia-datacenter-gpu", true, 128, 256, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs, false}},
       // GeForce, RTX and Quadro: fp64 at 1/32 (or 1/64) of fp32.
       {true,
        {"nvidia"},
        {},
-       {"nvidia-gpu", false, 128, 256, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
+       {"nvidia-gpu", false, 128, 256, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs, false}},
       // Instinct (ROCm names the device by its architecture: "gfx90a:sramecc+:xnack-" is MI200).
       {true,
        {"advanced micro devices", "amd"},
        {"instinct", "gfx906", "gfx908", "gfx90a", "gfx940", "gfx941", "gfx942", "gfx950"},
-       {"amd-instinct-gpu", false, 256, 256, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
+       {"amd-instinct-gpu", false, 256, 256, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs, false}},
       // Radeon: fp64 at 1/16-1/32 of fp32.
       {true,
        {"advanced micro devices", "amd"},
        {},
-       {"amd-gpu", false, 256, 256, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
+       {"amd-gpu", false, 256, 256, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs, false}},
       {true,
        {"intel"},
        {"data center gpu max"},
-       {"intel-datacenter-gpu", false, 128, 128, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
+       {"intel-datacenter-gpu", false, 128, 128, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs, false}},
       // Arc and integrated GPUs: fp64 emulated or missing.
       {true,
        {"intel"},
        {},
-       {"intel-gpu", false, 128, 128, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
+       {"intel-gpu", false, 128, 128, 256, 1, false, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs, false}},
       // Any other GPU: cl_khr_fp64 is trusted (its rate is unknown).
-      {true, {}, {}, {"gpu", false, 128, 128, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs}},
+      {true, {}, {}, {"gpu", false, 128, 128, 256, 1, true, kGpuLaunchUs, kGpuParticleNs, kGpuCgIterationUs, false}},
   };
   return rows;
 }

@@ -39,6 +39,11 @@ struct DeviceProfile {
   double auto_launch_us;
   double auto_particle_ns;
   double auto_cg_iteration_us;
+
+  /// Work-group sums (kernels/reduce.cl) by one work-item instead of a tree of barriers: a CPU
+  /// device runs a group's work-items as one loop per region between barriers, so each tree level
+  /// costs a loop over the whole group (on PoCL the tree doubled an element pass that sums energies).
+  bool serial_group_sum;
   static constexpr double kNever = std::numeric_limits<double>::infinity();
 };
 

@@ -75,11 +75,10 @@ std::vector<const ElementType*> OpenCLBackend<Real>::programTypes() const {
 template <typename Real>
 void OpenCLBackend<Real>::useProgramFor(const std::vector<const ElementType*>& types) {
   if (program_() != nullptr && types == program_types_) return;
-  // A CPU device runs a group's work-items as loops between barriers: its group sums take one
-  // region instead of a tree of barriers (kernels/reduce.cl). By the device's row, so that a GPU
-  // row forced on PoCL (STABINT_OPENCL_PROFILE) checks the GPUs' tree there.
+  // By the device's row, so that a GPU row forced on PoCL (STABINT_OPENCL_PROFILE) checks the
+  // GPUs' tree there.
   std::string options = ocl::programOptions(kDouble ? Precision::Double : Precision::Float);
-  if (std::string(device_.profile->name) == "cpu") options += " -DSTABINT_GROUP_SUM_SERIAL";
+  if (device_.profile->serial_group_sum) options += " -DSTABINT_GROUP_SUM_SERIAL";
   program_ = ocl::cachedProgram(context_, device_.device, ocl::elementProgramSource(types), options);
   program_types_ = types;
 }

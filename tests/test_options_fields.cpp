@@ -1,8 +1,8 @@
-// Every field of the options' field list (stabint/options_fields.hpp) round-trips through the C
+// Every field of the options' field list (stabint/options_table.h) round-trips through the C
 // API: a non-default value put into stabint_simulator_options reaches the simulator and comes back
 // from stabint_simulator_get_options unchanged. The list drives the test, so a field added to it
 // is tested without touching this file.
-#include <stabint/options_fields.hpp>
+#include <stabint/options_table.h>
 #include <stabint/stabint.hpp>
 #include <stabint/stabint_c.h>
 
@@ -44,9 +44,9 @@ void put(Enum value, C& c) {
 stabint_simulator_options toCStruct(const SimulatorOptions& o) {
   stabint_simulator_options c;
   stabint_simulator_options_default(&c);
-#define PUT_FIELD(type, name, doc) put(o.name, c.name);
+#define PUT_FIELD(type, name, default_value, rule, doc) put(o.name, c.name);
 #define PUT_NESTED(type, name, fields, doc) fields(PUT_SUB, name)
-#define PUT_SUB(parent, type, name, doc) put(o.parent.name, c.parent##_##name);
+#define PUT_SUB(parent, type, name, default_value, rule, doc) put(o.parent.name, c.parent##_##name);
   STABINT_SIMULATOR_OPTIONS_FIELDS(PUT_FIELD, PUT_NESTED)
 #undef PUT_FIELD
 #undef PUT_NESTED
@@ -64,10 +64,10 @@ bool same(C c, Enum cpp) {
 // Names every field of `c` that differs from `o`.
 std::vector<std::string> differences(const stabint_simulator_options& c, const SimulatorOptions& o) {
   std::vector<std::string> names;
-#define SAME_FIELD(type, name, doc) \
+#define SAME_FIELD(type, name, default_value, rule, doc) \
   if (!same(c.name, o.name)) names.push_back(#name);
 #define SAME_NESTED(type, name, fields, doc) fields(SAME_SUB, name)
-#define SAME_SUB(parent, type, name, doc) \
+#define SAME_SUB(parent, type, name, default_value, rule, doc) \
   if (!same(c.parent##_##name, o.parent.name)) names.push_back(#parent "_" #name);
   STABINT_SIMULATOR_OPTIONS_FIELDS(SAME_FIELD, SAME_NESTED)
 #undef SAME_FIELD
@@ -88,9 +88,10 @@ TEST(OptionsFields, EveryFieldRoundTripsThroughTheCApi) {
     void (*apply)(SimulatorOptions&);
   };
   const Change changes[] = {
-#define CHANGE_FIELD(type, name, doc) {#name, [](SimulatorOptions& o) { o.name = changed(o.name); }},
+#define CHANGE_FIELD(type, name, default_value, rule, doc) \
+  {#name, [](SimulatorOptions& o) { o.name = changed(o.name); }},
 #define CHANGE_NESTED(type, name, fields, doc) fields(CHANGE_SUB, name)
-#define CHANGE_SUB(parent, type, name, doc) \
+#define CHANGE_SUB(parent, type, name, default_value, rule, doc) \
   {#parent "." #name, [](SimulatorOptions& o) { o.parent.name = changed(o.parent.name); }},
       STABINT_SIMULATOR_OPTIONS_FIELDS(CHANGE_FIELD, CHANGE_NESTED)
 #undef CHANGE_FIELD

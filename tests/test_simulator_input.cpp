@@ -59,6 +59,13 @@ TEST(SimulatorInput, BadOptionsNameTheField) {
       },
       "gradient_tolerance");
   expectRejected([](SimulatorOptions& o) { o.max_root_evaluations = 0; }, "max_root_evaluations");
+  expectRejected([](SimulatorOptions& o) { o.max_iterations = 0; }, "max_iterations = 0 must be >= 1");
+  expectRejected([](SimulatorOptions& o) { o.cg_iterations = -3; }, "cg_iterations = -3 must be >= 1");
+  expectRejected([](SimulatorOptions& o) { o.cg_tolerance = 1.0; }, "cg_tolerance = 1 must be finite and in [0, 1)");
+  expectRejected([](SimulatorOptions& o) { o.contact_tolerance = -1e-3; }, "contact_tolerance = -0.001");
+  expectRejected([](SimulatorOptions& o) { o.contact_tolerance = HUGE_VAL; }, "contact_tolerance = inf");
+  expectRejected([](SimulatorOptions& o) { o.anderson_window = 51; }, "anderson_window = 51 must be in [1, 50]");
+  expectRejected([](SimulatorOptions& o) { o.global_solve = static_cast<GlobalSolve>(9); }, "global_solve = 9");
 }
 
 // Enums from a config file or a binding can hold any integer: an Integrator of 42 used to run no

@@ -1,12 +1,12 @@
 // The C API's conversions between its plain-C structs and enums (include/stabint/stabint_c.h)
 // and the C++ ones, generated from the lists: the options from their field list
-// (stabint/options_fields.hpp), the reports from theirs (stabint/types.hpp), the enums from their
+// (stabint/options_table.h), the reports from theirs (stabint/types.hpp), the enums from their
 // value lists. The C header is plain C and lists the fields itself; the checks below fail the
 // build when a C field is missing or has another type, or when a C enum's values drift from the
 // C++ enum's.
 #include "c_api/c_api.hpp"
 
-#include <stabint/options_fields.hpp>
+#include <stabint/options_table.h>
 
 #include <string>
 #include <type_traits>
@@ -60,11 +60,11 @@ using CType = typename CField<T>::type;
 
 // Every field of the options' list is in the C struct, with its C type. A nested struct's fields
 // are spelled <member>_<field> in C (opencl_platform).
-#define STABINT_C_CHECK_FIELD(type, name, doc)                                          \
+#define STABINT_C_CHECK_FIELD(type, name, default_value, rule, doc)                     \
   static_assert(std::is_same_v<decltype(stabint_simulator_options::name), CType<type>>, \
                 "stabint_simulator_options::" #name " has the wrong type");
 #define STABINT_C_CHECK_NESTED(type, name, fields, doc) fields(STABINT_C_CHECK_SUB, name)
-#define STABINT_C_CHECK_SUB(parent, type, name, doc)                                               \
+#define STABINT_C_CHECK_SUB(parent, type, name, default_value, rule, doc)                          \
   static_assert(std::is_same_v<decltype(stabint_simulator_options::parent##_##name), CType<type>>, \
                 "stabint_simulator_options::" #parent "_" #name " has the wrong type");
 STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_C_CHECK_FIELD, STABINT_C_CHECK_NESTED)
@@ -133,9 +133,10 @@ void toC(const PhaseTimes& cpp, stabint_phase_times& c) {
 
 SimulatorOptions fromC(const stabint_simulator_options& c) {
   SimulatorOptions o;
-#define STABINT_FROM_C_FIELD(type, name, doc) fromC(c.name, o.name, #name);
+#define STABINT_FROM_C_FIELD(type, name, default_value, rule, doc) fromC(c.name, o.name, #name);
 #define STABINT_FROM_C_NESTED(type, name, fields, doc) fields(STABINT_FROM_C_SUB, name)
-#define STABINT_FROM_C_SUB(parent, type, name, doc) fromC(c.parent##_##name, o.parent.name, #parent "_" #name);
+#define STABINT_FROM_C_SUB(parent, type, name, default_value, rule, doc) \
+  fromC(c.parent##_##name, o.parent.name, #parent "_" #name);
   STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_FROM_C_FIELD, STABINT_FROM_C_NESTED)
 #undef STABINT_FROM_C_FIELD
 #undef STABINT_FROM_C_NESTED
@@ -145,9 +146,9 @@ SimulatorOptions fromC(const stabint_simulator_options& c) {
 
 stabint_simulator_options toC(const SimulatorOptions& o) {
   stabint_simulator_options c{};
-#define STABINT_TO_C_FIELD(type, name, doc) toC(o.name, c.name);
+#define STABINT_TO_C_FIELD(type, name, default_value, rule, doc) toC(o.name, c.name);
 #define STABINT_TO_C_NESTED(type, name, fields, doc) fields(STABINT_TO_C_SUB, name)
-#define STABINT_TO_C_SUB(parent, type, name, doc) toC(o.parent.name, c.parent##_##name);
+#define STABINT_TO_C_SUB(parent, type, name, default_value, rule, doc) toC(o.parent.name, c.parent##_##name);
   STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_TO_C_FIELD, STABINT_TO_C_NESTED)
 #undef STABINT_TO_C_FIELD
 #undef STABINT_TO_C_NESTED

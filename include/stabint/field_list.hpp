@@ -7,8 +7,8 @@
 /// table come Python's keyword constructors, properties and `__repr__`, and, from the list, the
 /// C API's conversions of the reports and their `static_assert`s; the library's build checks that
 /// each list names every member of its struct. A member's type is taken from the struct itself
-/// (decltype), so that it is written once; SimulatorOptions, whose C struct and CLI flags need
-/// the type spelled in the list, has its own list with types (stabint/options_fields.hpp).
+/// (decltype), so that it is written once; SimulatorOptions and OpenCLOptions are themselves
+/// generated from their table (stabint/options_table.h), which also makes the C struct.
 /// docs/development.md, "Adding a field to a public struct".
 
 #include <cstddef>

@@ -6,7 +6,7 @@
 #include <stabint/errors.hpp>
 #include <stabint/events.hpp>
 #include <stabint/io.hpp>
-#include <stabint/options_fields.hpp>
+#include <stabint/options_table.h>
 #include <stabint/scene.hpp>
 #include <stabint/simulator.hpp>
 #include <stabint/types.hpp>

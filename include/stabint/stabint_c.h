@@ -25,6 +25,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include <stabint/options_table.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -150,34 +152,18 @@ stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t*
 /** An opaque simulator (a stabint::Simulator), from stabint_simulator_create. */
 typedef struct stabint_simulator stabint_simulator;
 
-/** The fields of stabint::SimulatorOptions (stabint/simulator.hpp documents each; a new C++ field
- * needs its C field here, see stabint/options_fields.hpp: the library does not build without it,
- * and a nested struct's fields are spelled opencl_platform and so on). Fill with
- * stabint_simulator_options_default() first, then change what you need. */
+/** @cond */
+#define STABINT_C_OPTION_(type, name, default_value, rule, doc) type name;
+#define STABINT_C_OPTION_NESTED_(type, name, fields, doc) fields(STABINT_C_OPTION_SUB_, name)
+#define STABINT_C_OPTION_SUB_(parent, type, name, default_value, rule, doc) type parent##_##name;
+/** @endcond */
+/** The fields of stabint::SimulatorOptions, generated from their rows
+ * (STABINT_SIMULATOR_OPTIONS_TABLE in stabint/options_table.h, which documents each): the same
+ * names, in the same order, with C types (int, double, the C enums above, and `const char*` for a
+ * string: NULL or "" is empty); a nested struct's fields are spelled opencl_platform and so on.
+ * Fill with stabint_simulator_options_default() first, then change what you need. */
 typedef struct stabint_simulator_options {
-  stabint_integrator integrator;      /**< SimulatorOptions::integrator */
-  double time_step;                   /**< SimulatorOptions::time_step, s */
-  int iterations;                     /**< SimulatorOptions::iterations */
-  double tolerance;                   /**< SimulatorOptions::tolerance */
-  int max_iterations;                 /**< SimulatorOptions::max_iterations */
-  stabint_acceleration acceleration;  /**< SimulatorOptions::acceleration */
-  double chebyshev_rho;               /**< SimulatorOptions::chebyshev_rho */
-  int anderson_window;                /**< SimulatorOptions::anderson_window */
-  int lbfgs_history;                  /**< SimulatorOptions::lbfgs_history */
-  double gradient_tolerance;          /**< SimulatorOptions::gradient_tolerance */
-  int be_iterations;                  /**< SimulatorOptions::be_iterations */
-  double energy_tolerance;            /**< SimulatorOptions::energy_tolerance */
-  double max_velocity_scale;          /**< SimulatorOptions::max_velocity_scale */
-  int max_root_evaluations;           /**< SimulatorOptions::max_root_evaluations */
-  double energy_limit;                /**< SimulatorOptions::energy_limit */
-  double contact_tolerance;           /**< m: deepest a particle may stay inside a collider after a step */
-  stabint_backend backend;            /**< SimulatorOptions::backend */
-  const char* opencl_platform;        /**< NULL or "": environment variable, then the first */
-  const char* opencl_device;          /**< NULL or "": environment variable, then the first */
-  stabint_precision opencl_precision; /**< OpenCLOptions::precision */
-  stabint_global_solve global_solve;  /**< SimulatorOptions::global_solve */
-  int cg_iterations;                  /**< SimulatorOptions::cg_iterations */
-  double cg_tolerance;                /**< SimulatorOptions::cg_tolerance */
+  STABINT_SIMULATOR_OPTIONS_TABLE(STABINT_C_OPTION_, STABINT_C_OPTION_NESTED_, STABINT_OPTION_C_TYPE_)
 } stabint_simulator_options;
 
 /** The C++ defaults (blend, h = 1/30, 10 iterations, CPU reference backend, ...). */

@@ -6,6 +6,7 @@
 /// stabint/simulator.hpp (docs/development.md, "Layering").
 #include <stabint/enum_list.hpp>
 #include <stabint/errors.hpp>
+#include <stabint/options_table.h>
 #include <stabint/scene.hpp>
 
 #include <string>
@@ -152,13 +153,19 @@ ElementKind parseElementKind(const std::string& name);
 /// Every element kind, in the enum's order.
 std::vector<ElementKind> allElementKinds();
 
-/// Which OpenCL device to use. Empty strings fall back to the environment variables
-/// STABINT_OPENCL_PLATFORM and STABINT_OPENCL_DEVICE, then to the first platform and device.
-/// Each selector is either an index ("0") or a case-insensitive substring of the name.
+/// @cond
+// The members of the options structs, from their rows (stabint/options_table.h).
+#define STABINT_OPTION_MEMBER_(type, name, default_value, rule, doc) type name = default_value;
+#define STABINT_OPTION_SUB_MEMBER_(parent, type, name, default_value, rule, doc) type name = default_value;
+#define STABINT_OPTION_NESTED_MEMBER_(type, name, fields, doc) type name;
+/// @endcond
+
+/// Which OpenCL device to use, and the precision: the rows of STABINT_OPENCL_OPTIONS_TABLE
+/// (stabint/options_table.h), each a member with its type and default. Empty selectors fall back
+/// to the environment variables STABINT_OPENCL_PLATFORM and STABINT_OPENCL_DEVICE, then to the
+/// first platform and device.
 struct OpenCLOptions {
-  std::string platform;                     ///< platform selector; empty: environment, then the first
-  std::string device;                       ///< device selector; empty: environment, then the first
-  Precision precision = Precision::Double;  ///< of the kernels and the device's data
+  STABINT_OPENCL_OPTIONS_FIELDS(STABINT_OPTION_SUB_MEMBER_, opencl)
 };
 
 /// One available OpenCL device, as listed by listOpenCLDevices().
@@ -191,68 +198,11 @@ STABINT_FIELD_TABLE_(OpenCLDeviceInfo, STABINT_OPENCL_DEVICE_INFO_FIELDS,
 std::vector<OpenCLDeviceInfo> listOpenCLDevices();
 
 /// How a Simulator (or BatchSimulator) steps: the integrator, the step, the solver and its
-/// budget, the blend's parameters and the backend. Checked when a simulator is built.
+/// budget, the blend's parameters and the backend. Its members are the rows of
+/// STABINT_SIMULATOR_OPTIONS_TABLE (stabint/options_table.h), each with its type, default, allowed
+/// values and what it does; checked when a simulator is built.
 struct SimulatorOptions {
-  Integrator integrator = Integrator::EnergyBlend;  ///< the blend by default
-  double time_step = 1.0 / 30.0;                    ///< h > 0
-
-  /// Local/global iterations per implicit solve (the real-time budget). When `tolerance` > 0 the
-  /// solve instead runs until the relative change of the objective is below it (reference
-  /// runs), at most `max_iterations`.
-  ///@{
-  int iterations = 10;
-  double tolerance = 0.0;
-  int max_iterations = 1000;
-  ///@}
-  /// The solver of every local/global solve (default L-BFGS, the most accurate at its cost on
-  /// every scene measured: docs/method.md, "Which solver is the default"; None is plain
-  /// iterations); the spectral-radius estimate of the plain iteration that the Chebyshev
-  /// recurrence uses (in (0, 1)); the number of past iterates Anderson acceleration combines
-  /// (>= 1); the curvature pairs L-BFGS keeps (in [1, 50]).
-  ///@{
-  Acceleration acceleration = Acceleration::LBFGS;
-  double chebyshev_rho = 0.98;
-  int anderson_window = 5;
-  int lbfgs_history = 5;
-  ///@}
-  /// L-BFGS's stopping rule by accuracy (Acceleration::LBFGS only; 0: off): a solve stops once the
-  /// gradient of its objective, in the norm of L-BFGS's inverse Hessian (sqrt(g.H g), the Newton
-  /// decrement), has fallen to gradient_tolerance times its value at the warm start; `iterations`
-  /// stays the cap (docs/method.md, "L-BFGS"). In [0, 1).
-  double gradient_tolerance = 0.0;
-
-  /// The global step's solver. With ConjugateGradient every global step runs `cg_iterations`
-  /// CG iterations (>= 1; a fixed count: the OpenCL device reads nothing back), or, when
-  /// `cg_tolerance` > 0, stops earlier once ||rhs - K_c x|| <= cg_tolerance ||rhs|| in every
-  /// column (the device then reads back the residual after every CG iteration).
-  ///@{
-  GlobalSolve global_solve = GlobalSolve::Factor;
-  int cg_iterations = 20;
-  double cg_tolerance = 0.0;
-  ///@}
-
-  /// Energy-tracking blend (docs/method.md, "The blend").
-  int be_iterations = 3;           ///< budget of the BE partner solve, warm-started at x_n
-  double energy_tolerance = 1e-3;  ///< tau = energy_tolerance * (K + E_int + E_scale)
-  /// Largest factor by which one step may scale the velocities up to restore missing energy:
-  /// energy comes back over a few steps, never as a kinetic jump of a nearly resting body.
-  double max_velocity_scale = 2.0;
-  int max_root_evaluations = 12;  ///< energy evaluations of the root find
-
-  /// Energy ceiling, off when 0: a step whose energy H exceeds the tracked target H* by more than
-  /// energy_limit * E_scale (energyScale()) is refused with EnergyLimitError, keeping the last
-  /// accepted state, so that an explicit or midpoint run that gains energy stops long before it
-  /// overflows. Energy lost (damping, BE) is never refused.
-  double energy_limit = 0.0;
-
-  /// Contact (docs/method.md, "Contact"): after every step, no particle stays deeper than this
-  /// inside a collider (m, >= 0); the final projection that moves it out is booked in H*. It also
-  /// sets the contact set's margin, contact_tolerance + time_step^2 |gravity|: a particle that is
-  /// (or, at its velocity, will be) that close to a collider carries its contact term.
-  double contact_tolerance = 1e-2;
-
-  BackendKind backend = BackendKind::CpuReference;  ///< where the element work runs
-  OpenCLOptions opencl;                             ///< device and precision (backend OpenCL or Auto)
+  STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_OPTION_MEMBER_, STABINT_OPTION_NESTED_MEMBER_)
 };
 
 /// Energies of a state (docs/method.md section 1). `elastic` includes every element's energy

@@ -1,8 +1,8 @@
-// The simulator's classes: the options (from their field list, stabint/options_fields.hpp), the
+// The simulator's classes: the options (from their field list, stabint/options_table.h), the
 // reports (from their tables, stabint/types.hpp), Checkpoint and Simulator.
 #include "fields.hpp"
 
-#include <stabint/options_fields.hpp>
+#include <stabint/options_table.h>
 
 #include <string>
 
@@ -26,21 +26,21 @@ void bindSimulator(nb::module_& m) {
                             "OpenCL device choice: index or name substring; empty: "
                             "STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE, then the first.")
       .def(nb::init<>())
-#define STABINT_PY_SUB(parent, type, name, doc) .def_rw(#name, &OpenCLOptions::name, doc)
+#define STABINT_PY_SUB(parent, type, name, default_value, rule, doc) .def_rw(#name, &OpenCLOptions::name, doc)
           STABINT_OPENCL_OPTIONS_FIELDS(STABINT_PY_SUB, opencl);
 #undef STABINT_PY_SUB
   bindStruct<OpenCLDeviceInfo>(m);
   m.def("list_opencl_devices", &listOpenCLDevices, "Every OpenCL device; empty when none is installed.");
 
-  // Generated from the field list (stabint/options_fields.hpp): one keyword per field, by name,
+  // Generated from the field list (stabint/options_table.h): one keyword per field, by name,
   // with the C++ default, and one property per field.
 #define STABINT_PY_PARAM(type, name, ...) , type name
 #define STABINT_PY_SET(type, name, ...) o->name = name;
 #define STABINT_PY_KEYWORD(type, name, ...) , nb::arg(#name) = d.name
-#define STABINT_PY_PROPERTY(type, name, doc) .def_rw(#name, &SimulatorOptions::name, doc)
+#define STABINT_PY_PROPERTY(type, name, default_value, rule, doc) .def_rw(#name, &SimulatorOptions::name, doc)
 #define STABINT_PY_NESTED_PROPERTY(type, name, fields, doc) .def_rw(#name, &SimulatorOptions::name, doc)
   nb::class_<SimulatorOptions>(m, "SimulatorOptions",
-                               "Options of a Simulator; every field is documented in stabint/simulator.hpp.")
+                               "Options of a Simulator; every field is a row of stabint/options_table.h.")
       .def(
           "__init__",
           [](SimulatorOptions* o STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_PARAM, STABINT_PY_PARAM)) {

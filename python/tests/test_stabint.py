@@ -159,12 +159,12 @@ NON_DEFAULT_OPTIONS = dict(
 
 
 def option_fields():
-    """The fields of SimulatorOptions as the field list (include/stabint/options_fields.hpp)
-    names them: the list the bindings are generated from."""
-    header = (SCENES.parent / "include" / "stabint" / "options_fields.hpp").read_text()
-    body = header[header.index("#define STABINT_SIMULATOR_OPTIONS_FIELDS"):
-                  header.index("#define STABINT_OPENCL_OPTIONS_FIELDS")]
-    return re.findall(r"^\s*(?:FIELD|NESTED)\([\w:]+, (\w+),", body, re.M)
+    """The fields of SimulatorOptions as their rows (include/stabint/options_table.h) name
+    them: the table the bindings are generated from."""
+    header = (SCENES.parent / "include" / "stabint" / "options_table.h").read_text()
+    body = header[header.index("#define STABINT_SIMULATOR_OPTIONS_TABLE"):
+                  header.index("#define STABINT_OPENCL_OPTIONS_TABLE")]
+    return re.findall(r"^\s*(?:FIELD|NESTED)\(T\(\w+\), (\w+),", body, re.M)
 
 
 def test_every_option_reaches_the_simulator():

@@ -1,6 +1,6 @@
 #include "cli.hpp"
 
-#include <stabint/options_fields.hpp>
+#include <stabint/options_table.h>
 
 #include <cerrno>
 #include <cmath>
@@ -12,7 +12,7 @@
 namespace stabint_run {
 namespace {
 
-// --- simulator options: one flag per field of the field list (stabint/options_fields.hpp) ------
+// --- simulator options: one flag per field of the field list (stabint/options_table.h) ------
 // Adding a field to SimulatorOptions adds its flag (the field name with '-' for '_') and its help
 // line here; a field of a new type needs its parseValue, shown and placeholder overloads.
 
@@ -109,10 +109,10 @@ stabint::Precision precision(const std::string& text) {
 // (--platform, --device, --precision: --precision also notes that it was given).
 bool setSimulatorOption(stabint::SimulatorOptions& o, const std::string& flag, const std::string& typed,
                         const std::function<std::string()>& value) {
-#define STABINT_RUN_SET(type, name, doc) \
-  if (flag == flagOf(#name)) {           \
-    parseValue(typed, value(), o.name);  \
-    return true;                         \
+#define STABINT_RUN_SET(type, name, default_value, rule, doc) \
+  if (flag == flagOf(#name)) {                                \
+    parseValue(typed, value(), o.name);                       \
+    return true;                                              \
   }
 #define STABINT_RUN_SET_NESTED(type, name, fields, doc)
   STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_RUN_SET, STABINT_RUN_SET_NESTED)
@@ -147,7 +147,7 @@ std::string simulatorOptionsHelp() {
     }
     s << out << "\n";
   };
-#define STABINT_RUN_HELP(type, name, doc) \
+#define STABINT_RUN_HELP(type, name, default_value, rule, doc) \
   line(flagOf(#name) + " " + placeholder(d.name), std::string(doc) + " (default " + shown(d.name) + ")");
 #define STABINT_RUN_HELP_NESTED(type, name, fields, doc)
   STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_RUN_HELP, STABINT_RUN_HELP_NESTED)
@@ -168,7 +168,7 @@ std::string usage() {
        "  --scene NAME|FILE.json    built-in scene (oscillator, chain, cloth, tetbar) or a JSON scene\n"
        "                            file (format: docs/scene-format.md)\n"
        "  --param KEY=VALUE         built-in scene parameter, repeatable (nx=50, pinned=[0,49])\n"
-       "Simulator options, one per field of SimulatorOptions (include/stabint/simulator.hpp);\n"
+       "Simulator options, one per row of include/stabint/options_table.h;\n"
        "--dt is --time-step:\n"
     << simulatorOptionsHelp()
     << "Backend (--backend above: auto prints its choice and the reason; opencl runs on the selected\n"

@@ -1,9 +1,10 @@
 // The C API's conversions between its plain-C structs and enums (include/stabint/stabint_c.h)
-// and the C++ ones, generated from the lists: the options from their field list
-// (stabint/options_table.h), the reports from theirs (stabint/types.hpp), the enums from their
-// value lists. The C header is plain C and lists the fields itself; the checks below fail the
-// build when a C field is missing or has another type, or when a C enum's values drift from the
-// C++ enum's.
+// and the C++ ones, generated from the lists: the options from their table
+// (stabint/options_table.h, which also makes both option structs), the reports from their lists
+// (stabint/types.hpp), the enums from their value lists. The C header spells the report structs
+// and the enums itself; the checks below fail the build when a C field is missing or has another
+// type (for the options: when the table's C type map disagrees with its C++ one), or when a C
+// enum's values drift from the C++ enum's.
 #include "c_api/c_api.hpp"
 
 #include <stabint/options_table.h>
@@ -58,7 +59,7 @@ struct CField<PhaseTimes> {
 template <class T>
 using CType = typename CField<T>::type;
 
-// Every field of the options' list is in the C struct, with its C type. A nested struct's fields
+// Every row of the options' table has its C field, with the C type of its C++ type. A nested struct's fields
 // are spelled <member>_<field> in C (opencl_platform).
 #define STABINT_C_CHECK_FIELD(type, name, default_value, rule, doc)                     \
   static_assert(std::is_same_v<decltype(stabint_simulator_options::name), CType<type>>, \

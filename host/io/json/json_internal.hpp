@@ -9,6 +9,8 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <filesystem>
+#include <filesystem>
 #include <optional>
 #include <set>
 #include <string>
@@ -102,6 +104,12 @@ ClothModel clothModel(const Field& f);
 // to the caller); `name_field` is named when the name is unknown.
 Scene builtinFromField(const std::string& name, const Field& params, const std::set<std::string>& extra,
                        const Field& name_field);
+
+// --- mesh_reader.cpp ------------------------------------------------------------------------------
+
+// A "mesh" entry of a scene file ({"file", "type", material keys, "translate", "damping",
+// "name"}) as a scene; a relative file is relative to `dir`.
+Scene meshFromField(const Field& mesh, const std::filesystem::path& dir);
 
 // --- scene_reader.cpp -----------------------------------------------------------------------------
 

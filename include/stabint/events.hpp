@@ -82,7 +82,8 @@ struct ScriptedEvent {
   EventAction action;  ///< what it does
 };
 
-/// Plays a list of events on a simulator: call apply(sim) before every sim.step(). The events
+/// Plays a list of events on a simulator: call apply(sim) before every sim.step() (or
+/// apply(batch, scene) before every batch.step(), on one scene of a BatchSimulator). The events
 /// must be in non-decreasing frame order, releases must name an earlier grab, grabs' ids must
 /// be unique, paths must have increasing frames after their event's and finite positions; the
 /// constructor throws InvalidInputError naming the event ("event 3 (frame 60): ...").

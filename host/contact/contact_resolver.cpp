@@ -134,20 +134,24 @@ void ContactResolver::bookProjection(const PotentialEnergy& projected, Potential
 
 std::vector<std::uint8_t> ContactResolver::baseFlags(const std::vector<std::vector<std::uint8_t>>& enabled,
                                                      const std::vector<std::int32_t>& log) const {
+  return baseFlags(count() == 0 ? std::vector<std::uint8_t>() : enabled[static_cast<std::size_t>(block_)], log);
+}
+
+std::vector<std::uint8_t> ContactResolver::baseFlags(std::vector<std::uint8_t> flags,
+                                                     const std::vector<std::int32_t>& log) {
   const auto corrupt = [] {
     throw InvalidInputError("checkpoint: its contact set changes do not fit its contact set");
   };
-  if (count() == 0) {
+  if (flags.empty()) {
     if (!log.empty()) corrupt();
     return {};
   }
-  std::vector<std::uint8_t> flags = enabled[static_cast<std::size_t>(block_)];
   if (!log.empty() && log.back() != 0) corrupt();
   for (std::size_t i = log.size(); i-- > 0;) {
     const std::int64_t entry = log[i];
     if (entry == 0) continue;
     const std::int64_t e = (entry > 0 ? entry : -entry) - 1;
-    if (e >= count()) corrupt();
+    if (e >= static_cast<std::int64_t>(flags.size())) corrupt();
     std::uint8_t& flag = flags[static_cast<std::size_t>(e)];
     if ((flag != 0) != (entry > 0)) corrupt();  // it entered: it is in; it left: it is out
     flag = entry > 0 ? 0 : 1;
@@ -164,7 +168,7 @@ void ContactResolver::restore(const std::vector<std::int32_t>& log) {
     if (entry > 0) entering.push_back(entry - 1);
     if (entry < 0) leaving.push_back(-entry - 1);
     if (entry != 0) continue;
-    changeSet(entering, leaving);
+    if (!entering.empty() || !leaving.empty()) changeSet(entering, leaving);
     entering.clear();
     leaving.clear();
   }

@@ -79,9 +79,13 @@ class ContactResolver {
   /// does not fit the flags or the scene.
   std::vector<std::uint8_t> baseFlags(const std::vector<std::vector<std::uint8_t>>& enabled,
                                       const std::vector<std::int32_t>& log) const;
+  /// baseFlags from the contact block's flags alone (one scene's of a batch: its pairs and a log
+  /// of them, numbered from its first pair).
+  static std::vector<std::uint8_t> baseFlags(std::vector<std::uint8_t> flags, const std::vector<std::int32_t>& log);
   /// A checkpoint's set, with the scene's contact flags set to its baseFlags: L assembled and
   /// every factor computed from them, then `log` replayed on them, so that the run continues bit
-  /// for bit (rank updates on other factors would differ in round-off).
+  /// for bit (rank updates on other factors would differ in round-off). A group of the log without
+  /// entries (one scene's of a batch, where another scene's set changed) changes nothing.
   void restore(const std::vector<std::int32_t>& log);
 
  private:

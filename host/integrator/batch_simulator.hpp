@@ -15,6 +15,7 @@
 #include "contact/contact_resolver.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
+#include "integrator/checkpoint.hpp"
 #include "integrator/element_changes.hpp"
 #include "integrator/frame_input.hpp"
 #include "integrator/input_scope.hpp"
@@ -29,6 +30,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -94,6 +96,36 @@ struct BatchSimulator::Impl {
     double target_now = 0.0;          // H* with this step's forcing, damping
     BlendStep blend;
   };
+  // ---- checkpoints (batch_checkpoint.cpp) --------------------------------------------------------
+  // Simulator's CheckpointData twice over: the batch's state as a Simulator of the concatenation
+  // would save it (its pins, forcing, elements and contact log: what ElementChanges and
+  // ContactResolver restore), and each scene's part of it as a Simulator of the scene alone would.
+  CheckpointData batchData();
+  CheckpointData sceneData(const CheckpointData& all, int scene) const;
+  /// What scene `scene`'s checkpoint must fit (InvalidInputError naming `call` for a scene out of
+  /// range); its messages start with "<call>: scene <s>: ".
+  RestoreTarget restoreTarget(int scene, const char* call) const;
+  void restoreScene(int scene, const CheckpointData& d);
+  void restoreAll(double time, const std::vector<CheckpointData>& scenes);
+  // Writes scene `scene`'s checkpoint `d` into `all` and `segments` (its pins may be more or
+  // fewer than the scene has now) as of the batch's time `time`.
+  void splice(CheckpointData& all, std::vector<SceneSegment>& segments, int scene, const CheckpointData& d,
+              double time) const;
+  // The scenes' contact logs (each numbered from its first pair, all with the groups of one
+  // batch's log) as the batch's.
+  std::vector<std::int32_t> mergeContactLogs(const std::vector<CheckpointData>& scenes) const;
+  // The state `all` with its segments and per-scene values, as Simulator::applyCheckpoint applies
+  // its own: with `assemble`, L is assembled from the contact flags of the log's start and the
+  // log replayed; else the elements that differ are updated in the factor.
+  void apply(const CheckpointData& all, const std::vector<SceneSegment>& segments,
+             const std::vector<PerScene>& per_scene, bool assemble);
+  // Scene p's values as its checkpoint has them: active when at the batch's time `time` (its
+  // E_scale stays its own, as a Simulator's does).
+  static void restoreScalars(PerScene& p, const CheckpointData& d, double time);
+  // Checked, then applied; a refusal puts the state before back through the same path.
+  void restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
+                      const std::vector<PerScene>& per_scene, bool assemble);
+
   Impl(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
   double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;
   // The integrators but the blend: the candidates of every stepping scene, with their forcing.

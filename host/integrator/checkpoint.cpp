@@ -238,28 +238,49 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
   return hash;
 }
 
-void checkRestorable(const CheckpointData& d, const SceneData& scene, const ContactResolver& contact) {
-  if (d.particles != scene.numParticles() || d.scene_fingerprint != sceneFingerprint(scene.scene()))
-    throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
-                            " particles, or other masses, rest shape or colliders)");
-  const std::size_t num_blocks = scene.blocks().size();
-  bool same_elements = d.stiffness.size() == num_blocks;
-  for (std::size_t b = 0; same_elements && b < num_blocks; ++b) {
-    const ElementBlock& block = scene.blocks()[b];
-    const std::size_t count =
-        block.type == &pinElementType() ? d.pin_list.size() : static_cast<std::size_t>(block.count);
-    same_elements = d.stiffness[b].size() == count;
+void checkRestorable(const CheckpointData& d, const RestoreTarget& target) {
+  try {
+    if (d.particles != target.particles || d.scene_fingerprint != target.fingerprint)
+      throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
+                              " particles, or other masses, rest shape or colliders)");
+    const std::size_t num_blocks = target.element_counts.size();
+    bool same_elements = d.stiffness.size() == num_blocks;
+    for (std::size_t b = 0; same_elements && b < num_blocks; ++b) {
+      const std::size_t count =
+          int(b) == target.pin_block ? d.pin_list.size() : static_cast<std::size_t>(target.element_counts[b]);
+      same_elements = d.stiffness[b].size() == count;
+    }
+    if (!same_elements) throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
+    const std::size_t motions = d.forcing.colliders.size();
+    if (motions != 0 && motions != target.colliders)
+      throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");
+    // Its checks of the contact log.
+    if (target.contact_block < 0)
+      ContactResolver::baseFlags(std::vector<std::uint8_t>(), d.contact_log);
+    else
+      ContactResolver::baseFlags(d.enabled[std::size_t(target.contact_block)], d.contact_log);
+    for (const Pin& p : d.pin_list)
+      if (p.vertex >= d.particles)
+        throw InvalidInputError("checkpoint: pin vertex " + std::to_string(p.vertex) + " out of range (the scene has " +
+                                std::to_string(d.particles) + " particles)");
+  } catch (const InvalidInputError& e) {
+    if (target.where.empty()) throw;
+    throw InvalidInputError(target.where + e.what());
   }
-  if (!same_elements) throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
-  const std::size_t motions = d.forcing.colliders.size();
-  if (motions != 0 && motions != scene.scene().colliders.size())
-    throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");
-  contact.baseFlags(d.enabled, d.contact_log);  // its checks of the contact log
-  for (const Pin& p : d.pin_list)
-    if (p.vertex >= scene.numParticles())
-      throw InvalidInputError("checkpoint: pin vertex " + std::to_string(p.vertex) + " out of range (the scene has " +
-                              std::to_string(scene.numParticles()) + " particles)");
 }
+
+void checkRestorable(const CheckpointData& d, const SceneData& scene, const ContactResolver& contact) {
+  RestoreTarget target;
+  target.fingerprint = sceneFingerprint(scene.scene());
+  target.particles = scene.numParticles();
+  for (const ElementBlock& block : scene.blocks()) target.element_counts.push_back(block.count);
+  target.pin_block = scene.blockIndex(pinElementType());
+  target.contact_block = contact.block();
+  target.colliders = scene.scene().colliders.size();
+  checkRestorable(d, target);
+}
+
+std::uint64_t checkpointChecksum(const char* data, std::size_t size) { return checksum(data, size); }
 
 std::string serializeCheckpoint(const CheckpointData& d) {
   Writer out;

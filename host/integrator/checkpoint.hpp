@@ -40,12 +40,29 @@ struct CheckpointData {
 /// another scene apart.
 std::uint64_t sceneFingerprint(const Scene& scene);
 
+/// What a checkpoint must fit: one scene, a Simulator's or one of a batch (whose SceneData is the
+/// concatenation, so the counts are the scene's segment's).
+struct RestoreTarget {
+  std::uint64_t fingerprint = 0;  // sceneFingerprint() of the scene alone
+  std::int64_t particles = 0;
+  std::vector<int> element_counts;  // per block; the pin block's comes with the checkpoint
+  int pin_block = -1;
+  int contact_block = -1;  // -1: none
+  std::size_t colliders = 0;
+  std::string where;  // the messages' prefix ("restore: scene 2: "; empty for a Simulator)
+};
+
 /// What a restore can check before it changes anything: InvalidInputError unless `d` belongs to
-/// `scene` (particles, fingerprint, element and collider counts, its contact log as `contact`
-/// reads it, pin vertices).
+/// the target (particles, fingerprint, element and collider counts, its contact log, pin
+/// vertices).
+void checkRestorable(const CheckpointData& d, const RestoreTarget& target);
+/// checkRestorable for a Simulator's scene, its contact set read by `contact`.
 void checkRestorable(const CheckpointData& d, const SceneData& scene, const ContactResolver& contact);
 
 std::string serializeCheckpoint(const CheckpointData& data);
+/// The checksum that ends a serialized checkpoint (FNV-1a, 64 bits), for other formats that hold
+/// checkpoints (a batch's).
+std::uint64_t checkpointChecksum(const char* data, std::size_t size);
 /// Throws FileFormatError(origin, 0, ...) for a wrong header, version, or truncated/oversized data.
 CheckpointData parseCheckpoint(const std::string& bytes, const std::string& origin);
 

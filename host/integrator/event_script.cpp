@@ -1,5 +1,7 @@
 // The player of scripted events (include/stabint/events.hpp): every action goes through the
-// Simulator's per-frame input, which validates it and books its energy.
+// per-frame input of a Simulator or of one scene of a batch, which validates it and books its
+// energy; one player (EventScript::play) over a small adaptor of each.
+#include <stabint/batch.hpp>
 #include <stabint/events.hpp>
 
 #include <cmath>
@@ -37,6 +39,52 @@ Eigen::Vector3d pathAt(const std::vector<PathKey>& path, int start_frame, const 
   }
   return path.back().position;
 }
+
+// What the player calls, on a Simulator.
+struct SimulatorTarget {
+  Simulator& sim;
+  int stepCount() const { return sim.stepCount(); }
+  int grab(int vertex, double stiffness) { return sim.grab(vertex, stiffness); }
+  Eigen::Vector3d position(int vertex) const { return sim.positions().row(vertex).transpose(); }
+  void release(int pin) { sim.release(pin); }
+  Eigen::MatrixX3d velocities() const { return sim.velocities(); }
+  void setVelocities(const Eigen::MatrixX3d& v) { sim.setVelocities(v); }
+  void setElementStiffness(ElementKind kind, const std::vector<int>& indices, double stiffness) {
+    sim.setElementStiffness(kind, indices, stiffness);
+  }
+  void setElementEnabled(ElementKind kind, const std::vector<int>& indices, bool enabled) {
+    sim.setElementEnabled(kind, indices, enabled);
+  }
+  void setPinTarget(int pin, const Eigen::Vector3d& q) { sim.setPinTarget(pin, q); }
+  void setColliderPosition(int collider, const Eigen::Vector3d& p) { sim.setColliderPosition(collider, p); }
+  void setColliderVelocity(int collider, const Eigen::Vector3d& v) { sim.setColliderVelocity(collider, v); }
+  Eigen::Vector3d colliderPosition(int collider) const { return sim.colliderPosition(collider); }
+  std::string where() const { return std::string(); }
+};
+
+// The same on scene `scene` of a batch: its calls with the scene first; the velocities are set by
+// setState with the scene's positions (the batch has no setVelocities).
+struct BatchSceneTarget {
+  BatchSimulator& batch;
+  int scene;
+  int stepCount() const { return batch.stepCount(scene); }
+  int grab(int vertex, double stiffness) { return batch.grab(scene, vertex, stiffness); }
+  Eigen::Vector3d position(int vertex) const { return batch.positions(scene).row(vertex).transpose(); }
+  void release(int pin) { batch.release(scene, pin); }
+  Eigen::MatrixX3d velocities() const { return batch.velocities(scene); }
+  void setVelocities(const Eigen::MatrixX3d& v) { batch.setState(scene, batch.positions(scene), v); }
+  void setElementStiffness(ElementKind kind, const std::vector<int>& indices, double stiffness) {
+    batch.setElementStiffness(scene, kind, indices, stiffness);
+  }
+  void setElementEnabled(ElementKind kind, const std::vector<int>& indices, bool enabled) {
+    batch.setElementEnabled(scene, kind, indices, enabled);
+  }
+  void setPinTarget(int pin, const Eigen::Vector3d& q) { batch.setPinTarget(scene, pin, q); }
+  void setColliderPosition(int collider, const Eigen::Vector3d& p) { batch.setColliderPosition(scene, collider, p); }
+  void setColliderVelocity(int collider, const Eigen::Vector3d& v) { batch.setColliderVelocity(scene, collider, v); }
+  Eigen::Vector3d colliderPosition(int collider) const { return batch.colliderPosition(scene, collider); }
+  std::string where() const { return "scene " + std::to_string(scene) + ": "; }
+};
 
 }  // namespace
 
@@ -123,6 +171,20 @@ int EventScript::handlePin(const std::string& id) const {
 }
 
 void EventScript::apply(Simulator& sim) {
+  SimulatorTarget target{sim};
+  play(target);
+}
+
+void EventScript::apply(BatchSimulator& batch, int scene) {
+  if (scene < 0 || scene >= batch.size())
+    throw InvalidInputError("EventScript::apply: scene " + std::to_string(scene) + " out of range (the batch has " +
+                            std::to_string(batch.size()) + " scenes)");
+  BatchSceneTarget target{batch, scene};
+  play(target);
+}
+
+template <typename Target>
+void EventScript::play(Target& sim) {
   const int frame = sim.stepCount();
   for (; next_ < events_.size() && events_[next_].frame <= frame; ++next_) {
     const ScriptedEvent& e = events_[next_];
@@ -133,7 +195,7 @@ void EventScript::apply(Simulator& sim) {
                        h.event = next_;
                        h.pin = sim.grab(g.vertex, g.stiffness);
                        h.start_frame = frame;
-                       h.start = sim.positions().row(g.vertex).transpose();
+                       h.start = sim.position(g.vertex);
                        held_.push_back(h);
                      },
                      [&](const ReleaseEvent& r) {
@@ -149,7 +211,7 @@ void EventScript::apply(Simulator& sim) {
                        Eigen::MatrixX3d v = sim.velocities();
                        for (int j : im.vertices) {
                          if (j < 0 || j >= v.rows())
-                           throw InvalidInputError("impulse vertex " + std::to_string(j) +
+                           throw InvalidInputError(sim.where() + "impulse vertex " + std::to_string(j) +
                                                    " out of range (the scene has " + std::to_string(v.rows()) +
                                                    " particles)");
                        }

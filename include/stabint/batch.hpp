@@ -26,6 +26,40 @@ struct BatchStepReport {
   std::vector<std::string> refusals;
 };
 
+/// A snapshot of every scene of a BatchSimulator (BatchSimulator::checkpoint()): the batch's
+/// time and one Checkpoint per scene, each in Simulator's format. Restoring it into a batch of the
+/// same scenes and options (BatchSimulator::restore(const BatchCheckpoint&)) continues bit for bit
+/// as the batch did from that moment when the batch restored into has the same pins and element
+/// stiffnesses as the checkpoint (the same batch, or a new one when no pin or element was changed
+/// before the checkpoint): the batch's one factor is then the same, as a Simulator's is (see
+/// Checkpoint). Otherwise the factor is updated rather than the same, and the run agrees to
+/// round-off. A scene that was inactive (refused) is restored inactive. The serialized form (bytes(),
+/// save()) is one file: a versioned header, the time, and each scene's checkpoint.
+class BatchCheckpoint {
+ public:
+  /// The batch's time (BatchSimulator::time()) at the snapshot.
+  double time() const { return time_; }
+  /// The number of scenes.
+  int size() const { return static_cast<int>(scenes_.size()); }
+  /// Scene `scene`'s checkpoint (InvalidInputError out of range): it restores into a Simulator of
+  /// that scene, as BatchSimulator::checkpoint(int) does.
+  const Checkpoint& scene(int scene) const;
+  /// The serialized form (what save() writes).
+  std::string bytes() const;
+  /// Checks the header, sizes, checksum and every scene's checkpoint; throws FileFormatError
+  /// naming `origin` and the problem.
+  static BatchCheckpoint fromBytes(const std::string& bytes, const std::string& origin = "batch checkpoint");
+  /// Writes bytes() to a file; throws FileFormatError when it cannot be written completely.
+  void save(const std::string& path) const;
+  /// Reads a file written by save(); throws FileFormatError when missing or malformed.
+  static BatchCheckpoint load(const std::string& path);
+
+ private:
+  friend class BatchSimulator;
+  double time_ = 0.0;
+  std::vector<Checkpoint> scenes_;
+};
+
 /// Steps many scenes with one integrator and one set of options: one local/global solve and one
 /// block-diagonal factor for all (no element couples two scenes), and per scene its own energies,
 /// target H*, blend decisions, forcing, damping and refusals, so that every scene follows the
@@ -159,6 +193,36 @@ class BatchSimulator {
   ///@}
   /// Whether element `index` of `kind` of scene `scene` is enabled.
   bool elementEnabled(int scene, ElementKind kind, int index) const;
+
+  /// Snapshot of scene `scene`, in Simulator's format: it restores into a Simulator of that scene
+  /// (same options and backend), which continues as the scene did (to the round-off of the
+  /// batch's factor against its own), and into scene `scene` of a batch of the same scenes
+  /// (restore(int, const Checkpoint&)). Its time is the scene's (time(int)). A scene inactive
+  /// after a refused step gives its kept state, at its own time, without BDF2 history (a restore
+  /// into a Simulator restarts BDF2 with a BE step, as after setState).
+  Checkpoint checkpoint(int scene) const;
+  /// Continues scene `scene` from `checkpoint`: a snapshot of that scene (checkpoint(int), or a
+  /// Simulator's of the same scene and options). The scenes share the batch's time, so the
+  /// checkpoint's time must be time(), the batch's: its time-dependent forcing (pin laws and
+  /// ramps, force fields, collider motion) continues from there, and it cannot be moved to another
+  /// time. A scene inactive after a refused step becomes active again. The other scenes keep
+  /// their state, targets and forcing; where the checkpoint's pins, element stiffnesses or
+  /// enabled flags differ from the scene's, the scene's block of the factor is updated as grab
+  /// and setElementStiffness update it (or the batch is refactored past a size; where its contact
+  /// set differs, the batch's factor is assembled and refactored), so the other scenes continue
+  /// to round-off. With BDF2 the checkpoint must have history when the batch has (and not when it
+  /// has not): the batch keeps one. Refused, with nothing changed, by an InvalidInputError naming
+  /// the call and the scene: a scene out of range, a checkpoint of another scene (particles,
+  /// masses, rest shape, colliders, element counts), of another time, or of another history.
+  void restore(int scene, const Checkpoint& checkpoint);
+  /// Snapshot of every scene (see BatchCheckpoint).
+  BatchCheckpoint checkpoint() const;
+  /// Continues every scene from `checkpoint`, a snapshot of a batch of the same scenes (in the
+  /// same order) and options: the batch's time, each scene's state, target, pins, elements,
+  /// forcing and contact set, BDF2's history, which scenes are inactive. Refused, with nothing
+  /// changed, by an InvalidInputError: another number of scenes, or a scene's checkpoint of
+  /// another scene or of a time after the batch checkpoint's (naming the scene).
+  void restore(const BatchCheckpoint& checkpoint);
 
  private:
   struct Impl;

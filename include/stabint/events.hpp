@@ -17,6 +17,8 @@
 
 namespace stabint {
 
+class BatchSimulator;
+
 /// A keyframe of a dragged handle: its target at the end of step `frame - 1` (i.e. when the
 /// simulator's step count is `frame`).
 struct PathKey {
@@ -80,7 +82,8 @@ struct ScriptedEvent {
   EventAction action;  ///< what it does
 };
 
-/// Plays a list of events on a simulator: call apply(sim) before every sim.step(). The events
+/// Plays a list of events on a simulator: call apply(sim) before every sim.step() (or
+/// apply(batch, scene) before every batch.step(), on one scene of a BatchSimulator). The events
 /// must be in non-decreasing frame order, releases must name an earlier grab, grabs' ids must
 /// be unique, paths must have increasing frames after their event's and finite positions; the
 /// constructor throws InvalidInputError naming the event ("event 3 (frame 60): ...").
@@ -106,6 +109,13 @@ class EventScript {
   /// its path. An event the simulator refuses (a vertex out of its range, say) throws its
   /// InvalidInputError with the event named; the events before it stay applied.
   void apply(Simulator& sim);
+  /// Plays the script on scene `scene` of `batch`, as apply(Simulator&) on that scene's own
+  /// Simulator: frames are batch.stepCount(scene), vertices, pins, colliders and elements the
+  /// scene's own, each event the batch's per-scene input call (refusals name the call and the
+  /// scene). An impulse is setState(scene, its positions, the pushed velocities), which the batch
+  /// refuses for BDF2 (where Simulator's setVelocities restarts BDF2 with a BE step). One script
+  /// object plays on one target: it keeps the handles and paths it started there.
+  void apply(BatchSimulator& batch, int scene);
 
   /// Pin index of a held handle by grab id (-1 when not held).
   int handlePin(const std::string& id) const;
@@ -118,6 +128,10 @@ class EventScript {
     int start_frame = 0;
     Eigen::Vector3d start = Eigen::Vector3d::Zero();
   };
+  // The one player of both apply()s, over a Simulator or one scene of a batch (event_script.cpp).
+  template <typename Target>
+  void play(Target& target);
+
   std::vector<ScriptedEvent> events_;
   std::size_t next_ = 0;
   std::vector<Handle> held_;

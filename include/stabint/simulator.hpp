@@ -38,6 +38,7 @@ class Checkpoint {
 
  private:
   friend class Simulator;
+  friend class BatchSimulator;
   std::string bytes_;
   double time_ = 0.0;
   int step_count_ = 0;

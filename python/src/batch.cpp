@@ -16,6 +16,50 @@ void bindBatch(nb::module_& m) {
       .def_ro("refusals", &BatchStepReport::refusals,
               "Per scene: '' when it stepped, else why its step was refused (the message its own Simulator "
               "would have raised) or that it is inactive since a refused step.");
+  nb::class_<BatchCheckpoint>(
+      m, "BatchCheckpoint",
+      "A snapshot of every scene of a batch (BatchSimulator.checkpoint()): the batch's time and "
+      "one Checkpoint per scene, each restorable into a Simulator of that scene. "
+      "BatchSimulator.restore() of it, into a batch of the same scenes and options, continues bit "
+      "for bit when that batch has the checkpoint's pins and element stiffnesses (the same "
+      "batch, or a new one when none were changed), else to round-off. Its bytes are one file: "
+      "a versioned header, the time and the scenes' checkpoints. Immutable; picklable.")
+      .def_prop_ro("time", &BatchCheckpoint::time, "The batch's time at the snapshot.")
+      .def("__len__", &BatchCheckpoint::size)
+      .def_prop_ro("size", &BatchCheckpoint::size, "Number of scenes.")
+      .def("scene", &BatchCheckpoint::scene, "scene"_a, "The Checkpoint of one scene (a copy).")
+      .def_prop_ro(
+          "bytes",
+          [](const BatchCheckpoint& c) {
+            const std::string b = c.bytes();
+            return nb::bytes(b.data(), b.size());
+          },
+          "The serialized form (what save() writes), as a new bytes object.")
+      .def_static(
+          "from_bytes",
+          [](nb::bytes data, const std::string& origin) {
+            return BatchCheckpoint::fromBytes(std::string(data.c_str(), data.size()), origin);
+          },
+          "data"_a, "origin"_a = "batch checkpoint",
+          "A batch checkpoint from its bytes. Raises FileFormatError naming `origin` and the problem when they are "
+          "malformed.")
+      .def("save", &BatchCheckpoint::save, "path"_a, nb::call_guard<nb::gil_scoped_release>(),
+           "Writes the bytes to one file. Raises FileFormatError when it cannot be written completely.")
+      .def_static("load", &BatchCheckpoint::load, "path"_a, nb::call_guard<nb::gil_scoped_release>(),
+                  "Reads a file written by save(). Raises FileFormatError when missing or malformed.")
+      .def("__getstate__",
+           [](const BatchCheckpoint& c) {
+             const std::string b = c.bytes();
+             return nb::bytes(b.data(), b.size());
+           })
+      .def("__setstate__",
+           [](BatchCheckpoint& c, nb::bytes data) {
+             new (&c) BatchCheckpoint(
+                 BatchCheckpoint::fromBytes(std::string(data.c_str(), data.size()), "pickled batch checkpoint"));
+           })
+      .def("__repr__", [](const BatchCheckpoint& c) {
+        return "BatchCheckpoint(size=" + std::to_string(c.size()) + ", time=" + std::to_string(c.time()) + ")";
+      });
   nb::class_<BatchSimulator>(m, "BatchSimulator",
                              "Steps many independent scenes with one set of options: one solve and one block-diagonal "
                              "factor for all, and per scene its own energies, target, blend decisions and refusals "
@@ -94,7 +138,20 @@ void bindBatch(nb::module_& m) {
            "scene"_a, "kind"_a, "indices"_a, "enabled"_a, "As Simulator.set_element_enabled, in one scene.")
       .def("set_element_enabled", nb::overload_cast<int, ElementKind, int, bool>(&BatchSimulator::setElementEnabled),
            "scene"_a, "kind"_a, "index"_a, "enabled"_a)
-      .def("element_enabled", &BatchSimulator::elementEnabled, "scene"_a, "kind"_a, "index"_a);
+      .def("element_enabled", &BatchSimulator::elementEnabled, "scene"_a, "kind"_a, "index"_a)
+      .def("checkpoint", nb::overload_cast<int>(&BatchSimulator::checkpoint, nb::const_), "scene"_a,
+           "Snapshot of one scene as a Checkpoint: it restores into a Simulator of that scene (same options), or "
+           "into that scene of a batch of the same scenes (restore(scene, checkpoint)).")
+      .def("checkpoint", nb::overload_cast<>(&BatchSimulator::checkpoint, nb::const_),
+           "Snapshot of every scene as a BatchCheckpoint (restore(checkpoint)).")
+      .def("restore", nb::overload_cast<int, const Checkpoint&>(&BatchSimulator::restore), "scene"_a, "checkpoint"_a,
+           "Continues one scene from a Checkpoint of it (this batch's or its own Simulator's) taken at the batch's "
+           "time: the scenes share the batch's time. Raises InvalidInputError naming the scene, with nothing "
+           "changed, for a checkpoint of another scene, time or BDF2 history.")
+      .def("restore", nb::overload_cast<const BatchCheckpoint&>(&BatchSimulator::restore), "checkpoint"_a,
+           "Continues every scene from a BatchCheckpoint of a batch of the same scenes and options. Raises "
+           "InvalidInputError, with nothing changed, for another number of scenes or a checkpoint of another scene "
+           "(naming it).");
 }
 
 }  // namespace stabint::py

@@ -35,9 +35,12 @@ void bindEvents(nb::module_& m) {
       .def_prop_ro("events", &EventScript::events, "The events (a copy).")
       .def("empty", &EventScript::empty)
       .def("__len__", [](const EventScript& e) { return e.events().size(); })
-      .def("apply", &EventScript::apply, "sim"_a,
+      .def("apply", nb::overload_cast<Simulator&>(&EventScript::apply), "sim"_a,
            "Applies every event not applied yet whose frame is at most sim.step_count, then sets the held "
            "handles' targets and the moving colliders' positions for the end of the coming step.")
+      .def("apply", nb::overload_cast<BatchSimulator&, int>(&EventScript::apply), "batch"_a, "scene"_a,
+           "The same on one scene of a batch (call it before every batch.step()): frames are "
+           "batch.step_count(scene), indices the scene's own; an impulse is the scene's set_state, refused for BDF2.")
       .def("handle_pin", &EventScript::handlePin, "id"_a, "Pin index of the held handle of grab `id` (-1: none).")
       .def("__copy__", [](const EventScript& e) { return EventScript(e); })
       .def(

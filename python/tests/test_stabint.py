@@ -852,6 +852,67 @@ def test_a_batch_steps_every_scene_as_its_own_simulator_and_refuses_per_scene():
     assert batch.step_count(0) == batch.step_count(1) + 2
 
 
+def test_a_batch_checkpoints_and_restores_scenes_and_plays_event_scripts(tmp_path):
+    # The whole batch: restored into a new batch of the same scenes (through a file), it continues
+    # bit for bit as the batch did (no pin or element was changed, so the factors are the same).
+    scenes = [stabint.chain_pendulum(), stabint.cloth_grid(nx=6, ny=6)]
+    options = stabint.SimulatorOptions(integrator=Integrator.EnergyBlend, iterations=5)
+    batch = stabint.BatchSimulator(scenes, options)
+    for _ in range(5):
+        batch.step()
+    whole = batch.checkpoint()
+    assert len(whole) == 2 and whole.time == batch.time
+    whole.save(str(tmp_path / "batch.ckpt"))
+    later = [batch.step() for _ in range(5)]
+    fresh = stabint.BatchSimulator(scenes, options)
+    fresh.restore(stabint.BatchCheckpoint.load(str(tmp_path / "batch.ckpt")))
+    again = [fresh.step() for _ in range(5)]
+    for i in range(2):
+        np.testing.assert_array_equal(fresh.positions(i), batch.positions(i))
+        assert fresh.target(i) == batch.target(i)
+        assert [r.scenes[i].branch for r in again] == [r.scenes[i].branch for r in later]
+
+    # One scene: its checkpoint restores into its own Simulator, which continues as the scene does
+    # in the batch (the batch's round-off: 1e-9 of the scene's size).
+    own = stabint.Simulator(scenes[1], options)
+    own.restore(batch.checkpoint(1))
+    assert own.step_count == batch.step_count(1)
+    for _ in range(5):
+        batch.step()
+        own.step()
+    size = np.ptp(scenes[1].positions, axis=0).max()
+    assert np.abs(batch.positions(1) - own.positions).max() <= 1e-9 * size
+    # A checkpoint of another time, or of another scene, is refused naming the scene.
+    with pytest.raises(stabint.InvalidInputError, match="scene 1: the checkpoint is at t = "):
+        batch.restore(1, whole.scene(1))
+    with pytest.raises(stabint.InvalidInputError, match="scene 0: checkpoint: it belongs to another scene"):
+        batch.restore(0, batch.checkpoint(1))
+    with pytest.raises(stabint.InvalidInputError, match="scene 5 out of range"):
+        batch.checkpoint(5)
+
+    # An event script on scene 1 of the batch: that scene follows its own Simulator playing the same
+    # script, the other scene gets nothing (no event energy).
+    events = [stabint.ScriptedEvent(1, stabint.GrabEvent(id="hand", vertex=30, stiffness=200.0,
+                                                         path=[stabint.PathKey(6, [0.0, 0.1, 0.0])])),
+              stabint.ScriptedEvent(8, stabint.ReleaseEvent(id="hand")),
+              stabint.ScriptedEvent(9, stabint.ImpulseEvent(vertices=[5], velocity=np.array([0.0, 0.5, 0.0])))]
+    in_batch, alone = stabint.EventScript(events), stabint.EventScript(events)
+    batch = stabint.BatchSimulator(scenes, options)
+    own = stabint.Simulator(scenes[1], options)
+    booked = 0.0
+    for _ in range(12):
+        in_batch.apply(batch, 1)
+        alone.apply(own)
+        report = batch.step()
+        own.step()
+        booked += abs(report.scenes[1].event_energy)
+        assert report.scenes[0].event_energy == 0.0
+    assert booked > 0.0
+    assert np.abs(batch.positions(1) - own.positions).max() <= 1e-9 * size
+    with pytest.raises(stabint.InvalidInputError, match="scene 3 out of range"):
+        in_batch.apply(batch, 3)
+
+
 def test_a_batch_refuses_what_would_couple_its_scenes_naming_the_scene():
     oscillator = stabint.linear_oscillator()
     other_gravity = stabint.chain_pendulum()

@@ -1,0 +1,480 @@
+// Checkpoints of a batch (include/stabint/batch.hpp, docs/batch_design.md "Checkpoints"): the
+// batch's state is what a Simulator of the concatenation would save, so Simulator's CheckpointData,
+// ElementChanges::save/restore and ContactResolver::restore serve it unchanged; a scene's
+// checkpoint is its part of that state, numbered as the scene alone numbers it, in Simulator's
+// format. A scene's restore splices its checkpoint into the batch's state and applies the whole.
+#include "integrator/batch_simulator.hpp"
+
+#include "elements/element_type.hpp"
+#include "integrator/integrator_steps.hpp"
+#include "io/text_reader.hpp"
+#include "out_of_memory.hpp"
+
+#include <stabint/errors.hpp>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace stabint {
+namespace {
+
+// Replaces v[first, first + count) with `with` (a scene's pins may be more or fewer).
+template <typename T>
+void replaceRange(std::vector<T>& v, int first, int count, const std::vector<T>& with) {
+  v.erase(v.begin() + first, v.begin() + first + count);
+  v.insert(v.begin() + first, with.begin(), with.end());
+}
+
+template <typename T>
+std::vector<T> rangeOf(const std::vector<T>& v, int first, int count) {
+  return std::vector<T>(v.begin() + first, v.begin() + first + count);
+}
+
+std::string timeText(double t) {
+  std::ostringstream out;
+  out.precision(17);
+  out << t;
+  return out.str();
+}
+
+int pinBlock(const SceneData& data) { return data.blockIndex(pinElementType()); }
+
+// Scene rows [first, first + count) of the batch's one user-force ramp `all` take the scene's own
+// ramp `own` at time t. The batch keeps one ramp (one t0, t1) for all particles: a scene's ramp
+// over a step other than the batch's fits only when one of the two is over by t (its value then
+// stays, evaluated as (1 - s) f + s f: round-off, as in setExternalForces).
+void spliceForces(SceneData::Ramp& all, int first, int count, const SceneData::Ramp& own, double t, int particles,
+                  const std::string& where) {
+  if (!own.active) {
+    if (all.active) {
+      all.start.middleRows(first, count).setZero();
+      all.end.middleRows(first, count).setZero();
+    }
+    return;
+  }
+  if (!all.active) {
+    all = SceneData::Ramp{own.t0, own.t1, Eigen::MatrixX3d::Zero(particles, 3), Eigen::MatrixX3d::Zero(particles, 3),
+                          true};
+  } else if (own.t0 != all.t0 || own.t1 != all.t1) {
+    if (!(own.t1 > t)) {
+      all.start.middleRows(first, count) = own.end;
+      all.end.middleRows(first, count) = own.end;
+      return;
+    }
+    if (all.t1 > t)
+      throw InvalidInputError(where + "its external forces ramp over [" + timeText(own.t0) + ", " + timeText(own.t1) +
+                              "], the batch's over [" + timeText(all.t0) + ", " + timeText(all.t1) +
+                              "]: one ramp for all scenes");
+    all.start = all.end;  // the other scenes' ramps are over: their values stay
+    all.t0 = own.t0;
+    all.t1 = own.t1;
+  }
+  all.start.middleRows(first, count) = own.start;
+  all.end.middleRows(first, count) = own.end;
+}
+
+}  // namespace
+
+CheckpointData BatchSimulator::Impl::batchData() {
+  CheckpointData d;
+  d.scene_fingerprint = sceneFingerprint(data_.scene());
+  d.particles = data_.numParticles();
+  d.pin_list = data_.scene().pins;
+  d.pins = static_cast<std::int64_t>(d.pin_list.size());
+  d.time = t_;
+  d.has_history = has_history_;
+  d.x = x_;
+  d.v = v_;
+  backend_->read(kXPrev, d.x_prev);
+  backend_->read(kVPrev, d.v_prev);
+  d.forcing = data_.forcingState();
+  d.contact_log = contact_.log();
+  ElementChanges(data_, system_, *backend_).save(d);
+  return d;
+}
+
+CheckpointData BatchSimulator::Impl::sceneData(const CheckpointData& all, int scene) const {
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  const PerScene& p = per_scene_[std::size_t(scene)];
+  CheckpointData d;
+  d.scene_fingerprint = sceneFingerprint(scenes_[std::size_t(scene)]);
+  d.particles = seg.num_particles;
+  const std::size_t pb = std::size_t(pinBlock(data_));
+  d.pin_list = rangeOf(all.pin_list, seg.first_element[pb], seg.num_elements[pb]);
+  for (Pin& pin : d.pin_list) pin.vertex -= seg.first_particle;
+  d.pins = static_cast<std::int64_t>(d.pin_list.size());
+  d.time = p.time;
+  d.steps = p.steps;
+  d.target = p.target;
+  d.kinetic = p.kinetic;
+  d.potential = p.potential;
+  d.pending_event_energy = p.pending_event_energy;
+  // An inactive scene's rows of the history slots hold its kept state, not its history.
+  d.has_history = all.has_history && p.active;
+  d.x = all.x.middleRows(seg.first_particle, seg.num_particles);
+  d.v = all.v.middleRows(seg.first_particle, seg.num_particles);
+  d.x_prev = all.x_prev.middleRows(seg.first_particle, seg.num_particles);
+  d.v_prev = all.v_prev.middleRows(seg.first_particle, seg.num_particles);
+  d.forcing.pins = rangeOf(all.forcing.pins, seg.first_element[pb], seg.num_elements[pb]);
+  // The batch's ramp has rows of zeros for the scenes never given forces: those have none, as
+  // their own Simulators (for which an active ramp means a pushed scene, no conserved momentum).
+  if (p.has_user_forces) {
+    const SceneData::Ramp& r = all.forcing.user_forces;
+    d.forcing.user_forces = SceneData::Ramp{r.t0, r.t1, r.start.middleRows(seg.first_particle, seg.num_particles),
+                                            r.end.middleRows(seg.first_particle, seg.num_particles), true};
+  }
+  d.forcing.colliders = rangeOf(all.forcing.colliders, seg.first_collider, seg.num_colliders);
+  for (std::size_t b = 0; b < all.stiffness.size(); ++b) {
+    d.stiffness.push_back(rangeOf(all.stiffness[b], seg.first_element[b], seg.num_elements[b]));
+    d.enabled.push_back(rangeOf(all.enabled[b], seg.first_element[b], seg.num_elements[b]));
+  }
+  // The scene's entries of the batch's contact log, numbered from its first pair. Every group's
+  // end (0) is kept, so that the scenes' logs of one batch line up group by group
+  // (mergeContactLogs); an empty group changes nothing when replayed.
+  const std::size_t cb = std::size_t(contact_.block());
+  const int first = seg.first_element[cb], count = seg.num_elements[cb];
+  if (count > 0)
+    for (std::int32_t entry : all.contact_log) {
+      const int e = (entry > 0 ? entry : -entry) - 1;
+      if (entry == 0)
+        d.contact_log.push_back(0);
+      else if (e >= first && e < first + count)
+        d.contact_log.push_back(entry > 0 ? e - first + 1 : -(e - first + 1));
+    }
+  return d;
+}
+
+RestoreTarget BatchSimulator::Impl::restoreTarget(int scene, const char* call) const {
+  checkScene(scene, call);
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  RestoreTarget target;
+  target.fingerprint = sceneFingerprint(scenes_[std::size_t(scene)]);
+  target.particles = seg.num_particles;
+  target.element_counts = seg.num_elements;
+  target.pin_block = pinBlock(data_);
+  target.contact_block = contact_.block();
+  target.colliders = std::size_t(seg.num_colliders);
+  target.where = std::string(call) + ": scene " + std::to_string(scene) + ": ";
+  return target;
+}
+
+void BatchSimulator::Impl::splice(CheckpointData& all, std::vector<SceneSegment>& segments, int scene,
+                                  const CheckpointData& d, double time) const {
+  SceneSegment& seg = segments[std::size_t(scene)];
+  const std::size_t pb = std::size_t(pinBlock(data_));
+  const int first_pin = seg.first_element[pb], pins = seg.num_elements[pb];
+  std::vector<Pin> pin_list = d.pin_list;
+  for (Pin& pin : pin_list) pin.vertex += seg.first_particle;
+  replaceRange(all.pin_list, first_pin, pins, pin_list);
+  replaceRange(all.forcing.pins, first_pin, pins, d.forcing.pins);
+  all.pins = static_cast<std::int64_t>(all.pin_list.size());
+  for (std::size_t b = 0; b < all.stiffness.size(); ++b) {
+    replaceRange(all.stiffness[b], seg.first_element[b], seg.num_elements[b], d.stiffness[b]);
+    replaceRange(all.enabled[b], seg.first_element[b], seg.num_elements[b], d.enabled[b]);
+  }
+  // The scene's pin range takes the checkpoint's count: the later scenes' pins move with it.
+  const int moved = static_cast<int>(pin_list.size()) - pins;
+  seg.num_elements[pb] += moved;
+  for (std::size_t s = std::size_t(scene) + 1; s < segments.size(); ++s) segments[s].first_element[pb] += moved;
+
+  all.x.middleRows(seg.first_particle, seg.num_particles) = d.x;
+  all.v.middleRows(seg.first_particle, seg.num_particles) = d.v;
+  all.x_prev.middleRows(seg.first_particle, seg.num_particles) = d.x_prev;
+  all.v_prev.middleRows(seg.first_particle, seg.num_particles) = d.v_prev;
+  const std::vector<Collider>& colliders = scenes_[std::size_t(scene)].colliders;
+  for (int c = 0; c < seg.num_colliders; ++c) {
+    // A checkpoint without collider motion (version 2) has its colliders on their scene laws.
+    const Collider& own = colliders[std::size_t(c)];
+    all.forcing.colliders[std::size_t(seg.first_collider + c)] =
+        d.forcing.colliders.empty() ? SceneData::ColliderMotion{0.0, 0.0, own.center, own.center, own.velocity, false}
+                                    : d.forcing.colliders[std::size_t(c)];
+  }
+  spliceForces(all.forcing.user_forces, seg.first_particle, seg.num_particles, d.forcing.user_forces, time,
+               data_.numParticles(), restoreTarget(scene, "restore").where);
+}
+
+std::vector<std::int32_t> BatchSimulator::Impl::mergeContactLogs(const std::vector<CheckpointData>& scenes) const {
+  const std::size_t cb = std::size_t(contact_.block());
+  std::vector<std::vector<std::vector<std::int32_t>>> groups(scenes.size());  // per scene, per group: entries
+  std::size_t count = 0;
+  bool first = true;
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    if (segments_[s].num_elements[cb] == 0) continue;
+    groups[s].emplace_back();
+    for (std::int32_t entry : scenes[s].contact_log) {
+      if (entry != 0) {
+        const int e = (entry > 0 ? entry : -entry) - 1 + segments_[s].first_element[cb];
+        groups[s].back().push_back(entry > 0 ? e + 1 : -(e + 1));
+      } else {
+        groups[s].emplace_back();
+      }
+    }
+    groups[s].pop_back();  // after the last group's end (checked by checkRestorable)
+    if (!first && groups[s].size() != count)
+      throw InvalidInputError("restore: scene " + std::to_string(s) +
+                              ": its contact set changes do not line up with the other scenes' (checkpoints of one "
+                              "batch only)");
+    count = groups[s].size();
+    first = false;
+  }
+  // A group of the batch's log lists the pairs entering and leaving in one step; the replay takes
+  // them apart by sign, so scene after scene gives the batch's change.
+  std::vector<std::int32_t> merged;
+  for (std::size_t g = 0; g < count; ++g) {
+    for (const auto& scene : groups)
+      if (!scene.empty()) merged.insert(merged.end(), scene[g].begin(), scene[g].end());
+    merged.push_back(0);
+  }
+  return merged;
+}
+
+void BatchSimulator::Impl::apply(const CheckpointData& all, const std::vector<SceneSegment>& segments,
+                                 const std::vector<PerScene>& per_scene, bool assemble) {
+  ElementChanges elements(data_, system_, *backend_);
+  if (assemble) {
+    const std::vector<std::uint8_t> base = contact_.baseFlags(all.enabled, all.contact_log);
+    elements.restore(all, contact_.block(), &base);
+    contact_.restore(all.contact_log);
+  } else {
+    elements.restore(all, contact_.block(), nullptr);
+  }
+  segments_ = segments;
+  backend_->setSegments(segments_);
+  backend_->write(kX, all.x);
+  backend_->write(kV, all.v);
+  backend_->write(kXPrev, all.x_prev);
+  backend_->write(kVPrev, all.v_prev);
+  x_ = all.x;
+  v_ = all.v;
+  v_slot_ = all.v;
+  t_ = all.time;
+  has_history_ = all.has_history;
+  data_.setForcingState(all.forcing);
+  per_scene_ = per_scene;
+  for (int s = 0; s < size(); ++s) pinsChanged(s);
+}
+
+void BatchSimulator::Impl::restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
+                                          const std::vector<PerScene>& per_scene, bool assemble) {
+  const CheckpointData before = batchData();
+  const std::vector<SceneSegment> segments_before = segments_;
+  const std::vector<PerScene> per_scene_before = per_scene_;
+  try {
+    apply(all, segments, per_scene, assemble);
+  } catch (const Error&) {
+    // What only applying shows (a system that does not factor): the state before goes back.
+    apply(before, segments_before, per_scene_before, assemble);
+    throw;
+  }
+}
+
+void BatchSimulator::Impl::restoreScalars(PerScene& p, const CheckpointData& d, double time) {
+  p.active = d.time == time;
+  p.time = d.time;
+  p.steps = static_cast<int>(d.steps);
+  p.kinetic = d.kinetic;
+  p.potential = d.potential;
+  p.target = d.target;
+  p.pending_event_energy = d.pending_event_energy;
+  p.has_user_forces = d.forcing.user_forces.active;
+}
+
+void BatchSimulator::Impl::restoreScene(int scene, const CheckpointData& d) {
+  const RestoreTarget target = restoreTarget(scene, "restore");
+  checkRestorable(d, target);
+  if (d.time != t_)
+    throw InvalidInputError(target.where + "the checkpoint is at t = " + timeText(d.time) +
+                            ", the batch at t = " + timeText(t_) +
+                            ": its scenes share the batch's time, a scene is restored at that time only");
+  if (options_.integrator == Integrator::BDF2 && d.has_history != has_history_)
+    throw InvalidInputError(target.where +
+                            (has_history_ ? "the checkpoint has no BDF2 history, the batch has"
+                                          : "the checkpoint has BDF2 history, the batch has none") +
+                            ": the batch keeps one for all scenes");
+  CheckpointData all = batchData();
+  // The scene's contact set as the checkpoint's: its pairs change without the log, so L is then
+  // assembled from the flags and factored again, with an empty log.
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  const std::size_t cb = std::size_t(contact_.block());
+  const bool assemble = rangeOf(all.enabled[cb], seg.first_element[cb], seg.num_elements[cb]) != d.enabled[cb];
+  std::vector<SceneSegment> segments = segments_;
+  splice(all, segments, scene, d, t_);
+  if (assemble) all.contact_log.clear();
+  std::vector<PerScene> per_scene = per_scene_;
+  restoreScalars(per_scene[std::size_t(scene)], d, t_);
+  restoreChecked(all, segments, per_scene, assemble);
+}
+
+void BatchSimulator::Impl::restoreAll(double time, const std::vector<CheckpointData>& scenes) {
+  if (int(scenes.size()) != size())
+    throw InvalidInputError("restore: the checkpoint has " + std::to_string(scenes.size()) + " scenes, the batch " +
+                            std::to_string(size()));
+  for (int s = 0; s < size(); ++s) {
+    const RestoreTarget target = restoreTarget(s, "restore");
+    checkRestorable(scenes[std::size_t(s)], target);
+    if (!(scenes[std::size_t(s)].time <= time))
+      throw InvalidInputError(target.where + "its time t = " + timeText(scenes[std::size_t(s)].time) +
+                              " is after the batch's, t = " + timeText(time));
+  }
+  CheckpointData all = batchData();
+  all.time = time;
+  all.has_history = false;
+  all.forcing.user_forces = SceneData::Ramp{};  // the scenes' own ramps only
+  std::vector<SceneSegment> segments = segments_;
+  std::vector<PerScene> per_scene = per_scene_;
+  for (int s = 0; s < size(); ++s) {
+    const CheckpointData& d = scenes[std::size_t(s)];
+    splice(all, segments, s, d, time);
+    restoreScalars(per_scene[std::size_t(s)], d, time);
+    // The batch's history is that of its active scenes (an inactive one's is its kept state).
+    if (d.time == time) all.has_history = all.has_history || d.has_history;
+  }
+  all.contact_log = mergeContactLogs(scenes);
+  restoreChecked(all, segments, per_scene, /*assemble=*/contact_.count() > 0);
+}
+
+// ---- the public classes ----------------------------------------------------------------------------
+
+Checkpoint BatchSimulator::checkpoint(int scene) const {
+  impl_->checkScene(scene, "checkpoint");
+  return reportingOutOfMemory("BatchSimulator::checkpoint", [&] {
+    const CheckpointData d = impl_->sceneData(impl_->batchData(), scene);
+    Checkpoint c;
+    c.bytes_ = serializeCheckpoint(d);
+    c.time_ = d.time;
+    c.step_count_ = static_cast<int>(d.steps);
+    return c;
+  });
+}
+
+BatchCheckpoint BatchSimulator::checkpoint() const {
+  return reportingOutOfMemory("BatchSimulator::checkpoint", [&] {
+    const CheckpointData all = impl_->batchData();
+    BatchCheckpoint batch;
+    batch.time_ = impl_->t_;
+    for (int s = 0; s < size(); ++s) {
+      const CheckpointData d = impl_->sceneData(all, s);
+      Checkpoint c;
+      c.bytes_ = serializeCheckpoint(d);
+      c.time_ = d.time;
+      c.step_count_ = static_cast<int>(d.steps);
+      batch.scenes_.push_back(std::move(c));
+    }
+    return batch;
+  });
+}
+
+void BatchSimulator::restore(int scene, const Checkpoint& checkpoint) {
+  reportingOutOfMemory("BatchSimulator::restore",
+                       [&] { impl_->restoreScene(scene, parseCheckpoint(checkpoint.bytes(), "checkpoint")); });
+}
+
+void BatchSimulator::restore(const BatchCheckpoint& checkpoint) {
+  reportingOutOfMemory("BatchSimulator::restore", [&] {
+    std::vector<CheckpointData> scenes;
+    for (int s = 0; s < checkpoint.size(); ++s)
+      scenes.push_back(parseCheckpoint(checkpoint.scene(s).bytes(), "checkpoint of scene " + std::to_string(s)));
+    impl_->restoreAll(checkpoint.time(), scenes);
+  });
+}
+
+namespace {
+
+constexpr char kBatchMagic[8] = {'S', 'T', 'B', 'B', 'T', 'C', 'H', '\n'};
+constexpr std::uint32_t kBatchVersion = 1;
+
+template <typename T>
+void put(std::string& out, const T& v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+}  // namespace
+
+const Checkpoint& BatchCheckpoint::scene(int scene) const {
+  if (scene < 0 || scene >= size())
+    throw InvalidInputError("BatchCheckpoint::scene: scene " + std::to_string(scene) + " out of range (it has " +
+                            std::to_string(size()) + " scenes)");
+  return scenes_[std::size_t(scene)];
+}
+
+// The magic, the version, the time, the scene count, each scene's checkpoint (its size, then its
+// bytes, which have their own checksum), and a checksum of everything before it.
+std::string BatchCheckpoint::bytes() const {
+  std::string out(kBatchMagic, sizeof kBatchMagic);
+  put(out, kBatchVersion);
+  put(out, time_);
+  put(out, static_cast<std::int64_t>(scenes_.size()));
+  for (const Checkpoint& c : scenes_) {
+    put(out, static_cast<std::int64_t>(c.bytes().size()));
+    out += c.bytes();
+  }
+  put(out, checkpointChecksum(out.data(), out.size()));
+  return out;
+}
+
+BatchCheckpoint BatchCheckpoint::fromBytes(const std::string& bytes, const std::string& origin) {
+  const auto fail = [&](const std::string& what) {
+    throw FileFormatError(origin, 0, "not a valid stabint batch checkpoint: " + what);
+  };
+  std::size_t pos = 0;
+  std::size_t end = bytes.size();
+  const auto take = [&](void* to, std::size_t size, const char* what) {
+    if (end - pos < size) fail(std::string("truncated at ") + what);
+    std::memcpy(to, bytes.data() + pos, size);
+    pos += size;
+  };
+  char magic[sizeof kBatchMagic];
+  take(magic, sizeof magic, "the header");
+  if (std::memcmp(magic, kBatchMagic, sizeof magic) != 0) fail("wrong header");
+  std::uint32_t version = 0;
+  take(&version, sizeof version, "the version");
+  if (version != kBatchVersion)
+    fail("format version " + std::to_string(version) + ", expected " + std::to_string(kBatchVersion));
+  std::uint64_t stored = 0;
+  if (end - pos < sizeof stored) fail("truncated at the checksum");
+  end -= sizeof stored;
+  std::memcpy(&stored, bytes.data() + end, sizeof stored);
+  if (stored != checkpointChecksum(bytes.data(), end))
+    fail("the checksum does not match: the data is corrupted or was changed");
+  BatchCheckpoint batch;
+  take(&batch.time_, sizeof batch.time_, "the time");
+  if (!std::isfinite(batch.time_)) fail("the time is not finite");
+  std::int64_t count = 0;
+  take(&count, sizeof count, "the scene count");
+  if (count < 0 || static_cast<std::uint64_t>(count) > (end - pos) / sizeof(std::int64_t))
+    fail("scene count " + std::to_string(count) + " does not fit the data");
+  for (std::int64_t s = 0; s < count; ++s) {
+    std::int64_t size = 0;
+    take(&size, sizeof size, "a scene's size");
+    if (size < 0 || static_cast<std::uint64_t>(size) > end - pos)
+      fail("scene " + std::to_string(s) + "'s size does not fit the data");
+    batch.scenes_.push_back(
+        Checkpoint::fromBytes(bytes.substr(pos, std::size_t(size)), origin + ", scene " + std::to_string(s)));
+    pos += std::size_t(size);
+  }
+  if (pos != end) fail(std::to_string(end - pos) + " bytes after the end");
+  return batch;
+}
+
+void BatchCheckpoint::save(const std::string& path) const {
+  const std::string data = bytes();
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  if (!file) throw FileFormatError(path, 0, "cannot open the batch checkpoint file for writing");
+  file.write(data.data(), static_cast<std::streamsize>(data.size()));
+  file.flush();
+  if (!file) throw FileFormatError(path, 0, "writing the batch checkpoint failed");
+}
+
+BatchCheckpoint BatchCheckpoint::load(const std::string& path) {
+  // The bounded reader: regular files only, size limited.
+  return fromBytes(io::readTextFile(path), path);
+}
+
+}  // namespace stabint

@@ -37,9 +37,11 @@ void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions
   const FrameInput input = frameInput(scene, "setState");
   input.checkRows(positions, "positions");
   input.checkRows(velocities, "velocities");
-  if (options_.integrator == Integrator::BDF2)
+  // BDF2 restarts with a BE step after a jump (its history is not the new state's); the batch keeps
+  // one history for all scenes, so only a batch of one can restart.
+  if (options_.integrator == Integrator::BDF2 && size() > 1)
     throw InvalidInputError(scope(scene, "setState").where() +
-                            "BDF2 would restart every scene of the batch with a BE step; not supported in a batch yet");
+                            "BDF2 would restart every scene of the batch with a BE step; only a batch of one can");
   const SceneSegment& seg = segments_[std::size_t(scene)];
   PerScene& p = per_scene_[std::size_t(scene)];
   const double h_before = p.kinetic + p.potential.total();
@@ -60,6 +62,7 @@ void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions
   p.potential = potentials[std::size_t(scene)];
   p.kinetic = kineticEnergy(scene, v_);
   bookEvent(scene, h_before);
+  has_history_ = false;  // BDF2 (a batch of one): the next step is a BE step, as Simulator's
   if (!p.active) {
     p.active = true;
     p.time = t_;

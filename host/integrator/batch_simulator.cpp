@@ -13,16 +13,20 @@
 namespace stabint {
 namespace {
 
-// Simulator's checks, then what the batch does not support yet. The backend is refused later,
+// Simulator's checks, then the options that couple the scenes of a batch of more than one: a
+// tolerance stop, Chebyshev and Anderson acceleration, Newton-CG and CG reduce over the whole
+// vector (one scene's blow-up would reach the others through them). A batch of one scene has
+// nothing to couple and takes every option its Simulator takes. The backend is refused later,
 // once created, unless it computes per-scene energies (Backend::computesPerScene).
-const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
+const SimulatorOptions& checkedOptions(const SimulatorOptions& o, std::size_t scenes) {
   validateOptions(o);
   const bool per_scene_solver = o.acceleration == Acceleration::None || o.acceleration == Acceleration::LBFGS;
-  if (o.tolerance != 0.0 || o.gradient_tolerance != 0.0 || !per_scene_solver || o.global_solve != GlobalSolve::Factor)
+  if (scenes > 1 &&
+      (o.tolerance != 0.0 || o.gradient_tolerance != 0.0 || !per_scene_solver || o.global_solve != GlobalSolve::Factor))
     throw InvalidInputError(
-        "batch simulator options: a tolerance stop (tolerance, gradient_tolerance), Chebyshev or Anderson acceleration "
-        "and CG sum over the whole batch: a fixed iteration count with the factor only, plain or L-BFGS (per scene), "
-        "until they are per scene");
+        "batch simulator options: with more than one scene, a tolerance stop (tolerance, gradient_tolerance), "
+        "Chebyshev, Anderson or Newton acceleration and CG sum over the whole batch: a fixed iteration count with the "
+        "factor only, plain or L-BFGS (per scene), until they are per scene");
   return o;
 }
 
@@ -38,7 +42,7 @@ Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) { retu
 }  // namespace
 
 BatchSimulator::Impl::Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : Impl(concatenateScenes(scenes), scenes, checkedOptions(options)) {}
+    : Impl(concatenateScenes(scenes), scenes, checkedOptions(options, scenes.size())) {}
 
 BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options)
     : scenes_(scenes),
@@ -58,7 +62,8 @@ BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, c
   if (!backend_->computesPerScene())
     throw InvalidInputError("batch simulator: the backend (" + backend_->description() +
                             ") computes no per-scene energies yet (docs/batch_design.md)");
-  factorIntegratorSystems(system_, options_.integrator, options_.time_step);
+  solver_.setScene(&data_);  // Newton-CG's spring Hessians (a batch of one only)
+  factorIntegratorSystems(system_, options_);
   backend_->setSegments(segments_);
   backend_->write(kX, x_);
   backend_->write(kV, v_);
@@ -200,11 +205,9 @@ const BatchStepReport& BatchSimulator::Impl::step() {
 }
 
 IterationControl BatchSimulator::Impl::iterationControl(int iterations) const {
-  IterationControl control;
-  control.iterations = iterations;
-  control.acceleration = options_.acceleration;
-  control.lbfgs_history = options_.lbfgs_history;
-  return control;
+  // A batch of more than one measures each scene against its own scale (LocalGlobalSolver's
+  // segments); the whole-vector controls it refuses. A batch of one is its scene.
+  return stabint::iterationControl(options_, iterations, per_scene_.size() == 1 ? per_scene_[0].energy_scale : 1.0);
 }
 
 void BatchSimulator::Impl::integrate(double t1, bool forced) {

@@ -5,8 +5,9 @@
 
 namespace stabint {
 
-void factorIntegratorSystems(GlobalSystem& system, Integrator integrator, double h) {
-  switch (integrator) {
+void factorIntegratorSystems(GlobalSystem& system, const SimulatorOptions& options) {
+  const double h = options.time_step;
+  switch (options.integrator) {
     case Integrator::BDF2:
       system.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
       [[fallthrough]];  // and its first step is BE
@@ -16,6 +17,7 @@ void factorIntegratorSystems(GlobalSystem& system, Integrator integrator, double
     case Integrator::ForwardEuler:
     case Integrator::SymplecticEuler: break;  // explicit: no system
   }
+  if (options.global_solve == GlobalSolve::ConjugateGradient) system.dropFactors();
 }
 
 int IntegratorSteps::backwardEuler(double h, double t, int x_out, int v_out, const IterationControl& control,
@@ -89,6 +91,23 @@ void IntegratorSteps::commit(Integrator integrator, bool& has_history) {
   }
   backend_.copy(kX, kXNew);
   backend_.copy(kV, kVNew);
+}
+
+IterationControl iterationControl(const SimulatorOptions& o, int iterations, double energy_scale) {
+  IterationControl c;
+  c.iterations = iterations;
+  c.tolerance = o.tolerance;
+  c.max_iterations = o.max_iterations;
+  c.energy_scale = energy_scale;
+  c.acceleration = o.acceleration;
+  c.chebyshev_rho = o.chebyshev_rho;
+  c.anderson_window = o.anderson_window;
+  c.lbfgs_history = o.lbfgs_history;
+  c.gradient_tolerance = o.gradient_tolerance;
+  c.global_solve = o.global_solve;
+  c.cg_iterations = o.cg_iterations;
+  c.cg_tolerance = o.cg_tolerance;
+  return c;
 }
 
 IterationControl endingPlain(IterationControl control) {

@@ -35,8 +35,11 @@ enum DriverSlot : int {
 
 /// Factors the systems K_c = c M + L the integrator solves with (the blend: BE's and IM's), with
 /// the same expressions for c as the steps below, so that each is factored once. Explicit
-/// integrators factor nothing.
-void factorIntegratorSystems(GlobalSystem& system, Integrator integrator, double h);
+/// integrators factor nothing. With GlobalSolve::ConjugateGradient the factors only validate the
+/// systems (masses too small for the stiffnesses are refused here, naming them, rather than
+/// failing the first step) and are then dropped: element changes would keep updating them for
+/// nothing.
+void factorIntegratorSystems(GlobalSystem& system, const SimulatorOptions& options);
 
 /// One integrator step from (kX, kV) at time t (and (kXPrev, kVPrev) for BDF2): each leaves
 /// x_{n+1}, v_{n+1} in (x_out, v_out) and returns the local/global iterations it did.
@@ -80,6 +83,11 @@ class IntegratorSteps {
 /// for the solves whose error the step carries on, implicit midpoint's and BDF2's, and the
 /// blend's BE partner, which the blend combines with the IM candidate.
 IterationControl endingPlain(IterationControl control);
+
+/// The solver's controls for one solve of `iterations` (the budget) from the options, with the
+/// energy scale the tolerance stop and the line search measure against: one place for Simulator
+/// and BatchSimulator, so that a batch of one solves as its Simulator does.
+IterationControl iterationControl(const SimulatorOptions& options, int iterations, double energy_scale);
 
 /// The work the forcing does in a step (docs/method.md section 4): with p_new and p_old the
 /// potentials of the new and old positions at t + h and t, and new_mid, old_mid theirs at

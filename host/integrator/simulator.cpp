@@ -51,10 +51,7 @@ struct Simulator::Impl {
     // The implicit systems are factored now, so that masses too small for the stiffnesses are
     // refused here, naming them, rather than failing the first step().
     solver.setScene(&scene);
-    factorIntegratorSystems(system, options.integrator, options.time_step);
-    // CG needs no factor: they only validated the systems, and element changes would keep
-    // updating them for nothing.
-    if (options.global_solve == GlobalSolve::ConjugateGradient) system.dropFactors();
+    factorIntegratorSystems(system, options);
     backend->write(kX, x);
     backend->write(kV, v);
     potential = backend->potential(kX, 0.0);
@@ -66,16 +63,7 @@ struct Simulator::Impl {
 
   double kineticEnergy(const Eigen::MatrixX3d& vel) const { return stabint::kineticEnergy(scene.masses(), vel); }
 
-  IterationControl control(int iterations) const {
-    IterationControl c{iterations,           options.tolerance,     options.max_iterations, energy_scale,
-                       options.acceleration, options.chebyshev_rho, options.anderson_window};
-    c.lbfgs_history = options.lbfgs_history;
-    c.gradient_tolerance = options.gradient_tolerance;
-    c.global_solve = options.global_solve;
-    c.cg_iterations = options.cg_iterations;
-    c.cg_tolerance = options.cg_tolerance;
-    return c;
-  }
+  IterationControl control(int iterations) const { return iterationControl(options, iterations, energy_scale); }
 
   // ---- the integrators (integrator_steps.hpp): each leaves x_{n+1}, v_{n+1} in (x_out, v_out) ----
   int backwardEuler(int x_out, int v_out, int iterations, bool warm_start) {

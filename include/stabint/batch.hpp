@@ -88,10 +88,12 @@ class BatchCheckpoint {
 ///
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
 /// scene valid and with the same gravity, a backend that computes per-scene energies (the CPU
-/// reference and OpenCL), a fixed iteration count with the factor (no tolerance stop, no
-/// Chebyshev or Anderson acceleration, no CG: they sum over the whole batch, and one scene's
-/// blow-up would reach the others through them). Acceleration::LBFGS runs per scene: its dot
-/// products, line search and history are each scene's own.
+/// reference and OpenCL) and, with more than one scene, a fixed iteration count with the factor
+/// (no tolerance stop, no Chebyshev, Anderson or Newton acceleration, no CG: they sum over the
+/// whole batch, and one scene's blow-up would reach the others through them). Acceleration::LBFGS
+/// runs per scene: its dot products, line search and history are each scene's own. A batch of one
+/// scene takes every option its Simulator takes and steps as that Simulator does, bit for bit on
+/// the CPU reference (tests/test_batch_of_one.cpp).
 class BatchSimulator {
  public:
   /// Validates and copies the scenes and options; a scene or option outside the constraints
@@ -145,7 +147,8 @@ class BatchSimulator {
   /// Replaces scene `scene`'s positions and velocities (`n_s by 3`, finite), as
   /// Simulator::setState: a discontinuous event booked in that scene's H* only (the next
   /// report's event_energy). A scene refused earlier steps again, from the batch's time.
-  /// Refused for BDF2 (whose restart would take every scene back to a BE step). Bad input:
+  /// With BDF2 only in a batch of one, which restarts with a BE step as Simulator does (the scenes
+  /// of a larger batch share one history, which the restart would drop for all). Bad input:
   /// InvalidInputError naming the scene, nothing changed.
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
   /// Pin `pin` of scene `scene` (its index in that scene's list, grabbed pins included) moves its

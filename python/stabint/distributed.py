@@ -367,7 +367,7 @@ def _batches(scenes: Sequence[Any], options: Any, frames: int, batch_size: int, 
             raise InvalidInputError(f"sweep: scene {index}: {e}") from e
         signature = json.dumps(cell_options, sort_keys=True)
         if signature not in groups:
-            _check_batch_options(cell_options, index)
+            _check_batch_options(cell_options, index, batch_size)
         groups.setdefault(signature, []).append((index, _describe(cell.scene, index), dict(cell.key), cell_options))
     batches = []
     for members in groups.values():
@@ -378,14 +378,16 @@ def _batches(scenes: Sequence[Any], options: Any, frames: int, batch_size: int, 
     return batches
 
 
-def _check_batch_options(options: Dict[str, Any], index: int) -> None:
-    # Options a BatchSimulator refuses (a tolerance stop, Chebyshev, Anderson, CG) are found here,
-    # before any task is sent, by the library's own check on a one-particle batch. Only for the
-    # CPU reference: an OpenCL choice is checked where the device is, in the worker.
+def _check_batch_options(options: Dict[str, Any], index: int, batch_size: int) -> None:
+    # Options a BatchSimulator of more than one scene refuses (a tolerance stop, Chebyshev,
+    # Anderson, Newton, CG) are found here, before any task is sent, by the library's own check on
+    # a batch of one-particle scenes as large as the sweep's batches (up to two): with batch_size 1
+    # every option runs. Only for the CPU reference: an OpenCL choice is checked where the device
+    # is, in the worker.
     if options["backend"] != "CpuReference":
         return
     try:
-        BatchSimulator([_stabint.builtin_scene("oscillator")], _options_from_dict(options))
+        BatchSimulator([_stabint.builtin_scene("oscillator")] * min(batch_size, 2), _options_from_dict(options))
     except InvalidInputError as e:
         raise InvalidInputError(f"sweep: scene {index}: {e}") from e
 

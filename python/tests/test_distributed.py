@@ -152,6 +152,19 @@ def test_a_refused_scene_is_reported_and_the_others_step_on():
     assert raised.value.step + 1 == results[1].refused_at  # the same step its own Simulator refuses
 
 
+def test_batches_of_one_take_the_options_that_couple_scenes():
+    # A tolerance stop reduces over the whole batch, so a batch of several scenes refuses it (next
+    # test); with batch_size 1 each scene is its own Simulator, bit for bit.
+    options = {"integrator": "BackwardEuler", "acceleration": "None_", "tolerance": 1e-6}
+    results = sweep([BuiltinScene("chain"), BuiltinScene("chain", {"stiffness": 1e3})], options, 5, batch_size=1,
+                    client=None)
+    sim = stabint.Simulator(stabint.chain_pendulum(), stabint.SimulatorOptions(
+        integrator=stabint.Integrator.BackwardEuler, acceleration=stabint.Acceleration.None_, tolerance=1e-6))
+    for _ in range(5):
+        sim.step()
+    assert (results[0].positions[-1] == sim.positions).all()
+
+
 def test_bad_input_is_an_invalid_input_error_naming_the_problem(client):
     with pytest.raises(stabint.InvalidInputError, match="non-empty list"):
         sweep([], OPTIONS, 10, client=client)

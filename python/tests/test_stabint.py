@@ -919,8 +919,9 @@ def test_a_batch_refuses_what_would_couple_its_scenes_naming_the_scene():
     other_gravity.gravity = np.array([0.0, -1.0, 0.0])
     with pytest.raises(stabint.InvalidInputError, match="scene 1"):
         stabint.BatchSimulator([stabint.chain_pendulum(), other_gravity])
-    with pytest.raises(stabint.InvalidInputError, match="tolerance"):
-        stabint.BatchSimulator([oscillator], stabint.SimulatorOptions(tolerance=1e-6))
+    with pytest.raises(stabint.InvalidInputError, match="more than one scene.*tolerance"):
+        stabint.BatchSimulator([oscillator, oscillator], stabint.SimulatorOptions(tolerance=1e-6))
+    stabint.BatchSimulator([oscillator], stabint.SimulatorOptions(tolerance=1e-6))  # a batch of one takes it
     batch = stabint.BatchSimulator([oscillator])
     with pytest.raises(stabint.InvalidInputError):
         batch.positions(1)

@@ -334,6 +334,9 @@ void BatchSimulator::Impl::blend(double t1, bool forced) {
       p.p_new = p.blend.blend(p.x_new, p.v_new, *backend_);
       v_new_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.v_new;  // Simulator writes it
     }
+  // A batch of one forms the corrections' trial positions on the device from the blended state,
+  // as Simulator does (evaluateBlendPotentials).
+  if (n == 1 && needs_partner[0]) backend_->write(kXNew, per_scene_[0].x_new);
 }
 
 // The potentials of the step's new positions in `slot` at t1, per scene, into p_all_: the step's
@@ -362,13 +365,18 @@ void BatchSimulator::Impl::evaluateBlendPotentials(double t1, const std::vector<
       if (!any && x_trial_.rows() != x_.rows()) x_trial_ = x_;
       any = true;
       // As Backend::combine(kXTrial, 1 - w, from, w, partner) forms it (bit for bit on the CPU
-      // reference).
+      // reference; on a device, which rounds and contracts in its own way, a batch of one lets the
+      // device form it from the slots that hold from() and the partner, kXNew and kXPartner, as
+      // Simulator does, so that it is its Simulator bit for bit there too).
       const double w = b.weight();
-      x_trial_.middleRows(segments_[s].first_particle, segments_[s].num_particles) =
-          (1.0 - w) * b.from() + w * b.partner();
+      if (segments_.size() == 1)
+        backend_->combine(kXTrial, 1.0 - w, kXNew, w, kXPartner);
+      else
+        x_trial_.middleRows(segments_[s].first_particle, segments_[s].num_particles) =
+            (1.0 - w) * b.from() + w * b.partner();
     }
     if (!any) return;
-    backend_->write(kXTrial, x_trial_);
+    if (segments_.size() > 1) backend_->write(kXTrial, x_trial_);
     backend_->potentials(kXTrial, t1, p_all_);
     for (std::size_t s = 0; s < segments_.size(); ++s) {
       BlendStep& b = per_scene_[s].blend;

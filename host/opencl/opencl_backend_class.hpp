@@ -203,6 +203,7 @@ class OpenCLBackend final : public Backend {
   std::string segmentsMisfit(const std::vector<SceneSegment>& segments) const;
 
   void checkSegmentsFit() const;
+  bool segmentIsWholeScene() const;
 
   void uploadSegmentTable();
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzzes the four loaders and the checkpoint reader with libFuzzer: builds the harnesses of fuzz/ with clang into
+# Fuzzes the four loaders and the two checkpoint readers (a Simulator's, a batch's) with libFuzzer: builds the harnesses of fuzz/ with clang into
 # build-fuzz/ (library instrumented with ASan + UBSan + coverage) and runs each for SECONDS
 # (default 60), starting from the seed corpus fuzz/corpus/<harness>/. New inputs go to
 # build-fuzz/corpus/<harness>/, never into the repository; a crash, sanitizer report, hang
@@ -14,7 +14,7 @@ cd "$(dirname "$0")/.."
 seconds="${1:-60}"
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(obj tetgen medit json checkpoint)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(obj tetgen medit json checkpoint batch_checkpoint)
 
 bash scripts/install-deps.sh
 build=build-fuzz

@@ -5,6 +5,7 @@
 // and the restore, which must keep the same promises except that an accepted wild state may
 // refuse its steps. STABINT_MUTATIONS sets the count (default 10,000 of each, a fraction of a
 // second; longer runs: STABINT_MUTATIONS=100000 build/tests/test_checkpoint_mutation).
+#include "../fuzz/batch_checkpoint_properties.hpp"
 #include "../fuzz/checkpoint_properties.hpp"
 
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@ namespace stabint {
 namespace {
 
 namespace cp = checkpoint_properties;
+namespace bp = batch_checkpoint_properties;
 
 int mutationCount() {
   const char* n = std::getenv("STABINT_MUTATIONS");
@@ -44,14 +46,15 @@ struct Tally {
   int unreadable = 0, refused = 0, restored = 0, restored_stepping = 0;
 };
 
-Tally run(bool resigned, int count) {
-  const std::string seed = cp::seed();
+// `batch`: a whole batch's checkpoint (batch_checkpoint_properties.hpp), else a Simulator's.
+Tally run(bool resigned, int count, bool batch = false) {
+  const std::string seed = batch ? bp::seed() : cp::seed();
   std::mt19937_64 rng(resigned ? 20 : 19);
   Tally tally;
   for (int i = 0; i < count; ++i) {
     std::string bytes = mutate(seed, rng);
-    if (resigned) cp::resign(bytes);
-    const cp::Result r = cp::check(bytes, 3);
+    if (resigned) batch ? bp::resign(bytes) : cp::resign(bytes);
+    const cp::Result r = batch ? bp::check(bytes, 3) : cp::check(bytes, 3);
     EXPECT_TRUE(r.violation.empty()) << "mutation " << i << ": " << r.violation;
     switch (r.outcome) {
       case cp::Outcome::Unreadable: ++tally.unreadable; break;
@@ -67,9 +70,9 @@ Tally run(bool resigned, int count) {
         break;
     }
   }
-  std::printf("  %s: %d mutations, %d unreadable, %d refused at restore, %d restored (%d of them stepping)\n",
-              resigned ? "re-signed" : "as damaged", count, tally.unreadable, tally.refused, tally.restored,
-              tally.restored_stepping);
+  std::printf("  %s%s: %d mutations, %d unreadable, %d refused at restore, %d restored (%d of them stepping)\n",
+              batch ? "batch, " : "", resigned ? "re-signed" : "as damaged", count, tally.unreadable, tally.refused,
+              tally.restored, tally.restored_stepping);
   return tally;
 }
 
@@ -87,6 +90,25 @@ TEST(CheckpointMutation, DamagedCheckpointsAreRefusedOrStep) {
 TEST(CheckpointMutation, ResignedCheckpointsKeepTheRestorePromises) {
   const Tally t = run(true, mutationCount());
   // Re-signed, the mutations reach the restore: some are refused there and some restore.
+  EXPECT_GT(t.restored, 0);
+}
+
+// The same for a whole batch's checkpoint (BatchCheckpoint), a fifth as many (each builds a
+// batch of two scenes).
+TEST(CheckpointMutation, TheBatchSeedRestoresAndSteps) {
+  const cp::Result r = bp::check(bp::seed(), 3);
+  EXPECT_EQ(r.outcome, cp::Outcome::Restored);
+  EXPECT_EQ(r.steps_taken, 3);
+}
+
+TEST(CheckpointMutation, DamagedBatchCheckpointsAreRefusedOrStep) {
+  const int count = mutationCount() / 5;
+  const Tally t = run(false, count, /*batch=*/true);
+  EXPECT_EQ(t.unreadable + t.refused + t.restored, count);
+}
+
+TEST(CheckpointMutation, ResignedBatchCheckpointsKeepTheRestorePromises) {
+  const Tally t = run(true, mutationCount() / 5, /*batch=*/true);
   EXPECT_GT(t.restored, 0);
 }
 

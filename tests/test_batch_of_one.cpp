@@ -38,6 +38,25 @@ void expectSameReport(const StepReport& b, const StepReport& s, const std::strin
   EXPECT_EQ(b.energy_evaluations, s.energy_evaluations) << where;
 }
 
+// Every scene of the batch tests, each stepped `steps` times alone and as a batch of one.
+void expectBatchOfOneIsItsSimulator(const SimulatorOptions& o, int steps, const std::string& label) {
+  std::vector<Scene> scenes = testing::mixedBatchScenes();
+  for (const Scene& s : testing::contactBatchScenes()) scenes.push_back(s);
+  for (std::size_t k = 0; k < scenes.size(); ++k) {
+    Simulator alone(scenes[k], o);
+    BatchSimulator batch({scenes[k]}, o);
+    for (int n = 0; n < steps; ++n) {
+      const std::string where = label + "scene " + std::to_string(k) + ", step " + std::to_string(n);
+      const StepReport own = alone.step();
+      const BatchStepReport& b = batch.step();
+      ASSERT_EQ(b.refusals[0], "") << where;
+      expectSameReport(b.scenes[0], own, where);
+      ASSERT_TRUE(batch.positions(0) == alone.positions()) << where;
+      ASSERT_TRUE(batch.velocities(0) == alone.velocities()) << where;
+    }
+  }
+}
+
 using Case = std::tuple<Integrator, Acceleration>;
 
 class BatchOfOne : public ::testing::TestWithParam<Case> {};
@@ -47,21 +66,7 @@ TEST_P(BatchOfOne, StepsAsItsSimulatorBitForBit) {
   SimulatorOptions o;
   o.integrator = integrator;
   o.acceleration = acceleration;
-  std::vector<Scene> scenes = testing::mixedBatchScenes();
-  for (const Scene& s : testing::contactBatchScenes()) scenes.push_back(s);
-  for (std::size_t k = 0; k < scenes.size(); ++k) {
-    Simulator alone(scenes[k], o);
-    BatchSimulator batch({scenes[k]}, o);
-    for (int n = 0; n < 40; ++n) {
-      const std::string where = "scene " + std::to_string(k) + ", step " + std::to_string(n);
-      const StepReport own = alone.step();
-      const BatchStepReport& b = batch.step();
-      ASSERT_EQ(b.refusals[0], "") << where;
-      expectSameReport(b.scenes[0], own, where);
-      ASSERT_TRUE(batch.positions(0) == alone.positions()) << where;
-      ASSERT_TRUE(batch.velocities(0) == alone.velocities()) << where;
-    }
-  }
+  expectBatchOfOneIsItsSimulator(o, 40, "");
 }
 
 // The solver options a batch of more than one refuses (they reduce over the whole batch): a batch
@@ -90,22 +95,7 @@ TEST_P(BatchOfOneSolver, TakesTheCouplingOptionsAsItsSimulator) {
       o.cg_tolerance = 1e-8;
       break;
   }
-  std::vector<Scene> scenes = testing::mixedBatchScenes();
-  for (const Scene& s : testing::contactBatchScenes()) scenes.push_back(s);
-  for (std::size_t k = 0; k < scenes.size(); ++k) {
-    Simulator alone(scenes[k], o);
-    BatchSimulator batch({scenes[k]}, o);
-    for (int n = 0; n < 30; ++n) {
-      const std::string where =
-          "variant " + std::to_string(variant) + ", scene " + std::to_string(k) + ", step " + std::to_string(n);
-      const StepReport own = alone.step();
-      const BatchStepReport& b = batch.step();
-      ASSERT_EQ(b.refusals[0], "") << where;
-      expectSameReport(b.scenes[0], own, where);
-      ASSERT_TRUE(batch.positions(0) == alone.positions()) << where;
-      ASSERT_TRUE(batch.velocities(0) == alone.velocities()) << where;
-    }
-  }
+  expectBatchOfOneIsItsSimulator(o, 30, "variant " + std::to_string(variant) + ", ");
 }
 
 INSTANTIATE_TEST_SUITE_P(Options, BatchOfOneSolver,

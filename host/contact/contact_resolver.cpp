@@ -22,12 +22,10 @@ constexpr int kMaxContactLogColumns = 4096;
 
 }  // namespace
 
-ContactResolver::ContactResolver(SceneData& scene, GlobalSystem& system, Backend& backend,
-                                 const SimulatorOptions& options, double t, const Eigen::MatrixX3d& x,
-                                 const Eigen::MatrixX3d& v)
+ContactResolver::ContactResolver(SceneData& scene, GlobalSystem& system, const SimulatorOptions& options, double t,
+                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v)
     : scene_(scene),
       system_(system),
-      backend_(backend),
       time_step_(options.time_step),
       tolerance_(options.contact_tolerance),
       block_(scene.blockIndex(contactElementType())) {

@@ -26,7 +26,7 @@ class ContactResolver {
  public:
   /// The set at time t from (x, v): the pairs near their colliders are in, the others get weight
   /// 0, and L is assembled from that (before anything is factored).
-  ContactResolver(SceneData& scene, GlobalSystem& system, Backend& backend, const SimulatorOptions& options, double t,
+  ContactResolver(SceneData& scene, GlobalSystem& system, const SimulatorOptions& options, double t,
                   const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
   /// The number of (collider, particle) pairs: 0 without colliders.
@@ -85,7 +85,6 @@ class ContactResolver {
 
   SceneData& scene_;
   GlobalSystem& system_;
-  Backend& backend_;
   double time_step_, tolerance_;
   int block_ = -1;
   std::vector<std::int32_t> log_;

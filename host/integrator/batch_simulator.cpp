@@ -67,7 +67,7 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
       x_(batch.scene.positions),
       v_(batch.scene.velocities),
       v_slot_(batch.scene.velocities),
-      contact_(data_, system_, *backend_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
+      contact_(data_, system_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
       per_scene_(segments_.size()) {
   // Any backend with per-scene energies steps a batch (the OpenCL backend once it has them).
   if (!backend_->computesPerScene())

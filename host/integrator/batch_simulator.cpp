@@ -139,6 +139,42 @@ const BatchStepReport& BatchDriver::step() {
   backend_->times() = PhaseTimes{};
   const double h = options_.time_step;
   const double t1 = t_ + h;
+  startScenes(t1);
+  updateContactSets();
+  // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
+  // exactly 0 (its terms at t_m and t_1 are the same numbers).
+  const bool forced = data_.forcingChangesDuring(t_, t1);
+  if (options_.integrator == Integrator::EnergyBlend)
+    blend(t1, forced);
+  else
+    integrate(t1, forced);
+
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    PerScene& p = per_scene_[s];
+    if (p.stepping && (!p.x_new.allFinite() || !p.v_new.allFinite()))
+      refuse(s, nonFiniteState(report_.scenes[s].step, t_, t1, options_.integrator));
+  }
+  if (options_.integrator == Integrator::EnergyBlend) {
+    for (PerScene& p : per_scene_)
+      if (p.stepping) p.blend.beginCorrections(p.x_new, p.v_new, p.target_now, p.p_new);
+    evaluateBlendPotentials(t1);
+    for (PerScene& p : per_scene_)
+      if (p.stepping) p.velocities_changed = p.blend.finishCorrections(p.x_new, p.v_new, p.p_new, *backend_);
+  }
+  resolveContact(t1);
+  acceptScenes(t1);
+  commit(t1);
+  if (as_simulator_) {
+    // A Simulator's report has the step's times (a batch's, shared by its scenes, are not reported).
+    StepReport& r = report_.scenes[0];
+    r.times = backend_->times();
+    r.times.bookkeeping = std::max(
+        0.0, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - r.times.total());
+  }
+  return report_;
+}
+
+void BatchDriver::startScenes(double t1) {
   const std::size_t n = segments_.size();
   report_.scenes.assign(n, StepReport{});
   report_.refusals.assign(n, std::string());
@@ -153,28 +189,10 @@ const BatchStepReport& BatchDriver::step() {
     p.target_now = p.target;
     if (!p.active) report_.refusals[s] = "inactive since a refused step";
   }
-  updateContactSets();
-  // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
-  // exactly 0 (its terms at t_m and t_1 are the same numbers).
-  const bool forced = data_.forcingChangesDuring(t_, t1);
-  if (options_.integrator == Integrator::EnergyBlend)
-    blend(t1, forced);
-  else
-    integrate(t1, forced);
+}
 
-  for (std::size_t s = 0; s < n; ++s) {
-    PerScene& p = per_scene_[s];
-    if (p.stepping && (!p.x_new.allFinite() || !p.v_new.allFinite()))
-      refuse(s, nonFiniteState(report_.scenes[s].step, t_, t1, options_.integrator));
-  }
-  if (options_.integrator == Integrator::EnergyBlend) {
-    for (PerScene& p : per_scene_)
-      if (p.stepping) p.blend.beginCorrections(p.x_new, p.v_new, p.target_now, p.p_new);
-    evaluateBlendPotentials(t1);
-    for (PerScene& p : per_scene_)
-      if (p.stepping) p.velocities_changed = p.blend.finishCorrections(p.x_new, p.v_new, p.p_new, *backend_);
-  }
-  resolveContact(t1);
+void BatchDriver::acceptScenes(double t1) {
+  const std::size_t n = segments_.size();
   for (std::size_t s = 0; s < n; ++s) {
     PerScene& p = per_scene_[s];
     StepReport& r = report_.scenes[s];
@@ -197,7 +215,10 @@ const BatchStepReport& BatchDriver::step() {
     ++p.steps;
     p.pending_event_energy = 0.0;
   }
+}
 
+void BatchDriver::commit(double t1) {
+  const std::size_t n = segments_.size();
   // The new state of the batch: each stepped scene's candidate, each other scene's last state
   // (its block was solved too: its results are dropped). The slots get the velocities Simulator's
   // slots would hold: the host copy when it changed them (corrections, damping that removed
@@ -230,14 +251,6 @@ const BatchStepReport& BatchDriver::step() {
   x_.swap(x_new_);
   v_slot_.swap(v_new_);
   t_ = t1;
-  if (as_simulator_) {
-    // A Simulator's report has the step's times (a batch's, shared by its scenes, are not reported).
-    StepReport& r = report_.scenes[0];
-    r.times = backend_->times();
-    r.times.bookkeeping = std::max(
-        0.0, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - r.times.total());
-  }
-  return report_;
 }
 
 IterationControl BatchDriver::iterationControl(int iterations) const {

@@ -139,6 +139,12 @@ struct BatchDriver {
 
   BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
   double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;
+  // step()'s parts: each scene's report and H* for the step to t1 (an inactive scene does not
+  // step); the stepping scenes' damping, energy check and new scalars, or their refusal; the new
+  // state of the batch in the slots and host copies, the BDF2 history and the time.
+  void startScenes(double t1);
+  void acceptScenes(double t1);
+  void commit(double t1);
   // The integrators but the blend: the candidates of every stepping scene, with their forcing.
   void integrate(double t1, bool forced);
   IterationControl iterationControl(int iterations) const;

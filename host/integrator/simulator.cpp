@@ -1,9 +1,9 @@
 // Simulator: a batch of one (docs/batch_design.md, "A Simulator is a batch of one"). Stepping,
-// the blend, forcing, contact, damping, events, element changes and checkpoints are the batch
-// driver's (BatchDriver, batch_simulator.hpp) on one segment that is the whole scene, in its Simulator mode
-// (BatchDriver::forSimulator): a refused step throws and changes nothing, messages are
-// the whole scene's, and a checkpoint restores at any time. What is left here maps the public
-// calls onto scene 0 and keeps the report of the last completed step.
+// the blend, forcing, contact, damping, events, element changes and checkpoints are the one
+// stepping driver's (BatchDriver, batch_simulator.hpp) on one segment that is the whole scene, in
+// its Simulator mode (BatchDriver::forSimulator): a refused step throws and changes nothing,
+// messages are the whole scene's, and a checkpoint restores at any time. What is left here maps
+// the public calls onto scene 0 and keeps the report of the last completed step.
 #include <stabint/simulator.hpp>
 
 #include "integrator/batch_simulator.hpp"

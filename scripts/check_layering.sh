@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The layering rule (docs/development.md, "Layering"): the element math, the scene, the solver,
-# the backends and contact resolution sit below the stepping drivers (contact/ there so that both
-# drivers can hold a ContactResolver). They take the library's shared types from the leaf
+# the backends and contact resolution sit below the stepping driver (contact/ there so that the
+# driver can hold a ContactResolver). They take the library's shared types from the leaf
 # header stabint/types.hpp and include neither the stepping facade (stabint/simulator.hpp,
 # batch.hpp, events.hpp, stabint.hpp) nor any header of host/integrator/. Fails, naming the file
 # and line, on an include that breaks it.

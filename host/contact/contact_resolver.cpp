@@ -22,12 +22,10 @@ constexpr int kMaxContactLogColumns = 4096;
 
 }  // namespace
 
-ContactResolver::ContactResolver(SceneData& scene, GlobalSystem& system, Backend& backend,
-                                 const SimulatorOptions& options, double t, const Eigen::MatrixX3d& x,
-                                 const Eigen::MatrixX3d& v)
+ContactResolver::ContactResolver(SceneData& scene, GlobalSystem& system, const SimulatorOptions& options, double t,
+                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v)
     : scene_(scene),
       system_(system),
-      backend_(backend),
       time_step_(options.time_step),
       tolerance_(options.contact_tolerance),
       block_(scene.blockIndex(contactElementType())) {
@@ -63,10 +61,6 @@ void ContactResolver::changeSet(const std::vector<int>& entering, const std::vec
   system_.addToDiagonal(vertices, deltas);
 }
 
-bool ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
-  return updateSet(t, x, v, {wholeScene(scene_)})[0] != 0;
-}
-
 std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
                                              const std::vector<ContactPart>& parts) {
   std::vector<char> entered_inside(parts.size(), 0);
@@ -96,17 +90,6 @@ std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x
     log_columns_ += columns;
   }
   return entered_inside;
-}
-
-bool ContactResolver::resolve(int x_slot, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target,
-                              PotentialEnergy& p, StepReport& report) {
-  const Resolved resolved = applyFrictionAndProjection(wholeScene(scene_), t1, x, v, target, report);
-  if (resolved.positions_moved) {
-    backend_.roundToStorage(x);  // what the slot holds (OpenCL float rounds), without a read
-    backend_.write(x_slot, x);
-    bookProjection(backend_.potential(x_slot, t1), p, target, report);
-  }
-  return resolved.velocities_changed;
 }
 
 ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const ContactPart& part, double t1,

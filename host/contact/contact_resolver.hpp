@@ -26,7 +26,7 @@ class ContactResolver {
  public:
   /// The set at time t from (x, v): the pairs near their colliders are in, the others get weight
   /// 0, and L is assembled from that (before anything is factored).
-  ContactResolver(SceneData& scene, GlobalSystem& system, Backend& backend, const SimulatorOptions& options, double t,
+  ContactResolver(SceneData& scene, GlobalSystem& system, const SimulatorOptions& options, double t,
                   const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
   /// The number of (collider, particle) pairs: 0 without colliders.
@@ -40,26 +40,17 @@ class ContactResolver {
   /// again. Energy: a pair enters or leaves out of contact (E = 0 both sides), so nothing is
   /// booked; one that enters already inside (it moved farther than the margin) makes H jump by
   /// its contact energy, which is not booked either: the blend takes it out, as it takes the
-  /// final projection's additions. Returns true in that case: the potential of x changed.
-  bool updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
-  /// updateSet for the pairs of `parts` only (a batch's active scenes: the pairs of the others
-  /// stay as they are), from the whole scene's (x, v), with one change of L and the factors for
-  /// all; entry i of the result is updateSet's for parts[i] (a pair of it entered inside).
+  /// final projection's additions. For the pairs of `parts` only (a batch's active scenes: the
+  /// pairs of the others stay as they are), from the whole scene's (x, v), with one change of L
+  /// and the factors for all; entry i of the result is 1 when a pair of parts[i] entered inside
+  /// (the potential of its x changed).
   std::vector<char> updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
                               const std::vector<ContactPart>& parts);
 
-  /// After the solve, on the accepted state's host copies (x, v) at t1, whose positions the
-  /// backend's `x_slot` holds too: friction and the final projection
-  /// (applyFrictionAndProjection), the slot following the positions, whose potential then books
-  /// the projection (bookProjection). Returns true when the velocities changed.
-  bool resolve(int x_slot, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target, PotentialEnergy& p,
-               StepReport& report);
-
-  /// resolve's host part, for `part` on its host copies (x, v) of the accepted state at t1:
-  /// friction takes kinetic energy out of v and out of `target` (H*) with it, like damping
-  /// (report.friction); the final projection moves the positions out of the colliders. When it
-  /// moved them (`positions_moved`), their potential is the caller's to evaluate (a batch: one
-  /// pass for every scene) and to book with bookProjection.
+  /// After the solve, for `part` on its host copies (x, v) of the accepted state at t1: friction takes kinetic energy
+  /// out of v and out of `target` (H*) with it, like damping (report.friction); the final projection moves the
+  /// positions out of the colliders. When it moved them (`positions_moved`), their potential is the caller's to
+  /// evaluate (a batch: one pass for every scene) and to book with bookProjection.
   struct Resolved {
     bool velocities_changed = false;
     bool positions_moved = false;
@@ -94,7 +85,6 @@ class ContactResolver {
 
   SceneData& scene_;
   GlobalSystem& system_;
-  Backend& backend_;
   double time_step_, tolerance_;
   int block_ = -1;
   std::vector<std::int32_t> log_;

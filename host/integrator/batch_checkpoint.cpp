@@ -82,7 +82,7 @@ void spliceForces(SceneData::Ramp& all, int first, int count, const SceneData::R
 
 }  // namespace
 
-CheckpointData BatchSimulator::Impl::batchData() {
+CheckpointData BatchDriver::batchData() {
   CheckpointData d;
   d.scene_fingerprint = sceneFingerprint(data_.scene());
   d.particles = data_.numParticles();
@@ -100,7 +100,7 @@ CheckpointData BatchSimulator::Impl::batchData() {
   return d;
 }
 
-CheckpointData BatchSimulator::Impl::sceneData(const CheckpointData& all, int scene) const {
+CheckpointData BatchDriver::sceneData(const CheckpointData& all, int scene) const {
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const PerScene& p = per_scene_[std::size_t(scene)];
   CheckpointData d;
@@ -151,7 +151,7 @@ CheckpointData BatchSimulator::Impl::sceneData(const CheckpointData& all, int sc
   return d;
 }
 
-RestoreTarget BatchSimulator::Impl::restoreTarget(int scene, const char* call) const {
+RestoreTarget BatchDriver::restoreTarget(int scene, const char* call) const {
   checkScene(scene, call);
   const SceneSegment& seg = segments_[std::size_t(scene)];
   RestoreTarget target;
@@ -161,12 +161,13 @@ RestoreTarget BatchSimulator::Impl::restoreTarget(int scene, const char* call) c
   target.pin_block = pinBlock(data_);
   target.contact_block = contact_.block();
   target.colliders = std::size_t(seg.num_colliders);
-  target.where = std::string(call) + ": scene " + std::to_string(scene) + ": ";
+  // A Simulator's messages name neither the call nor a scene.
+  target.where = as_simulator_ ? std::string() : std::string(call) + ": scene " + std::to_string(scene) + ": ";
   return target;
 }
 
-void BatchSimulator::Impl::splice(CheckpointData& all, std::vector<SceneSegment>& segments, int scene,
-                                  const CheckpointData& d, double time) const {
+void BatchDriver::splice(CheckpointData& all, std::vector<SceneSegment>& segments, int scene, const CheckpointData& d,
+                         double time) const {
   SceneSegment& seg = segments[std::size_t(scene)];
   const std::size_t pb = std::size_t(pinBlock(data_));
   const int first_pin = seg.first_element[pb], pins = seg.num_elements[pb];
@@ -200,7 +201,7 @@ void BatchSimulator::Impl::splice(CheckpointData& all, std::vector<SceneSegment>
                data_.numParticles(), restoreTarget(scene, "restore").where);
 }
 
-std::vector<std::int32_t> BatchSimulator::Impl::mergeContactLogs(const std::vector<CheckpointData>& scenes) const {
+std::vector<std::int32_t> BatchDriver::mergeContactLogs(const std::vector<CheckpointData>& scenes) const {
   const std::size_t cb = std::size_t(contact_.block());
   std::vector<std::vector<std::vector<std::int32_t>>> groups(scenes.size());  // per scene, per group: entries
   std::size_t count = 0;
@@ -235,8 +236,8 @@ std::vector<std::int32_t> BatchSimulator::Impl::mergeContactLogs(const std::vect
   return merged;
 }
 
-void BatchSimulator::Impl::apply(const CheckpointData& all, const std::vector<SceneSegment>& segments,
-                                 const std::vector<PerScene>& per_scene, bool assemble) {
+void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegment>& segments,
+                        const std::vector<PerScene>& per_scene, bool assemble) {
   ElementChanges elements(data_, system_, *backend_);
   if (assemble) {
     const std::vector<std::uint8_t> base = contact_.baseFlags(all.enabled, all.contact_log);
@@ -261,8 +262,8 @@ void BatchSimulator::Impl::apply(const CheckpointData& all, const std::vector<Sc
   for (int s = 0; s < size(); ++s) pinsChanged(s);
 }
 
-void BatchSimulator::Impl::restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
-                                          const std::vector<PerScene>& per_scene, bool assemble) {
+void BatchDriver::restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
+                                 const std::vector<PerScene>& per_scene, bool assemble) {
   const CheckpointData before = batchData();
   const std::vector<SceneSegment> segments_before = segments_;
   const std::vector<PerScene> per_scene_before = per_scene_;
@@ -275,7 +276,7 @@ void BatchSimulator::Impl::restoreChecked(const CheckpointData& all, const std::
   }
 }
 
-void BatchSimulator::Impl::restoreScalars(PerScene& p, const CheckpointData& d, double time) {
+void BatchDriver::restoreScalars(PerScene& p, const CheckpointData& d, double time) {
   p.active = d.time == time;
   p.time = d.time;
   p.steps = static_cast<int>(d.steps);
@@ -286,7 +287,7 @@ void BatchSimulator::Impl::restoreScalars(PerScene& p, const CheckpointData& d, 
   p.has_user_forces = d.forcing.user_forces.active;
 }
 
-void BatchSimulator::Impl::restoreScene(int scene, const CheckpointData& d) {
+void BatchDriver::restoreScene(int scene, const CheckpointData& d) {
   const RestoreTarget target = restoreTarget(scene, "restore");
   checkRestorable(d, target);
   if (d.time != t_)
@@ -312,7 +313,7 @@ void BatchSimulator::Impl::restoreScene(int scene, const CheckpointData& d) {
   restoreChecked(all, segments, per_scene, assemble);
 }
 
-void BatchSimulator::Impl::restoreAll(double time, const std::vector<CheckpointData>& scenes) {
+void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& scenes) {
   if (int(scenes.size()) != size())
     throw InvalidInputError("restore: the checkpoint has " + std::to_string(scenes.size()) + " scenes, the batch " +
                             std::to_string(size()));

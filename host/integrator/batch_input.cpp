@@ -13,27 +13,29 @@
 
 namespace stabint {
 
-InputScope BatchSimulator::Impl::scope(int scene, const char* call) const {
+InputScope BatchDriver::scope(int scene, const char* call) const {
   checkScene(scene, call);
+  // A Simulator's one segment is its whole scene: the same ranges, with Simulator's messages.
+  if (as_simulator_) return InputScope();
   return InputScope(segments_[std::size_t(scene)], scene, call);
 }
 
-FrameInput BatchSimulator::Impl::frameInput(int scene, const char* call) {
+FrameInput BatchDriver::frameInput(int scene, const char* call) {
   return FrameInput(data_, options_.time_step, inputLimit(choice_), scope(scene, call));
 }
 
-ElementChanges BatchSimulator::Impl::elementChanges(int scene, const char* call) {
+ElementChanges BatchDriver::elementChanges(int scene, const char* call) {
   return ElementChanges(data_, system_, *backend_, scope(scene, call));
 }
 
-void BatchSimulator::Impl::bookEvent(int scene, double h_before) {
+void BatchDriver::bookEvent(int scene, double h_before) {
   PerScene& p = per_scene_[std::size_t(scene)];
   const double event = p.kinetic + p.potential.total() - h_before;
   p.target += event;
   p.pending_event_energy += event;
 }
 
-void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   const FrameInput input = frameInput(scene, "setState");
   input.checkRows(positions, "positions");
   input.checkRows(velocities, "velocities");
@@ -69,7 +71,7 @@ void BatchSimulator::Impl::setState(int scene, const Eigen::MatrixX3d& positions
   }
 }
 
-void BatchSimulator::Impl::setExternalForces(int scene, const Eigen::MatrixX3d& forces) {
+void BatchDriver::setExternalForces(int scene, const Eigen::MatrixX3d& forces) {
   frameInput(scene, "setExternalForces").setExternalForces(forces, t_);
   PerScene& p = per_scene_[std::size_t(scene)];
   p.has_user_forces = true;
@@ -77,7 +79,7 @@ void BatchSimulator::Impl::setExternalForces(int scene, const Eigen::MatrixX3d& 
 }
 
 template <typename Change>
-void BatchSimulator::Impl::changeElementsAsEvent(int scene, const char* call, Change&& change) {
+void BatchDriver::changeElementsAsEvent(int scene, const char* call, Change&& change) {
   checkScene(scene, call);
   const PerScene& p = per_scene_[std::size_t(scene)];
   const double h_before = p.kinetic + p.potential.total();
@@ -89,7 +91,7 @@ void BatchSimulator::Impl::changeElementsAsEvent(int scene, const char* call, Ch
   pinsChanged(scene);
 }
 
-int BatchSimulator::Impl::grab(int scene, int vertex, double stiffness) {
+int BatchDriver::grab(int scene, int vertex, double stiffness) {
   const InputRange own = scope(scene, "grab").pins(data_);
   const std::vector<Pin> pins = frameInput(scene, "grab").pinsAfterGrab(vertex, stiffness, x_);
   changeElementsAsEvent(scene, "grab", [&] {
@@ -103,18 +105,18 @@ int BatchSimulator::Impl::grab(int scene, int vertex, double stiffness) {
   return own.count;
 }
 
-void BatchSimulator::Impl::release(int scene, int pin) {
+void BatchDriver::release(int scene, int pin) {
   const std::vector<Pin> pins = frameInput(scene, "release").pinsAfterRelease(pin, t_);
   changeElementsAsEvent(scene, "release", [&] { elementChanges(scene, "release").changePins(pins); });
 }
 
-void BatchSimulator::Impl::changeElements(int scene, ElementKind kind, const std::vector<int>& indices,
-                                          const double* stiffness, bool enabled) {
+void BatchDriver::changeElements(int scene, ElementKind kind, const std::vector<int>& indices, const double* stiffness,
+                                 bool enabled) {
   const char* call = stiffness ? "setElementStiffness" : "setElementEnabled";
   changeElementsAsEvent(scene, call, [&] { elementChanges(scene, call).change(kind, indices, stiffness, enabled); });
 }
 
-void BatchSimulator::Impl::pinsChanged(int scene) {
+void BatchDriver::pinsChanged(int scene) {
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const std::size_t pin_block = std::size_t(data_.blockIndex(pinElementType()));
   const std::vector<Pin>& all = data_.scene().pins;

@@ -3,11 +3,13 @@
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
-#include "out_of_memory.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <memory>
+#include <string>
 #include <utility>
 
 namespace stabint {
@@ -41,10 +43,19 @@ Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) { retu
 
 }  // namespace
 
-BatchSimulator::Impl::Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : Impl(concatenateScenes(scenes), scenes, checkedOptions(options, scenes.size())) {}
+BatchDriver::BatchDriver(const std::vector<Scene>& scenes, const SimulatorOptions& options)
+    : BatchDriver(concatenateScenes(scenes), scenes, checkedOptions(options, scenes.size())) {}
 
-BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options)
+std::unique_ptr<BatchDriver> BatchDriver::forSimulator(const Scene& scene, const SimulatorOptions& options) {
+  // Simulator's order of checks: the options, then the scene (SceneData validates it, with
+  // Simulator's messages).
+  validateOptions(options);
+  auto impl = std::make_unique<BatchDriver>(batchOfOne(scene), std::vector<Scene>{scene}, options);
+  impl->as_simulator_ = true;
+  return impl;
+}
+
+BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options)
     : scenes_(scenes),
       segments_(std::move(batch.segments)),
       options_(options),
@@ -56,7 +67,7 @@ BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, c
       x_(batch.scene.positions),
       v_(batch.scene.velocities),
       v_slot_(batch.scene.velocities),
-      contact_(data_, system_, *backend_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
+      contact_(data_, system_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
       per_scene_(segments_.size()) {
   // Any backend with per-scene energies steps a batch (the OpenCL backend once it has them).
   if (!backend_->computesPerScene())
@@ -84,32 +95,86 @@ BatchSimulator::Impl::Impl(SceneBatch batch, const std::vector<Scene>& scenes, c
   backend_->times() = PhaseTimes{};
 }
 
-double BatchSimulator::Impl::kineticEnergy(int scene, const Eigen::MatrixX3d& v) const {
+double BatchDriver::kineticEnergy(int scene, const Eigen::MatrixX3d& v) const {
   const SceneSegment& seg = segments_[std::size_t(scene)];
   return stabint::kineticEnergy(scenes_[std::size_t(scene)].masses, rowsOf(v, seg));
 }
 
-Eigen::MatrixX3d BatchSimulator::Impl::positions(int scene) const { return rowsOf(x_, segments_[std::size_t(scene)]); }
-Eigen::MatrixX3d BatchSimulator::Impl::velocities(int scene) const { return rowsOf(v_, segments_[std::size_t(scene)]); }
-EnergyReport BatchSimulator::Impl::energy(int scene) const {
+Eigen::MatrixX3d BatchDriver::positions(int scene) const { return rowsOf(x_, segments_[std::size_t(scene)]); }
+Eigen::MatrixX3d BatchDriver::velocities(int scene) const { return rowsOf(v_, segments_[std::size_t(scene)]); }
+EnergyReport BatchDriver::energy(int scene) const {
   const PerScene& p = per_scene_[std::size_t(scene)];
   return EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
 }
 
-void BatchSimulator::Impl::checkScene(int scene, const char* call) const {
+void BatchDriver::checkScene(int scene, const char* call) const {
   if (scene < 0 || scene >= size())
     throw InvalidInputError(std::string(call) + ": scene " + std::to_string(scene) + " out of range (the batch has " +
                             std::to_string(size()) + " scenes)");
 }
 
-void BatchSimulator::Impl::refuse(std::size_t s, const std::string& message) {
-  report_.refusals[s] = message;
+void BatchDriver::refuse(std::size_t s, const StepRefusal& refusal) {
+  // A Simulator's driver: nothing was committed yet (the slots kX/kV, the host copies, the BDF2
+  // history, H* and the time still hold the last accepted step), so the Simulator can step again.
+  if (as_simulator_) {
+    if (refusal.energy_limit) throw EnergyLimitError(refusal.message, refusal.step);
+    throw NonFiniteStateError(refusal.message, refusal.step);
+  }
+  report_.refusals[s] = refusal.message;
   per_scene_[s].stepping = false;
 }
 
-const BatchStepReport& BatchSimulator::Impl::step() {
+void BatchDriver::setIterations(int iterations) {
+  if (iterations < 1) throw InvalidInputError("iterations = " + std::to_string(iterations) + " must be >= 1");
+  options_.iterations = iterations;
+}
+
+std::string BatchDriver::backendDescription() const {
+  const std::string& reason = choice_.reason;
+  return backend_->description() + (reason.empty() ? "" : " [" + reason + "]");
+}
+
+const BatchStepReport& BatchDriver::step() {
+  const auto start = std::chrono::steady_clock::now();
+  backend_->times() = PhaseTimes{};
   const double h = options_.time_step;
   const double t1 = t_ + h;
+  startScenes(t1);
+  updateContactSets();
+  // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
+  // exactly 0 (its terms at t_m and t_1 are the same numbers).
+  const bool forced = data_.forcingChangesDuring(t_, t1);
+  if (options_.integrator == Integrator::EnergyBlend)
+    blend(t1, forced);
+  else
+    integrate(t1, forced);
+
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    PerScene& p = per_scene_[s];
+    if (p.stepping && (!p.x_new.allFinite() || !p.v_new.allFinite()))
+      refuse(s, nonFiniteState(report_.scenes[s].step, t_, t1, options_.integrator));
+  }
+  if (options_.integrator == Integrator::EnergyBlend) {
+    for (PerScene& p : per_scene_)
+      if (p.stepping) p.blend.beginCorrections(p.x_new, p.v_new, p.target_now, p.p_new);
+    evaluateBlendPotentials(t1);
+    for (PerScene& p : per_scene_)
+      if (p.stepping) p.velocities_changed = p.blend.finishCorrections(p.x_new, p.v_new, p.p_new, *backend_);
+  }
+  resolveContact(t1);
+  acceptScenes(t1);
+  commit(t1);
+  if (as_simulator_) {
+    // A Simulator's report has the step's times (a batch's, shared by its scenes, are not reported).
+    StepReport& r = report_.scenes[0];
+    r.times = backend_->times();
+    r.times.bookkeeping = std::max(
+        0.0, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - r.times.total());
+  }
+  return report_;
+}
+
+void BatchDriver::startScenes(double t1) {
   const std::size_t n = segments_.size();
   report_.scenes.assign(n, StepReport{});
   report_.refusals.assign(n, std::string());
@@ -124,28 +189,10 @@ const BatchStepReport& BatchSimulator::Impl::step() {
     p.target_now = p.target;
     if (!p.active) report_.refusals[s] = "inactive since a refused step";
   }
-  updateContactSets();
-  // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
-  // exactly 0 (its terms at t_m and t_1 are the same numbers).
-  const bool forced = data_.forcingChangesDuring(t_, t1);
-  if (options_.integrator == Integrator::EnergyBlend)
-    blend(t1, forced);
-  else
-    integrate(t1, forced);
+}
 
-  for (std::size_t s = 0; s < n; ++s) {
-    PerScene& p = per_scene_[s];
-    if (p.stepping && (!p.x_new.allFinite() || !p.v_new.allFinite()))
-      refuse(s, nonFiniteState(report_.scenes[s].step, t_, t1, options_.integrator).message);
-  }
-  if (options_.integrator == Integrator::EnergyBlend) {
-    for (PerScene& p : per_scene_)
-      if (p.stepping) p.blend.beginCorrections(p.x_new, p.v_new, p.target_now, p.p_new);
-    evaluateBlendPotentials(t1);
-    for (PerScene& p : per_scene_)
-      if (p.stepping) p.velocities_changed = p.blend.finishCorrections(p.x_new, p.v_new, p.p_new, *backend_);
-  }
-  resolveContact(t1);
+void BatchDriver::acceptScenes(double t1) {
+  const std::size_t n = segments_.size();
   for (std::size_t s = 0; s < n; ++s) {
     PerScene& p = per_scene_[s];
     StepReport& r = report_.scenes[s];
@@ -158,7 +205,7 @@ const BatchStepReport& BatchSimulator::Impl::step() {
     const double k_new = stabint::kineticEnergy(scenes_[s].masses, p.v_new);
     const StepRefusal refusal = checkStepEnergy(r.step, t_, t1, options_, k_new, p.p_new, p.target_now, p.energy_scale);
     if (!refusal.message.empty()) {
-      refuse(s, refusal.message);
+      refuse(s, refusal);
       continue;
     }
     p.kinetic = k_new;
@@ -168,7 +215,10 @@ const BatchStepReport& BatchSimulator::Impl::step() {
     ++p.steps;
     p.pending_event_energy = 0.0;
   }
+}
 
+void BatchDriver::commit(double t1) {
+  const std::size_t n = segments_.size();
   // The new state of the batch: each stepped scene's candidate, each other scene's last state
   // (its block was solved too: its results are dropped). The slots get the velocities Simulator's
   // slots would hold: the host copy when it changed them (corrections, damping that removed
@@ -201,16 +251,15 @@ const BatchStepReport& BatchSimulator::Impl::step() {
   x_.swap(x_new_);
   v_slot_.swap(v_new_);
   t_ = t1;
-  return report_;
 }
 
-IterationControl BatchSimulator::Impl::iterationControl(int iterations) const {
+IterationControl BatchDriver::iterationControl(int iterations) const {
   // A batch of more than one measures each scene against its own scale (LocalGlobalSolver's
   // segments); the whole-vector controls it refuses. A batch of one is its scene.
   return stabint::iterationControl(options_, iterations, per_scene_.size() == 1 ? per_scene_[0].energy_scale : 1.0);
 }
 
-void BatchSimulator::Impl::integrate(double t1, bool forced) {
+void BatchDriver::integrate(double t1, bool forced) {
   const double h = options_.time_step;
   const IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
@@ -238,7 +287,7 @@ void BatchSimulator::Impl::integrate(double t1, bool forced) {
   }
 }
 
-void BatchSimulator::Impl::blend(double t1, bool forced) {
+void BatchDriver::blend(double t1, bool forced) {
   const double h = options_.time_step;
   const double tm = t_ + 0.5 * h;
   const std::size_t n = segments_.size();
@@ -341,7 +390,7 @@ void BatchSimulator::Impl::blend(double t1, bool forced) {
 
 // The potentials of the step's new positions in `slot` at t1, per scene, into p_all_: the step's
 // solve's where its last local step was at them, else an energy pass (returns whether it ran).
-bool BatchSimulator::Impl::potentialsOfStep(const IntegratorSteps& steps, int slot, double t1) {
+bool BatchDriver::potentialsOfStep(const IntegratorSteps& steps, int slot, double t1) {
   if (steps.potentialsOfStep().size() == segments_.size()) {
     p_all_ = steps.potentialsOfStep();
     return false;
@@ -350,7 +399,7 @@ bool BatchSimulator::Impl::potentialsOfStep(const IntegratorSteps& steps, int sl
   return true;
 }
 
-void BatchSimulator::Impl::evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner) {
+void BatchDriver::evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner) {
   // Rounds: as many as the scene that needs the most evaluations, not their sum. At w = 1 the
   // trial is the partner, whose potential its solve may have left (`partner`, per scene): taken
   // without a pass, as Simulator takes it.
@@ -385,12 +434,12 @@ void BatchSimulator::Impl::evaluateBlendPotentials(double t1, const std::vector<
   }
 }
 
-ContactPart BatchSimulator::Impl::contactPart(std::size_t s, int first_row) const {
+ContactPart BatchDriver::contactPart(std::size_t s, int first_row) const {
   const SceneSegment& seg = segments_[s];
   return ContactPart{IndexRange{seg.first_collider, seg.num_colliders}, first_row};
 }
 
-void BatchSimulator::Impl::updateContactSets() {
+void BatchDriver::updateContactSets() {
   if (contact_.count() == 0) return;
   std::vector<std::size_t> scenes;
   std::vector<ContactPart> parts;
@@ -407,7 +456,7 @@ void BatchSimulator::Impl::updateContactSets() {
     if (entered_inside[i]) per_scene_[scenes[i]].potential = potentials[scenes[i]];
 }
 
-void BatchSimulator::Impl::resolveContact(double t1) {
+void BatchDriver::resolveContact(double t1) {
   if (contact_.count() == 0) return;
   std::vector<char> projected(segments_.size(), 0);
   bool any = false;
@@ -437,63 +486,4 @@ void BatchSimulator::Impl::resolveContact(double t1) {
   }
 }
 
-// ---- the public class ----------------------------------------------------------------------------
-
-BatchSimulator::BatchSimulator(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : impl_(reportingOutOfMemory("BatchSimulator", [&] { return std::make_unique<Impl>(scenes, options); })) {}
-BatchSimulator::~BatchSimulator() = default;
-BatchSimulator::BatchSimulator(BatchSimulator&&) noexcept = default;
-BatchSimulator& BatchSimulator::operator=(BatchSimulator&&) noexcept = default;
-
-const BatchStepReport& BatchSimulator::step() {
-  return reportingOutOfMemory("BatchSimulator::step", [&]() -> const BatchStepReport& { return impl_->step(); });
-}
-int BatchSimulator::size() const { return impl_->size(); }
-bool BatchSimulator::active(int scene) const {
-  impl_->checkScene(scene, "active");
-  return impl_->per_scene_[std::size_t(scene)].active;
-}
-Eigen::MatrixX3d BatchSimulator::positions(int scene) const {
-  impl_->checkScene(scene, "positions");
-  return impl_->positions(scene);
-}
-Eigen::MatrixX3d BatchSimulator::velocities(int scene) const {
-  impl_->checkScene(scene, "velocities");
-  return impl_->velocities(scene);
-}
-const Eigen::MatrixX3d& BatchSimulator::allPositions() const { return impl_->x_; }
-int BatchSimulator::firstParticle(int scene) const {
-  impl_->checkScene(scene, "firstParticle");
-  return impl_->segments_[std::size_t(scene)].first_particle;
-}
-int BatchSimulator::numParticles(int scene) const {
-  impl_->checkScene(scene, "numParticles");
-  return impl_->segments_[std::size_t(scene)].num_particles;
-}
-double BatchSimulator::time() const { return impl_->t_; }
-double BatchSimulator::time(int scene) const {
-  impl_->checkScene(scene, "time");
-  return impl_->per_scene_[std::size_t(scene)].time;
-}
-int BatchSimulator::stepCount(int scene) const {
-  impl_->checkScene(scene, "stepCount");
-  return impl_->per_scene_[std::size_t(scene)].steps;
-}
-double BatchSimulator::target(int scene) const {
-  impl_->checkScene(scene, "target");
-  return impl_->per_scene_[std::size_t(scene)].target;
-}
-EnergyReport BatchSimulator::energy(int scene) const {
-  impl_->checkScene(scene, "energy");
-  return impl_->energy(scene);
-}
-double BatchSimulator::energyScale(int scene) const {
-  impl_->checkScene(scene, "energyScale");
-  return impl_->per_scene_[std::size_t(scene)].energy_scale;
-}
-const SimulatorOptions& BatchSimulator::options() const { return impl_->options_; }
-std::string BatchSimulator::backendDescription() const {
-  const std::string& reason = impl_->choice_.reason;
-  return impl_->backend_->description() + (reason.empty() ? "" : " [" + reason + "]");
-}
 }  // namespace stabint

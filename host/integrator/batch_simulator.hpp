@@ -38,14 +38,25 @@
 namespace stabint {
 
 class IntegratorSteps;
+struct StepRefusal;
 
-// The public class (include/stabint/batch.hpp) is a pointer to this.
-struct BatchSimulator::Impl {
+// The one stepping driver: BatchSimulator's (its Impl, below) and, as a batch of one, Simulator's
+// (forSimulator, simulator.cpp).
+struct BatchDriver {
   /// Throws InvalidInputError for a bad scene ("scene <i>: ..."), scenes a batch cannot keep
   /// apart (concatenateScenes) or options it does not support yet.
-  Impl(const std::vector<Scene>& scenes, const SimulatorOptions& options);
+  BatchDriver(const std::vector<Scene>& scenes, const SimulatorOptions& options);
+  /// A Simulator's driver (simulator.cpp): `scene` alone as the batch's one segment (its
+  /// SceneData is the scene's own, not a concatenation), every option its Simulator takes, and
+  /// Simulator's semantics where a batch's differ (`as_simulator_`).
+  static std::unique_ptr<BatchDriver> forSimulator(const Scene& scene, const SimulatorOptions& options);
 
+  /// Throws NonFiniteStateError or EnergyLimitError for a refused step of a Simulator's driver,
+  /// before anything is committed; a batch books the refusal instead (refuse()).
   const BatchStepReport& step();
+  /// The iteration budget of every later solve (>= 1, InvalidInputError otherwise).
+  void setIterations(int iterations);
+  std::string backendDescription() const;
 
   // ---- per-frame input and element changes of one scene (batch_input.cpp) ----------------------
   // Simulator's FrameInput and ElementChanges on the scene's segment: its indices, its rows, its
@@ -126,8 +137,14 @@ struct BatchSimulator::Impl {
   void restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
                       const std::vector<PerScene>& per_scene, bool assemble);
 
-  Impl(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
+  BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
   double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;
+  // step()'s parts: each scene's report and H* for the step to t1 (an inactive scene does not
+  // step); the stepping scenes' damping, energy check and new scalars, or their refusal; the new
+  // state of the batch in the slots and host copies, the BDF2 history and the time.
+  void startScenes(double t1);
+  void acceptScenes(double t1);
+  void commit(double t1);
   // The integrators but the blend: the candidates of every stepping scene, with their forcing.
   void integrate(double t1, bool forced);
   IterationControl iterationControl(int iterations) const;
@@ -147,7 +164,9 @@ struct BatchSimulator::Impl {
   // Friction and the final projection of every stepping scene on its candidate, booked in its
   // own target, as Simulator's after its corrections; one energy pass for the projected scenes.
   void resolveContact(double t1);
-  void refuse(std::size_t s, const std::string& message);
+  // Scene s's step is refused: the scene stops stepping (a batch keeps it inactive, its state and
+  // time at the refusal); a Simulator's driver throws instead.
+  void refuse(std::size_t s, const StepRefusal& refusal);
 
   std::vector<Scene> scenes_;  // each scene alone: its bodies for the damping, its pins as the batch's
   std::vector<SceneSegment> segments_;
@@ -168,6 +187,15 @@ struct BatchSimulator::Impl {
   bool has_history_ = false;                                          // BDF2: (kXPrev, kVPrev) hold the previous step
   std::vector<PerScene> per_scene_;
   BatchStepReport report_;
+  // A Simulator's batch of one (forSimulator): a refused step throws and leaves everything as it
+  // was (a batch's refused scene turns inactive while the batch's time goes on), and messages
+  // are the whole scene's, without a batch's "<call>: scene 0: ".
+  bool as_simulator_ = false;
+};
+
+// The public class (include/stabint/batch.hpp) is a pointer to this.
+struct BatchSimulator::Impl : BatchDriver {
+  using BatchDriver::BatchDriver;
 };
 
 }  // namespace stabint

@@ -269,17 +269,6 @@ void checkRestorable(const CheckpointData& d, const RestoreTarget& target) {
   }
 }
 
-void checkRestorable(const CheckpointData& d, const SceneData& scene, const ContactResolver& contact) {
-  RestoreTarget target;
-  target.fingerprint = sceneFingerprint(scene.scene());
-  target.particles = scene.numParticles();
-  for (const ElementBlock& block : scene.blocks()) target.element_counts.push_back(block.count);
-  target.pin_block = scene.blockIndex(pinElementType());
-  target.contact_block = contact.block();
-  target.colliders = scene.scene().colliders.size();
-  checkRestorable(d, target);
-}
-
 std::uint64_t checkpointChecksum(const char* data, std::size_t size) { return checksum(data, size); }
 
 std::string serializeCheckpoint(const CheckpointData& d) {

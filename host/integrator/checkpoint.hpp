@@ -12,8 +12,6 @@
 
 namespace stabint {
 
-class ContactResolver;
-
 struct CheckpointData {
   std::uint64_t scene_fingerprint = 0;  // sceneFingerprint() of the scene it belongs to
   std::int64_t particles = 0, pins = 0;
@@ -56,8 +54,6 @@ struct RestoreTarget {
 /// the target (particles, fingerprint, element and collider counts, its contact log, pin
 /// vertices).
 void checkRestorable(const CheckpointData& d, const RestoreTarget& target);
-/// checkRestorable for a Simulator's scene, its contact set read by `contact`.
-void checkRestorable(const CheckpointData& d, const SceneData& scene, const ContactResolver& contact);
 
 std::string serializeCheckpoint(const CheckpointData& data);
 /// The checksum that ends a serialized checkpoint (FNV-1a, 64 bits), for other formats that hold

@@ -81,4 +81,15 @@ SceneBatch concatenateScenes(const std::vector<Scene>& scenes) {
   return batch;
 }
 
+SceneBatch batchOfOne(const Scene& scene) {
+  SceneSegment segment;
+  segment.num_particles = scene.numParticles();
+  segment.num_colliders = static_cast<int>(scene.colliders.size());
+  for (const ElementType* type : elementTypes()) {
+    segment.first_element.push_back(0);
+    segment.num_elements.push_back(type->count(scene));
+  }
+  return SceneBatch{scene, {segment}};
+}
+
 }  // namespace stabint

@@ -43,4 +43,8 @@ struct SceneBatch {
 /// act on its own particles only.
 SceneBatch concatenateScenes(const std::vector<Scene>& scenes);
 
+/// `scene` itself as a batch of one (a Simulator's: its scene as it is, not appended to an empty
+/// one), with the segment that covers all of it. Not validated: SceneData validates it.
+SceneBatch batchOfOne(const Scene& scene);
+
 }  // namespace stabint

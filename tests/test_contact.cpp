@@ -6,7 +6,7 @@
 #include "contact_scenes.hpp"
 #include "temp_dir_test.hpp"
 #include "elements/contact.hpp"
-#include "integrator/checkpoint.hpp"
+#include "state/checkpoint.hpp"
 
 #include <gtest/gtest.h>
 

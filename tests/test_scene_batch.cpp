@@ -660,5 +660,17 @@ TEST(BatchSimulator, AccessorsLocateEachSceneAndRefuseBadIndices) {
   EXPECT_EQ(batch.positions(0), x);
 }
 
+// The step's phase times are the batch's: every pass is shared, so no scene has times of its own.
+TEST(BatchSimulator, ReportsTheWholeStepsPhaseTimes) {
+  SimulatorOptions options;
+  options.integrator = Integrator::EnergyBlend;
+  BatchSimulator batch(mixedBatchScenes(), options);
+  const BatchStepReport& report = batch.step();
+  EXPECT_GT(report.times.local, 0.0);
+  EXPECT_GT(report.times.global, 0.0);
+  EXPECT_GE(report.times.bookkeeping, 0.0);
+  for (const StepReport& r : report.scenes) EXPECT_EQ(r.times.total(), 0.0);
+}
+
 }  // namespace
 }  // namespace stabint

@@ -164,13 +164,12 @@ const BatchStepReport& BatchDriver::step() {
   resolveContact(t1);
   acceptScenes(t1);
   commit(t1);
-  if (as_simulator_) {
-    // A Simulator's report has the step's times (a batch's, shared by its scenes, are not reported).
-    StepReport& r = report_.scenes[0];
-    r.times = backend_->times();
-    r.times.bookkeeping = std::max(
-        0.0, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - r.times.total());
-  }
+  // The step's times are the batch's (its scenes share every pass); a Simulator reports them as
+  // its own step's.
+  report_.times = backend_->times();
+  report_.times.bookkeeping = std::max(
+      0.0, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - report_.times.total());
+  if (as_simulator_) report_.scenes[0].times = report_.times;
   return report_;
 }
 

@@ -15,7 +15,7 @@
 #include "contact/contact_resolver.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
-#include "integrator/checkpoint.hpp"
+#include "state/checkpoint.hpp"
 #include "integrator/element_changes.hpp"
 #include "integrator/frame_input.hpp"
 #include "integrator/input_scope.hpp"
@@ -107,12 +107,15 @@ struct BatchDriver {
     double target_now = 0.0;          // H* with this step's forcing, damping
     BlendStep blend;
   };
-  // ---- checkpoints (batch_checkpoint.cpp) --------------------------------------------------------
+  // ---- checkpoints (state/batch_checkpoint.cpp) --------------------------------------------------
   // Simulator's CheckpointData twice over: the batch's state as a Simulator of the concatenation
   // would save it (its pins, forcing, elements and contact log: what ElementChanges and
   // ContactResolver restore), and each scene's part of it as a Simulator of the scene alone would.
   CheckpointData batchData();
   CheckpointData sceneData(const CheckpointData& all, int scene) const;
+  /// Scene `scene`'s checkpoint (its part of `all`, batchData()'s) in Simulator's format: what
+  /// Simulator::checkpoint and both of BatchSimulator's return.
+  Checkpoint checkpointOf(const CheckpointData& all, int scene) const;
   /// What scene `scene`'s checkpoint must fit (InvalidInputError naming `call` for a scene out of
   /// range); its messages start with "<call>: scene <s>: ".
   RestoreTarget restoreTarget(int scene, const char* call) const;

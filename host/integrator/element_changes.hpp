@@ -6,7 +6,7 @@
 // of H these cause as an event; the contact set's changes are ContactResolver's. A batch changes
 // one scene's elements through the same code (InputScope: its indices and messages).
 #include "backend.hpp"
-#include "integrator/checkpoint.hpp"
+#include "state/checkpoint.hpp"
 #include "integrator/input_scope.hpp"
 #include "solver/global_system.hpp"
 

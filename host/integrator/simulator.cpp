@@ -7,7 +7,7 @@
 #include <stabint/simulator.hpp>
 
 #include "integrator/batch_simulator.hpp"
-#include "integrator/checkpoint.hpp"
+#include "state/checkpoint.hpp"
 #include "out_of_memory.hpp"
 
 #include <memory>
@@ -98,14 +98,7 @@ bool Simulator::elementEnabled(ElementKind kind, int index) const {
 }
 
 // ---- checkpoints: scene 0's, in the format a batch's scenes share -------------------------------
-Checkpoint Simulator::checkpoint() const {
-  const CheckpointData d = impl_->driver->sceneData(impl_->driver->batchData(), 0);
-  Checkpoint c;
-  c.bytes_ = serializeCheckpoint(d);
-  c.time_ = d.time;
-  c.step_count_ = static_cast<int>(d.steps);
-  return c;
-}
+Checkpoint Simulator::checkpoint() const { return impl_->driver->checkpointOf(impl_->driver->batchData(), 0); }
 
 // The batch of one takes the checkpoint's time, as restoring a whole batch does; a refused
 // restore changes nothing (BatchDriver::restoreChecked).

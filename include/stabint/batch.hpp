@@ -24,6 +24,10 @@ struct BatchStepReport {
   /// Per scene: empty when the scene stepped, else why its step was refused (the message its own
   /// Simulator::step would have thrown) or that it is inactive since a refused step.
   std::vector<std::string> refusals;
+  /// Wall-clock seconds per phase of the whole batch's step. The scenes share every pass, so
+  /// their own reports' `times` are zero (a batch of one's included: Simulator::step reports
+  /// these as its own).
+  PhaseTimes times;
 };
 
 /// A snapshot of every scene of a BatchSimulator (BatchSimulator::checkpoint()): the batch's

@@ -128,7 +128,8 @@ class EventScript {
     int start_frame = 0;
     Eigen::Vector3d start = Eigen::Vector3d::Zero();
   };
-  // The one player of both apply()s, over a Simulator or one scene of a batch (event_script.cpp).
+  // The one player of both apply()s, over a Simulator or one scene of a batch (the library's
+  // scripting/event_script.cpp).
   template <typename Target>
   void play(Target& target);
 

@@ -15,7 +15,10 @@ void bindBatch(nb::module_& m) {
               "scene's describes its kept state).")
       .def_ro("refusals", &BatchStepReport::refusals,
               "Per scene: '' when it stepped, else why its step was refused (the message its own Simulator "
-              "would have raised) or that it is inactive since a refused step.");
+              "would have raised) or that it is inactive since a refused step.")
+      .def_ro("times", &BatchStepReport::times,
+              "Wall-clock seconds per phase of the whole batch's step (the scenes share every pass, so "
+              "their own reports' times are zero).");
   nb::class_<BatchCheckpoint>(
       m, "BatchCheckpoint",
       "A snapshot of every scene of a batch (BatchSimulator.checkpoint()): the batch's time and "

@@ -1,4 +1,4 @@
-#include "integrator/checkpoint.hpp"
+#include "state/checkpoint.hpp"
 
 #include "contact/contact_resolver.hpp"
 #include "elements/element_type.hpp"

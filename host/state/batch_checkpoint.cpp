@@ -343,16 +343,19 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
 
 // ---- the public classes ----------------------------------------------------------------------------
 
+Checkpoint BatchDriver::checkpointOf(const CheckpointData& all, int scene) const {
+  const CheckpointData d = sceneData(all, scene);
+  Checkpoint c;
+  c.bytes_ = serializeCheckpoint(d);
+  c.time_ = d.time;
+  c.step_count_ = static_cast<int>(d.steps);
+  return c;
+}
+
 Checkpoint BatchSimulator::checkpoint(int scene) const {
   impl_->checkScene(scene, "checkpoint");
-  return reportingOutOfMemory("BatchSimulator::checkpoint", [&] {
-    const CheckpointData d = impl_->sceneData(impl_->batchData(), scene);
-    Checkpoint c;
-    c.bytes_ = serializeCheckpoint(d);
-    c.time_ = d.time;
-    c.step_count_ = static_cast<int>(d.steps);
-    return c;
-  });
+  return reportingOutOfMemory("BatchSimulator::checkpoint",
+                              [&] { return impl_->checkpointOf(impl_->batchData(), scene); });
 }
 
 BatchCheckpoint BatchSimulator::checkpoint() const {
@@ -360,14 +363,7 @@ BatchCheckpoint BatchSimulator::checkpoint() const {
     const CheckpointData all = impl_->batchData();
     BatchCheckpoint batch;
     batch.time_ = impl_->t_;
-    for (int s = 0; s < size(); ++s) {
-      const CheckpointData d = impl_->sceneData(all, s);
-      Checkpoint c;
-      c.bytes_ = serializeCheckpoint(d);
-      c.time_ = d.time;
-      c.step_count_ = static_cast<int>(d.steps);
-      batch.scenes_.push_back(std::move(c));
-    }
+    for (int s = 0; s < size(); ++s) batch.scenes_.push_back(impl_->checkpointOf(all, s));
     return batch;
   });
 }

@@ -96,13 +96,33 @@ def machine_lines(results):
     return lines
 
 
+def gtest_lines(log):
+    """The test stage without ctest (STABINT_NO_CTEST): each executable's GoogleTest summary."""
+    runs = re.split(r"^== ", log, flags=re.M)[1:]
+    passed = sum(int(n) for n in re.findall(r"^\[  PASSED  \] (\d+) tests?", log, re.M))
+    failed = sorted(set(re.findall(r"^\[  FAILED  \] ([^\s,]+)(?: \(|, where|$)", log, re.M)))
+    unfinished = [r.split()[0] for r in runs if not re.search(r"^\[==========\] \d+ tests? from .* ran", r, re.M)]
+    lines = ["%d test cases passed, %d failed, in %d executables (GoogleTest one by one, ctest.log)"
+             % (passed, len(failed), len(runs))]
+    if failed:
+        lines += ["", "Failed:", "```"] + failed[:40] + ["```"]
+    if unfinished:
+        lines += ["", "No GoogleTest summary (crashed or cut short): " + ", ".join(unfinished)]
+    return lines
+
+
 def tests_lines(results):
     log = read(os.path.join(results, "ctest.log"))
     if not log:
         return ["Not run (stage `test`)."]
     lines = []
     m = re.search(r"^\d+% tests passed.*$", log, re.M)
-    lines.append((m.group(0) if m else "no summary line in ctest.log (cut short?)") + " (`ctest -L opencl`, ctest.log)")
+    if m:
+        lines.append(m.group(0) + " (`ctest -L opencl`, ctest.log)")
+    elif re.search(r"^== .*--gtest_filter=", log, re.M):
+        lines += gtest_lines(log)
+    else:
+        lines.append("no summary line in ctest.log (cut short?) (`ctest -L opencl`, ctest.log)")
     failed = log.split("The following tests FAILED:", 1)
     if len(failed) == 2:
         lines += ["", "Failed:", "```"] + [l for l in failed[1].strip().splitlines() if l.strip()][:40] + ["```"]

@@ -1,9 +1,11 @@
-// The C API (include/stabint/stabint_c.h) over the C++ API: errors and statuses, names, scenes,
-// the default options and checkpoints; the simulator is in simulator_c.cpp, the conversions of
+// The C API (include/stabint/stabint_c.h) over the C++ API: errors and statuses, the helpers of
+// c_api.hpp, names, scenes, the default options and checkpoints; the simulator is in
+// simulator_c.cpp, the batch in batch_c.cpp, the conversions of
 // the structs and enums in c_conversions.cpp, guarded() and the handles in c_api.hpp.
 #include "c_api/c_api.hpp"
 
-#include <limits>
+#include <algorithm>
+#include <cstring>
 #include <string>
 #include <utility>
 
@@ -17,8 +19,6 @@ struct LastError {
 };
 thread_local LastError last_error;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 }  // namespace
 
 stabint_status fail(stabint_status status, const char* class_name, const std::string& text, int step) {
@@ -26,6 +26,40 @@ stabint_status fail(stabint_status status, const char* class_name, const std::st
   last_error.message = std::string(class_name) + ": " + text;
   last_error.step = step;
   return status;
+}
+
+Eigen::MatrixX3d rowsFrom(Eigen::Index particles, const double* values, size_t count, const char* what) {
+  require(values, what);
+  const size_t n = static_cast<size_t>(particles);
+  if (count != 3 * n) {
+    throw ArgumentError{std::string(what) + ": " + std::to_string(count) + " values, " + std::to_string(3 * n) +
+                        " expected (3 per particle)"};
+  }
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  return Eigen::Map<const RowMajor>(values, particles, 3);
+}
+
+std::vector<int> indexList(const int* indices, size_t count) {
+  if (count > 0) require(indices, "indices");
+  return count > 0 ? std::vector<int>(indices, indices + count) : std::vector<int>{};
+}
+
+Eigen::Vector3d vector3(const double* values, const char* what) {
+  require(values, what);
+  return Eigen::Vector3d(values[0], values[1], values[2]);
+}
+
+void copyVector3(const Eigen::Vector3d& v, double* out) {
+  for (int k = 0; k < 3; ++k) out[k] = v[k];
+}
+
+size_t copyText(const std::string& text, char* out, size_t capacity) {
+  if (out != nullptr && capacity > 0) {
+    const size_t n = std::min(text.size(), capacity - 1);
+    std::memcpy(out, text.data(), n);
+    out[n] = '\0';
+  }
+  return text.size();
 }
 
 }  // namespace stabint::c_api

@@ -60,6 +60,16 @@ stabint_status copyAll(const stabint_batch* batch, T* out, size_t capacity) {
   return guarded([&] { copyRows(batchOf(batch).allPositions(), out, capacity, "all positions"); });
 }
 
+// The vector `get` returns (a getter of a pin's or collider's position) into `out`.
+template <class Get>
+stabint_status copyVectorOut(Get&& get, double* out) {
+  return guarded([&] {
+    const Eigen::Vector3d v = get();
+    require(out, "out");
+    copyVector3(v, out);
+  });
+}
+
 // The scenes of a create call, copied; `count` >= 1 and no NULL among them.
 std::vector<stabint::Scene> sceneList(const stabint_scene* const* scenes, int count) {
   if (count < 1) throw ArgumentError{"count: " + std::to_string(count) + " scenes, at least 1 needed"};
@@ -208,11 +218,7 @@ stabint_status stabint_batch_set_pin_target(stabint_batch* batch, int scene, int
 }
 
 stabint_status stabint_batch_pin_target(const stabint_batch* batch, int scene, int pin, double out[3]) {
-  return guarded([&] {
-    const Eigen::Vector3d q = batchOf(batch).pinTarget(scene, pin);
-    require(out, "out");
-    copyVector3(q, out);
-  });
+  return copyVectorOut([&] { return batchOf(batch).pinTarget(scene, pin); }, out);
 }
 
 stabint_status stabint_batch_set_external_forces(stabint_batch* batch, int scene, const double* forces, size_t count) {
@@ -233,11 +239,7 @@ stabint_status stabint_batch_set_collider_velocity(stabint_batch* batch, int sce
 }
 
 stabint_status stabint_batch_collider_position(const stabint_batch* batch, int scene, int collider, double out[3]) {
-  return guarded([&] {
-    const Eigen::Vector3d p = batchOf(batch).colliderPosition(scene, collider);
-    require(out, "out");
-    copyVector3(p, out);
-  });
+  return copyVectorOut([&] { return batchOf(batch).colliderPosition(scene, collider); }, out);
 }
 
 stabint_status stabint_batch_grab(stabint_batch* batch, int scene, int vertex, double stiffness, int* out_pin) {

@@ -898,20 +898,26 @@ static void test_batch_steps_as_its_scenes_simulators(void) {
   compare_batch_with_simulators(&options, 0, 2, 20, 1);
 }
 
-/* The whole batch's positions are every scene's, one after another. */
-static void test_batch_all_positions(void) {
+/* The chain and the 6 x 5 cloth with the default options. */
+static stabint_batch* chain_and_cloth(void) {
   stabint_scene* scenes[2];
   stabint_simulator_options options;
   stabint_batch* batch;
-  double *all, *x;
-  float* xf;
-  int n0, n1, i, agree = 1;
   scenes[0] = builtin("chain", NULL);
   scenes[1] = builtin("cloth", kSmallCloth);
   stabint_simulator_options_default(&options);
   batch = batch_of(scenes, 2, &options);
   stabint_scene_destroy(scenes[0]);
   stabint_scene_destroy(scenes[1]);
+  return batch;
+}
+
+/* The whole batch's positions are every scene's, one after another. */
+static void test_batch_all_positions(void) {
+  stabint_batch* batch = chain_and_cloth();
+  double *all, *x;
+  float* xf;
+  int n0, n1, i, agree = 1;
   if (batch == NULL) return;
   CHECK(stabint_batch_step(batch, NULL, 0) == STABINT_OK);
   n0 = stabint_batch_num_particles(batch, 0);
@@ -1068,20 +1074,6 @@ static void test_batch_collider_moved_every_frame(const char* scene_dir) {
   free(x);
   stabint_simulator_destroy(own);
   stabint_batch_destroy(batch);
-}
-
-/* The chain and the 6 x 5 cloth with the default options. */
-static stabint_batch* chain_and_cloth(void) {
-  stabint_scene* scenes[2];
-  stabint_simulator_options options;
-  stabint_batch* batch;
-  scenes[0] = builtin("chain", NULL);
-  scenes[1] = builtin("cloth", kSmallCloth);
-  stabint_simulator_options_default(&options);
-  batch = batch_of(scenes, 2, &options);
-  stabint_scene_destroy(scenes[0]);
-  stabint_scene_destroy(scenes[1]);
-  return batch;
 }
 
 /* `status` is `expected` and the last error's message has `text`. */

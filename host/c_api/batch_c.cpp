@@ -272,7 +272,7 @@ stabint_status stabint_batch_set_element_enabled(stabint_batch* batch, int scene
   });
 }
 
-stabint_status stabint_batch_checkpoint(const stabint_batch* batch, int scene, stabint_checkpoint** out) {
+stabint_status stabint_batch_scene_checkpoint(const stabint_batch* batch, int scene, stabint_checkpoint** out) {
   return guarded([&] {
     if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
     const stabint::BatchSimulator& b = batchOf(batch);
@@ -281,12 +281,64 @@ stabint_status stabint_batch_checkpoint(const stabint_batch* batch, int scene, s
   });
 }
 
-stabint_status stabint_batch_restore(stabint_batch* batch, int scene, const stabint_checkpoint* checkpoint) {
+stabint_status stabint_batch_scene_restore(stabint_batch* batch, int scene, const stabint_checkpoint* checkpoint) {
   return guarded([&] {
     stabint::BatchSimulator& b = batchOf(batch);
     require(checkpoint, "checkpoint");
     b.restore(scene, checkpoint->checkpoint);
   });
+}
+
+stabint_status stabint_batch_checkpoint_create(const stabint_batch* batch, stabint_batch_checkpoint** out) {
+  return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
+    const stabint::BatchSimulator& b = batchOf(batch);
+    require(out, "out");
+    *out = new stabint_batch_checkpoint{b.checkpoint()};
+  });
+}
+
+stabint_status stabint_batch_restore(stabint_batch* batch, const stabint_batch_checkpoint* checkpoint) {
+  return guarded([&] {
+    stabint::BatchSimulator& b = batchOf(batch);
+    require(checkpoint, "checkpoint");
+    b.restore(checkpoint->checkpoint);
+  });
+}
+
+stabint_status stabint_batch_checkpoint_scene(const stabint_batch_checkpoint* checkpoint, int scene,
+                                              stabint_checkpoint** out) {
+  return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
+    require(checkpoint, "checkpoint");
+    require(out, "out");
+    *out = new stabint_checkpoint{checkpoint->checkpoint.scene(scene)};
+  });
+}
+
+stabint_status stabint_batch_checkpoint_save(const stabint_batch_checkpoint* checkpoint, const char* path) {
+  return saveCheckpoint(checkpoint, path);
+}
+
+stabint_status stabint_batch_checkpoint_load(const char* path, stabint_batch_checkpoint** out) {
+  return loadCheckpoint(path, out);
+}
+
+const void* stabint_batch_checkpoint_data(const stabint_batch_checkpoint* checkpoint, size_t* size) {
+  return checkpointData(checkpoint, size);
+}
+
+stabint_status stabint_batch_checkpoint_from_bytes(const void* data, size_t size, stabint_batch_checkpoint** out) {
+  return checkpointFromBytes(data, size, out);
+}
+
+void stabint_batch_checkpoint_destroy(stabint_batch_checkpoint* checkpoint) { delete checkpoint; }
+
+double stabint_batch_checkpoint_time(const stabint_batch_checkpoint* checkpoint) {
+  return checkpoint ? checkpoint->checkpoint.time() : kNaN;
+}
+int stabint_batch_checkpoint_size(const stabint_batch_checkpoint* checkpoint) {
+  return checkpoint ? checkpoint->checkpoint.size() : -1;
 }
 
 }  // extern "C"

@@ -12,6 +12,7 @@
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 struct stabint_scene {
@@ -22,6 +23,13 @@ struct stabint_simulator {
 };
 struct stabint_checkpoint {
   stabint::Checkpoint checkpoint;
+};
+// A whole batch's checkpoint and its serialized bytes (BatchCheckpoint::bytes() makes them anew;
+// stabint_batch_checkpoint_data hands out a pointer into them).
+struct stabint_batch_checkpoint {
+  explicit stabint_batch_checkpoint(stabint::BatchCheckpoint c) : checkpoint(std::move(c)), bytes(checkpoint.bytes()) {}
+  stabint::BatchCheckpoint checkpoint;
+  std::string bytes;
 };
 // The batch and the report of its last step (its refusals and per-scene reports, which the C API
 // reads back after stabint_batch_step; empty before the first step).
@@ -130,6 +138,48 @@ size_t copyDescription(Describe&& describe, char* out, size_t capacity) noexcept
     return 0;
   }
   return copyText(text, out, capacity);
+}
+
+// The checkpoint handles' common calls (stabint_checkpoint, stabint_batch_checkpoint): save,
+// load, bytes and from bytes, over the C++ class's save(), load(), bytes() and fromBytes().
+inline const std::string& bytesOf(const stabint_checkpoint& c) { return c.checkpoint.bytes(); }
+inline const std::string& bytesOf(const stabint_batch_checkpoint& c) { return c.bytes; }
+
+template <class Handle>
+stabint_status saveCheckpoint(const Handle* handle, const char* path) {
+  return guarded([&] {
+    require(handle, "checkpoint");
+    require(path, "path");
+    handle->checkpoint.save(path);
+  });
+}
+
+template <class Handle>
+stabint_status loadCheckpoint(const char* path, Handle** out) {
+  return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
+    require(path, "path");
+    require(out, "out");
+    *out = new Handle{decltype(Handle::checkpoint)::load(path)};
+  });
+}
+
+template <class Handle>
+const void* checkpointData(const Handle* handle, size_t* size) {
+  if (size != nullptr) *size = handle ? bytesOf(*handle).size() : 0;
+  return handle ? bytesOf(*handle).data() : nullptr;
+}
+
+template <class Handle>
+stabint_status checkpointFromBytes(const void* data, size_t size, Handle** out) {
+  return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
+    if (size > 0) require(data, "data");
+    require(out, "out");
+    std::string bytes;
+    if (size > 0) bytes.assign(static_cast<const char*>(data), size);
+    *out = new Handle{decltype(Handle::checkpoint)::fromBytes(std::move(bytes))};
+  });
 }
 
 // The C enum of each public C++ enum with its count (its values run from 0); c_conversions.cpp

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
-#include <utility>
 
 namespace stabint::c_api {
 namespace {
@@ -152,36 +151,17 @@ stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t*
 }
 
 stabint_status stabint_checkpoint_save(const stabint_checkpoint* checkpoint, const char* path) {
-  return guarded([&] {
-    require(checkpoint, "checkpoint");
-    require(path, "path");
-    checkpoint->checkpoint.save(path);
-  });
+  return saveCheckpoint(checkpoint, path);
 }
 
-stabint_status stabint_checkpoint_load(const char* path, stabint_checkpoint** out) {
-  return guarded([&] {
-    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
-    require(path, "path");
-    require(out, "out");
-    *out = new stabint_checkpoint{stabint::Checkpoint::load(path)};
-  });
-}
+stabint_status stabint_checkpoint_load(const char* path, stabint_checkpoint** out) { return loadCheckpoint(path, out); }
 
 const void* stabint_checkpoint_data(const stabint_checkpoint* checkpoint, size_t* size) {
-  if (size != nullptr) *size = checkpoint ? checkpoint->checkpoint.bytes().size() : 0;
-  return checkpoint ? checkpoint->checkpoint.bytes().data() : nullptr;
+  return checkpointData(checkpoint, size);
 }
 
 stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size, stabint_checkpoint** out) {
-  return guarded([&] {
-    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
-    if (size > 0) require(data, "data");
-    require(out, "out");
-    std::string bytes;
-    if (size > 0) bytes.assign(static_cast<const char*>(data), size);
-    *out = new stabint_checkpoint{stabint::Checkpoint::fromBytes(std::move(bytes))};
-  });
+  return checkpointFromBytes(data, size, out);
 }
 
 void stabint_checkpoint_destroy(stabint_checkpoint* checkpoint) { delete checkpoint; }

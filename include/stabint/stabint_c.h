@@ -353,7 +353,7 @@ int stabint_checkpoint_step_count(const stabint_checkpoint* checkpoint); /**< -1
  * Refusals: a scene whose step blows up or exceeds options.energy_limit does not fail the batch's
  * step. Its step is refused (stabint_batch_refusal gives the message its own simulator's step
  * would have returned), its last accepted state is kept, and it stays inactive (stabint_batch_active
- * is 0) while the other scenes step on, until stabint_batch_set_state or stabint_batch_restore
+ * is 0) while the other scenes step on, until stabint_batch_set_state or stabint_batch_scene_restore
  * restarts it from the batch's time. An inactive scene takes per-frame input as an active one does. */
 /** An opaque batch of scenes (a stabint::BatchSimulator), from stabint_batch_create. */
 typedef struct stabint_batch stabint_batch;
@@ -386,7 +386,7 @@ stabint_status stabint_batch_refusal(const stabint_batch* batch, int scene, char
 
 /** Number of scenes; -1 for NULL. */
 int stabint_batch_size(const stabint_batch* batch);
-/** 1 while scene `scene` steps, 0 after a refused step until set_state or restore; -1 for NULL or a
+/** 1 while scene `scene` steps, 0 after a refused step until set_state or scene_restore; -1 for NULL or a
  * scene out of range. */
 int stabint_batch_active(const stabint_batch* batch, int scene);
 /** Number of particles of scene `scene`; -1 for NULL or a scene out of range. */
@@ -470,12 +470,47 @@ stabint_status stabint_batch_set_element_enabled(stabint_batch* batch, int scene
  * a simulator of that scene (same options and backend), which continues as the scene did (to the
  * round-off of the batch's factor against its own), and into scene `scene` of a batch of the same
  * scenes. Its time is the scene's (stabint_batch_scene_time). */
-stabint_status stabint_batch_checkpoint(const stabint_batch* batch, int scene, stabint_checkpoint** out);
+stabint_status stabint_batch_scene_checkpoint(const stabint_batch* batch, int scene, stabint_checkpoint** out);
 /** Continues scene `scene` from `checkpoint` (of that scene, from stabint_batch_checkpoint or a
  * simulator's of the same scene and options); an inactive scene becomes active. The scenes share
  * the batch's time, so the checkpoint's time must be stabint_batch_time. INVALID_INPUT naming the
  * scene for a checkpoint of another scene, time or history; the batch is then unchanged. */
-stabint_status stabint_batch_restore(stabint_batch* batch, int scene, const stabint_checkpoint* checkpoint);
+stabint_status stabint_batch_scene_restore(stabint_batch* batch, int scene, const stabint_checkpoint* checkpoint);
+
+/* A snapshot of a whole batch (stabint::BatchCheckpoint): the batch's time and one checkpoint per
+ * scene in the simulator's format. Restoring it into a batch of the same scenes (in the same
+ * order) and options continues bit for bit as the batch did from that moment when the batch
+ * restored into has the same pins and element stiffnesses as the checkpoint (the same batch, or a
+ * new one when no pin or element was changed before the checkpoint); otherwise to round-off. A
+ * scene that was inactive is restored inactive. The serialized form is one file: a versioned
+ * header, the time and each scene's checkpoint. */
+/** An opaque checkpoint of a whole batch (a stabint::BatchCheckpoint). */
+typedef struct stabint_batch_checkpoint stabint_batch_checkpoint;
+
+/** A snapshot of every scene of the batch into a new batch checkpoint. */
+stabint_status stabint_batch_checkpoint_create(const stabint_batch* batch, stabint_batch_checkpoint** out);
+/** Continues every scene from `checkpoint`: the batch's time, each scene's state, H*, pins,
+ * elements, forcing and contact set, BDF2's history and which scenes are inactive. INVALID_INPUT
+ * for another number of scenes, or a scene's checkpoint of another scene (the message names the
+ * scene); the batch is then unchanged. */
+stabint_status stabint_batch_restore(stabint_batch* batch, const stabint_batch_checkpoint* checkpoint);
+/** Scene `scene`'s checkpoint in it, copied into a new simulator checkpoint (it restores into a
+ * simulator of that scene, as stabint_batch_scene_checkpoint's does); INVALID_INPUT out of range. */
+stabint_status stabint_batch_checkpoint_scene(const stabint_batch_checkpoint* checkpoint, int scene,
+                                              stabint_checkpoint** out);
+/** As stabint_checkpoint_save and stabint_checkpoint_load, for a batch checkpoint. */
+/** @{ */
+stabint_status stabint_batch_checkpoint_save(const stabint_batch_checkpoint* checkpoint, const char* path);
+stabint_status stabint_batch_checkpoint_load(const char* path, stabint_batch_checkpoint** out);
+/** @} */
+/** The serialized bytes, as stabint_checkpoint_data (valid while the checkpoint exists). */
+const void* stabint_batch_checkpoint_data(const stabint_batch_checkpoint* checkpoint, size_t* size);
+/** A batch checkpoint from serialized bytes; FILE_FORMAT when they are malformed. */
+stabint_status stabint_batch_checkpoint_from_bytes(const void* data, size_t size, stabint_batch_checkpoint** out);
+/** Releases a batch checkpoint (NULL is ignored). */
+void stabint_batch_checkpoint_destroy(stabint_batch_checkpoint* checkpoint);
+double stabint_batch_checkpoint_time(const stabint_batch_checkpoint* checkpoint); /**< the batch's time; NaN for NULL */
+int stabint_batch_checkpoint_size(const stabint_batch_checkpoint* checkpoint);    /**< scenes; -1 for NULL */
 
 #ifdef __cplusplus
 }

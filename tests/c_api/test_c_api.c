@@ -263,6 +263,18 @@ static stabint_simulator* small_cloth(stabint_integrator integrator) {
 
 static double* new_rows(int n) { return (double*)calloc(3 * (size_t)n, sizeof(double)); }
 
+/* A fresh empty temporary file under $TMPDIR (or /tmp), its path into `path`; returns its file
+ * descriptor, -1 (and a failed check) when none could be made. */
+static int temp_file(char* path, size_t size) {
+  const char* tmp = getenv("TMPDIR");
+  int fd;
+  if (tmp == NULL || tmp[0] == '\0') tmp = "/tmp";
+  snprintf(path, size, "%s/stabint_c_api_XXXXXX", tmp);
+  fd = mkstemp(path);
+  CHECK(fd >= 0);
+  return fd;
+}
+
 /* A hand drags pin 0 along x, its target set every frame: the target reads back exactly as set
  * (the ramp ends on it bit for bit), the pinned corner follows it and the other pin stays. */
 static void test_pin_target_set_every_frame_moves_the_pin(void) {
@@ -556,7 +568,6 @@ static void test_checkpoints_continue_bit_for_bit(void) {
   const void *data, *loaded_data;
   size_t size = 0, loaded_size = 0;
   char path[1024];
-  const char* tmp = getenv("TMPDIR");
   int fd;
   FILE* file;
 
@@ -595,10 +606,7 @@ static void test_checkpoints_continue_bit_for_bit(void) {
   CHECK(loaded == NULL);
 
   /* Through a file in a fresh temporary path. */
-  if (tmp == NULL || tmp[0] == '\0') tmp = "/tmp";
-  snprintf(path, sizeof path, "%s/stabint_c_api_XXXXXX", tmp);
-  fd = mkstemp(path);
-  CHECK(fd >= 0);
+  fd = temp_file(path, sizeof path);
   if (fd >= 0) close(fd);
   CHECK(stabint_checkpoint_save(ckpt, path) == STABINT_OK);
   CHECK(stabint_checkpoint_load(path, &loaded) == STABINT_OK);
@@ -656,7 +664,6 @@ static void test_checkpoints_continue_bit_for_bit(void) {
  * blend and static pins, H* moves by exactly the reported friction and projection (round-off of
  * 30 terms of size up to H0). contact_tolerance reaches the simulator and is checked. */
 static void test_colliders_from_a_scene_file(void) {
-  const char* tmp = getenv("TMPDIR");
   char path[1024];
   FILE* file;
   int fd, f;
@@ -666,10 +673,7 @@ static void test_colliders_from_a_scene_file(void) {
   stabint_step_report report;
   stabint_energy start;
   double friction = 0.0, projection = 0.0;
-  if (tmp == NULL || tmp[0] == '\0') tmp = "/tmp";
-  snprintf(path, sizeof path, "%s/stabint_c_api_XXXXXX", tmp);
-  fd = mkstemp(path);
-  CHECK(fd >= 0);
+  fd = temp_file(path, sizeof path);
   if (fd < 0) return;
   file = fdopen(fd, "w");
   CHECK(file != NULL);
@@ -943,8 +947,8 @@ static void test_batch_all_positions(void) {
   stabint_batch_destroy(batch);
 }
 
-/* Steps a frame of the drive() inputs (pin 0 dragged, a force on particle 0) given to scene 1 of
- * `batch` and to `sim`; scene 0 gets none. */
+/* Steps a frame of the drive() inputs (pin 0 dragged, a force on particle 0), functions of time
+ * only, given to scene 1 of `batch` and to `sim` (unless NULL); scene 0 gets none. */
 static void drive_scene_one(stabint_batch* batch, stabint_simulator* sim, const double corner[3], int n) {
   double* f = new_rows(n);
   double q[3];
@@ -955,10 +959,12 @@ static void drive_scene_one(stabint_batch* batch, stabint_simulator* sim, const 
   f[2] = 0.5 * cos(5.0 * t1);
   CHECK(stabint_batch_set_pin_target(batch, 1, 0, q) == STABINT_OK);
   CHECK(stabint_batch_set_external_forces(batch, 1, f, 3 * (size_t)n) == STABINT_OK);
-  CHECK(stabint_simulator_set_pin_target(sim, 0, q) == STABINT_OK);
-  CHECK(stabint_simulator_set_external_forces(sim, f, 3 * (size_t)n) == STABINT_OK);
   CHECK(stabint_batch_step(batch, NULL, 0) == STABINT_OK);
-  CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
+  if (sim != NULL) {
+    CHECK(stabint_simulator_set_pin_target(sim, 0, q) == STABINT_OK);
+    CHECK(stabint_simulator_set_external_forces(sim, f, 3 * (size_t)n) == STABINT_OK);
+    CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
+  }
   free(f);
 }
 
@@ -1196,9 +1202,9 @@ static void test_batch_bad_input_is_rejected_and_changes_nothing(void) {
                 "indices is NULL");
   check_refused(stabint_batch_set_element_enabled(batch, 0, "tets", bad_springs, 1, 0), STABINT_INVALID_INPUT,
                 "setElementEnabled: scene 0: tet 0 out of range");
-  check_refused(stabint_batch_checkpoint(batch, 2, &ckpt), STABINT_INVALID_INPUT, "scene 2 out of range");
+  check_refused(stabint_batch_scene_checkpoint(batch, 2, &ckpt), STABINT_INVALID_INPUT, "scene 2 out of range");
   CHECK(ckpt == NULL);
-  check_refused(stabint_batch_restore(batch, 0, NULL), STABINT_INVALID_ARGUMENT, "checkpoint is NULL");
+  check_refused(stabint_batch_scene_restore(batch, 0, NULL), STABINT_INVALID_ARGUMENT, "checkpoint is NULL");
 
   /* Nothing changed: the batch steps on as its twin, bit for bit. */
   for (f = 0; f < 5; ++f) {
@@ -1334,17 +1340,17 @@ static void test_batch_checkpoints(void) {
     CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
     CHECK(stabint_simulator_step(chain, NULL) == STABINT_OK);
   }
-  CHECK(stabint_batch_checkpoint(batch, 1, &ckpt) == STABINT_OK);
+  CHECK(stabint_batch_scene_checkpoint(batch, 1, &ckpt) == STABINT_OK);
   CHECK(stabint_checkpoint_step_count(ckpt) == 10);
   CHECK(stabint_checkpoint_time(ckpt) == stabint_batch_scene_time(batch, 1));
   CHECK(stabint_simulator_checkpoint(chain, &chain_ckpt) == STABINT_OK);
 
   /* Another scene's checkpoint is refused, naming the scene, and changes nothing. */
-  check_refused(stabint_batch_restore(other, 1, chain_ckpt), STABINT_INVALID_INPUT, "scene 1");
+  check_refused(stabint_batch_scene_restore(other, 1, chain_ckpt), STABINT_INVALID_INPUT, "scene 1");
   CHECK(stabint_batch_copy_positions(batch, 1, x, count) == STABINT_OK);
   CHECK(stabint_batch_copy_positions(other, 1, y, count) == STABINT_OK);
   CHECK(max_abs_diff(x, y, count) > 1e-3); /* pushed */
-  CHECK(stabint_batch_restore(other, 1, ckpt) == STABINT_OK);
+  CHECK(stabint_batch_scene_restore(other, 1, ckpt) == STABINT_OK);
   CHECK(stabint_batch_copy_positions(other, 1, y, count) == STABINT_OK);
   CHECK(stabint_batch_copy_positions(batch, 1, x, count) == STABINT_OK);
   CHECK(memcmp(x, y, count * sizeof(double)) == 0);
@@ -1353,7 +1359,7 @@ static void test_batch_checkpoints(void) {
   /* Into a simulator of the cloth; and the simulator's own into the chain scene of a batch. */
   CHECK(stabint_simulator_restore(sim, ckpt) == STABINT_OK);
   CHECK(stabint_simulator_step_count(sim) == 10);
-  CHECK(stabint_batch_restore(other, 0, chain_ckpt) == STABINT_OK);
+  CHECK(stabint_batch_scene_restore(other, 0, chain_ckpt) == STABINT_OK);
   for (i = 0; i < 10; ++i) {
     CHECK(stabint_batch_step(batch, NULL, 0) == STABINT_OK);
     CHECK(stabint_batch_step(other, NULL, 0) == STABINT_OK);
@@ -1364,10 +1370,10 @@ static void test_batch_checkpoints(void) {
   CHECK(stabint_batch_copy_positions(batch, 1, x, count) == STABINT_OK);
   CHECK(memcmp(x, y, count * sizeof(double)) == 0);
   /* An old checkpoint: the batch's time moved on. */
-  CHECK(stabint_batch_restore(batch, 1, ckpt) == STABINT_INVALID_INPUT);
+  CHECK(stabint_batch_scene_restore(batch, 1, ckpt) == STABINT_INVALID_INPUT);
   CHECK(strstr(stabint_last_error_message(), "scene 1") != NULL);
   CHECK(stabint_batch_step_count(batch, 1) == 20);
-  CHECK(stabint_batch_checkpoint(batch, 0, &from_sim) == STABINT_OK);
+  CHECK(stabint_batch_scene_checkpoint(batch, 0, &from_sim) == STABINT_OK);
   CHECK(stabint_checkpoint_step_count(from_sim) == 20);
   stabint_checkpoint_destroy(ckpt);
   stabint_checkpoint_destroy(from_sim);
@@ -1379,6 +1385,126 @@ static void test_batch_checkpoints(void) {
   free(x);
   free(y);
   free(f);
+}
+
+/* Every scene's positions of `batch`, one after another, into a new array. */
+static double* all_positions(const stabint_batch* batch) {
+  const int s = stabint_batch_size(batch) - 1;
+  const size_t count = 3 * (size_t)(stabint_batch_first_particle(batch, s) + stabint_batch_num_particles(batch, s));
+  double* x = (double*)malloc(count * sizeof(double));
+  CHECK(stabint_batch_copy_all_positions(batch, x, count) == STABINT_OK);
+  return x;
+}
+
+/* Drives scene 1 of `batch` 20 frames (drive_scene_one); it ends with all positions `original`,
+ * bit for bit. */
+static void drive_and_compare(stabint_batch* batch, const double corner[3], const double* original) {
+  const int n = stabint_batch_num_particles(batch, 1);
+  const size_t all = 3 * (size_t)(stabint_batch_first_particle(batch, 1) + n);
+  double* again;
+  int i;
+  for (i = 0; i < 20; ++i) drive_scene_one(batch, NULL, corner, n);
+  again = all_positions(batch);
+  CHECK(memcmp(again, original, all * sizeof(double)) == 0);
+  free(again);
+}
+
+/* A whole batch's checkpoint (chain and cloth, the cloth dragged as in drive()) restored into the
+ * same batch, into a new batch of the same scenes, from its bytes and from a file continues bit
+ * for bit (no pin or element was changed, so the factor is the same: BatchCheckpoint); one of its
+ * scenes restores into a simulator; another batch's is refused and changes nothing. */
+static void test_batch_checkpoint_of_the_whole_batch(void) {
+  stabint_batch* batch = chain_and_cloth();
+  stabint_batch* other = chain_and_cloth();
+  stabint_batch* one = NULL;
+  stabint_simulator* sim = small_cloth(STABINT_ENERGY_BLEND);
+  stabint_scene* cloth = builtin("cloth", kSmallCloth);
+  const stabint_scene* list[1];
+  stabint_simulator_options options;
+  stabint_batch_checkpoint *ckpt = NULL, *copy = NULL, *loaded = NULL, *single = NULL;
+  stabint_checkpoint* scene_ckpt = NULL;
+  const int n = stabint_batch_num_particles(batch, 1);
+  const size_t all = 3 * (size_t)(stabint_batch_first_particle(batch, 1) + n);
+  double corner[3], time, *original, *again;
+  const void* data;
+  size_t size = 0;
+  char path[1024];
+  int i, fd;
+  list[0] = cloth;
+  stabint_simulator_options_default(&options);
+  CHECK(stabint_batch_create(list, 1, &options, &one) == STABINT_OK);
+  stabint_scene_destroy(cloth);
+  if (batch == NULL || other == NULL || one == NULL) return;
+  CHECK(stabint_batch_pin_target(batch, 1, 0, corner) == STABINT_OK);
+  for (i = 0; i < 12; ++i) drive_scene_one(batch, NULL, corner, n);
+  CHECK(stabint_batch_checkpoint_create(batch, &ckpt) == STABINT_OK);
+  CHECK(stabint_batch_checkpoint_size(ckpt) == 2);
+  time = stabint_batch_time(batch);
+  CHECK(stabint_batch_checkpoint_time(ckpt) == time);
+  for (i = 0; i < 20; ++i) drive_scene_one(batch, NULL, corner, n);
+  original = all_positions(batch);
+
+  CHECK(stabint_batch_restore(batch, ckpt) == STABINT_OK);
+  CHECK(stabint_batch_time(batch) == time && stabint_batch_step_count(batch, 1) == 12);
+  drive_and_compare(batch, corner, original);
+
+  /* From its bytes into a new batch; through a file into it again. */
+  data = stabint_batch_checkpoint_data(ckpt, &size);
+  CHECK(data != NULL && size > 0);
+  CHECK(stabint_batch_checkpoint_from_bytes(data, size, &copy) == STABINT_OK);
+  CHECK(stabint_batch_restore(other, copy) == STABINT_OK);
+  drive_and_compare(other, corner, original);
+  fd = temp_file(path, sizeof path);
+  if (fd >= 0) close(fd);
+  CHECK(stabint_batch_checkpoint_save(ckpt, path) == STABINT_OK);
+  CHECK(stabint_batch_checkpoint_load(path, &loaded) == STABINT_OK);
+  remove(path);
+  CHECK(stabint_batch_restore(other, loaded) == STABINT_OK);
+  drive_and_compare(other, corner, original);
+  CHECK(stabint_batch_checkpoint_load(path, &single) == STABINT_FILE_FORMAT);
+  CHECK(strstr(stabint_last_error_message(), path) != NULL);
+  CHECK(stabint_batch_checkpoint_from_bytes(data, size - 1, &single) == STABINT_FILE_FORMAT);
+  CHECK(single == NULL);
+
+  /* Its cloth restores into a simulator, which continues as the batch's cloth to 1e-9 of the
+   * cloth's size (the batch's factor against the simulator's own: round-off, as above). */
+  CHECK(stabint_batch_checkpoint_scene(ckpt, 1, &scene_ckpt) == STABINT_OK);
+  CHECK(stabint_checkpoint_step_count(scene_ckpt) == 12);
+  CHECK(stabint_simulator_restore(sim, scene_ckpt) == STABINT_OK);
+  CHECK(stabint_batch_restore(batch, ckpt) == STABINT_OK);
+  for (i = 0; i < 20; ++i) drive_scene_one(batch, sim, corner, n);
+  batch_scene_vs_simulator(batch, 1, sim, 1e-9 * extent(original + (all - 3 * (size_t)n), n));
+  stabint_checkpoint_destroy(scene_ckpt);
+  check_refused(stabint_batch_checkpoint_scene(ckpt, 2, &scene_ckpt), STABINT_INVALID_INPUT, "2");
+  CHECK(scene_ckpt == NULL);
+
+  /* A batch of one's checkpoint into a batch of two: refused, nothing changed. */
+  CHECK(stabint_batch_checkpoint_create(one, &single) == STABINT_OK);
+  free(original);
+  original = all_positions(other);
+  CHECK(stabint_batch_restore(other, single) == STABINT_INVALID_INPUT);
+  stabint_batch_checkpoint_destroy(single);
+  single = NULL;
+  again = all_positions(other);
+  CHECK(memcmp(again, original, all * sizeof(double)) == 0);
+  CHECK(stabint_batch_step_count(other, 1) == 32);
+  free(again);
+  check_refused(stabint_batch_restore(other, NULL), STABINT_INVALID_ARGUMENT, "checkpoint is NULL");
+  check_refused(stabint_batch_checkpoint_create(NULL, &single), STABINT_INVALID_ARGUMENT, "batch is NULL");
+  CHECK(single == NULL);
+  CHECK(stabint_batch_checkpoint_time(NULL) != stabint_batch_checkpoint_time(NULL)); /* NaN */
+  CHECK(stabint_batch_checkpoint_size(NULL) == -1);
+  CHECK(stabint_batch_checkpoint_data(NULL, &size) == NULL && size == 0);
+  stabint_batch_checkpoint_destroy(NULL);
+  stabint_batch_checkpoint_destroy(ckpt);
+  stabint_batch_checkpoint_destroy(copy);
+  stabint_batch_checkpoint_destroy(loaded);
+  stabint_checkpoint_destroy(scene_ckpt);
+  stabint_simulator_destroy(sim);
+  stabint_batch_destroy(batch);
+  stabint_batch_destroy(other);
+  stabint_batch_destroy(one);
+  free(original);
 }
 
 int main(int argc, char** argv) {
@@ -1408,6 +1534,7 @@ int main(int argc, char** argv) {
   test_batch_bad_input_is_rejected_and_changes_nothing();
   test_batch_refusal_leaves_the_other_scenes();
   test_batch_checkpoints();
+  test_batch_checkpoint_of_the_whole_batch();
   printf("%d passed, %d failed\n", passed, failed);
   return failed == 0 ? 0 : 1;
 }

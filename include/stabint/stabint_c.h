@@ -378,8 +378,9 @@ stabint_status stabint_batch_get_options(const stabint_batch* batch, stabint_sim
 stabint_status stabint_batch_step(stabint_batch* batch, stabint_step_report* reports, size_t capacity);
 /** Scene `scene`'s report of the last stabint_batch_step (zeros before the first). */
 stabint_status stabint_batch_last_report(const stabint_batch* batch, int scene, stabint_step_report* out);
-/** Why scene `scene`'s last step was refused, or that it is inactive since a refused step: "" when
- * it stepped (and before the first step). Copied truncated to `capacity` bytes with a terminating
+/** Why scene `scene`'s last step was refused (the text its own simulator's step would fail with,
+ * which stabint_last_error_message() would give after "<Class>: "), or that it is inactive since a
+ * refused step: "" when it stepped (and before the first step). Copied truncated to `capacity` bytes with a terminating
  * NUL (`out` may be NULL with capacity 0); the full length (without NUL) goes to `length` (may be
  * NULL). */
 stabint_status stabint_batch_refusal(const stabint_batch* batch, int scene, char* out, size_t capacity, size_t* length);

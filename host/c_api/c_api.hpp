@@ -8,9 +8,12 @@
 #include <stabint/stabint.hpp>
 #include <stabint/stabint_c.h>
 
+#include <limits>
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 struct stabint_scene {
   stabint::Scene scene;
@@ -20,6 +23,19 @@ struct stabint_simulator {
 };
 struct stabint_checkpoint {
   stabint::Checkpoint checkpoint;
+};
+// A whole batch's checkpoint and its serialized bytes (BatchCheckpoint::bytes() makes them anew;
+// stabint_batch_checkpoint_data hands out a pointer into them).
+struct stabint_batch_checkpoint {
+  explicit stabint_batch_checkpoint(stabint::BatchCheckpoint c) : checkpoint(std::move(c)), bytes(checkpoint.bytes()) {}
+  stabint::BatchCheckpoint checkpoint;
+  std::string bytes;
+};
+// The batch and the report of its last step (its refusals and per-scene reports, which the C API
+// reads back after stabint_batch_step; empty before the first step).
+struct stabint_batch {
+  stabint::BatchSimulator batch;
+  stabint::BatchStepReport last;
 };
 
 namespace stabint::c_api {
@@ -80,6 +96,90 @@ inline void requireCapacity(size_t capacity, size_t needed, const char* what) {
     throw ArgumentError{std::string(what) + ": buffer holds " + std::to_string(capacity) + " values, " +
                         std::to_string(needed) + " needed"};
   }
+}
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Rows of an n by 3 matrix, interleaved x y z, converted to T, into `out` (room for `capacity`
+// values); `what` names the array in the message of a short buffer.
+template <class T>
+void copyRows(const Eigen::MatrixX3d& m, T* out, size_t capacity, const char* what) {
+  require(out, "out");
+  const size_t n = static_cast<size_t>(m.rows());
+  requireCapacity(capacity, 3 * n, what);
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) out[3 * i + k] = static_cast<T>(m(static_cast<Eigen::Index>(i), k));
+  }
+}
+
+// An interleaved x y z array of `count` values as an n by 3 matrix, n = `particles`; a NULL
+// array or a count other than 3 n is API misuse.
+Eigen::MatrixX3d rowsFrom(Eigen::Index particles, const double* values, size_t count, const char* what);
+
+// A C array of element indices (NULL allowed when count is 0) as the C++ API takes them.
+std::vector<int> indexList(const int* indices, size_t count);
+
+// A C vector of three values (`what` names it when NULL), and a C++ one copied out.
+Eigen::Vector3d vector3(const double* values, const char* what);
+void copyVector3(const Eigen::Vector3d& v, double* out);
+
+// `text` truncated to `capacity` bytes with a terminating NUL into `out` (nothing when `out` is
+// NULL or `capacity` is 0); returns the full length without NUL.
+size_t copyText(const std::string& text, char* out, size_t capacity);
+
+// The text `describe()` returns, copied as copyText does; 0 when it throws (an informational text
+// never lets an exception into C).
+template <class Describe>
+size_t copyDescription(Describe&& describe, char* out, size_t capacity) noexcept {
+  std::string text;
+  try {
+    text = describe();
+  } catch (...) {
+    return 0;
+  }
+  return copyText(text, out, capacity);
+}
+
+// The checkpoint handles' common calls (stabint_checkpoint, stabint_batch_checkpoint): save,
+// load, bytes and from bytes, over the C++ class's save(), load(), bytes() and fromBytes().
+inline const std::string& bytesOf(const stabint_checkpoint& c) { return c.checkpoint.bytes(); }
+inline const std::string& bytesOf(const stabint_batch_checkpoint& c) { return c.bytes; }
+
+template <class Handle>
+stabint_status saveCheckpoint(const Handle* handle, const char* path) {
+  return guarded([&] {
+    require(handle, "checkpoint");
+    require(path, "path");
+    handle->checkpoint.save(path);
+  });
+}
+
+template <class Handle>
+stabint_status loadCheckpoint(const char* path, Handle** out) {
+  return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
+    require(path, "path");
+    require(out, "out");
+    *out = new Handle{decltype(Handle::checkpoint)::load(path)};
+  });
+}
+
+template <class Handle>
+const void* checkpointData(const Handle* handle, size_t* size) {
+  if (size != nullptr) *size = handle ? bytesOf(*handle).size() : 0;
+  return handle ? bytesOf(*handle).data() : nullptr;
+}
+
+template <class Handle>
+stabint_status checkpointFromBytes(const void* data, size_t size, Handle** out) {
+  return guarded([&] {
+    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
+    if (size > 0) require(data, "data");
+    require(out, "out");
+    std::string bytes;
+    if (size > 0) bytes.assign(static_cast<const char*>(data), size);
+    *out = new Handle{decltype(Handle::checkpoint)::fromBytes(std::move(bytes))};
+  });
 }
 
 // The C enum of each public C++ enum with its count (its values run from 0); c_conversions.cpp

@@ -2,50 +2,25 @@
 // changes and checkpoints (include/stabint/stabint_c.h over stabint::Simulator).
 #include "c_api/c_api.hpp"
 
-#include <algorithm>
-#include <cstring>
-#include <limits>
 #include <string>
-#include <vector>
 
 using namespace stabint::c_api;
 
 namespace {
 
-// Rows of an n by 3 matrix, interleaved x y z, converted to T.
+// Positions or velocities into `out` (see copyRows).
 template <class T>
-stabint_status copyRows(const stabint_simulator* sim, bool positions, T* out, size_t capacity) {
+stabint_status copyState(const stabint_simulator* sim, bool positions, T* out, size_t capacity) {
   return guarded([&] {
     require(sim, "simulator");
-    require(out, "out");
-    const Eigen::MatrixX3d& m = positions ? sim->sim.positions() : sim->sim.velocities();
-    const size_t n = static_cast<size_t>(m.rows());
-    requireCapacity(capacity, 3 * n, positions ? "positions" : "velocities");
-    for (size_t i = 0; i < n; ++i) {
-      for (int k = 0; k < 3; ++k) out[3 * i + k] = static_cast<T>(m(static_cast<Eigen::Index>(i), k));
-    }
+    copyRows(positions ? sim->sim.positions() : sim->sim.velocities(), out, capacity,
+             positions ? "positions" : "velocities");
   });
 }
 
-// An interleaved x y z array of `count` values as an n by 3 matrix, n = the simulator's particle
-// count; a NULL array or a count other than 3 n is API misuse.
-Eigen::MatrixX3d rowsFrom(const stabint_simulator* sim, const double* values, size_t count, const char* what) {
-  require(values, what);
-  const size_t n = static_cast<size_t>(sim->sim.positions().rows());
-  if (count != 3 * n) {
-    throw ArgumentError{std::string(what) + ": " + std::to_string(count) + " values, " + std::to_string(3 * n) +
-                        " expected (3 per particle)"};
-  }
-  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-  return Eigen::Map<const RowMajor>(values, static_cast<Eigen::Index>(n), 3);
-}
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// A C array of element indices (NULL allowed when count is 0) as the C++ API takes them.
-std::vector<int> indexList(const int* indices, size_t count) {
-  if (count > 0) require(indices, "indices");
-  return count > 0 ? std::vector<int>(indices, indices + count) : std::vector<int>{};
+// An interleaved array of the simulator's particle count (see rowsFrom).
+Eigen::MatrixX3d rowsOf(const stabint_simulator* sim, const double* values, size_t count, const char* what) {
+  return rowsFrom(sim->sim.positions().rows(), values, count, what);
 }
 
 }  // namespace
@@ -95,16 +70,16 @@ int stabint_simulator_num_particles(const stabint_simulator* sim) {
 }
 
 stabint_status stabint_simulator_copy_positions(const stabint_simulator* sim, double* out, size_t capacity) {
-  return copyRows(sim, true, out, capacity);
+  return copyState(sim, true, out, capacity);
 }
 stabint_status stabint_simulator_copy_positions_float(const stabint_simulator* sim, float* out, size_t capacity) {
-  return copyRows(sim, true, out, capacity);
+  return copyState(sim, true, out, capacity);
 }
 stabint_status stabint_simulator_copy_velocities(const stabint_simulator* sim, double* out, size_t capacity) {
-  return copyRows(sim, false, out, capacity);
+  return copyState(sim, false, out, capacity);
 }
 stabint_status stabint_simulator_copy_velocities_float(const stabint_simulator* sim, float* out, size_t capacity) {
-  return copyRows(sim, false, out, capacity);
+  return copyState(sim, false, out, capacity);
 }
 
 stabint_status stabint_simulator_energy(const stabint_simulator* sim, stabint_energy* out) {
@@ -130,25 +105,13 @@ double stabint_simulator_energy_scale(const stabint_simulator* sim) { return sim
 
 size_t stabint_simulator_backend_description(const stabint_simulator* sim, char* out, size_t capacity) {
   if (sim == nullptr) return 0;
-  std::string text;
-  try {
-    text = sim->sim.backendDescription();
-  } catch (...) {
-    return 0;  // a description is informational: never let it throw into C
-  }
-  if (out != nullptr && capacity > 0) {
-    const size_t n = std::min(text.size(), capacity - 1);
-    std::memcpy(out, text.data(), n);
-    out[n] = '\0';
-  }
-  return text.size();
+  return copyDescription([&] { return sim->sim.backendDescription(); }, out, capacity);
 }
 
 stabint_status stabint_simulator_set_pin_target(stabint_simulator* sim, int pin, const double target[3]) {
   return guarded([&] {
     require(sim, "simulator");
-    require(target, "target");
-    sim->sim.setPinTarget(pin, Eigen::Vector3d(target[0], target[1], target[2]));
+    sim->sim.setPinTarget(pin, vector3(target, "target"));
   });
 }
 
@@ -156,24 +119,21 @@ stabint_status stabint_simulator_pin_target(const stabint_simulator* sim, int pi
   return guarded([&] {
     require(sim, "simulator");
     require(out, "out");
-    const Eigen::Vector3d q = sim->sim.pinTarget(pin);
-    for (int k = 0; k < 3; ++k) out[k] = q[k];
+    copyVector3(sim->sim.pinTarget(pin), out);
   });
 }
 
 stabint_status stabint_simulator_set_collider_position(stabint_simulator* sim, int collider, const double position[3]) {
   return guarded([&] {
     require(sim, "simulator");
-    require(position, "position");
-    sim->sim.setColliderPosition(collider, Eigen::Vector3d(position[0], position[1], position[2]));
+    sim->sim.setColliderPosition(collider, vector3(position, "position"));
   });
 }
 
 stabint_status stabint_simulator_set_collider_velocity(stabint_simulator* sim, int collider, const double velocity[3]) {
   return guarded([&] {
     require(sim, "simulator");
-    require(velocity, "velocity");
-    sim->sim.setColliderVelocity(collider, Eigen::Vector3d(velocity[0], velocity[1], velocity[2]));
+    sim->sim.setColliderVelocity(collider, vector3(velocity, "velocity"));
   });
 }
 
@@ -181,15 +141,14 @@ stabint_status stabint_simulator_collider_position(const stabint_simulator* sim,
   return guarded([&] {
     require(sim, "simulator");
     require(out, "out");
-    const Eigen::Vector3d p = sim->sim.colliderPosition(collider);
-    for (int k = 0; k < 3; ++k) out[k] = p[k];
+    copyVector3(sim->sim.colliderPosition(collider), out);
   });
 }
 
 stabint_status stabint_simulator_set_external_forces(stabint_simulator* sim, const double* forces, size_t count) {
   return guarded([&] {
     require(sim, "simulator");
-    sim->sim.setExternalForces(rowsFrom(sim, forces, count, "forces"));
+    sim->sim.setExternalForces(rowsOf(sim, forces, count, "forces"));
   });
 }
 
@@ -197,8 +156,8 @@ stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double*
                                            size_t count) {
   return guarded([&] {
     require(sim, "simulator");
-    const Eigen::MatrixX3d x = rowsFrom(sim, positions, count, "positions");
-    const Eigen::MatrixX3d v = rowsFrom(sim, velocities, count, "velocities");
+    const Eigen::MatrixX3d x = rowsOf(sim, positions, count, "positions");
+    const Eigen::MatrixX3d v = rowsOf(sim, velocities, count, "velocities");
     sim->sim.setState(x, v);
   });
 }
@@ -206,14 +165,14 @@ stabint_status stabint_simulator_set_state(stabint_simulator* sim, const double*
 stabint_status stabint_simulator_set_positions(stabint_simulator* sim, const double* positions, size_t count) {
   return guarded([&] {
     require(sim, "simulator");
-    sim->sim.setPositions(rowsFrom(sim, positions, count, "positions"));
+    sim->sim.setPositions(rowsOf(sim, positions, count, "positions"));
   });
 }
 
 stabint_status stabint_simulator_set_velocities(stabint_simulator* sim, const double* velocities, size_t count) {
   return guarded([&] {
     require(sim, "simulator");
-    sim->sim.setVelocities(rowsFrom(sim, velocities, count, "velocities"));
+    sim->sim.setVelocities(rowsOf(sim, velocities, count, "velocities"));
   });
 }
 

@@ -1,11 +1,12 @@
-// The C API (include/stabint/stabint_c.h) over the C++ API: errors and statuses, names, scenes,
-// the default options and checkpoints; the simulator is in simulator_c.cpp, the conversions of
+// The C API (include/stabint/stabint_c.h) over the C++ API: errors and statuses, the helpers of
+// c_api.hpp, names, scenes, the default options and checkpoints; the simulator is in
+// simulator_c.cpp, the batch in batch_c.cpp, the conversions of
 // the structs and enums in c_conversions.cpp, guarded() and the handles in c_api.hpp.
 #include "c_api/c_api.hpp"
 
-#include <limits>
+#include <algorithm>
+#include <cstring>
 #include <string>
-#include <utility>
 
 namespace stabint::c_api {
 namespace {
@@ -17,8 +18,6 @@ struct LastError {
 };
 thread_local LastError last_error;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 }  // namespace
 
 stabint_status fail(stabint_status status, const char* class_name, const std::string& text, int step) {
@@ -26,6 +25,40 @@ stabint_status fail(stabint_status status, const char* class_name, const std::st
   last_error.message = std::string(class_name) + ": " + text;
   last_error.step = step;
   return status;
+}
+
+Eigen::MatrixX3d rowsFrom(Eigen::Index particles, const double* values, size_t count, const char* what) {
+  require(values, what);
+  const size_t n = static_cast<size_t>(particles);
+  if (count != 3 * n) {
+    throw ArgumentError{std::string(what) + ": " + std::to_string(count) + " values, " + std::to_string(3 * n) +
+                        " expected (3 per particle)"};
+  }
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  return Eigen::Map<const RowMajor>(values, particles, 3);
+}
+
+std::vector<int> indexList(const int* indices, size_t count) {
+  if (count > 0) require(indices, "indices");
+  return count > 0 ? std::vector<int>(indices, indices + count) : std::vector<int>{};
+}
+
+Eigen::Vector3d vector3(const double* values, const char* what) {
+  require(values, what);
+  return Eigen::Vector3d(values[0], values[1], values[2]);
+}
+
+void copyVector3(const Eigen::Vector3d& v, double* out) {
+  for (int k = 0; k < 3; ++k) out[k] = v[k];
+}
+
+size_t copyText(const std::string& text, char* out, size_t capacity) {
+  if (out != nullptr && capacity > 0) {
+    const size_t n = std::min(text.size(), capacity - 1);
+    std::memcpy(out, text.data(), n);
+    out[n] = '\0';
+  }
+  return text.size();
 }
 
 }  // namespace stabint::c_api
@@ -118,36 +151,17 @@ stabint_status stabint_scene_copy_triangles(const stabint_scene* scene, int32_t*
 }
 
 stabint_status stabint_checkpoint_save(const stabint_checkpoint* checkpoint, const char* path) {
-  return guarded([&] {
-    require(checkpoint, "checkpoint");
-    require(path, "path");
-    checkpoint->checkpoint.save(path);
-  });
+  return saveCheckpoint(checkpoint, path);
 }
 
-stabint_status stabint_checkpoint_load(const char* path, stabint_checkpoint** out) {
-  return guarded([&] {
-    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
-    require(path, "path");
-    require(out, "out");
-    *out = new stabint_checkpoint{stabint::Checkpoint::load(path)};
-  });
-}
+stabint_status stabint_checkpoint_load(const char* path, stabint_checkpoint** out) { return loadCheckpoint(path, out); }
 
 const void* stabint_checkpoint_data(const stabint_checkpoint* checkpoint, size_t* size) {
-  if (size != nullptr) *size = checkpoint ? checkpoint->checkpoint.bytes().size() : 0;
-  return checkpoint ? checkpoint->checkpoint.bytes().data() : nullptr;
+  return checkpointData(checkpoint, size);
 }
 
 stabint_status stabint_checkpoint_from_bytes(const void* data, size_t size, stabint_checkpoint** out) {
-  return guarded([&] {
-    if (out != nullptr) *out = nullptr;  // a failed create leaves no handle behind
-    if (size > 0) require(data, "data");
-    require(out, "out");
-    std::string bytes;
-    if (size > 0) bytes.assign(static_cast<const char*>(data), size);
-    *out = new stabint_checkpoint{stabint::Checkpoint::fromBytes(std::move(bytes))};
-  });
+  return checkpointFromBytes(data, size, out);
 }
 
 void stabint_checkpoint_destroy(stabint_checkpoint* checkpoint) { delete checkpoint; }

@@ -787,6 +787,9 @@ def test_a_batch_steps_every_scene_as_its_own_simulator_and_refuses_per_scene():
         own = [sim.step() for sim in alone]
         assert report.refusals == ["", "", ""]
         assert [r.branch for r in report.scenes] == [r.branch for r in own]
+        # The step's phase times are the batch's: its scenes share every pass.
+        assert report.times.local > 0.0 and report.times.global_ > 0.0
+        assert all(r.times.total == 0.0 for r in report.scenes)
     for i, sim in enumerate(alone):
         size = np.ptp(scenes[i].positions, axis=0).max()
         assert np.abs(batch.positions(i) - sim.positions).max() <= 1e-9 * size

@@ -9,6 +9,8 @@
 
 #include "integrator/batch_simulator.hpp"
 
+#include <chrono>
+
 namespace stabint::bench {
 namespace {
 
@@ -57,6 +59,33 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
   state.SetLabel(batched ? "one BatchSimulator" : "one Simulator per scene");
 }
 
+// Per-frame input to every scene of a batch: each frame sets every scene's external forces (the
+// timed part, one call per scene), then steps the batch (not timed). What one frame's input costs
+// a game driving many bodies; per scene it must not grow with the batch.
+void runBatchForces(benchmark::State& state, const std::string& name, const std::function<Scene()>& make) {
+  const int count = static_cast<int>(state.range(0));
+  releaseAllFixtures();
+  BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
+    auto fixture = std::make_unique<BatchFixture>();
+    fixture->batch = std::make_unique<BatchSimulator>(std::vector<Scene>(std::size_t(count), make()),
+                                                      optionsFor(BackendChoice::Cpu, Integrator::BackwardEuler));
+    return fixture;
+  });
+  BatchSimulator& batch = *f.batch;
+  const Eigen::MatrixX3d forces = Eigen::MatrixX3d::Constant(batch.numParticles(0), 3, 0.01);
+  double seconds = 0.0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    for (int s = 0; s < count; ++s) batch.setExternalForces(s, forces);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    state.PauseTiming();
+    batch.step();
+    state.ResumeTiming();
+  }
+  state.counters["scenes"] = count;
+  state.counters["us_per_scene"] = 1e6 * seconds / (double(state.iterations()) * count);
+}
+
 }  // namespace
 
 void registerBatchCases() {
@@ -86,6 +115,16 @@ void registerBatchCases() {
                 ->Unit(benchmark::kMillisecond);
           }
       }
+  for (int count : {100, 1000}) {
+    const std::string name = "batch_input/chain/BE/cpu/forces";
+    benchmark::RegisterBenchmark(name.c_str(),
+                                 [=](benchmark::State& state) { runBatchForces(state, name, scenes[0].make); })
+        ->Arg(count)
+        ->ArgName("scenes")
+        ->Iterations(20)
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond);
+  }
   // A Simulator as "a batch of one" (issue 22, docs/batch_design.md): the single-scene overhead of
   // the batch's driver, one scene stepped as a BatchSimulator of one ("batch") or as a Simulator
   // ("simulator"), 30 steps from rest. The ratio is what folding the two drivers into one costs a

@@ -90,9 +90,9 @@ Eigen::MatrixX3d gust(int particles, int frame, double size) {
 
 class BatchInput : public ::testing::TestWithParam<Integrator> {};
 
-// Forces set every frame on the free chain and, in some of the same frames, on the cloth follow
-// each scene's own Simulator given the same forces; the bar, given none, follows its own. The
-// forces then persist. (That a pushed scene stops conserving momentum for the blend is
+// Forces set every frame on the free chain (in some frames twice) and, in some of the same frames,
+// on the cloth follow each scene's own Simulator given the same forces; the bar, given none,
+// follows its own. The forces then persist. (That a pushed scene stops conserving momentum for the blend is
 // BatchInputBlend's.)
 TEST_P(BatchInput, ExternalForcesActOnTheirSceneOnly) {
   const std::vector<Scene> scenes = inputScenes();
@@ -101,6 +101,11 @@ TEST_P(BatchInput, ExternalForcesActOnTheirSceneOnly) {
   for (int step = 0; step < 40; ++step) {
     if (step < 30) {
       const Eigen::MatrixX3d chain = gust(scenes[0].numParticles(), step, 0.05);
+      if (step % 4 == 1) {  // set twice in one frame: the second call's forces are the step's
+        const Eigen::MatrixX3d first = -2.0 * chain;
+        both.batch.setExternalForces(0, first);
+        both.alone[0].setExternalForces(first);
+      }
       both.batch.setExternalForces(0, chain);
       both.alone[0].setExternalForces(chain);
     }

@@ -65,10 +65,7 @@ void FrameInput::setExternalForces(const Eigen::MatrixX3d& forces, double t) {
   }
   // One ramp holds every particle's forces: the other rows go on to the values they were given
   // (a scene set earlier in this frame keeps its ramp over the same step).
-  const SceneData::Ramp& current = scene_.userForces();
-  Eigen::MatrixX3d all = current.active ? current.end : Eigen::MatrixX3d::Zero(scene_.numParticles(), 3);
-  all.middleRows(rows.first, rows.count) = forces;
-  scene_.rampUserForces(all, t, t + time_step_);
+  scene_.rampUserForceRows(rows.first, forces, t, t + time_step_);
 }
 
 Eigen::Vector3d FrameInput::pinTarget(int pin, double t) const {

@@ -140,6 +140,20 @@ void SceneData::rampUserForces(const Eigen::MatrixX3d& forces, double t0, double
   ++forcing_version_;
 }
 
+void SceneData::rampUserForceRows(int first, const Eigen::MatrixX3d& forces, double t0, double t1) {
+  if (!user_forces_.active || user_forces_.t0 != t0 || user_forces_.t1 != t1) {
+    // A new ramp for every row, each going on to the value it was given (start: its value at t0).
+    Eigen::MatrixX3d all = user_forces_.active ? user_forces_.end : Eigen::MatrixX3d::Zero(n_, 3);
+    all.middleRows(first, forces.rows()) = forces;
+    rampUserForces(all, t0, t1);
+    return;
+  }
+  // The ramp over this [t0, t1] already holds every row: its start is each row's value at t0
+  // (what rampUserForces would take again), so only these rows' end changes.
+  user_forces_.end.middleRows(first, forces.rows()) = forces;
+  ++forcing_version_;
+}
+
 void SceneData::rampColliderPosition(int collider, const Eigen::Vector3d& position, double t0, double t1) {
   ColliderMotion& m = collider_motion_[static_cast<std::size_t>(collider)];
   const Eigen::Vector3d start = m.at(t0);

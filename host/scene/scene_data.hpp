@@ -71,6 +71,10 @@ class SceneData final : public RunningScene {
   /// The user's per-particle forces move linearly from their value at t0 to `forces` at t1 and
   /// stay there (zero before the first call).
   void rampUserForces(const Eigen::MatrixX3d& forces, double t0, double t1);
+  /// The same for rows first.. of the user's forces only (one scene of a batch); the other rows
+  /// go on to the values they were given. Within a ramp over the same [t0, t1] (scenes set one
+  /// after another before a step) it costs the rows it sets, not the batch's.
+  void rampUserForceRows(int first, const Eigen::MatrixX3d& forces, double t0, double t1);
   /// Collider `collider` moves linearly from its position at t0 to `position` at t1 and stays
   /// there; its scene velocity is no longer used.
   void rampColliderPosition(int collider, const Eigen::Vector3d& position, double t0, double t1);

@@ -660,6 +660,19 @@ TEST(BatchSimulator, AccessorsLocateEachSceneAndRefuseBadIndices) {
   EXPECT_EQ(batch.positions(0), x);
 }
 
+// One budget for every scene (they share their solves); a refused one changes nothing.
+TEST(BatchSimulator, SetIterationsIsEveryScenesBudget) {
+  SimulatorOptions options;
+  options.integrator = Integrator::BackwardEuler;
+  options.acceleration = Acceleration::None;
+  BatchSimulator batch(mixedBatchScenes(), options);
+  EXPECT_THROW(batch.setIterations(0), InvalidInputError);
+  EXPECT_EQ(batch.options().iterations, options.iterations);
+  batch.setIterations(3);
+  EXPECT_EQ(batch.options().iterations, 3);
+  for (const StepReport& r : batch.step().scenes) EXPECT_EQ(r.iterations, 3);
+}
+
 // The step's phase times are the batch's: every pass is shared, so no scene has times of its own.
 TEST(BatchSimulator, ReportsTheWholeStepsPhaseTimes) {
   SimulatorOptions options;

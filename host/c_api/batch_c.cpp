@@ -203,6 +203,10 @@ stabint_status stabint_batch_copy_all_positions_float(const stabint_batch* batch
   return copyAll(batch, out, capacity);
 }
 
+stabint_status stabint_batch_set_iterations(stabint_batch* batch, int iterations) {
+  return guarded([&] { batchOf(batch).setIterations(iterations); });
+}
+
 stabint_status stabint_batch_set_state(stabint_batch* batch, int scene, const double* positions,
                                        const double* velocities, size_t count) {
   return guarded([&] {

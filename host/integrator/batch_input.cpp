@@ -133,6 +133,7 @@ void BatchDriver::pinsChanged(int scene) {
 void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   impl_->setState(scene, positions, velocities);
 }
+void BatchSimulator::setIterations(int iterations) { impl_->setIterations(iterations); }
 void BatchSimulator::setPinTarget(int scene, int pin, const Eigen::Vector3d& target) {
   impl_->frameInput(scene, "setPinTarget").setPinTarget(pin, target, impl_->t_);
 }

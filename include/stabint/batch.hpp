@@ -155,6 +155,10 @@ class BatchSimulator {
   /// of a larger batch share one history, which the restart would drop for all). Bad input:
   /// InvalidInputError naming the scene, nothing changed.
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  /// Local/global iteration budget of every later step of every scene (>= 1; the scenes share
+  /// their solves); time, states and targets are kept, options().iterations follows.
+  /// InvalidInputError otherwise, nothing changed.
+  void setIterations(int iterations);
   /// Pin `pin` of scene `scene` (its index in that scene's list, grabbed pins included) moves its
   /// target linearly to `target` over the next step and stays there, as Simulator::setPinTarget:
   /// the work is booked by the forcing rule in that scene's H* only.

@@ -436,6 +436,9 @@ stabint_status stabint_batch_copy_all_positions_float(const stabint_batch* batch
  * one scene. `count` applies to each array. */
 stabint_status stabint_batch_set_state(stabint_batch* batch, int scene, const double* positions,
                                        const double* velocities, size_t count);
+/** Local/global iterations per solve of every later step of every scene (>= 1), as
+ * stabint_simulator_set_iterations. */
+stabint_status stabint_batch_set_iterations(stabint_batch* batch, int iterations);
 /** Pin `pin` of scene `scene` moves to `target`, as stabint_simulator_set_pin_target. */
 stabint_status stabint_batch_set_pin_target(stabint_batch* batch, int scene, int pin, const double target[3]);
 /** Current target of pin `pin` of scene `scene` into `out`. */

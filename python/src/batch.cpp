@@ -102,6 +102,9 @@ void bindBatch(nb::module_& m) {
       .def("set_state", &BatchSimulator::setState, "scene"_a, "positions"_a, "velocities"_a,
            "Replaces one scene's positions and velocities ((n_s, 3) each, finite), booked in that scene's H* "
            "only; a refused scene steps again. Raises InvalidInputError naming the scene for bad input.")
+      .def("set_iterations", &BatchSimulator::setIterations, "iterations"_a,
+           "Local/global iteration budget of every later step of every scene (>= 1); time, states and "
+           "targets are kept, options.iterations follows.")
       .def(
           "set_pin_target",
           [](BatchSimulator& b, int scene, int pin, const std::array<double, 3>& target) {

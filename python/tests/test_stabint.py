@@ -434,6 +434,15 @@ def test_set_iterations_changes_the_budget_of_later_steps():
     assert sim.time == time and sim.target == target
     assert sim.step().iterations == 9
     assert sim.options.iterations == 9
+    # A batch's budget is every scene's.
+    batch = stabint.BatchSimulator([stabint.chain_pendulum(), stabint.cloth_grid(nx=4, ny=4)],
+                                   stabint.SimulatorOptions(integrator=Integrator.BackwardEuler,
+                                                            acceleration=stabint.Acceleration.None_))
+    batch.set_iterations(3)
+    assert [r.iterations for r in batch.step().scenes] == [3, 3]
+    assert batch.options.iterations == 3
+    with pytest.raises(stabint.InvalidInputError):
+        batch.set_iterations(0)
 
 
 def drive(sim, corner, frames):

@@ -1507,6 +1507,35 @@ static void test_batch_checkpoint_of_the_whole_batch(void) {
   free(original);
 }
 
+/* The iteration budget of every scene's later steps: options follow, a refused budget changes
+ * nothing, and a plain BE step does exactly that many iterations per scene. */
+static void test_batch_set_iterations(void) {
+  stabint_batch* batch = chain_and_cloth();
+  stabint_simulator_options options;
+  stabint_step_report reports[2];
+  check_refused(stabint_batch_set_iterations(batch, 0), STABINT_INVALID_INPUT, "iterations = 0");
+  check_refused(stabint_batch_set_iterations(NULL, 3), STABINT_INVALID_ARGUMENT, "batch is NULL");
+  CHECK(stabint_batch_get_options(batch, &options) == STABINT_OK && options.iterations == 10);
+  stabint_batch_destroy(batch);
+
+  stabint_simulator_options_default(&options);
+  options.integrator = STABINT_BACKWARD_EULER;
+  options.acceleration = STABINT_ACCELERATION_NONE;
+  {
+    stabint_scene* scenes[2];
+    scenes[0] = builtin("chain", NULL);
+    scenes[1] = builtin("cloth", kSmallCloth);
+    batch = batch_of(scenes, 2, &options);
+    stabint_scene_destroy(scenes[0]);
+    stabint_scene_destroy(scenes[1]);
+  }
+  CHECK(stabint_batch_set_iterations(batch, 4) == STABINT_OK);
+  CHECK(stabint_batch_get_options(batch, &options) == STABINT_OK && options.iterations == 4);
+  CHECK(stabint_batch_step(batch, reports, 2) == STABINT_OK);
+  CHECK(reports[0].iterations == 4 && reports[1].iterations == 4);
+  stabint_batch_destroy(batch);
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     fprintf(stderr, "usage: %s SCENE_DIR\n", argv[0]);
@@ -1529,6 +1558,7 @@ int main(int argc, char** argv) {
   test_element_changes();
   test_batch_steps_as_its_scenes_simulators();
   test_batch_all_positions();
+  test_batch_set_iterations();
   test_batch_input_acts_on_its_scene();
   test_batch_collider_moved_every_frame(argv[1]);
   test_batch_bad_input_is_rejected_and_changes_nothing();

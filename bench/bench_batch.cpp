@@ -59,10 +59,12 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
   state.SetLabel(batched ? "one BatchSimulator" : "one Simulator per scene");
 }
 
-// Per-frame input to every scene of a batch: each frame sets every scene's external forces (the
-// timed part, one call per scene), then steps the batch (not timed). What one frame's input costs
-// a game driving many bodies; per scene it must not grow with the batch.
-void runBatchForces(benchmark::State& state, const std::string& name, const std::function<Scene()>& make) {
+// Per-frame input to every scene of a batch: each frame sets every scene's external forces
+// ("forces") or state ("state": its positions and velocities as they are, an event of zero
+// energy), one call per scene, timed, then steps the batch (not timed). What one frame's input
+// costs a game driving many bodies; per scene it must not grow with the batch.
+void runBatchInput(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
+                   bool forces_input) {
   const int count = static_cast<int>(state.range(0));
   releaseAllFixtures();
   BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
@@ -74,9 +76,21 @@ void runBatchForces(benchmark::State& state, const std::string& name, const std:
   BatchSimulator& batch = *f.batch;
   const Eigen::MatrixX3d forces = Eigen::MatrixX3d::Constant(batch.numParticles(0), 3, 0.01);
   double seconds = 0.0;
+  std::vector<Eigen::MatrixX3d> x(static_cast<std::size_t>(count)), v(static_cast<std::size_t>(count));
   for (auto _ : state) {
+    if (!forces_input) {
+      for (int s = 0; s < count; ++s) {
+        x[std::size_t(s)] = batch.positions(s);
+        v[std::size_t(s)] = batch.velocities(s);
+      }
+    }
     const auto start = std::chrono::steady_clock::now();
-    for (int s = 0; s < count; ++s) batch.setExternalForces(s, forces);
+    for (int s = 0; s < count; ++s) {
+      if (forces_input)
+        batch.setExternalForces(s, forces);
+      else
+        batch.setState(s, x[std::size_t(s)], v[std::size_t(s)]);
+    }
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     state.PauseTiming();
     batch.step();
@@ -115,16 +129,17 @@ void registerBatchCases() {
                 ->Unit(benchmark::kMillisecond);
           }
       }
-  for (int count : {100, 1000}) {
-    const std::string name = "batch_input/chain/BE/cpu/forces";
-    benchmark::RegisterBenchmark(name.c_str(),
-                                 [=](benchmark::State& state) { runBatchForces(state, name, scenes[0].make); })
+  for (bool forces_input : {true, false})
+    for (int count : {100, 1000}) {
+      const std::string name = std::string("batch_input/chain/BE/cpu/") + (forces_input ? "forces" : "state");
+      benchmark::RegisterBenchmark(
+          name.c_str(), [=](benchmark::State& state) { runBatchInput(state, name, scenes[0].make, forces_input); })
         ->Arg(count)
         ->ArgName("scenes")
         ->Iterations(20)
         ->UseRealTime()
-        ->Unit(benchmark::kMillisecond);
-  }
+          ->Unit(benchmark::kMillisecond);
+    }
   // A Simulator as "a batch of one" (issue 22, docs/batch_design.md): the single-scene overhead of
   // the batch's driver, one scene stepped as a BatchSimulator of one ("batch") or as a Simulator
   // ("simulator"), 30 steps from rest. The ratio is what folding the two drivers into one costs a

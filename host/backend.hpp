@@ -42,6 +42,13 @@ class Backend {
   }
   /// Rounds host values to what a slot holds after write() (a device in float keeps floats).
   virtual void roundToStorage(Eigen::MatrixX3d& /*host*/) const {}
+  /// Whether writeRows is available: the backend writes some rows of a slot alone and then holds
+  /// them exactly as given (the CPU reference). One scene's input then costs that scene's rows.
+  virtual bool writesRows() const { return false; }
+  /// Rows first.. of a slot from the host (only where writesRows()).
+  virtual void writeRows(int /*slot*/, int /*first*/, const Eigen::MatrixX3d& /*rows*/) {
+    throw Error(description() + " writes whole slots only");
+  }
   virtual void copy(int dst, int src) = 0;
   /// dst = a * x + b * y. dst may be x or y.
   virtual void combine(int dst, double a, int x, double b, int y) = 0;
@@ -104,6 +111,13 @@ class Backend {
   virtual void massDots(int /*a*/, int /*b*/, std::vector<double>& /*out*/) { notPerScene(); }
   /// out[s] = potential of segment s's particles and elements in `x` at time t.
   virtual void potentials(int /*x*/, double /*t*/, std::vector<PotentialEnergy>& /*out*/) { notPerScene(); }
+  /// potentials()[segment] alone; a backend that can pass over one segment's elements costs that
+  /// segment's (one scene's event in a batch), the others pass over all of them.
+  virtual PotentialEnergy potentialOf(int segment, int x, double t) {
+    std::vector<PotentialEnergy> all;
+    potentials(x, t, all);
+    return all[static_cast<std::size_t>(segment)];
+  }
 
   /// Waits until everything queued has completed.
   virtual void synchronize() {}

@@ -149,7 +149,23 @@ TEST(SceneBatch, CpuPerSceneEnergiesAreEachScenesOwn) {
     EXPECT_EQ(potentials[s].pins, p.pins) << "scene " << s;
     EXPECT_EQ(potentials[s].external, p.external) << "scene " << s;
     EXPECT_EQ(dots[s], own->massDot(1, 1)) << "scene " << s;
+    // One segment's pass alone (a scene's event in a batch) is its part of the whole pass.
+    const PotentialEnergy alone = backend->potentialOf(int(s), 0, t);
+    EXPECT_EQ(alone.internal, p.internal) << "scene " << s;
+    EXPECT_EQ(alone.pins, p.pins) << "scene " << s;
+    EXPECT_EQ(alone.external, p.external) << "scene " << s;
   }
+  // Rows written alone replace those rows only, exactly.
+  ASSERT_TRUE(backend->writesRows());
+  const SceneSegment& last = batch.segments.back();
+  const Eigen::MatrixX3d before = perturbed(batch.scene.positions, 0.02);
+  const Eigen::MatrixX3d rows = Eigen::MatrixX3d::Constant(last.num_particles, 3, 0.25);
+  backend->writeRows(0, last.first_particle, rows);
+  Eigen::MatrixX3d after;
+  backend->read(0, after);
+  EXPECT_EQ(after.middleRows(last.first_particle, last.num_particles), rows);
+  EXPECT_EQ(after.topRows(last.first_particle), before.topRows(last.first_particle));
+  backend->write(0, before);
   // And together they are the batch's single values, to the round-off of the different sums.
   const PotentialEnergy whole = backend->potential(0, t);
   double internal = 0.0, pins = 0.0, external = 0.0, dot = 0.0;

@@ -31,6 +31,10 @@ class CpuBackend final : public Backend {
         params_(scene.blocks().size()) {}
 
   void write(int slot, const Eigen::MatrixX3d& host) override { slots_[slot] = host; }
+  bool writesRows() const override { return true; }
+  void writeRows(int slot, int first, const Eigen::MatrixX3d& rows) override {
+    slots_[slot].middleRows(first, rows.rows()) = rows;
+  }
   void read(int slot, Eigen::MatrixX3d& host) override { host = slots_[slot]; }
   void copy(int dst, int src) override { slots_[dst] = slots_[src]; }
   void combine(int dst, double a, int x, double b, int y) override { slots_[dst] = a * slots_[x] + b * slots_[y]; }
@@ -103,31 +107,42 @@ class CpuBackend final : public Backend {
       return;
     }
     const auto start = Clock::now();
-    const Eigen::MatrixX3d& x = slots_[slot];
-    const std::vector<ElementBlock>& blocks = scene_.blocks();
-    const Eigen::MatrixX3d& f = externalForces(t);
-    out.assign(segments_.size(), PotentialEnergy{});
-    for (std::size_t s = 0; s < segments_.size(); ++s) {
-      const SceneSegment& seg = segments_[s];
-      PotentialEnergy& e = out[s];
-      for (std::size_t b = 0; b < blocks.size(); ++b) {
-        const ElementBlock& block = blocks[b];
-        const int count = seg.num_elements[b];
-        if (count == 0) continue;
-        const double energy =
-            block.type->passRange(block, paramsAt(b, t), x, seg.first_element[b], count, kPassEnergy, nullptr);
-        (block.type->term() == EnergyTerm::Pins ? e.pins : e.internal) += energy;
-      }
-      segment_a_ = f.middleRows(seg.first_particle, seg.num_particles);
-      segment_b_ = x.middleRows(seg.first_particle, seg.num_particles);
-      e.external = -segment_a_.cwiseProduct(segment_b_).sum();
-    }
+    out.resize(segments_.size());
+    for (std::size_t s = 0; s < segments_.size(); ++s) out[s] = segmentPotential(s, slots_[slot], t);
     times_.energy += secondsSince(start);
+  }
+
+  PotentialEnergy potentialOf(int segment, int slot, double t) override {
+    if (segments_.size() == 1) return potential(slot, t);  // as potentials() for a batch of one
+    const auto start = Clock::now();
+    const PotentialEnergy e = segmentPotential(static_cast<std::size_t>(segment), slots_[slot], t);
+    times_.energy += secondsSince(start);
+    return e;
   }
 
   std::string description() const override { return "CPU reference (double)"; }
 
  private:
+  /// Segment s's elements and particles alone, in the order a backend of that scene alone sums
+  /// them (bit for bit).
+  PotentialEnergy segmentPotential(std::size_t s, const Eigen::MatrixX3d& x, double t) {
+    const std::vector<ElementBlock>& blocks = scene_.blocks();
+    const SceneSegment& seg = segments_[s];
+    PotentialEnergy e;
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      const ElementBlock& block = blocks[b];
+      const int count = seg.num_elements[b];
+      if (count == 0) continue;
+      const double energy =
+          block.type->passRange(block, paramsAt(b, t), x, seg.first_element[b], count, kPassEnergy, nullptr);
+      (block.type->term() == EnergyTerm::Pins ? e.pins : e.internal) += energy;
+    }
+    segment_a_ = externalForces(t).middleRows(seg.first_particle, seg.num_particles);
+    segment_b_ = x.middleRows(seg.first_particle, seg.num_particles);
+    e.external = -segment_a_.cwiseProduct(segment_b_).sum();
+    return e;
+  }
+
   /// Every block in the order of the contribution numbering (so the scattered sums add in the
   /// order of the OpenCL gather), plus the external potential when energies are asked for.
   PotentialEnergy elementPass(const Eigen::MatrixX3d& x, double t, int flags, Eigen::MatrixX3d* out) {

@@ -51,17 +51,20 @@ void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const E
   // copies by round-off, as a Simulator's do).
   x_.middleRows(seg.first_particle, seg.num_particles) = positions;
   v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;
-  backend_->write(kX, x_);
-  backend_->write(kV, v_slot_);
-  // The slots may hold less precision (a float device): the host copies are what they hold.
-  backend_->readBoth(kX, x_, kV, v_slot_);
+  if (backend_->writesRows()) {  // the scene's rows alone, held exactly as given
+    backend_->writeRows(kX, seg.first_particle, positions);
+    backend_->writeRows(kV, seg.first_particle, velocities);
+  } else {
+    backend_->write(kX, x_);
+    backend_->write(kV, v_slot_);
+    // The slots may hold less precision (a float device): the host copies are what they hold.
+    backend_->readBoth(kX, x_, kV, v_slot_);
+  }
   v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
   // The scene's contact set follows, so that the event books the contact energy of the new
   // positions; the potential is evaluated below anyway.
   contact_.updateSet(t_, x_, v_, {contactPart(std::size_t(scene), 0)});
-  std::vector<PotentialEnergy> potentials;
-  backend_->potentials(kX, t_, potentials);
-  p.potential = potentials[std::size_t(scene)];
+  p.potential = backend_->potentialOf(scene, kX, t_);
   p.kinetic = kineticEnergy(scene, v_);
   bookEvent(scene, h_before);
   has_history_ = false;  // BDF2 (a batch of one): the next step is a BE step, as Simulator's
@@ -84,9 +87,7 @@ void BatchDriver::changeElementsAsEvent(int scene, const char* call, Change&& ch
   const PerScene& p = per_scene_[std::size_t(scene)];
   const double h_before = p.kinetic + p.potential.total();
   change();
-  std::vector<PotentialEnergy> potentials;
-  backend_->potentials(kX, t_, potentials);
-  per_scene_[std::size_t(scene)].potential = potentials[std::size_t(scene)];
+  per_scene_[std::size_t(scene)].potential = backend_->potentialOf(scene, kX, t_);
   bookEvent(scene, h_before);
   pinsChanged(scene);
 }

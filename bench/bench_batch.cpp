@@ -134,10 +134,10 @@ void registerBatchCases() {
       const std::string name = std::string("batch_input/chain/BE/cpu/") + (forces_input ? "forces" : "state");
       benchmark::RegisterBenchmark(
           name.c_str(), [=](benchmark::State& state) { runBatchInput(state, name, scenes[0].make, forces_input); })
-        ->Arg(count)
-        ->ArgName("scenes")
-        ->Iterations(20)
-        ->UseRealTime()
+          ->Arg(count)
+          ->ArgName("scenes")
+          ->Iterations(20)
+          ->UseRealTime()
           ->Unit(benchmark::kMillisecond);
     }
   // A Simulator as "a batch of one" (issue 22, docs/batch_design.md): the single-scene overhead of

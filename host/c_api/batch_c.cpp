@@ -116,9 +116,10 @@ stabint_status stabint_batch_step(stabint_batch* batch, stabint_step_report* rep
       require(reports, "reports");
       requireCapacity(capacity, n, "reports");
     }
-    batch->last = b.step();
+    batch->last = nullptr;
+    batch->last = &b.step();
     if (reports != nullptr) {
-      for (size_t s = 0; s < n; ++s) reports[s] = toC(batch->last.scenes[s]);
+      for (size_t s = 0; s < n; ++s) reports[s] = toC(batch->last->scenes[s]);
     }
   });
 }
@@ -127,8 +128,7 @@ stabint_status stabint_batch_last_report(const stabint_batch* batch, int scene, 
   return guarded([&] {
     checkScene(batchOf(batch), scene, "lastReport");
     require(out, "out");
-    const auto& scenes = batch->last.scenes;
-    *out = toC(scenes.empty() ? stabint::StepReport{} : scenes[static_cast<size_t>(scene)]);
+    *out = toC(batch->last ? batch->last->scenes[static_cast<size_t>(scene)] : stabint::StepReport{});
   });
 }
 
@@ -137,8 +137,7 @@ stabint_status stabint_batch_refusal(const stabint_batch* batch, int scene, char
   return guarded([&] {
     checkScene(batchOf(batch), scene, "refusal");
     if (capacity > 0) require(out, "out");
-    const auto& refusals = batch->last.refusals;
-    const size_t full = copyText(refusals.empty() ? "" : refusals[static_cast<size_t>(scene)], out, capacity);
+    const size_t full = copyText(batch->last ? batch->last->refusals[static_cast<size_t>(scene)] : "", out, capacity);
     if (length != nullptr) *length = full;
   });
 }

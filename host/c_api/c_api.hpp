@@ -32,10 +32,12 @@ struct stabint_batch_checkpoint {
   std::string bytes;
 };
 // The batch and the report of its last step (its refusals and per-scene reports, which the C API
-// reads back after stabint_batch_step; empty before the first step).
+// reads back after stabint_batch_step): the batch's own, which stays valid until its next step, so
+// a step of a thousand scenes copies no report. Null before the first step and after a step that
+// threw (its report may be half written).
 struct stabint_batch {
   stabint::BatchSimulator batch;
-  stabint::BatchStepReport last;
+  const stabint::BatchStepReport* last = nullptr;
 };
 
 namespace stabint::c_api {

@@ -111,6 +111,14 @@ class Backend {
   virtual void massDots(int /*a*/, int /*b*/, std::vector<double>& /*out*/) { notPerScene(); }
   /// out[s] = potential of segment s's particles and elements in `x` at time t.
   virtual void potentials(int /*x*/, double /*t*/, std::vector<PotentialEnergy>& /*out*/) { notPerScene(); }
+  /// localStepGradient with every segment's potential at `x` (as potentials() gives them) instead
+  /// of the whole scene's: a batch's L-BFGS line search. A backend that can sum per segment in
+  /// the same element pass does one pass; the others run potentials() after it.
+  virtual void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
+                                         std::vector<PotentialEnergy>& per_scene) {
+    localStepGradient(x, y, c, t, gradient, nullptr);
+    potentials(x, t, per_scene);
+  }
   /// potentials()[segment] alone; a backend that can pass over one segment's elements costs that
   /// segment's (one scene's event in a batch), the others pass over all of them.
   virtual PotentialEnergy potentialOf(int segment, int x, double t) {

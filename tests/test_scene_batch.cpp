@@ -8,6 +8,7 @@
 
 #include "batch_scenes.hpp"
 #include "cpu/cpu_backend.hpp"
+#include "cpu/worker_pool.hpp"
 #include "elements/element_type.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
@@ -210,6 +211,51 @@ TEST(SceneBatch, PotentialsOfAnLbfgsResultAreThePerScenePass) {
     EXPECT_EQ(left[s].pins, pass[s].pins) << "scene " << s;
     EXPECT_EQ(left[s].external, pass[s].external) << "scene " << s;
   }
+}
+
+// The CPU reference's per-scene passes of a large batch run on threads, each thread a run of
+// segments, and a batch's L-BFGS takes its gradient and every scene's energy from one pass
+// (localStepGradientPerScene): both must be the serial per-segment pass and the force pass bit
+// for bit, whatever the thread count, or a scene would step differently in a large batch.
+TEST(SceneBatch, CpuPerScenePassesOnThreadsAreTheSerialOnes) {
+  std::vector<Scene> scenes;
+  for (int copy = 0; copy < 60; ++copy)  // about 40,000 elements: enough for the threads to pay
+    for (const Scene& s : mixedBatchScenes()) scenes.push_back(s);
+  const SceneBatch batch = concatenateScenes(scenes);
+  const SceneData data(batch.scene);
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
+  backend->setSegments(batch.segments);
+  backend->write(0, perturbed(batch.scene.positions, 0.02));
+  backend->write(1, batch.scene.positions);
+  const double c = 3600.0, t = 0.7;
+  const int threads = cpuThreads();
+  setCpuThreads(1);
+  std::vector<PotentialEnergy> serial, fused;
+  backend->potentials(0, t, serial);
+  Eigen::MatrixX3d gradient, serial_gradient;
+  backend->localStepGradient(0, 1, c, t, serial_gradient);
+  for (int n : {1, 2, 3}) {
+    setCpuThreads(n);
+    for (ThreadedPassPath path : {ThreadedPassPath::Auto, ThreadedPassPath::Serial}) {
+      setThreadedPassPath(path);
+      std::vector<PotentialEnergy> pass;
+      backend->potentials(0, t, pass);
+      backend->localStepGradientPerScene(0, 1, c, t, gradient, fused);
+      ASSERT_EQ(pass.size(), scenes.size());
+      ASSERT_EQ(fused.size(), scenes.size());
+      EXPECT_EQ(gradient, serial_gradient) << n << " threads";
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        for (const std::vector<PotentialEnergy>* got : {&pass, &fused}) {
+          EXPECT_EQ((*got)[s].internal, serial[s].internal) << "scene " << s << ", " << n << " threads";
+          EXPECT_EQ((*got)[s].pins, serial[s].pins) << "scene " << s << ", " << n << " threads";
+          EXPECT_EQ((*got)[s].external, serial[s].external) << "scene " << s << ", " << n << " threads";
+        }
+      }
+    }
+  }
+  setThreadedPassPath(ThreadedPassPath::Auto);
+  setCpuThreads(threads);
+  EXPECT_NE(serial.back().internal, 0.0);
 }
 
 struct PremiseCase {

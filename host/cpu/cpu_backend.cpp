@@ -76,9 +76,7 @@ class CpuBackend final : public Backend {
     force_.setZero(scene_.numParticles(), 3);
     const int flags = kPassForce | (energy_at_x ? kPassEnergy : 0);
     const PotentialEnergy e = elementPass(slots_[x_slot], t, flags, &force_);
-    gradient.resize(scene_.numParticles(), 3);
-    gradient.array() = (slots_[x_slot] - slots_[y_slot]).array().colwise() * (c * scene_.masses().array()) -
-                       externalForces(t).array() - force_.array();
+    formGradient(x_slot, y_slot, c, t, gradient);
     if (energy_at_x) *energy_at_x = e;
     times_.local += secondsSince(start);
   }
@@ -107,15 +105,32 @@ class CpuBackend final : public Backend {
       return;
     }
     const auto start = Clock::now();
-    out.resize(segments_.size());
-    for (std::size_t s = 0; s < segments_.size(); ++s) out[s] = segmentPotential(s, slots_[slot], t);
+    segmentPasses(slots_[slot], t, kPassEnergy, nullptr, out);
     times_.energy += secondsSince(start);
+  }
+
+  // A batch's L-BFGS: the force pass and every scene's energy at once, segment by segment.
+  void localStepGradientPerScene(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& gradient,
+                                 std::vector<PotentialEnergy>& per_scene) override {
+    if (segments_.size() <= 1) {
+      Backend::localStepGradientPerScene(x_slot, y_slot, c, t, gradient, per_scene);
+      return;
+    }
+    const auto start = Clock::now();
+    force_.setZero(scene_.numParticles(), 3);
+    segmentPasses(slots_[x_slot], t, kPassForce | kPassEnergy, &force_, per_scene);
+    formGradient(x_slot, y_slot, c, t, gradient);
+    times_.local += secondsSince(start);
   }
 
   PotentialEnergy potentialOf(int segment, int slot, double t) override {
     if (segments_.size() == 1) return potential(slot, t);  // as potentials() for a batch of one
     const auto start = Clock::now();
-    const PotentialEnergy e = segmentPotential(static_cast<std::size_t>(segment), slots_[slot], t);
+    const std::vector<ElementBlock>& blocks = scene_.blocks();
+    block_params_.resize(blocks.size());
+    for (std::size_t b = 0; b < blocks.size(); ++b) block_params_[b] = &paramsAt(b, t);
+    const PotentialEnergy e = segmentPass(static_cast<std::size_t>(segment), slots_[slot], externalForces(t),
+                                          kPassEnergy, nullptr, segment_a_, segment_b_);
     times_.energy += secondsSince(start);
     return e;
   }
@@ -123,9 +138,21 @@ class CpuBackend final : public Backend {
   std::string description() const override { return "CPU reference (double)"; }
 
  private:
+  /// The local step's gradient from the element forces in force_:
+  /// g = c m (x - y) - f_ext - sum of forces (the kernel gather_gradient's order of operations).
+  void formGradient(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& gradient) {
+    gradient.resize(scene_.numParticles(), 3);
+    gradient.array() = (slots_[x_slot] - slots_[y_slot]).array().colwise() * (c * scene_.masses().array()) -
+                       externalForces(t).array() - force_.array();
+  }
+
   /// Segment s's elements and particles alone, in the order a backend of that scene alone sums
-  /// them (bit for bit).
-  PotentialEnergy segmentPotential(std::size_t s, const Eigen::MatrixX3d& x, double t) {
+  /// them (bit for bit): `flags`' pass over each block's range of the segment (contributions into
+  /// `out`'s rows of the segment, which no other segment's elements touch) and the external
+  /// potential of its rows, copied out so that the reduction runs over an `n_s by 3` matrix as
+  /// over the scene alone's. `rows_f`, `rows_x`: scratch of the calling thread.
+  PotentialEnergy segmentPass(std::size_t s, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& external, int flags,
+                              Eigen::MatrixX3d* out, Eigen::MatrixX3d& rows_f, Eigen::MatrixX3d& rows_x) const {
     const std::vector<ElementBlock>& blocks = scene_.blocks();
     const SceneSegment& seg = segments_[s];
     PotentialEnergy e;
@@ -133,14 +160,53 @@ class CpuBackend final : public Backend {
       const ElementBlock& block = blocks[b];
       const int count = seg.num_elements[b];
       if (count == 0) continue;
-      const double energy =
-          block.type->passRange(block, paramsAt(b, t), x, seg.first_element[b], count, kPassEnergy, nullptr);
+      const double energy = block.type->passRange(block, *block_params_[b], x, seg.first_element[b], count, flags, out);
       (block.type->term() == EnergyTerm::Pins ? e.pins : e.internal) += energy;
     }
-    segment_a_ = externalForces(t).middleRows(seg.first_particle, seg.num_particles);
-    segment_b_ = x.middleRows(seg.first_particle, seg.num_particles);
-    e.external = -segment_a_.cwiseProduct(segment_b_).sum();
+    rows_f = external.middleRows(seg.first_particle, seg.num_particles);
+    rows_x = x.middleRows(seg.first_particle, seg.num_particles);
+    e.external = -rows_f.cwiseProduct(rows_x).sum();
     return e;
+  }
+
+  /// segmentPass for every segment into per_scene. On threads each takes a contiguous run of
+  /// segments (about equal element work): a segment's sums and contributions are the same on any
+  /// thread, so the result is the serial pass's bit for bit.
+  void segmentPasses(const Eigen::MatrixX3d& x, double t, int flags, Eigen::MatrixX3d* out,
+                     std::vector<PotentialEnergy>& per_scene) {
+    const std::vector<ElementBlock>& blocks = scene_.blocks();
+    // The time-dependent params and forcing are cached on this thread before any worker reads them.
+    block_params_.resize(blocks.size());
+    for (std::size_t b = 0; b < blocks.size(); ++b) block_params_[b] = &paramsAt(b, t);
+    const Eigen::MatrixX3d& external = externalForces(t);
+    const std::size_t segments = segments_.size();
+    per_scene.resize(segments);
+    const int threads = cpuThreads();
+    const bool threaded = threads > 1 && threadedPassPath() != ThreadedPassPath::Serial &&
+                          mayPay(passWork(blocks, blocks.size(), flags), threads);
+    if (!threaded) {
+      for (std::size_t s = 0; s < segments; ++s)
+        per_scene[s] = segmentPass(s, x, external, flags, out, segment_a_, segment_b_);
+      return;
+    }
+    // Contiguous runs of segments of about equal work, by the elements' local-step cost.
+    std::vector<double> work(segments + 1, 0.0);
+    for (std::size_t s = 0; s < segments; ++s) {
+      double w = 0.0;
+      for (std::size_t b = 0; b < blocks.size(); ++b)
+        w += segments_[s].num_elements[b] * std::max(blocks[b].type->elementCost(), 1.0);
+      work[s + 1] = work[s] + w;
+    }
+    std::vector<std::size_t> bounds(std::size_t(threads) + 1, segments);
+    bounds[0] = 0;
+    for (int p = 1; p < threads; ++p)
+      bounds[std::size_t(p)] =
+          std::size_t(std::lower_bound(work.begin(), work.end(), work[segments] * p / threads) - work.begin());
+    parallelFor(threads, [&](int part) {
+      Eigen::MatrixX3d rows_f, rows_x;
+      for (std::size_t s = bounds[std::size_t(part)]; s < bounds[std::size_t(part) + 1]; ++s)
+        per_scene[s] = segmentPass(s, x, external, flags, out, rows_f, rows_x);
+    });
   }
 
   /// Every block in the order of the contribution numbering (so the scattered sums add in the

@@ -56,16 +56,15 @@ void LocalGlobalSolver::segmentDots(const Eigen::MatrixX3d& a, const Eigen::Matr
 // The objective of every segment at the positions x_trial_ (already in slot x), from the local
 // step that also leaves the gradient there in trial_gradient_.
 void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, std::vector<double>& objective) {
-  PotentialEnergy potential;
-  const bool one = rows_.size() == 1;
-  backend_.localStepGradient(x, y, c, t, trial_gradient_, one ? &potential : nullptr);
   objective.resize(rows_.size());
-  if (one) {
+  if (rows_.size() == 1) {
+    PotentialEnergy potential;
+    backend_.localStepGradient(x, y, c, t, trial_gradient_, &potential);
     objective[0] = inertia(c, x_trial_) + potential.total();
     result_potentials_.assign(1, potential);
     return;
   }
-  backend_.potentials(x, t, segment_potentials_);
+  backend_.localStepGradientPerScene(x, y, c, t, trial_gradient_, segment_potentials_);
   result_potentials_ = segment_potentials_;
   for (std::size_t s = 0; s < rows_.size(); ++s) {
     const Segment& seg = rows_[s];

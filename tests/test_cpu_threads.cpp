@@ -250,6 +250,33 @@ TEST(CpuThreads, TriangleClothIsTheSameOnOneAndTwoThreads) {
   }
 }
 
+// A batch large enough for its per-scene passes and its L-BFGS history passes to go on threads
+// (runs of scenes per thread: cpu_backend.cpp segmentPasses, lbfgs.cpp forEachSegment) steps
+// bit for bit as on one thread, with BE and with the blend (whose energy passes are per scene).
+TEST(CpuThreads, LargeBatchIsTheSameOnOneAndTwoThreads) {
+  ClothGridParams p;
+  p.nx = p.ny = 10;
+  std::vector<Scene> scenes(150, makeClothGrid(p));  // 15,000 particles
+  for (std::size_t s = 0; s < scenes.size(); ++s) scenes[s].velocities.col(2).setConstant(0.01 * double(s % 7));
+  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+    SCOPED_TRACE(integratorName(integrator));
+    SimulatorOptions options;
+    options.integrator = integrator;
+    auto run = [&](int threads) {
+      ThreadCount setting(threads);
+      BatchSimulator batch(scenes, options);
+      for (int i = 0; i < 4; ++i) batch.step();
+      std::vector<Eigen::MatrixX3d> x;
+      for (int s = 0; s < batch.size(); ++s) x.push_back(batch.positions(s));
+      return x;
+    };
+    const std::vector<Eigen::MatrixX3d> one = run(1), two = run(2);
+    ASSERT_EQ(one.size(), two.size());
+    for (std::size_t s = 0; s < one.size(); ++s) ASSERT_EQ(one[s], two[s]) << "scene " << s;
+    EXPECT_NE(one[0], scenes[0].positions);
+  }
+}
+
 // The host solve (one pass over the factor for the three columns, on the calling thread) gives
 // the same result bit for bit on one thread and on two, and CHOLMOD's solve to round-off.
 TEST(CpuThreads, GlobalSolveIsTheSameOnOneAndTwoThreads) {

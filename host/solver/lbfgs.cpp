@@ -18,6 +18,7 @@
 // length and history is the segment's own, so a scene takes the steps it takes alone.
 #include "solver/local_global.hpp"
 
+#include "cpu/worker_pool.hpp"
 #include "simd.hpp"
 
 #include <algorithm>
@@ -259,6 +260,35 @@ void forEachChunk(int first, int count, Eigen::Index n, F&& f) {
     for (int i = 0; i < count; i += kChunk) f(col * n + first + i, std::min(kChunk, count - i));
 }
 
+// A batch's history passes go on threads from this many particles: its vectors then no longer fit
+// a core's caches, and a pass over them (milliseconds) dwarfs a worker's wake-up (20-30 us).
+constexpr int kThreadedHistoryParticles = 10'000;
+
+// f(seg) for every segment: on cpuThreads() threads, each a contiguous run of segments of about
+// equal rows, where a batch is that large. A segment's sums are its own and add in the same order
+// on any thread, so the results are the serial loop's bit for bit.
+template <class Rows, class F>
+void forEachSegment(const std::vector<Rows>& rows, F&& f) {
+  const std::size_t segments = rows.size();
+  const int threads = cpuThreads();
+  const int particles = segments == 0 ? 0 : rows.back().first + rows.back().count - rows.front().first;
+  if (segments < 2 || threads < 2 || particles < kThreadedHistoryParticles) {
+    for (std::size_t seg = 0; seg < segments; ++seg) f(seg);
+    return;
+  }
+  std::vector<std::size_t> bounds(std::size_t(threads) + 1, segments);
+  bounds[0] = 0;
+  std::size_t seg = 0;
+  for (int part = 1; part < threads; ++part) {
+    const double share = double(particles) * part / threads;
+    while (seg < segments && rows[seg].first - rows.front().first < share) ++seg;
+    bounds[std::size_t(part)] = seg;
+  }
+  parallelFor(threads, [&](int part) {
+    for (std::size_t s = bounds[std::size_t(part)]; s < bounds[std::size_t(part) + 1]; ++s) f(s);
+  });
+}
+
 }  // namespace
 
 // After an accepted line search: the new pair s = x_trial - x_cur, y = g_trial - g into ring slot
@@ -278,7 +308,7 @@ void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy,
   sy.assign(rows_.size(), 0.0);
   yy.assign(rows_.size(), 0.0);
   ss.assign(rows_.size(), 0.0);
-  for (std::size_t seg = 0; seg < rows_.size(); ++seg) {
+  forEachSegment(rows_, [&](std::size_t seg) {
     Eigen::MatrixXd& gram = gram_[seg];
     std::vector<double>& sg = history_sg_[seg];
     for (int j = 0; j < window; ++j) gram(slot, j) = gram(j, slot) = sg[std::size_t(j)] = 0.0;
@@ -303,7 +333,7 @@ void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy,
       }
     });
     gram(slot, slot) = sy[seg];
-  }
+  });
 }
 
 // direction_ = -H g by the two-loop recursion over the newest `pairs` pairs, from the products
@@ -315,7 +345,7 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
   const int window = static_cast<int>(history_s_.size());
   auto slotOf = [&](int k) { return std::size_t((newest - k + window) % window); };  // k-th newest
   search_.resize(n, 3);
-  for (std::size_t seg = 0; seg < rows_.size(); ++seg) {
+  forEachSegment(rows_, [&](std::size_t seg) {
     const Eigen::MatrixXd& gram = gram_[seg];
     for (int k = 0; k < pairs; ++k) {
       const std::size_t i = slotOf(k);
@@ -331,11 +361,11 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
         if (a != 0.0) subtractScaled(len, q, a, history_y_[slotOf(k)].data() + o);
       }
     });
-  }
+  });
   applyInitialInverseHessian(c, control, search_, direction_);
-  std::vector<double>& yr = scalars_[8];
   slope.assign(rows_.size(), 0.0);
-  for (std::size_t seg = 0; seg < rows_.size(); ++seg) {
+  forEachSegment(rows_, [&](std::size_t seg) {
+    thread_local std::vector<double> yr;  // y_i.r of the newest `pairs` pairs (no allocation per call)
     yr.assign(std::size_t(pairs), 0.0);
     forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
       const double* r = direction_.data() + o;
@@ -359,7 +389,7 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
       }
       slope[seg] += negateAndSlope(len, d, gradient_.data() + o);
     });
-  }
+  });
 }
 
 int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const IterationControl& control,

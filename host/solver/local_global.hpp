@@ -139,7 +139,7 @@ class LocalGlobalSolver {
   // the products s_i.y_j of the ring's pairs and s_i.g at x_cur_.
   std::vector<std::vector<double>> history_rho_, history_alpha_, history_sg_;
   std::vector<Eigen::MatrixXd> gram_;
-  std::vector<double> scalars_[9];  // per-segment scalars of one solve (no allocation per solve)
+  std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, converged_;
   // Newton-CG: the scene, each spring's transverse coefficient w min(1, r/|u|) and direction at
   // the iterate, the CG vectors.

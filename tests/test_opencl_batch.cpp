@@ -139,6 +139,38 @@ TEST(OpenCLBatch, PerSceneValuesEqualTheCpuReferences) {
   }
 }
 
+// A batch's L-BFGS takes the gradient and every scene's energy from one element pass
+// (localStepGradientPerScene): the gradient of localStepGradient and the energies of potentials(),
+// bit for bit (the same kernels on the same values; only what the pass also writes differs).
+TEST(OpenCLBatch, PerSceneGradientPassIsTheGradientAndThePerScenePass) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
+    const SceneData data(batch.scene);
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    backend->setSegments(batch.segments);
+    backend->write(0, testing::perturbed(batch.scene.positions, 0.02, 5));
+    backend->write(1, batch.scene.positions);
+    const double c = 3600.0;
+    for (double t : {0.0, 0.7}) {
+      std::vector<PotentialEnergy> fused, pass;
+      Eigen::MatrixX3d gradient, alone;
+      backend->localStepGradientPerScene(0, 1, c, t, gradient, fused);
+      backend->localStepGradient(0, 1, c, t, alone);
+      backend->potentials(0, t, pass);
+      EXPECT_EQ(gradient, alone) << "t = " << t;
+      ASSERT_EQ(fused.size(), batch.segments.size());
+      ASSERT_EQ(pass.size(), batch.segments.size());
+      for (std::size_t s = 0; s < pass.size(); ++s) {
+        EXPECT_GT(pass[s].internal, 0.0) << "scene " << s;
+        EXPECT_EQ(fused[s].internal, pass[s].internal) << "scene " << s << ", t = " << t;
+        EXPECT_EQ(fused[s].pins, pass[s].pins) << "scene " << s << ", t = " << t;
+        EXPECT_EQ(fused[s].external, pass[s].external) << "scene " << s << ", t = " << t;
+      }
+    }
+  }
+}
+
 // A grab changes the pins block (SceneData::setPins, Backend::elementsChanged): the element
 // energies move in the device's layout, and the segments set again afterwards still pick each
 // scene's own.

@@ -135,6 +135,9 @@ class OpenCLBackend final : public Backend {
 
   void potentials(int x, double t, std::vector<PotentialEnergy>& out) override;
 
+  void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
+                                 std::vector<PotentialEnergy>& per_scene) override;
+
   void synchronize() override { ocl::check(queue_.finish(), "clFinish"); }
 
   std::string description() const override;

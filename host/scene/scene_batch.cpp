@@ -11,22 +11,14 @@
 namespace stabint {
 namespace {
 
-template <typename Matrix>
-void appendRows(Matrix& into, const Matrix& rows) {
-  const Eigen::Index n = into.rows();
-  into.conservativeResize(n + rows.rows(), Eigen::NoChange);
-  into.bottomRows(rows.rows()) = rows;
-}
-
-}  // namespace
-
-void appendScene(Scene& s, const Scene& p) {
-  const int offset = s.numParticles();
-  appendRows(s.positions, p.positions);
-  appendRows(s.rest_positions, p.rest_positions);
-  appendRows(s.velocities, p.velocities);
-  s.masses.conservativeResize(offset + p.masses.size());
-  s.masses.tail(p.masses.size()) = p.masses;
+// Part p's particles into rows [offset, offset + p's count) of s's matrices, which already have
+// them; its elements, fields, bodies and triangles appended with their particles shifted by offset.
+void placeScene(Scene& s, const Scene& p, int offset) {
+  const int n = p.numParticles();
+  s.positions.middleRows(offset, n) = p.positions;
+  s.rest_positions.middleRows(offset, n) = p.rest_positions;
+  s.velocities.middleRows(offset, n) = p.velocities;
+  s.masses.segment(offset, n) = p.masses;
   for (const ElementType* type : elementTypes()) type->appendShifted(s, p, offset);
   for (ForceField f : p.force_fields) {
     // "All particles" of a part means the part's own particles once it has neighbours.
@@ -46,6 +38,22 @@ void appendScene(Scene& s, const Scene& p) {
   }
 }
 
+// s's per-particle matrices resized to `particles` rows, keeping the rows they have.
+void resizeParticles(Scene& s, int particles) {
+  s.positions.conservativeResize(particles, Eigen::NoChange);
+  s.rest_positions.conservativeResize(particles, Eigen::NoChange);
+  s.velocities.conservativeResize(particles, Eigen::NoChange);
+  s.masses.conservativeResize(particles);
+}
+
+}  // namespace
+
+void appendScene(Scene& s, const Scene& p) {
+  const int offset = s.numParticles();
+  resizeParticles(s, offset + p.numParticles());
+  placeScene(s, p, offset);
+}
+
 SceneBatch concatenateScenes(const std::vector<Scene>& scenes) {
   if (scenes.empty()) throw InvalidInputError("scene batch: no scenes");
   for (std::size_t i = 0; i < scenes.size(); ++i) {
@@ -61,13 +69,18 @@ SceneBatch concatenateScenes(const std::vector<Scene>& scenes) {
   SceneBatch batch;
   batch.scene.name = "batch of " + std::to_string(scenes.size()) + " scenes";
   batch.scene.gravity = scenes.front().gravity;
-  batch.scene.positions.resize(0, 3);
-  batch.scene.rest_positions.resize(0, 3);
-  batch.scene.velocities.resize(0, 3);
-  batch.scene.masses.resize(0);
+  // The particles' matrices are sized once: appending scene by scene would copy them each time,
+  // quadratic in the number of scenes.
+  int particles = 0;
+  for (const Scene& s : scenes) particles += s.numParticles();
+  batch.scene.positions.resize(particles, 3);
+  batch.scene.rest_positions.resize(particles, 3);
+  batch.scene.velocities.resize(particles, 3);
+  batch.scene.masses.resize(particles);
+  int offset = 0;
   for (const Scene& s : scenes) {
     SceneSegment segment;
-    segment.first_particle = batch.scene.numParticles();
+    segment.first_particle = offset;
     segment.num_particles = s.numParticles();
     segment.first_collider = static_cast<int>(batch.scene.colliders.size());
     segment.num_colliders = static_cast<int>(s.colliders.size());
@@ -75,7 +88,8 @@ SceneBatch concatenateScenes(const std::vector<Scene>& scenes) {
       segment.first_element.push_back(type->count(batch.scene));
       segment.num_elements.push_back(type->count(s));
     }
-    appendScene(batch.scene, s);
+    placeScene(batch.scene, s, offset);
+    offset += s.numParticles();
     batch.segments.push_back(std::move(segment));
   }
   return batch;

@@ -126,9 +126,7 @@ class CpuBackend final : public Backend {
   PotentialEnergy potentialOf(int segment, int slot, double t) override {
     if (segments_.size() == 1) return potential(slot, t);  // as potentials() for a batch of one
     const auto start = Clock::now();
-    const std::vector<ElementBlock>& blocks = scene_.blocks();
-    block_params_.resize(blocks.size());
-    for (std::size_t b = 0; b < blocks.size(); ++b) block_params_[b] = &paramsAt(b, t);
+    cacheBlockParams(t);
     const PotentialEnergy e = segmentPass(static_cast<std::size_t>(segment), slots_[slot], externalForces(t),
                                           kPassEnergy, nullptr, segment_a_, segment_b_);
     times_.energy += secondsSince(start);
@@ -169,6 +167,12 @@ class CpuBackend final : public Backend {
     return e;
   }
 
+  /// Every block's params at time t into block_params_, for segmentPass.
+  void cacheBlockParams(double t) {
+    block_params_.resize(scene_.blocks().size());
+    for (std::size_t b = 0; b < block_params_.size(); ++b) block_params_[b] = &paramsAt(b, t);
+  }
+
   /// segmentPass for every segment into per_scene. On threads each takes a contiguous run of
   /// segments (about equal element work): a segment's sums and contributions are the same on any
   /// thread, so the result is the serial pass's bit for bit.
@@ -176,8 +180,7 @@ class CpuBackend final : public Backend {
                      std::vector<PotentialEnergy>& per_scene) {
     const std::vector<ElementBlock>& blocks = scene_.blocks();
     // The time-dependent params and forcing are cached on this thread before any worker reads them.
-    block_params_.resize(blocks.size());
-    for (std::size_t b = 0; b < blocks.size(); ++b) block_params_[b] = &paramsAt(b, t);
+    cacheBlockParams(t);
     const Eigen::MatrixX3d& external = externalForces(t);
     const std::size_t segments = segments_.size();
     per_scene.resize(segments);

@@ -64,13 +64,17 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
 // energy), one call per scene, timed, then steps the batch (not timed). What one frame's input
 // costs a game driving many bodies; per scene it must not grow with the batch.
 void runBatchInput(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
-                   bool forces_input) {
+                   BackendChoice backend, bool forces_input) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
   const int count = static_cast<int>(state.range(0));
   releaseAllFixtures();
   BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
     auto fixture = std::make_unique<BatchFixture>();
     fixture->batch = std::make_unique<BatchSimulator>(std::vector<Scene>(std::size_t(count), make()),
-                                                      optionsFor(BackendChoice::Cpu, Integrator::BackwardEuler));
+                                                      optionsFor(backend, Integrator::BackwardEuler));
     return fixture;
   });
   BatchSimulator& batch = *f.batch;
@@ -129,17 +133,20 @@ void registerBatchCases() {
                 ->Unit(benchmark::kMillisecond);
           }
       }
-  for (bool forces_input : {true, false})
-    for (int count : {100, 1000}) {
-      const std::string name = std::string("batch_input/chain/BE/cpu/") + (forces_input ? "forces" : "state");
-      benchmark::RegisterBenchmark(
-          name.c_str(), [=](benchmark::State& state) { runBatchInput(state, name, scenes[0].make, forces_input); })
-          ->Arg(count)
-          ->ArgName("scenes")
-          ->Iterations(20)
-          ->UseRealTime()
-          ->Unit(benchmark::kMillisecond);
-    }
+  for (BackendChoice backend : allBackends())
+    for (bool forces_input : {true, false})
+      for (int count : {100, 1000}) {
+        const std::string name =
+            std::string("batch_input/chain/BE/") + backendLabel(backend) + "/" + (forces_input ? "forces" : "state");
+        benchmark::RegisterBenchmark(
+            name.c_str(),
+            [=](benchmark::State& state) { runBatchInput(state, name, scenes[0].make, backend, forces_input); })
+            ->Arg(count)
+            ->ArgName("scenes")
+            ->Iterations(20)
+            ->UseRealTime()
+            ->Unit(benchmark::kMillisecond);
+      }
   // A Simulator as "a batch of one" (issue 22, docs/batch_design.md): the single-scene overhead of
   // the batch's driver, one scene stepped as a BatchSimulator of one ("batch") or as a Simulator
   // ("simulator"), 30 steps from rest. The ratio is what folding the two drivers into one costs a

@@ -15,6 +15,28 @@ void OpenCLBackend<Real>::write(int slot, const Eigen::MatrixX3d& host) {
   times_.transfer += secondsSince(start);
 }
 
+// A slot is its three columns one after another (x of every particle, then y, then z), so rows
+// first.. are one range of each column: one rectangular write of three lines of rows.rows() reals,
+// n reals apart on the device.
+template <typename Real>
+void OpenCLBackend<Real>::writeRows(int slot, int first, const Eigen::MatrixX3d& rows) {
+  checkSlot(slot);
+  if (first < 0 || rows.rows() > n_ - first)
+    throw InvalidInputError("OpenCL backend: write of rows " + std::to_string(first) + ".." +
+                            std::to_string(first + rows.rows()) + " of a slot of " + std::to_string(n_) + " rows");
+  if (rows.rows() == 0) return;
+  const auto start = Clock::now();
+  PendingWrite& w = nextStaging();
+  w.data.assign(rows.data(), rows.data() + rows.size());
+  const std::size_t count = std::size_t(rows.rows());
+  const cl::array<cl::size_type, 3> device_origin{bytes(std::size_t(first)), 0, 0}, host_origin{0, 0, 0},
+      region{bytes(count), 3, 1};
+  ocl::check(queue_.enqueueWriteBufferRect(slots_[slot], CL_FALSE, device_origin, host_origin, region,
+                                           bytes(std::size_t(n_)), 0, bytes(count), 0, w.data.data(), nullptr, &w.done),
+             "clEnqueueWriteBufferRect");
+  times_.transfer += secondsSince(start);
+}
+
 template <typename Real>
 void OpenCLBackend<Real>::read(int slot, Eigen::MatrixX3d& host) {
   checkSlot(slot);
@@ -106,12 +128,19 @@ void OpenCLBackend<Real>::uploadForcing(double t, bool force) {
 template <typename Real>
 void OpenCLBackend<Real>::writeAsync(const cl::Buffer& buffer, const double* host, std::size_t count) {
   if (count == 0) return;
-  PendingWrite& w = pending_writes_[next_write_];
-  next_write_ = (next_write_ + 1) % pending_writes_.size();
-  if (w.done()) ocl::check(w.done.wait(), "clWaitForEvents");
+  PendingWrite& w = nextStaging();
   w.data.assign(host, host + count);
   ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, 0, bytes(count), w.data.data(), nullptr, &w.done),
              "clEnqueueWriteBuffer");
+}
+
+// The next staging buffer of the ring, once its previous transfer has completed.
+template <typename Real>
+typename OpenCLBackend<Real>::PendingWrite& OpenCLBackend<Real>::nextStaging() {
+  PendingWrite& w = pending_writes_[next_write_];
+  next_write_ = (next_write_ + 1) % pending_writes_.size();
+  if (w.done()) ocl::check(w.done.wait(), "clWaitForEvents");
+  return w;
 }
 
 template <typename Real>
@@ -160,11 +189,13 @@ void OpenCLBackend<Real>::readPartials(int count, bool blocking) {
              "clEnqueueReadBuffer");
 }
 
-// The first `count` per-scene sums to the host (blocking: the only wait of a per-scene call).
+// `count` per-scene sums from `first` on to the host, at the same places (blocking: the only wait
+// of a per-scene call).
 template <typename Real>
-void OpenCLBackend<Real>::readSegmentSums(std::size_t count) {
-  ocl::check(queue_.enqueueReadBuffer(segment_sums_, CL_TRUE, 0, bytes(count), host_segment_sums_.data()),
-             "clEnqueueReadBuffer");
+void OpenCLBackend<Real>::readSegmentSums(std::size_t count, std::size_t first) {
+  ocl::check(
+      queue_.enqueueReadBuffer(segment_sums_, CL_TRUE, bytes(first), bytes(count), host_segment_sums_.data() + first),
+      "clEnqueueReadBuffer");
 }
 
 template class OpenCLBackend<double>;

@@ -264,6 +264,44 @@ TEST(OpenCLBatch, OneScenesRowsAndPotentialAreItsPartOfTheWholeSlotsAndPass) {
   }
 }
 
+// Element changes (SceneData::setElementStiffness, setElementEnabled) reach the device as the
+// changed elements' params alone (ElementBlock::changed_params), or the whole block once more
+// changes were made than the log keeps: either way the device then holds what a backend made
+// afresh uploads, and every scene's energy is that backend's bit for bit.
+TEST(OpenCLBatch, ElementChangesReachTheDeviceAsAFreshUploadWould) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch batch = concatenateScenes(manyScenes());
+    SceneData data(batch.scene);
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 1, openclOptions(precision));
+    backend->setSegments(batch.segments);
+    const Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 14);
+    backend->write(0, x);
+    std::vector<PotentialEnergy> got;
+    backend->potentials(0, 0.0, got);  // the params are on the device
+    const int spring = typeIndex("spring");
+    const SceneSegment& cloth = batch.segments[batch.segments.size() - 2];
+    const double k = batch.scene.springs[0].stiffness;
+    const auto expectAsFresh = [&](const char* what) {
+      backend->potentials(0, 0.0, got);
+      const std::unique_ptr<Backend> fresh = makeOpenCLBackend(data, 1, openclOptions(precision));
+      fresh->setSegments(batch.segments);
+      fresh->write(0, x);
+      std::vector<PotentialEnergy> want;
+      fresh->potentials(0, 0.0, want);
+      for (std::size_t s = 0; s < want.size(); ++s) {
+        EXPECT_EQ(got[s].internal, want[s].internal) << what << ", scene " << s;
+        EXPECT_EQ(got[s].pins, want[s].pins) << what << ", scene " << s;
+      }
+    };
+    for (int i : {3, 40, 17}) data.setElementStiffness(spring, cloth.first_element[std::size_t(spring)] + i, 3.0 * k);
+    data.setElementEnabled(spring, cloth.first_element[std::size_t(spring)] + 5, false);
+    expectAsFresh("a few of one scene's springs");
+    for (int e = 0; e < 600; ++e) data.setElementStiffness(spring, e, (1.0 + 0.001 * e) * k);
+    expectAsFresh("more changes than the log keeps");
+  }
+}
+
 // A batch of one takes the single-value pass (a Simulator's numbers): so does its one segment.
 TEST(OpenCLBatch, TheOneSegmentOfABatchOfOneIsTheSingleValuePass) {
   for (Precision precision : availablePrecisions()) {

@@ -190,7 +190,9 @@ class OpenCLBackend final : public Backend {
 
   void uploadForcing(double t, bool force);
 
-  void writeAsync(const cl::Buffer& buffer, const double* host, std::size_t count);
+  void writeAsync(const cl::Buffer& buffer, const double* host, std::size_t count, std::size_t offset = 0);
+
+  bool uploadChangedParams(DeviceBlock& d);
 
   struct PendingWrite;
   PendingWrite& nextStaging();

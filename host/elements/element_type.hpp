@@ -77,7 +77,7 @@ struct ElementBlock {
   /// The element each of the last in-place changes rewrote, in order: the changes since revision
   /// r are the last params_revision - r entries, where there are that many (SceneData keeps the
   /// latest few hundred); a copy further behind refreshes the whole block. One scene's element
-  /// change in a batch then costs a device copy that scene's elements.
+  /// change in a batch then costs a device copy of that scene's elements.
   std::vector<int> changed_params;
 };
 

@@ -154,6 +154,8 @@ class SceneData final : public RunningScene {
   void numberContributions();
   // Zeroes the weights of the disabled elements of a freshly built block.
   void applyEnabled(std::size_t block);
+  // Element `element`'s params were rewritten in place: a new params revision, and the element
+  // in the block's log (ElementBlock::changed_params).
   void paramsChanged(ElementBlock& block, int element);
   // The scene's laws of the colliders (their velocity from their center at t = 0).
   std::vector<ColliderMotion> sceneColliderMotion() const;

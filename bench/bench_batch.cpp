@@ -59,37 +59,60 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
   state.SetLabel(batched ? "one BatchSimulator" : "one Simulator per scene");
 }
 
+// What runBatchInput gives every scene each frame.
+enum class BatchInput { Forces, State, Stiffness };
+
+const char* inputLabel(BatchInput input) {
+  switch (input) {
+    case BatchInput::Forces: return "forces";
+    case BatchInput::State: return "state";
+    case BatchInput::Stiffness: return "stiffness";
+  }
+  return "";
+}
+
 // Per-frame input to every scene of a batch: each frame sets every scene's external forces
-// ("forces") or state ("state": its positions and velocities as they are, an event of zero
-// energy), one call per scene, timed, then steps the batch (not timed). What one frame's input
-// costs a game driving many bodies; per scene it must not grow with the batch.
+// ("forces"), state ("state": its positions and velocities as they are, an event of zero
+// energy) or its first spring's stiffness ("stiffness": 1% up and down in turn, an element
+// change: an event, an update of the factor), one call per scene, timed, then steps the batch
+// (not timed). What one frame's input costs a game driving many bodies; per scene it must not
+// grow with the batch.
 void runBatchInput(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
-                   bool forces_input) {
+                   BackendChoice backend, BatchInput input) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
   const int count = static_cast<int>(state.range(0));
   releaseAllFixtures();
   BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
     auto fixture = std::make_unique<BatchFixture>();
     fixture->batch = std::make_unique<BatchSimulator>(std::vector<Scene>(std::size_t(count), make()),
-                                                      optionsFor(BackendChoice::Cpu, Integrator::BackwardEuler));
+                                                      optionsFor(backend, Integrator::BackwardEuler));
     return fixture;
   });
   BatchSimulator& batch = *f.batch;
   const Eigen::MatrixX3d forces = Eigen::MatrixX3d::Constant(batch.numParticles(0), 3, 0.01);
+  const double stiffness = make().springs.at(0).stiffness;
+  int frame = 0;
   double seconds = 0.0;
   std::vector<Eigen::MatrixX3d> x(static_cast<std::size_t>(count)), v(static_cast<std::size_t>(count));
   for (auto _ : state) {
-    if (!forces_input) {
+    if (input == BatchInput::State) {
       for (int s = 0; s < count; ++s) {
         x[std::size_t(s)] = batch.positions(s);
         v[std::size_t(s)] = batch.velocities(s);
       }
     }
     const auto start = std::chrono::steady_clock::now();
+    const double k = stiffness * (frame++ % 2 == 0 ? 1.01 : 1.0);
     for (int s = 0; s < count; ++s) {
-      if (forces_input)
+      if (input == BatchInput::Forces)
         batch.setExternalForces(s, forces);
-      else
+      else if (input == BatchInput::State)
         batch.setState(s, x[std::size_t(s)], v[std::size_t(s)]);
+      else
+        batch.setElementStiffness(s, ElementKind::Spring, 0, k);
     }
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     state.PauseTiming();
@@ -129,17 +152,18 @@ void registerBatchCases() {
                 ->Unit(benchmark::kMillisecond);
           }
       }
-  for (bool forces_input : {true, false})
-    for (int count : {100, 1000}) {
-      const std::string name = std::string("batch_input/chain/BE/cpu/") + (forces_input ? "forces" : "state");
-      benchmark::RegisterBenchmark(
-          name.c_str(), [=](benchmark::State& state) { runBatchInput(state, name, scenes[0].make, forces_input); })
-          ->Arg(count)
-          ->ArgName("scenes")
-          ->Iterations(20)
-          ->UseRealTime()
-          ->Unit(benchmark::kMillisecond);
-    }
+  for (BackendChoice backend : allBackends())
+    for (BatchInput input : {BatchInput::Forces, BatchInput::State, BatchInput::Stiffness})
+      for (int count : {100, 1000}) {
+        const std::string name = std::string("batch_input/chain/BE/") + backendLabel(backend) + "/" + inputLabel(input);
+        benchmark::RegisterBenchmark(
+            name.c_str(), [=](benchmark::State& state) { runBatchInput(state, name, scenes[0].make, backend, input); })
+            ->Arg(count)
+            ->ArgName("scenes")
+            ->Iterations(20)
+            ->UseRealTime()
+            ->Unit(benchmark::kMillisecond);
+      }
   // A Simulator as "a batch of one" (issue 22, docs/batch_design.md): the single-scene overhead of
   // the batch's driver, one scene stepped as a BatchSimulator of one ("batch") or as a Simulator
   // ("simulator"), 30 steps from rest. The ratio is what folding the two drivers into one costs a

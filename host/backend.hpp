@@ -43,7 +43,8 @@ class Backend {
   /// Rounds host values to what a slot holds after write() (a device in float keeps floats).
   virtual void roundToStorage(Eigen::MatrixX3d& /*host*/) const {}
   /// Whether writeRows is available: the backend writes some rows of a slot alone and then holds
-  /// them exactly as given (the CPU reference). One scene's input then costs that scene's rows.
+  /// them as roundToStorage gives them (exactly as given but on a float device). One scene's input
+  /// then costs that scene's rows.
   virtual bool writesRows() const { return false; }
   /// Rows first.. of a slot from the host (only where writesRows()).
   virtual void writeRows(int /*slot*/, int /*first*/, const Eigen::MatrixX3d& /*rows*/) {

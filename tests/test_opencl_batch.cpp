@@ -1,6 +1,8 @@
 // The OpenCL side of the batch (docs/batch_design.md): per-scene energies and mass dots of a
 // concatenation (Backend::setSegments / potentials / massDots, kernels/segments.cl), checked
 // against the single-value reductions and against the CPU reference per scene.
+#include <stabint/builders.hpp>
+
 #include "batch_scenes.hpp"
 #include "opencl_batch_support.hpp"
 #include "test_opencl_support.hpp"
@@ -224,6 +226,127 @@ TEST(OpenCLBatch, RefusesSegmentsOutsideTheScene) {
     std::vector<double> dots;
     backend->massDots(1, 1, dots);
     EXPECT_EQ(dots.size(), batch.segments.size());
+  }
+}
+
+// The mixed scenes, then enough small chains that the segments outnumber a work-group of
+// segments.cl's per-scene sums, then a cloth whose springs fill several element groups: scenes
+// share element groups with their neighbours, and the later ones lie in a later group of sums.
+std::vector<Scene> manyScenes() {
+  std::vector<Scene> scenes = testing::mixedBatchScenes();
+  ChainPendulumParams chain;
+  chain.particles = 3;
+  for (int i = 0; i < 300; ++i) scenes.push_back(makeChainPendulum(chain));
+  ClothGridParams cloth;
+  cloth.nx = 14;
+  cloth.ny = 12;
+  scenes.push_back(makeClothGrid(cloth));
+  scenes.push_back(testing::mixedBatchScenes()[0]);
+  return scenes;
+}
+
+// One scene's input on the device costs its own rows and elements (Backend::writeRows,
+// potentialOf; a scene's setState and element changes in a batch): rows written alone replace
+// those rows only, as roundToStorage gives them, and one segment's energy is potentials()'s value
+// for it bit for bit, whichever segments were evaluated before.
+TEST(OpenCLBatch, OneScenesRowsAndPotentialAreItsPartOfTheWholeSlotsAndPass) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch batch = concatenateScenes(manyScenes());
+    const SceneData data(batch.scene);
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    ASSERT_TRUE(backend->writesRows());
+    backend->setSegments(batch.segments);
+    const Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 9);
+    backend->write(0, x);
+    Eigen::MatrixX3d before;
+    backend->read(0, before);
+    const SceneSegment& seg = batch.segments[2];
+    const Eigen::MatrixX3d rows =
+        testing::perturbed(batch.scene.positions, 0.03, 10).middleRows(seg.first_particle, seg.num_particles);
+    backend->writeRows(0, seg.first_particle, rows);
+    Eigen::MatrixX3d after, stored = rows;
+    backend->read(0, after);
+    backend->roundToStorage(stored);
+    EXPECT_EQ(after.middleRows(seg.first_particle, seg.num_particles), stored);
+    EXPECT_EQ(after.topRows(seg.first_particle), before.topRows(seg.first_particle));
+    const int end = seg.first_particle + seg.num_particles;
+    EXPECT_EQ(after.bottomRows(after.rows() - end), before.bottomRows(after.rows() - end));
+    EXPECT_THROW(backend->writeRows(0, int(after.rows()) - 1, rows), InvalidInputError);
+
+    // Two slots evaluated in turn: each segment's pass finds the element energies of the other
+    // slot's in the groups it shares with its neighbours, and in its own.
+    backend->write(1, testing::perturbed(batch.scene.positions, 0.04, 11));
+    for (double t : {0.0, 0.7}) {  // the first chain's field has grown by its rate at t = 0.7
+      std::vector<PotentialEnergy> all[2];
+      for (int slot : {0, 1}) backend->potentials(slot, t, all[slot]);
+      ASSERT_EQ(all[0].size(), batch.segments.size());
+      for (std::size_t s = batch.segments.size(); s-- > 0;)
+        for (int slot : {0, 1}) {
+          const PotentialEnergy one = backend->potentialOf(int(s), slot, t);
+          const PotentialEnergy& want = all[slot][s];
+          EXPECT_EQ(one.internal, want.internal) << "scene " << s << ", slot " << slot << ", t = " << t;
+          EXPECT_EQ(one.pins, want.pins) << "scene " << s << ", slot " << slot << ", t = " << t;
+          EXPECT_EQ(one.external, want.external) << "scene " << s << ", slot " << slot << ", t = " << t;
+        }
+      EXPECT_GT(all[0][2].internal, 0.0);
+      EXPECT_GT(all[0].back().pins, 0.0);
+    }
+    EXPECT_THROW(backend->potentialOf(int(batch.segments.size()), 0, 0.0), InvalidInputError);
+  }
+}
+
+// Element changes (SceneData::setElementStiffness, setElementEnabled) reach the device as the
+// changed elements' params alone (ElementBlock::changed_params), or the whole block once more
+// changes were made than the log keeps: either way the device then holds what a backend made
+// afresh uploads, and every scene's energy is that backend's bit for bit.
+TEST(OpenCLBatch, ElementChangesReachTheDeviceAsAFreshUploadWould) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch batch = concatenateScenes(manyScenes());
+    SceneData data(batch.scene);
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 1, openclOptions(precision));
+    backend->setSegments(batch.segments);
+    const Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 14);
+    backend->write(0, x);
+    std::vector<PotentialEnergy> got;
+    backend->potentials(0, 0.0, got);  // the params are on the device
+    const int spring = typeIndex("spring");
+    const SceneSegment& cloth = batch.segments[batch.segments.size() - 2];
+    const double k = batch.scene.springs[0].stiffness;
+    const auto expectAsFresh = [&](const char* what) {
+      backend->potentials(0, 0.0, got);
+      const std::unique_ptr<Backend> fresh = makeOpenCLBackend(data, 1, openclOptions(precision));
+      fresh->setSegments(batch.segments);
+      fresh->write(0, x);
+      std::vector<PotentialEnergy> want;
+      fresh->potentials(0, 0.0, want);
+      for (std::size_t s = 0; s < want.size(); ++s) {
+        EXPECT_EQ(got[s].internal, want[s].internal) << what << ", scene " << s;
+        EXPECT_EQ(got[s].pins, want[s].pins) << what << ", scene " << s;
+      }
+    };
+    for (int i : {3, 40, 17}) data.setElementStiffness(spring, cloth.first_element[std::size_t(spring)] + i, 3.0 * k);
+    data.setElementEnabled(spring, cloth.first_element[std::size_t(spring)] + 5, false);
+    expectAsFresh("a few of one scene's springs");
+    for (int e = 0; e < 600; ++e) data.setElementStiffness(spring, e, (1.0 + 0.001 * e) * k);
+    expectAsFresh("more changes than the log keeps");
+  }
+}
+
+// A batch of one takes the single-value pass (a Simulator's numbers): so does its one segment.
+TEST(OpenCLBatch, TheOneSegmentOfABatchOfOneIsTheSingleValuePass) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch whole = concatenateScenes({testing::mixedBatchScenes()[2]});
+    const SceneData data(whole.scene);
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    backend->setSegments(whole.segments);
+    backend->write(0, testing::perturbed(whole.scene.positions, 0.02, 11));
+    const PotentialEnergy one = backend->potentialOf(0, 0, 0.0), single = backend->potential(0, 0.0);
+    EXPECT_EQ(one.internal, single.internal);
+    EXPECT_EQ(one.pins, single.pins);
+    EXPECT_EQ(one.external, single.external);
   }
 }
 

@@ -30,7 +30,8 @@ using testing::stepBothAndExpectNear;
 // follows each scene's own Simulator given the same calls (tests/test_batch_input.cpp): forces on
 // the cloth, a grab of it (the later scenes' pins move in the pin list) dragged and released, one
 // of its pins disabled, the bar's tets softened, a list of the cloth's springs stiffened (a
-// refactorization), the chain's pin dragged; then the contact batch with a box dragged in one scene
+// refactorization), the bar's state set (moved and thrown; not with BDF2, which restarts only a
+// batch of one), the chain's pin dragged; then the contact batch with a box dragged in one scene
 // and a ground moved in another. Every scene within the cross-backend tolerance of the CPU batch,
 // for the integrators those tests compare across backends.
 TEST(OpenCLBatchSimulator, InputFollowsTheCpuBatch) {
@@ -55,6 +56,12 @@ TEST(OpenCLBatchSimulator, InputFollowsTheCpuBatch) {
     if (step == 8)
       batch.setElementStiffness(1, ElementKind::Tet, std::vector<int>{0, 1, 2}, 0.5 * scenes[1].tets[0].stiffness);
     if (step == 12) batch.setElementStiffness(0, ElementKind::Spring, springs, 2.0 * cloth.springs[0].stiffness);
+    if (step == 15 && batch.options().integrator != Integrator::BDF2) {  // BDF2: a batch of one only
+      Eigen::MatrixX3d x = batch.positions(1), v = batch.velocities(1);
+      x.col(1).array() += 0.01;
+      v.col(0).array() += 0.2;
+      batch.setState(1, x, v);
+    }
     if (step == 20) batch.release(0, 2);
   };
   const std::vector<Scene> contact = testing::contactBatchScenes();
@@ -81,6 +88,41 @@ TEST(OpenCLBatchSimulator, InputFollowsTheCpuBatch) {
         }
       }
     }
+  }
+}
+
+// A scene's setState writes its rows alone (Backend::writeRows): the host copies are still what the
+// slots hold, the scene's rows as the device stores the new state (rounded to float there) and
+// every other scene's as the device holds them (rounded too, as a read of the whole slots would
+// give them, before any step), and the event is booked from the scene's own potential.
+TEST(OpenCLBatchSimulator, SetStateLeavesEveryHostCopyWhatTheSlotsHold) {
+  const std::vector<Scene> scenes = testing::mixedBatchScenes();
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const auto stored = [&](const Eigen::MatrixX3d& m) -> Eigen::MatrixX3d {
+      if (precision == Precision::Double) return m;
+      return m.cast<float>().cast<double>();
+    };
+    const BatchCase c{Integrator::BackwardEuler, 1.0 / 60.0, 3};
+    BatchSimulator batch(scenes, batchOptions(c, BackendKind::OpenCL, precision));
+    const Eigen::MatrixX3d x = testing::perturbed(scenes[1].positions, 0.02, 12);
+    const Eigen::MatrixX3d v = testing::perturbed(scenes[1].velocities, 0.3, 13);
+    const double target_before = batch.target(0);
+    batch.setState(1, x, v);
+    EXPECT_EQ(batch.positions(1), stored(x));
+    EXPECT_EQ(batch.velocities(1), stored(v));
+    for (int s : {0, 2, 3}) EXPECT_EQ(batch.positions(s), stored(scenes[std::size_t(s)].positions)) << "scene " << s;
+    EXPECT_EQ(batch.target(0), target_before);  // the event is scene 1's alone
+    // The scene's energies are those of the state it holds: a CPU batch given the stored state.
+    BatchSimulator cpu(scenes, batchOptions(c, BackendKind::CpuReference, precision));
+    cpu.setState(1, stored(x), stored(v));
+    const double tol = crossBackendTolerance(precision) * cpu.energyScale(1);
+    EXPECT_NEAR(batch.energy(1).elastic, cpu.energy(1).elastic, tol);
+    EXPECT_NEAR(batch.energy(1).external, cpu.energy(1).external, tol);
+    EXPECT_EQ(batch.energy(1).kinetic, cpu.energy(1).kinetic);
+    EXPECT_NEAR(batch.target(1), cpu.target(1), tol);
+    for (int step = 0; step < c.steps; ++step)
+      stepBothAndExpectNear(batch, cpu, crossBackendTolerance(precision), step);
   }
 }
 

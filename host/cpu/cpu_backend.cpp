@@ -390,11 +390,12 @@ class CpuBackend final : public Backend {
     return cached.values;
   }
 
-  // Forcing at time t, cached like the params.
+  // External forces at time t, cached like the params (by their own version: an element change
+  // leaves them).
   const Eigen::MatrixX3d& externalForces(double t) {
-    if (!external_key_.matches(t, scene_.forcingVersion())) {
+    if (!external_key_.matches(t, scene_.forcesVersion())) {
       scene_.externalForces(t, external_);
-      external_key_ = {t, scene_.forcingVersion()};
+      external_key_ = {t, scene_.forcesVersion()};
     }
     return external_;
   }

@@ -74,6 +74,11 @@ struct ElementBlock {
   /// Incremented when params change in place at run time (a stiffness change, an element
   /// enabled or disabled: SceneData::setElementStiffness), so device copies are refreshed.
   int params_revision = 0;
+  /// The element each of the last in-place changes rewrote, in order: the changes since revision
+  /// r are the last params_revision - r entries, where there are that many (SceneData keeps the
+  /// latest few hundred); a copy further behind refreshes the whole block. One scene's element
+  /// change in a batch then costs a device copy of that scene's elements.
+  std::vector<int> changed_params;
 };
 
 /// Sizes of a type's data, fixed at compile time for each type.

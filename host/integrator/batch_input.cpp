@@ -48,16 +48,27 @@ void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const E
   PerScene& p = per_scene_[std::size_t(scene)];
   const double h_before = p.kinetic + p.potential.total();
   // The other scenes' rows of kV stay what they are (v_slot_, which may differ from their host
-  // copies by round-off, as a Simulator's do).
-  x_.middleRows(seg.first_particle, seg.num_particles) = positions;
-  v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;
-  if (backend_->writesRows()) {  // the scene's rows alone, held exactly as given
+  // copies by round-off, as a Simulator's do). The slots may hold less precision (a float
+  // device): the host copies are what they hold.
+  if (backend_->writesRows()) {  // the scene's rows alone
+    if (!host_copies_stored_) {
+      backend_->roundToStorage(x_);
+      backend_->roundToStorage(v_slot_);
+      host_copies_stored_ = true;
+    }
     backend_->writeRows(kX, seg.first_particle, positions);
     backend_->writeRows(kV, seg.first_particle, velocities);
+    Eigen::MatrixX3d stored = positions;
+    backend_->roundToStorage(stored);
+    x_.middleRows(seg.first_particle, seg.num_particles) = stored;
+    stored = velocities;
+    backend_->roundToStorage(stored);
+    v_slot_.middleRows(seg.first_particle, seg.num_particles) = stored;
   } else {
+    x_.middleRows(seg.first_particle, seg.num_particles) = positions;
+    v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;
     backend_->write(kX, x_);
     backend_->write(kV, v_slot_);
-    // The slots may hold less precision (a float device): the host copies are what they hold.
     backend_->readBoth(kX, x_, kV, v_slot_);
   }
   v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);

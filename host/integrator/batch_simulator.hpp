@@ -181,9 +181,15 @@ struct BatchDriver {
   LocalGlobalSolver solver_;
   Eigen::MatrixX3d x_, v_, x_new_, v_new_;  // host copies of the whole batch (v_new_: kVNew's)
   Eigen::MatrixX3d v_slot_;                 // what kV holds (see step())
-  ContactResolver contact_;                 // every scene's colliders, each on its own particles
-  Eigen::MatrixX3d x_aux_, v_aux_;          // host copies of the partner or the full-budget BE solve
-  Eigen::MatrixX3d x_trial_;                // the root finds' trial positions
+  // Whether x_ and v_slot_ are what kX and kV hold to the bit. After construction and a restore
+  // they hold the values the slots were written from, which a float device holds rounded; the
+  // first setState rounds them all (once), so that the host copies of every scene are the slots'
+  // after any scene's setState, whichever rows it writes; a step keeps them so (its candidates
+  // come from the slots or are rounded to them).
+  bool host_copies_stored_ = false;
+  ContactResolver contact_;         // every scene's colliders, each on its own particles
+  Eigen::MatrixX3d x_aux_, v_aux_;  // host copies of the partner or the full-budget BE solve
+  Eigen::MatrixX3d x_trial_;        // the root finds' trial positions
   std::vector<PotentialEnergy> p_all_, new_mid_, old_mid_, aux_mid_;  // per-scene potentials
   std::vector<PotentialEnergy> partner_potentials_;                   // of the BE partner, when its solve left them
   double t_ = 0.0;                                                    // the batch's time (of the active scenes)

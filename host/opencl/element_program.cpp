@@ -48,7 +48,9 @@ std::string instance(const ElementType& type) {
 // host: deterministic). Segment s is the int4 (first group, end group, items, first
 // contribution); the groups after the last type's segment serve the vertices. With
 // PASS_ENERGY_PER_ELEMENT (launched over the element groups only) each element's energy goes to
-// element_energies[its global id] for the per-scene sums of segments.cl.
+// element_energies[its global id] for the per-scene sums of segments.cl. A launch may cover some
+// groups only, from first_group on (one scene's elements): group g of the launch is group
+// first_group + g of the whole pass, with the same elements and results.
 std::string dispatcher(const std::vector<const ElementType*>& types) {
   std::string args, branches;
   for (const ElementType* type : types) {
@@ -71,13 +73,15 @@ std::string dispatcher(const std::vector<const ElementType*>& types) {
                 "  } else ";
   }
   return "__kernel void element_pass(__global const real* x, const int n, const int flags,\n"
+         "                           const int first_group,\n"
          "                           __global const real* fext, __global real* contrib,\n"
          "                           __global real* partials, __global real* element_energies,\n"
          "                           __local real* scratch,\n"
          "                           const int vertex_first_group" +
          args +
          ") {\n"
-         "  const int group = get_group_id(0), lid = get_local_id(0), local_size = get_local_size(0);\n"
+         "  const int group = first_group + get_group_id(0), lid = get_local_id(0),\n"
+         "            local_size = get_local_size(0);\n"
          "  real energy = 0;\n" +
          branches +
          "{\n"

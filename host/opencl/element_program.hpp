@@ -14,9 +14,9 @@ class ElementType;
 namespace stabint::ocl {
 
 /// Source of the program for `types` (a subsequence of elementTypes(): a scene without tets does
-/// not compile the tet's rotation). element_pass's arguments are, in order: x, n, flags, f_ext,
-/// contributions, partials, per-element energies, local scratch, the first group of the vertex
-/// segment, then for each of `types` in order: its segment (int4: first group, end group,
+/// not compile the tet's rotation). element_pass's arguments are, in order: x, n, flags, the
+/// launch's first group, f_ext, contributions, partials, per-element energies, local scratch, the
+/// first group of the vertex segment, then for each of `types` in order: its segment (int4: first group, end group,
 /// elements, first contribution), vertices, coefficients and params.
 std::string elementProgramSource(const std::vector<const ElementType*>& types);
 

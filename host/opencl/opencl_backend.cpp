@@ -135,6 +135,8 @@ void OpenCLBackend<Real>::buildKernels() {
   element_args_.x = element_pass_.addSlot(0, slots_);
   element_pass_.add(n);
   element_args_.flags = element_pass_.add(cl_int(0));
+  element_args_.first_group = element_pass_.add(cl_int(0));
+  element_first_group_ = 0;
   element_pass_.add(fext_);
   element_pass_.add(contrib_);
   element_pass_.add(partials_);

@@ -102,6 +102,10 @@ class OpenCLBackend final : public Backend {
     if (!kDouble) host = host.cast<Real>().template cast<double>();
   }
 
+  bool writesRows() const override { return true; }
+
+  void writeRows(int slot, int first, const Eigen::MatrixX3d& rows) override;
+
   void copy(int dst, int src) override;
 
   void combine(int dst, double a, int x, double b, int y) override;
@@ -137,6 +141,8 @@ class OpenCLBackend final : public Backend {
 
   void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
                                  std::vector<PotentialEnergy>& per_scene) override;
+
+  PotentialEnergy potentialOf(int segment, int x, double t) override;
 
   void synchronize() override { ocl::check(queue_.finish(), "clFinish"); }
 
@@ -187,7 +193,12 @@ class OpenCLBackend final : public Backend {
 
   void uploadForcing(double t, bool force);
 
-  void writeAsync(const cl::Buffer& buffer, const double* host, std::size_t count);
+  void writeAsync(const cl::Buffer& buffer, const double* host, std::size_t count, std::size_t offset = 0);
+
+  bool uploadChangedParams(DeviceBlock& d);
+
+  struct PendingWrite;
+  PendingWrite& nextStaging();
 
   // The element pass with `flags` (plus the energy when asked for), then `gather` over its
   // contributions into rhs_, read back to `out`: localStepRhs and localStepGradient.
@@ -201,7 +212,7 @@ class OpenCLBackend final : public Backend {
 
   void readPartials(int count, bool blocking = true);
 
-  void readSegmentSums(std::size_t count);
+  void readSegmentSums(std::size_t count, std::size_t first = 0);
 
   std::string segmentsMisfit(const std::vector<SceneSegment>& segments) const;
 
@@ -219,6 +230,8 @@ class OpenCLBackend final : public Backend {
   static double deviceSeconds(const cl::Event& first, const cl::Event& last);
 
   bool enqueueElementPass(int x, int flags);
+
+  void enqueueElementGroups(int x, int flags, int first_group, int end_group);
 
   cl::Kernel makeKernel(const char* name);
 
@@ -268,8 +281,9 @@ class OpenCLBackend final : public Backend {
 
   Launch element_pass_, mass_dot_, combine_, gather_rhs_, gather_gradient_, gather_accel_;
   struct {
-    cl_uint x, flags;
+    cl_uint x, flags, first_group;
   } element_args_{};
+  int element_first_group_ = 0;  // the value element_pass_'s first_group argument holds
   struct {
     cl_uint a, x, b, y, dst;
   } combine_args_{};

@@ -163,13 +163,24 @@ template <typename Real>
 bool OpenCLBackend<Real>::enqueueElementPass(int x, int flags) {
   const int groups = (flags & kPassEnergy) ? full_groups_ : segment_groups_[blocks_.size()];
   if (groups == 0) return false;
+  enqueueElementGroups(x, flags, 0, groups);
+  return true;
+}
+
+// Groups [first_group, end_group) of the element pass (not empty): the same work-groups as in the
+// whole pass, so each element gives the same results.
+template <typename Real>
+void OpenCLBackend<Real>::enqueueElementGroups(int x, int flags, int first_group, int end_group) {
   element_pass_.bindSlot(element_args_.x, x, slots_);
   element_pass_.set(element_args_.flags, cl_int(flags));
+  if (first_group != element_first_group_) {
+    element_pass_.set(element_args_.first_group, cl_int(first_group));
+    element_first_group_ = first_group;
+  }
   ocl::check(queue_.enqueueNDRangeKernel(element_pass_.kernel, cl::NullRange,
-                                         cl::NDRange(element_local_ * std::size_t(groups)), element_pass_.local,
-                                         nullptr, &element_event_),
+                                         cl::NDRange(element_local_ * std::size_t(end_group - first_group)),
+                                         element_pass_.local, nullptr, &element_event_),
              "clEnqueueNDRangeKernel");
-  return true;
 }
 
 template class OpenCLBackend<double>;

@@ -112,6 +112,47 @@ void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, doub
   times_.energy += std::max(0.0, wall - local - gathered);
 }
 
+// One scene's part of potentials(), bit for bit: per block, the element pass over the groups that
+// hold the segment's elements (a group it shares with a neighbour computes the neighbour's too,
+// with the same values: each element's energy is its own), then segment_energies over the
+// work-group that holds the segment's work-item, with potentials' work-group size (the same
+// compiled kernel, each work-item summing its own segment), and one read of its three sums. The
+// other items of that group sum their segments from energies that may be stale: those sums are
+// not read.
+template <typename Real>
+PotentialEnergy OpenCLBackend<Real>::potentialOf(int segment, int x, double t) {
+  checkSegmentsFit();
+  if (segment < 0 || segment >= int(segments_.size()))
+    throw InvalidInputError("OpenCL backend: segment " + std::to_string(segment) + " of " +
+                            std::to_string(segments_.size()));
+  if (segmentIsWholeScene()) return potential(x, t);
+  checkSlot(x);
+  uploadForcing(t, false);
+  const auto start = Clock::now();
+  const SceneSegment& seg = segments_[std::size_t(segment)];
+  const int local = int(element_local_);
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    if (seg.num_elements[b] == 0) continue;
+    const int first = segment_groups_[b] + seg.first_element[b] / local;
+    const int end = segment_groups_[b] + (seg.first_element[b] + seg.num_elements[b] + local - 1) / local;
+    enqueueElementGroups(x, kPassEnergyPerElement, first, end);
+  }
+  segment_energies_.bindSlot(segment_energies_x_, x, slots_);
+  const std::size_t group = segment_energies_.local[0];
+  const std::size_t offset = std::size_t(segment) / group * group;
+  ocl::check(queue_.enqueueNDRangeKernel(segment_energies_.kernel, cl::NDRange(offset), cl::NDRange(group),
+                                         segment_energies_.local),
+             "clEnqueueNDRangeKernel");
+  readSegmentSums(kSegmentEnergies, kSegmentEnergies * std::size_t(segment));
+  PotentialEnergy out;
+  const Real* sums = host_segment_sums_.data() + kSegmentEnergies * std::size_t(segment);
+  out.internal = double(sums[kSegmentInternal]);
+  out.pins = double(sums[kSegmentPins]);
+  out.external = double(sums[kSegmentExternal]);
+  times_.energy += secondsSince(start);
+  return out;
+}
+
 // The kernels index buffers with the table, so a table that does not fit this scene is refused
 // rather than read out of bounds on the device: why it does not fit, or "".
 template <typename Real>

@@ -15,6 +15,28 @@ void OpenCLBackend<Real>::write(int slot, const Eigen::MatrixX3d& host) {
   times_.transfer += secondsSince(start);
 }
 
+// A slot is its three columns one after another (x of every particle, then y, then z), so rows
+// first.. are one range of each column: one rectangular write of three lines of rows.rows() reals,
+// n reals apart on the device.
+template <typename Real>
+void OpenCLBackend<Real>::writeRows(int slot, int first, const Eigen::MatrixX3d& rows) {
+  checkSlot(slot);
+  if (first < 0 || rows.rows() > n_ - first)
+    throw InvalidInputError("OpenCL backend: write of rows " + std::to_string(first) + ".." +
+                            std::to_string(first + rows.rows()) + " of a slot of " + std::to_string(n_) + " rows");
+  if (rows.rows() == 0) return;
+  const auto start = Clock::now();
+  PendingWrite& w = nextStaging();
+  w.data.assign(rows.data(), rows.data() + rows.size());
+  const std::size_t count = std::size_t(rows.rows());
+  const cl::array<cl::size_type, 3> device_origin{bytes(std::size_t(first)), 0, 0}, host_origin{0, 0, 0},
+      region{bytes(count), 3, 1};
+  ocl::check(queue_.enqueueWriteBufferRect(slots_[slot], CL_FALSE, device_origin, host_origin, region,
+                                           bytes(std::size_t(n_)), 0, bytes(count), 0, w.data.data(), nullptr, &w.done),
+             "clEnqueueWriteBufferRect");
+  times_.transfer += secondsSince(start);
+}
+
 template <typename Real>
 void OpenCLBackend<Real>::read(int slot, Eigen::MatrixX3d& host) {
   checkSlot(slot);
@@ -68,12 +90,12 @@ cl::Buffer OpenCLBackend<Real>::zeroBuffer(std::size_t count) {
 template <typename Real>
 void OpenCLBackend<Real>::uploadForcing(double t, bool force) {
   const auto start = Clock::now();
-  const int version = scene_.forcingVersion();
-  if (force || version != fext_version_ || (scene_.hasTimeDependentForces() && t != fext_time_)) {
+  const int version = scene_.forcingVersion(), forces_version = scene_.forcesVersion();
+  if (force || forces_version != fext_version_ || (scene_.hasTimeDependentForces() && t != fext_time_)) {
     scene_.externalForces(t, host_fext_);
     writeAsync(fext_, host_fext_.data(), std::size_t(host_fext_.size()));
     fext_time_ = t;
-    fext_version_ = version;
+    fext_version_ = forces_version;
   }
   for (DeviceBlock& d : blocks_) {
     if (d.block->count == 0) continue;
@@ -83,6 +105,7 @@ void OpenCLBackend<Real>::uploadForcing(double t, bool force) {
     const bool stale = !d.params_uploaded || d.params_revision != d.block->params_revision ||
                        (timed ? (version != d.params_version || t != d.params_time) : d.params_timed);
     if (!force && !stale) continue;
+    if (!force && !timed && !d.params_timed && d.params_uploaded && uploadChangedParams(d)) continue;
     if (timed) {
       d.block->type->paramsAt(scene_, t, d.host_params);
     } else {
@@ -98,20 +121,47 @@ void OpenCLBackend<Real>::uploadForcing(double t, bool force) {
   times_.transfer += secondsSince(start);
 }
 
-// Non-blocking: `host` is copied to a staging buffer of a small ring first, so the caller may
-// change or free it as soon as we return; the next blocking call of the in-order queue (every
-// read and energy pass ends with one) waits for the transfer, which saves a synchronisation
-// per local/global iteration (solve, write x, then the next local step or energy pass). A
-// staging buffer is refilled only after its previous transfer has completed.
+// Constant params that changed in place since the upload (ElementBlock::changed_params): the range
+// of elements from the first changed to the last goes up alone. False when the log no longer
+// reaches back to the uploaded revision (the caller uploads the whole block).
 template <typename Real>
-void OpenCLBackend<Real>::writeAsync(const cl::Buffer& buffer, const double* host, std::size_t count) {
+bool OpenCLBackend<Real>::uploadChangedParams(DeviceBlock& d) {
+  const ElementBlock& block = *d.block;
+  const std::size_t changes = std::size_t(block.params_revision - d.params_revision);
+  if (block.params_revision < d.params_revision || changes > block.changed_params.size()) return false;
+  const auto since = block.changed_params.end() - std::ptrdiff_t(changes);
+  const auto [lowest, highest] = std::minmax_element(since, block.changed_params.end());
+  if (changes > 0) {
+    const std::size_t p = std::size_t(block.type->shape().params), first = p * std::size_t(*lowest);
+    writeAsync(d.params, block.params.data() + first, p * std::size_t(*highest + 1) - first, first);
+  }
+  d.params_revision = block.params_revision;
+  return true;
+}
+
+// `count` reals from `host` to the buffer from its real `offset` on. Non-blocking: `host` is
+// copied to a staging buffer of a small ring first, so the caller may change or free it as soon
+// as we return; the next blocking call of the in-order queue (every read and energy pass ends
+// with one) waits for the transfer, which saves a synchronisation per local/global iteration
+// (solve, write x, then the next local step or energy pass). A staging buffer is refilled only
+// after its previous transfer has completed.
+template <typename Real>
+void OpenCLBackend<Real>::writeAsync(const cl::Buffer& buffer, const double* host, std::size_t count,
+                                     std::size_t offset) {
   if (count == 0) return;
+  PendingWrite& w = nextStaging();
+  w.data.assign(host, host + count);
+  ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, bytes(offset), bytes(count), w.data.data(), nullptr, &w.done),
+             "clEnqueueWriteBuffer");
+}
+
+// The next staging buffer of the ring, once its previous transfer has completed.
+template <typename Real>
+typename OpenCLBackend<Real>::PendingWrite& OpenCLBackend<Real>::nextStaging() {
   PendingWrite& w = pending_writes_[next_write_];
   next_write_ = (next_write_ + 1) % pending_writes_.size();
   if (w.done()) ocl::check(w.done.wait(), "clWaitForEvents");
-  w.data.assign(host, host + count);
-  ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, 0, bytes(count), w.data.data(), nullptr, &w.done),
-             "clEnqueueWriteBuffer");
+  return w;
 }
 
 template <typename Real>
@@ -160,11 +210,13 @@ void OpenCLBackend<Real>::readPartials(int count, bool blocking) {
              "clEnqueueReadBuffer");
 }
 
-// The first `count` per-scene sums to the host (blocking: the only wait of a per-scene call).
+// `count` per-scene sums from `first` on to the host, at the same places (blocking: the only wait
+// of a per-scene call).
 template <typename Real>
-void OpenCLBackend<Real>::readSegmentSums(std::size_t count) {
-  ocl::check(queue_.enqueueReadBuffer(segment_sums_, CL_TRUE, 0, bytes(count), host_segment_sums_.data()),
-             "clEnqueueReadBuffer");
+void OpenCLBackend<Real>::readSegmentSums(std::size_t count, std::size_t first) {
+  ocl::check(
+      queue_.enqueueReadBuffer(segment_sums_, CL_TRUE, bytes(first), bytes(count), host_segment_sums_.data() + first),
+      "clEnqueueReadBuffer");
 }
 
 template class OpenCLBackend<double>;

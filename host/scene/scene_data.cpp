@@ -138,6 +138,7 @@ void SceneData::rampUserForces(const Eigen::MatrixX3d& forces, double t0, double
   const Eigen::MatrixX3d start = user_forces_.active ? user_forces_.at(t0) : Eigen::MatrixX3d::Zero(n_, 3);
   user_forces_ = Ramp{t0, t1, start, forces, true};
   ++forcing_version_;
+  ++forces_version_;
 }
 
 void SceneData::rampUserForceRows(int first, const Eigen::MatrixX3d& forces, double t0, double t1) {
@@ -152,6 +153,7 @@ void SceneData::rampUserForceRows(int first, const Eigen::MatrixX3d& forces, dou
   // (what rampUserForces would take again), so only these rows' end changes.
   user_forces_.end.middleRows(first, forces.rows()) = forces;
   ++forcing_version_;
+  ++forces_version_;
 }
 
 void SceneData::rampColliderPosition(int collider, const Eigen::Vector3d& position, double t0, double t1) {
@@ -196,8 +198,19 @@ void SceneData::setElementStiffness(int block, int element, double stiffness) {
   const std::size_t p = static_cast<std::size_t>(b.type->shape().params);
   b.type->elementParams(scene_, element, &b.params[p * static_cast<std::size_t>(element)]);
   if (!elementEnabled(block, element)) b.params[p * static_cast<std::size_t>(element)] = 0.0;
-  ++b.params_revision;
+  paramsChanged(b, element);
   ++forcing_version_;  // cached time-dependent params (pins) carry the weight too
+}
+
+void SceneData::paramsChanged(ElementBlock& block, int element) {
+  // [project rule] The log is trimmed by half when it reaches this length: amortised O(1) per
+  // change, and a copy that missed more changes than that refreshes the whole block.
+  constexpr std::size_t kMaxLog = 512;
+  ++block.params_revision;
+  if (block.changed_params.size() >= kMaxLog)
+    block.changed_params.erase(block.changed_params.begin(),
+                               block.changed_params.begin() + std::ptrdiff_t(kMaxLog / 2));
+  block.changed_params.push_back(element);
 }
 
 void SceneData::setElementEnabled(int block, int element, bool enabled) {
@@ -211,7 +224,7 @@ void SceneData::setElementEnabled(int block, int element, bool enabled) {
   } else {
     b.params[p * static_cast<std::size_t>(element)] = 0.0;
   }
-  ++b.params_revision;
+  paramsChanged(b, element);
   ++forcing_version_;
 }
 
@@ -263,6 +276,7 @@ void SceneData::setForcingState(const ForcingState& state) {
   driven_colliders_ = static_cast<int>(std::count_if(collider_motion_.begin(), collider_motion_.end(),
                                                      [](const ColliderMotion& m) { return m.driven; }));
   ++forcing_version_;
+  ++forces_version_;
 }
 
 }  // namespace stabint

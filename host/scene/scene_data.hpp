@@ -82,6 +82,10 @@ class SceneData final : public RunningScene {
   void setColliderVelocity(int collider, const Eigen::Vector3d& velocity, double t0);
   /// Incremented by every change of the forcing (ramps, restore), so cached forcing is refreshed.
   int forcingVersion() const { return forcing_version_; }
+  /// Incremented by every change of what externalForces gives (user-force ramps, restore); the
+  /// changes of pins, colliders and elements, which move forcingVersion, leave it, so that one
+  /// scene's element change in a batch does not evaluate every particle's forces again.
+  int forcesVersion() const { return forces_version_; }
 
   // ---- changes of the element set (grab and release) -----------------------------------------
   /// Replaces the pins (validated like a scene's; InvalidInputError naming the pin, nothing
@@ -150,6 +154,9 @@ class SceneData final : public RunningScene {
   void numberContributions();
   // Zeroes the weights of the disabled elements of a freshly built block.
   void applyEnabled(std::size_t block);
+  // Element `element`'s params were rewritten in place: a new params revision, and the element
+  // in the block's log (ElementBlock::changed_params).
+  void paramsChanged(ElementBlock& block, int element);
   // The scene's laws of the colliders (their velocity from their center at t = 0).
   std::vector<ColliderMotion> sceneColliderMotion() const;
 
@@ -166,6 +173,7 @@ class SceneData final : public RunningScene {
   std::vector<ColliderMotion> collider_motion_;  // one per collider
   int driven_colliders_ = 0;
   int forcing_version_ = 0;
+  int forces_version_ = 0;
   int layout_version_ = 0;
   std::vector<std::vector<std::uint8_t>> enabled_;  // per block; empty: all enabled
 };

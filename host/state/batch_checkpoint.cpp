@@ -255,6 +255,7 @@ void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegmen
   x_ = all.x;
   v_ = all.v;
   v_slot_ = all.v;
+  host_copies_stored_ = false;
   t_ = all.time;
   has_history_ = all.has_history;
   data_.setForcingState(all.forcing);

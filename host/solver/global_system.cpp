@@ -175,6 +175,17 @@ void GlobalSystem::refactorAll() {
   for (double c : cs) factor(c);
 }
 
+const std::vector<int>& GlobalSystem::Factor::rowOf() {
+  if (row_of.empty()) {
+    const cholmod_factor* f = factor();
+    const int n = static_cast<int>(f->n);
+    const int* perm = static_cast<const int*>(f->Perm);
+    row_of.resize(static_cast<std::size_t>(n));
+    for (int r = 0; r < n; ++r) row_of[static_cast<std::size_t>(perm ? perm[r] : r)] = r;
+  }
+  return row_of;
+}
+
 void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, int R, double delta, FactorChange how) {
   for (int i = 0; i < K; ++i) {
     for (int j = 0; j < K; ++j) {
@@ -197,15 +208,8 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
     // C = sqrt(|delta|) A^T in the factor's fill-reducing order: vertex v is row k with
     // Perm[k] = v. Each column lists its rows in ascending order, as CHOLMOD requires.
     std::vector<std::pair<int, int>> rows(static_cast<std::size_t>(K));  // (permuted row, k)
-    const int* perm = static_cast<const int*>(factor->Perm);
-    for (int k = 0; k < K; ++k) {
-      int row = vertices[k];
-      if (perm) {
-        for (row = 0; row < n && perm[row] != vertices[k]; ++row) {
-        }
-      }
-      rows[static_cast<std::size_t>(k)] = {row, k};
-    }
+    const std::vector<int>& row_of = it->second->rowOf();
+    for (int k = 0; k < K; ++k) rows[static_cast<std::size_t>(k)] = {row_of[static_cast<std::size_t>(vertices[k])], k};
     std::sort(rows.begin(), rows.end());
     cholmod_sparse* c = cholmod_allocate_sparse(n, R, static_cast<std::size_t>(K * R), /*sorted=*/1, /*packed=*/1,
                                                 /*stype=*/0, CHOLMOD_REAL, &common);
@@ -239,10 +243,7 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
   for (auto it = factors_.begin(); it != factors_.end();) {
     cholmod_factor* factor = it->second->factor();
     cholmod_common& common = it->second->cholmod();
-    // Row of vertex v in the factor's fill-reducing order (Perm[row] = v), found once for all.
-    std::vector<int> row_of(static_cast<std::size_t>(n));
-    const int* perm = static_cast<const int*>(factor->Perm);
-    for (int r = 0; r < n; ++r) row_of[static_cast<std::size_t>(perm ? perm[r] : r)] = r;
+    const std::vector<int>& row_of = it->second->rowOf();
     bool updated = true;
     for (const bool update : {true, false}) {
       std::vector<std::size_t> columns;

@@ -117,6 +117,11 @@ class GlobalSystem {
     // found on first use and again after a rank update (which may change the tree).
     SubtreeSplit split;
     bool split_known = false;
+    // Row of vertex v in the fill-reducing order (Perm[row] = v), made on the first rank update:
+    // the permutation is the factorization's, which the updates keep, so one change costs its
+    // element's rows instead of a search over every row (a batch's element change).
+    std::vector<int> row_of;
+    const std::vector<int>& rowOf();
   };
   int factorizations_ = 0;
   int laplacian_version_ = 0;

@@ -224,6 +224,8 @@ class OpenCLBackend final : public Backend {
   double sumPartials(int first, int last) const;
 
   PotentialEnergy sumEnergies() const;
+  // Scene s's energies as segment_energies left them in host_segment_sums_.
+  PotentialEnergy segmentEnergies(std::size_t s) const;
 
   void enqueue(const Launch& launch, cl::Event* event = nullptr);
 

@@ -62,11 +62,7 @@ void OpenCLBackend<Real>::potentials(int x, double t, std::vector<PotentialEnerg
     segment_energies_.bindSlot(segment_energies_x_, x, slots_);
     enqueue(segment_energies_);
     readSegmentSums(kSegmentEnergies * segments_.size());
-    for (std::size_t s = 0; s < segments_.size(); ++s) {
-      out[s].internal = double(host_segment_sums_[kSegmentEnergies * s + kSegmentInternal]);
-      out[s].pins = double(host_segment_sums_[kSegmentEnergies * s + kSegmentPins]);
-      out[s].external = double(host_segment_sums_[kSegmentEnergies * s + kSegmentExternal]);
-    }
+    for (std::size_t s = 0; s < segments_.size(); ++s) out[s] = segmentEnergies(s);
   }
   times_.energy += secondsSince(start);
 }
@@ -98,12 +94,8 @@ void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, doub
   ocl::check(queue_.enqueueReadBuffer(segment_sums_, CL_FALSE, 0, bytes(sums), host_segment_sums_.data()),
              "clEnqueueReadBuffer");
   readMatrix(rhs_, gradient);  // blocking: everything queued above has completed
-  per_scene.assign(segments_.size(), PotentialEnergy{});
-  for (std::size_t s = 0; s < segments_.size(); ++s) {
-    per_scene[s].internal = double(host_segment_sums_[kSegmentEnergies * s + kSegmentInternal]);
-    per_scene[s].pins = double(host_segment_sums_[kSegmentEnergies * s + kSegmentPins]);
-    per_scene[s].external = double(host_segment_sums_[kSegmentEnergies * s + kSegmentExternal]);
-  }
+  per_scene.resize(segments_.size());
+  for (std::size_t s = 0; s < segments_.size(); ++s) per_scene[s] = segmentEnergies(s);
   const double wall = secondsSince(start);
   const double local = launched ? deviceSeconds(element_event_, element_event_) : 0.0;
   const double gathered = deviceSeconds(gather_event_, gather_event_);
@@ -144,13 +136,19 @@ PotentialEnergy OpenCLBackend<Real>::potentialOf(int segment, int x, double t) {
                                          segment_energies_.local),
              "clEnqueueNDRangeKernel");
   readSegmentSums(kSegmentEnergies, kSegmentEnergies * std::size_t(segment));
-  PotentialEnergy out;
-  const Real* sums = host_segment_sums_.data() + kSegmentEnergies * std::size_t(segment);
-  out.internal = double(sums[kSegmentInternal]);
-  out.pins = double(sums[kSegmentPins]);
-  out.external = double(sums[kSegmentExternal]);
+  const PotentialEnergy out = segmentEnergies(std::size_t(segment));
   times_.energy += secondsSince(start);
   return out;
+}
+
+template <typename Real>
+PotentialEnergy OpenCLBackend<Real>::segmentEnergies(std::size_t s) const {
+  const Real* sums = host_segment_sums_.data() + kSegmentEnergies * s;
+  PotentialEnergy e;
+  e.internal = double(sums[kSegmentInternal]);
+  e.pins = double(sums[kSegmentPins]);
+  e.external = double(sums[kSegmentExternal]);
+  return e;
 }
 
 // The kernels index buffers with the table, so a table that does not fit this scene is refused

@@ -62,6 +62,26 @@ void OpenCLBackend<Real>::localStepGradient(int x, int y, double c, double t, Ei
   gatheredLocalStep(kPassForce, gather_gradient_, gather_gradient_args_, x, y, c, t, gradient, energy_at_x);
 }
 
+// A batch's L-BFGS local step: the force pass also writes each element's energy, and the per-scene
+// sums run after the gather (gatheredLocalStep), so that the gradient's read is the only wait: no
+// second element pass.
+// The per-element energies and their sums are those of potentials() (an element's energy does not
+// depend on what else its pass writes).
+template <typename Real>
+void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
+                                                    std::vector<PotentialEnergy>& per_scene) {
+  checkSegmentsFit();
+  if (segmentIsWholeScene() || segments_.empty()) {
+    Backend::localStepGradientPerScene(x, y, c, t, gradient, per_scene);
+    return;
+  }
+  gather_gradient_.bindSlot(gather_gradient_args_.x, x, slots_);
+  gatheredLocalStep(kPassForce, gather_gradient_, gather_gradient_args_, x, y, c, t, gradient, nullptr,
+                    /*per_scene=*/true);
+  per_scene.resize(segments_.size());
+  for (std::size_t s = 0; s < segments_.size(); ++s) per_scene[s] = segmentEnergies(s);
+}
+
 template <typename Real>
 void OpenCLBackend<Real>::setGlobalMatrix(const Eigen::SparseMatrix<double>& laplacian) {
   const auto start = Clock::now();
@@ -101,16 +121,25 @@ int OpenCLBackend<Real>::solveGlobal(double c, int x, int iterations, double tol
 template <typename Real>
 template <class GatherArgs>
 void OpenCLBackend<Real>::gatheredLocalStep(int flags, Launch& gather, const GatherArgs& args, int x, int y, double c,
-                                            double t, Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x) {
+                                            double t, Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x,
+                                            bool per_scene) {
   checkSlot(x);
   checkSlot(y);
   uploadForcing(t, false);
   const auto start = Clock::now();
-  const bool launched = enqueueElementPass(x, flags | (energy_at_x ? kPassEnergy : 0));
+  const bool launched =
+      enqueueElementPass(x, flags | (energy_at_x ? kPassEnergy : 0) | (per_scene ? kPassEnergyPerElement : 0));
   gather.bindSlot(args.y, y, slots_);
   gather.set(args.c, Real(c));
   enqueue(gather, &gather_event_);
   if (energy_at_x) readPartials(full_groups_, /*blocking=*/false);
+  if (per_scene) {
+    segment_energies_.bindSlot(segment_energies_x_, x, slots_);
+    enqueue(segment_energies_);
+    ocl::check(queue_.enqueueReadBuffer(segment_sums_, CL_FALSE, 0, bytes(kSegmentEnergies * segments_.size()),
+                                        host_segment_sums_.data()),
+               "clEnqueueReadBuffer");
+  }
   readMatrix(rhs_, out);  // blocking: everything queued above has completed
   if (energy_at_x) *energy_at_x = sumEnergies();
   const double wall = secondsSince(start);

@@ -67,43 +67,6 @@ void OpenCLBackend<Real>::potentials(int x, double t, std::vector<PotentialEnerg
   times_.energy += secondsSince(start);
 }
 
-// A batch's L-BFGS local step: the force pass also writes each element's energy, and the per-scene
-// sums run after the gather, so that the gradient's read is the only wait: no second element pass.
-// The per-element energies and their sums are those of potentials() (an element's energy does not
-// depend on what else its pass writes).
-template <typename Real>
-void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
-                                                    std::vector<PotentialEnergy>& per_scene) {
-  checkSegmentsFit();
-  if (segmentIsWholeScene() || segments_.empty()) {
-    Backend::localStepGradientPerScene(x, y, c, t, gradient, per_scene);
-    return;
-  }
-  checkSlot(x);
-  checkSlot(y);
-  uploadForcing(t, false);
-  const auto start = Clock::now();
-  const bool launched = enqueueElementPass(x, kPassForce | kPassEnergyPerElement);
-  gather_gradient_.bindSlot(gather_gradient_args_.x, x, slots_);
-  gather_gradient_.bindSlot(gather_gradient_args_.y, y, slots_);
-  gather_gradient_.set(gather_gradient_args_.c, Real(c));
-  enqueue(gather_gradient_, &gather_event_);
-  segment_energies_.bindSlot(segment_energies_x_, x, slots_);
-  enqueue(segment_energies_);
-  const std::size_t sums = kSegmentEnergies * segments_.size();
-  ocl::check(queue_.enqueueReadBuffer(segment_sums_, CL_FALSE, 0, bytes(sums), host_segment_sums_.data()),
-             "clEnqueueReadBuffer");
-  readMatrix(rhs_, gradient);  // blocking: everything queued above has completed
-  per_scene.resize(segments_.size());
-  for (std::size_t s = 0; s < segments_.size(); ++s) per_scene[s] = segmentEnergies(s);
-  const double wall = secondsSince(start);
-  const double local = launched ? deviceSeconds(element_event_, element_event_) : 0.0;
-  const double gathered = deviceSeconds(gather_event_, gather_event_);
-  times_.local += local;
-  times_.gather += gathered;
-  times_.energy += std::max(0.0, wall - local - gathered);
-}
-
 // One scene's part of potentials(), bit for bit: per block, the element pass over the groups that
 // hold the segment's elements (a group it shares with a neighbour computes the neighbour's too,
 // with the same values: each element's energy is its own), then segment_energies over the

@@ -52,6 +52,19 @@ double externalMagnitude(const SceneData& data, const Eigen::MatrixX3d& x, doubl
   return f.middleRows(first, count).cwiseProduct(x.middleRows(first, count)).rowwise().sum().cwiseAbs().sum();
 }
 
+// The mixed scenes concatenated, on an OpenCL backend of `precision` with their segments set.
+struct MixedBatchOnDevice {
+  explicit MixedBatchOnDevice(Precision precision)
+      : batch(concatenateScenes(testing::mixedBatchScenes())),
+        data(batch.scene),
+        backend(makeOpenCLBackend(data, 2, openclOptions(precision))) {
+    backend->setSegments(batch.segments);
+  }
+  const SceneBatch batch;
+  const SceneData data;
+  const std::unique_ptr<Backend> backend;
+};
+
 // One segment holding the whole scene gives the single-value reductions' numbers, up to the
 // order of the additions.
 TEST(OpenCLBatch, OneSegmentEqualsTheSingleValueCalls) {
@@ -147,10 +160,9 @@ TEST(OpenCLBatch, PerSceneValuesEqualTheCpuReferences) {
 TEST(OpenCLBatch, PerSceneGradientPassIsTheGradientAndThePerScenePass) {
   for (Precision precision : availablePrecisions()) {
     SCOPED_TRACE(precisionName(precision));
-    const SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
-    const SceneData data(batch.scene);
-    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
-    backend->setSegments(batch.segments);
+    const MixedBatchOnDevice device(precision);
+    const SceneBatch& batch = device.batch;
+    Backend* const backend = device.backend.get();
     backend->write(0, testing::perturbed(batch.scene.positions, 0.02, 5));
     backend->write(1, batch.scene.positions);
     const double c = 3600.0;
@@ -212,10 +224,9 @@ TEST(OpenCLBatch, SegmentsFollowAChangeOfThePins) {
 TEST(OpenCLBatch, RefusesSegmentsOutsideTheScene) {
   for (Precision precision : availablePrecisions()) {
     SCOPED_TRACE(precisionName(precision));
-    const SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
-    const SceneData data(batch.scene);
-    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
-    backend->setSegments(batch.segments);
+    const MixedBatchOnDevice device(precision);
+    const SceneBatch& batch = device.batch;
+    Backend* const backend = device.backend.get();
     std::vector<SceneSegment> bad = batch.segments;
     bad.back().num_particles += 1;
     EXPECT_THROW(backend->setSegments(bad), InvalidInputError);

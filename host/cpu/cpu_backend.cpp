@@ -192,7 +192,7 @@ class CpuBackend final : public Backend {
         per_scene[s] = segmentPass(s, x, external, flags, out, segment_a_, segment_b_);
       return;
     }
-    // Contiguous runs of segments of about equal work, by the elements' local-step cost.
+    // Runs of segments of about equal work, by the elements' local-step cost.
     std::vector<double> work(segments + 1, 0.0);
     for (std::size_t s = 0; s < segments; ++s) {
       double w = 0.0;
@@ -200,15 +200,9 @@ class CpuBackend final : public Backend {
         w += segments_[s].num_elements[b] * std::max(blocks[b].type->elementCost(), 1.0);
       work[s + 1] = work[s] + w;
     }
-    std::vector<std::size_t> bounds(std::size_t(threads) + 1, segments);
-    bounds[0] = 0;
-    for (int p = 1; p < threads; ++p)
-      bounds[std::size_t(p)] =
-          std::size_t(std::lower_bound(work.begin(), work.end(), work[segments] * p / threads) - work.begin());
-    parallelFor(threads, [&](int part) {
-      Eigen::MatrixX3d rows_f, rows_x;
-      for (std::size_t s = bounds[std::size_t(part)]; s < bounds[std::size_t(part) + 1]; ++s)
-        per_scene[s] = segmentPass(s, x, external, flags, out, rows_f, rows_x);
+    parallelForRuns(work, [&](std::size_t s) {
+      thread_local Eigen::MatrixX3d rows_f, rows_x;  // the segment's rows (no allocation per segment)
+      per_scene[s] = segmentPass(s, x, external, flags, out, rows_f, rows_x);
     });
   }
 

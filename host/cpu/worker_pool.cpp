@@ -137,4 +137,18 @@ void setCpuThreads(int threads) { threadSetting().store(std::max(1, threads)); }
 
 void parallelFor(int tasks, const std::function<void(int)>& task) { pool().run(tasks, cpuThreads(), task); }
 
+void parallelForRuns(const std::vector<double>& work, const std::function<void(std::size_t)>& item) {
+  const std::size_t items = work.empty() ? 0 : work.size() - 1;
+  const int threads = cpuThreads();
+  std::vector<std::size_t> bounds(std::size_t(threads) + 1, items);
+  bounds[0] = 0;
+  for (int p = 1; p < threads; ++p)
+    bounds[std::size_t(p)] = std::size_t(
+        std::lower_bound(work.begin(), work.begin() + std::ptrdiff_t(items) + 1, work[items] * p / threads) -
+        work.begin());
+  parallelFor(threads, [&](int part) {
+    for (std::size_t i = bounds[std::size_t(part)]; i < bounds[std::size_t(part) + 1]; ++i) item(i);
+  });
+}
+
 }  // namespace stabint

@@ -3,7 +3,9 @@
 // host's global solve (docs/method.md, "Threads on the CPU"). Every use writes disjoint outputs
 // per task and combines them in a fixed order afterwards, so results are the same bit for bit
 // for any thread count: the thread count is a speed setting, never a numerical one.
+#include <cstddef>
 #include <functional>
+#include <vector>
 
 namespace stabint {
 
@@ -21,5 +23,11 @@ void setCpuThreads(int threads);
 /// tasks on its own thread. Having run its tasks, the calling thread waits awake (up to 200 us)
 /// for workers still running theirs before it sleeps: waking it would take longer.
 void parallelFor(int tasks, const std::function<void(int)>& task);
+
+/// item(i) for every i in [0, work.size() - 1) on cpuThreads() threads, each thread a contiguous
+/// run of items of about equal work (`work` is the prefix sums: item i costs work[i + 1] - work[i]),
+/// the runs in order. For items that write disjoint outputs and may go to any thread (a batch's
+/// scenes): the results are the serial loop's.
+void parallelForRuns(const std::vector<double>& work, const std::function<void(std::size_t)>& item);
 
 }  // namespace stabint

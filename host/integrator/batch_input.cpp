@@ -56,14 +56,15 @@ void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const E
       backend_->roundToStorage(v_slot_);
       host_copies_stored_ = true;
     }
-    backend_->writeRows(kX, seg.first_particle, positions);
-    backend_->writeRows(kV, seg.first_particle, velocities);
-    Eigen::MatrixX3d stored = positions;
-    backend_->roundToStorage(stored);
-    x_.middleRows(seg.first_particle, seg.num_particles) = stored;
-    stored = velocities;
-    backend_->roundToStorage(stored);
-    v_slot_.middleRows(seg.first_particle, seg.num_particles) = stored;
+    // The rows to the slot, and as the slot holds them to its host copy.
+    auto writeRows = [&](int slot, const Eigen::MatrixX3d& rows, Eigen::MatrixX3d& host) {
+      backend_->writeRows(slot, seg.first_particle, rows);
+      Eigen::MatrixX3d stored = rows;
+      backend_->roundToStorage(stored);
+      host.middleRows(seg.first_particle, seg.num_particles) = stored;
+    };
+    writeRows(kX, positions, x_);
+    writeRows(kV, velocities, v_slot_);
   } else {
     x_.middleRows(seg.first_particle, seg.num_particles) = positions;
     v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;

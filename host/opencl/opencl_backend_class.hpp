@@ -214,7 +214,7 @@ class OpenCLBackend final : public Backend {
 
   void readPartials(int count, bool blocking = true);
 
-  void readSegmentSums(std::size_t count, std::size_t first = 0);
+  void readSegmentSums(std::size_t count, std::size_t first = 0, bool blocking = true);
 
   std::string segmentsMisfit(const std::vector<SceneSegment>& segments) const;
 

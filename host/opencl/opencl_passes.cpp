@@ -136,9 +136,7 @@ void OpenCLBackend<Real>::gatheredLocalStep(int flags, Launch& gather, const Gat
   if (per_scene) {
     segment_energies_.bindSlot(segment_energies_x_, x, slots_);
     enqueue(segment_energies_);
-    ocl::check(queue_.enqueueReadBuffer(segment_sums_, CL_FALSE, 0, bytes(kSegmentEnergies * segments_.size()),
-                                        host_segment_sums_.data()),
-               "clEnqueueReadBuffer");
+    readSegmentSums(kSegmentEnergies * segments_.size(), 0, /*blocking=*/false);
   }
   readMatrix(rhs_, out);  // blocking: everything queued above has completed
   if (energy_at_x) *energy_at_x = sumEnergies();

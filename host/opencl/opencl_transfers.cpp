@@ -211,12 +211,12 @@ void OpenCLBackend<Real>::readPartials(int count, bool blocking) {
 }
 
 // `count` per-scene sums from `first` on to the host, at the same places (blocking: the only wait
-// of a per-scene call).
+// of a per-scene call; or none, when a blocking read queued after it waits).
 template <typename Real>
-void OpenCLBackend<Real>::readSegmentSums(std::size_t count, std::size_t first) {
-  ocl::check(
-      queue_.enqueueReadBuffer(segment_sums_, CL_TRUE, bytes(first), bytes(count), host_segment_sums_.data() + first),
-      "clEnqueueReadBuffer");
+void OpenCLBackend<Real>::readSegmentSums(std::size_t count, std::size_t first, bool blocking) {
+  ocl::check(queue_.enqueueReadBuffer(segment_sums_, blocking ? CL_TRUE : CL_FALSE, bytes(first), bytes(count),
+                                      host_segment_sums_.data() + first),
+             "clEnqueueReadBuffer");
 }
 
 template class OpenCLBackend<double>;

@@ -276,17 +276,9 @@ void forEachSegment(const std::vector<Rows>& rows, F&& f) {
     for (std::size_t seg = 0; seg < segments; ++seg) f(seg);
     return;
   }
-  std::vector<std::size_t> bounds(std::size_t(threads) + 1, segments);
-  bounds[0] = 0;
-  std::size_t seg = 0;
-  for (int part = 1; part < threads; ++part) {
-    const double share = double(particles) * part / threads;
-    while (seg < segments && rows[seg].first - rows.front().first < share) ++seg;
-    bounds[std::size_t(part)] = seg;
-  }
-  parallelFor(threads, [&](int part) {
-    for (std::size_t s = bounds[std::size_t(part)]; s < bounds[std::size_t(part) + 1]; ++s) f(s);
-  });
+  std::vector<double> work(segments + 1, 0.0);  // by rows
+  for (std::size_t seg = 0; seg < segments; ++seg) work[seg + 1] = work[seg] + rows[seg].count;
+  parallelForRuns(work, f);
 }
 
 }  // namespace

@@ -45,14 +45,17 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
   // for their times to compare.
   int im_steps = 0;
   auto count_branch = [&](const StepReport& r) { im_steps += r.branch == BlendBranch::ImplicitMidpoint; };
+  PhaseTimes summed;  // the batch's phases per step (where a batch's step goes: device or host)
   for (auto _ : state) {
     if (batched) {
       const BatchStepReport& r = f.batch->step();
+      summed += r.times;
       for (const StepReport& scene : r.scenes) count_branch(scene);
     } else {
       for (Simulator& s : f.separate) count_branch(s.step());
     }
   }
+  if (batched) setPhaseCounters(state, summed);
   state.counters["scenes"] = count;
   if (integrator == Integrator::EnergyBlend)
     state.counters["im_fraction"] = double(im_steps) / (double(count) * double(state.iterations()));

@@ -4,6 +4,7 @@
 #include <stabint/stabint.hpp>
 
 #include "cpu/cpu_backend.hpp"
+#include "elements/element_type.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
@@ -415,6 +416,59 @@ TEST(GlobalSystem, RankOneUpdatesMatchRefactorization) {
   original.solve(900.0, rhs, b);
   updated.solve(900.0, rhs, a);
   EXPECT_GT((a - b).cwiseAbs().maxCoeff(), 1e-6 * b.cwiseAbs().maxCoeff());
+}
+
+// GlobalSystem::apply, the one path of run-time weight changes: a change priced at most
+// kMaxUpdatePrice (64 springs: one row each, 4 per row) updates the factors in place, one spring
+// more refactors them (L assembled from the scene), and so does a single change too large for an
+// update (changeIsHuge) or one the caller asks to refactor. Either way the factors solve the
+// changed scene's system as a fresh factorization does: to the round-off of 64 rank-1 updates
+// (1e-11 of the solution; 3 updates stay within 1e-12 above).
+TEST(GlobalSystem, ApplyUpdatesUpToItsPriceAndRefactorsPast) {
+  ClothGridParams p;
+  p.nx = p.ny = 10;
+  const Scene s = makeClothGrid(p);
+  const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(s.numParticles(), 3);
+  struct Case {
+    int springs;
+    double factor;  // new stiffness / old
+    GlobalSystem::Update how;
+    bool refactors;
+  };
+  const int per_row = GlobalSystem::WeightChange::kElementRowPrice;
+  const int most = GlobalSystem::kMaxUpdatePrice / per_row;  // springs: one row each
+  ASSERT_EQ(most, 64);
+  for (const Case& c :
+       {Case{most, 2.0, GlobalSystem::Update::Cheapest, false},
+        Case{most + 1, 2.0, GlobalSystem::Update::Cheapest, true}, Case{1, 1e12, GlobalSystem::Update::Cheapest, true},
+        Case{1, 2.0, GlobalSystem::Update::Refactor, true}}) {
+    SceneData data(s);
+    GlobalSystem system(data);
+    Eigen::MatrixX3d x, expected;
+    system.solve(900.0, rhs, x);
+    const int block = data.blockIndex(elementType(ElementKind::Spring));
+    const ElementBlock& b = data.blocks()[std::size_t(block)];
+    ASSERT_GE(b.count, c.springs);
+    const ElementShape shape = b.type->shape();
+    const std::size_t stride = shape.shared_coefficients ? 0 : std::size_t(shape.rows * shape.vertices);
+    GlobalSystem::WeightChange change;
+    for (int e = 0; e < c.springs; ++e) {
+      const double w_old = data.elementWeight(block, e);
+      data.setElementStiffness(block, e, c.factor * b.type->stiffness(data.scene(), e));
+      change.addElement(&b.vertices[std::size_t(shape.vertices) * std::size_t(e)], shape.vertices,
+                        b.coefficients.data() + stride * std::size_t(e), shape.rows,
+                        data.elementWeight(block, e) - w_old);
+    }
+    EXPECT_EQ(change.updatePrice(), per_row * shape.rows * c.springs);
+    EXPECT_EQ(system.apply(change, data, c.how), c.refactors) << c.springs << " springs";
+    EXPECT_EQ(system.factorizations(), c.refactors ? 2 : 1);
+    system.solve(900.0, rhs, x);
+    GlobalSystem fresh(data);
+    fresh.solve(900.0, rhs, expected);
+    EXPECT_LT((x - expected).cwiseAbs().maxCoeff(), 1e-11 * expected.cwiseAbs().maxCoeff()) << c.springs << " springs";
+    EXPECT_LT((system.stiffnessLaplacian() - fresh.stiffnessLaplacian()).norm(),
+              1e-12 * fresh.stiffnessLaplacian().norm());
+  }
 }
 
 }  // namespace

@@ -12,11 +12,6 @@
 namespace stabint {
 namespace {
 
-// [project rule] A contact set change of more than this many pairs assembles L and refactors
-// instead of updating: on the 50 x 50 cloth a batched update of both blend factors costs about
-// as much per pair as 1/400 of a new assembly with both factorizations (docs/method.md,
-// "Contact"); refactoring a little early also resets the updates' round-off.
-constexpr int kMaxContactUpdateColumns = 256;
 // The log of updates since the last assembly is bounded too (a checkpoint's restore replays it).
 constexpr int kMaxContactLogColumns = 4096;
 
@@ -42,23 +37,22 @@ int ContactResolver::count() const { return block_ < 0 ? 0 : scene_.blocks()[sta
 // depth plus the fall under gravity over one step beyond the prediction.
 double ContactResolver::margin() const { return tolerance_ + time_step_ * time_step_ * scene_.scene().gravity.norm(); }
 
-// Pairs entering and leaving the set: their flags, L and every factor by one rank-k update and
-// one rank-k downdate (GlobalSystem::addToDiagonal).
-void ContactResolver::changeSet(const std::vector<int>& entering, const std::vector<int>& leaving) {
+// Pairs entering and leaving the set: their flags, then L and the factors by one
+// GlobalSystem::apply of their diagonal terms (a leaving pair's weight is read while it is in).
+// With `refactor` L is assembled and factored again whatever the change's size. Returns whether
+// it was.
+bool ContactResolver::changeSet(const std::vector<int>& entering, const std::vector<int>& leaving, bool refactor) {
   const std::vector<int>& particle = scene_.blocks()[static_cast<std::size_t>(block_)].vertices;
-  std::vector<int> vertices;
-  std::vector<double> deltas;
+  GlobalSystem::WeightChange weights;
   for (int e : entering) {
     scene_.setElementEnabled(block_, e, true);
-    vertices.push_back(particle[static_cast<std::size_t>(e)]);
-    deltas.push_back(scene_.elementWeight(block_, e));
+    weights.addDiagonal(particle[static_cast<std::size_t>(e)], scene_.elementWeight(block_, e));
   }
   for (int e : leaving) {
-    vertices.push_back(particle[static_cast<std::size_t>(e)]);
-    deltas.push_back(-scene_.elementWeight(block_, e));
+    weights.addDiagonal(particle[static_cast<std::size_t>(e)], -scene_.elementWeight(block_, e));
     scene_.setElementEnabled(block_, e, false);
   }
-  system_.addToDiagonal(vertices, deltas);
+  return system_.apply(weights, scene_, refactor ? GlobalSystem::Update::Refactor : GlobalSystem::Update::Cheapest);
 }
 
 std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
@@ -75,15 +69,10 @@ std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x
   }
   if (change.empty()) return entered_inside;
   const int columns = static_cast<int>(change.entering.size() + change.leaving.size());
-  if (columns > kMaxContactUpdateColumns || log_columns_ + columns > kMaxContactLogColumns) {
-    for (int e : change.entering) scene_.setElementEnabled(block_, e, true);
-    for (int e : change.leaving) scene_.setElementEnabled(block_, e, false);
-    system_.assemble(scene_);
-    system_.refactorAll();
+  if (changeSet(change.entering, change.leaving, log_columns_ + columns > kMaxContactLogColumns)) {
     log_.clear();
     log_columns_ = 0;
   } else {
-    changeSet(change.entering, change.leaving);
     for (int e : change.entering) log_.push_back(e + 1);
     for (int e : change.leaving) log_.push_back(-(e + 1));
     log_.push_back(0);
@@ -151,7 +140,7 @@ void ContactResolver::restore(const std::vector<std::int32_t>& log) {
     if (entry > 0) entering.push_back(entry - 1);
     if (entry < 0) leaving.push_back(-entry - 1);
     if (entry != 0) continue;
-    if (!entering.empty() || !leaving.empty()) changeSet(entering, leaving);
+    if (!entering.empty() || !leaving.empty()) changeSet(entering, leaving, false);
     entering.clear();
     leaving.clear();
   }

@@ -81,7 +81,7 @@ class ContactResolver {
 
  private:
   double margin() const;
-  void changeSet(const std::vector<int>& entering, const std::vector<int>& leaving);
+  bool changeSet(const std::vector<int>& entering, const std::vector<int>& leaving, bool refactor);
 
   SceneData& scene_;
   GlobalSystem& system_;

@@ -15,12 +15,6 @@
 namespace stabint {
 namespace {
 
-// [project rule] A change of more than this many rank-1 columns (elements times rows of A_e)
-// refactors instead of updating: an update costs 1/28 (spring of the 50 x 50 cloth) to 1/15
-// (tet of a 3,264-particle bar) of a refactorization (docs/method.md, "Per-frame input"), so
-// a few tens of columns break even.
-constexpr int kMaxUpdateColumns = 64;
-
 bool samePins(const std::vector<Pin>& a, const std::vector<Pin>& b) {
   return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const Pin& p, const Pin& q) {
     return p.vertex == q.vertex && p.stiffness == q.stiffness && p.target.position == q.target.position &&
@@ -56,31 +50,15 @@ bool ElementChanges::enabled(ElementKind kind, int index) const {
   return scene_.elementEnabled(block, scope_.elements(scene_, block).first + index);
 }
 
-// L and its factors follow a change of element e's weight from w_old to its current one by the
-// element's term (w - w_old) A^T A: a rank-R update or downdate, or (`how` Deferred) a change of
-// L whose factors the caller refactors.
-void ElementChanges::updateSystem(int block, int e, double w_old, GlobalSystem::FactorChange how) {
+// Element e's term (w - w_old) A^T A into `change`, unless its weight is the same.
+void ElementChanges::addTerm(GlobalSystem::WeightChange& change, int block, int e, double w_old) const {
   const double w_new = scene_.elementWeight(block, e);
   if (w_new == w_old) return;
   const ElementBlock& b = scene_.blocks()[static_cast<std::size_t>(block)];
   const ElementShape shape = b.type->shape();
   const std::size_t stride = shape.shared_coefficients ? 0 : std::size_t(shape.rows * shape.vertices);
-  const int* vertices = &b.vertices[std::size_t(shape.vertices) * std::size_t(e)];
-  const double* a = b.coefficients.data() + stride * std::size_t(e);
-  // A huge change is left to applyLaplacianFromScene, which the caller runs after all changes.
-  if (system_.changeIsHuge(vertices, shape.vertices, a, shape.rows, w_new - w_old))
-    laplacian_from_scene_ = true;
-  else
-    system_.addElementTerm(vertices, shape.vertices, a, shape.rows, w_new - w_old, how);
-}
-
-// After changes of which one was too large for an update of L and the factors
-// (GlobalSystem::changeIsHuge): L assembled from the scene's weights and every factor again.
-void ElementChanges::applyLaplacianFromScene() {
-  if (!laplacian_from_scene_) return;
-  laplacian_from_scene_ = false;
-  system_.assemble(scene_);
-  system_.refactorAll();
+  change.addElement(&b.vertices[std::size_t(shape.vertices) * std::size_t(e)], shape.vertices,
+                    b.coefficients.data() + stride * std::size_t(e), shape.rows, w_new - w_old);
 }
 
 void ElementChanges::change(ElementKind kind, std::vector<int> indices, const double* stiffness, bool enabled) {
@@ -120,12 +98,10 @@ void ElementChanges::change(ElementKind kind, std::vector<int> indices, const do
   } else {
     for (int e : indices) scene_.setElementEnabled(block, e, enabled);
   }
-  const bool refactor = indices.size() * std::size_t(b.type->shape().rows) > std::size_t(kMaxUpdateColumns);
-  const auto how = refactor ? GlobalSystem::FactorChange::Deferred : GlobalSystem::FactorChange::RankUpdate;
+  GlobalSystem::WeightChange weights;
+  for (std::size_t i = 0; i < indices.size(); ++i) addTerm(weights, block, indices[i], w_old[i]);
   try {
-    for (std::size_t i = 0; i < indices.size(); ++i) updateSystem(block, indices[i], w_old[i], how);
-    if (refactor && !laplacian_from_scene_) system_.refactorAll();
-    applyLaplacianFromScene();
+    system_.apply(weights, scene_);
   } catch (const Error&) {
     // The new system does not factor (a stiffness too large for the masses, as the constructor
     // refuses it): the old stiffnesses and flags go back, with L and the factors from them.
@@ -133,7 +109,6 @@ void ElementChanges::change(ElementKind kind, std::vector<int> indices, const do
       scene_.setElementStiffness(block, indices[i], k_old[i]);
       scene_.setElementEnabled(block, indices[i], on_old[i]);
     }
-    laplacian_from_scene_ = false;
     system_.assemble(scene_);
     system_.refactorAll();
     throw;
@@ -164,15 +139,10 @@ void ElementChanges::changePins(const std::vector<Pin>& pins, int inserted) {
         scene_.setElementEnabled(pin_block, i, flags[static_cast<std::size_t>(i)]);
   }
   backend_.elementsChanged();
-  const double one = 1.0;
-  for (const auto& [vertex, k] : delta) {
-    if (k == 0.0) continue;
-    if (system_.changeIsHuge(&vertex, 1, &one, 1, k))
-      laplacian_from_scene_ = true;
-    else
-      system_.addToDiagonal(vertex, k);
-  }
-  applyLaplacianFromScene();
+  GlobalSystem::WeightChange weights;
+  for (const auto& [vertex, k] : delta)
+    if (k != 0.0) weights.addDiagonal(vertex, k);
+  system_.apply(weights, scene_);
 }
 
 void ElementChanges::save(CheckpointData& d) const {
@@ -190,6 +160,7 @@ void ElementChanges::save(CheckpointData& d) const {
 void ElementChanges::restore(const CheckpointData& d, int contact_block,
                              const std::vector<std::uint8_t>* contact_flags) {
   if (!samePins(d.pin_list, scene_.scene().pins)) changePins(d.pin_list);
+  GlobalSystem::WeightChange weights;
   for (std::size_t b = 0; b < scene_.blocks().size(); ++b) {
     const ElementBlock& block = scene_.blocks()[b];
     const int bi = static_cast<int>(b);
@@ -201,10 +172,10 @@ void ElementChanges::restore(const CheckpointData& d, int contact_block,
       const double w_old = scene_.elementWeight(bi, e);
       if (k_differs) scene_.setElementStiffness(bi, e, k);
       if (scene_.elementEnabled(bi, e) != on) scene_.setElementEnabled(bi, e, on);
-      if (!contact_flags) updateSystem(bi, e, w_old);
+      if (!contact_flags) addTerm(weights, bi, e, w_old);
     }
   }
-  if (!contact_flags) applyLaplacianFromScene();
+  if (!contact_flags) system_.apply(weights, scene_);
 }
 
 }  // namespace stabint

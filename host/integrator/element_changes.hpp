@@ -1,9 +1,9 @@
 #pragma once
 // Run-time changes of the elements (docs/method.md, "Per-frame input"): stiffnesses, enabled
 // flags and the pin set, each validated before anything changes, with L and its factors
-// following the changed weights, by rank updates or, past a size, by a new assembly and
-// factorization; and the same changes when a checkpoint is restored. The driver books the jump
-// of H these cause as an event; the contact set's changes are ContactResolver's. A batch changes
+// following the changed weights as one GlobalSystem::apply (rank updates or, past its price, a
+// new assembly and factorization); and the same changes when a checkpoint is restored. The
+// driver books the jump of H these cause as an event; the contact set's changes are ContactResolver's. A batch changes
 // one scene's elements through the same code (InputScope: its indices and messages).
 #include "backend.hpp"
 #include "state/checkpoint.hpp"
@@ -38,10 +38,10 @@ class ElementChanges {
   void change(ElementKind kind, std::vector<int> indices, const double* stiffness, bool enabled);
 
   /// A new pin set (validated first: nothing changes when it throws): the element blocks and
-  /// the backends follow, and the factors get one rank-1 update per particle whose pin
-  /// stiffness changed. `inserted`: the index of a pin inserted before others (a grab in a
-  /// batch's scene that is not the last), whose ramps and enabled flags move with their pins;
-  /// -1 when every pin keeps its index.
+  /// the backends follow, and L and the factors by a diagonal term per particle whose pin
+  /// stiffness changed (GlobalSystem::apply). `inserted`: the index of a pin inserted before
+  /// others (a grab in a batch's scene that is not the last), whose ramps and enabled flags move
+  /// with their pins; -1 when every pin keeps its index.
   void changePins(const std::vector<Pin>& pins, int inserted = -1);
 
   /// Every element's stiffness and enabled flag, into a checkpoint.
@@ -53,15 +53,12 @@ class ElementChanges {
   void restore(const CheckpointData& d, int contact_block, const std::vector<std::uint8_t>* contact_flags);
 
  private:
-  void updateSystem(int block, int e, double w_old,
-                    GlobalSystem::FactorChange how = GlobalSystem::FactorChange::RankUpdate);
-  void applyLaplacianFromScene();
+  void addTerm(GlobalSystem::WeightChange& change, int block, int e, double w_old) const;
 
   SceneData& scene_;
   GlobalSystem& system_;
   Backend& backend_;
   InputScope scope_;
-  bool laplacian_from_scene_ = false;  // a change since the last assembly was too large to update
 };
 
 }  // namespace stabint

@@ -195,7 +195,6 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
     }
   }
   laplacianChanged();
-  if (how == FactorChange::Deferred) return;
   if (how == FactorChange::Drop) {
     factors_.clear();
     return;
@@ -274,6 +273,33 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
     // As addElementTerm: a failed update leaves the factor unusable; factor it again on next use.
     it = updated ? std::next(it) : factors_.erase(it);
   }
+}
+
+int GlobalSystem::WeightChange::updatePrice() const {
+  int price = static_cast<int>(diagonal_vertices_.size());
+  for (const Term& t : elements_) price += kElementRowPrice * t.R;
+  return price;
+}
+
+bool GlobalSystem::apply(const WeightChange& change, const SceneData& scene, Update how) {
+  if (change.empty() && how == Update::Cheapest) return false;
+  bool refactor = how == Update::Refactor || change.updatePrice() > kMaxUpdatePrice;
+  const double one = 1.0;
+  for (std::size_t i = 0; !refactor && i < change.elements_.size(); ++i) {
+    const WeightChange::Term& t = change.elements_[i];
+    refactor = changeIsHuge(t.vertices, t.K, t.coefficients, t.R, t.delta);
+  }
+  for (std::size_t i = 0; !refactor && i < change.diagonal_vertices_.size(); ++i)
+    refactor = changeIsHuge(&change.diagonal_vertices_[i], 1, &one, 1, change.diagonal_deltas_[i]);
+  if (refactor) {
+    assemble(scene);
+    refactorAll();
+    return true;
+  }
+  for (const WeightChange::Term& t : change.elements_)
+    addElementTerm(t.vertices, t.K, t.coefficients, t.R, t.delta, FactorChange::RankUpdate);
+  if (!change.diagonal_vertices_.empty()) addToDiagonal(change.diagonal_vertices_, change.diagonal_deltas_);
+  return false;
 }
 
 }  // namespace stabint

@@ -88,7 +88,6 @@ class GlobalSystem {
   enum class FactorChange {
     RankUpdate,  // a rank-R cholmod_updown of each
     Drop,        // dropped, factored again on their next use (as addToDiagonal's `refactor`)
-    Deferred,    // left stale: the caller calls refactorAll() before the next solve
   };
   /// L += delta A^T A over `vertices` (K of them) with A the R by K row-major `coefficients`: an
   /// element's weight changed by delta (a stiffness change, an element enabled or disabled). By
@@ -97,7 +96,7 @@ class GlobalSystem {
   /// instead.
   void addElementTerm(const int* vertices, int K, const double* coefficients, int R, double delta,
                       FactorChange how = FactorChange::RankUpdate);
-  /// Factors every c factored so far again from the current L (after Deferred changes).
+  /// Factors every c factored so far again from the current L.
   void refactorAll();
 
   /// L(v_i, v_i) += delta_i for each i, every existing factor updated with one rank-k CHOLMOD
@@ -105,6 +104,56 @@ class GlobalSystem {
   /// the order given): the contact set's change at a step's start. Deterministic: the same
   /// calls on the same factors give the same factors, bit for bit.
   void addToDiagonal(const std::vector<int>& vertices, const std::vector<double>& deltas);
+
+  /// Changes of element weights to apply as one (apply): element terms delta A^T A (a stiffness
+  /// change, an element enabled or disabled; the pointers are the scene's block data and must
+  /// stay valid until apply) and diagonal terms (a pin or a contact pair: a weight at one
+  /// particle).
+  class WeightChange {
+   public:
+    void addElement(const int* vertices, int K, const double* coefficients, int R, double delta) {
+      elements_.push_back({vertices, K, coefficients, R, delta});
+    }
+    void addDiagonal(int vertex, double delta) {
+      diagonal_vertices_.push_back(vertex);
+      diagonal_deltas_.push_back(delta);
+    }
+    bool empty() const { return elements_.empty() && diagonal_vertices_.empty(); }
+    /// The price of updating the factors in place, in diagonal columns: an element's row counts
+    /// kElementRowPrice (its update spans up to four vertices' paths of the elimination tree and
+    /// is one cholmod_updown call per element; the diagonal terms share one call).
+    int updatePrice() const;
+    static constexpr int kElementRowPrice = 4;
+
+   private:
+    friend class GlobalSystem;
+    struct Term {
+      const int* vertices;
+      int K;
+      const double* coefficients;
+      int R;
+      double delta;
+    };
+    std::vector<Term> elements_;
+    std::vector<int> diagonal_vertices_;
+    std::vector<double> diagonal_deltas_;
+  };
+  /// Whether apply() may update the factors in place or must factor them again.
+  enum class Update { Cheapest, Refactor };
+  /// [project rule] The one path of every run-time change of L's weights (element changes, the
+  /// pin set, the contact set, restores), with one update-or-refactor policy. The scene already
+  /// holds the new weights. L is assembled from them and every factor computed again when
+  /// - a term changeIsHuge() (its update would cancel the entry's digits),
+  /// - the change's updatePrice() is over kMaxUpdatePrice (past that, a new assembly and
+  ///   factorization is the cheaper: docs/method.md, "Per-frame input"), or
+  /// - `how` is Refactor (the caller's own reason: the contact log's bound);
+  /// else L takes the terms and every factor their rank updates: each element term one rank-R
+  /// update or downdate in order, then the diagonal terms one rank-k update of the positive ones
+  /// and one rank-k downdate of the negative ones. Returns whether it refactored (a refactored
+  /// L carries no round-off of earlier updates). InvalidInputError when the new system does not
+  /// factor (then L and the factors are the caller's to put back).
+  bool apply(const WeightChange& change, const SceneData& scene, Update how = Update::Cheapest);
+  static constexpr int kMaxUpdatePrice = 256;
 
  private:
   // Simplicial CHOLMOD: solve() reads its columns directly (factor_solve.hpp), which took 0.1-0.3

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <vector>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -127,21 +128,22 @@ double* rowsIn(std::vector<double>& buffer, std::size_t n, int lanes) {
   return buffer.data() + ((64 - address % 64) % 64) / sizeof(double);
 }
 
-// Row k of the permuted system is row perm[k] of the original; unused lanes are zero.
-void permuteIn(const cholmod_factor& factor, const double* b, std::size_t ld, int columns, int lanes, double* work) {
-  const std::size_t n = factor.n;
+// Rows [lo, hi) (all by default) of the permuted system: row k is row perm[k] of the original;
+// unused lanes are zero.
+void permuteIn(const cholmod_factor& factor, const double* b, std::size_t ld, int columns, int lanes, double* work,
+               std::size_t lo = 0, std::size_t hi = SIZE_MAX) {
   const int* perm = static_cast<const int*>(factor.Perm);
-  for (std::size_t k = 0; k < n; ++k) {
+  for (std::size_t k = lo; k < std::min<std::size_t>(hi, factor.n); ++k) {
     const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
     double* w = work + std::size_t(lanes) * k;
     for (int c = 0; c < lanes; ++c) w[c] = c < columns ? b[row + ld * std::size_t(c)] : 0.0;
   }
 }
 
-void permuteOut(const cholmod_factor& factor, const double* work, std::size_t ld, int columns, int lanes, double* out) {
-  const std::size_t n = factor.n;
+void permuteOut(const cholmod_factor& factor, const double* work, std::size_t ld, int columns, int lanes, double* out,
+                std::size_t lo = 0, std::size_t hi = SIZE_MAX) {
   const int* perm = static_cast<const int*>(factor.Perm);
-  for (std::size_t k = 0; k < n; ++k) {
+  for (std::size_t k = lo; k < std::min<std::size_t>(hi, factor.n); ++k) {
     const std::size_t row = perm ? static_cast<std::size_t>(perm[k]) : k;
     const double* w = work + std::size_t(lanes) * k;
     for (int c = 0; c < columns; ++c) out[row + ld * std::size_t(c)] = w[c];
@@ -159,39 +161,79 @@ void solveSimplicial(const cholmod_factor& factor, const double* rhs, double* x,
   permuteOut(factor, work, ld, columns, lanes, x + ld * std::size_t(first));
 }
 
-SubtreeSplit findSubtreeSplit(const cholmod_factor& factor) {
+namespace {
+
+// Per column of a factor's elimination tree (the etree parent of column j is its first row below
+// the diagonal): its subtree's size and smallest column, and the entries of the columns before
+// it (before[n]: all of them). Empty when the factor is not postordered (every subtree the
+// columns [j - size + 1, j]; CHOLMOD postorders, and cholmod_updown may change the tree).
+struct TreeShape {
+  std::vector<int> size;
+  std::vector<double> before;
+};
+TreeShape treeShape(const cholmod_factor& factor) {
   const int n = static_cast<int>(factor.n);
   const int* p = static_cast<const int*>(factor.p);
   const int* i = static_cast<const int*>(factor.i);
   const int* nz = static_cast<const int*>(factor.nz);
-  // Etree parent of column j: its first row below the diagonal (after j). Subtree sizes and
-  // smallest columns, children first.
-  std::vector<int> size(static_cast<std::size_t>(n), 1), lowest(static_cast<std::size_t>(n));
-  std::vector<double> before(static_cast<std::size_t>(n) + 1, 0.0);  // entries of the columns < k
+  TreeShape t;
+  t.size.assign(static_cast<std::size_t>(n), 1);
+  t.before.assign(static_cast<std::size_t>(n) + 1, 0.0);
+  std::vector<int> lowest(static_cast<std::size_t>(n));
   for (int j = 0; j < n; ++j) lowest[j] = j;
   for (int j = 0; j < n; ++j) {
-    before[j + 1] = before[j] + nz[j];
+    t.before[j + 1] = t.before[j] + nz[j];
     if (nz[j] > 1) {
       const int parent = i[p[j] + 1];
-      size[parent] += size[j];
+      t.size[parent] += t.size[j];
       lowest[parent] = std::min(lowest[parent], lowest[j]);
     }
   }
-  // Postordered (CHOLMOD's default, and cholmod_updown may change the tree): the subtree of every
-  // j must be the columns [j - size + 1, j], else no split.
   for (int j = 0; j < n; ++j)
-    if (lowest[j] != j - size[j] + 1) return {0, 0};
+    if (lowest[j] != j - t.size[j] + 1) return {};
+  return t;
+}
+
+}  // namespace
+
+SubtreeSplit findSubtreeSplit(const cholmod_factor& factor) {
+  const int n = static_cast<int>(factor.n);
+  const TreeShape t = treeShape(factor);
+  if (t.size.empty()) return {0, 0};
   SubtreeSplit best{0, 0};
-  double cost = before[n];  // the backward pass on one thread
+  double cost = t.before[n];  // the backward pass on one thread
   for (int c = 0; c < n; ++c) {
-    const int start = c - size[c] + 1;
-    const double a = before[start], b = before[c + 1] - before[start], top = before[n] - before[c + 1];
+    const int start = c - t.size[c] + 1;
+    const double a = t.before[start], b = t.before[c + 1] - t.before[start], top = t.before[n] - t.before[c + 1];
     if (std::max(a, b) + top < cost) {
       cost = std::max(a, b) + top;
       best = {start, c + 1};
     }
   }
   return best;
+}
+
+double EliminationForest::largestTreeShare() const {
+  double largest = 0.0;
+  for (std::size_t t = 0; t + 1 < entries.size(); ++t) largest = std::max(largest, entries[t + 1] - entries[t]);
+  return entries.empty() || entries.back() <= 0.0 ? 1.0 : largest / entries.back();
+}
+
+EliminationForest findForest(const cholmod_factor& factor) {
+  const int n = static_cast<int>(factor.n);
+  const int* nz = static_cast<const int*>(factor.nz);
+  const TreeShape t = treeShape(factor);
+  EliminationForest forest;
+  if (t.size.empty()) return forest;
+  // A root (no entry below its diagonal) ends its tree, which starts size - 1 columns before it.
+  for (int j = 0; j < n; ++j) {
+    if (nz[j] > 1) continue;
+    forest.starts.push_back(j - t.size[j] + 1);
+    forest.entries.push_back(t.before[j - t.size[j] + 1]);
+  }
+  forest.starts.push_back(n);
+  forest.entries.push_back(t.before[n]);
+  return forest;
 }
 
 void solveSimplicialSubtrees(const cholmod_factor& factor, const SubtreeSplit& split, const double* rhs, double* x,
@@ -206,6 +248,19 @@ void solveSimplicialSubtrees(const cholmod_factor& factor, const SubtreeSplit& s
     substituteRange(factor, work, inverse, 4, 2, part == 0 ? 0 : split.a_end, part == 0 ? split.a_end : split.b_end);
   });
   permuteOut(factor, work, ld, 3, 4, x);
+}
+
+void solveSimplicialForest(const cholmod_factor& factor, const EliminationForest& forest, const double* rhs, double* x,
+                           std::size_t ld, std::vector<double>& buffer) {
+  const std::size_t n = factor.n;
+  double* work = rowsIn(buffer, n, 4);
+  double* inverse = work + 4 * n;
+  parallelForRuns(forest.entries, [&](std::size_t tree) {
+    const std::size_t lo = std::size_t(forest.starts[tree]), hi = std::size_t(forest.starts[tree + 1]);
+    permuteIn(factor, rhs, ld, 3, 4, work, lo, hi);
+    substituteRange(factor, work, inverse, 4, 3, int(lo), int(hi));
+    permuteOut(factor, work, ld, 3, 4, x, lo, hi);
+  });
 }
 
 }  // namespace stabint

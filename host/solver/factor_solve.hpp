@@ -53,4 +53,24 @@ SubtreeSplit findSubtreeSplit(const cholmod_factor& factor);
 void solveSimplicialSubtrees(const cholmod_factor& factor, const SubtreeSplit& split, const double* rhs, double* x,
                              std::size_t ld, std::vector<double>& work);
 
+/// The trees of a postordered factor's elimination forest (a batch's factor: one tree per scene,
+/// or more): tree t is the columns [starts[t], starts[t + 1]), entries[t] the factor's entries in
+/// the columns before it (the last of each: n and all of them). Empty when the factor is not
+/// postordered.
+struct EliminationForest {
+  std::vector<int> starts;
+  std::vector<double> entries;
+  int trees() const { return starts.empty() ? 0 : static_cast<int>(starts.size()) - 1; }
+  /// The largest tree's share of the entries (1 for one tree).
+  double largestTreeShare() const;
+};
+EliminationForest findForest(const cholmod_factor& factor);
+/// solveSimplicial for the three columns (lanes {x, y, z, 0}), the trees on cpuThreads() threads,
+/// each thread a run of whole trees of about equal entries (parallelForRuns), both passes and the
+/// permutations. Bit for bit solveSimplicial on any thread count: no tree's column reaches
+/// another's rows, and no chain of columns (a block) crosses two trees (a root has no entry below
+/// its diagonal), so every tree is solved as the serial solve solves it.
+void solveSimplicialForest(const cholmod_factor& factor, const EliminationForest& forest, const double* rhs, double* x,
+                           std::size_t ld, std::vector<double>& work);
+
 }  // namespace stabint

@@ -111,17 +111,22 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
   const Eigen::Index n = rhs.rows();
   x.resize(n, 3);
   // One pass over the factor for the three columns (the columns split over threads would each
-  // read the whole factor; docs/bench_summary.md, "Global solve against its bound"). On large
-  // systems the backward pass goes over two subtrees on two threads, by the size alone, so that
-  // the arithmetic is the same on any thread count.
+  // read the whole factor; docs/bench_summary.md, "Global solve against its bound"). A batch's
+  // factor, a forest of many trees none of which holds half the entries, is solved tree by tree on
+  // every thread (the serial arithmetic); on other large systems the backward pass goes over two
+  // subtrees on two threads. Both by the size alone, so that the arithmetic is the same on any
+  // thread count.
   // The factors made here are simplicial, double, int-indexed (Eigen's CholmodSimplicialLLT), and
   // cholmod_updown keeps them so.
   if (!simplicialSolveApplies(*l)) throw Error("GlobalSystem::solve: CHOLMOD factor of an unexpected kind");
-  if (n >= kSubtreeRows && !f.split_known) {
-    f.split = findSubtreeSplit(*l);
-    f.split_known = true;
+  if (n >= kForestRows && !f.shape_known) {
+    f.forest = findForest(*l);
+    f.split = n >= kSubtreeRows ? findSubtreeSplit(*l) : SubtreeSplit{};
+    f.shape_known = true;
   }
-  if (n >= kSubtreeRows && f.split.b_end > 0) {
+  if (n >= kForestRows && f.forest.trees() > 1 && f.forest.largestTreeShare() <= 0.5) {
+    solveSimplicialForest(*l, f.forest, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
+  } else if (n >= kSubtreeRows && f.split.b_end > 0) {
     solveSimplicialSubtrees(*l, f.split, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
   } else {
     solveSimplicial(*l, rhs.data(), x.data(), static_cast<std::size_t>(n), 0, 3, 4, solve_work_);
@@ -228,7 +233,7 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
       updated = cholmod_updown(delta > 0.0 ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
-    it->second->split_known = false;  // the update may have changed the elimination tree
+    it->second->shape_known = false;  // the update may have changed the elimination tree
     // A failed update (out of memory, or a downdate that lost positive definiteness to
     // round-off) leaves the factor unusable: factor that c again on its next use.
     it = updated ? std::next(it) : factors_.erase(it);
@@ -269,7 +274,7 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
       updated = cholmod_updown(update ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
-    it->second->split_known = false;  // the update may have changed the elimination tree
+    it->second->shape_known = false;  // the update may have changed the elimination tree
     // As addElementTerm: a failed update leaves the factor unusable; factor it again on next use.
     it = updated ? std::next(it) : factors_.erase(it);
   }

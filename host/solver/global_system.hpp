@@ -41,6 +41,10 @@ class GlobalSystem {
   /// second thread costs more than it saves; docs/bench_summary.md "Global solve against its
   /// bound").
   static constexpr Eigen::Index kSubtreeRows = 15000;
+  /// From this many particles solve() runs the trees of a factor that is a forest (a batch's: one
+  /// tree per scene) on every thread, where no tree holds half the entries: the serial solve's
+  /// arithmetic, tree by tree (docs/method.md, "Threads on the CPU").
+  static constexpr Eigen::Index kForestRows = 4000;
 
   /// Jacobi-preconditioned conjugate gradients on K_c x = rhs (GlobalSolve::ConjugateGradient on
   /// the host: the CPU reference of the OpenCL device's CG, the same algorithm in double, Eigen's
@@ -162,10 +166,12 @@ class GlobalSystem {
   // reaches the cholmod_factor that Eigen keeps protected, for the solve and the rank updates.
   struct Factor : Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
     cholmod_factor* factor() { return m_cholmodFactor; }
-    // Where solve() splits the backward pass over two subtrees (at least kSubtreeRows rows),
-    // found on first use and again after a rank update (which may change the tree).
+    // The elimination forest's trees (solve() from kForestRows rows) and where solve() splits the
+    // backward pass over two subtrees (from kSubtreeRows rows), found on first use and again after
+    // a rank update (which may change the tree).
+    EliminationForest forest;
     SubtreeSplit split;
-    bool split_known = false;
+    bool shape_known = false;
     // Row of vertex v in the fill-reducing order (Perm[row] = v), made on the first rank update:
     // the permutation is the factorization's, which the updates keep, so one change costs its
     // element's rows instead of a search over every row (a batch's element change).

@@ -63,12 +63,13 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
 }
 
 // What runBatchInput gives every scene each frame.
-enum class BatchInput { Forces, State, Stiffness };
+enum class BatchInput { Forces, State, States, Stiffness };
 
 const char* inputLabel(BatchInput input) {
   switch (input) {
     case BatchInput::Forces: return "forces";
     case BatchInput::State: return "state";
+    case BatchInput::States: return "states";
     case BatchInput::Stiffness: return "stiffness";
   }
   return "";
@@ -77,9 +78,9 @@ const char* inputLabel(BatchInput input) {
 // Per-frame input to every scene of a batch: each frame sets every scene's external forces
 // ("forces"), state ("state": its positions and velocities as they are, an event of zero
 // energy) or its first spring's stiffness ("stiffness": 1% up and down in turn, an element
-// change: an event, an update of the factor), one call per scene, timed, then steps the batch
-// (not timed). What one frame's input costs a game driving many bodies; per scene it must not
-// grow with the batch.
+// change: an event, an update of the factor), one call per scene, or every scene's state in one
+// setStates call ("states"), timed, then steps the batch (not timed). What one frame's input costs a game driving many
+// bodies; per scene it must not grow with the batch.
 void runBatchInput(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
                    BackendChoice backend, BatchInput input) {
   if (const std::string why = skipReason(backend); !why.empty()) {
@@ -100,8 +101,10 @@ void runBatchInput(benchmark::State& state, const std::string& name, const std::
   int frame = 0;
   double seconds = 0.0;
   std::vector<Eigen::MatrixX3d> x(static_cast<std::size_t>(count)), v(static_cast<std::size_t>(count));
+  std::vector<int> all(static_cast<std::size_t>(count));
+  for (int s = 0; s < count; ++s) all[std::size_t(s)] = s;
   for (auto _ : state) {
-    if (input == BatchInput::State) {
+    if (input == BatchInput::State || input == BatchInput::States) {
       for (int s = 0; s < count; ++s) {
         x[std::size_t(s)] = batch.positions(s);
         v[std::size_t(s)] = batch.velocities(s);
@@ -109,7 +112,8 @@ void runBatchInput(benchmark::State& state, const std::string& name, const std::
     }
     const auto start = std::chrono::steady_clock::now();
     const double k = stiffness * (frame++ % 2 == 0 ? 1.01 : 1.0);
-    for (int s = 0; s < count; ++s) {
+    if (input == BatchInput::States) batch.setStates(all, x, v);
+    for (int s = 0; s < count && input != BatchInput::States; ++s) {
       if (input == BatchInput::Forces)
         batch.setExternalForces(s, forces);
       else if (input == BatchInput::State)
@@ -156,7 +160,7 @@ void registerBatchCases() {
           }
       }
   for (BackendChoice backend : allBackends())
-    for (BatchInput input : {BatchInput::Forces, BatchInput::State, BatchInput::Stiffness})
+    for (BatchInput input : {BatchInput::Forces, BatchInput::State, BatchInput::States, BatchInput::Stiffness})
       for (int count : {100, 1000}) {
         const std::string name = std::string("batch_input/chain/BE/") + backendLabel(backend) + "/" + inputLabel(input);
         benchmark::RegisterBenchmark(

@@ -127,6 +127,12 @@ class Backend {
     potentials(x, t, all);
     return all[static_cast<std::size_t>(segment)];
   }
+  /// out[i] = potentialOf(segments[i], x, t), bit for bit (several scenes' events at once). A
+  /// device backend passes over those segments' elements and waits once for all their sums.
+  virtual void potentialsOf(const std::vector<int>& segments, int x, double t, std::vector<PotentialEnergy>& out) {
+    out.clear();
+    for (int segment : segments) out.push_back(potentialOf(segment, x, t));
+  }
 
   /// Waits until everything queued has completed.
   virtual void synchronize() {}

@@ -439,6 +439,75 @@ TEST(BatchInputErrors, BadInputNamesTheSceneAndChangesNothing) {
 // once setState reactivates it: here the stiff chain of BatchSimulator.OneScenesRefusalLeaves...
 // (SE explodes on its pin) is softened while refused and restarted from rest, after which it
 // follows a Simulator of the softened chain started from the same state.
+// setStates of several scenes (out of order, among scenes with colliders, whose contact sets
+// follow) is bit for bit the same setState calls one by one: states, targets, energies and every
+// later step's report, BE and the blend. Bad input to any listed scene, a scene listed twice or
+// lists of different lengths are refused naming the call and the scene, and no scene changes.
+TEST(BatchInputStates, SetStatesIsTheSameCallsOneByOne) {
+  const std::vector<Scene> scenes = contactBatchScenes();
+  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+    SCOPED_TRACE(integratorName(integrator));
+    const SimulatorOptions options = inputOptions(integrator);
+    BatchSimulator together(scenes, options), apart(scenes, options);
+    for (int step = 0; step < 4; ++step) {
+      together.step();
+      apart.step();
+    }
+    // Scenes 2 and 0 teleported 2 cm up (into and out of their colliders' margins) with new
+    // velocities.
+    const std::vector<int> list = {2, 0};
+    std::vector<Eigen::MatrixX3d> x, v;
+    for (int s : list) {
+      x.push_back(together.positions(s).rowwise() + Eigen::RowVector3d(0.0, 0.02, 0.0));
+      v.push_back(0.5 * together.velocities(s));
+    }
+    together.setStates(list, x, v);
+    for (std::size_t i = 0; i < list.size(); ++i) apart.setState(list[i], x[i], v[i]);
+    for (int step = 0; step <= 6; ++step) {
+      for (int s = 0; s < together.size(); ++s) {
+        ASSERT_EQ(together.positions(s), apart.positions(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(together.velocities(s), apart.velocities(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(together.target(s), apart.target(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(together.energy(s).total(), apart.energy(s).total()) << "scene " << s << ", step " << step;
+      }
+      const BatchStepReport& a = together.step();
+      const BatchStepReport& b = apart.step();
+      for (int s = 0; s < together.size(); ++s) {
+        ASSERT_EQ(a.scenes[std::size_t(s)].event_energy, b.scenes[std::size_t(s)].event_energy) << "scene " << s;
+        ASSERT_EQ(a.scenes[std::size_t(s)].branch, b.scenes[std::size_t(s)].branch) << "scene " << s;
+      }
+    }
+    // Refusals.
+    std::vector<Eigen::MatrixX3d> bad = {together.positions(1), together.positions(2)};
+    bad[1](3, 2) = NAN;
+    const std::vector<Eigen::MatrixX3d> v12 = {together.velocities(1), together.velocities(2)};
+    expectRefused(
+        together,
+        [&] {
+          together.setStates({1, 2}, bad, v12);
+        },
+        "setStates: scene 2: positions: row 3");
+    expectRefused(
+        together,
+        [&] {
+          together.setStates({1, 1}, {bad[0], bad[0]}, {v12[0], v12[0]});
+        },
+        "setStates: scene 1: listed twice");
+    expectRefused(
+        together,
+        [&] {
+          together.setStates({1, 3}, {bad[0], bad[0]}, {v12[0], v12[0]});
+        },
+        "setStates: scene 3 out of range");
+    expectRefused(
+        together,
+        [&] {
+          together.setStates({1, 2}, {bad[0]}, v12);
+        },
+        "setStates: 2 scenes, 1 positions");
+  }
+}
+
 TEST(BatchInputInactive, ARefusedSceneTakesInputAndActsOnItAfterSetState) {
   ChainPendulumParams soft, stiff;
   soft.stiffness = 10.0;

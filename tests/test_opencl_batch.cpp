@@ -302,8 +302,59 @@ TEST(OpenCLBatch, OneScenesRowsAndPotentialAreItsPartOfTheWholeSlotsAndPass) {
         }
       EXPECT_GT(all[0][2].internal, 0.0);
       EXPECT_GT(all[0].back().pins, 0.0);
+      // Several segments at once (potentialsOf: their groups merged into fewer launches, one
+      // wait): the same values, in the list's order, whatever the list.
+      const int count = int(batch.segments.size());
+      std::vector<int> every, odd, ends = {count - 1, 0};
+      for (int s = count; s-- > 0;) every.push_back(s);
+      for (int s = 1; s < count; s += 2) odd.push_back(s);
+      for (const std::vector<int>* list : {&every, &odd, &ends})
+        for (int slot : {0, 1}) {
+          std::vector<PotentialEnergy> some;
+          backend->potentialsOf(*list, slot, t, some);
+          ASSERT_EQ(some.size(), list->size());
+          for (std::size_t i = 0; i < list->size(); ++i) {
+            const PotentialEnergy& want = all[slot][std::size_t((*list)[i])];
+            EXPECT_EQ(some[i].internal, want.internal) << "scene " << (*list)[i] << ", slot " << slot;
+            EXPECT_EQ(some[i].pins, want.pins) << "scene " << (*list)[i] << ", slot " << slot;
+            EXPECT_EQ(some[i].external, want.external) << "scene " << (*list)[i] << ", slot " << slot;
+          }
+        }
     }
     EXPECT_THROW(backend->potentialOf(int(batch.segments.size()), 0, 0.0), InvalidInputError);
+    std::vector<PotentialEnergy> none;
+    EXPECT_THROW(backend->potentialsOf({0, int(batch.segments.size())}, 0, 0.0, none), InvalidInputError);
+  }
+}
+
+// potentialsOf over scenes whose per-scene sums lie in several work-groups (300 chains; every
+// third scene, from the last): each value is the whole pass's for that scene bit for bit, though
+// the sums buffer held another slot's values before.
+TEST(OpenCLBatch, SeveralScenesPotentialsAreTheWholePassValues) {
+  ChainPendulumParams params;
+  params.particles = 4;
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const SceneBatch batch = concatenateScenes(std::vector<Scene>(300, makeChainPendulum(params)));
+    const SceneData data(batch.scene);
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    backend->setSegments(batch.segments);
+    backend->write(0, testing::perturbed(batch.scene.positions, 0.02, 3));
+    backend->write(1, testing::perturbed(batch.scene.positions, 0.05, 4));
+    std::vector<PotentialEnergy> before, some, want;
+    backend->potentials(0, 0.0, before);
+    std::vector<int> list;
+    for (int s = 299; s >= 0; s -= 3) list.push_back(s);
+    backend->potentialsOf(list, 1, 0.0, some);
+    backend->potentials(1, 0.0, want);
+    ASSERT_EQ(some.size(), list.size());
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const PotentialEnergy& w = want[std::size_t(list[i])];
+      EXPECT_EQ(some[i].internal, w.internal) << "scene " << list[i];
+      EXPECT_EQ(some[i].pins, w.pins) << "scene " << list[i];
+      EXPECT_EQ(some[i].external, w.external) << "scene " << list[i];
+      EXPECT_NE(w.internal, before[std::size_t(list[i])].internal) << "scene " << list[i];
+    }
   }
 }
 

@@ -2,6 +2,7 @@
 // same calls as the CPU batch, which follows each scene's own Simulator given them
 // (tests/test_batch_input.cpp), follows it to the cross-backend tolerance.
 #include <stabint/batch.hpp>
+#include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
 
 #include "batch_scenes.hpp"
@@ -123,6 +124,61 @@ TEST(OpenCLBatchSimulator, SetStateLeavesEveryHostCopyWhatTheSlotsHold) {
     EXPECT_NEAR(batch.target(1), cpu.target(1), tol);
     for (int step = 0; step < c.steps; ++step)
       stepBothAndExpectNear(batch, cpu, crossBackendTolerance(precision), step);
+  }
+}
+
+// setStates on the device (one pass over the listed scenes' elements, one wait) is bit for bit
+// the same setState calls one by one there, in double and float, on the contact batch.
+TEST(OpenCLBatchSimulator, SetStatesIsTheSameCallsOneByOne) {
+  const std::vector<Scene> scenes = testing::contactBatchScenes();
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const BatchCase c{Integrator::EnergyBlend, 1.0 / 60.0, 4};
+    const SimulatorOptions options = batchOptions(c, BackendKind::OpenCL, precision);
+    BatchSimulator together(scenes, options), apart(scenes, options);
+    for (int step = 0; step < 3; ++step) {
+      together.step();
+      apart.step();
+    }
+    const std::vector<int> list = {2, 0, 1};
+    std::vector<Eigen::MatrixX3d> x, v;
+    for (int s : list) {
+      x.push_back(testing::perturbed(together.positions(s), 0.01, 20 + s));
+      v.push_back(testing::perturbed(together.velocities(s), 0.2, 30 + s));
+    }
+    together.setStates(list, x, v);
+    for (std::size_t i = 0; i < list.size(); ++i) apart.setState(list[i], x[i], v[i]);
+    for (int step = 0; step <= c.steps; ++step) {
+      for (int s = 0; s < together.size(); ++s) {
+        ASSERT_EQ(together.positions(s), apart.positions(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(together.target(s), apart.target(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(together.energy(s).elastic, apart.energy(s).elastic) << "scene " << s << ", step " << step;
+      }
+      together.step();
+      apart.step();
+    }
+    // 300 chains: the per-scene sums span several work-groups (merged into one launch where they
+    // are adjacent); every third scene set.
+    ChainPendulumParams params;
+    params.particles = 4;
+    const std::vector<Scene> chains(300, makeChainPendulum(params));
+    BatchSimulator many(chains, options), one_by_one(chains, options);
+    many.step();
+    one_by_one.step();
+    std::vector<int> every_third;
+    std::vector<Eigen::MatrixX3d> xs, vs;
+    for (int s = 299; s >= 0; s -= 3) {
+      every_third.push_back(s);
+      xs.push_back(testing::perturbed(many.positions(s), 0.05, s));
+      vs.push_back(testing::perturbed(many.velocities(s), 0.5, 1000 + s));
+    }
+    many.setStates(every_third, xs, vs);
+    for (std::size_t i = 0; i < every_third.size(); ++i) one_by_one.setState(every_third[i], xs[i], vs[i]);
+    for (int s = 0; s < many.size(); ++s) {
+      ASSERT_EQ(many.target(s), one_by_one.target(s)) << "scene " << s;
+      ASSERT_EQ(many.energy(s).elastic, one_by_one.energy(s).elastic) << "scene " << s;
+    }
+    EXPECT_NE(many.target(299), many.target(298));  // the set scenes booked their events
   }
 }
 

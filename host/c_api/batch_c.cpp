@@ -216,6 +216,32 @@ stabint_status stabint_batch_set_state(stabint_batch* batch, int scene, const do
   });
 }
 
+stabint_status stabint_batch_set_states(stabint_batch* batch, const int* scenes, size_t scene_count,
+                                        const double* positions, const double* velocities, size_t count) {
+  return guarded([&] {
+    stabint::BatchSimulator& b = batchOf(batch);
+    if (scene_count > 0) require(scenes, "scenes");
+    const std::vector<int> list(scenes, scenes + scene_count);
+    size_t needed = 0;
+    for (int scene : list) {
+      checkScene(b, scene, "setStates");
+      needed += 3 * size_t(b.numParticles(scene));
+    }
+    if (count != needed)
+      throw ArgumentError{"count is " + std::to_string(count) + ", the listed scenes take " + std::to_string(needed) +
+                          " values in each of positions and velocities"};
+    std::vector<Eigen::MatrixX3d> x, v;
+    size_t offset = 0;
+    for (int scene : list) {
+      const size_t values = 3 * size_t(b.numParticles(scene));
+      x.push_back(sceneRows(b, scene, "setStates", positions ? positions + offset : nullptr, values, "positions"));
+      v.push_back(sceneRows(b, scene, "setStates", velocities ? velocities + offset : nullptr, values, "velocities"));
+      offset += values;
+    }
+    b.setStates(list, x, v);
+  });
+}
+
 stabint_status stabint_batch_set_pin_target(stabint_batch* batch, int scene, int pin, const double target[3]) {
   return guarded([&] { batchOf(batch).setPinTarget(scene, pin, vector3(target, "target")); });
 }

@@ -35,17 +35,21 @@ void BatchDriver::bookEvent(int scene, double h_before) {
   p.pending_event_energy += event;
 }
 
-void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
-  const FrameInput input = frameInput(scene, "setState");
+void BatchDriver::checkState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities,
+                             const char* call) {
+  const FrameInput input = frameInput(scene, call);
   input.checkRows(positions, "positions");
   input.checkRows(velocities, "velocities");
   // BDF2 restarts with a BE step after a jump (its history is not the new state's); the batch keeps
   // one history for all scenes, so only a batch of one can restart.
   if (options_.integrator == Integrator::BDF2 && size() > 1)
-    throw InvalidInputError(scope(scene, "setState").where() +
+    throw InvalidInputError(scope(scene, call).where() +
                             "BDF2 would restart every scene of the batch with a BE step; only a batch of one can");
+}
+
+double BatchDriver::writeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   const SceneSegment& seg = segments_[std::size_t(scene)];
-  PerScene& p = per_scene_[std::size_t(scene)];
+  const PerScene& p = per_scene_[std::size_t(scene)];
   const double h_before = p.kinetic + p.potential.total();
   // The other scenes' rows of kV stay what they are (v_slot_, which may differ from their host
   // copies by round-off, as a Simulator's do). The slots may hold less precision (a float
@@ -74,9 +78,14 @@ void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const E
   }
   v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
   // The scene's contact set follows, so that the event books the contact energy of the new
-  // positions; the potential is evaluated below anyway.
+  // positions; the potential is evaluated after it anyway.
   contact_.updateSet(t_, x_, v_, {contactPart(std::size_t(scene), 0)});
-  p.potential = backend_->potentialOf(scene, kX, t_);
+  return h_before;
+}
+
+void BatchDriver::bookState(int scene, double h_before, const PotentialEnergy& potential) {
+  PerScene& p = per_scene_[std::size_t(scene)];
+  p.potential = potential;
   p.kinetic = kineticEnergy(scene, v_);
   bookEvent(scene, h_before);
   has_history_ = false;  // BDF2 (a batch of one): the next step is a BE step, as Simulator's
@@ -84,6 +93,34 @@ void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const E
     p.active = true;
     p.time = t_;
   }
+}
+
+void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+  checkState(scene, positions, velocities, "setState");
+  const double h_before = writeState(scene, positions, velocities);
+  bookState(scene, h_before, backend_->potentialOf(scene, kX, t_));
+}
+
+void BatchDriver::setStates(const std::vector<int>& scenes, const std::vector<Eigen::MatrixX3d>& positions,
+                            const std::vector<Eigen::MatrixX3d>& velocities) {
+  if (positions.size() != scenes.size() || velocities.size() != scenes.size())
+    throw InvalidInputError("setStates: " + std::to_string(scenes.size()) + " scenes, " +
+                            std::to_string(positions.size()) + " positions and " + std::to_string(velocities.size()) +
+                            " velocities: one of each per scene");
+  std::vector<char> listed(std::size_t(size()), 0);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    checkState(scenes[i], positions[i], velocities[i], "setStates");
+    if (listed[std::size_t(scenes[i])]++)
+      throw InvalidInputError(scope(scenes[i], "setStates").where() + "listed twice");
+  }
+  // The scenes' events are independent (each books its own H*), so writing every scene's rows
+  // before the potentials changes none of them.
+  std::vector<double> h_before;
+  for (std::size_t i = 0; i < scenes.size(); ++i)
+    h_before.push_back(writeState(scenes[i], positions[i], velocities[i]));
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentialsOf(scenes, kX, t_, potentials);
+  for (std::size_t i = 0; i < scenes.size(); ++i) bookState(scenes[i], h_before[i], potentials[i]);
 }
 
 void BatchDriver::setExternalForces(int scene, const Eigen::MatrixX3d& forces) {
@@ -145,6 +182,10 @@ void BatchDriver::pinsChanged(int scene) {
 
 void BatchSimulator::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   impl_->setState(scene, positions, velocities);
+}
+void BatchSimulator::setStates(const std::vector<int>& scenes, const std::vector<Eigen::MatrixX3d>& positions,
+                               const std::vector<Eigen::MatrixX3d>& velocities) {
+  impl_->setStates(scenes, positions, velocities);
 }
 void BatchSimulator::setIterations(int iterations) { impl_->setIterations(iterations); }
 void BatchSimulator::setPinTarget(int scene, int pin, const Eigen::Vector3d& target) {

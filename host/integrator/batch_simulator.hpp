@@ -66,6 +66,13 @@ struct BatchDriver {
   FrameInput frameInput(int scene, const char* call);
   ElementChanges elementChanges(int scene, const char* call);
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  void setStates(const std::vector<int>& scenes, const std::vector<Eigen::MatrixX3d>& positions,
+                 const std::vector<Eigen::MatrixX3d>& velocities);
+  // setState's parts: the checks, the new rows with the scene's contact set (returns H before
+  // them), and the event booked from the new potential.
+  void checkState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities, const char* call);
+  double writeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  void bookState(int scene, double h_before, const PotentialEnergy& potential);
   void setExternalForces(int scene, const Eigen::MatrixX3d& forces);
   int grab(int scene, int vertex, double stiffness);
   void release(int scene, int pin);

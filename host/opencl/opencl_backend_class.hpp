@@ -143,6 +143,7 @@ class OpenCLBackend final : public Backend {
                                  std::vector<PotentialEnergy>& per_scene) override;
 
   PotentialEnergy potentialOf(int segment, int x, double t) override;
+  void potentialsOf(const std::vector<int>& segments, int x, double t, std::vector<PotentialEnergy>& out) override;
 
   void synchronize() override { ocl::check(queue_.finish(), "clFinish"); }
 

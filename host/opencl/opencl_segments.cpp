@@ -1,6 +1,9 @@
 // The OpenCL backend's per-scene sums for a batch (kernels/segments.cl).
 #include "opencl/opencl_backend_class.hpp"
 
+#include <algorithm>
+#include <utility>
+
 namespace stabint::ocl {
 
 template <typename Real>
@@ -67,41 +70,79 @@ void OpenCLBackend<Real>::potentials(int x, double t, std::vector<PotentialEnerg
   times_.energy += secondsSince(start);
 }
 
-// One scene's part of potentials(), bit for bit: per block, the element pass over the groups that
-// hold the segment's elements (a group it shares with a neighbour computes the neighbour's too,
-// with the same values: each element's energy is its own), then segment_energies over the
-// work-group that holds the segment's work-item, with potentials' work-group size (the same
-// compiled kernel, each work-item summing its own segment), and one read of its three sums. The
-// other items of that group sum their segments from energies that may be stale: those sums are
-// not read.
 template <typename Real>
 PotentialEnergy OpenCLBackend<Real>::potentialOf(int segment, int x, double t) {
+  std::vector<PotentialEnergy> out;
+  potentialsOf({segment}, x, t, out);
+  return out[0];
+}
+
+namespace {
+
+// [first, end) ranges, sorted and merged where they overlap or touch.
+std::vector<std::pair<int, int>> mergedRanges(std::vector<std::pair<int, int>> ranges) {
+  std::sort(ranges.begin(), ranges.end());
+  std::vector<std::pair<int, int>> merged;
+  for (const auto& r : ranges) {
+    if (!merged.empty() && r.first <= merged.back().second)
+      merged.back().second = std::max(merged.back().second, r.second);
+    else
+      merged.push_back(r);
+  }
+  return merged;
+}
+
+}  // namespace
+
+// Some scenes' part of potentials(), bit for bit: per block, the element pass over the groups
+// that hold those segments' elements (a group shared with a neighbour computes the neighbour's
+// too, with the same values: each element's energy is its own), then segment_energies over the
+// work-groups that hold the segments' work-items, with potentials' work-group size (the same
+// compiled kernel, each work-item summing its own segment), and one read of the sums from the
+// first segment's to the last's: one wait for all. Adjacent groups go in one launch, so every
+// scene at once is the whole pass. The other items of those groups sum their segments from
+// energies that may be stale: those sums are not read.
+template <typename Real>
+void OpenCLBackend<Real>::potentialsOf(const std::vector<int>& segments, int x, double t,
+                                       std::vector<PotentialEnergy>& out) {
   checkSegmentsFit();
-  if (segment < 0 || segment >= int(segments_.size()))
-    throw InvalidInputError("OpenCL backend: segment " + std::to_string(segment) + " of " +
-                            std::to_string(segments_.size()));
-  if (segmentIsWholeScene()) return potential(x, t);
+  for (int segment : segments)
+    if (segment < 0 || segment >= int(segments_.size()))
+      throw InvalidInputError("OpenCL backend: segment " + std::to_string(segment) + " of " +
+                              std::to_string(segments_.size()));
+  out.clear();
+  if (segments.empty()) return;
+  if (segmentIsWholeScene()) {
+    out.assign(segments.size(), potential(x, t));
+    return;
+  }
   checkSlot(x);
   uploadForcing(t, false);
   const auto start = Clock::now();
-  const SceneSegment& seg = segments_[std::size_t(segment)];
   const int local = int(element_local_);
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
-    if (seg.num_elements[b] == 0) continue;
-    const int first = segment_groups_[b] + seg.first_element[b] / local;
-    const int end = segment_groups_[b] + (seg.first_element[b] + seg.num_elements[b] + local - 1) / local;
-    enqueueElementGroups(x, kPassEnergyPerElement, first, end);
+    std::vector<std::pair<int, int>> groups;
+    for (int segment : segments) {
+      const SceneSegment& seg = segments_[std::size_t(segment)];
+      if (seg.num_elements[b] == 0) continue;
+      groups.emplace_back(segment_groups_[b] + seg.first_element[b] / local,
+                          segment_groups_[b] + (seg.first_element[b] + seg.num_elements[b] + local - 1) / local);
+    }
+    for (const auto& [first, end] : mergedRanges(std::move(groups)))
+      enqueueElementGroups(x, kPassEnergyPerElement, first, end);
   }
   segment_energies_.bindSlot(segment_energies_x_, x, slots_);
-  const std::size_t group = segment_energies_.local[0];
-  const std::size_t offset = std::size_t(segment) / group * group;
-  ocl::check(queue_.enqueueNDRangeKernel(segment_energies_.kernel, cl::NDRange(offset), cl::NDRange(group),
-                                         segment_energies_.local),
-             "clEnqueueNDRangeKernel");
-  readSegmentSums(kSegmentEnergies, kSegmentEnergies * std::size_t(segment));
-  const PotentialEnergy out = segmentEnergies(std::size_t(segment));
+  const int group = int(segment_energies_.local[0]);
+  std::vector<std::pair<int, int>> sums;
+  for (int segment : segments) sums.emplace_back(segment / group, segment / group + 1);
+  for (const auto& [first, end] : mergedRanges(std::move(sums)))
+    ocl::check(queue_.enqueueNDRangeKernel(segment_energies_.kernel, cl::NDRange(std::size_t(first * group)),
+                                           cl::NDRange(std::size_t((end - first) * group)), segment_energies_.local),
+               "clEnqueueNDRangeKernel");
+  const auto [lowest, highest] = std::minmax_element(segments.begin(), segments.end());
+  readSegmentSums(kSegmentEnergies * std::size_t(*highest - *lowest + 1), kSegmentEnergies * std::size_t(*lowest));
+  for (int segment : segments) out.push_back(segmentEnergies(std::size_t(segment)));
   times_.energy += secondsSince(start);
-  return out;
 }
 
 template <typename Real>

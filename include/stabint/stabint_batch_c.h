@@ -114,6 +114,13 @@ stabint_status stabint_batch_copy_all_positions_float(const stabint_batch* batch
  * one scene. `count` applies to each array. */
 stabint_status stabint_batch_set_state(stabint_batch* batch, int scene, const double* positions,
                                        const double* velocities, size_t count);
+/** stabint_batch_set_state of `scene_count` scenes at once (`scenes`, each at most once), as
+ * BatchSimulator::setStates: the same events bit for bit, with one wait on a device. `positions`
+ * and `velocities` hold the listed scenes' arrays one after another in the list's order; `count`,
+ * for each of the two, is their total length, 3 times the listed scenes' particles. Everything is
+ * checked first: on an error no scene changes. */
+stabint_status stabint_batch_set_states(stabint_batch* batch, const int* scenes, size_t scene_count,
+                                        const double* positions, const double* velocities, size_t count);
 /** Local/global iterations per solve of every later step of every scene (>= 1), as
  * stabint_simulator_set_iterations. */
 stabint_status stabint_batch_set_iterations(stabint_batch* batch, int iterations);

@@ -102,6 +102,10 @@ void bindBatch(nb::module_& m) {
       .def("set_state", &BatchSimulator::setState, "scene"_a, "positions"_a, "velocities"_a,
            "Replaces one scene's positions and velocities ((n_s, 3) each, finite), booked in that scene's H* "
            "only; a refused scene steps again. Raises InvalidInputError naming the scene for bad input.")
+      .def("set_states", &BatchSimulator::setStates, "scenes"_a, "positions"_a, "velocities"_a,
+           "set_state of several scenes at once (a list of scene indices, each at most once, with one (n_s, 3) "
+           "array of positions and of velocities per scene): the same events bit for bit, with one wait on a "
+           "device. Everything is checked first; on InvalidInputError no scene changes.")
       .def("set_iterations", &BatchSimulator::setIterations, "iterations"_a,
            "Local/global iteration budget of every later step of every scene (>= 1); time, states and "
            "targets are kept, options.iterations follows.")

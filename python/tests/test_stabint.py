@@ -445,6 +445,32 @@ def test_set_iterations_changes_the_budget_of_later_steps():
         batch.set_iterations(0)
 
 
+def test_batch_set_states_is_set_state_scene_by_scene():
+    scenes = [stabint.chain_pendulum(), stabint.cloth_grid(nx=4, ny=4), stabint.chain_pendulum()]
+    options = stabint.SimulatorOptions(integrator=Integrator.EnergyBlend)
+    together, apart = stabint.BatchSimulator(scenes, options), stabint.BatchSimulator(scenes, options)
+    together.step()
+    apart.step()
+    listed = [2, 1]
+    x = [together.positions(s) + 0.01 for s in listed]
+    v = [0.5 * together.velocities(s) + 0.1 for s in listed]
+    together.set_states(listed, x, v)
+    for s, xs, vs in zip(listed, x, v):
+        apart.set_state(s, xs, vs)
+    for _ in range(3):
+        for s in range(3):
+            assert together.target(s) == apart.target(s)
+            assert np.array_equal(together.positions(s), apart.positions(s))
+        together.step()
+        apart.step()
+    target = together.target(1)
+    with pytest.raises(stabint.InvalidInputError, match="listed twice"):
+        together.set_states([1, 1], [x[1], x[1]], [v[1], v[1]])
+    with pytest.raises(stabint.InvalidInputError, match="2 scenes, 1 positions"):
+        together.set_states([2, 1], [x[0]], v)
+    assert together.target(1) == target
+
+
 def drive(sim, corner, frames):
     """A game loop: pin 0 dragged around `corner` and a force on particle 0, both functions of
     time only; returns the final positions."""

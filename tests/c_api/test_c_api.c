@@ -1095,6 +1095,44 @@ static void check_refused(stabint_status status, stabint_status expected, const 
  * INVALID_ARGUMENT naming the argument; a scene or index out of range or a value the library
  * refuses is INVALID_INPUT naming the call and the scene. None changes the batch, which then steps
  * bit for bit as an untouched twin. */
+/* set_states of scenes 1 and 0 is set_state of scene 1, then of scene 0: the same states and
+ * targets bit for bit, and the same steps after them. */
+static void test_batch_set_states_is_set_state_one_by_one(void) {
+  stabint_batch* together = chain_and_cloth();
+  stabint_batch* apart = chain_and_cloth();
+  const int n0 = stabint_batch_num_particles(together, 0), n1 = stabint_batch_num_particles(together, 1);
+  const size_t c0 = 3 * (size_t)n0, c1 = 3 * (size_t)n1;
+  const int scenes[2] = {1, 0};
+  double* x = malloc((c0 + c1) * sizeof(double));
+  double* v = malloc((c0 + c1) * sizeof(double));
+  double *a = new_rows(n1), *b = new_rows(n1);
+  int s, step;
+  CHECK(x != NULL && v != NULL);
+  CHECK(stabint_batch_step(together, NULL, 0) == STABINT_OK && stabint_batch_step(apart, NULL, 0) == STABINT_OK);
+  CHECK(stabint_batch_copy_positions(together, 1, x, c1) == STABINT_OK);
+  CHECK(stabint_batch_copy_positions(together, 0, x + c1, c0) == STABINT_OK);
+  for (s = 0; s < (int)(c0 + c1); ++s) {
+    x[s] += 0.01 * sin(0.7 * s);
+    v[s] = 0.3 * cos(1.3 * s);
+  }
+  CHECK(stabint_batch_set_states(together, scenes, 2, x, v, c0 + c1) == STABINT_OK);
+  CHECK(stabint_batch_set_state(apart, 1, x, v, c1) == STABINT_OK);
+  CHECK(stabint_batch_set_state(apart, 0, x + c1, v + c1, c0) == STABINT_OK);
+  for (step = 0; step < 3; ++step) {
+    for (s = 0; s < 2; ++s) CHECK(stabint_batch_target(together, s) == stabint_batch_target(apart, s));
+    CHECK(stabint_batch_copy_positions(together, 1, a, c1) == STABINT_OK);
+    CHECK(stabint_batch_copy_positions(apart, 1, b, c1) == STABINT_OK);
+    CHECK(memcmp(a, b, c1 * sizeof(double)) == 0);
+    CHECK(stabint_batch_step(together, NULL, 0) == STABINT_OK && stabint_batch_step(apart, NULL, 0) == STABINT_OK);
+  }
+  free(x);
+  free(v);
+  free(a);
+  free(b);
+  stabint_batch_destroy(together);
+  stabint_batch_destroy(apart);
+}
+
 static void test_batch_bad_input_is_rejected_and_changes_nothing(void) {
   stabint_batch* batch = chain_and_cloth();
   stabint_batch* twin = chain_and_cloth();
@@ -1175,6 +1213,28 @@ static void test_batch_bad_input_is_rejected_and_changes_nothing(void) {
   check_refused(stabint_batch_set_state(batch, 2, x, y, count), STABINT_INVALID_INPUT,
                 "setState: scene 2 out of range");
   CHECK(stabint_batch_copy_positions(batch, 1, x, count) == STABINT_OK);
+  {
+    /* set_states: the listed scenes' arrays one after another; a scene listed twice, a count that
+     * is not the listed scenes', NULL scenes or a bad row in the second listed array are refused. */
+    const int twice[2] = {1, 1}, scene_one[1] = {1};
+    double* xx = malloc(2 * count * sizeof(double));
+    double* yy = malloc(2 * count * sizeof(double));
+    CHECK(xx != NULL && yy != NULL);
+    memcpy(xx, x, count * sizeof(double));
+    memcpy(xx + count, x, count * sizeof(double));
+    memcpy(yy, y, count * sizeof(double));
+    memcpy(yy + count, y, count * sizeof(double));
+    check_refused(stabint_batch_set_states(batch, twice, 2, xx, yy, 2 * count), STABINT_INVALID_INPUT,
+                  "setStates: scene 1: listed twice");
+    check_refused(stabint_batch_set_states(batch, scene_one, 1, xx, yy, 2 * count), STABINT_INVALID_ARGUMENT,
+                  "count is");
+    check_refused(stabint_batch_set_states(batch, NULL, 1, xx, yy, count), STABINT_INVALID_ARGUMENT, "scenes is NULL");
+    xx[count + 5] = NAN; /* in the second listed scene's array */
+    check_refused(stabint_batch_set_states(batch, twice, 2, xx, yy, 2 * count), STABINT_INVALID_INPUT,
+                  "setStates: scene 1: positions: row 1");
+    free(xx);
+    free(yy);
+  }
   x[3 * 3 + 1] = NAN;
   check_refused(stabint_batch_set_state(batch, 1, x, y, count), STABINT_INVALID_INPUT, "row 3");
   CHECK(strstr(stabint_last_error_message(), "scene 1") != NULL);
@@ -1561,6 +1621,7 @@ int main(int argc, char** argv) {
   test_batch_set_iterations();
   test_batch_input_acts_on_its_scene();
   test_batch_collider_moved_every_frame(argv[1]);
+  test_batch_set_states_is_set_state_one_by_one();
   test_batch_bad_input_is_rejected_and_changes_nothing();
   test_batch_refusal_leaves_the_other_scenes();
   test_batch_checkpoints();

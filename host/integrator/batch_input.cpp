@@ -7,6 +7,7 @@
 #include "integrator/backend_choice.hpp"
 #include "integrator/integrator_steps.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -47,40 +48,38 @@ void BatchDriver::checkState(int scene, const Eigen::MatrixX3d& positions, const
                             "BDF2 would restart every scene of the batch with a BE step; only a batch of one can");
 }
 
-double BatchDriver::writeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
+double BatchDriver::storeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const PerScene& p = per_scene_[std::size_t(scene)];
   const double h_before = p.kinetic + p.potential.total();
-  // The other scenes' rows of kV stay what they are (v_slot_, which may differ from their host
-  // copies by round-off, as a Simulator's do). The slots may hold less precision (a float
-  // device): the host copies are what they hold.
-  if (backend_->writesRows()) {  // the scene's rows alone
-    if (!host_copies_stored_) {
-      backend_->roundToStorage(x_);
-      backend_->roundToStorage(v_slot_);
-      host_copies_stored_ = true;
-    }
-    // The rows to the slot, and as the slot holds them to its host copy.
-    auto writeRows = [&](int slot, const Eigen::MatrixX3d& rows, Eigen::MatrixX3d& host) {
-      backend_->writeRows(slot, seg.first_particle, rows);
-      Eigen::MatrixX3d stored = rows;
-      backend_->roundToStorage(stored);
-      host.middleRows(seg.first_particle, seg.num_particles) = stored;
-    };
-    writeRows(kX, positions, x_);
-    writeRows(kV, velocities, v_slot_);
+  // The slots may hold less precision (a float device): the host copies are what they hold, the
+  // other scenes' rows of kV included (v_slot_, which may differ from their host copies in v_ by
+  // round-off, as a Simulator's do).
+  if (!host_copies_stored_) {
+    backend_->roundToStorage(x_);
+    backend_->roundToStorage(v_slot_);
+    host_copies_stored_ = true;
+  }
+  auto store = [&](const Eigen::MatrixX3d& rows, Eigen::MatrixX3d& host) {
+    Eigen::MatrixX3d stored = rows;
+    backend_->roundToStorage(stored);
+    host.middleRows(seg.first_particle, seg.num_particles) = stored;
+  };
+  store(positions, x_);
+  store(velocities, v_slot_);
+  v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
+  return h_before;
+}
+
+void BatchDriver::writeStateRows(int first, int end) {
+  if (end <= first) return;
+  if (backend_->writesRows()) {  // those rows alone, as the host copies hold them
+    backend_->writeRows(kX, first, x_.middleRows(first, end - first));
+    backend_->writeRows(kV, first, v_slot_.middleRows(first, end - first));
   } else {
-    x_.middleRows(seg.first_particle, seg.num_particles) = positions;
-    v_slot_.middleRows(seg.first_particle, seg.num_particles) = velocities;
     backend_->write(kX, x_);
     backend_->write(kV, v_slot_);
-    backend_->readBoth(kX, x_, kV, v_slot_);
   }
-  v_.middleRows(seg.first_particle, seg.num_particles) = v_slot_.middleRows(seg.first_particle, seg.num_particles);
-  // The scene's contact set follows, so that the event books the contact energy of the new
-  // positions; the potential is evaluated after it anyway.
-  contact_.updateSet(t_, x_, v_, {contactPart(std::size_t(scene), 0)});
-  return h_before;
 }
 
 void BatchDriver::bookState(int scene, double h_before, const PotentialEnergy& potential) {
@@ -97,7 +96,12 @@ void BatchDriver::bookState(int scene, double h_before, const PotentialEnergy& p
 
 void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   checkState(scene, positions, velocities, "setState");
-  const double h_before = writeState(scene, positions, velocities);
+  const double h_before = storeState(scene, positions, velocities);
+  const SceneSegment& seg = segments_[std::size_t(scene)];
+  writeStateRows(seg.first_particle, seg.first_particle + seg.num_particles);
+  // The scene's contact set follows, so that the event books the contact energy of the new
+  // positions.
+  contact_.updateSet(t_, x_, v_, {contactPart(std::size_t(scene), 0)});
   bookState(scene, h_before, backend_->potentialOf(scene, kX, t_));
 }
 
@@ -113,11 +117,20 @@ void BatchDriver::setStates(const std::vector<int>& scenes, const std::vector<Ei
     if (listed[std::size_t(scenes[i])]++)
       throw InvalidInputError(scope(scenes[i], "setStates").where() + "listed twice");
   }
-  // The scenes' events are independent (each books its own H*), so writing every scene's rows
-  // before the potentials changes none of them.
+  // The scenes' events are independent (each books its own H*, each contact set is its scene's),
+  // so storing every scene's rows before the contact sets and the potentials changes none of
+  // them. One write of the rows from the first listed scene's to the last's (the scenes between
+  // rewritten as they are): on a device a write costs a command, whatever its rows.
   std::vector<double> h_before;
-  for (std::size_t i = 0; i < scenes.size(); ++i)
-    h_before.push_back(writeState(scenes[i], positions[i], velocities[i]));
+  int first = data_.numParticles(), end = 0;
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    h_before.push_back(storeState(scenes[i], positions[i], velocities[i]));
+    const SceneSegment& seg = segments_[std::size_t(scenes[i])];
+    first = std::min(first, seg.first_particle);
+    end = std::max(end, seg.first_particle + seg.num_particles);
+  }
+  writeStateRows(first, end);
+  for (int scene : scenes) contact_.updateSet(t_, x_, v_, {contactPart(std::size_t(scene), 0)});
   std::vector<PotentialEnergy> potentials;
   backend_->potentialsOf(scenes, kX, t_, potentials);
   for (std::size_t i = 0; i < scenes.size(); ++i) bookState(scenes[i], h_before[i], potentials[i]);

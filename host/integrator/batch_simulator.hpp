@@ -68,10 +68,12 @@ struct BatchDriver {
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
   void setStates(const std::vector<int>& scenes, const std::vector<Eigen::MatrixX3d>& positions,
                  const std::vector<Eigen::MatrixX3d>& velocities);
-  // setState's parts: the checks, the new rows with the scene's contact set (returns H before
-  // them), and the event booked from the new potential.
+  // setState's parts: the checks; the new rows into the host copies as the slots will hold them
+  // (returns H before them); rows [first, end) of the host copies to the slots; the event booked
+  // from the new potential.
   void checkState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities, const char* call);
-  double writeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  double storeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
+  void writeStateRows(int first, int end);
   void bookState(int scene, double h_before, const PotentialEnergy& potential);
   void setExternalForces(int scene, const Eigen::MatrixX3d& forces);
   int grab(int scene, int vertex, double stiffness);

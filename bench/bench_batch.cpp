@@ -79,8 +79,8 @@ const char* inputLabel(BatchInput input) {
 // ("forces"), state ("state": its positions and velocities as they are, an event of zero
 // energy) or its first spring's stiffness ("stiffness": 1% up and down in turn, an element
 // change: an event, an update of the factor), one call per scene, or every scene's state in one
-// setStates call ("states"), timed, then steps the batch (not timed). What one frame's input costs a game driving many
-// bodies; per scene it must not grow with the batch.
+// setStates call ("states"), timed, then steps the batch (not timed). What one frame's input
+// costs a game driving many bodies; per scene it must not grow with the batch.
 void runBatchInput(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
                    BackendChoice backend, BatchInput input) {
   if (const std::string why = skipReason(backend); !why.empty()) {

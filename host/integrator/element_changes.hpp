@@ -3,8 +3,9 @@
 // flags and the pin set, each validated before anything changes, with L and its factors
 // following the changed weights as one GlobalSystem::apply (rank updates or, past its price, a
 // new assembly and factorization); and the same changes when a checkpoint is restored. The
-// driver books the jump of H these cause as an event; the contact set's changes are ContactResolver's. A batch changes
-// one scene's elements through the same code (InputScope: its indices and messages).
+// driver books the jump of H these cause as an event; the contact set's changes are
+// ContactResolver's. A batch changes one scene's elements through the same code (InputScope: its
+// indices and messages).
 #include "backend.hpp"
 #include "state/checkpoint.hpp"
 #include "integrator/input_scope.hpp"

@@ -120,11 +120,13 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
   // cholmod_updown keeps them so.
   if (!simplicialSolveApplies(*l)) throw Error("GlobalSystem::solve: CHOLMOD factor of an unexpected kind");
   if (n >= kForestRows && !f.shape_known) {
+    // A forest whose largest tree holds half of the entries or more gains less than the split.
     f.forest = findForest(*l);
+    if (f.forest.largestTreeShare() > 0.5) f.forest = {};
     f.split = n >= kSubtreeRows ? findSubtreeSplit(*l) : SubtreeSplit{};
     f.shape_known = true;
   }
-  if (n >= kForestRows && f.forest.trees() > 1 && f.forest.largestTreeShare() <= 0.5) {
+  if (n >= kForestRows && f.forest.trees() > 1) {
     solveSimplicialForest(*l, f.forest, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
   } else if (n >= kSubtreeRows && f.split.b_end > 0) {
     solveSimplicialSubtrees(*l, f.split, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);

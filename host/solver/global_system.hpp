@@ -166,9 +166,10 @@ class GlobalSystem {
   // reaches the cholmod_factor that Eigen keeps protected, for the solve and the rank updates.
   struct Factor : Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
     cholmod_factor* factor() { return m_cholmodFactor; }
-    // The elimination forest's trees (solve() from kForestRows rows) and where solve() splits the
-    // backward pass over two subtrees (from kSubtreeRows rows), found on first use and again after
-    // a rank update (which may change the tree).
+    // The elimination forest's trees (solve() from kForestRows rows; none where one tree holds
+    // half of the entries) and where solve() splits the backward pass over two subtrees (from
+    // kSubtreeRows rows), found on first use and again after a rank update (which may change the
+    // tree).
     EliminationForest forest;
     SubtreeSplit split;
     bool shape_known = false;

@@ -157,10 +157,10 @@ class BatchSimulator {
   void setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities);
   /// setState of several scenes at once (`scenes[i]` takes `positions[i]` and `velocities[i]`;
   /// each scene at most once): the same events, booked in the same order, bit for bit the calls
-  /// one by one, but the scenes' new potentials come from one pass with one wait, where a device
-  /// backend would wait once per call (docs/method.md, "Batches"). Everything is checked first:
-  /// bad input is an InvalidInputError naming the call, the scene and the field, and no scene
-  /// changes.
+  /// one by one, but with one write of the rows and one pass with one wait for the potentials,
+  /// where a device backend waits once per call (docs/guide.md, "Many scenes at once").
+  /// Everything is checked first: bad input is an InvalidInputError naming the call, the scene
+  /// and the field, and no scene changes.
   void setStates(const std::vector<int>& scenes, const std::vector<Eigen::MatrixX3d>& positions,
                  const std::vector<Eigen::MatrixX3d>& velocities);
   /// Local/global iteration budget of every later step of every scene (>= 1; the scenes share

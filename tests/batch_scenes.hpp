@@ -145,6 +145,34 @@ inline void setStateInBoth(BatchSimulator& batch, std::vector<Simulator>& alone,
   }
 }
 
+/// Element changes of the mixed scenes (mixedBatchScenes) before one step, as a frame of a game
+/// gives them: the bar's tets softened, a chain spring stiffened, forces on the cloth, a second
+/// change of the bar (a tet disabled), 70 cloth springs stiffened (past the factor's update price:
+/// a refactorization) and the triangle cloth's hinges disabled. With `read_after_each` each
+/// change's event is read (target()) right after it, which books it there; without, the events
+/// wait for the step, but the bar's second change books its first.
+inline void changeElementsOfSeveralScenes(BatchSimulator& batch, const std::vector<Scene>& scenes,
+                                          bool read_after_each) {
+  auto read = [&](int s) {
+    if (read_after_each) (void)batch.target(s);
+  };
+  batch.setElementStiffness(2, ElementKind::Tet, std::vector<int>{0, 1, 2}, 0.5 * scenes[2].tets[0].stiffness);
+  read(2);
+  batch.setElementStiffness(0, ElementKind::Spring, 1, 3.0 * scenes[0].springs[1].stiffness);
+  read(0);
+  batch.setExternalForces(1, Eigen::MatrixX3d::Constant(scenes[1].numParticles(), 3, 0.002));
+  batch.setElementEnabled(2, ElementKind::Tet, 1, false);
+  read(2);
+  std::vector<int> springs;
+  for (int i = 0; i < 70 && i < int(scenes[1].springs.size()); ++i) springs.push_back(i);
+  batch.setElementStiffness(1, ElementKind::Spring, springs, 2.0 * scenes[1].springs[0].stiffness);
+  read(1);
+  std::vector<int> hinges;
+  for (int i = 0; i < int(scenes[3].bending_hinges.size()); i += 2) hinges.push_back(i);
+  batch.setElementEnabled(3, ElementKind::BendingHinge, hinges, false);
+  read(3);
+}
+
 /// Position of the element type `identifier` in elementTypes() (the per-type ranges of a segment).
 inline int typeIndex(const char* identifier) {
   const std::vector<const ElementType*>& types = elementTypes();

@@ -508,6 +508,52 @@ TEST(BatchInputStates, SetStatesIsTheSameCallsOneByOne) {
   }
 }
 
+// Element changes book their events when something reads them or at the step, so that the
+// changes of many scenes share one pass (BatchDriver::settleEvents). Changes of four scenes, one
+// of them changed twice, with other input between them: the batch that books each at the step is
+// bit for bit the batch that reads each event right after its change (states, targets, energies,
+// the events in the step's report, every later step), and a checkpoint taken before the step
+// holds the booked events (the same bytes). BE and the blend.
+TEST(BatchInputEvents, ElementChangesBookedAtTheStepAreTheChangesBookedAtOnce) {
+  const std::vector<Scene> scenes = mixedBatchScenes();
+  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+    SCOPED_TRACE(integratorName(integrator));
+    const SimulatorOptions options = inputOptions(integrator);
+    BatchSimulator at_once(scenes, options), at_step(scenes, options), saved(scenes, options);
+    for (int step = 0; step < 3; ++step) {
+      at_once.step();
+      at_step.step();
+      saved.step();
+    }
+    std::vector<double> before;
+    for (int s = 0; s < at_once.size(); ++s) before.push_back(at_once.target(s));
+    testing::changeElementsOfSeveralScenes(at_once, scenes, /*read_after_each=*/true);
+    testing::changeElementsOfSeveralScenes(at_step, scenes, /*read_after_each=*/false);
+    testing::changeElementsOfSeveralScenes(saved, scenes, /*read_after_each=*/false);
+    const BatchCheckpoint checkpoint = saved.checkpoint();
+    const BatchCheckpoint reference = at_once.checkpoint();
+    for (int s = 0; s < at_once.size(); ++s)
+      EXPECT_EQ(checkpoint.scene(s).bytes(), reference.scene(s).bytes()) << "scene " << s;
+    for (int step = 0; step < 6; ++step) {
+      const BatchStepReport& a = at_once.step();
+      const BatchStepReport& b = at_step.step();
+      for (int s = 0; s < at_once.size(); ++s) {
+        const std::size_t i = std::size_t(s);
+        ASSERT_EQ(a.scenes[i].event_energy, b.scenes[i].event_energy) << "scene " << s << ", step " << step;
+        // Every scene's change did work (a stiffer spring, softer or fewer elements).
+        if (step == 0) {
+          EXPECT_NE(b.scenes[i].event_energy, 0.0) << "scene " << s;
+        }
+        ASSERT_EQ(at_once.positions(s), at_step.positions(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(at_once.velocities(s), at_step.velocities(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(at_once.target(s), at_step.target(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(at_once.energy(s).total(), at_step.energy(s).total()) << "scene " << s << ", step " << step;
+      }
+    }
+    EXPECT_NE(at_step.target(0), before[0]);
+  }
+}
+
 TEST(BatchInputInactive, ARefusedSceneTakesInputAndActsOnItAfterSetState) {
   ChainPendulumParams soft, stiff;
   soft.stiffness = 10.0;

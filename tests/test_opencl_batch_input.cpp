@@ -182,5 +182,35 @@ TEST(OpenCLBatchSimulator, SetStatesIsTheSameCallsOneByOne) {
   }
 }
 
+// Element changes of several scenes booked at the step (one pass over those scenes' elements,
+// one wait) are bit for bit the same changes each read right after it on the device, in double
+// and float (the CPU batch's test: BatchInputEvents in tests/test_batch_input.cpp).
+TEST(OpenCLBatchSimulator, ElementChangesBookedAtTheStepAreTheChangesBookedAtOnce) {
+  const std::vector<Scene> scenes = testing::mixedBatchScenes();
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const BatchCase c{Integrator::EnergyBlend, 1.0 / 60.0, 4};
+    const SimulatorOptions options = batchOptions(c, BackendKind::OpenCL, precision);
+    BatchSimulator at_once(scenes, options), at_step(scenes, options);
+    at_once.step();
+    at_step.step();
+    testing::changeElementsOfSeveralScenes(at_once, scenes, /*read_after_each=*/true);
+    testing::changeElementsOfSeveralScenes(at_step, scenes, /*read_after_each=*/false);
+    for (int step = 0; step < c.steps; ++step) {
+      const BatchStepReport& a = at_once.step();
+      const BatchStepReport& b = at_step.step();
+      for (int s = 0; s < at_once.size(); ++s) {
+        ASSERT_EQ(a.scenes[std::size_t(s)].event_energy, b.scenes[std::size_t(s)].event_energy) << "scene " << s;
+        if (step == 0) {
+          EXPECT_NE(b.scenes[std::size_t(s)].event_energy, 0.0) << "scene " << s;
+        }
+        ASSERT_EQ(at_once.positions(s), at_step.positions(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(at_once.target(s), at_step.target(s)) << "scene " << s << ", step " << step;
+        ASSERT_EQ(at_once.energy(s).elastic, at_step.energy(s).elastic) << "scene " << s << ", step " << step;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace stabint

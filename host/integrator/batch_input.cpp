@@ -96,6 +96,7 @@ void BatchDriver::bookState(int scene, double h_before, const PotentialEnergy& p
 
 void BatchDriver::setState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   checkState(scene, positions, velocities, "setState");
+  settleEvents();  // their potentials are of the positions before
   const double h_before = storeState(scene, positions, velocities);
   const SceneSegment& seg = segments_[std::size_t(scene)];
   writeStateRows(seg.first_particle, seg.first_particle + seg.num_particles);
@@ -117,6 +118,7 @@ void BatchDriver::setStates(const std::vector<int>& scenes, const std::vector<Ei
     if (listed[std::size_t(scenes[i])]++)
       throw InvalidInputError(scope(scenes[i], "setStates").where() + "listed twice");
   }
+  settleEvents();  // their potentials are of the positions before
   // The scenes' events are independent (each books its own H*, each contact set is its scene's),
   // so storing every scene's rows before the contact sets and the potentials changes none of
   // them. One write of the rows from the first listed scene's to the last's (the scenes between
@@ -143,18 +145,36 @@ void BatchDriver::setExternalForces(int scene, const Eigen::MatrixX3d& forces) {
   p.momentum_conserved = momentumConserved(scenes_[std::size_t(scene)], p.has_user_forces);
 }
 
+void BatchDriver::settleEvents() {
+  if (unsettled_.empty()) return;
+  // Each scene's potential is its own elements' at its own rows: the other scenes' changes since
+  // do not enter it, and potentialsOf gives potentialOf's values bit for bit.
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentialsOf(unsettled_, kX, t_, potentials);
+  for (std::size_t i = 0; i < unsettled_.size(); ++i) {
+    PerScene& p = per_scene_[std::size_t(unsettled_[i])];
+    p.potential = potentials[i];
+    p.event_unsettled = false;
+    bookEvent(unsettled_[i], p.h_before_event);
+  }
+  unsettled_.clear();
+}
+
 template <typename Change>
 void BatchDriver::changeElementsAsEvent(int scene, const char* call, Change&& change) {
   checkScene(scene, call);
-  const PerScene& p = per_scene_[std::size_t(scene)];
+  PerScene& p = per_scene_[std::size_t(scene)];
+  if (p.event_unsettled) settleEvents();  // this change's H before is the last one's H after
   const double h_before = p.kinetic + p.potential.total();
   change();
-  per_scene_[std::size_t(scene)].potential = backend_->potentialOf(scene, kX, t_);
-  bookEvent(scene, h_before);
+  p.event_unsettled = true;
+  p.h_before_event = h_before;
+  unsettled_.push_back(scene);
   pinsChanged(scene);
 }
 
 int BatchDriver::grab(int scene, int vertex, double stiffness) {
+  settleEvents();  // the pin ranges of the later scenes move
   const InputRange own = scope(scene, "grab").pins(data_);
   const std::vector<Pin> pins = frameInput(scene, "grab").pinsAfterGrab(vertex, stiffness, x_);
   changeElementsAsEvent(scene, "grab", [&] {
@@ -169,6 +189,7 @@ int BatchDriver::grab(int scene, int vertex, double stiffness) {
 }
 
 void BatchDriver::release(int scene, int pin) {
+  settleEvents();  // the pin block is rebuilt
   const std::vector<Pin> pins = frameInput(scene, "release").pinsAfterRelease(pin, t_);
   changeElementsAsEvent(scene, "release", [&] { elementChanges(scene, "release").changePins(pins); });
 }

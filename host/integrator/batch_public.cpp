@@ -53,7 +53,7 @@ int BatchSimulator::stepCount(int scene) const {
 }
 double BatchSimulator::target(int scene) const {
   impl_->checkScene(scene, "target");
-  return impl_->per_scene_[std::size_t(scene)].target;
+  return impl_->target(scene);
 }
 EnergyReport BatchSimulator::energy(int scene) const {
   impl_->checkScene(scene, "energy");

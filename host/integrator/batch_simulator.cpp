@@ -102,9 +102,14 @@ double BatchDriver::kineticEnergy(int scene, const Eigen::MatrixX3d& v) const {
 
 Eigen::MatrixX3d BatchDriver::positions(int scene) const { return rowsOf(x_, segments_[std::size_t(scene)]); }
 Eigen::MatrixX3d BatchDriver::velocities(int scene) const { return rowsOf(v_, segments_[std::size_t(scene)]); }
-EnergyReport BatchDriver::energy(int scene) const {
+EnergyReport BatchDriver::energy(int scene) {
+  settleEvents();
   const PerScene& p = per_scene_[std::size_t(scene)];
   return EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
+}
+double BatchDriver::target(int scene) {
+  settleEvents();
+  return per_scene_[std::size_t(scene)].target;
 }
 
 void BatchDriver::checkScene(int scene, const char* call) const {
@@ -135,6 +140,7 @@ std::string BatchDriver::backendDescription() const {
 }
 
 const BatchStepReport& BatchDriver::step() {
+  settleEvents();  // before the step's clock and phase times, as when each change settled at once
   const auto start = std::chrono::steady_clock::now();
   backend_->times() = PhaseTimes{};
   const double h = options_.time_step;

@@ -86,6 +86,12 @@ struct BatchDriver {
   void changeElementsAsEvent(int scene, const char* call, Change&& change);
   // H* and the pending event energy of the scene move by the jump of H from h_before.
   void bookEvent(int scene, double h_before);
+  // An element change books its event later: H after the change needs the scene's potential, a
+  // backend pass and, on a device, a wait, which the changes of many scenes before a step then
+  // share (one potentialsOf). Whatever reads a scene's energies or H*, or changes its positions,
+  // pins or time, settles them first, and a second change of an unsettled scene settles the
+  // first: every event is what an evaluation right after its change books, bit for bit.
+  void settleEvents();
   // The scene's own copy follows the batch's pins (a grab, a release, a pin's stiffness), and
   // with it whether the scene conserves momentum.
   void pinsChanged(int scene);
@@ -95,7 +101,10 @@ struct BatchDriver {
   void checkScene(int scene, const char* call) const;
   Eigen::MatrixX3d positions(int scene) const;
   Eigen::MatrixX3d velocities(int scene) const;
-  EnergyReport energy(int scene) const;
+  /// The scene's energies (its events settled).
+  EnergyReport energy(int scene);
+  /// The scene's H* (its events settled).
+  double target(int scene);
 
   struct PerScene {
     bool active = true;
@@ -108,6 +117,8 @@ struct BatchDriver {
     bool momentum_conserved = false;
     bool has_user_forces = false;       // setExternalForces was called for the scene
     double pending_event_energy = 0.0;  // booked by setState and element changes since the last step
+    bool event_unsettled = false;       // an element change's event waits for settleEvents
+    double h_before_event = 0.0;        // H before that change
     // This step's.
     bool stepping = false;            // active, and not refused so far in this step
     bool velocities_changed = false;  // the host copy v_new differs from kVNew's rows
@@ -204,6 +215,7 @@ struct BatchDriver {
   double t_ = 0.0;                                                    // the batch's time (of the active scenes)
   bool has_history_ = false;                                          // BDF2: (kXPrev, kVPrev) hold the previous step
   std::vector<PerScene> per_scene_;
+  std::vector<int> unsettled_;  // the scenes whose event_unsettled is set, in the order changed
   BatchStepReport report_;
   // A Simulator's batch of one (forSimulator): a refused step throws and leaves everything as it
   // was (a batch's refused scene turns inactive while the batch's time goes on), and messages

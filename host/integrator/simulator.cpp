@@ -47,7 +47,7 @@ const Eigen::MatrixX3d& Simulator::positions() const { return impl_->driver->x_;
 const Eigen::MatrixX3d& Simulator::velocities() const { return impl_->driver->v_; }
 double Simulator::time() const { return impl_->time(); }
 int Simulator::stepCount() const { return impl_->state().steps; }
-double Simulator::target() const { return impl_->state().target; }
+double Simulator::target() const { return impl_->driver->target(0); }
 EnergyReport Simulator::energy() const { return impl_->driver->energy(0); }
 double Simulator::energyScale() const { return impl_->state().energy_scale; }
 const Scene& Simulator::scene() const { return impl_->driver->data_.scene(); }

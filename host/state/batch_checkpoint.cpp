@@ -83,6 +83,7 @@ void spliceForces(SceneData::Ramp& all, int first, int count, const SceneData::R
 }  // namespace
 
 CheckpointData BatchDriver::batchData() {
+  settleEvents();
   CheckpointData d;
   d.scene_fingerprint = sceneFingerprint(data_.scene());
   d.particles = data_.numParticles();

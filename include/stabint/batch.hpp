@@ -200,7 +200,9 @@ class BatchSimulator {
   void release(int scene, int pin);
   /// Element `index` (or `indices`) of `kind` of scene `scene` (its index in that scene's list)
   /// gets `stiffness`, as Simulator::setElementStiffness: an event of that scene, its block of
-  /// the factor updated.
+  /// the factor updated. Its event is booked when first needed (the step, energy(), target(), a
+  /// checkpoint, ...), so the changes of many scenes before a step share one energy pass and,
+  /// on a device, one wait.
   ///@{
   void setElementStiffness(int scene, ElementKind kind, int index, double stiffness);
   void setElementStiffness(int scene, ElementKind kind, const std::vector<int>& indices, double stiffness);

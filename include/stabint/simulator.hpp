@@ -44,7 +44,8 @@ class Checkpoint {
 };
 
 /// Steps a scene with one integrator. The scene is validated and copied at construction; the
-/// caller's scene is never modified.
+/// caller's scene is never modified. One thread at a time: the const getters may finish work
+/// the input calls left for them (an element change's event is booked when first read).
 class Simulator {
  public:
   /// Throws InvalidInputError for a bad scene or options (also for masses too small for the
@@ -148,7 +149,9 @@ class Simulator {
   /// term, a rank-R update or downdate of the factors (R = rows of its A_e: 1 for springs, hinges
   /// and pins, 2 for triangle strain, 3 for tets). Time, state, BDF2 history and H* are kept.
   /// scene() shows the new stiffness. The list form changes several elements at once (all
-  /// validated before any changes).
+  /// validated before any changes). The event is booked when something first needs it (step(),
+  /// energy(), target(), checkpoint(), setState(), grab(), release() or the next change), with
+  /// the same value as at once; in a batch the changes of many scenes so share one pass.
   ///@{
   void setElementStiffness(ElementKind kind, int index, double stiffness);
   void setElementStiffness(ElementKind kind, const std::vector<int>& indices, double stiffness);

@@ -146,7 +146,8 @@ inline void setStateInBoth(BatchSimulator& batch, std::vector<Simulator>& alone,
 }
 
 /// Element changes of the mixed scenes (mixedBatchScenes) before one step, as a frame of a game
-/// gives them: the bar's tets softened, a chain spring stiffened, forces on the cloth, a second
+/// gives them: the bar's tets softened, a chain spring stiffened, the chain's pin moved and
+/// forces on the chain and the cloth, a second
 /// change of the bar (a tet disabled), 70 cloth springs stiffened (past the factor's update price:
 /// a refactorization) and the triangle cloth's hinges disabled. With `read_after_each` each
 /// change's event is read (target()) right after it, which books it there; without, the events
@@ -160,6 +161,10 @@ inline void changeElementsOfSeveralScenes(BatchSimulator& batch, const std::vect
   read(2);
   batch.setElementStiffness(0, ElementKind::Spring, 1, 3.0 * scenes[0].springs[1].stiffness);
   read(0);
+  // Ramps that start at this time leave the potential there as it was: the chain's unsettled
+  // event is booked after them as before them.
+  batch.setPinTarget(0, 0, batch.pinTarget(0, 0) + Eigen::Vector3d(0.01, 0.0, 0.0));
+  batch.setExternalForces(0, Eigen::MatrixX3d::Constant(scenes[0].numParticles(), 3, -0.001));
   batch.setExternalForces(1, Eigen::MatrixX3d::Constant(scenes[1].numParticles(), 3, 0.002));
   batch.setElementEnabled(2, ElementKind::Tet, 1, false);
   read(2);

@@ -484,8 +484,10 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   SimulatorOptions options;
   options.integrator = Integrator::BackwardEuler;
   options.tolerance = 1e-6;
+  options.acceleration = Acceleration::None;
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
   options.tolerance = 0.0;
+  options.acceleration = Acceleration::LBFGS;
   options.global_solve = GlobalSolve::ConjugateGradient;
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
   options.global_solve = GlobalSolve::Factor;
@@ -497,10 +499,13 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
   options.acceleration = Acceleration::LBFGS;  // per scene
   EXPECT_NO_THROW(BatchSimulator(scenes, options));
-  options.gradient_tolerance = 1e-3;  // a stop for the whole batch
-  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  options.gradient_tolerance = 1e-3;  // per scene too
+  options.tolerance = 1e-6;
+  EXPECT_NO_THROW(BatchSimulator(scenes, options));
   options.gradient_tolerance = 0.0;
   options.acceleration = Acceleration::None;
+  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);  // plain iterations' stop: the whole batch's
+  options.tolerance = 0.0;
   // Simulator's own checks come first.
   options.integrator = Integrator::BackwardEuler;
   options.time_step = -1.0;
@@ -581,6 +586,44 @@ TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
 // (LocalGlobalSolver::setSegments): each scene takes the iterates it takes alone, so the blend's
 // decisions and states are again its own Simulator's.
 TEST(BatchSimulatorBlend, LbfgsSolvesArePerScene) { expectBlendBatchFollowsItsScenes(Acceleration::LBFGS); }
+
+// L-BFGS's stops by accuracy in a batch are per scene: each scene stops its solve where its own
+// Simulator stops (the same iterations in every step's report, the partner's and the full-budget
+// BE's included), stays at that iterate while the others go on, and follows its own trajectory.
+// The objective-change stop and the gradient stop, BE, BDF2, IM and the blend; the scenes stop
+// at different counts within one step (else nothing per scene was exercised; a scene may also run
+// into the cap, 60, as its own Simulator does).
+TEST(BatchSimulator, LbfgsStopsByAccuracyArePerScene) {
+  const std::vector<Scene> scenes = mixedBatchScenes();
+  for (Integrator integrator :
+       {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {
+    for (int stop = 0; stop < 2; ++stop) {
+      SimulatorOptions options;
+      options.integrator = integrator;
+      options.time_step = 1.0 / 60.0;
+      options.acceleration = Acceleration::LBFGS;
+      (stop == 0 ? options.tolerance : options.gradient_tolerance) = stop == 0 ? 1e-7 : 1e-3;
+      options.max_iterations = 60;
+      if (stop == 1) options.iterations = 60;  // the gradient stop's cap
+      const std::string what = std::string(integratorName(integrator)) + (stop == 0 ? ", tolerance" : ", gradient");
+      BatchSimulator batch(scenes, options);
+      std::vector<Simulator> alone;
+      for (const Scene& s : scenes) alone.emplace_back(s, options);
+      int steps_with_different_counts = 0;
+      for (int step = 0; step < 15; ++step) {
+        const BatchStepReport& report =
+            testing::stepAndExpectSame(batch, alone, what + ", step " + std::to_string(step));
+        int fewest = report.scenes[0].iterations, most = fewest;
+        for (const StepReport& r : report.scenes) {
+          fewest = std::min(fewest, r.iterations);
+          most = std::max(most, r.iterations);
+        }
+        if (fewest < most) ++steps_with_different_counts;
+      }
+      EXPECT_GT(steps_with_different_counts, 0) << what;
+    }
+  }
+}
 
 // With an energy ceiling far below the blend's band, the steps whose energy ends above H* are
 // refused: each scene at the step its own Simulator refuses, with its message; the others step on.

@@ -15,20 +15,22 @@
 namespace stabint {
 namespace {
 
-// Simulator's checks, then the options that couple the scenes of a batch of more than one: a
-// tolerance stop, Chebyshev and Anderson acceleration, Newton-CG and CG reduce over the whole
-// vector (one scene's blow-up would reach the others through them). A batch of one scene has
+// Simulator's checks, then the options that couple the scenes of a batch of more than one:
+// Chebyshev and Anderson acceleration, Newton-CG, CG and plain iterations' tolerance stop reduce
+// over the whole vector (one scene's blow-up would reach the others through them); L-BFGS's
+// reductions and stops are per scene. A batch of one scene has
 // nothing to couple and takes every option its Simulator takes. The backend is refused later,
 // once created, unless it computes per-scene energies (Backend::computesPerScene).
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o, std::size_t scenes) {
   validateOptions(o);
-  const bool per_scene_solver = o.acceleration == Acceleration::None || o.acceleration == Acceleration::LBFGS;
-  if (scenes > 1 &&
-      (o.tolerance != 0.0 || o.gradient_tolerance != 0.0 || !per_scene_solver || o.global_solve != GlobalSolve::Factor))
+  const bool lbfgs = o.acceleration == Acceleration::LBFGS;
+  const bool per_scene_solver = o.acceleration == Acceleration::None || lbfgs;
+  const bool stops = o.tolerance != 0.0 || o.gradient_tolerance != 0.0;
+  if (scenes > 1 && ((stops && !lbfgs) || !per_scene_solver || o.global_solve != GlobalSolve::Factor))
     throw InvalidInputError(
-        "batch simulator options: with more than one scene, a tolerance stop (tolerance, gradient_tolerance), "
-        "Chebyshev, Anderson or Newton acceleration and CG sum over the whole batch: a fixed iteration count with the "
-        "factor only, plain or L-BFGS (per scene), until they are per scene");
+        "batch simulator options: with more than one scene, Chebyshev, Anderson or Newton acceleration, CG and a "
+        "tolerance stop (tolerance, gradient_tolerance) of plain iterations sum over the whole batch: the factor "
+        "only, plain iterations with a fixed count or L-BFGS (per scene, its stops too), until they are per scene");
   return o;
 }
 
@@ -258,6 +260,10 @@ void BatchDriver::commit(double t1) {
   t_ = t1;
 }
 
+int BatchDriver::sceneIterations(std::size_t s, int done) const {
+  return done == 0 ? 0 : solver_.segmentIterations(s);  // 0: an explicit step, no solve
+}
+
 IterationControl BatchDriver::iterationControl(int iterations) const {
   // A batch of more than one measures each scene against its own scale (LocalGlobalSolver's
   // segments); the whole-vector controls it refuses. A batch of one is its scene.
@@ -279,7 +285,7 @@ void BatchDriver::integrate(double t1, bool forced) {
     PerScene& p = per_scene_[s];
     if (!p.stepping) continue;
     StepReport& r = report_.scenes[s];
-    r.iterations = iterations;
+    r.iterations = sceneIterations(s, iterations);
     r.energy_evaluations = evaluated ? 1 : 0;
     p.x_new = blockOf(x_new_, segments_[s]);
     p.v_new = blockOf(v_new_, segments_[s]);
@@ -312,7 +318,7 @@ void BatchDriver::blend(double t1, bool forced) {
     if (!p.stepping) continue;
     StepReport& r = report_.scenes[s];
     const Eigen::VectorXd& masses = scenes_[s].masses;
-    r.iterations = im_iterations;
+    r.iterations = sceneIterations(s, im_iterations);
     r.energy_evaluations = 1;
     p.blend.start(BlendScene{&masses, p.momentum_conserved, p.energy_scale,
                              blendTolerance(options_, p.kinetic, p.potential, p.energy_scale)},
@@ -350,7 +356,7 @@ void BatchDriver::blend(double t1, bool forced) {
       if (!not_finite[s]) continue;
       PerScene& p = per_scene_[s];
       StepReport& r = report_.scenes[s];
-      r.iterations += iterations;
+      r.iterations += sceneIterations(s, iterations);
       r.energy_evaluations += evaluated ? 1 : 0;
       p.x_new = blockOf(x_aux_, segments_[s]);
       p.v_new = blockOf(v_aux_, segments_[s]);
@@ -375,7 +381,7 @@ void BatchDriver::blend(double t1, bool forced) {
   for (std::size_t s = 0; s < n; ++s) {
     if (!needs_partner[s]) continue;
     PerScene& p = per_scene_[s];
-    report_.scenes[s].iterations += be_iterations;
+    report_.scenes[s].iterations += sceneIterations(s, be_iterations);
     p.blend.partnerPositions() = blockOf(x_aux_, segments_[s]);
     p.blend.partnerVelocities() = blockOf(v_aux_, segments_[s]);
     p.blend.partnerRead();

@@ -171,6 +171,8 @@ struct BatchDriver {
   // The integrators but the blend: the candidates of every stepping scene, with their forcing.
   void integrate(double t1, bool forced);
   IterationControl iterationControl(int iterations) const;
+  // Scene s's iterations in the solve that did `done` (LocalGlobalSolver::segmentIterations).
+  int sceneIterations(std::size_t s, int done) const;
   // The blend in lockstep: one IM solve, at most one partner solve (and one full-budget BE solve
   // when some scene's IM candidate blew up), one batched energy pass per root-find round.
   void blend(double t1, bool forced);

@@ -427,9 +427,17 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   if (objective_history) objective_history->assign(1, objective[0]);
 
   int done = 0;
-  converged_.assign(segments, 0);
+  // A segment whose stop (by accuracy) was met takes no more steps: it stays at the iterate it
+  // stopped at, with the iterations done by then, as the scene alone stops its solve there.
+  stopped_.assign(segments, 0);
+  segment_iterations_.assign(segments, 0);
+  int running = static_cast<int>(segments);
+  auto stop = [&](std::size_t s) {
+    stopped_[s] = 1;
+    segment_iterations_[s] = done;
+    --running;
+  };
   const std::vector<char>& moved = moved_;
-  std::vector<char>& converged = converged_;
   auto forgetSegment = [&](std::size_t s) {
     for (auto& rho : history_rho_) rho[s] = 0.0;
   };
@@ -445,16 +453,18 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     ++done;
     if (by_gradient) {
       if (done == 1) initial_decrement.assign(segments, 0.0);
-      bool all = true;
       for (std::size_t s = 0; s < segments; ++s) {
+        if (stopped_[s]) continue;
         const double decrement = std::sqrt(std::max(0.0, -slope[s]));
         if (done == 1) initial_decrement[s] = decrement;
-        all = all && decrement <= control.gradient_tolerance * initial_decrement[s];
+        // Converged: the direction's solve is spent, but the segment takes no step along it
+        // (its rows of slot x and its objective stay the accepted iterate's).
+        if (done > 1 && decrement <= control.gradient_tolerance * initial_decrement[s]) stop(s);
       }
-      // Converged: the direction's solve is spent, but no local step follows (slot x and the
-      // objective are still the accepted iterate's).
-      if (all && done > 1) break;
+      if (running == 0) break;
     }
+    for (std::size_t s = 0; s < segments; ++s)
+      if (stopped_[s]) slope[s] = 0.0;  // no step (lineSearch)
     // With positive curvature pairs H is positive definite and the direction descends; a slope
     // >= 0 is round-off (or a converged segment). A segment that does not move restarts from the
     // plain step.
@@ -476,15 +486,19 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
       // A segment that stayed for want of decrease has not converged: it restarts from the plain step.
       const bool stayed = !moved[s] && step[s] != 0.0;
       const double change = std::abs(objective[s] - trial_objective[s]);
-      converged[s] = to_tolerance && !stayed &&
-                     change <= control.tolerance * std::max(std::abs(trial_objective[s]), control.energy_scale);
+      const double scale = segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
+      if (to_tolerance && !stopped_[s] && !stayed &&
+          change <= control.tolerance * std::max(std::abs(trial_objective[s]), scale))
+        stop(s);
       objective[s] = trial_objective[s];
     }
     newest = slot;
     stored = std::min(stored + 1, window);
     if (objective_history) objective_history->push_back(objective[0]);
-    if (to_tolerance && std::all_of(converged.begin(), converged.end(), [](char c) { return c != 0; })) break;
+    if (running == 0) break;
   }
+  for (std::size_t s = 0; s < segments; ++s)
+    if (!stopped_[s]) segment_iterations_[s] = done;
   return done;
 }
 

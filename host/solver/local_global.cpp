@@ -56,9 +56,16 @@ int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationCo
                              std::vector<double>* objective_history) {
   result_potentials_.clear();
   if (control.acceleration == Acceleration::LBFGS) return solveLbfgs(c, y, x, t, control, objective_history);
-  if (control.acceleration == Acceleration::Newton) return solveNewton(c, y, x, t, control, objective_history);
-  if (control.acceleration != Acceleration::None) return solveAccelerated(c, y, x, t, control, objective_history);
-  return solvePlain(c, y, x, t, control, objective_history);
+  int done = 0;
+  if (control.acceleration == Acceleration::Newton) {
+    done = solveNewton(c, y, x, t, control, objective_history);
+  } else if (control.acceleration != Acceleration::None) {
+    done = solveAccelerated(c, y, x, t, control, objective_history);
+  } else {
+    done = solvePlain(c, y, x, t, control, objective_history);
+  }
+  segment_iterations_.assign(std::max<std::size_t>(1, rows_.size()), done);
+  return done;
 }
 
 int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const IterationControl& control,

@@ -66,6 +66,11 @@ class LocalGlobalSolver {
   /// same positions. Empty otherwise.
   const std::vector<PotentialEnergy>& potentialsOfResult() const { return result_potentials_; }
 
+  /// The iterations segment `s` took in the last solve: the solve's count, but in an L-BFGS
+  /// solve with a stop by accuracy (tolerance, gradient_tolerance), where each segment stops on
+  /// its own, as its scene alone would, and stays there while the others go on.
+  int segmentIterations(std::size_t s) const { return segment_iterations_[s]; }
+
   /// Accelerated iterates rejected (objective rose) since construction.
   int rejectedAccelerations() const { return rejected_; }
 
@@ -140,7 +145,8 @@ class LocalGlobalSolver {
   std::vector<std::vector<double>> history_rho_, history_alpha_, history_sg_;
   std::vector<Eigen::MatrixXd> gram_;
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
-  std::vector<char> accepted_, moved_, converged_;
+  std::vector<char> accepted_, moved_, stopped_;
+  std::vector<int> segment_iterations_;  // of the last solve, per segment
   // Newton-CG: the scene, each spring's transverse coefficient w min(1, r/|u|) and direction at
   // the iterate, the CG vectors.
   const SceneData* scene_ = nullptr;

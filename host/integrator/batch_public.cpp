@@ -49,7 +49,7 @@ double BatchSimulator::time(int scene) const {
 }
 int BatchSimulator::stepCount(int scene) const {
   impl_->checkScene(scene, "stepCount");
-  return impl_->per_scene_[std::size_t(scene)].steps;
+  return static_cast<int>(impl_->per_scene_[std::size_t(scene)].steps);
 }
 double BatchSimulator::target(int scene) const {
   impl_->checkScene(scene, "target");

@@ -188,7 +188,7 @@ void BatchDriver::startScenes(double t1) {
   for (std::size_t s = 0; s < n; ++s) {
     PerScene& p = per_scene_[s];
     StepReport& r = report_.scenes[s];
-    r.step = p.steps;
+    r.step = static_cast<int>(p.steps);
     r.time = t1;
     r.event_energy = p.pending_event_energy;
     p.stepping = p.active;
@@ -245,7 +245,7 @@ void BatchDriver::commit(double t1) {
       p.active = false;
       const double event_energy = r.event_energy;
       r = StepReport{};
-      r.step = p.steps;
+      r.step = static_cast<int>(p.steps);
       r.time = p.time;
       r.event_energy = event_energy;
     }

@@ -106,19 +106,16 @@ struct BatchDriver {
   /// The scene's H* (its events settled).
   double target(int scene);
 
-  struct PerScene {
+  // A scene's book (time, steps, energies of the accepted state, H*, the pending event energy:
+  // what its checkpoint saves and restores as one value), and what the driver derives or keeps
+  // for the step.
+  struct PerScene : SceneBook {
     bool active = true;
-    double time = 0.0;
-    int steps = 0;
-    double kinetic = 0.0;
-    PotentialEnergy potential;  // of the accepted state at `time`
-    double target = 0.0;
     double energy_scale = 0.0;
     bool momentum_conserved = false;
-    bool has_user_forces = false;       // setExternalForces was called for the scene
-    double pending_event_energy = 0.0;  // booked by setState and element changes since the last step
-    bool event_unsettled = false;       // an element change's event waits for settleEvents
-    double h_before_event = 0.0;        // H before that change
+    bool has_user_forces = false;  // setExternalForces was called for the scene
+    bool event_unsettled = false;  // an element change's event waits for settleEvents
+    double h_before_event = 0.0;   // H before that change
     // This step's.
     bool stepping = false;            // active, and not refused so far in this step
     bool velocities_changed = false;  // the host copy v_new differs from kVNew's rows

@@ -46,7 +46,7 @@ const StepReport& Simulator::step() {
 const Eigen::MatrixX3d& Simulator::positions() const { return impl_->driver->x_; }
 const Eigen::MatrixX3d& Simulator::velocities() const { return impl_->driver->v_; }
 double Simulator::time() const { return impl_->time(); }
-int Simulator::stepCount() const { return impl_->state().steps; }
+int Simulator::stepCount() const { return static_cast<int>(impl_->state().steps); }
 double Simulator::target() const { return impl_->driver->target(0); }
 EnergyReport Simulator::energy() const { return impl_->driver->energy(0); }
 double Simulator::energyScale() const { return impl_->state().energy_scale; }

@@ -1,8 +1,14 @@
 #pragma once
-// SceneData: the validated scene in the form both backends consume. Built once per Simulator;
-// everything here is immutable afterwards except the forcing: pin targets, external forces and
-// collider motion, which a running simulation's input replaces (docs/method.md, "Per-frame input"). Backends
-// evaluate the forcing through pinTarget/externalForces and key their caches on forcingVersion().
+// SceneData: the validated scene in the form both backends consume, built once per Simulator or
+// batch. Not immutable: a running simulation's input changes three parts of it, each through its
+// own calls and a version the backends key their caches on (docs/method.md, "Per-frame input"):
+// - the forcing: pin targets, external forces and collider motion as ramps (forcingVersion,
+//   forcesVersion; backends evaluate it through pinTarget and externalForces);
+// - element stiffnesses and enabled flags: the params in place (ElementBlock::params_revision);
+// - the pin set (grab, release): the pin block and the contribution lists rebuilt (layoutVersion).
+// The rest is fixed. The other owners of the running state are the driver (positions,
+// velocities, each scene's SceneBook), the backends' slots and the factors (GlobalSystem), which
+// follow the element weights through GlobalSystem::apply.
 #include "elements/element_type.hpp"
 
 #include <stabint/scene.hpp>

@@ -111,12 +111,7 @@ CheckpointData BatchDriver::sceneData(const CheckpointData& all, int scene) cons
   d.pin_list = rangeOf(all.pin_list, seg.first_element[pb], seg.num_elements[pb]);
   for (Pin& pin : d.pin_list) pin.vertex -= seg.first_particle;
   d.pins = static_cast<std::int64_t>(d.pin_list.size());
-  d.time = p.time;
-  d.steps = p.steps;
-  d.target = p.target;
-  d.kinetic = p.kinetic;
-  d.potential = p.potential;
-  d.pending_event_energy = p.pending_event_energy;
+  static_cast<SceneBook&>(d) = p;
   // An inactive scene's rows of the history slots hold its kept state, not its history.
   d.has_history = all.has_history && p.active;
   d.x = all.x.middleRows(seg.first_particle, seg.num_particles);
@@ -280,12 +275,7 @@ void BatchDriver::restoreChecked(const CheckpointData& all, const std::vector<Sc
 
 void BatchDriver::restoreScalars(PerScene& p, const CheckpointData& d, double time) {
   p.active = d.time == time;
-  p.time = d.time;
-  p.steps = static_cast<int>(d.steps);
-  p.kinetic = d.kinetic;
-  p.potential = d.potential;
-  p.target = d.target;
-  p.pending_event_energy = d.pending_event_energy;
+  static_cast<SceneBook&>(p) = d;
   p.has_user_forces = d.forcing.user_forces.active;
 }
 

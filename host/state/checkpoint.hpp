@@ -12,16 +12,24 @@
 
 namespace stabint {
 
-struct CheckpointData {
+/// A scene's energy books between steps: its clock, its energies, H* and the event energy the next
+/// step reports. One value, which the driver keeps per scene (BatchDriver::PerScene) and a
+/// checkpoint holds (CheckpointData), so that saving and restoring them is one assignment.
+struct SceneBook {
+  double time = 0.0;
+  std::int64_t steps = 0;
+  double target = 0.0;  // H*
+  double kinetic = 0.0;
+  PotentialEnergy potential;          // of the state at `time`
+  double pending_event_energy = 0.0;  // booked by events since the last step
+};
+
+/// A checkpoint's contents: the scene's book (for a whole batch's, the batch's time only) and the
+/// rest of its state.
+struct CheckpointData : SceneBook {
   std::uint64_t scene_fingerprint = 0;  // sceneFingerprint() of the scene it belongs to
   std::int64_t particles = 0, pins = 0;
   std::vector<Pin> pin_list;  // `pins` of them: the scene's, grabbed and released
-  double time = 0.0;
-  std::int64_t steps = 0;
-  double target = 0.0;
-  double kinetic = 0.0;
-  PotentialEnergy potential;  // of the state at `time`
-  double pending_event_energy = 0.0;
   bool has_history = false;
   Eigen::MatrixX3d x, v, x_prev, v_prev;
   SceneData::ForcingState forcing;

@@ -720,43 +720,44 @@ TEST(OpenCLBatchSimulator, ContactFollowsTheCpuBatch) {
   }
 }
 
-// L-BFGS's stops by accuracy on the device are per scene as on the CPU reference
-// (BatchSimulator.LbfgsStopsByAccuracyArePerScene): each scene of the device batch takes the
+// Stops by accuracy on the device are per scene as on the CPU reference
+// (BatchSimulator.StopsByAccuracyArePerScene): each scene of the device batch takes the
 // iterations its own device Simulator takes, step by step, and follows its trajectory (the
-// solver's decisions are the host's, on the device's per-scene objectives), in double and float;
-// the scenes stop at different counts.
-TEST(OpenCLBatchSimulatorStops, LbfgsStopsByAccuracyArePerScene) {
+// solver's decisions are the host's, on the device's per-scene objectives), L-BFGS's and plain
+// iterations' tolerance stop, in double and float; the scenes stop at different counts.
+TEST(OpenCLBatchSimulatorStops, StopsByAccuracyArePerScene) {
   const std::vector<Scene> scenes = testing::mixedBatchScenes();
-  for (Precision precision : availablePrecisions()) {
-    SCOPED_TRACE(precisionName(precision));
-    SimulatorOptions options =
-        batchOptions(BatchCase{Integrator::EnergyBlend, 1.0 / 60.0, 8}, BackendKind::OpenCL, precision);
-    options.acceleration = Acceleration::LBFGS;
-    options.tolerance = precision == Precision::Float ? 1e-5 : 1e-7;
-    options.max_iterations = 60;
-    BatchSimulator batch(scenes, options);
-    std::vector<Simulator> alone;
-    for (const Scene& s : scenes) alone.emplace_back(s, options);
-    int steps_with_different_counts = 0;
-    for (int step = 0; step < 8; ++step) {
-      const BatchStepReport& report = batch.step();
-      int fewest = report.scenes[0].iterations, most = fewest;
-      for (std::size_t s = 0; s < scenes.size(); ++s) {
-        SCOPED_TRACE("scene " + std::to_string(s) + " step " + std::to_string(step));
-        const StepReport& own = alone[s].step();
-        EXPECT_TRUE(report.refusals[s].empty()) << report.refusals[s];
-        EXPECT_EQ(report.scenes[s].iterations, own.iterations);
-        EXPECT_EQ(report.scenes[s].branch, own.branch);
-        expectBookedAndEnergiesNear(report.scenes[s], own, crossBackendTolerance(precision) * alone[s].energyScale());
-        EXPECT_LE(testing::relativeError(batch.positions(int(s)), alone[s].positions()),
-                  crossBackendTolerance(precision));
-        fewest = std::min(fewest, report.scenes[s].iterations);
-        most = std::max(most, report.scenes[s].iterations);
+  for (Precision precision : availablePrecisions())
+    for (Acceleration acceleration : {Acceleration::LBFGS, Acceleration::None}) {
+      SCOPED_TRACE(precisionName(precision) + std::string(acceleration == Acceleration::None ? ", plain" : ", L-BFGS"));
+      SimulatorOptions options =
+          batchOptions(BatchCase{Integrator::EnergyBlend, 1.0 / 60.0, 8}, BackendKind::OpenCL, precision);
+      options.acceleration = acceleration;
+      options.tolerance = precision == Precision::Float ? 1e-5 : 1e-7;
+      options.max_iterations = 60;
+      BatchSimulator batch(scenes, options);
+      std::vector<Simulator> alone;
+      for (const Scene& s : scenes) alone.emplace_back(s, options);
+      int steps_with_different_counts = 0;
+      for (int step = 0; step < 8; ++step) {
+        const BatchStepReport& report = batch.step();
+        int fewest = report.scenes[0].iterations, most = fewest;
+        for (std::size_t s = 0; s < scenes.size(); ++s) {
+          SCOPED_TRACE("scene " + std::to_string(s) + " step " + std::to_string(step));
+          const StepReport& own = alone[s].step();
+          EXPECT_TRUE(report.refusals[s].empty()) << report.refusals[s];
+          EXPECT_EQ(report.scenes[s].iterations, own.iterations);
+          EXPECT_EQ(report.scenes[s].branch, own.branch);
+          expectBookedAndEnergiesNear(report.scenes[s], own, crossBackendTolerance(precision) * alone[s].energyScale());
+          EXPECT_LE(testing::relativeError(batch.positions(int(s)), alone[s].positions()),
+                    crossBackendTolerance(precision));
+          fewest = std::min(fewest, report.scenes[s].iterations);
+          most = std::max(most, report.scenes[s].iterations);
+        }
+        if (fewest < most) ++steps_with_different_counts;
       }
-      if (fewest < most) ++steps_with_different_counts;
+      EXPECT_GT(steps_with_different_counts, 0);
     }
-    EXPECT_GT(steps_with_different_counts, 0);
-  }
 }
 
 }  // namespace

@@ -16,21 +16,19 @@ namespace stabint {
 namespace {
 
 // Simulator's checks, then the options that couple the scenes of a batch of more than one:
-// Chebyshev and Anderson acceleration, Newton-CG, CG and plain iterations' tolerance stop reduce
-// over the whole vector (one scene's blow-up would reach the others through them); L-BFGS's
-// reductions and stops are per scene. A batch of one scene has
+// Chebyshev and Anderson acceleration, Newton-CG and CG reduce over the whole vector (one scene's
+// blow-up would reach the others through them); plain iterations' and L-BFGS's reductions and
+// stops are per scene. A batch of one scene has
 // nothing to couple and takes every option its Simulator takes. The backend is refused later,
 // once created, unless it computes per-scene energies (Backend::computesPerScene).
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o, std::size_t scenes) {
   validateOptions(o);
-  const bool lbfgs = o.acceleration == Acceleration::LBFGS;
-  const bool per_scene_solver = o.acceleration == Acceleration::None || lbfgs;
-  const bool stops = o.tolerance != 0.0 || o.gradient_tolerance != 0.0;
-  if (scenes > 1 && ((stops && !lbfgs) || !per_scene_solver || o.global_solve != GlobalSolve::Factor))
+  const bool per_scene_solver = o.acceleration == Acceleration::None || o.acceleration == Acceleration::LBFGS;
+  if (scenes > 1 && (!per_scene_solver || o.global_solve != GlobalSolve::Factor))
     throw InvalidInputError(
-        "batch simulator options: with more than one scene, Chebyshev, Anderson or Newton acceleration, CG and a "
-        "tolerance stop (tolerance, gradient_tolerance) of plain iterations sum over the whole batch: the factor "
-        "only, plain iterations with a fixed count or L-BFGS (per scene, its stops too), until they are per scene");
+        "batch simulator options: with more than one scene, Chebyshev, Anderson or Newton acceleration and CG sum "
+        "over the whole batch: the factor only, with plain iterations or L-BFGS (per scene, their stops by "
+        "accuracy too), until they are per scene");
   return o;
 }
 

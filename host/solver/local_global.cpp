@@ -63,6 +63,7 @@ int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationCo
     done = solveAccelerated(c, y, x, t, control, objective_history);
   } else {
     done = solvePlain(c, y, x, t, control, objective_history);
+    if (control.tolerance > 0.0 && rows_.size() > 1) return done;  // per segment (solvePlainPerSegment)
   }
   segment_iterations_.assign(std::max<std::size_t>(1, rows_.size()), done);
   return done;
@@ -73,6 +74,7 @@ int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const Iterat
   const bool to_tolerance = control.tolerance > 0.0;
   const bool track = to_tolerance || objective_history != nullptr;
   const int limit = to_tolerance ? control.max_iterations : control.iterations;
+  if (to_tolerance && rows_.size() > 1) return solvePlainPerSegment(c, y, x, t, control);
   if (control.global_solve == GlobalSolve::ConjugateGradient && !onBackend(control)) backend_.read(x, x_host_);
   if (!track) {
     for (int done = 0; done < limit; ++done) {
@@ -112,6 +114,55 @@ int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const Iterat
     previous = current;
     if (to_tolerance && change <= control.tolerance * std::max(std::abs(current), control.energy_scale)) break;
   }
+  return done;
+}
+
+// Plain iterations of a batch with the tolerance stop: each segment's objective is its scene's
+// (Backend::potentials and massDots: the numbers its own Simulator's solve computes) and so is
+// its stop; a segment that has stopped keeps its iterate (its rows are written back after every
+// later global step) and the count at its stop, while the others go on. An energy pass per
+// iteration besides the local step: the local step's own energy is the batch's sum.
+int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, const IterationControl& control) {
+  const std::size_t segments = rows_.size();
+  std::vector<double>&previous = scalars_[0], &current = scalars_[1], &dots = scalars_[2];
+  auto objectives = [&](std::vector<double>& out) {
+    backend_.potentials(x, t, segment_potentials_);
+    backend_.combine(scratch_, 1.0, x, -1.0, y);
+    backend_.massDots(scratch_, scratch_, dots);
+    out.resize(segments);
+    for (std::size_t s = 0; s < segments; ++s) out[s] = 0.5 * c * dots[s] + segment_potentials_[s].total();
+  };
+  stopped_.assign(segments, 0);
+  segment_iterations_.assign(segments, 0);
+  std::size_t running = segments;
+  objectives(previous);
+  int done = 0;
+  while (done < control.max_iterations) {
+    localStep(c, y, x, t, control, nullptr);
+    globalStep(c, x, control, /*to_host=*/true);
+    ++done;
+    for (std::size_t s = 0; s < segments && running < segments; ++s)
+      if (stopped_[s])
+        x_host_.middleRows(rows_[s].first, rows_[s].count) = x_stopped_.middleRows(rows_[s].first, rows_[s].count);
+    backend_.write(x, x_host_);
+    objectives(current);
+    for (std::size_t s = 0; s < segments; ++s) {
+      if (stopped_[s]) continue;
+      const double scale = segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
+      if (std::abs(previous[s] - current[s]) <= control.tolerance * std::max(std::abs(current[s]), scale)) {
+        stopped_[s] = 1;
+        segment_iterations_[s] = done;
+        --running;
+        if (x_stopped_.rows() != x_host_.rows()) x_stopped_.resize(x_host_.rows(), 3);
+        x_stopped_.middleRows(rows_[s].first, rows_[s].count) = x_host_.middleRows(rows_[s].first, rows_[s].count);
+      }
+    }
+    previous.swap(current);
+    if (running == 0) break;
+  }
+  for (std::size_t s = 0; s < segments; ++s)
+    if (!stopped_[s]) segment_iterations_[s] = done;
+  result_potentials_ = segment_potentials_;  // of slot x as it is left
   return done;
 }
 

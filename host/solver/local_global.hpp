@@ -66,9 +66,9 @@ class LocalGlobalSolver {
   /// same positions. Empty otherwise.
   const std::vector<PotentialEnergy>& potentialsOfResult() const { return result_potentials_; }
 
-  /// The iterations segment `s` took in the last solve: the solve's count, but in an L-BFGS
-  /// solve with a stop by accuracy (tolerance, gradient_tolerance), where each segment stops on
-  /// its own, as its scene alone would, and stays there while the others go on.
+  /// The iterations segment `s` took in the last solve: the solve's count, but with a stop by
+  /// accuracy (L-BFGS's tolerance or gradient_tolerance, plain iterations' tolerance), where each
+  /// segment stops on its own, as its scene alone would, and stays there while the others go on.
   int segmentIterations(std::size_t s) const { return segment_iterations_[s]; }
 
   /// Accelerated iterates rejected (objective rose) since construction.
@@ -87,6 +87,7 @@ class LocalGlobalSolver {
  private:
   int solvePlain(double c, int y, int x, double t, const IterationControl& control,
                  std::vector<double>* objective_history);
+  int solvePlainPerSegment(double c, int y, int x, double t, const IterationControl& control);
   int solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
                        std::vector<double>* objective_history);
   // Newton-CG with the springs' projected Hessians (host/solver/newton.cpp).
@@ -147,6 +148,7 @@ class LocalGlobalSolver {
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, stopped_;
   std::vector<int> segment_iterations_;  // of the last solve, per segment
+  Eigen::MatrixX3d x_stopped_;           // plain iterations: the stopped segments' iterates
   // Newton-CG: the scene, each spring's transverse coefficient w min(1, r/|u|) and direction at
   // the iterate, the CG vectors.
   const SceneData* scene_ = nullptr;

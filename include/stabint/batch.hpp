@@ -92,12 +92,12 @@ class BatchCheckpoint {
 ///
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
 /// scene valid and with the same gravity, a backend that computes per-scene energies (the CPU
-/// reference and OpenCL) and, with more than one scene, the factor (no Chebyshev, Anderson or
-/// Newton acceleration, no CG, no tolerance stop of plain iterations: they sum over the whole
-/// batch, and one scene's blow-up would reach the others through them). Acceleration::LBFGS (the
-/// default) runs per scene: its dot products, line search and history are each scene's own, and
-/// so are its stops by accuracy (tolerance, gradient_tolerance): each scene stops its solve where
-/// its own Simulator would and reports its own iterations. A batch of one
+/// reference and OpenCL) and, with more than one scene, the factor with plain iterations or
+/// Acceleration::LBFGS (no Chebyshev, Anderson or Newton acceleration, no CG: they sum over the
+/// whole batch, and one scene's blow-up would reach the others through them). L-BFGS (the
+/// default) runs per scene: its dot products, line search and history are each scene's own. The
+/// stops by accuracy (tolerance, gradient_tolerance) are per scene: each scene stops its solve
+/// where its own Simulator would and reports its own iterations. A batch of one
 /// scene takes every option its Simulator takes and steps as that Simulator does, bit for bit on
 /// the CPU reference (tests/test_batch_of_one.cpp).
 class BatchSimulator {

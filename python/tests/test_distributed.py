@@ -153,13 +153,13 @@ def test_a_refused_scene_is_reported_and_the_others_step_on():
 
 
 def test_batches_of_one_take_the_options_that_couple_scenes():
-    # Plain iterations' tolerance stop reduces over the whole batch, so a batch of several scenes
-    # refuses it (next test); with batch_size 1 each scene is its own Simulator, bit for bit.
-    options = {"integrator": "BackwardEuler", "acceleration": "None_", "tolerance": 1e-6}
+    # With batch_size 1 each scene is its own Simulator, bit for bit (a batch of several scenes
+    # refuses the options that reduce over the whole batch: next test).
+    options = {"integrator": "BackwardEuler", "acceleration": "Anderson"}
     results = sweep([BuiltinScene("chain"), BuiltinScene("chain", {"stiffness": 1e3})], options, 5, batch_size=1,
                     client=None)
     sim = stabint.Simulator(stabint.chain_pendulum(), stabint.SimulatorOptions(
-        integrator=stabint.Integrator.BackwardEuler, acceleration=stabint.Acceleration.None_, tolerance=1e-6))
+        integrator=stabint.Integrator.BackwardEuler, acceleration=stabint.Acceleration.Anderson))
     for _ in range(5):
         sim.step()
     assert (results[0].positions[-1] == sim.positions).all()
@@ -174,10 +174,9 @@ def test_bad_input_is_an_invalid_input_error_naming_the_problem(client):
         sweep([Cell(BuiltinScene("chain"), {"h": 0.01})], OPTIONS, 10, client=client)
     with pytest.raises(stabint.InvalidInputError, match="batch_size must be an integer >= 1"):
         sweep([BuiltinScene("chain")], OPTIONS, 10, batch_size=0, client=client)
-    # Options a batch cannot run (plain iterations' tolerance stop sums over the whole batch),
-    # before any task.
+    # Options a batch cannot run (Anderson acceleration sums over the whole batch), before any task.
     with pytest.raises(stabint.InvalidInputError, match="scene 0: batch simulator options"):
-        sweep([BuiltinScene("chain")], {"tolerance": 1e-4, "acceleration": "None_"}, 10, client=client)
+        sweep([BuiltinScene("chain")], {"acceleration": "Anderson"}, 10, client=client)
     # Scenes of one options group must share gravity: the worker's BatchSimulator says which
     # batch, and the error reaches the caller with its class.
     upside_down = stabint.chain_pendulum()

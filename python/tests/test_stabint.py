@@ -957,11 +957,13 @@ def test_a_batch_refuses_what_would_couple_its_scenes_naming_the_scene():
     other_gravity.gravity = np.array([0.0, -1.0, 0.0])
     with pytest.raises(stabint.InvalidInputError, match="scene 1"):
         stabint.BatchSimulator([stabint.chain_pendulum(), other_gravity])
-    plain_to_tolerance = stabint.SimulatorOptions(tolerance=1e-6, acceleration=stabint.Acceleration.None_)
-    with pytest.raises(stabint.InvalidInputError, match="more than one scene.*tolerance"):
-        stabint.BatchSimulator([oscillator, oscillator], plain_to_tolerance)
-    stabint.BatchSimulator([oscillator], plain_to_tolerance)  # a batch of one takes it
-    stabint.BatchSimulator([oscillator, oscillator], stabint.SimulatorOptions(tolerance=1e-6))  # L-BFGS: per scene
+    anderson = stabint.SimulatorOptions(acceleration=stabint.Acceleration.Anderson)
+    with pytest.raises(stabint.InvalidInputError, match="more than one scene.*Anderson"):
+        stabint.BatchSimulator([oscillator, oscillator], anderson)
+    stabint.BatchSimulator([oscillator], anderson)  # a batch of one takes it
+    for acceleration in (stabint.Acceleration.LBFGS, stabint.Acceleration.None_):  # stops per scene
+        stabint.BatchSimulator([oscillator, oscillator], stabint.SimulatorOptions(tolerance=1e-6,
+                                                                                  acceleration=acceleration))
     batch = stabint.BatchSimulator([oscillator])
     with pytest.raises(stabint.InvalidInputError):
         batch.positions(1)

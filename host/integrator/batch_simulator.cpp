@@ -18,9 +18,9 @@ namespace {
 // Simulator's checks, then the options that couple the scenes of a batch of more than one:
 // Chebyshev and Anderson acceleration, Newton-CG and CG reduce over the whole vector (one scene's
 // blow-up would reach the others through them); plain iterations' and L-BFGS's reductions and
-// stops are per scene. A batch of one scene has
-// nothing to couple and takes every option its Simulator takes. The backend is refused later,
-// once created, unless it computes per-scene energies (Backend::computesPerScene).
+// stops are per scene. A batch of one scene has nothing to couple and takes every option its
+// Simulator takes. The backend is refused later, once created, unless it computes per-scene
+// energies (Backend::computesPerScene).
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o, std::size_t scenes) {
   validateOptions(o);
   const bool per_scene_solver = o.acceleration == Acceleration::None || o.acceleration == Acceleration::LBFGS;

@@ -121,7 +121,7 @@ void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const Itera
     localStepObjectives(c, y, x, t, trial_objective);
     for (std::size_t s = 0; s < segments; ++s) {
       if (accepted_[s]) continue;
-      const double scale = segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
+      const double scale = segmentScale(control, s);
       const double noise = 1e-12 * std::max(std::abs(objective[s]), scale);
       if (trial_objective[s] <= objective[s] + kArmijo * step[s] * slope[s] + noise) {
         accepted_[s] = 1;
@@ -429,14 +429,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   int done = 0;
   // A segment whose stop (by accuracy) was met takes no more steps: it stays at the iterate it
   // stopped at, with the iterations done by then, as the scene alone stops its solve there.
-  stopped_.assign(segments, 0);
-  segment_iterations_.assign(segments, 0);
-  int running = static_cast<int>(segments);
-  auto stop = [&](std::size_t s) {
-    stopped_[s] = 1;
-    segment_iterations_[s] = done;
-    --running;
-  };
+  startSegmentStops(segments);
   const std::vector<char>& moved = moved_;
   auto forgetSegment = [&](std::size_t s) {
     for (auto& rho : history_rho_) rho[s] = 0.0;
@@ -459,9 +452,9 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
         if (done == 1) initial_decrement[s] = decrement;
         // Converged: the direction's solve is spent, but the segment takes no step along it
         // (its rows of slot x and its objective stay the accepted iterate's).
-        if (done > 1 && decrement <= control.gradient_tolerance * initial_decrement[s]) stop(s);
+        if (done > 1 && decrement <= control.gradient_tolerance * initial_decrement[s]) stopSegment(s, done);
       }
-      if (running == 0) break;
+      if (running_segments_ == 0) break;
     }
     for (std::size_t s = 0; s < segments; ++s)
       if (stopped_[s]) slope[s] = 0.0;  // no step (lineSearch)
@@ -486,19 +479,17 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
       // A segment that stayed for want of decrease has not converged: it restarts from the plain step.
       const bool stayed = !moved[s] && step[s] != 0.0;
       const double change = std::abs(objective[s] - trial_objective[s]);
-      const double scale = segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
       if (to_tolerance && !stopped_[s] && !stayed &&
-          change <= control.tolerance * std::max(std::abs(trial_objective[s]), scale))
-        stop(s);
+          change <= control.tolerance * std::max(std::abs(trial_objective[s]), segmentScale(control, s)))
+        stopSegment(s, done);
       objective[s] = trial_objective[s];
     }
     newest = slot;
     stored = std::min(stored + 1, window);
     if (objective_history) objective_history->push_back(objective[0]);
-    if (running == 0) break;
+    if (running_segments_ == 0) break;
   }
-  for (std::size_t s = 0; s < segments; ++s)
-    if (!stopped_[s]) segment_iterations_[s] = done;
+  finishSegmentStops(done);
   return done;
 }
 

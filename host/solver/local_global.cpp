@@ -55,18 +55,37 @@ void LocalGlobalSolver::globalStep(double c, int x, const IterationControl& cont
 int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationControl& control,
                              std::vector<double>* objective_history) {
   result_potentials_.clear();
+  // These two count each segment's iterations themselves (a segment may stop before the others).
   if (control.acceleration == Acceleration::LBFGS) return solveLbfgs(c, y, x, t, control, objective_history);
+  const bool plain = control.acceleration == Acceleration::None;
+  if (plain && control.tolerance > 0.0 && rows_.size() > 1) return solvePlainPerSegment(c, y, x, t, control);
   int done = 0;
-  if (control.acceleration == Acceleration::Newton) {
-    done = solveNewton(c, y, x, t, control, objective_history);
-  } else if (control.acceleration != Acceleration::None) {
-    done = solveAccelerated(c, y, x, t, control, objective_history);
-  } else {
+  if (plain) {
     done = solvePlain(c, y, x, t, control, objective_history);
-    if (control.tolerance > 0.0 && rows_.size() > 1) return done;  // per segment (solvePlainPerSegment)
+  } else if (control.acceleration == Acceleration::Newton) {
+    done = solveNewton(c, y, x, t, control, objective_history);
+  } else {
+    done = solveAccelerated(c, y, x, t, control, objective_history);
   }
   segment_iterations_.assign(std::max<std::size_t>(1, rows_.size()), done);
   return done;
+}
+
+void LocalGlobalSolver::startSegmentStops(std::size_t segments) {
+  stopped_.assign(segments, 0);
+  segment_iterations_.assign(segments, 0);
+  running_segments_ = segments;
+}
+
+void LocalGlobalSolver::stopSegment(std::size_t s, int done) {
+  stopped_[s] = 1;
+  segment_iterations_[s] = done;
+  --running_segments_;
+}
+
+void LocalGlobalSolver::finishSegmentStops(int done) {
+  for (std::size_t s = 0; s < stopped_.size(); ++s)
+    if (!stopped_[s]) segment_iterations_[s] = done;
 }
 
 int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const IterationControl& control,
@@ -74,7 +93,6 @@ int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const Iterat
   const bool to_tolerance = control.tolerance > 0.0;
   const bool track = to_tolerance || objective_history != nullptr;
   const int limit = to_tolerance ? control.max_iterations : control.iterations;
-  if (to_tolerance && rows_.size() > 1) return solvePlainPerSegment(c, y, x, t, control);
   if (control.global_solve == GlobalSolve::ConjugateGradient && !onBackend(control)) backend_.read(x, x_host_);
   if (!track) {
     for (int done = 0; done < limit; ++done) {
@@ -132,36 +150,31 @@ int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, co
     out.resize(segments);
     for (std::size_t s = 0; s < segments; ++s) out[s] = 0.5 * c * dots[s] + segment_potentials_[s].total();
   };
-  stopped_.assign(segments, 0);
-  segment_iterations_.assign(segments, 0);
-  std::size_t running = segments;
+  startSegmentStops(segments);
   objectives(previous);
   int done = 0;
   while (done < control.max_iterations) {
     localStep(c, y, x, t, control, nullptr);
     globalStep(c, x, control, /*to_host=*/true);
     ++done;
-    for (std::size_t s = 0; s < segments && running < segments; ++s)
+    for (std::size_t s = 0; s < segments && running_segments_ < segments; ++s)
       if (stopped_[s])
         x_host_.middleRows(rows_[s].first, rows_[s].count) = x_stopped_.middleRows(rows_[s].first, rows_[s].count);
     backend_.write(x, x_host_);
     objectives(current);
     for (std::size_t s = 0; s < segments; ++s) {
       if (stopped_[s]) continue;
-      const double scale = segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
+      const double scale = segmentScale(control, s);
       if (std::abs(previous[s] - current[s]) <= control.tolerance * std::max(std::abs(current[s]), scale)) {
-        stopped_[s] = 1;
-        segment_iterations_[s] = done;
-        --running;
+        stopSegment(s, done);
         if (x_stopped_.rows() != x_host_.rows()) x_stopped_.resize(x_host_.rows(), 3);
         x_stopped_.middleRows(rows_[s].first, rows_[s].count) = x_host_.middleRows(rows_[s].first, rows_[s].count);
       }
     }
     previous.swap(current);
-    if (running == 0) break;
+    if (running_segments_ == 0) break;
   }
-  for (std::size_t s = 0; s < segments; ++s)
-    if (!stopped_[s]) segment_iterations_[s] = done;
+  finishSegmentStops(done);
   result_potentials_ = segment_potentials_;  // of slot x as it is left
   return done;
 }

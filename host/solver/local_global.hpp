@@ -88,6 +88,15 @@ class LocalGlobalSolver {
   int solvePlain(double c, int y, int x, double t, const IterationControl& control,
                  std::vector<double>* objective_history);
   int solvePlainPerSegment(double c, int y, int x, double t, const IterationControl& control);
+  // Segment s's energy scale: its scene's in a batch (setSegments), else the control's.
+  double segmentScale(const IterationControl& control, std::size_t s) const {
+    return segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
+  }
+  // The stops by accuracy per segment in one solve: none stopped at the start; segment s stopped
+  // after `done` iterations (it takes no more steps); at the end the others get the solve's count.
+  void startSegmentStops(std::size_t segments);
+  void stopSegment(std::size_t s, int done);
+  void finishSegmentStops(int done);
   int solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
                        std::vector<double>* objective_history);
   // Newton-CG with the springs' projected Hessians (host/solver/newton.cpp).
@@ -147,6 +156,7 @@ class LocalGlobalSolver {
   std::vector<Eigen::MatrixXd> gram_;
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, stopped_;
+  std::size_t running_segments_ = 0;     // not stopped yet in this solve
   std::vector<int> segment_iterations_;  // of the last solve, per segment
   Eigen::MatrixX3d x_stopped_;           // plain iterations: the stopped segments' iterates
   // Newton-CG: the scene, each spring's transverse coefficient w min(1, r/|u|) and direction at

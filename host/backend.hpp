@@ -120,6 +120,15 @@ class Backend {
     localStepGradient(x, y, c, t, gradient, nullptr);
     potentials(x, t, per_scene);
   }
+  /// localStepRhs with every segment's potential at `x` (as potentials() gives them): a batch's
+  /// Chebyshev and Anderson solves, whose safeguard compares each scene's objective. A backend
+  /// that can sum per segment in the same element pass does one pass; the others run
+  /// potentials() after it.
+  virtual void localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
+                                    std::vector<PotentialEnergy>& per_scene) {
+    localStepRhs(x, y, c, t, rhs, nullptr);
+    potentials(x, t, per_scene);
+  }
   /// potentials()[segment] alone; a backend that can pass over one segment's elements costs that
   /// segment's (one scene's event in a batch), the others pass over all of them.
   virtual PotentialEnergy potentialOf(int segment, int x, double t) {

@@ -723,13 +723,15 @@ TEST(OpenCLBatchSimulator, ContactFollowsTheCpuBatch) {
 // Stops by accuracy on the device are per scene as on the CPU reference
 // (BatchSimulator.StopsByAccuracyArePerScene): each scene of the device batch takes the
 // iterations its own device Simulator takes, step by step, and follows its trajectory (the
-// solver's decisions are the host's, on the device's per-scene objectives), L-BFGS's and plain
-// iterations' tolerance stop, in double and float; the scenes stop at different counts.
+// solver's decisions are the host's, on the device's per-scene objectives: the projection pass's
+// per-scene energies for Chebyshev and Anderson, Backend::localStepRhsPerScene), the tolerance
+// stop of every solver, in double and float; the scenes stop at different counts.
 TEST(OpenCLBatchSimulatorStops, StopsByAccuracyArePerScene) {
   const std::vector<Scene> scenes = testing::mixedBatchScenes();
   for (Precision precision : availablePrecisions())
-    for (Acceleration acceleration : {Acceleration::LBFGS, Acceleration::None}) {
-      SCOPED_TRACE(precisionName(precision) + std::string(acceleration == Acceleration::None ? ", plain" : ", L-BFGS"));
+    for (Acceleration acceleration : {Acceleration::LBFGS, Acceleration::None, Acceleration::Chebyshev,
+                                      Acceleration::Anderson, Acceleration::Newton}) {
+      SCOPED_TRACE(precisionName(precision) + std::string(", ") + accelerationName(acceleration));
       SimulatorOptions options =
           batchOptions(BatchCase{Integrator::EnergyBlend, 1.0 / 60.0, 8}, BackendKind::OpenCL, precision);
       options.acceleration = acceleration;

@@ -486,14 +486,12 @@ TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
   options.global_solve = GlobalSolve::ConjugateGradient;
   EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
   options.global_solve = GlobalSolve::Factor;
-  options.acceleration = Acceleration::Anderson;
-  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
-  options.acceleration = Acceleration::Chebyshev;
-  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
-  options.acceleration = Acceleration::Newton;  // not per scene yet
-  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
-  options.acceleration = Acceleration::LBFGS;  // per scene
-  EXPECT_NO_THROW(BatchSimulator(scenes, options));
+  for (Acceleration per_scene :
+       {Acceleration::LBFGS, Acceleration::Anderson, Acceleration::Chebyshev, Acceleration::Newton}) {
+    options.acceleration = per_scene;
+    EXPECT_NO_THROW(BatchSimulator(scenes, options)) << accelerationName(per_scene);
+  }
+  options.acceleration = Acceleration::LBFGS;
   options.gradient_tolerance = 1e-3;  // its stops are per scene too
   options.tolerance = 1e-6;
   EXPECT_NO_THROW(BatchSimulator(scenes, options));
@@ -582,6 +580,22 @@ TEST(BatchSimulatorBlend, EveryScenesBranchAndStateAreItsOwnSimulators) {
 // decisions and states are again its own Simulator's.
 TEST(BatchSimulatorBlend, LbfgsSolvesArePerScene) { expectBlendBatchFollowsItsScenes(Acceleration::LBFGS); }
 
+// 15 steps of the batch against its scenes' own Simulators (testing::stepAndExpectSame); returns
+// how many of them had scenes that took different iteration counts.
+int stepsWithDifferentCounts(BatchSimulator& batch, std::vector<Simulator>& alone, const std::string& what) {
+  int steps_with_different_counts = 0;
+  for (int step = 0; step < 15; ++step) {
+    const BatchStepReport& report = testing::stepAndExpectSame(batch, alone, what + ", step " + std::to_string(step));
+    int fewest = report.scenes[0].iterations, most = fewest;
+    for (const StepReport& r : report.scenes) {
+      fewest = std::min(fewest, r.iterations);
+      most = std::max(most, r.iterations);
+    }
+    if (fewest < most) ++steps_with_different_counts;
+  }
+  return steps_with_different_counts;
+}
+
 // Stops by accuracy in a batch are per scene: each scene stops its solve where its own Simulator
 // stops (the same iterations in every step's report, the partner's and the full-budget BE's
 // included), stays at that iterate while the others go on, and follows its own trajectory.
@@ -610,18 +624,39 @@ TEST(BatchSimulator, StopsByAccuracyArePerScene) {
       BatchSimulator batch(scenes, options);
       std::vector<Simulator> alone;
       for (const Scene& s : scenes) alone.emplace_back(s, options);
-      int steps_with_different_counts = 0;
-      for (int step = 0; step < 15; ++step) {
-        const BatchStepReport& report =
-            testing::stepAndExpectSame(batch, alone, what + ", step " + std::to_string(step));
-        int fewest = report.scenes[0].iterations, most = fewest;
-        for (const StepReport& r : report.scenes) {
-          fewest = std::min(fewest, r.iterations);
-          most = std::max(most, r.iterations);
+      EXPECT_GT(stepsWithDifferentCounts(batch, alone, what), 0) << what;
+    }
+  }
+}
+
+// Chebyshev, Anderson and Newton-CG in a batch: each scene has its own rule, objective, safeguard
+// or CG and line search, and tolerance stop, so it takes the iterates its own Simulator takes
+// (states to round-off, the same iterations and branches). With a fixed count and with the
+// tolerance stop (the scenes then stop at different counts within a step), BE, IM and the blend.
+TEST(BatchSimulator, AccelerationsArePerScene) {
+  const std::vector<Scene> scenes = mixedBatchScenes();
+  for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::Newton}) {
+    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {
+      for (const bool stop : {false, true}) {
+        SimulatorOptions options;
+        options.integrator = integrator;
+        options.time_step = 1.0 / 60.0;
+        options.acceleration = acceleration;
+        options.iterations = 12;
+        if (stop) {
+          options.tolerance = 1e-6;
+          options.max_iterations = 60;
         }
-        if (fewest < most) ++steps_with_different_counts;
+        const std::string what = std::string(accelerationName(acceleration)) + ", " + integratorName(integrator) +
+                                 (stop ? ", tolerance" : ", fixed count");
+        BatchSimulator batch(scenes, options);
+        std::vector<Simulator> alone;
+        for (const Scene& s : scenes) alone.emplace_back(s, options);
+        const int steps_with_different_counts = stepsWithDifferentCounts(batch, alone, what);
+        if (stop) {
+          EXPECT_GT(steps_with_different_counts, 0) << what;
+        }
       }
-      EXPECT_GT(steps_with_different_counts, 0) << what;
     }
   }
 }

@@ -123,6 +123,20 @@ class CpuBackend final : public Backend {
     times_.local += secondsSince(start);
   }
 
+  // A batch's Chebyshev or Anderson: the projections and every scene's energy at once.
+  void localStepRhsPerScene(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& rhs,
+                            std::vector<PotentialEnergy>& per_scene) override {
+    if (segments_.size() <= 1) {
+      Backend::localStepRhsPerScene(x_slot, y_slot, c, t, rhs, per_scene);
+      return;
+    }
+    const auto start = Clock::now();
+    rhs = (c * slots_[y_slot]).array().colwise() * scene_.masses().array();
+    rhs += externalForces(t);
+    segmentPasses(slots_[x_slot], t, kPassProjection | kPassEnergy, &rhs, per_scene);
+    times_.local += secondsSince(start);
+  }
+
   PotentialEnergy potentialOf(int segment, int slot, double t) override {
     if (segments_.size() == 1) return potential(slot, t);  // as potentials() for a batch of one
     const auto start = Clock::now();

@@ -15,20 +15,18 @@
 namespace stabint {
 namespace {
 
-// Simulator's checks, then the options that couple the scenes of a batch of more than one:
-// Chebyshev and Anderson acceleration, Newton-CG and CG reduce over the whole vector (one scene's
-// blow-up would reach the others through them); plain iterations' and L-BFGS's reductions and
-// stops are per scene. A batch of one scene has nothing to couple and takes every option its
-// Simulator takes. The backend is refused later, once created, unless it computes per-scene
-// energies (Backend::computesPerScene).
+// Simulator's checks, then the option that couples the scenes of a batch of more than one: CG's
+// dot products run over the whole vector (one scene's blow-up would reach the others through
+// them); every acceleration's reductions, safeguards, line searches and stops are per scene. A
+// batch of one scene has nothing to couple and takes every option its Simulator takes. The
+// backend is refused later, once created, unless it computes per-scene energies
+// (Backend::computesPerScene).
 const SimulatorOptions& checkedOptions(const SimulatorOptions& o, std::size_t scenes) {
   validateOptions(o);
-  const bool per_scene_solver = o.acceleration == Acceleration::None || o.acceleration == Acceleration::LBFGS;
-  if (scenes > 1 && (!per_scene_solver || o.global_solve != GlobalSolve::Factor))
+  if (scenes > 1 && o.global_solve != GlobalSolve::Factor)
     throw InvalidInputError(
-        "batch simulator options: with more than one scene, Chebyshev, Anderson or Newton acceleration and CG sum "
-        "over the whole batch: the factor only, with plain iterations or L-BFGS (per scene, their stops by "
-        "accuracy too), until they are per scene");
+        "batch simulator options: with more than one scene, the global solve by CG sums over the whole batch: "
+        "the factor only (every acceleration and the stops by accuracy run per scene), until it is per scene");
   return o;
 }
 
@@ -73,7 +71,7 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
   if (!backend_->computesPerScene())
     throw InvalidInputError("batch simulator: the backend (" + backend_->description() +
                             ") computes no per-scene energies yet (docs/batch_design.md)");
-  solver_.setScene(&data_);  // Newton-CG's spring Hessians (a batch of one only)
+  solver_.setScene(&data_);  // Newton-CG's spring Hessians
   factorIntegratorSystems(system_, options_);
   backend_->setSegments(segments_);
   backend_->write(kX, x_);

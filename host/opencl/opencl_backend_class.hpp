@@ -141,6 +141,8 @@ class OpenCLBackend final : public Backend {
 
   void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
                                  std::vector<PotentialEnergy>& per_scene) override;
+  void localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
+                            std::vector<PotentialEnergy>& per_scene) override;
 
   PotentialEnergy potentialOf(int segment, int x, double t) override;
   void potentialsOf(const std::vector<int>& segments, int x, double t, std::vector<PotentialEnergy>& out) override;
@@ -203,7 +205,7 @@ class OpenCLBackend final : public Backend {
 
   // The element pass with `flags` (plus the energy when asked for), then `gather` over its
   // contributions into rhs_, read back to `out`: localStepRhs and localStepGradient. With
-  // `per_scene` (a batch's: localStepGradientPerScene) the pass also writes each element's energy
+  // `per_scene` (a batch's: localStepGradientPerScene, localStepRhsPerScene) the pass also writes each element's energy
   // and the per-scene sums follow the gather, read into host_segment_sums_ before the same wait.
   template <class GatherArgs>
   void gatheredLocalStep(int flags, Launch& gather, const GatherArgs& args, int x, int y, double c, double t,

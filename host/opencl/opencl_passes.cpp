@@ -82,6 +82,20 @@ void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, doub
   for (std::size_t s = 0; s < segments_.size(); ++s) per_scene[s] = segmentEnergies(s);
 }
 
+// The same for a batch's Chebyshev and Anderson: the projection pass writes each element's energy.
+template <typename Real>
+void OpenCLBackend<Real>::localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
+                                               std::vector<PotentialEnergy>& per_scene) {
+  checkSegmentsFit();
+  if (segmentIsWholeScene() || segments_.empty()) {
+    Backend::localStepRhsPerScene(x, y, c, t, rhs, per_scene);
+    return;
+  }
+  gatheredLocalStep(kPassProjection, gather_rhs_, gather_rhs_args_, x, y, c, t, rhs, nullptr, /*per_scene=*/true);
+  per_scene.resize(segments_.size());
+  for (std::size_t s = 0; s < segments_.size(); ++s) per_scene[s] = segmentEnergies(s);
+}
+
 template <typename Real>
 void OpenCLBackend<Real>::setGlobalMatrix(const Eigen::SparseMatrix<double>& laplacian) {
   const auto start = Clock::now();

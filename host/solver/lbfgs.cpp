@@ -67,13 +67,8 @@ void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, st
   }
   backend_.localStepGradientPerScene(x, y, c, t, trial_gradient_, segment_potentials_);
   result_potentials_ = segment_potentials_;
-  for (std::size_t s = 0; s < rows_.size(); ++s) {
-    const Segment& seg = rows_[s];
-    const auto d = x_trial_.middleRows(seg.first, seg.count) - y_host_.middleRows(seg.first, seg.count);
-    const double inertial =
-        0.5 * c * (d.rowwise().squaredNorm().transpose() * masses_.segment(seg.first, seg.count))(0);
-    objective[s] = inertial + segment_potentials_[s].total();
-  }
+  for (std::size_t s = 0; s < rows_.size(); ++s)
+    objective[s] = segmentInertia(c, x_trial_, s) + segment_potentials_[s].total();
 }
 
 void LocalGlobalSolver::applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,

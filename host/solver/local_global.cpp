@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include <Eigen/Dense>
 
@@ -55,18 +56,13 @@ void LocalGlobalSolver::globalStep(double c, int x, const IterationControl& cont
 int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationControl& control,
                              std::vector<double>* objective_history) {
   result_potentials_.clear();
-  // These two count each segment's iterations themselves (a segment may stop before the others).
+  // These count each segment's iterations themselves (a segment may stop before the others).
   if (control.acceleration == Acceleration::LBFGS) return solveLbfgs(c, y, x, t, control, objective_history);
-  const bool plain = control.acceleration == Acceleration::None;
-  if (plain && control.tolerance > 0.0 && rows_.size() > 1) return solvePlainPerSegment(c, y, x, t, control);
-  int done = 0;
-  if (plain) {
-    done = solvePlain(c, y, x, t, control, objective_history);
-  } else if (control.acceleration == Acceleration::Newton) {
-    done = solveNewton(c, y, x, t, control, objective_history);
-  } else {
-    done = solveAccelerated(c, y, x, t, control, objective_history);
-  }
+  if (control.acceleration == Acceleration::Newton) return solveNewton(c, y, x, t, control, objective_history);
+  if (control.acceleration == Acceleration::Chebyshev || control.acceleration == Acceleration::Anderson)
+    return solveAccelerated(c, y, x, t, control, objective_history);
+  if (control.tolerance > 0.0 && rows_.size() > 1) return solvePlainPerSegment(c, y, x, t, control);
+  const int done = solvePlain(c, y, x, t, control, objective_history);
   segment_iterations_.assign(std::max<std::size_t>(1, rows_.size()), done);
   return done;
 }
@@ -136,15 +132,16 @@ int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const Iterat
 }
 
 // Plain iterations of a batch with the tolerance stop: each segment's objective is its scene's
-// (Backend::potentials and massDots: the numbers its own Simulator's solve computes) and so is
-// its stop; a segment that has stopped keeps its iterate (its rows are written back after every
-// later global step) and the count at its stop, while the others go on. An energy pass per
-// iteration besides the local step: the local step's own energy is the batch's sum.
+// (the local step's per-scene energies and massDots: the numbers its own Simulator's solve
+// computes) and so is its stop; a segment that has stopped keeps its iterate (its rows are
+// written back after every later global step) and the count at its stop, while the others go on.
+// The local step at each iterate gives both its objectives and the next global step's
+// right-hand side: one element pass per iteration.
 int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, const IterationControl& control) {
   const std::size_t segments = rows_.size();
   std::vector<double>&previous = scalars_[0], &current = scalars_[1], &dots = scalars_[2];
   auto objectives = [&](std::vector<double>& out) {
-    backend_.potentials(x, t, segment_potentials_);
+    backend_.localStepRhsPerScene(x, y, c, t, rhs_, segment_potentials_);
     backend_.combine(scratch_, 1.0, x, -1.0, y);
     backend_.massDots(scratch_, scratch_, dots);
     out.resize(segments);
@@ -154,7 +151,6 @@ int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, co
   objectives(previous);
   int done = 0;
   while (done < control.max_iterations) {
-    localStep(c, y, x, t, control, nullptr);
     globalStep(c, x, control, /*to_host=*/true);
     ++done;
     for (std::size_t s = 0; s < segments && running_segments_ < segments; ++s)
@@ -179,12 +175,10 @@ int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, co
   return done;
 }
 
-namespace {
-
 // The extrapolation rules of the safeguarded loop below. Given the accepted iterate x_k and its
 // plain update g = G(x_k), propose() writes x_{k+1} and returns true, or returns false to take
 // g itself. start() begins a solve; rejected() follows an x_{k+1} whose objective rose (the loop
-// then continues from g, the plain update of the accepted x_k).
+// then continues from g, the plain update of the accepted x_k). A batch keeps one per scene.
 class Extrapolation {
  public:
   virtual ~Extrapolation() = default;
@@ -192,6 +186,8 @@ class Extrapolation {
   virtual void rejected() = 0;
   virtual bool propose(const Eigen::MatrixX3d& x_k, const Eigen::MatrixX3d& g, Eigen::MatrixX3d& next) = 0;
 };
+
+namespace {
 
 // Chebyshev semi-iteration (Wang 2015): x_{k+1} = w_{k+1} (g - x_{k-1}) + x_{k-1}, w_1 = 1,
 // w_2 = 2/(2 - rho^2), w_{k+1} = 4/(4 - rho^2 w_k).
@@ -261,61 +257,133 @@ class Anderson final : public Extrapolation {
 
 }  // namespace
 
+LocalGlobalSolver::~LocalGlobalSolver() = default;
+
+double LocalGlobalSolver::segmentInertia(double c, const Eigen::MatrixX3d& x, std::size_t s) const {
+  const Segment& seg = rows_[s];
+  const auto d = x.middleRows(seg.first, seg.count) - y_host_.middleRows(seg.first, seg.count);
+  return 0.5 * c * (d.rowwise().squaredNorm().transpose() * masses_.segment(seg.first, seg.count))(0);
+}
+
+// One rule per segment, kept from one solve to the next (their vectors are reused): new ones only
+// when the rule, its constant or the segments change.
+void LocalGlobalSolver::prepareExtrapolations(const IterationControl& control, std::size_t segments) {
+  const bool anderson = control.acceleration == Acceleration::Anderson;
+  const double constant = anderson ? control.anderson_window : control.chebyshev_rho;
+  if (extrapolations_.size() == segments && extrapolation_key_ == std::make_pair(anderson, constant)) return;
+  extrapolations_.clear();
+  for (std::size_t s = 0; s < segments; ++s) {
+    if (anderson)
+      extrapolations_.push_back(std::make_unique<Anderson>(control.anderson_window));
+    else
+      extrapolations_.push_back(std::make_unique<Chebyshev>(control.chebyshev_rho));
+  }
+  extrapolation_key_ = {anderson, constant};
+}
+
+// The local step at slot x (= x_cur_) and every segment's objective there. One segment: the whole
+// scene's pass and inertia, as a Simulator has always computed them.
+void LocalGlobalSolver::acceleratedObjectives(double c, int y, int x, double t, const IterationControl& control,
+                                              std::vector<double>& objective) {
+  if (rows_.size() <= 1) {
+    PotentialEnergy potential;
+    localStep(c, y, x, t, control, &potential);
+    objective.assign(1, inertia(c, x_cur_) + potential.total());
+    return;
+  }
+  backend_.localStepRhsPerScene(x, y, c, t, rhs_, segment_potentials_);
+  objective.resize(rows_.size());
+  for (std::size_t s = 0; s < rows_.size(); ++s)
+    objective[s] = segmentInertia(c, x_cur_, s) + segment_potentials_[s].total();
+}
+
+// Segment s's extrapolation from its rows of x_cur_ (x_k) and x_host_ (g) into x_next_. One
+// segment works on the whole matrices; a batch's segments on copies of their rows, so that each
+// rule sees the vectors its scene alone has.
+bool LocalGlobalSolver::proposeSegment(std::size_t s) {
+  Extrapolation& rule = *extrapolations_[s];
+  if (rows_.size() <= 1) return rule.propose(x_cur_, x_host_, x_next_);
+  const Segment& seg = rows_[s];
+  segment_x_ = x_cur_.middleRows(seg.first, seg.count);
+  segment_g_ = x_host_.middleRows(seg.first, seg.count);
+  const bool extrapolated = rule.propose(segment_x_, segment_g_, segment_next_);
+  if (extrapolated) x_next_.middleRows(seg.first, seg.count) = segment_next_;
+  return extrapolated;
+}
+
 // Safeguarded acceleration: the plain update never raises the objective, an extrapolated one
 // may. The local step of every iterate also returns its potential, so an iterate whose
 // objective rose is replaced by the plain update of the last accepted iterate and the
 // extrapolation restarts. The last iteration is always plain, so the returned x is never worse
-// than any earlier iterate.
+// than any earlier iterate. In a batch every segment has its own rule, objective, rejections and
+// tolerance stop (a stopped segment keeps its iterate while the others go on), so a scene takes
+// the iterates it takes alone.
 int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
                                         std::vector<double>* objective_history) {
-  Chebyshev chebyshev(control.chebyshev_rho);
-  Anderson anderson(control.anderson_window);
-  Extrapolation& rule = control.acceleration == Acceleration::Anderson ? static_cast<Extrapolation&>(anderson)
-                                                                       : static_cast<Extrapolation&>(chebyshev);
+  const std::size_t segments = std::max<std::size_t>(1, rows_.size());
+  prepareExtrapolations(control, segments);
   const bool to_tolerance = control.tolerance > 0.0;
   const int limit = to_tolerance ? control.max_iterations : control.iterations;
   backend_.read(y, y_host_);
   backend_.read(x, x_cur_);
+  if (x_next_.rows() != x_cur_.rows()) x_next_.resize(x_cur_.rows(), 3);
   if (objective_history) objective_history->clear();
-  rule.start();
+  for (auto& rule : extrapolations_) rule->start();
+  startSegmentStops(segments);
 
-  double accepted_objective = 0.0;  // objective of the last accepted iterate
+  std::vector<double>&accepted_objective = scalars_[0], &current = scalars_[1];  // of the last accepted iterate
+  accepted_objective.assign(segments, 0.0);
   bool have_accepted = false;
-  bool extrapolated = false;  // x_cur_ is an extrapolated (not plain) iterate
+  extrapolated_.assign(segments, 0);  // x_cur_'s rows of the segment are extrapolated (not plain)
+  auto rows = [&](Eigen::MatrixX3d& m, std::size_t s) {
+    return rows_.size() <= 1 ? m.middleRows(0, m.rows()) : m.middleRows(rows_[s].first, rows_[s].count);
+  };
   int done = 0;
-  PotentialEnergy potential;
   while (true) {
-    localStep(c, y, x, t, control, &potential);
-    double current = inertia(c, x_cur_) + potential.total();
-    // A rise within round-off of the objective is no rise: deciding on noise would make two
-    // backends that agree to round-off take different iterates.
-    const double noise = 1e-12 * std::max(std::abs(accepted_objective), control.energy_scale);
-    if (extrapolated && have_accepted && !(current <= accepted_objective + noise)) {
-      ++rejected_;
-      x_cur_ = x_host_;  // the plain update of the last accepted iterate
-      backend_.write(x, x_cur_);
-      localStep(c, y, x, t, control, &potential);
-      current = inertia(c, x_cur_) + potential.total();
-      rule.rejected();
+    acceleratedObjectives(c, y, x, t, control, current);
+    bool rejected = false;
+    for (std::size_t s = 0; s < segments; ++s) {
+      if (stopped_[s]) continue;
+      // A rise within round-off of the objective is no rise: deciding on noise would make two
+      // backends that agree to round-off take different iterates.
+      const double noise = 1e-12 * std::max(std::abs(accepted_objective[s]), segmentScale(control, s));
+      if (extrapolated_[s] && have_accepted && !(current[s] <= accepted_objective[s] + noise)) {
+        ++rejected_;
+        rejected = true;
+        rows(x_cur_, s) = rows(x_host_, s);  // the plain update of the last accepted iterate
+        extrapolations_[s]->rejected();
+      }
     }
-    if (objective_history) objective_history->push_back(current);
-    const bool converged =
-        to_tolerance && have_accepted &&
-        std::abs(accepted_objective - current) <= control.tolerance * std::max(std::abs(current), control.energy_scale);
-    accepted_objective = current;
+    if (rejected) {
+      backend_.write(x, x_cur_);
+      acceleratedObjectives(c, y, x, t, control, current);
+    }
+    if (objective_history) objective_history->push_back(current[0]);
+    for (std::size_t s = 0; s < segments; ++s) {
+      if (stopped_[s]) continue;
+      const bool converged = to_tolerance && have_accepted &&
+                             std::abs(accepted_objective[s] - current[s]) <=
+                                 control.tolerance * std::max(std::abs(current[s]), segmentScale(control, s));
+      accepted_objective[s] = current[s];
+      if (converged) stopSegment(s, done);
+    }
     have_accepted = true;
-    if (done >= limit || converged) break;
+    if (done >= limit || running_segments_ == 0) break;
 
     // x_host_ = the plain update of x_cur_ (which the host CG also starts from).
     if (control.global_solve == GlobalSolve::ConjugateGradient) x_host_ = x_cur_;
     globalStep(c, x, control, /*to_host=*/true);
     ++done;
     const bool last = done >= limit;
-    extrapolated = rule.propose(x_cur_, x_host_, x_next_) && !last;
-    x_cur_ = extrapolated ? x_next_ : x_host_;
+    for (std::size_t s = 0; s < segments; ++s) {
+      if (stopped_[s]) continue;  // its rows of x_cur_ stay at its last iterate
+      extrapolated_[s] = proposeSegment(s) && !last;
+      rows(x_cur_, s) = extrapolated_[s] ? rows(x_next_, s) : rows(x_host_, s);
+    }
     backend_.write(x, x_cur_);
     if (last && !objective_history) break;  // the final plain iterate needs no local step
   }
+  finishSegmentStops(done);
   return done;
 }
 

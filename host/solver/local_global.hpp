@@ -12,12 +12,15 @@
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace stabint {
 
 class SceneData;
+class Extrapolation;  // Chebyshev's or Anderson's rule (local_global.cpp)
 
 /// How long a solve runs: a fixed count (real-time budget), or with tolerance > 0 until the
 /// relative change of the objective is below it (reference runs), at most max_iterations.
@@ -45,6 +48,7 @@ class LocalGlobalSolver {
  public:
   /// `scratch_slot` is a backend slot the solver may overwrite.
   LocalGlobalSolver(Backend& backend, GlobalSystem& system, int scratch_slot);
+  ~LocalGlobalSolver();
 
   /// Runs iterations from the positions in slot `x` (the warm start) and leaves the result there.
   /// Returns the number of iterations (global solves) done. When `objective_history` is given,
@@ -67,15 +71,17 @@ class LocalGlobalSolver {
   const std::vector<PotentialEnergy>& potentialsOfResult() const { return result_potentials_; }
 
   /// The iterations segment `s` took in the last solve: the solve's count, but with a stop by
-  /// accuracy (L-BFGS's tolerance or gradient_tolerance, plain iterations' tolerance), where each
-  /// segment stops on its own, as its scene alone would, and stays there while the others go on.
+  /// accuracy (any solver's tolerance, L-BFGS's gradient_tolerance) or Newton-CG's own CG counts,
+  /// where each segment stops on its own, as its scene alone would, and stays there while the
+  /// others go on.
   int segmentIterations(std::size_t s) const { return segment_iterations_[s]; }
 
   /// Accelerated iterates rejected (objective rose) since construction.
   int rejectedAccelerations() const { return rejected_; }
 
   /// The scenes of a batch (block-diagonal K_c): L-BFGS keeps its dot products, step lengths
-  /// and history per segment, so each scene takes the steps it takes alone. Without segments
+  /// and history per segment, Chebyshev and Anderson their rule, objective and safeguard,
+  /// Newton-CG its CG and line search, so each scene takes the steps it takes alone. Without segments
   /// the whole system is one. `energy_scales` (one per segment) replace IterationControl::
   /// energy_scale in each segment's round-off allowance.
   void setSegments(const std::vector<SceneSegment>& segments, const std::vector<double>& energy_scales);
@@ -99,6 +105,10 @@ class LocalGlobalSolver {
   void finishSegmentStops(int done);
   int solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
                        std::vector<double>* objective_history);
+  void prepareExtrapolations(const IterationControl& control, std::size_t segments);
+  void acceleratedObjectives(double c, int y, int x, double t, const IterationControl& control,
+                             std::vector<double>& objective);
+  bool proposeSegment(std::size_t s);
   // Newton-CG with the springs' projected Hessians (host/solver/newton.cpp).
   int solveNewton(double c, int y, int x, double t, const IterationControl& control,
                   std::vector<double>* objective_history);
@@ -127,6 +137,8 @@ class LocalGlobalSolver {
     return control.global_solve == GlobalSolve::ConjugateGradient && backend_.solvesGlobalSystem();
   }
   double inertia(double c, const Eigen::MatrixX3d& x) const;
+  // c/2 ||x - y||_M^2 over segment s's rows (y: y_host_).
+  double segmentInertia(double c, const Eigen::MatrixX3d& x, std::size_t s) const;
 
   Backend& backend_;
   GlobalSystem& system_;
@@ -159,6 +171,13 @@ class LocalGlobalSolver {
   std::size_t running_segments_ = 0;     // not stopped yet in this solve
   std::vector<int> segment_iterations_;  // of the last solve, per segment
   Eigen::MatrixX3d x_stopped_;           // plain iterations: the stopped segments' iterates
+  // Chebyshev and Anderson: one rule per segment (kept with the rule's kind and constant), whether
+  // each segment's iterate is extrapolated, and a segment's rows for its rule (and for Newton-CG's
+  // dot products).
+  std::vector<std::unique_ptr<Extrapolation>> extrapolations_;
+  std::pair<bool, double> extrapolation_key_{false, 0.0};
+  std::vector<char> extrapolated_;
+  Eigen::MatrixX3d segment_x_, segment_g_, segment_next_;
   // Newton-CG: the scene, each spring's transverse coefficient w min(1, r/|u|) and direction at
   // the iterate, the CG vectors.
   const SceneData* scene_ = nullptr;

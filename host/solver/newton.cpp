@@ -56,62 +56,110 @@ void LocalGlobalSolver::hessianTimes(double c, const Eigen::MatrixX3d& v, Eigen:
   }
 }
 
+// Per scene segment (a batch's concatenated scenes, block-diagonal K_c and H): every segment runs
+// its own CG (its dot products, step lengths and stops; a CG iteration counts against the
+// segment's budget only while its CG runs), its own line search and its own tolerance stop, so a
+// scene takes the steps it takes alone. The factor solves and the products with H run over the
+// whole batch.
 int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const IterationControl& control,
                                    std::vector<double>* objective_history) {
   const Eigen::Index n = masses_.size();
-  if (rows_.empty()) rows_.push_back({0, static_cast<int>(n)});  // one system: batches refuse Newton-CG
+  if (rows_.empty()) rows_.push_back({0, static_cast<int>(n)});  // one system
+  const std::size_t segments = rows_.size();
   const bool to_tolerance = control.tolerance > 0.0;
   const int limit = to_tolerance ? control.max_iterations : control.iterations;
   backend_.read(y, y_host_);
   backend_.read(x, x_trial_);
   x_cur_ = x_trial_;
-  std::vector<double>&objective = scalars_[0], &trial_objective = scalars_[1], &slope = scalars_[2],
-  &step = scalars_[6];
+  std::vector<double>&objective = scalars_[0], &trial_objective = scalars_[1], &slope = scalars_[2], &rz = scalars_[3],
+  &rz0 = scalars_[4], &product = scalars_[5], &step = scalars_[6];
   localStepObjectives(c, y, x, t, objective);
   gradient_ = trial_gradient_;
   if (objective_history) objective_history->assign(1, objective[0]);
-  auto dot = [](const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) { return a.cwiseProduct(b).sum(); };
+  // CG's dot products: over the whole vectors for one segment, as a Simulator has always summed
+  // them, and over copies of each segment's rows in a batch, so that they are summed as the scene
+  // alone sums them (bit for bit: CG amplifies round-off).
+  auto dots = [&](const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b, std::vector<double>& out) {
+    if (segments == 1) {
+      out.assign(1, a.cwiseProduct(b).sum());
+      return;
+    }
+    out.resize(segments);
+    for (std::size_t s = 0; s < segments; ++s) {
+      segment_x_ = a.middleRows(rows_[s].first, rows_[s].count);
+      segment_g_ = b.middleRows(rows_[s].first, rows_[s].count);
+      out[s] = segment_x_.cwiseProduct(segment_g_).sum();
+    }
+  };
+  auto rows = [&](Eigen::MatrixX3d& m, std::size_t s) { return m.middleRows(rows_[s].first, rows_[s].count); };
+  startSegmentStops(segments);
+  std::vector<int>& done = segment_iterations_;  // each segment's count; stopSegment keeps it
+  std::vector<char>& cg_running = accepted_;     // free until the line search
+  auto stop = [&](std::size_t s) { stopSegment(s, done[s]); };
+  if (limit <= 0)
+    for (std::size_t s = 0; s < segments; ++s) stop(s);
 
-  int done = 0;
-  while (done < limit) {
+  while (running_segments_ > 0) {
     // CG on H d = -g, preconditioned with K_c^-1, from d = 0.
     springCurvature();
     direction_.setZero(n, 3);
     search_ = -gradient_;  // the residual
     applyInitialInverseHessian(c, control, search_, cg_z_);
     cg_p_ = cg_z_;
-    double rz = dot(search_, cg_z_);
-    const double rz0 = rz;
-    for (int k = 0; k < kMaxCgPerStep && done < limit; ++k) {
+    dots(search_, cg_z_, rz);
+    rz0 = rz;
+    cg_running.assign(segments, 0);
+    for (std::size_t s = 0; s < segments; ++s) cg_running[s] = !stopped_[s];
+    for (int k = 0; k < kMaxCgPerStep; ++k) {
       hessianTimes(c, cg_p_, cg_hp_);
-      const double curvature = dot(cg_p_, cg_hp_);
-      ++done;
-      if (!(curvature > 0.0)) break;
-      const double alpha = rz / curvature;
-      direction_ += alpha * cg_p_;
-      search_ -= alpha * cg_hp_;
-      if (k + 1 == kMaxCgPerStep || done >= limit) break;
+      dots(cg_p_, cg_hp_, product);  // the curvature along p
+      bool any = false;
+      for (std::size_t s = 0; s < segments; ++s) {
+        if (!cg_running[s]) continue;
+        ++done[s];
+        cg_running[s] = 0;
+        if (!(product[s] > 0.0)) continue;
+        const double alpha = rz[s] / product[s];
+        rows(direction_, s) += alpha * rows(cg_p_, s);
+        rows(search_, s) -= alpha * rows(cg_hp_, s);
+        cg_running[s] = k + 1 < kMaxCgPerStep && done[s] < limit;
+        any = any || cg_running[s];
+      }
+      if (!any) break;
       applyInitialInverseHessian(c, control, search_, cg_z_);
-      const double rz_new = dot(search_, cg_z_);
-      if (rz_new <= kForcing * kForcing * rz0) break;
-      cg_p_ = cg_z_ + (rz_new / rz) * cg_p_;
-      rz = rz_new;
+      dots(search_, cg_z_, product);  // the new rz
+      for (std::size_t s = 0; s < segments; ++s) {
+        if (!cg_running[s]) continue;
+        if (product[s] <= kForcing * kForcing * rz0[s]) {
+          cg_running[s] = 0;
+          continue;
+        }
+        rows(cg_p_, s) = rows(cg_z_, s) + (product[s] / rz[s]) * rows(cg_p_, s);
+        rz[s] = product[s];
+      }
     }
     segmentDots(gradient_, direction_, slope);
+    for (std::size_t s = 0; s < segments; ++s)
+      if (stopped_[s]) slope[s] = 0.0;  // takes no step
     lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
-    if (!moved_[0]) {
-      // No decrease along the Newton direction: the solve stays at the accepted iterate.
-      if (objective_history) objective_history->push_back(objective[0]);
-      break;
-    }
     gradient_ = trial_gradient_;
-    const double change = std::abs(objective[0] - trial_objective[0]);
-    objective[0] = trial_objective[0];
     x_cur_ = x_trial_;
+    for (std::size_t s = 0; s < segments; ++s) {
+      if (stopped_[s]) continue;
+      if (!moved_[s]) {
+        // No decrease along the Newton direction: the segment stays at its accepted iterate.
+        stop(s);
+        continue;
+      }
+      const double change = std::abs(objective[s] - trial_objective[s]);
+      objective[s] = trial_objective[s];
+      if ((to_tolerance && change <= control.tolerance * std::max(std::abs(objective[s]), segmentScale(control, s))) ||
+          done[s] >= limit)
+        stop(s);
+    }
     if (objective_history) objective_history->push_back(objective[0]);
-    if (to_tolerance && change <= control.tolerance * std::max(std::abs(objective[0]), control.energy_scale)) break;
   }
-  return done;
+  return *std::max_element(done.begin(), done.end());
 }
 
 }  // namespace stabint

@@ -155,11 +155,11 @@ def test_a_refused_scene_is_reported_and_the_others_step_on():
 def test_batches_of_one_take_the_options_that_couple_scenes():
     # With batch_size 1 each scene is its own Simulator, bit for bit (a batch of several scenes
     # refuses the options that reduce over the whole batch: next test).
-    options = {"integrator": "BackwardEuler", "acceleration": "Anderson"}
+    options = {"integrator": "BackwardEuler", "global_solve": "ConjugateGradient"}
     results = sweep([BuiltinScene("chain"), BuiltinScene("chain", {"stiffness": 1e3})], options, 5, batch_size=1,
                     client=None)
     sim = stabint.Simulator(stabint.chain_pendulum(), stabint.SimulatorOptions(
-        integrator=stabint.Integrator.BackwardEuler, acceleration=stabint.Acceleration.Anderson))
+        integrator=stabint.Integrator.BackwardEuler, global_solve=stabint.GlobalSolve.ConjugateGradient))
     for _ in range(5):
         sim.step()
     assert (results[0].positions[-1] == sim.positions).all()
@@ -174,9 +174,9 @@ def test_bad_input_is_an_invalid_input_error_naming_the_problem(client):
         sweep([Cell(BuiltinScene("chain"), {"h": 0.01})], OPTIONS, 10, client=client)
     with pytest.raises(stabint.InvalidInputError, match="batch_size must be an integer >= 1"):
         sweep([BuiltinScene("chain")], OPTIONS, 10, batch_size=0, client=client)
-    # Options a batch cannot run (Anderson acceleration sums over the whole batch), before any task.
+    # Options a batch cannot run (CG sums over the whole batch), before any task.
     with pytest.raises(stabint.InvalidInputError, match="scene 0: batch simulator options"):
-        sweep([BuiltinScene("chain")], {"acceleration": "Anderson"}, 10, client=client)
+        sweep([BuiltinScene("chain")], {"global_solve": "ConjugateGradient"}, 10, client=client)
     # Scenes of one options group must share gravity: the worker's BatchSimulator says which
     # batch, and the error reaches the caller with its class.
     upside_down = stabint.chain_pendulum()

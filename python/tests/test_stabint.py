@@ -957,11 +957,12 @@ def test_a_batch_refuses_what_would_couple_its_scenes_naming_the_scene():
     other_gravity.gravity = np.array([0.0, -1.0, 0.0])
     with pytest.raises(stabint.InvalidInputError, match="scene 1"):
         stabint.BatchSimulator([stabint.chain_pendulum(), other_gravity])
-    anderson = stabint.SimulatorOptions(acceleration=stabint.Acceleration.Anderson)
-    with pytest.raises(stabint.InvalidInputError, match="more than one scene.*Anderson"):
-        stabint.BatchSimulator([oscillator, oscillator], anderson)
-    stabint.BatchSimulator([oscillator], anderson)  # a batch of one takes it
-    for acceleration in (stabint.Acceleration.LBFGS, stabint.Acceleration.None_):  # stops per scene
+    cg = stabint.SimulatorOptions(global_solve=stabint.GlobalSolve.ConjugateGradient)
+    with pytest.raises(stabint.InvalidInputError, match="more than one scene.*CG"):
+        stabint.BatchSimulator([oscillator, oscillator], cg)
+    stabint.BatchSimulator([oscillator], cg)  # a batch of one takes it
+    for acceleration in (stabint.Acceleration.LBFGS, stabint.Acceleration.None_, stabint.Acceleration.Anderson,
+                         stabint.Acceleration.Chebyshev, stabint.Acceleration.Newton):  # per scene, their stops too
         stabint.BatchSimulator([oscillator, oscillator], stabint.SimulatorOptions(tolerance=1e-6,
                                                                                   acceleration=acceleration))
     batch = stabint.BatchSimulator([oscillator])

@@ -4,12 +4,15 @@
 // the blend ("blend", EnergyBlend at the default iterations). The ratio of the two is the batch's
 // gain (docs/batch_design.md, the benchmark that judges issue 11 item 3: on OpenCL the batch must
 // be at least 20x "separate" and faster than the CPU reference's "separate").
-// bench/batch_chart.py draws and tabulates a run of the family.
+// bench/batch_chart.py draws and tabulates a run of the family. batch_stops/: solves stopped by
+// accuracy, per scene (runBatchStops).
 #include "bench_common.hpp"
 
 #include "integrator/batch_simulator.hpp"
 
 #include <chrono>
+#include <cmath>
+#include <tuple>
 
 namespace stabint::bench {
 namespace {
@@ -133,6 +136,52 @@ void runBatchInput(benchmark::State& state, const std::string& name, const std::
   state.counters["us_per_scene"] = 1e6 * seconds / (double(state.iterations()) * count);
 }
 
+// A batch whose scenes stop their solves by accuracy, each on its own (docs/method.md section 11):
+// `count` 10 x 10 cloths whose stretch stiffnesses span 1e2 to 1e4 N/m (so they stop at different
+// counts), BE with every solve to a tolerance (1e-6 of the objective's change; for "lbfgs-gradient"
+// L-BFGS's gradient_tolerance 1e-2), at most 60 iterations, 20 steps from rest. Counter
+// `iterations`: the mean over the scenes and steps.
+void runBatchStops(benchmark::State& state, const std::string& name, BackendChoice backend, Acceleration acceleration,
+                   bool gradient_stop) {
+  if (const std::string why = skipReason(backend); !why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  const int count = static_cast<int>(state.range(0));
+  releaseAllFixtures();
+  BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
+    std::vector<Scene> scenes;
+    for (int s = 0; s < count; ++s) {
+      ClothGridParams p;
+      p.nx = p.ny = 10;
+      p.stretch_stiffness = 1e2 * std::pow(100.0, double(s) / std::max(1, count - 1));
+      scenes.push_back(makeClothGrid(p));
+    }
+    SimulatorOptions options = optionsFor(backend, Integrator::BackwardEuler);
+    options.acceleration = acceleration;
+    if (gradient_stop) {
+      options.gradient_tolerance = 1e-2;
+      options.iterations = 60;
+    } else {
+      options.tolerance = 1e-6;
+      options.max_iterations = 60;
+    }
+    auto fixture = std::make_unique<BatchFixture>();
+    fixture->batch = std::make_unique<BatchSimulator>(scenes, options);
+    return fixture;
+  });
+  PhaseTimes summed;
+  double iterations = 0.0;
+  for (auto _ : state) {
+    const BatchStepReport& r = f.batch->step();
+    summed += r.times;
+    for (const StepReport& scene : r.scenes) iterations += scene.iterations;
+  }
+  setPhaseCounters(state, summed);
+  state.counters["scenes"] = count;
+  state.counters["iterations"] = iterations / (double(count) * double(state.iterations()));
+}
+
 }  // namespace
 
 void registerBatchCases() {
@@ -174,6 +223,22 @@ void registerBatchCases() {
             ->UseRealTime()
             ->Unit(benchmark::kMillisecond);
       }
+  for (BackendChoice backend : allBackends())
+    for (const auto& [label, acceleration, gradient_stop] :
+         {std::tuple{"plain", Acceleration::None, false}, std::tuple{"lbfgs", Acceleration::LBFGS, false},
+          std::tuple{"lbfgs-gradient", Acceleration::LBFGS, true},
+          std::tuple{"anderson", Acceleration::Anderson, false},
+          std::tuple{"chebyshev", Acceleration::Chebyshev, false}, std::tuple{"newton", Acceleration::Newton, false}}) {
+      const std::string name = std::string("batch_stops/cloth10/BE/") + backendLabel(backend) + "/" + label;
+      benchmark::RegisterBenchmark(
+          name.c_str(),
+          [=](benchmark::State& state) { runBatchStops(state, name, backend, acceleration, gradient_stop); })
+          ->Arg(100)
+          ->ArgName("scenes")
+          ->Iterations(20)
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond);
+    }
   // A Simulator as "a batch of one" (issue 22, docs/batch_design.md): the single-scene overhead of
   // the batch's driver, one scene stepped as a BatchSimulator of one ("batch") or as a Simulator
   // ("simulator"), 30 steps from rest. The ratio is what folding the two drivers into one costs a

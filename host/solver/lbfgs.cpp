@@ -429,6 +429,12 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   auto forgetSegment = [&](std::size_t s) {
     for (auto& rho : history_rho_) rho[s] = 0.0;
   };
+  auto usesHistory = [&](std::size_t s) {
+    for (const auto& rho : history_rho_)
+      if (rho[s] != 0.0) return true;
+    return false;
+  };
+  plain_direction_.assign(segments, 0);
   while (done < limit) {
     // [project rule] Where the integrator asks for it (implicit midpoint, BDF2, the blend's
     // partner) the last iteration of a budget is a plain one (the direction of the empty
@@ -451,14 +457,24 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
       }
       if (running_segments_ == 0) break;
     }
-    for (std::size_t s = 0; s < segments; ++s)
+    for (std::size_t s = 0; s < segments; ++s) {
       if (stopped_[s]) slope[s] = 0.0;  // no step (lineSearch)
+      plain_direction_[s] = pairs == 0 || !usesHistory(s);
+    }
     // With positive curvature pairs H is positive definite and the direction descends; a slope
     // >= 0 is round-off (or a converged segment). A segment that does not move restarts from the
-    // plain step.
+    // plain step. A plain step decreases the objective in exact arithmetic (f(x + d) <= f(x) -
+    // 1/2 d^T K_c d); where even it does not, the segment's objective is at its round-off floor
+    // (in float on a device, long before the budget: the objective's round-off is 1e-7 of it), and
+    // every later iteration would try the same step again: the segment stops there.
     lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
-    for (std::size_t s = 0; s < segments; ++s)
-      if (!moved_[s]) forgetSegment(s);
+    for (std::size_t s = 0; s < segments; ++s) {
+      if (moved_[s] || stopped_[s]) continue;
+      if (plain_direction_[s])
+        stopSegment(s, done);
+      else
+        forgetSegment(s);
+    }
 
     // The curvature pair of the step, kept where s.y > 0.
     const int slot = (newest + 1) % window;

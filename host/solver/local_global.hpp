@@ -168,6 +168,7 @@ class LocalGlobalSolver {
   std::vector<Eigen::MatrixXd> gram_;
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, stopped_;
+  std::vector<char> plain_direction_;    // L-BFGS: the segment's direction used no curvature pair
   std::size_t running_segments_ = 0;     // not stopped yet in this solve
   std::vector<int> segment_iterations_;  // of the last solve, per segment
   Eigen::MatrixX3d x_stopped_;           // plain iterations: the stopped segments' iterates

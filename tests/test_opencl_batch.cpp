@@ -525,7 +525,8 @@ double distanceFromTheEdge(const StepReport& r, const EnergyReport& previous, do
 // The OpenCL batch with the blend steps every scene as the CPU batch does (itself each scene's own
 // Simulator, tests/test_scene_batch.cpp). In double the energies agree to ~1e-12 of E_scale (measured 3e-12), far
 // inside any decision's distance from the tolerance edge: every scene takes the same branch with the same alpha,
-// velocity scale and iterations, and the energies, targets and states agree to the cross-backend tolerance (as
+// velocity scale and iterations (in float at most the CPU's: a float solve may stop at its round-off floor), and the
+// energies, targets and states agree to the cross-backend tolerance (as
 // OpenCLBlend.ChainPendulumBranchesAndAlphaMatchCpu for one Simulator). In float the energies carry about 1e-5 of
 // E_scale of round-off (measured 8e-6) against a tolerance band of 1e-3 of it, so a decision within that round-off of
 // the edge may go either way (the reason crossBackendIntegrators leaves the blend out in float); a scene is compared as
@@ -607,7 +608,13 @@ TEST(OpenCLBatchSimulator, BlendFollowsTheCpuBatch) {
         ++compared;
         ++branches[std::size_t(w.branch)];
         worst_energy = std::max(worst_energy, std::abs(g.energy.total() - w.energy.total()) / scale);
-        EXPECT_EQ(g.iterations, w.iterations);
+        // A float solve may stop at its round-off floor before its budget (docs/method.md,
+        // "L-BFGS"), where the CPU's double solve goes on.
+        if (precision == Precision::Double) {
+          EXPECT_EQ(g.iterations, w.iterations);
+        } else {
+          EXPECT_LE(g.iterations, w.iterations);
+        }
         EXPECT_NEAR(g.alpha, w.alpha, precision == Precision::Double ? 1e-8 : tol);
         EXPECT_NEAR(g.velocity_scale, w.velocity_scale, precision == Precision::Double ? 1e-8 : tol);
         expectBookedAndEnergiesNear(g, w, tol * scale);

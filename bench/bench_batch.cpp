@@ -22,16 +22,22 @@ struct BatchFixture {
   std::vector<Simulator> separate;
 };
 
-void runBatch(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
-              BackendChoice backend, Integrator integrator, bool batched) {
+// A fresh fixture per case function call (every repetition times the same steps from rest), made
+// by `make`; null, with the case skipped, where the backend is missing.
+BatchFixture* freshFixture(benchmark::State& state, const std::string& name, BackendChoice backend,
+                           const std::function<std::unique_ptr<BatchFixture>()>& make) {
   if (const std::string why = skipReason(backend); !why.empty()) {
     state.SkipWithError(why.c_str());
-    return;
+    return nullptr;
   }
-  const int count = static_cast<int>(state.range(0));
-  // A fresh fixture per case function call: every repetition times the same steps from rest.
   releaseAllFixtures();
-  BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
+  return &cachedFixture<BatchFixture>(name, make);
+}
+
+void runBatch(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
+              BackendChoice backend, Integrator integrator, bool batched) {
+  const int count = static_cast<int>(state.range(0));
+  BatchFixture* fixture_or_null = freshFixture(state, name, backend, [&] {
     auto fixture = std::make_unique<BatchFixture>();
     const std::vector<Scene> scenes(static_cast<std::size_t>(count), make());
     const SimulatorOptions options = optionsFor(backend, integrator);
@@ -43,6 +49,8 @@ void runBatch(benchmark::State& state, const std::string& name, const std::funct
     }
     return fixture;
   });
+  if (!fixture_or_null) return;
+  BatchFixture& f = *fixture_or_null;
   // The share of scene-steps whose IM candidate the blend accepted (the others need the BE partner,
   // which the batch then solves for every scene): the two variants must take the same branches
   // for their times to compare.
@@ -86,19 +94,15 @@ const char* inputLabel(BatchInput input) {
 // costs a game driving many bodies; per scene it must not grow with the batch.
 void runBatchInput(benchmark::State& state, const std::string& name, const std::function<Scene()>& make,
                    BackendChoice backend, BatchInput input) {
-  if (const std::string why = skipReason(backend); !why.empty()) {
-    state.SkipWithError(why.c_str());
-    return;
-  }
   const int count = static_cast<int>(state.range(0));
-  releaseAllFixtures();
-  BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
+  BatchFixture* f = freshFixture(state, name, backend, [&] {
     auto fixture = std::make_unique<BatchFixture>();
     fixture->batch = std::make_unique<BatchSimulator>(std::vector<Scene>(std::size_t(count), make()),
                                                       optionsFor(backend, Integrator::BackwardEuler));
     return fixture;
   });
-  BatchSimulator& batch = *f.batch;
+  if (!f) return;
+  BatchSimulator& batch = *f->batch;
   const Eigen::MatrixX3d forces = Eigen::MatrixX3d::Constant(batch.numParticles(0), 3, 0.01);
   const double stiffness = make().springs.at(0).stiffness;
   int frame = 0;
@@ -143,13 +147,8 @@ void runBatchInput(benchmark::State& state, const std::string& name, const std::
 // `iterations`: the mean over the scenes and steps.
 void runBatchStops(benchmark::State& state, const std::string& name, BackendChoice backend, Acceleration acceleration,
                    bool gradient_stop) {
-  if (const std::string why = skipReason(backend); !why.empty()) {
-    state.SkipWithError(why.c_str());
-    return;
-  }
   const int count = static_cast<int>(state.range(0));
-  releaseAllFixtures();
-  BatchFixture& f = cachedFixture<BatchFixture>(name, [&] {
+  BatchFixture* f = freshFixture(state, name, backend, [&] {
     std::vector<Scene> scenes;
     for (int s = 0; s < count; ++s) {
       ClothGridParams p;
@@ -170,10 +169,11 @@ void runBatchStops(benchmark::State& state, const std::string& name, BackendChoi
     fixture->batch = std::make_unique<BatchSimulator>(scenes, options);
     return fixture;
   });
+  if (!f) return;
   PhaseTimes summed;
   double iterations = 0.0;
   for (auto _ : state) {
-    const BatchStepReport& r = f.batch->step();
+    const BatchStepReport& r = f->batch->step();
     summed += r.times;
     for (const StepReport& scene : r.scenes) iterations += scene.iterations;
   }

@@ -205,11 +205,13 @@ class OpenCLBackend final : public Backend {
 
   // The element pass with `flags` (plus the energy when asked for), then `gather` over its
   // contributions into rhs_, read back to `out`: localStepRhs and localStepGradient. With
-  // `per_scene` (a batch's: localStepGradientPerScene, localStepRhsPerScene) the pass also writes each element's energy
-  // and the per-scene sums follow the gather, read into host_segment_sums_ before the same wait.
+  // `per_scene` (a batch's: localStepGradientPerScene, localStepRhsPerScene) the pass also writes
+  // each element's energy and the per-scene sums follow the gather, read before the same wait into
+  // *per_scene (one per segment).
   template <class GatherArgs>
   void gatheredLocalStep(int flags, Launch& gather, const GatherArgs& args, int x, int y, double c, double t,
-                         Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x, bool per_scene = false);
+                         Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x,
+                         std::vector<PotentialEnergy>* per_scene = nullptr);
 
   void readMatrix(const cl::Buffer& buffer, Eigen::MatrixX3d& host);
 

@@ -76,10 +76,7 @@ void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, doub
     return;
   }
   gather_gradient_.bindSlot(gather_gradient_args_.x, x, slots_);
-  gatheredLocalStep(kPassForce, gather_gradient_, gather_gradient_args_, x, y, c, t, gradient, nullptr,
-                    /*per_scene=*/true);
-  per_scene.resize(segments_.size());
-  for (std::size_t s = 0; s < segments_.size(); ++s) per_scene[s] = segmentEnergies(s);
+  gatheredLocalStep(kPassForce, gather_gradient_, gather_gradient_args_, x, y, c, t, gradient, nullptr, &per_scene);
 }
 
 // The same for a batch's Chebyshev and Anderson: the projection pass writes each element's energy.
@@ -91,9 +88,7 @@ void OpenCLBackend<Real>::localStepRhsPerScene(int x, int y, double c, double t,
     Backend::localStepRhsPerScene(x, y, c, t, rhs, per_scene);
     return;
   }
-  gatheredLocalStep(kPassProjection, gather_rhs_, gather_rhs_args_, x, y, c, t, rhs, nullptr, /*per_scene=*/true);
-  per_scene.resize(segments_.size());
-  for (std::size_t s = 0; s < segments_.size(); ++s) per_scene[s] = segmentEnergies(s);
+  gatheredLocalStep(kPassProjection, gather_rhs_, gather_rhs_args_, x, y, c, t, rhs, nullptr, &per_scene);
 }
 
 template <typename Real>
@@ -136,7 +131,7 @@ template <typename Real>
 template <class GatherArgs>
 void OpenCLBackend<Real>::gatheredLocalStep(int flags, Launch& gather, const GatherArgs& args, int x, int y, double c,
                                             double t, Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x,
-                                            bool per_scene) {
+                                            std::vector<PotentialEnergy>* per_scene) {
   checkSlot(x);
   checkSlot(y);
   uploadForcing(t, false);
@@ -154,6 +149,10 @@ void OpenCLBackend<Real>::gatheredLocalStep(int flags, Launch& gather, const Gat
   }
   readMatrix(rhs_, out);  // blocking: everything queued above has completed
   if (energy_at_x) *energy_at_x = sumEnergies();
+  if (per_scene) {
+    per_scene->resize(segments_.size());
+    for (std::size_t s = 0; s < segments_.size(); ++s) (*per_scene)[s] = segmentEnergies(s);
+  }
   const double wall = secondsSince(start);
   const double local = launched ? deviceSeconds(element_event_, element_event_) : 0.0;
   const double gathered = deviceSeconds(gather_event_, gather_event_);

@@ -69,8 +69,7 @@ TEST_P(BatchOfOne, StepsAsItsSimulatorBitForBit) {
   expectBatchOfOneIsItsSimulator(o, 40, "");
 }
 
-// Every solver option, CG (which a batch of more than one refuses: it reduces over the whole
-// batch) included: a batch of one takes them, as its Simulator does.
+// Every solver option: a batch of one takes them, as its Simulator does, bit for bit.
 class BatchOfOneSolver : public ::testing::TestWithParam<std::tuple<Integrator, int>> {};
 
 TEST_P(BatchOfOneSolver, TakesTheCouplingOptionsAsItsSimulator) {
@@ -126,23 +125,6 @@ TEST(BatchOfOne, SetStateRestartsBdf2AsItsSimulator) {
   BatchSimulator two({scene, scene}, o);
   two.step();
   EXPECT_THROW(two.setState(1, scene.positions, scene.velocities), InvalidInputError);
-}
-
-// A batch of more than one refuses the global solve by CG (it reduces over the whole batch), naming it.
-TEST(BatchOfOne, TwoScenesRefuseTheCouplingOption) {
-  const Scene scene = testing::mixedBatchScenes()[0];
-  for (const double cg_tolerance : {0.0, 1e-8}) {
-    SimulatorOptions o;
-    o.global_solve = GlobalSolve::ConjugateGradient;
-    o.cg_tolerance = cg_tolerance;
-    EXPECT_NO_THROW(BatchSimulator({scene}, o)) << cg_tolerance;
-    try {
-      BatchSimulator two({scene, scene}, o);
-      ADD_FAILURE() << "CG accepted for two scenes";
-    } catch (const InvalidInputError& e) {
-      EXPECT_NE(std::string(e.what()).find("more than one scene"), std::string::npos) << e.what();
-    }
-  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, BatchOfOne,

@@ -479,12 +479,14 @@ TEST(BatchSimulator, OneScenesBlowUpStaysInItsBlock) {
   EXPECT_EQ(batch.velocities(1), neighbour.velocities());
 }
 
-TEST(BatchSimulator, RefusesOptionsThatWouldCoupleTheScenes) {
+// Every option runs per scene in a batch: each acceleration with its stops, and CG (each scene's
+// block on its own); only Simulator's own checks refuse options.
+TEST(BatchSimulator, TakesEverySolverOptionRefusesBadOnes) {
   const std::vector<Scene> scenes = mixedBatchScenes();
   SimulatorOptions options;
   options.integrator = Integrator::BackwardEuler;
   options.global_solve = GlobalSolve::ConjugateGradient;
-  EXPECT_THROW(BatchSimulator(scenes, options), InvalidInputError);
+  EXPECT_NO_THROW(BatchSimulator(scenes, options));
   options.global_solve = GlobalSolve::Factor;
   for (Acceleration per_scene :
        {Acceleration::LBFGS, Acceleration::Anderson, Acceleration::Chebyshev, Acceleration::Newton}) {
@@ -659,6 +661,30 @@ TEST(BatchSimulator, AccelerationsArePerScene) {
       }
     }
   }
+}
+
+// CG in a batch runs on each scene's block of the system on its own (GlobalSystem::setBlocks), as
+// the scene's own Simulator runs it on its system: the same iterates to round-off, with a fixed
+// CG count and with CG's tolerance, under plain iterations and L-BFGS, BE and the blend.
+TEST(BatchSimulator, ConjugateGradientsArePerScene) {
+  const std::vector<Scene> scenes = mixedBatchScenes();
+  for (Acceleration acceleration : {Acceleration::None, Acceleration::LBFGS})
+    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend})
+      for (const double cg_tolerance : {0.0, 1e-8}) {
+        SimulatorOptions options;
+        options.integrator = integrator;
+        options.time_step = 1.0 / 60.0;
+        options.acceleration = acceleration;
+        options.global_solve = GlobalSolve::ConjugateGradient;
+        options.cg_iterations = 15;
+        options.cg_tolerance = cg_tolerance;
+        const std::string what = std::string(accelerationName(acceleration)) + ", " + integratorName(integrator) +
+                                 ", CG tolerance " + std::to_string(cg_tolerance);
+        BatchSimulator batch(scenes, options);
+        std::vector<Simulator> alone;
+        for (const Scene& s : scenes) alone.emplace_back(s, options);
+        stepsWithDifferentCounts(batch, alone, what);
+      }
 }
 
 // With an energy ceiling far below the blend's band, the steps whose energy ends above H* are

@@ -15,18 +15,12 @@
 namespace stabint {
 namespace {
 
-// Simulator's checks, then the option that couples the scenes of a batch of more than one: CG's
-// dot products run over the whole vector (one scene's blow-up would reach the others through
-// them); every acceleration's reductions, safeguards, line searches and stops are per scene. A
-// batch of one scene has nothing to couple and takes every option its Simulator takes. The
-// backend is refused later, once created, unless it computes per-scene energies
-// (Backend::computesPerScene).
-const SimulatorOptions& checkedOptions(const SimulatorOptions& o, std::size_t scenes) {
+// Simulator's checks. Nothing in the options couples the scenes of a batch: every acceleration's
+// reductions, safeguards, line searches and stops are per scene, and CG runs on each scene's block
+// of the system (on the host, GlobalSystem::setBlocks). The backend is refused later, once
+// created, unless it computes per-scene energies (Backend::computesPerScene).
+const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   validateOptions(o);
-  if (scenes > 1 && o.global_solve != GlobalSolve::Factor)
-    throw InvalidInputError(
-        "batch simulator options: with more than one scene, the global solve by CG sums over the whole batch: "
-        "the factor only (every acceleration and the stops by accuracy run per scene), until it is per scene");
   return o;
 }
 
@@ -42,7 +36,7 @@ Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) { retu
 }  // namespace
 
 BatchDriver::BatchDriver(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : BatchDriver(concatenateScenes(scenes), scenes, checkedOptions(options, scenes.size())) {}
+    : BatchDriver(concatenateScenes(scenes), scenes, checkedOptions(options)) {}
 
 std::unique_ptr<BatchDriver> BatchDriver::forSimulator(const Scene& scene, const SimulatorOptions& options) {
   // Simulator's order of checks: the options, then the scene (SceneData validates it, with

@@ -139,21 +139,46 @@ int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, 
                                          double tolerance) {
   auto found = cg_systems_.find(c);
   if (found == cg_systems_.end()) {
-    auto system = std::make_unique<CgSystem>();
-    system->matrix = shiftedLaplacian(c);
-    system->cg.compute(system->matrix);
-    found = cg_systems_.emplace(c, std::move(system)).first;
+    std::vector<std::unique_ptr<CgSystem>> systems;
+    const Eigen::SparseMatrix<double> shifted = shiftedLaplacian(c);
+    for (std::size_t b = 0; b < std::max<std::size_t>(1, blocks_.size()); ++b) {
+      auto system = std::make_unique<CgSystem>();
+      if (blocks_.empty())
+        system->matrix = shifted;
+      else
+        system->matrix = shifted.block(blocks_[b].first, blocks_[b].first, blocks_[b].second, blocks_[b].second);
+      system->cg.compute(system->matrix);
+      systems.push_back(std::move(system));
+    }
+    found = cg_systems_.emplace(c, std::move(systems)).first;
   }
-  auto& cg = found->second->cg;
-  cg.setMaxIterations(iterations);
-  cg.setTolerance(tolerance);  // 0: Eigen's threshold becomes the smallest normal number (a fixed count)
   int most = 0;
-  for (int k = 0; k < 3; ++k) {
-    Eigen::VectorXd column = cg.solveWithGuess(rhs.col(k), x.col(k));
-    x.col(k) = column;
-    most = std::max(most, static_cast<int>(cg.iterations()));
+  for (std::size_t b = 0; b < found->second.size(); ++b) {
+    auto& cg = found->second[b]->cg;
+    cg.setMaxIterations(iterations);
+    cg.setTolerance(tolerance);  // 0: Eigen's threshold becomes the smallest normal number (a fixed count)
+    for (int k = 0; k < 3; ++k) {
+      if (blocks_.empty()) {
+        Eigen::VectorXd column = cg.solveWithGuess(rhs.col(k), x.col(k));
+        x.col(k) = column;
+      } else {
+        // The block's rows copied out, so that CG runs on the vectors its scene alone has.
+        const Eigen::VectorXd block_rhs = rhs.col(k).segment(blocks_[b].first, blocks_[b].second);
+        const Eigen::VectorXd block_x = x.col(k).segment(blocks_[b].first, blocks_[b].second);
+        Eigen::VectorXd column = cg.solveWithGuess(block_rhs, block_x);
+        x.col(k).segment(blocks_[b].first, blocks_[b].second) = column;
+      }
+      most = std::max(most, static_cast<int>(cg.iterations()));
+    }
   }
   return most;
+}
+
+void GlobalSystem::setBlocks(std::vector<std::pair<int, int>> blocks) {
+  if (blocks.size() <= 1) blocks.clear();
+  if (blocks == blocks_) return;
+  blocks_ = std::move(blocks);
+  cg_systems_.clear();
 }
 
 void GlobalSystem::addToDiagonal(int j, double delta, bool refactor) {

@@ -10,6 +10,7 @@
 
 #include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace stabint {
@@ -50,13 +51,19 @@ class GlobalSystem {
   /// the host: the CPU reference of the OpenCL device's CG, the same algorithm in double, Eigen's
   /// ConjugateGradient with its DiagonalPreconditioner), each column warm-started from `x`:
   /// `iterations` iterations, or fewer once ||rhs - K_c x|| < tolerance ||rhs|| (tolerance > 0).
-  /// Returns the largest iteration count of the three columns.
+  /// Returns the largest iteration count of the three columns. With blocks (setBlocks), CG runs
+  /// on each diagonal block on its own, as that block's own system would run it.
   int solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,
                              double tolerance);
 
   /// out = (c M + L) x for the three columns at once (L symmetric: its stored columns are its
   /// rows, read once for all three columns).
   void multiply(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out) const;
+
+  /// The rows of K_c's diagonal blocks (a batch's scenes: first row, count), which no element
+  /// couples: solveConjugateGradient then runs one CG per block, so that one scene's residuals
+  /// and step lengths never depend on another's. Empty or one block: the whole system.
+  void setBlocks(std::vector<std::pair<int, int>> blocks);
 
   /// Drops every factor (GlobalSolve::ConjugateGradient factors only to validate the system, so
   /// element changes then update no factor).
@@ -181,12 +188,14 @@ class GlobalSystem {
   };
   int factorizations_ = 0;
   int laplacian_version_ = 0;
-  // K_c = c M + L and its CG solver (which keeps a reference to it) per c, dropped when L changes.
+  // K_c = c M + L (or one diagonal block of it) and its CG solver (which keeps a reference to it),
+  // per c and block, dropped when L changes.
   struct CgSystem {
     Eigen::SparseMatrix<double> matrix;
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
   };
-  std::map<double, std::unique_ptr<CgSystem>> cg_systems_;
+  std::map<double, std::vector<std::unique_ptr<CgSystem>>> cg_systems_;
+  std::vector<std::pair<int, int>> blocks_;  // setBlocks; empty: the whole system
   // Every change of L goes through here: the copies made from it (CG systems here, the device's
   // CSR through laplacianVersion) follow.
   void laplacianChanged() {

@@ -41,7 +41,12 @@ constexpr int kMaxHalvings = 4;
 void LocalGlobalSolver::setSegments(const std::vector<SceneSegment>& segments,
                                     const std::vector<double>& energy_scales) {
   rows_.clear();
-  for (const SceneSegment& s : segments) rows_.push_back({s.first_particle, s.num_particles});
+  std::vector<std::pair<int, int>> blocks;
+  for (const SceneSegment& s : segments) {
+    rows_.push_back({s.first_particle, s.num_particles});
+    blocks.emplace_back(s.first_particle, s.num_particles);
+  }
+  system_.setBlocks(std::move(blocks));  // a batch's host CG per scene
   segment_scales_ = energy_scales;
 }
 

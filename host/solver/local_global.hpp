@@ -133,8 +133,10 @@ class LocalGlobalSolver {
   void globalStep(double c, int x, const IterationControl& control, bool to_host);
   // The local step at slot `x`: rhs_ on the host, or kept in the backend for its own solve.
   void localStep(double c, int y, int x, double t, const IterationControl& control, PotentialEnergy* energy);
+  // The device's CG reduces over the whole system; a batch's scenes (segments) run CG on the host,
+  // each on its own block (GlobalSystem::setBlocks).
   bool onBackend(const IterationControl& control) const {
-    return control.global_solve == GlobalSolve::ConjugateGradient && backend_.solvesGlobalSystem();
+    return control.global_solve == GlobalSolve::ConjugateGradient && backend_.solvesGlobalSystem() && rows_.size() <= 1;
   }
   double inertia(double c, const Eigen::MatrixX3d& x) const;
   // c/2 ||x - y||_M^2 over segment s's rows (y: y_host_).

@@ -92,11 +92,11 @@ class BatchCheckpoint {
 ///
 /// The batch's constraints (InvalidInputError, naming the scene where one is at fault): every
 /// scene valid and with the same gravity, a backend that computes per-scene energies (the CPU
-/// reference and OpenCL) and, with more than one scene, the factor's global solve (not CG: its
-/// dot products sum over the whole batch, and one scene's blow-up would reach the others through
-/// them). Every acceleration runs per scene: L-BFGS's (the default) dot products, line search and
-/// history, Chebyshev's and Anderson's extrapolation and safeguard, Newton-CG's CG and line
-/// search are each scene's own. The
+/// reference and OpenCL). Every solver option runs per scene, so that one scene's blow-up never
+/// reaches the others: L-BFGS's (the default) dot products, line search and history, Chebyshev's
+/// and Anderson's extrapolation and safeguard, Newton-CG's CG and line search are each scene's
+/// own, and GlobalSolve::ConjugateGradient runs CG on each scene's block of the system on its own
+/// (on the host, also on OpenCL: the device's CG sums over the whole system). The
 /// stops by accuracy (tolerance, gradient_tolerance) are per scene: each scene stops its solve
 /// where its own Simulator would and reports its own iterations. A batch of one
 /// scene takes every option its Simulator takes and steps as that Simulator does, bit for bit on

@@ -38,9 +38,9 @@ typedef struct stabint_batch stabint_batch;
 
 /** Validates and copies `count` (>= 1) scenes and the options, all scenes sharing the options.
  * INVALID_INPUT for a bad scene or option, or one outside a batch's constraints (the message names
- * the scene at fault): the same gravity in every scene and, with more than one scene, the
- * factor's global solve (not CG); every acceleration and the stops by accuracy, tolerance and
- * gradient_tolerance, run per scene: each scene stops where its own simulator would.
+ * the scene at fault): the same gravity in every scene. Every solver option runs per scene (each
+ * acceleration, the stops by accuracy, tolerance and gradient_tolerance, and CG on each scene's
+ * block): each scene stops where its own simulator would.
  * The scenes may be destroyed as soon as the batch exists. */
 stabint_status stabint_batch_create(const stabint_scene* const* scenes, int count,
                                     const stabint_simulator_options* options, stabint_batch** out);

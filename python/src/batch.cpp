@@ -69,8 +69,8 @@ void bindBatch(nb::module_& m) {
                              "(docs/method.md, \"Batches\"). The scenes are validated and copied at construction.")
       .def(nb::init<const std::vector<Scene>&, const SimulatorOptions&>(), "scenes"_a, "options"_a = SimulatorOptions(),
            "Raises InvalidInputError naming the scene (\"scene 3: ...\") for a bad scene, scenes with different "
-           "gravity, or options a batch of several scenes does not support (the global solve by CG; every "
-           "acceleration and the stops by accuracy run per scene).")
+           "gravity, or bad option values (every solver option runs per scene: each acceleration and its "
+           "stops by accuracy, and CG on each scene's block).")
       .def(
           "step", [](BatchSimulator& b) { return b.step(); }, nb::call_guard<nb::gil_scoped_release>(),
           "Advances every active scene one step and returns the BatchStepReport. Never raises for a scene that "

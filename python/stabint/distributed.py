@@ -379,11 +379,10 @@ def _batches(scenes: Sequence[Any], options: Any, frames: int, batch_size: int, 
 
 
 def _check_batch_options(options: Dict[str, Any], index: int, batch_size: int) -> None:
-    # Options a BatchSimulator of more than one scene refuses (the global solve by CG)
-    # are found here, before any task is sent, by the library's own check on
-    # a batch of one-particle scenes as large as the sweep's batches (up to two): with batch_size 1
-    # every option runs. Only for the CPU reference: an OpenCL choice is checked where the device
-    # is, in the worker.
+    # Options the library refuses (their values: a batch takes every solver option) are found
+    # here, before any task is sent, by the library's own check on a batch of one-particle scenes
+    # as large as the sweep's batches (up to two). Only for the CPU reference: an OpenCL choice is
+    # checked where the device is, in the worker.
     if options["backend"] != "CpuReference":
         return
     try:
@@ -418,7 +417,7 @@ def sweep(scenes: Sequence[Any], options: Union[SimulatorOptions, Mapping[str, A
 
     Bad input raises InvalidInputError naming the scene or batch: an empty list, an object that
     is not a scene description, an unknown option field, a scene that does not validate, or a
-    batch the BatchSimulator refuses (differing gravity, the global solve by CG). Errors raised in a worker reach the caller with their own class."""
+    batch the BatchSimulator refuses (differing gravity, a bad option value). Errors raised in a worker reach the caller with their own class."""
     _check_counts(frames, batch_size, stride)
     batches = _batches(scenes, options, frames, batch_size, stride, velocities)
     client = client if client is not None else _default_client()

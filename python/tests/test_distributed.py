@@ -152,9 +152,8 @@ def test_a_refused_scene_is_reported_and_the_others_step_on():
     assert raised.value.step + 1 == results[1].refused_at  # the same step its own Simulator refuses
 
 
-def test_batches_of_one_take_the_options_that_couple_scenes():
-    # With batch_size 1 each scene is its own Simulator, bit for bit (a batch of several scenes
-    # refuses the options that reduce over the whole batch: next test).
+def test_batches_of_one_are_their_simulators():
+    # With batch_size 1 each scene is its own Simulator, bit for bit, CG included.
     options = {"integrator": "BackwardEuler", "global_solve": "ConjugateGradient"}
     results = sweep([BuiltinScene("chain"), BuiltinScene("chain", {"stiffness": 1e3})], options, 5, batch_size=1,
                     client=None)
@@ -174,9 +173,9 @@ def test_bad_input_is_an_invalid_input_error_naming_the_problem(client):
         sweep([Cell(BuiltinScene("chain"), {"h": 0.01})], OPTIONS, 10, client=client)
     with pytest.raises(stabint.InvalidInputError, match="batch_size must be an integer >= 1"):
         sweep([BuiltinScene("chain")], OPTIONS, 10, batch_size=0, client=client)
-    # Options a batch cannot run (CG sums over the whole batch), before any task.
-    with pytest.raises(stabint.InvalidInputError, match="scene 0: batch simulator options"):
-        sweep([BuiltinScene("chain")], {"global_solve": "ConjugateGradient"}, 10, client=client)
+    # Option values the library refuses, before any task.
+    with pytest.raises(stabint.InvalidInputError, match="scene 0: simulator options: time_step"):
+        sweep([BuiltinScene("chain")], {"time_step": -1.0}, 10, client=client)
     # Scenes of one options group must share gravity: the worker's BatchSimulator says which
     # batch, and the error reaches the caller with its class.
     upside_down = stabint.chain_pendulum()

@@ -951,20 +951,22 @@ def test_a_batch_checkpoints_and_restores_scenes_and_plays_event_scripts(tmp_pat
         in_batch.apply(batch, 3)
 
 
-def test_a_batch_refuses_what_would_couple_its_scenes_naming_the_scene():
+def test_a_batch_refuses_what_would_couple_its_scenes_naming_the_scene_and_takes_every_solver():
     oscillator = stabint.linear_oscillator()
     other_gravity = stabint.chain_pendulum()
     other_gravity.gravity = np.array([0.0, -1.0, 0.0])
     with pytest.raises(stabint.InvalidInputError, match="scene 1"):
         stabint.BatchSimulator([stabint.chain_pendulum(), other_gravity])
-    cg = stabint.SimulatorOptions(global_solve=stabint.GlobalSolve.ConjugateGradient)
-    with pytest.raises(stabint.InvalidInputError, match="more than one scene.*CG"):
-        stabint.BatchSimulator([oscillator, oscillator], cg)
-    stabint.BatchSimulator([oscillator], cg)  # a batch of one takes it
+    # Every solver option runs per scene: each acceleration with its stops, and CG on each
+    # scene's block; bad option values are refused as a Simulator refuses them.
+    stabint.BatchSimulator([oscillator, oscillator],
+                           stabint.SimulatorOptions(global_solve=stabint.GlobalSolve.ConjugateGradient))
     for acceleration in (stabint.Acceleration.LBFGS, stabint.Acceleration.None_, stabint.Acceleration.Anderson,
-                         stabint.Acceleration.Chebyshev, stabint.Acceleration.Newton):  # per scene, their stops too
+                         stabint.Acceleration.Chebyshev, stabint.Acceleration.Newton):
         stabint.BatchSimulator([oscillator, oscillator], stabint.SimulatorOptions(tolerance=1e-6,
                                                                                   acceleration=acceleration))
+    with pytest.raises(stabint.InvalidInputError, match="time_step"):
+        stabint.BatchSimulator([oscillator, oscillator], stabint.SimulatorOptions(time_step=-1.0))
     batch = stabint.BatchSimulator([oscillator])
     with pytest.raises(stabint.InvalidInputError):
         batch.positions(1)

@@ -148,6 +148,7 @@ int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, co
     for (std::size_t s = 0; s < segments; ++s) out[s] = 0.5 * c * dots[s] + segment_potentials_[s].total();
   };
   startSegmentStops(segments);
+  if (control.global_solve == GlobalSolve::ConjugateGradient) backend_.read(x, x_host_);  // CG's warm start
   objectives(previous);
   int done = 0;
   while (done < control.max_iterations) {

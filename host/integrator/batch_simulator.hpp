@@ -8,9 +8,8 @@
 // batch, its energies booked per scene), per-frame input and element changes of one scene
 // (batch_input.cpp: Simulator's FrameInput and ElementChanges on the scene's segment), on any
 // backend that computes per-scene energies (the
-// CPU reference and OpenCL), with a fixed iteration count and the factor (the
-// controls that sum over the whole batch, a tolerance stop, acceleration and CG, are refused:
-// they would couple the scenes, and one scene's NaN would reach the others through them).
+// CPU reference and OpenCL), with every solver option, each run per scene (its reductions, stops
+// and CG on its own block), so that one scene's NaN never reaches the others.
 #include "backend.hpp"
 #include "contact/contact_resolver.hpp"
 #include "integrator/backend_choice.hpp"

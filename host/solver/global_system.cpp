@@ -146,7 +146,8 @@ int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, 
       if (blocks_.empty())
         system->matrix = shifted;
       else
-        system->matrix = shifted.block(blocks_[b].first, blocks_[b].first, blocks_[b].second, blocks_[b].second);
+        system->matrix = shifted.block(blocks_[b].first_particle, blocks_[b].first_particle, blocks_[b].num_particles,
+                                       blocks_[b].num_particles);
       system->cg.compute(system->matrix);
       systems.push_back(std::move(system));
     }
@@ -163,10 +164,10 @@ int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, 
         x.col(k) = column;
       } else {
         // The block's rows copied out, so that CG runs on the vectors its scene alone has.
-        const Eigen::VectorXd block_rhs = rhs.col(k).segment(blocks_[b].first, blocks_[b].second);
-        const Eigen::VectorXd block_x = x.col(k).segment(blocks_[b].first, blocks_[b].second);
+        const Eigen::VectorXd block_rhs = rhs.col(k).segment(blocks_[b].first_particle, blocks_[b].num_particles);
+        const Eigen::VectorXd block_x = x.col(k).segment(blocks_[b].first_particle, blocks_[b].num_particles);
         Eigen::VectorXd column = cg.solveWithGuess(block_rhs, block_x);
-        x.col(k).segment(blocks_[b].first, blocks_[b].second) = column;
+        x.col(k).segment(blocks_[b].first_particle, blocks_[b].num_particles) = column;
       }
       most = std::max(most, static_cast<int>(cg.iterations()));
     }
@@ -174,10 +175,8 @@ int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, 
   return most;
 }
 
-void GlobalSystem::setBlocks(std::vector<std::pair<int, int>> blocks) {
-  if (blocks.size() <= 1) blocks.clear();
-  if (blocks == blocks_) return;
-  blocks_ = std::move(blocks);
+void GlobalSystem::setBlocks(const std::vector<SceneSegment>& blocks) {
+  blocks_ = blocks.size() > 1 ? blocks : std::vector<SceneSegment>{};
   cg_systems_.clear();
 }
 

@@ -2,6 +2,7 @@
 // The global step of the local/global solver: K_c = c M + L with L = sum_e w_e A_e^T A_e, an
 // `n by n` scalar matrix shared by x, y and z. Factored once per distinct c with CHOLMOD and
 // reused for every iteration of every step (docs/method.md section 2).
+#include "scene/scene_batch.hpp"
 #include "solver/factor_solve.hpp"
 
 #include <Eigen/CholmodSupport>
@@ -10,7 +11,6 @@
 
 #include <map>
 #include <memory>
-#include <utility>
 #include <vector>
 
 namespace stabint {
@@ -63,7 +63,7 @@ class GlobalSystem {
   /// The rows of K_c's diagonal blocks (a batch's scenes: first row, count), which no element
   /// couples: solveConjugateGradient then runs one CG per block, so that one scene's residuals
   /// and step lengths never depend on another's. Empty or one block: the whole system.
-  void setBlocks(std::vector<std::pair<int, int>> blocks);
+  void setBlocks(const std::vector<SceneSegment>& blocks);
 
   /// Drops every factor (GlobalSolve::ConjugateGradient factors only to validate the system, so
   /// element changes then update no factor).
@@ -195,7 +195,7 @@ class GlobalSystem {
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
   };
   std::map<double, std::vector<std::unique_ptr<CgSystem>>> cg_systems_;
-  std::vector<std::pair<int, int>> blocks_;  // setBlocks; empty: the whole system
+  std::vector<SceneSegment> blocks_;  // setBlocks; empty: the whole system
   // Every change of L goes through here: the copies made from it (CG systems here, the device's
   // CSR through laplacianVersion) follow.
   void laplacianChanged() {

@@ -41,12 +41,8 @@ constexpr int kMaxHalvings = 4;
 void LocalGlobalSolver::setSegments(const std::vector<SceneSegment>& segments,
                                     const std::vector<double>& energy_scales) {
   rows_.clear();
-  std::vector<std::pair<int, int>> blocks;
-  for (const SceneSegment& s : segments) {
-    rows_.push_back({s.first_particle, s.num_particles});
-    blocks.emplace_back(s.first_particle, s.num_particles);
-  }
-  system_.setBlocks(std::move(blocks));  // a batch's host CG per scene
+  for (const SceneSegment& s : segments) rows_.push_back({s.first_particle, s.num_particles});
+  system_.setBlocks(segments);  // a batch's host CG per scene
   segment_scales_ = energy_scales;
 }
 
@@ -107,12 +103,11 @@ void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const Itera
     step[s] = slope[s] < 0.0 ? 1.0 : 0.0;
     accepted_[s] = step[s] == 0.0;
   }
-  auto rowsOf = [&](Eigen::MatrixX3d& m, std::size_t s) { return m.middleRows(rows_[s].first, rows_[s].count); };
   for (int halving = 0; halving <= kMaxHalvings; ++halving) {
     bool any_trial = false;
     for (std::size_t s = 0; s < segments; ++s) {
       if (accepted_[s]) continue;
-      rowsOf(x_trial_, s) = rowsOf(x_cur_, s) + step[s] * rowsOf(direction_, s);
+      segmentRows(x_trial_, s) = segmentRows(x_cur_, s) + step[s] * segmentRows(direction_, s);
       any_trial = true;
     }
     if (!any_trial) break;
@@ -130,7 +125,7 @@ void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const Itera
         step[s] *= 0.5;
       } else {
         accepted_[s] = 1;
-        rowsOf(x_trial_, s) = rowsOf(x_cur_, s);
+        segmentRows(x_trial_, s) = segmentRows(x_cur_, s);
       }
     }
   }

@@ -336,9 +336,6 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
   accepted_objective.assign(segments, 0.0);
   bool have_accepted = false;
   extrapolated_.assign(segments, 0);  // x_cur_'s rows of the segment are extrapolated (not plain)
-  auto rows = [&](Eigen::MatrixX3d& m, std::size_t s) {
-    return rows_.size() <= 1 ? m.middleRows(0, m.rows()) : m.middleRows(rows_[s].first, rows_[s].count);
-  };
   int done = 0;
   while (true) {
     acceleratedObjectives(c, y, x, t, control, current);
@@ -351,7 +348,7 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
       if (extrapolated_[s] && have_accepted && !(current[s] <= accepted_objective[s] + noise)) {
         ++rejected_;
         rejected = true;
-        rows(x_cur_, s) = rows(x_host_, s);  // the plain update of the last accepted iterate
+        segmentRows(x_cur_, s) = segmentRows(x_host_, s);  // the plain update of the last accepted iterate
         extrapolations_[s]->rejected();
       }
     }
@@ -379,7 +376,7 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
     for (std::size_t s = 0; s < segments; ++s) {
       if (stopped_[s]) continue;  // its rows of x_cur_ stay at its last iterate
       extrapolated_[s] = proposeSegment(s) && !last;
-      rows(x_cur_, s) = extrapolated_[s] ? rows(x_next_, s) : rows(x_host_, s);
+      segmentRows(x_cur_, s) = extrapolated_[s] ? segmentRows(x_next_, s) : segmentRows(x_host_, s);
     }
     backend_.write(x, x_cur_);
     if (last && !objective_history) break;  // the final plain iterate needs no local step

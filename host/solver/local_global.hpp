@@ -139,6 +139,10 @@ class LocalGlobalSolver {
     return control.global_solve == GlobalSolve::ConjugateGradient && backend_.solvesGlobalSystem() && rows_.size() <= 1;
   }
   double inertia(double c, const Eigen::MatrixX3d& x) const;
+  // Segment s's rows of `m` (all of them without segments).
+  auto segmentRows(Eigen::MatrixX3d& m, std::size_t s) const {
+    return rows_.empty() ? m.middleRows(0, m.rows()) : m.middleRows(rows_[s].first, rows_[s].count);
+  }
   // c/2 ||x - y||_M^2 over segment s's rows (y: y_host_).
   double segmentInertia(double c, const Eigen::MatrixX3d& x, std::size_t s) const;
 
@@ -191,6 +195,7 @@ class LocalGlobalSolver {
   };
   std::vector<SpringCurvature> springs_;
   Eigen::MatrixX3d cg_z_, cg_p_, cg_hp_;
+  std::vector<char> cg_running_;  // per segment: its CG goes on in this Newton step
 };
 
 }  // namespace stabint

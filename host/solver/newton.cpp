@@ -91,10 +91,9 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
       out[s] = segment_x_.cwiseProduct(segment_g_).sum();
     }
   };
-  auto rows = [&](Eigen::MatrixX3d& m, std::size_t s) { return m.middleRows(rows_[s].first, rows_[s].count); };
   startSegmentStops(segments);
   std::vector<int>& done = segment_iterations_;  // each segment's count; stopSegment keeps it
-  std::vector<char>& cg_running = accepted_;     // free until the line search
+  std::vector<char>& cg_running = cg_running_;
   auto stop = [&](std::size_t s) { stopSegment(s, done[s]); };
   if (limit <= 0)
     for (std::size_t s = 0; s < segments; ++s) stop(s);
@@ -120,8 +119,8 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
         cg_running[s] = 0;
         if (!(product[s] > 0.0)) continue;
         const double alpha = rz[s] / product[s];
-        rows(direction_, s) += alpha * rows(cg_p_, s);
-        rows(search_, s) -= alpha * rows(cg_hp_, s);
+        segmentRows(direction_, s) += alpha * segmentRows(cg_p_, s);
+        segmentRows(search_, s) -= alpha * segmentRows(cg_hp_, s);
         cg_running[s] = k + 1 < kMaxCgPerStep && done[s] < limit;
         any = any || cg_running[s];
       }
@@ -134,7 +133,7 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
           cg_running[s] = 0;
           continue;
         }
-        rows(cg_p_, s) = rows(cg_z_, s) + (product[s] / rz[s]) * rows(cg_p_, s);
+        segmentRows(cg_p_, s) = segmentRows(cg_z_, s) + (product[s] / rz[s]) * segmentRows(cg_p_, s);
         rz[s] = product[s];
       }
     }

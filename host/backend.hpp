@@ -121,7 +121,8 @@ class Backend {
     potentials(x, t, per_scene);
   }
   /// localStepRhs with every segment's potential at `x` (as potentials() gives them): a batch's
-  /// Chebyshev and Anderson solves, whose safeguard compares each scene's objective. A backend
+  /// Chebyshev and Anderson solves and plain iterations' tolerance stop, which compare each
+  /// scene's objective. A backend
   /// that can sum per segment in the same element pass does one pass; the others run
   /// potentials() after it.
   virtual void localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,

@@ -666,7 +666,8 @@ TEST(BatchSimulator, AccelerationsArePerScene) {
 // CG in a batch runs on each scene's block of the system on its own (GlobalSystem::setBlocks), as
 // the scene's own Simulator runs it on its system: the same iterates to round-off, with a fixed
 // CG count and with CG's tolerance, under plain iterations (also with their tolerance stop, each
-// scene's CG warm-started from its iterate), Anderson and L-BFGS, BE and the blend.
+// scene's CG warm-started from its iterate, which this test does not tell apart from a stale start:
+// the stop's many iterations wash it out), Anderson and L-BFGS, BE and the blend.
 TEST(BatchSimulator, ConjugateGradientsArePerScene) {
   const std::vector<Scene> scenes = mixedBatchScenes();
   for (Acceleration acceleration : {Acceleration::None, Acceleration::Anderson, Acceleration::LBFGS})
@@ -677,7 +678,7 @@ TEST(BatchSimulator, ConjugateGradientsArePerScene) {
         options.time_step = 1.0 / 60.0;
         options.acceleration = acceleration;
         options.global_solve = GlobalSolve::ConjugateGradient;
-        options.cg_iterations = 4;  // far from converged: the warm start and the blocks matter
+        options.cg_iterations = 4;  // far from converged: a CG over the whole batch would part from its scenes
         options.cg_tolerance = cg_tolerance;
         if (cg_tolerance == 0.0 && acceleration == Acceleration::None) {
           options.tolerance = 1e-6;  // the solve's own stop, per scene

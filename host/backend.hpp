@@ -115,8 +115,14 @@ class Backend {
   /// localStepGradient with every segment's potential at `x` (as potentials() gives them) instead
   /// of the whole scene's: a batch's L-BFGS line search. A backend that can sum per segment in
   /// the same element pass does one pass; the others run potentials() after it.
+  ///
+  /// With `running` (one flag per segment), a backend may skip the segments not flagged (a
+  /// batch's scenes that take no part in the solve, or stopped in it): their entries of
+  /// `per_scene` and their rows of the result are then unspecified. The CPU reference skips them;
+  /// the OpenCL backend passes over every element (one launch for the batch).
   virtual void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
-                                         std::vector<PotentialEnergy>& per_scene) {
+                                         std::vector<PotentialEnergy>& per_scene,
+                                         const std::vector<char>* /*running*/ = nullptr) {
     localStepGradient(x, y, c, t, gradient, nullptr);
     potentials(x, t, per_scene);
   }
@@ -125,8 +131,10 @@ class Backend {
   /// scene's objective. A backend
   /// that can sum per segment in the same element pass does one pass; the others run
   /// potentials() after it.
+  /// `running` as for localStepGradientPerScene.
   virtual void localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
-                                    std::vector<PotentialEnergy>& per_scene) {
+                                    std::vector<PotentialEnergy>& per_scene,
+                                    const std::vector<char>* /*running*/ = nullptr) {
     localStepRhs(x, y, c, t, rhs, nullptr);
     potentials(x, t, per_scene);
   }

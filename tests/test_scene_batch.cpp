@@ -258,6 +258,145 @@ TEST(SceneBatch, CpuPerScenePassesOnThreadsAreTheSerialOnes) {
   EXPECT_NE(serial.back().internal, 0.0);
 }
 
+// A solve of some of a batch's blocks (GlobalSystem::solve and solveConjugateGradient with
+// `solved`): the blocks solved are the whole solve's rows bit for bit, and the others' rows are not
+// touched (the work skipped), on a small batch (one thread) and on one past kForestRows (the
+// trees on threads).
+TEST(SceneBatch, SolvesOfSomeBlocksSkipTheOthers) {
+  for (int copies : {1, 60}) {
+    std::vector<Scene> scenes;
+    for (int copy = 0; copy < copies; ++copy)
+      for (const Scene& s : mixedBatchScenes()) scenes.push_back(s);
+    const SceneBatch batch = concatenateScenes(scenes);
+    const SceneData data(batch.scene);
+    GlobalSystem system(data);
+    system.setBlocks(batch.segments);
+    const Eigen::Index n = batch.scene.numParticles();
+    ASSERT_EQ(copies > 1, n >= GlobalSystem::kForestRows) << n;
+    const Eigen::MatrixX3d rhs = perturbed(batch.scene.positions, 0.3);
+    std::vector<char> solved(scenes.size(), 1);
+    for (std::size_t s = 1; s < scenes.size(); s += 2) solved[s] = 0;
+    const double c = 900.0;
+    for (bool cg : {false, true}) {
+      const std::string what = std::to_string(copies) + (cg ? " copies, CG" : " copies, factor");
+      Eigen::MatrixX3d whole = Eigen::MatrixX3d::Zero(n, 3);
+      Eigen::MatrixX3d some = Eigen::MatrixX3d::Constant(n, 3, 7.0);  // the rows not solved keep it
+      Eigen::MatrixX3d start = Eigen::MatrixX3d::Zero(n, 3);
+      for (std::size_t s = 0; s < scenes.size(); ++s)
+        if (solved[s]) some.middleRows(batch.segments[s].first_particle, batch.segments[s].num_particles).setZero();
+      if (cg) {
+        system.solveConjugateGradient(c, rhs, whole, 5, 0.0);
+        system.solveConjugateGradient(c, rhs, some, 5, 0.0, &solved);
+      } else {
+        system.solve(c, rhs, whole);
+        system.solve(c, rhs, some, &solved);
+      }
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        const SceneSegment& seg = batch.segments[s];
+        if (solved[s])
+          EXPECT_EQ(some.middleRows(seg.first_particle, seg.num_particles),
+                    whole.middleRows(seg.first_particle, seg.num_particles))
+              << what << ", scene " << s;
+        else
+          EXPECT_TRUE((some.middleRows(seg.first_particle, seg.num_particles).array() == 7.0).all())
+              << what << ", scene " << s;
+      }
+      EXPECT_NE(whole, start) << what;
+    }
+  }
+}
+
+// Scenes that take no part in a solve (LocalGlobalSolver::setSolving: a batch's inactive scenes,
+// or those that need no blend partner) keep their warm start exactly, take no iteration and have
+// no potential (NaN), while the others take the iterates they take when all solve, bit for bit:
+// every solver, to a fixed count and to a tolerance, with the factor and with CG. The CPU
+// reference also skips their element passes (their energies are not computed: checked through
+// localStepGradientPerScene's entries, which stay as they were).
+TEST(SceneBatch, ScenesThatTakeNoPartInASolveKeepTheirWarmStart) {
+  const std::vector<Scene> scenes = mixedBatchScenes();
+  const SceneBatch batch = concatenateScenes(scenes);
+  const SceneData data(batch.scene);
+  const std::vector<char> solving = {1, 0, 1, 0};
+  ASSERT_EQ(solving.size(), scenes.size());
+  const Eigen::MatrixX3d warm = perturbed(batch.scene.positions, 0.02);
+  const double c = 3600.0, t = 0.7;
+  struct Case {
+    Acceleration acceleration;
+    double tolerance;
+  };
+  for (const Case k : {Case{Acceleration::None, 0.0}, Case{Acceleration::None, 1e-8}, Case{Acceleration::LBFGS, 0.0},
+                       Case{Acceleration::LBFGS, 1e-8}, Case{Acceleration::Anderson, 1e-8},
+                       Case{Acceleration::Chebyshev, 0.0}, Case{Acceleration::Newton, 1e-8}})
+    for (GlobalSolve global : {GlobalSolve::Factor, GlobalSolve::ConjugateGradient}) {
+      const std::string what = std::string(accelerationName(k.acceleration)) + ", tolerance " +
+                               std::to_string(k.tolerance) + (global == GlobalSolve::Factor ? ", factor" : ", CG");
+      IterationControl control;
+      control.iterations = 6;
+      control.acceleration = k.acceleration;
+      control.tolerance = k.tolerance;
+      control.max_iterations = 40;
+      control.global_solve = global;
+      auto run = [&](const std::vector<char>& taking_part, Eigen::MatrixX3d& x, std::vector<int>& iterations,
+                     std::vector<PotentialEnergy>& potentials) {
+        const std::unique_ptr<Backend> backend = makeCpuBackend(data, 3);
+        backend->setSegments(batch.segments);
+        GlobalSystem system(data);
+        LocalGlobalSolver solver(*backend, system, 2);
+        solver.setSegments(batch.segments, std::vector<double>(scenes.size(), 1.0));
+        solver.setSolving(taking_part);
+        backend->write(0, warm);
+        backend->write(1, batch.scene.positions);
+        solver.solve(c, 1, 0, t, control);
+        backend->read(0, x);
+        iterations.clear();
+        for (std::size_t s = 0; s < scenes.size(); ++s) iterations.push_back(solver.segmentIterations(s));
+        potentials = solver.potentialsOfResult();
+      };
+      Eigen::MatrixX3d all_x, some_x;
+      std::vector<int> all_iterations, some_iterations;
+      std::vector<PotentialEnergy> all_potentials, some_potentials;
+      run({}, all_x, all_iterations, all_potentials);
+      run(solving, some_x, some_iterations, some_potentials);
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        const SceneSegment& seg = batch.segments[s];
+        const std::string where = what + ", scene " + std::to_string(s);
+        if (solving[s]) {
+          EXPECT_EQ(some_x.middleRows(seg.first_particle, seg.num_particles),
+                    all_x.middleRows(seg.first_particle, seg.num_particles))
+              << where;
+          EXPECT_EQ(some_iterations[s], all_iterations[s]) << where;
+          EXPECT_GT(some_iterations[s], 0) << where;
+        } else {
+          EXPECT_EQ(some_x.middleRows(seg.first_particle, seg.num_particles),
+                    warm.middleRows(seg.first_particle, seg.num_particles))
+              << where;
+          EXPECT_EQ(some_iterations[s], 0) << where;
+        }
+        if (some_potentials.empty()) continue;
+        ASSERT_EQ(some_potentials.size(), scenes.size()) << where;
+        if (solving[s]) {
+          if (!all_potentials.empty()) {
+            EXPECT_EQ(some_potentials[s].total(), all_potentials[s].total()) << where;
+          }
+        } else {
+          EXPECT_TRUE(std::isnan(some_potentials[s].total())) << where;
+        }
+      }
+    }
+  // The CPU reference's pass skips the scenes not flagged: their entries stay as they were.
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
+  backend->setSegments(batch.segments);
+  backend->write(0, warm);
+  backend->write(1, batch.scene.positions);
+  const PotentialEnergy sentinel{1.0, 2.0, 3.0};
+  std::vector<PotentialEnergy> all, some(scenes.size(), sentinel);
+  Eigen::MatrixX3d gradient;
+  backend->localStepGradientPerScene(0, 1, c, t, gradient, all);
+  backend->localStepGradientPerScene(0, 1, c, t, gradient, some, &solving);
+  for (std::size_t s = 0; s < scenes.size(); ++s)
+    EXPECT_EQ(some[s].total(), solving[s] ? all[s].total() : sentinel.total()) << "scene " << s;
+}
+
 struct PremiseCase {
   Integrator integrator;
   double time_step;

@@ -111,21 +111,21 @@ class CpuBackend final : public Backend {
 
   // A batch's L-BFGS: the force pass and every scene's energy at once, segment by segment.
   void localStepGradientPerScene(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& gradient,
-                                 std::vector<PotentialEnergy>& per_scene) override {
+                                 std::vector<PotentialEnergy>& per_scene, const std::vector<char>* running) override {
     if (segments_.size() <= 1) {
       Backend::localStepGradientPerScene(x_slot, y_slot, c, t, gradient, per_scene);
       return;
     }
     const auto start = Clock::now();
     force_.setZero(scene_.numParticles(), 3);
-    segmentPasses(slots_[x_slot], t, kPassForce | kPassEnergy, &force_, per_scene);
+    segmentPasses(slots_[x_slot], t, kPassForce | kPassEnergy, &force_, per_scene, running);
     formGradient(x_slot, y_slot, c, t, gradient);
     times_.local += secondsSince(start);
   }
 
   // A batch's Chebyshev or Anderson: the projections and every scene's energy at once.
   void localStepRhsPerScene(int x_slot, int y_slot, double c, double t, Eigen::MatrixX3d& rhs,
-                            std::vector<PotentialEnergy>& per_scene) override {
+                            std::vector<PotentialEnergy>& per_scene, const std::vector<char>* running) override {
     if (segments_.size() <= 1) {
       Backend::localStepRhsPerScene(x_slot, y_slot, c, t, rhs, per_scene);
       return;
@@ -133,7 +133,7 @@ class CpuBackend final : public Backend {
     const auto start = Clock::now();
     rhs = (c * slots_[y_slot]).array().colwise() * scene_.masses().array();
     rhs += externalForces(t);
-    segmentPasses(slots_[x_slot], t, kPassProjection | kPassEnergy, &rhs, per_scene);
+    segmentPasses(slots_[x_slot], t, kPassProjection | kPassEnergy, &rhs, per_scene, running);
     times_.local += secondsSince(start);
   }
 
@@ -187,11 +187,11 @@ class CpuBackend final : public Backend {
     for (std::size_t b = 0; b < block_params_.size(); ++b) block_params_[b] = &paramsAt(b, t);
   }
 
-  /// segmentPass for every segment into per_scene. On threads each takes a contiguous run of
-  /// segments (about equal element work): a segment's sums and contributions are the same on any
-  /// thread, so the result is the serial pass's bit for bit.
+  /// segmentPass for every segment into per_scene (with `running`, the segments flagged alone). On
+  /// threads each takes a contiguous run of segments (about equal element work): a segment's sums
+  /// and contributions are the same on any thread, so the result is the serial pass's bit for bit.
   void segmentPasses(const Eigen::MatrixX3d& x, double t, int flags, Eigen::MatrixX3d* out,
-                     std::vector<PotentialEnergy>& per_scene) {
+                     std::vector<PotentialEnergy>& per_scene, const std::vector<char>* running = nullptr) {
     const std::vector<ElementBlock>& blocks = scene_.blocks();
     // The time-dependent params and forcing are cached on this thread before any worker reads them.
     cacheBlockParams(t);
@@ -199,22 +199,34 @@ class CpuBackend final : public Backend {
     const std::size_t segments = segments_.size();
     per_scene.resize(segments);
     const int threads = cpuThreads();
-    const bool threaded = threads > 1 && threadedPassPath() != ThreadedPassPath::Serial &&
-                          mayPay(passWork(blocks, blocks.size(), flags), threads);
-    if (!threaded) {
-      for (std::size_t s = 0; s < segments; ++s)
-        per_scene[s] = segmentPass(s, x, external, flags, out, segment_a_, segment_b_);
-      return;
-    }
-    // Runs of segments of about equal work, by the elements' local-step cost.
-    std::vector<double> work(segments + 1, 0.0);
+    auto runs = [&](std::size_t s) { return !running || (*running)[s]; };
+    // Runs of segments of about equal work, by the elements' local-step cost (0 for a segment
+    // that does not run).
+    std::vector<double>& work = segment_work_;
+    work.assign(segments + 1, 0.0);
+    double all = 0.0;
     for (std::size_t s = 0; s < segments; ++s) {
       double w = 0.0;
       for (std::size_t b = 0; b < blocks.size(); ++b)
         w += segments_[s].num_elements[b] * std::max(blocks[b].type->elementCost(), 1.0);
-      work[s + 1] = work[s] + w;
+      all += w;
+      work[s + 1] = work[s] + (runs(s) ? w : 0.0);
+    }
+    // The threads must pay for the segments that run.
+    PassWork pass = passWork(blocks, blocks.size(), flags);
+    const double share = all > 0.0 ? work[segments] / all : 0.0;
+    pass.elements *= share;
+    pass.contributions *= share;
+    pass.count *= share;
+    const bool threaded =
+        threads > 1 && threadedPassPath() != ThreadedPassPath::Serial && share > 0.0 && mayPay(pass, threads);
+    if (!threaded) {
+      for (std::size_t s = 0; s < segments; ++s)
+        if (runs(s)) per_scene[s] = segmentPass(s, x, external, flags, out, segment_a_, segment_b_);
+      return;
     }
     parallelForRuns(work, [&](std::size_t s) {
+      if (!runs(s)) return;
       thread_local Eigen::MatrixX3d rows_f, rows_x;  // the segment's rows (no allocation per segment)
       per_scene[s] = segmentPass(s, x, external, flags, out, rows_f, rows_x);
     });
@@ -429,6 +441,7 @@ class CpuBackend final : public Backend {
   ForcingKey external_key_;
   std::vector<SceneSegment> segments_;
   Eigen::MatrixX3d segment_a_, segment_b_;  // one segment's rows (massDots, potentials)
+  std::vector<double> segment_work_;        // segmentPasses: the runs' prefix sums of work
   Eigen::VectorXd segment_m_;
   // threadedPass's work list and buffers, reused from pass to pass.
   std::vector<Run> chunks_;

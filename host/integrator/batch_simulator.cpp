@@ -217,7 +217,7 @@ void BatchDriver::acceptScenes(double t1) {
 void BatchDriver::commit(double t1) {
   const std::size_t n = segments_.size();
   // The new state of the batch: each stepped scene's candidate, each other scene's last state
-  // (its block was solved too: its results are dropped). The slots get the velocities Simulator's
+  // (its block took no part in the solves). The slots get the velocities Simulator's
   // slots would hold: the host copy when it changed them (corrections, damping that removed
   // energy), else the solve's (v_new_ mirrors kVNew; damping that removes exactly 0 J may still
   // move the host copy by round-off, and Simulator then keeps the solve's).
@@ -250,6 +250,12 @@ void BatchDriver::commit(double t1) {
   t_ = t1;
 }
 
+std::vector<char> BatchDriver::steppingScenes() const {
+  std::vector<char> stepping(per_scene_.size());
+  for (std::size_t s = 0; s < per_scene_.size(); ++s) stepping[s] = per_scene_[s].stepping ? 1 : 0;
+  return stepping;
+}
+
 int BatchDriver::sceneIterations(std::size_t s, int done) const {
   return done == 0 ? 0 : solver_.segmentIterations(s);  // 0: an explicit step, no solve
 }
@@ -264,6 +270,7 @@ void BatchDriver::integrate(double t1, bool forced) {
   const double h = options_.time_step;
   const IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
+  solver_.setSolving(steppingScenes());
   const int iterations = steps.step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
   const bool evaluated = potentialsOfStep(steps, kXNew, t1);
   if (forced) {
@@ -294,6 +301,7 @@ void BatchDriver::blend(double t1, bool forced) {
   const std::size_t n = segments_.size();
   IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
+  solver_.setSolving(steppingScenes());
   const int im_iterations = steps.implicitMidpoint(h, t_, kXNew, kVNew, control);
   backend_->readBoth(kXNew, x_new_, kVNew, v_new_);
   backend_->potentials(kXNew, t1, p_all_);
@@ -335,8 +343,9 @@ void BatchDriver::blend(double t1, bool forced) {
   }
 
   if (any_not_finite) {
-    // The BE step with the full budget for the scenes whose IM candidate blew up, solved for the
-    // whole batch (a rare step: its cost does not matter) in kXTrial and kScratch.
+    // The BE step with the full budget for the scenes whose IM candidate blew up, in kXTrial and
+    // kScratch.
+    solver_.setSolving(not_finite);
     backend_->copy(kXTrial, kX);
     const int iterations = steps.backwardEuler(h, t_, kXTrial, kScratch, control, /*warm_start=*/true);
     backend_->readBoth(kXTrial, x_aux_, kScratch, v_aux_);
@@ -361,10 +370,9 @@ void BatchDriver::blend(double t1, bool forced) {
   }
 
   if (!any_partner) return;
-  // The BE partner for the whole batch when any scene needs it; the other scenes' rows are
-  // dropped (their blocks are independent: masking them would save element work only,
-  // docs/batch_design.md).
+  // The BE partner of the scenes that need it; the others take no part in its solve.
   control.iterations = options_.be_iterations;
+  solver_.setSolving(needs_partner);
   backend_->copy(kXPartner, kX);
   const int be_iterations = steps.backwardEuler(h, t_, kXPartner, kVPartner, endingPlain(control), /*warm_start=*/true);
   backend_->readBoth(kXPartner, x_aux_, kVPartner, v_aux_);

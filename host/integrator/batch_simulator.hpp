@@ -169,6 +169,8 @@ struct BatchDriver {
   IterationControl iterationControl(int iterations) const;
   // Scene s's iterations in the solve that did `done` (LocalGlobalSolver::segmentIterations).
   int sceneIterations(std::size_t s, int done) const;
+  // One flag per scene: it steps (the solves of the others' blocks are not run).
+  std::vector<char> steppingScenes() const;
   // The blend in lockstep: one IM solve, at most one partner solve (and one full-budget BE solve
   // when some scene's IM candidate blew up), one batched energy pass per root-find round.
   void blend(double t1, bool forced);

@@ -139,10 +139,11 @@ class OpenCLBackend final : public Backend {
 
   void potentials(int x, double t, std::vector<PotentialEnergy>& out) override;
 
+  // Every segment's elements, `running` or not (one launch for the batch).
   void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
-                                 std::vector<PotentialEnergy>& per_scene) override;
+                                 std::vector<PotentialEnergy>& per_scene, const std::vector<char>* running) override;
   void localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
-                            std::vector<PotentialEnergy>& per_scene) override;
+                            std::vector<PotentialEnergy>& per_scene, const std::vector<char>* running) override;
 
   PotentialEnergy potentialOf(int segment, int x, double t) override;
   void potentialsOf(const std::vector<int>& segments, int x, double t, std::vector<PotentialEnergy>& out) override;

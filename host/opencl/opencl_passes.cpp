@@ -69,7 +69,8 @@ void OpenCLBackend<Real>::localStepGradient(int x, int y, double c, double t, Ei
 // depend on what else its pass writes).
 template <typename Real>
 void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
-                                                    std::vector<PotentialEnergy>& per_scene) {
+                                                    std::vector<PotentialEnergy>& per_scene,
+                                                    const std::vector<char>* /*running*/) {
   checkSegmentsFit();
   if (segmentIsWholeScene() || segments_.empty()) {
     Backend::localStepGradientPerScene(x, y, c, t, gradient, per_scene);
@@ -82,7 +83,8 @@ void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, doub
 // The same for a batch's Chebyshev and Anderson: the projection pass writes each element's energy.
 template <typename Real>
 void OpenCLBackend<Real>::localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
-                                               std::vector<PotentialEnergy>& per_scene) {
+                                               std::vector<PotentialEnergy>& per_scene,
+                                               const std::vector<char>* /*running*/) {
   checkSegmentsFit();
   if (segmentIsWholeScene() || segments_.empty()) {
     Backend::localStepRhsPerScene(x, y, c, t, rhs, per_scene);

@@ -251,16 +251,33 @@ void solveSimplicialSubtrees(const cholmod_factor& factor, const SubtreeSplit& s
 }
 
 void solveSimplicialForest(const cholmod_factor& factor, const EliminationForest& forest, const double* rhs, double* x,
-                           std::size_t ld, std::vector<double>& buffer) {
+                           std::size_t ld, std::vector<double>& buffer, const std::vector<char>* solved,
+                           bool threaded) {
   const std::size_t n = factor.n;
   double* work = rowsIn(buffer, n, 4);
   double* inverse = work + 4 * n;
-  parallelForRuns(forest.entries, [&](std::size_t tree) {
+  auto solveTree = [&](std::size_t tree) {
+    if (solved && !(*solved)[tree]) return;
     const std::size_t lo = std::size_t(forest.starts[tree]), hi = std::size_t(forest.starts[tree + 1]);
     permuteIn(factor, rhs, ld, 3, 4, work, lo, hi);
     substituteRange(factor, work, inverse, 4, 3, int(lo), int(hi));
     permuteOut(factor, work, ld, 3, 4, x, lo, hi);
-  });
+  };
+  if (!threaded) {
+    for (int tree = 0; tree < forest.trees(); ++tree) solveTree(std::size_t(tree));
+    return;
+  }
+  if (!solved) {
+    parallelForRuns(forest.entries, solveTree);
+    return;
+  }
+  // The runs split the work of the trees solved.
+  std::vector<double> work_before(forest.entries.size(), 0.0);
+  for (int tree = 0; tree < forest.trees(); ++tree) {
+    const std::size_t t = std::size_t(tree);
+    work_before[t + 1] = work_before[t] + ((*solved)[t] ? forest.entries[t + 1] - forest.entries[t] : 0.0);
+  }
+  parallelForRuns(work_before, solveTree);
 }
 
 }  // namespace stabint

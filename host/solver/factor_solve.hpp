@@ -70,7 +70,13 @@ EliminationForest findForest(const cholmod_factor& factor);
 /// permutations. Bit for bit solveSimplicial on any thread count: no tree's column reaches
 /// another's rows, and no chain of columns (a block) crosses two trees (a root has no entry below
 /// its diagonal), so every tree is solved as the serial solve solves it.
+///
+/// With `solved` (one flag per tree), only the trees flagged are solved: the rows of the others
+/// are left in `x` as they were, and their work is not done (a batch's scenes that take no part in
+/// a solve). `threaded` false keeps the trees on the calling thread (small systems, where waking
+/// a worker costs more than it saves); the arithmetic is the same either way.
 void solveSimplicialForest(const cholmod_factor& factor, const EliminationForest& forest, const double* rhs, double* x,
-                           std::size_t ld, std::vector<double>& work);
+                           std::size_t ld, std::vector<double>& work, const std::vector<char>* solved = nullptr,
+                           bool threaded = true);
 
 }  // namespace stabint

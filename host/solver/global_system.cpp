@@ -104,7 +104,7 @@ void GlobalSystem::factor(double c, const char* c_name) {
   ++factorizations_;
 }
 
-void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x) {
+void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, const std::vector<char>* solved) {
   factor(c);
   Factor& f = *factors_.find(c)->second;
   cholmod_factor* l = f.factor();
@@ -126,17 +126,52 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
     f.split = n >= kSubtreeRows ? findSubtreeSplit(*l) : SubtreeSplit{};
     f.shape_known = true;
   }
-  if (n >= kForestRows && f.forest.trees() > 1) {
+  // Some blocks alone: tree by tree, the arithmetic of the serial and the forest's solves (not
+  // the subtree split's, which the whole solve takes on a large system with a dominant tree).
+  const bool forest = n >= kForestRows && f.forest.trees() > 1;
+  const bool split = !forest && n >= kSubtreeRows && f.split.b_end > 0;
+  if (solved && blocks_.size() > 1 && !split && std::find(solved->begin(), solved->end(), 0) != solved->end() &&
+      solveBlocks(f, rhs, x, *solved))
+    return;
+  if (forest) {
     solveSimplicialForest(*l, f.forest, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
-  } else if (n >= kSubtreeRows && f.split.b_end > 0) {
+  } else if (split) {
     solveSimplicialSubtrees(*l, f.split, rhs.data(), x.data(), static_cast<std::size_t>(n), solve_work_);
   } else {
     solveSimplicial(*l, rhs.data(), x.data(), static_cast<std::size_t>(n), 0, 3, 4, solve_work_);
   }
 }
 
+bool GlobalSystem::solveBlocks(Factor& f, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x,
+                               const std::vector<char>& solved) {
+  const cholmod_factor& l = *f.factor();
+  if (!f.trees_known) {
+    f.trees = findForest(l);
+    f.tree_block.clear();
+    const int* perm = static_cast<const int*>(l.Perm);
+    for (int tree = 0; tree < f.trees.trees(); ++tree) {
+      // Any row of the tree tells its block: no element couples two blocks, so no tree holds rows
+      // of two.
+      const int column = f.trees.starts[std::size_t(tree)];
+      const int row = perm ? perm[column] : column;
+      const auto after = std::upper_bound(blocks_.begin(), blocks_.end(), row,
+                                          [](int r, const SceneSegment& b) { return r < b.first_particle; });
+      f.tree_block.push_back(static_cast<int>(after - blocks_.begin()) - 1);
+    }
+    f.trees_known = true;
+  }
+  if (f.trees.trees() == 0) return false;
+  solved_trees_.resize(f.tree_block.size());
+  for (std::size_t tree = 0; tree < f.tree_block.size(); ++tree)
+    solved_trees_[tree] = solved[std::size_t(f.tree_block[tree])];
+  // Threads where the whole solve would take them (kForestRows), the same arithmetic either way.
+  solveSimplicialForest(l, f.trees, rhs.data(), x.data(), static_cast<std::size_t>(rhs.rows()), solve_work_,
+                        &solved_trees_, rhs.rows() >= kForestRows);
+  return true;
+}
+
 int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,
-                                         double tolerance) {
+                                         double tolerance, const std::vector<char>* solved) {
   auto found = cg_systems_.find(c);
   if (found == cg_systems_.end()) {
     std::vector<std::unique_ptr<CgSystem>> systems;
@@ -155,6 +190,7 @@ int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, 
   }
   int most = 0;
   for (std::size_t b = 0; b < found->second.size(); ++b) {
+    if (solved && !blocks_.empty() && !(*solved)[b]) continue;
     auto& cg = found->second[b]->cg;
     cg.setMaxIterations(iterations);
     cg.setTolerance(tolerance);  // 0: Eigen's threshold becomes the smallest normal number (a fixed count)
@@ -259,7 +295,7 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
       updated = cholmod_updown(delta > 0.0 ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
-    it->second->shape_known = false;  // the update may have changed the elimination tree
+    it->second->shapeChanged();
     // A failed update (out of memory, or a downdate that lost positive definiteness to
     // round-off) leaves the factor unusable: factor that c again on its next use.
     it = updated ? std::next(it) : factors_.erase(it);
@@ -300,7 +336,7 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
       updated = cholmod_updown(update ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
-    it->second->shape_known = false;  // the update may have changed the elimination tree
+    it->second->shapeChanged();
     // As addElementTerm: a failed update leaves the factor unusable; factor it again on next use.
     it = updated ? std::next(it) : factors_.erase(it);
   }

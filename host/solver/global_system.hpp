@@ -37,7 +37,13 @@ class GlobalSystem {
   /// kSubtreeRows particles the backward pass runs over two subtrees of the elimination tree on
   /// up to two threads (cpuThreads()), the same arithmetic on any thread count, so the same
   /// result bit for bit.
-  void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x);
+  ///
+  /// With `solved` (one flag per block of setBlocks), only the blocks flagged are solved: the
+  /// rows of the others are left in `x` as they were, where the factor's elimination forest shows
+  /// its trees (CHOLMOD's postordered factors do), and their work is not done. The rows solved are
+  /// those of the whole solve bit for bit (a batch's scenes that take no part in a solve:
+  /// stopped, or not stepping).
+  void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, const std::vector<char>* solved = nullptr);
   /// From this many particles solve() splits the backward pass over two subtrees (below it the
   /// second thread costs more than it saves; docs/bench_summary.md "Global solve against its
   /// bound").
@@ -53,8 +59,9 @@ class GlobalSystem {
   /// `iterations` iterations, or fewer once ||rhs - K_c x|| < tolerance ||rhs|| (tolerance > 0).
   /// Returns the largest iteration count of the three columns. With blocks (setBlocks), CG runs
   /// on each diagonal block on its own, as that block's own system would run it.
+  /// With `solved` and blocks, only the blocks flagged run (the others' rows of `x` stay).
   int solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, int iterations,
-                             double tolerance);
+                             double tolerance, const std::vector<char>* solved = nullptr);
 
   /// out = (c M + L) x for the three columns at once (L symmetric: its stored columns are its
   /// rows, read once for all three columns).
@@ -180,6 +187,13 @@ class GlobalSystem {
     EliminationForest forest;
     SubtreeSplit split;
     bool shape_known = false;
+    // For solves of some blocks: every tree of the forest (whatever its share) and the block
+    // (setBlocks) each belongs to, found on first use and again after a rank update.
+    EliminationForest trees;
+    std::vector<int> tree_block;
+    bool trees_known = false;
+    // A rank update may have changed the elimination tree.
+    void shapeChanged() { shape_known = trees_known = false; }
     // Row of vertex v in the fill-reducing order (Perm[row] = v), made on the first rank update:
     // the permutation is the factorization's, which the updates keep, so one change costs its
     // element's rows instead of a search over every row (a batch's element change).
@@ -210,6 +224,9 @@ class GlobalSystem {
   // The solve's work buffer (the permuted right-hand side, a row of four doubles per particle),
   // kept from one solve to the next.
   std::vector<double> solve_work_;
+  std::vector<char> solved_trees_;  // solve()'s trees to solve, from its blocks (kept: no allocation)
+  // solve() of the blocks flagged in `solved` alone; false where the factor shows no forest.
+  bool solveBlocks(Factor& f, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, const std::vector<char>& solved);
 };
 
 }  // namespace stabint

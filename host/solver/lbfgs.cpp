@@ -66,8 +66,8 @@ void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, st
     result_potentials_.assign(1, potential);
     return;
   }
-  backend_.localStepGradientPerScene(x, y, c, t, trial_gradient_, segment_potentials_);
-  result_potentials_ = segment_potentials_;
+  backend_.localStepGradientPerScene(x, y, c, t, trial_gradient_, segment_potentials_, runningMask());
+  keepResultPotentials();
   for (std::size_t s = 0; s < rows_.size(); ++s)
     objective[s] = segmentInertia(c, x_trial_, s) + segment_potentials_[s].total();
 }
@@ -77,9 +77,9 @@ void LocalGlobalSolver::applyInitialInverseHessian(double c, const IterationCont
   const auto start = std::chrono::steady_clock::now();
   if (control.global_solve == GlobalSolve::ConjugateGradient) {
     r.setZero(q.rows(), 3);
-    system_.solveConjugateGradient(c, q, r, control.cg_iterations, control.cg_tolerance);
+    system_.solveConjugateGradient(c, q, r, control.cg_iterations, control.cg_tolerance, runningMask());
   } else {
-    system_.solve(c, q, r);
+    system_.solve(c, q, r, runningMask());
   }
   backend_.times().global += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -296,6 +296,7 @@ void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy,
   yy.assign(rows_.size(), 0.0);
   ss.assign(rows_.size(), 0.0);
   forEachSegment(rows_, [&](std::size_t seg) {
+    if (stopped_[seg]) return;  // no pair (its products stay 0)
     Eigen::MatrixXd& gram = gram_[seg];
     std::vector<double>& sg = history_sg_[seg];
     for (int j = 0; j < window; ++j) gram(slot, j) = gram(j, slot) = sg[std::size_t(j)] = 0.0;
@@ -333,6 +334,7 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
   auto slotOf = [&](int k) { return std::size_t((newest - k + window) % window); };  // k-th newest
   search_.resize(n, 3);
   forEachSegment(rows_, [&](std::size_t seg) {
+    if (stopped_[seg]) return;  // takes no step (its slope is set to 0)
     const Eigen::MatrixXd& gram = gram_[seg];
     for (int k = 0; k < pairs; ++k) {
       const std::size_t i = slotOf(k);
@@ -352,6 +354,7 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
   applyInitialInverseHessian(c, control, search_, direction_);
   slope.assign(rows_.size(), 0.0);
   forEachSegment(rows_, [&](std::size_t seg) {
+    if (stopped_[seg]) return;
     thread_local std::vector<double> yr;  // y_i.r of the newest `pairs` pairs (no allocation per call)
     yr.assign(std::size_t(pairs), 0.0);
     forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
@@ -411,6 +414,10 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   std::vector<double>&objective = scalars_[0], &trial_objective = scalars_[1], &slope = scalars_[2], &dot = scalars_[3],
   &yy = scalars_[4], &ss = scalars_[5], &step = scalars_[6];
   step.resize(segments);
+  // A segment whose stop (by accuracy) was met takes no more steps: it stays at the iterate it
+  // stopped at, with the iterations done by then, as the scene alone stops its solve there. One
+  // that takes no part (setSolving) is stopped from the start.
+  startSegmentStops(segments);
   localStepObjectives(c, y, x, t, objective);
   gradient_ = trial_gradient_;
   // The stopping rule by accuracy (IterationControl::gradient_tolerance): each segment's gradient
@@ -422,9 +429,6 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   if (objective_history) objective_history->assign(1, objective[0]);
 
   int done = 0;
-  // A segment whose stop (by accuracy) was met takes no more steps: it stays at the iterate it
-  // stopped at, with the iterations done by then, as the scene alone stops its solve there.
-  startSegmentStops(segments);
   const std::vector<char>& moved = moved_;
   auto forgetSegment = [&](std::size_t s) {
     for (auto& rho : history_rho_) rho[s] = 0.0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include <Eigen/Dense>
@@ -45,9 +46,9 @@ void LocalGlobalSolver::globalStep(double c, int x, const IterationControl& cont
     return;
   }
   if (control.global_solve == GlobalSolve::ConjugateGradient) {
-    system_.solveConjugateGradient(c, rhs_, x_host_, control.cg_iterations, control.cg_tolerance);
+    system_.solveConjugateGradient(c, rhs_, x_host_, control.cg_iterations, control.cg_tolerance, runningMask());
   } else {
-    system_.solve(c, rhs_, x_host_);
+    system_.solve(c, rhs_, x_host_, runningMask());
   }
   backend_.times().global += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!to_host) backend_.write(x, x_host_);  // the backend books its own transfer time
@@ -56,12 +57,22 @@ void LocalGlobalSolver::globalStep(double c, int x, const IterationControl& cont
 int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationControl& control,
                              std::vector<double>* objective_history) {
   result_potentials_.clear();
+  running_.clear();  // no stops yet: every pass and solve over the whole batch
+  running_segments_ = 0;
+  const std::size_t segments = std::max<std::size_t>(1, rows_.size());
+  std::size_t taking_part = 0;
+  for (std::size_t s = 0; s < segments; ++s) taking_part += solving(s) ? 1 : 0;
+  if (taking_part == 0) {  // slot x stays the warm start
+    segment_iterations_.assign(segments, 0);
+    return 0;
+  }
   // These count each segment's iterations themselves (a segment may stop before the others).
   if (control.acceleration == Acceleration::LBFGS) return solveLbfgs(c, y, x, t, control, objective_history);
   if (control.acceleration == Acceleration::Newton) return solveNewton(c, y, x, t, control, objective_history);
   if (control.acceleration == Acceleration::Chebyshev || control.acceleration == Acceleration::Anderson)
     return solveAccelerated(c, y, x, t, control, objective_history);
-  if (control.tolerance > 0.0 && rows_.size() > 1) return solvePlainPerSegment(c, y, x, t, control);
+  if ((control.tolerance > 0.0 || taking_part < segments) && rows_.size() > 1)
+    return solvePlainPerSegment(c, y, x, t, control);
   const int done = solvePlain(c, y, x, t, control, objective_history);
   segment_iterations_.assign(std::max<std::size_t>(1, rows_.size()), done);
   return done;
@@ -69,14 +80,25 @@ int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationCo
 
 void LocalGlobalSolver::startSegmentStops(std::size_t segments) {
   stopped_.assign(segments, 0);
+  running_.assign(segments, 1);
   segment_iterations_.assign(segments, 0);
   running_segments_ = segments;
+  for (std::size_t s = 0; s < segments; ++s)
+    if (!solving(s)) stopSegment(s, 0);
 }
 
 void LocalGlobalSolver::stopSegment(std::size_t s, int done) {
   stopped_[s] = 1;
+  running_[s] = 0;
   segment_iterations_[s] = done;
   --running_segments_;
+}
+
+void LocalGlobalSolver::keepResultPotentials() {
+  result_potentials_ = segment_potentials_;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t s = 0; s < result_potentials_.size(); ++s)
+    if (!solving(s)) result_potentials_[s] = PotentialEnergy{nan, nan, nan};
 }
 
 void LocalGlobalSolver::finishSegmentStops(int done) {
@@ -131,27 +153,31 @@ int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const Iterat
   return done;
 }
 
-// Plain iterations of a batch with the tolerance stop: each segment's objective is its scene's
-// (the local step's per-scene energies and massDots: the numbers its own Simulator's solve
-// computes) and so is its stop; a segment that has stopped keeps its iterate (its rows are
-// written back after every later global step) and the count at its stop, while the others go on.
-// The local step at each iterate gives both its objectives and the next global step's
-// right-hand side: one element pass per iteration.
+// Plain iterations of a batch with the tolerance stop, or of some of its scenes (setSolving): each
+// segment's objective is its scene's (the local step's per-scene energies and massDots: the
+// numbers its own Simulator's solve computes) and so is its stop; a segment that has stopped, or
+// takes no part, keeps its iterate (its rows are written back after every later global step) and
+// the count at its stop, while the others go on. The local step at each iterate gives both its
+// objectives and the next global step's right-hand side: one element pass per iteration.
 int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, const IterationControl& control) {
   const std::size_t segments = rows_.size();
+  const bool to_tolerance = control.tolerance > 0.0;
+  const int limit = to_tolerance ? control.max_iterations : control.iterations;
   std::vector<double>&previous = scalars_[0], &current = scalars_[1], &dots = scalars_[2];
   auto objectives = [&](std::vector<double>& out) {
-    backend_.localStepRhsPerScene(x, y, c, t, rhs_, segment_potentials_);
+    backend_.localStepRhsPerScene(x, y, c, t, rhs_, segment_potentials_, runningMask());
     backend_.combine(scratch_, 1.0, x, -1.0, y);
     backend_.massDots(scratch_, scratch_, dots);
     out.resize(segments);
     for (std::size_t s = 0; s < segments; ++s) out[s] = 0.5 * c * dots[s] + segment_potentials_[s].total();
   };
   startSegmentStops(segments);
-  if (control.global_solve == GlobalSolve::ConjugateGradient) backend_.read(x, x_host_);  // CG's warm start
+  // The warm start: CG's, and the rows of the segments that take no part.
+  if (control.global_solve == GlobalSolve::ConjugateGradient || running_segments_ < segments) backend_.read(x, x_host_);
+  if (running_segments_ < segments) x_stopped_ = x_host_;
   objectives(previous);
   int done = 0;
-  while (done < control.max_iterations) {
+  while (done < limit) {
     globalStep(c, x, control, /*to_host=*/true);
     ++done;
     for (std::size_t s = 0; s < segments && running_segments_ < segments; ++s)
@@ -162,7 +188,8 @@ int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, co
     for (std::size_t s = 0; s < segments; ++s) {
       if (stopped_[s]) continue;
       const double scale = segmentScale(control, s);
-      if (std::abs(previous[s] - current[s]) <= control.tolerance * std::max(std::abs(current[s]), scale)) {
+      if (to_tolerance &&
+          std::abs(previous[s] - current[s]) <= control.tolerance * std::max(std::abs(current[s]), scale)) {
         stopSegment(s, done);
         if (x_stopped_.rows() != x_host_.rows()) x_stopped_.resize(x_host_.rows(), 3);
         x_stopped_.middleRows(rows_[s].first, rows_[s].count) = x_host_.middleRows(rows_[s].first, rows_[s].count);
@@ -172,7 +199,7 @@ int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, co
     if (running_segments_ == 0) break;
   }
   finishSegmentStops(done);
-  result_potentials_ = segment_potentials_;  // of slot x as it is left
+  keepResultPotentials();  // of slot x as it is left
   return done;
 }
 
@@ -292,7 +319,7 @@ void LocalGlobalSolver::acceleratedObjectives(double c, int y, int x, double t, 
     objective.assign(1, inertia(c, x_cur_) + potential.total());
     return;
   }
-  backend_.localStepRhsPerScene(x, y, c, t, rhs_, segment_potentials_);
+  backend_.localStepRhsPerScene(x, y, c, t, rhs_, segment_potentials_, runningMask());
   objective.resize(rows_.size());
   for (std::size_t s = 0; s < rows_.size(); ++s)
     objective[s] = segmentInertia(c, x_cur_, s) + segment_potentials_[s].total();

@@ -86,6 +86,13 @@ class LocalGlobalSolver {
   /// energy_scale in each segment's round-off allowance.
   void setSegments(const std::vector<SceneSegment>& segments, const std::vector<double>& energy_scales);
 
+  /// The segments the next solves solve, one flag per segment (a batch's scenes that step, or
+  /// that need the blend's partner); empty: all of them. A segment not flagged keeps its rows of
+  /// slot x (the warm start), takes no iteration (segmentIterations 0) and has no potential in
+  /// potentialsOfResult (NaN); on the CPU reference its element passes and its trees of the
+  /// factor's solve are not run, and its history work on the host is not done either way.
+  void setSolving(std::vector<char> segments) { solving_ = std::move(segments); }
+
   /// The scene whose springs Newton-CG takes its Hessians from (Acceleration::Newton); without
   /// one its Hessian is K_c.
   void setScene(const SceneData* scene);
@@ -98,9 +105,17 @@ class LocalGlobalSolver {
   double segmentScale(const IterationControl& control, std::size_t s) const {
     return segment_scales_.empty() ? control.energy_scale : segment_scales_[s];
   }
-  // The stops by accuracy per segment in one solve: none stopped at the start; segment s stopped
-  // after `done` iterations (it takes no more steps); at the end the others get the solve's count.
+  // The stops by accuracy per segment in one solve: at the start the segments not solving
+  // (setSolving) stopped after 0 iterations; segment s stopped after `done` iterations (it takes
+  // no more steps); at the end the others get the solve's count.
   void startSegmentStops(std::size_t segments);
+  // Whether segment s takes part in this solve (setSolving).
+  bool solving(std::size_t s) const { return solving_.empty() || rows_.size() <= 1 || solving_[s] != 0; }
+  // The segments still running (running_), for the passes and solves that may skip the others;
+  // null while all run.
+  const std::vector<char>* runningMask() const { return running_segments_ < running_.size() ? &running_ : nullptr; }
+  // The potentials of the last solve's result: the segments that did not solve get NaN.
+  void keepResultPotentials();
   void stopSegment(std::size_t s, int done);
   void finishSegmentStops(int done);
   int solveAccelerated(double c, int y, int x, double t, const IterationControl& control,
@@ -174,6 +189,8 @@ class LocalGlobalSolver {
   std::vector<Eigen::MatrixXd> gram_;
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, stopped_;
+  std::vector<char> running_;            // not stopped_ (the mask the passes and solves take)
+  std::vector<char> solving_;            // setSolving
   std::vector<char> plain_direction_;    // L-BFGS: the segment's direction used no curvature pair
   std::size_t running_segments_ = 0;     // not stopped yet in this solve
   std::vector<int> segment_iterations_;  // of the last solve, per segment

@@ -73,6 +73,7 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
   x_cur_ = x_trial_;
   std::vector<double>&objective = scalars_[0], &trial_objective = scalars_[1], &slope = scalars_[2], &rz = scalars_[3],
   &rz0 = scalars_[4], &product = scalars_[5], &step = scalars_[6];
+  startSegmentStops(segments);
   localStepObjectives(c, y, x, t, objective);
   gradient_ = trial_gradient_;
   if (objective_history) objective_history->assign(1, objective[0]);
@@ -91,7 +92,6 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
       out[s] = segment_x_.cwiseProduct(segment_g_).sum();
     }
   };
-  startSegmentStops(segments);
   std::vector<int>& done = segment_iterations_;  // each segment's count; stopSegment keeps it
   std::vector<char>& cg_running = cg_running_;
   auto stop = [&](std::size_t s) { stopSegment(s, done[s]); };

@@ -679,7 +679,7 @@ SimulatorOptions blendOptions() {
 // Every scene of a blend batch takes the branch its own Simulator takes, step by step, with its
 // alpha, velocity scale, forcing, damping, target and energies, and follows its trajectory: the
 // decisions, root finds and corrections are per scene (one energy pass per round for all), the
-// partner is solved for the whole batch whenever any scene needs it.
+// partner is solved for the scenes that need it (the others take no part in its solve).
 void expectBlendBatchFollowsItsScenes(Acceleration acceleration) {
   const std::vector<Scene> scenes = blendScenes();
   SimulatorOptions options = blendOptions();

@@ -110,8 +110,14 @@ class Backend {
   virtual void setSegments(const std::vector<SceneSegment>& /*segments*/) { notPerScene(); }
   /// out[s] = sum over segment s's particles of m_j a_j . b_j.
   virtual void massDots(int /*a*/, int /*b*/, std::vector<double>& /*out*/) { notPerScene(); }
-  /// out[s] = potential of segment s's particles and elements in `x` at time t.
-  virtual void potentials(int /*x*/, double /*t*/, std::vector<PotentialEnergy>& /*out*/) { notPerScene(); }
+  /// out[s] = potential of segment s's particles and elements in `x` at time t. With `which` (one
+  /// flag per segment) a backend may skip the segments not flagged: their entries are then
+  /// unspecified (the CPU reference leaves them as they were; the OpenCL backend passes over every
+  /// segment in one launch).
+  virtual void potentials(int /*x*/, double /*t*/, std::vector<PotentialEnergy>& /*out*/,
+                          const std::vector<char>* /*which*/ = nullptr) {
+    notPerScene();
+  }
   /// localStepGradient with every segment's potential at `x` (as potentials() gives them) instead
   /// of the whole scene's: a batch's L-BFGS line search. A backend that can sum per segment in
   /// the same element pass does one pass; the others run potentials() after it.

@@ -395,6 +395,12 @@ TEST(SceneBatch, ScenesThatTakeNoPartInASolveKeepTheirWarmStart) {
   backend->localStepGradientPerScene(0, 1, c, t, gradient, some, &solving);
   for (std::size_t s = 0; s < scenes.size(); ++s)
     EXPECT_EQ(some[s].total(), solving[s] ? all[s].total() : sentinel.total()) << "scene " << s;
+  // And so does its energy pass of some scenes (a blend's root-find rounds).
+  some.assign(scenes.size(), sentinel);
+  backend->potentials(0, t, all);
+  backend->potentials(0, t, some, &solving);
+  for (std::size_t s = 0; s < scenes.size(); ++s)
+    EXPECT_EQ(some[s].total(), solving[s] ? all[s].total() : sentinel.total()) << "scene " << s;
 }
 
 struct PremiseCase {

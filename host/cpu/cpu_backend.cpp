@@ -99,13 +99,13 @@ class CpuBackend final : public Backend {
     times_.energy += secondsSince(start);
   }
 
-  void potentials(int slot, double t, std::vector<PotentialEnergy>& out) override {
+  void potentials(int slot, double t, std::vector<PotentialEnergy>& out, const std::vector<char>* which) override {
     if (segments_.size() == 1) {  // a batch of one: the whole pass, threaded as potential()'s
       out.assign(1, potential(slot, t));
       return;
     }
     const auto start = Clock::now();
-    segmentPasses(slots_[slot], t, kPassEnergy, nullptr, out);
+    segmentPasses(slots_[slot], t, kPassEnergy, nullptr, out, which);
     times_.energy += secondsSince(start);
   }
 

@@ -270,12 +270,13 @@ void BatchDriver::integrate(double t1, bool forced) {
   const double h = options_.time_step;
   const IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
-  solver_.setSolving(steppingScenes());
+  const std::vector<char> stepping = steppingScenes();
+  solver_.setSolving(stepping);
   const int iterations = steps.step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
-  const bool evaluated = potentialsOfStep(steps, kXNew, t1);
+  const bool evaluated = potentialsOfStep(steps, kXNew, t1, stepping);
   if (forced) {
-    backend_->potentials(kXNew, t_ + 0.5 * h, new_mid_);
-    backend_->potentials(kX, t_ + 0.5 * h, old_mid_);
+    backend_->potentials(kXNew, t_ + 0.5 * h, new_mid_, &stepping);
+    backend_->potentials(kX, t_ + 0.5 * h, old_mid_, &stepping);
   }
   backend_->readBoth(kXNew, x_new_, kVNew, v_new_);
   for (std::size_t s = 0; s < segments_.size(); ++s) {
@@ -301,13 +302,14 @@ void BatchDriver::blend(double t1, bool forced) {
   const std::size_t n = segments_.size();
   IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
-  solver_.setSolving(steppingScenes());
+  const std::vector<char> stepping = steppingScenes();
+  solver_.setSolving(stepping);
   const int im_iterations = steps.implicitMidpoint(h, t_, kXNew, kVNew, control);
   backend_->readBoth(kXNew, x_new_, kVNew, v_new_);
-  backend_->potentials(kXNew, t1, p_all_);
+  backend_->potentials(kXNew, t1, p_all_, &stepping);
   if (forced) {
-    backend_->potentials(kXNew, tm, new_mid_);
-    backend_->potentials(kX, tm, old_mid_);
+    backend_->potentials(kXNew, tm, new_mid_, &stepping);
+    backend_->potentials(kX, tm, old_mid_, &stepping);
   }
   std::vector<char> not_finite(n, 0), needs_partner(n, 0);
   bool any_not_finite = false, any_partner = false;
@@ -349,8 +351,8 @@ void BatchDriver::blend(double t1, bool forced) {
     backend_->copy(kXTrial, kX);
     const int iterations = steps.backwardEuler(h, t_, kXTrial, kScratch, control, /*warm_start=*/true);
     backend_->readBoth(kXTrial, x_aux_, kScratch, v_aux_);
-    const bool evaluated = potentialsOfStep(steps, kXTrial, t1);
-    if (forced) backend_->potentials(kXTrial, tm, aux_mid_);
+    const bool evaluated = potentialsOfStep(steps, kXTrial, t1, not_finite);
+    if (forced) backend_->potentials(kXTrial, tm, aux_mid_, &not_finite);
     for (std::size_t s = 0; s < n; ++s) {
       if (!not_finite[s]) continue;
       PerScene& p = per_scene_[s];
@@ -397,14 +399,15 @@ void BatchDriver::blend(double t1, bool forced) {
   if (n == 1 && needs_partner[0]) backend_->write(kXNew, per_scene_[0].x_new);
 }
 
-// The potentials of the step's new positions in `slot` at t1, per scene, into p_all_: the step's
-// solve's where its last local step was at them, else an energy pass (returns whether it ran).
-bool BatchDriver::potentialsOfStep(const IntegratorSteps& steps, int slot, double t1) {
+// The potentials of the step's new positions in `slot` at t1, of the scenes flagged in `which`
+// (those the step solved), into p_all_: the step's solve's where its last local step was at them,
+// else an energy pass (returns whether it ran).
+bool BatchDriver::potentialsOfStep(const IntegratorSteps& steps, int slot, double t1, const std::vector<char>& which) {
   if (steps.potentialsOfStep().size() == segments_.size()) {
     p_all_ = steps.potentialsOfStep();
     return false;
   }
-  backend_->potentials(slot, t1, p_all_);
+  backend_->potentials(slot, t1, p_all_, &which);
   return true;
 }
 
@@ -412,16 +415,19 @@ void BatchDriver::evaluateBlendPotentials(double t1, const std::vector<Potential
   // Rounds: as many as the scene that needs the most evaluations, not their sum. At w = 1 the
   // trial is the partner, whose potential its solve may have left (`partner`, per scene): taken
   // without a pass, as Simulator takes it.
+  std::vector<char> wanting(segments_.size());
   for (;;) {
     bool any = false;
     for (std::size_t s = 0; s < segments_.size(); ++s) {
       BlendStep& b = per_scene_[s].blend;
+      wanting[s] = 0;
       if (!per_scene_[s].stepping) continue;
       while (b.wantsPotential() && b.weight() == 1.0 && partner.size() == segments_.size())
         b.take(partner[s], /*evaluated=*/false);
       if (!b.wantsPotential()) continue;
       if (!any && x_trial_.rows() != x_.rows()) x_trial_ = x_;
       any = true;
+      wanting[s] = 1;
       // As Backend::combine(kXTrial, 1 - w, from, w, partner) forms it (bit for bit on the CPU
       // reference; on a device, which rounds and contracts in its own way, a batch of one lets the
       // device form it from the slots that hold from() and the partner, kXNew and kXPartner, as
@@ -435,7 +441,7 @@ void BatchDriver::evaluateBlendPotentials(double t1, const std::vector<Potential
     }
     if (!any) return;
     if (segments_.size() > 1) backend_->write(kXTrial, x_trial_);
-    backend_->potentials(kXTrial, t1, p_all_);
+    backend_->potentials(kXTrial, t1, p_all_, &wanting);
     for (std::size_t s = 0; s < segments_.size(); ++s) {
       BlendStep& b = per_scene_[s].blend;
       if (per_scene_[s].stepping && b.wantsPotential()) b.take(p_all_[s]);
@@ -459,8 +465,10 @@ void BatchDriver::updateContactSets() {
   }
   const std::vector<char> entered_inside = contact_.updateSet(t_, x_, v_, parts);
   if (std::find(entered_inside.begin(), entered_inside.end(), 1) == entered_inside.end()) return;
+  std::vector<char> which(segments_.size(), 0);
+  for (std::size_t i = 0; i < scenes.size(); ++i) which[scenes[i]] = entered_inside[i];
   std::vector<PotentialEnergy> potentials;
-  backend_->potentials(kX, t_, potentials);
+  backend_->potentials(kX, t_, potentials, &which);
   for (std::size_t i = 0; i < scenes.size(); ++i)
     if (entered_inside[i]) per_scene_[scenes[i]].potential = potentials[scenes[i]];
 }
@@ -486,7 +494,7 @@ void BatchDriver::resolveContact(double t1) {
   backend_->roundToStorage(x_trial_);
   backend_->write(kXTrial, x_trial_);
   std::vector<PotentialEnergy> potentials;
-  backend_->potentials(kXTrial, t1, potentials);
+  backend_->potentials(kXTrial, t1, potentials, &projected);
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     if (!projected[s]) continue;
     PerScene& p = per_scene_[s];

@@ -177,7 +177,7 @@ struct BatchDriver {
   // The potentials every scene's BlendStep asks for, one batched pass per round: the trial
   // positions are formed on the host (no per-scene combine on the backend interface yet).
   void evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner = {});
-  bool potentialsOfStep(const IntegratorSteps& steps, int slot, double t1);
+  bool potentialsOfStep(const IntegratorSteps& steps, int slot, double t1, const std::vector<char>& which);
   // Scene s's colliders on host copies whose row 0 is particle `first_row` (0: the batch's).
   ContactPart contactPart(std::size_t s, int first_row) const;
   // The broad phase of the stepping scenes at the step's start from (x_, v_), as Simulator's (an

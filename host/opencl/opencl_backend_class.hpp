@@ -137,7 +137,8 @@ class OpenCLBackend final : public Backend {
 
   void massDots(int a, int b, std::vector<double>& out) override;
 
-  void potentials(int x, double t, std::vector<PotentialEnergy>& out) override;
+  // Every segment, flagged in `which` or not (one launch; potentialsOf serves a few scenes).
+  void potentials(int x, double t, std::vector<PotentialEnergy>& out, const std::vector<char>* which) override;
 
   // Every segment's elements, `running` or not (one launch for the batch).
   void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,

@@ -50,7 +50,8 @@ void OpenCLBackend<Real>::massDots(int a, int b, std::vector<double>& out) {
 
 // The element pass writing each element's energy, the per-scene sums, one read (one wait).
 template <typename Real>
-void OpenCLBackend<Real>::potentials(int x, double t, std::vector<PotentialEnergy>& out) {
+void OpenCLBackend<Real>::potentials(int x, double t, std::vector<PotentialEnergy>& out,
+                                     const std::vector<char>* /*which*/) {
   checkSegmentsFit();
   if (segmentIsWholeScene()) {
     out.assign(1, potential(x, t));

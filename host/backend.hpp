@@ -112,8 +112,8 @@ class Backend {
   virtual void massDots(int /*a*/, int /*b*/, std::vector<double>& /*out*/) { notPerScene(); }
   /// out[s] = potential of segment s's particles and elements in `x` at time t. With `which` (one
   /// flag per segment) a backend may skip the segments not flagged: their entries are then
-  /// unspecified (the CPU reference leaves them as they were; the OpenCL backend passes over every
-  /// segment in one launch).
+  /// unspecified (both backends leave them as they were; the OpenCL backend skips them where a few
+  /// launches cover the others, else passes over every segment in one launch).
   virtual void potentials(int /*x*/, double /*t*/, std::vector<PotentialEnergy>& /*out*/,
                           const std::vector<char>* /*which*/ = nullptr) {
     notPerScene();
@@ -125,7 +125,8 @@ class Backend {
   /// With `running` (one flag per segment), a backend may skip the segments not flagged (a
   /// batch's scenes that take no part in the solve, or stopped in it): their entries of
   /// `per_scene` and their rows of the result are then unspecified. The CPU reference skips them;
-  /// the OpenCL backend passes over every element (one launch for the batch).
+  /// the OpenCL backend skips their work-groups where a few launches cover the others (else one
+  /// launch for the batch).
   virtual void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
                                          std::vector<PotentialEnergy>& per_scene,
                                          const std::vector<char>* /*running*/ = nullptr) {

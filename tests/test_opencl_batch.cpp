@@ -53,9 +53,17 @@ double externalMagnitude(const SceneData& data, const Eigen::MatrixX3d& x, doubl
 }
 
 // The mixed scenes concatenated, on an OpenCL backend of `precision` with their segments set.
+// With `copies`, the mixed scenes that many times over.
+std::vector<Scene> mixedCopies(int copies) {
+  std::vector<Scene> scenes;
+  for (int copy = 0; copy < copies; ++copy)
+    for (const Scene& s : testing::mixedBatchScenes()) scenes.push_back(s);
+  return scenes;
+}
+
 struct MixedBatchOnDevice {
-  explicit MixedBatchOnDevice(Precision precision)
-      : batch(concatenateScenes(testing::mixedBatchScenes())),
+  explicit MixedBatchOnDevice(Precision precision, int copies = 1)
+      : batch(concatenateScenes(mixedCopies(copies))),
         data(batch.scene),
         backend(makeOpenCLBackend(data, 2, openclOptions(precision))) {
     backend->setSegments(batch.segments);
@@ -180,6 +188,62 @@ TEST(OpenCLBatch, PerSceneGradientPassIsTheGradientAndThePerScenePass) {
         EXPECT_EQ(fused[s].internal, pass[s].internal) << "scene " << s << ", t = " << t;
         EXPECT_EQ(fused[s].pins, pass[s].pins) << "scene " << s << ", t = " << t;
         EXPECT_EQ(fused[s].external, pass[s].external) << "scene " << s << ", t = " << t;
+      }
+    }
+  }
+}
+
+// A pass of some scenes (a batch's solve skipping its stopped scenes, its energy passes of some):
+// the element pass then runs over those scenes' work-groups alone, and their energies, gradient
+// rows and right-hand-side rows are the whole pass's bit for bit; the entries of the others are
+// left as they were. 200 scenes, of which two runs (scenes 30-69 and 150-159) pass: two launches
+// for a fifth of the work.
+TEST(OpenCLBatch, PassesOfSomeScenesAreTheirPartOfTheWholePass) {
+  for (Precision precision : availablePrecisions()) {
+    SCOPED_TRACE(precisionName(precision));
+    const MixedBatchOnDevice device(precision, 50);
+    const SceneBatch& batch = device.batch;
+    Backend* const backend = device.backend.get();
+    std::vector<char> some(batch.segments.size(), 0);
+    std::fill(some.begin() + 30, some.begin() + 70, 1);
+    std::fill(some.begin() + 150, some.begin() + 160, 1);
+    const PotentialEnergy sentinel{1.0, 2.0, 3.0};
+    const double c = 3600.0, t = 0.7;
+    const Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 5);
+    backend->write(1, batch.scene.positions);
+    for (const std::string what : {"gradient", "rhs", "potentials"}) {
+      std::vector<PotentialEnergy> all, other, part(some.size(), sentinel);
+      Eigen::MatrixX3d whole, rows;
+      // The whole pass at x, one at other positions (every element's results then differ), and
+      // the pass of some scenes at x again.
+      auto pass = [&](const Eigen::MatrixX3d& at, Eigen::MatrixX3d& out, std::vector<PotentialEnergy>& energies,
+                      const std::vector<char>* which) {
+        backend->write(0, at);
+        if (what == "gradient")
+          backend->localStepGradientPerScene(0, 1, c, t, out, energies, which);
+        else if (what == "rhs")
+          backend->localStepRhsPerScene(0, 1, c, t, out, energies, which);
+        else
+          backend->potentials(0, t, energies, which);
+      };
+      pass(x, whole, all, nullptr);
+      pass(batch.scene.positions, rows, other, nullptr);
+      pass(x, rows, part, &some);
+      for (std::size_t s = 0; s < some.size(); ++s) {
+        const SceneSegment& seg = batch.segments[s];
+        if (!some[s]) {
+          EXPECT_EQ(part[s].total(), sentinel.total()) << what << ", scene " << s;
+          continue;
+        }
+        EXPECT_NE(other[s].total(), all[s].total()) << what << ", scene " << s;
+        EXPECT_EQ(part[s].internal, all[s].internal) << what << ", scene " << s;
+        EXPECT_EQ(part[s].pins, all[s].pins) << what << ", scene " << s;
+        EXPECT_EQ(part[s].external, all[s].external) << what << ", scene " << s;
+        if (what != "potentials") {
+          EXPECT_EQ(rows.middleRows(seg.first_particle, seg.num_particles),
+                    whole.middleRows(seg.first_particle, seg.num_particles))
+              << what << ", scene " << s;
+        }
       }
     }
   }

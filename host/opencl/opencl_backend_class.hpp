@@ -209,11 +209,13 @@ class OpenCLBackend final : public Backend {
   // contributions into rhs_, read back to `out`: localStepRhs and localStepGradient. With
   // `per_scene` (a batch's: localStepGradientPerScene, localStepRhsPerScene) the pass also writes
   // each element's energy and the per-scene sums follow the gather, read before the same wait into
-  // *per_scene (one per segment).
+  // *per_scene (one per segment). With `running` as well, the pass covers the running segments'
+  // elements alone where that takes few launches (elementGroupRuns), and only their entries of
+  // *per_scene are written.
   template <class GatherArgs>
   void gatheredLocalStep(int flags, Launch& gather, const GatherArgs& args, int x, int y, double c, double t,
                          Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x,
-                         std::vector<PotentialEnergy>* per_scene = nullptr);
+                         std::vector<PotentialEnergy>* per_scene = nullptr, const std::vector<char>* running = nullptr);
 
   void readMatrix(const cl::Buffer& buffer, Eigen::MatrixX3d& host);
 
@@ -243,6 +245,18 @@ class OpenCLBackend final : public Backend {
   bool enqueueElementPass(int x, int flags);
 
   void enqueueElementGroups(int x, int flags, int first_group, int end_group);
+
+  // The element pass's groups that hold the elements of `segments`, merged into runs
+  // [first, end) of adjacent groups (a group shared with a neighbour computes its elements too,
+  // with the same values).
+  std::vector<std::pair<int, int>> elementGroupRuns(const std::vector<int>& segments) const;
+  // The segments flagged in `which`, when they are not all of them, their elements take at most
+  // kMostSkippingLaunches launches (each launch costs more than a small scene's elements) and
+  // leave a quarter of the element groups or more (else one launch of the whole pass is
+  // cheaper); else empty `runs` and false.
+  static constexpr std::size_t kMostSkippingLaunches = 8;
+  bool skippingRuns(const std::vector<char>& which, std::vector<int>& segments,
+                    std::vector<std::pair<int, int>>& runs) const;
 
   cl::Kernel makeKernel(const char* name);
 
@@ -309,6 +323,8 @@ class OpenCLBackend final : public Backend {
   } mass_dot_args_{};
   cl_uint gather_accel_dst_ = 0;
   cl::Event element_event_, gather_event_;
+  cl::Event element_first_event_;                 // the first launch of the last element pass (several: skipping)
+  std::vector<PotentialEnergy> some_potentials_;  // potentials() of some segments, reused
 
   double fext_time_ = std::numeric_limits<double>::quiet_NaN();
   int fext_version_ = -1;

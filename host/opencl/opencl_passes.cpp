@@ -70,27 +70,28 @@ void OpenCLBackend<Real>::localStepGradient(int x, int y, double c, double t, Ei
 template <typename Real>
 void OpenCLBackend<Real>::localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
                                                     std::vector<PotentialEnergy>& per_scene,
-                                                    const std::vector<char>* /*running*/) {
+                                                    const std::vector<char>* running) {
   checkSegmentsFit();
   if (segmentIsWholeScene() || segments_.empty()) {
     Backend::localStepGradientPerScene(x, y, c, t, gradient, per_scene);
     return;
   }
   gather_gradient_.bindSlot(gather_gradient_args_.x, x, slots_);
-  gatheredLocalStep(kPassForce, gather_gradient_, gather_gradient_args_, x, y, c, t, gradient, nullptr, &per_scene);
+  gatheredLocalStep(kPassForce, gather_gradient_, gather_gradient_args_, x, y, c, t, gradient, nullptr, &per_scene,
+                    running);
 }
 
 // The same for a batch's Chebyshev and Anderson: the projection pass writes each element's energy.
 template <typename Real>
 void OpenCLBackend<Real>::localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
                                                std::vector<PotentialEnergy>& per_scene,
-                                               const std::vector<char>* /*running*/) {
+                                               const std::vector<char>* running) {
   checkSegmentsFit();
   if (segmentIsWholeScene() || segments_.empty()) {
     Backend::localStepRhsPerScene(x, y, c, t, rhs, per_scene);
     return;
   }
-  gatheredLocalStep(kPassProjection, gather_rhs_, gather_rhs_args_, x, y, c, t, rhs, nullptr, &per_scene);
+  gatheredLocalStep(kPassProjection, gather_rhs_, gather_rhs_args_, x, y, c, t, rhs, nullptr, &per_scene, running);
 }
 
 template <typename Real>
@@ -133,13 +134,26 @@ template <typename Real>
 template <class GatherArgs>
 void OpenCLBackend<Real>::gatheredLocalStep(int flags, Launch& gather, const GatherArgs& args, int x, int y, double c,
                                             double t, Eigen::MatrixX3d& out, PotentialEnergy* energy_at_x,
-                                            std::vector<PotentialEnergy>* per_scene) {
+                                            std::vector<PotentialEnergy>* per_scene, const std::vector<char>* running) {
   checkSlot(x);
   checkSlot(y);
   uploadForcing(t, false);
   const auto start = Clock::now();
-  const bool launched =
-      enqueueElementPass(x, flags | (energy_at_x ? kPassEnergy : 0) | (per_scene ? kPassEnergyPerElement : 0));
+  const int pass_flags = flags | (energy_at_x ? kPassEnergy : 0) | (per_scene ? kPassEnergyPerElement : 0);
+  // The running segments' elements alone (the others' rows of `out` and sums are then stale).
+  std::vector<int> some;
+  std::vector<std::pair<int, int>> runs;
+  const bool skipping = per_scene && running && !energy_at_x && skippingRuns(*running, some, runs);
+  bool launched = false;
+  if (skipping) {
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      enqueueElementGroups(x, pass_flags, runs[r].first, runs[r].second);
+      if (r == 0) element_first_event_ = element_event_;
+      launched = true;
+    }
+  } else {
+    launched = enqueueElementPass(x, pass_flags);
+  }
   gather.bindSlot(args.y, y, slots_);
   gather.set(args.c, Real(c));
   enqueue(gather, &gather_event_);
@@ -153,10 +167,11 @@ void OpenCLBackend<Real>::gatheredLocalStep(int flags, Launch& gather, const Gat
   if (energy_at_x) *energy_at_x = sumEnergies();
   if (per_scene) {
     per_scene->resize(segments_.size());
-    for (std::size_t s = 0; s < segments_.size(); ++s) (*per_scene)[s] = segmentEnergies(s);
+    for (std::size_t s = 0; s < segments_.size(); ++s)
+      if (!skipping || (*running)[s]) (*per_scene)[s] = segmentEnergies(s);
   }
   const double wall = secondsSince(start);
-  const double local = launched ? deviceSeconds(element_event_, element_event_) : 0.0;
+  const double local = launched ? deviceSeconds(element_first_event_, element_event_) : 0.0;
   const double gathered = deviceSeconds(gather_event_, gather_event_);
   times_.local += local;
   times_.gather += gathered;
@@ -206,6 +221,7 @@ bool OpenCLBackend<Real>::enqueueElementPass(int x, int flags) {
   const int groups = (flags & kPassEnergy) ? full_groups_ : segment_groups_[blocks_.size()];
   if (groups == 0) return false;
   enqueueElementGroups(x, flags, 0, groups);
+  element_first_event_ = element_event_;
   return true;
 }
 

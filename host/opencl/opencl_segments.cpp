@@ -51,10 +51,18 @@ void OpenCLBackend<Real>::massDots(int a, int b, std::vector<double>& out) {
 // The element pass writing each element's energy, the per-scene sums, one read (one wait).
 template <typename Real>
 void OpenCLBackend<Real>::potentials(int x, double t, std::vector<PotentialEnergy>& out,
-                                     const std::vector<char>* /*which*/) {
+                                     const std::vector<char>* which) {
   checkSegmentsFit();
   if (segmentIsWholeScene()) {
     out.assign(1, potential(x, t));
+    return;
+  }
+  std::vector<int> some;
+  std::vector<std::pair<int, int>> runs;
+  if (which && skippingRuns(*which, some, runs)) {  // those segments alone, the others' entries kept
+    potentialsOf(some, x, t, some_potentials_);
+    out.resize(segments_.size());
+    for (std::size_t i = 0; i < some.size(); ++i) out[std::size_t(some[i])] = some_potentials_[i];
     return;
   }
   checkSlot(x);
@@ -95,8 +103,39 @@ std::vector<std::pair<int, int>> mergedRanges(std::vector<std::pair<int, int>> r
 
 }  // namespace
 
-// Some scenes' part of potentials(), bit for bit: per block, the element pass over the groups
-// that hold those segments' elements (a group shared with a neighbour computes the neighbour's
+template <typename Real>
+std::vector<std::pair<int, int>> OpenCLBackend<Real>::elementGroupRuns(const std::vector<int>& segments) const {
+  const int local = int(element_local_);
+  std::vector<std::pair<int, int>> groups;
+  for (std::size_t b = 0; b < blocks_.size(); ++b)
+    for (int segment : segments) {
+      const SceneSegment& seg = segments_[std::size_t(segment)];
+      if (seg.num_elements[b] == 0) continue;
+      groups.emplace_back(segment_groups_[b] + seg.first_element[b] / local,
+                          segment_groups_[b] + (seg.first_element[b] + seg.num_elements[b] + local - 1) / local);
+    }
+  return mergedRanges(std::move(groups));
+}
+
+template <typename Real>
+bool OpenCLBackend<Real>::skippingRuns(const std::vector<char>& which, std::vector<int>& segments,
+                                       std::vector<std::pair<int, int>>& runs) const {
+  segments.clear();
+  runs.clear();
+  for (std::size_t s = 0; s < segments_.size(); ++s)
+    if (which[s]) segments.push_back(int(s));
+  if (segments.size() == segments_.size()) return false;
+  runs = elementGroupRuns(segments);
+  int groups = 0;
+  for (const auto& [first, end] : runs) groups += end - first;
+  // Few launches that leave a quarter of the work or more.
+  if (runs.size() <= kMostSkippingLaunches && 4 * groups <= 3 * segment_groups_[blocks_.size()]) return true;
+  runs.clear();
+  return false;
+}
+
+// Some scenes' part of potentials(), bit for bit: the element pass over the groups that hold those
+// segments' elements (elementGroupRuns: a group shared with a neighbour computes the neighbour's
 // too, with the same values: each element's energy is its own), then segment_energies over the
 // work-groups that hold the segments' work-items, with potentials' work-group size (the same
 // compiled kernel, each work-item summing its own segment), and one read of the sums from the
@@ -120,18 +159,8 @@ void OpenCLBackend<Real>::potentialsOf(const std::vector<int>& segments, int x, 
   checkSlot(x);
   uploadForcing(t, false);
   const auto start = Clock::now();
-  const int local = int(element_local_);
-  for (std::size_t b = 0; b < blocks_.size(); ++b) {
-    std::vector<std::pair<int, int>> groups;
-    for (int segment : segments) {
-      const SceneSegment& seg = segments_[std::size_t(segment)];
-      if (seg.num_elements[b] == 0) continue;
-      groups.emplace_back(segment_groups_[b] + seg.first_element[b] / local,
-                          segment_groups_[b] + (seg.first_element[b] + seg.num_elements[b] + local - 1) / local);
-    }
-    for (const auto& [first, end] : mergedRanges(std::move(groups)))
-      enqueueElementGroups(x, kPassEnergyPerElement, first, end);
-  }
+  for (const auto& [first, end] : elementGroupRuns(segments))
+    enqueueElementGroups(x, kPassEnergyPerElement, first, end);
   segment_energies_.bindSlot(segment_energies_x_, x, slots_);
   const int group = int(segment_energies_.local[0]);
   std::vector<std::pair<int, int>> sums;

@@ -117,8 +117,9 @@ class BatchSimulator {
 
   /// Advances every active scene one step. Never throws for a scene that blows up or exceeds
   /// energy_limit: that scene's step is refused (BatchStepReport::refusals), its state kept, and
-  /// it stays inactive (its block is still solved, its results dropped) until setState; the
-  /// others step on.
+  /// it stays inactive (it takes no part in the solves and costs no solver work) until setState;
+  /// the others step on. Within a step each solve serves only the scenes that need it (the
+  /// blend's partner, the scenes whose solve has stopped by accuracy are skipped).
   const BatchStepReport& step();
 
   int size() const;  ///< number of scenes

@@ -50,14 +50,25 @@ void GlobalSystem::assemble(const SceneData& scene) {
   laplacianChanged();
 }
 
-void GlobalSystem::multiply(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out) const {
+void GlobalSystem::multiply(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out,
+                            const std::vector<char>* rows_of) const {
   const Eigen::Index n = x.rows();
   out.resize(n, 3);
+  if (rows_of && !blocks_.empty()) {
+    for (std::size_t b = 0; b < blocks_.size(); ++b)
+      if ((*rows_of)[b]) multiplyRows(c, x, out, blocks_[b].first_particle, blocks_[b].num_particles);
+    return;
+  }
+  multiplyRows(c, x, out, 0, n);
+}
+
+void GlobalSystem::multiplyRows(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out, Eigen::Index first,
+                                Eigen::Index count) const {
   const auto* begin = laplacian_.outerIndexPtr();
   const auto* rows = laplacian_.innerIndexPtr();
   const double* values = laplacian_.valuePtr();
   const auto* nonzeros = laplacian_.innerNonZeroPtr();  // null when compressed
-  for (Eigen::Index i = 0; i < n; ++i) {
+  for (Eigen::Index i = first; i < first + count; ++i) {
     const double cm = c * masses_[i];
     double a = cm * x(i, 0), b = cm * x(i, 1), d = cm * x(i, 2);
     const auto end = nonzeros ? begin[i] + nonzeros[i] : begin[i + 1];
@@ -214,6 +225,7 @@ int GlobalSystem::solveConjugateGradient(double c, const Eigen::MatrixX3d& rhs, 
 void GlobalSystem::setBlocks(const std::vector<SceneSegment>& blocks) {
   blocks_ = blocks.size() > 1 ? blocks : std::vector<SceneSegment>{};
   cg_systems_.clear();
+  for (auto& entry : factors_) entry.second->trees_known = false;  // their trees' blocks
 }
 
 void GlobalSystem::addToDiagonal(int j, double delta, bool refactor) {

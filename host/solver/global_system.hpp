@@ -64,8 +64,10 @@ class GlobalSystem {
                              double tolerance, const std::vector<char>* solved = nullptr);
 
   /// out = (c M + L) x for the three columns at once (L symmetric: its stored columns are its
-  /// rows, read once for all three columns).
-  void multiply(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out) const;
+  /// rows, read once for all three columns). With `rows_of` (one flag per block of setBlocks),
+  /// the rows of the blocks flagged alone; the others' rows of `out` are left as they were.
+  void multiply(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out,
+                const std::vector<char>* rows_of = nullptr) const;
 
   /// The rows of K_c's diagonal blocks (a batch's scenes: first row, count), which no element
   /// couples: solveConjugateGradient then runs one CG per block, so that one scene's residuals
@@ -217,6 +219,9 @@ class GlobalSystem {
     cg_systems_.clear();
   }
   Eigen::SparseMatrix<double> shiftedLaplacian(double c) const;  // c M + L
+  // multiply()'s rows [first, first + count).
+  void multiplyRows(double c, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& out, Eigen::Index first,
+                    Eigen::Index count) const;
 
   Eigen::SparseMatrix<double> laplacian_;
   Eigen::VectorXd masses_;

@@ -42,6 +42,7 @@ void LocalGlobalSolver::setSegments(const std::vector<SceneSegment>& segments,
                                     const std::vector<double>& energy_scales) {
   rows_.clear();
   for (const SceneSegment& s : segments) rows_.push_back({s.first_particle, s.num_particles});
+  segments_ = segments;
   system_.setBlocks(segments);  // a batch's host CG per scene
   segment_scales_ = energy_scales;
 }

@@ -177,6 +177,7 @@ class LocalGlobalSolver {
     int count = 0;
   };
   std::vector<Segment> rows_;
+  std::vector<SceneSegment> segments_;  // setSegments: each scene's element ranges (Newton's springs)
   std::vector<double> segment_scales_;
   std::vector<PotentialEnergy> segment_potentials_;
   // gradient_ is the objective's gradient at x_cur_, trial_gradient_ at the positions of the last

@@ -27,27 +27,36 @@ constexpr int kMaxCgPerStep = 5;
 
 void LocalGlobalSolver::setScene(const SceneData* scene) { scene_ = scene; }
 
-// The springs' transverse coefficients at x_trial_: beta_e = w min(1, r/|u|) and n_e.
+// The springs' transverse coefficients at x_trial_: beta_e = w min(1, r/|u|) and n_e, of the
+// segments still running (a batch's).
 void LocalGlobalSolver::springCurvature() {
   springs_.clear();
   if (scene_ == nullptr) return;
-  for (const ElementBlock& block : scene_->blocks()) {
+  const std::vector<ElementBlock>& blocks = scene_->blocks();
+  const bool some = runningMask() && segments_.size() == running_.size();
+  for (std::size_t k = 0; k < blocks.size(); ++k) {
+    const ElementBlock& block = blocks[k];
     if (std::strcmp(block.type->identifier(), "spring") != 0) continue;
     const int params = block.type->shape().params;
-    for (int e = 0; e < block.count; ++e) {
-      const int a = block.vertices[std::size_t(2 * e)], b = block.vertices[std::size_t(2 * e + 1)];
-      const double w = block.params[std::size_t(params * e)], rest = block.params[std::size_t(params * e + 1)];
-      const Eigen::Vector3d u = (x_trial_.row(a) - x_trial_.row(b)).transpose();
-      const double length = u.norm();
-      if (!(length > 0.0) || w == 0.0) continue;
-      springs_.push_back({a, b, w * std::min(1.0, rest / length), u / length});
+    for (std::size_t s = 0; s < (some ? segments_.size() : 1); ++s) {
+      if (some && !running_[s]) continue;
+      const int first = some ? segments_[s].first_element[k] : 0;
+      const int end = first + (some ? segments_[s].num_elements[k] : block.count);
+      for (int e = first; e < end; ++e) {
+        const int a = block.vertices[std::size_t(2 * e)], b = block.vertices[std::size_t(2 * e + 1)];
+        const double w = block.params[std::size_t(params * e)], rest = block.params[std::size_t(params * e + 1)];
+        const Eigen::Vector3d u = (x_trial_.row(a) - x_trial_.row(b)).transpose();
+        const double length = u.norm();
+        if (!(length > 0.0) || w == 0.0) continue;
+        springs_.push_back({a, b, w * std::min(1.0, rest / length), u / length});
+      }
     }
   }
 }
 
-// out = H v.
+// out = H v (the rows of the segments still running; the others' are left as they were).
 void LocalGlobalSolver::hessianTimes(double c, const Eigen::MatrixX3d& v, Eigen::MatrixX3d& out) const {
-  system_.multiply(c, v, out);
+  system_.multiply(c, v, out, runningMask());
   for (const SpringCurvature& s : springs_) {
     const Eigen::Vector3d d = (v.row(s.a) - v.row(s.b)).transpose();
     const Eigen::Vector3d transverse = s.beta * (d - s.n * s.n.dot(d));

@@ -383,6 +383,24 @@ TEST(SceneBatch, ScenesThatTakeNoPartInASolveKeepTheirWarmStart) {
         }
       }
     }
+  // The flags hold for one solve: the next one, given none, solves every scene.
+  {
+    const std::unique_ptr<Backend> backend = makeCpuBackend(data, 3);
+    backend->setSegments(batch.segments);
+    GlobalSystem system(data);
+    LocalGlobalSolver solver(*backend, system, 2);
+    solver.setSegments(batch.segments, std::vector<double>(scenes.size(), 1.0));
+    backend->write(1, batch.scene.positions);
+    IterationControl control;
+    control.iterations = 3;
+    for (bool flagged : {true, false}) {
+      if (flagged) solver.setSolving(solving);
+      backend->write(0, warm);
+      solver.solve(c, 1, 0, t, control);
+      for (std::size_t s = 0; s < scenes.size(); ++s)
+        EXPECT_EQ(solver.segmentIterations(s), flagged && !solving[s] ? 0 : 3) << "scene " << s;
+    }
+  }
   // The CPU reference's pass skips the scenes not flagged: their entries stay as they were.
   const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
   backend->setSegments(batch.segments);

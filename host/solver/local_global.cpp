@@ -57,6 +57,8 @@ void LocalGlobalSolver::globalStep(double c, int x, const IterationControl& cont
 int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationControl& control,
                              std::vector<double>* objective_history) {
   result_potentials_.clear();
+  solving_.swap(next_solving_);  // this solve's flags; the next solve's are set anew
+  next_solving_.clear();
   running_.clear();  // no stops yet: every pass and solve over the whole batch
   running_segments_ = 0;
   const std::size_t segments = std::max<std::size_t>(1, rows_.size());

@@ -86,12 +86,13 @@ class LocalGlobalSolver {
   /// energy_scale in each segment's round-off allowance.
   void setSegments(const std::vector<SceneSegment>& segments, const std::vector<double>& energy_scales);
 
-  /// The segments the next solves solve, one flag per segment (a batch's scenes that step, or
+  /// The segments the next solve solves, one flag per segment (a batch's scenes that step, or
   /// that need the blend's partner); empty: all of them. A segment not flagged keeps its rows of
   /// slot x (the warm start), takes no iteration (segmentIterations 0) and has no potential in
   /// potentialsOfResult (NaN); on the CPU reference its element passes and its trees of the
   /// factor's solve are not run, and its history work on the host is not done either way.
-  void setSolving(std::vector<char> segments) { solving_ = std::move(segments); }
+  /// The flags hold for the next solve only (a caller that sets none gets every segment solved).
+  void setSolving(std::vector<char> segments) { next_solving_ = std::move(segments); }
 
   /// The scene whose springs Newton-CG takes its Hessians from (Acceleration::Newton); without
   /// one its Hessian is K_c.
@@ -191,7 +192,8 @@ class LocalGlobalSolver {
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_, stopped_;
   std::vector<char> running_;            // not stopped_ (the mask the passes and solves take)
-  std::vector<char> solving_;            // setSolving
+  std::vector<char> next_solving_;       // setSolving, for the next solve
+  std::vector<char> solving_;            // the solve's (next_solving_ taken at its start)
   std::vector<char> plain_direction_;    // L-BFGS: the segment's direction used no curvature pair
   std::size_t running_segments_ = 0;     // not stopped yet in this solve
   std::vector<int> segment_iterations_;  // of the last solve, per segment

@@ -112,8 +112,8 @@ class Backend {
   virtual void massDots(int /*a*/, int /*b*/, std::vector<double>& /*out*/) { notPerScene(); }
   /// out[s] = potential of segment s's particles and elements in `x` at time t. With `which` (one
   /// flag per segment) a backend may skip the segments not flagged: their entries are then
-  /// unspecified (both backends leave them as they were; the OpenCL backend skips them where a few
-  /// launches cover the others, else passes over every segment in one launch).
+  /// unspecified (the CPU reference leaves them as they were; the OpenCL backend does so where a
+  /// few launches cover the flagged ones, else it computes every segment in one launch).
   virtual void potentials(int /*x*/, double /*t*/, std::vector<PotentialEnergy>& /*out*/,
                           const std::vector<char>* /*which*/ = nullptr) {
     notPerScene();

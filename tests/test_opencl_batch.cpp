@@ -196,8 +196,8 @@ TEST(OpenCLBatch, PerSceneGradientPassIsTheGradientAndThePerScenePass) {
 // A pass of some scenes (a batch's solve skipping its stopped scenes, its energy passes of some):
 // the element pass then runs over those scenes' work-groups alone, and their energies, gradient
 // rows and right-hand-side rows are the whole pass's bit for bit; the entries of the others are
-// left as they were. 200 scenes, of which two runs (scenes 30-69 and 150-159) pass: two launches
-// for a fifth of the work.
+// left as they were. 200 scenes, of which two runs (scenes 30-69 and 150-159) pass: a quarter of
+// the scenes, in two launches per element type at most (fewer where the runs share a group).
 TEST(OpenCLBatch, PassesOfSomeScenesAreTheirPartOfTheWholePass) {
   for (Precision precision : availablePrecisions()) {
     SCOPED_TRACE(precisionName(precision));

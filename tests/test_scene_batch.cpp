@@ -259,9 +259,8 @@ TEST(SceneBatch, CpuPerScenePassesOnThreadsAreTheSerialOnes) {
 }
 
 // A solve of some of a batch's blocks (GlobalSystem::solve and solveConjugateGradient with
-// `solved`): the blocks solved are the whole solve's rows bit for bit, and the others' rows are not
-// touched (the work skipped), on a small batch (one thread) and on one past kForestRows (the
-// trees on threads).
+// `solved`, and the product multiply): the blocks solved are the whole solve's rows bit for bit, and the others' rows
+// are not touched (the work skipped), on a small batch (one thread) and on one past kForestRows (the trees on threads).
 TEST(SceneBatch, SolvesOfSomeBlocksSkipTheOthers) {
   for (int copies : {1, 60}) {
     std::vector<Scene> scenes;
@@ -277,16 +276,19 @@ TEST(SceneBatch, SolvesOfSomeBlocksSkipTheOthers) {
     std::vector<char> solved(scenes.size(), 1);
     for (std::size_t s = 1; s < scenes.size(); s += 2) solved[s] = 0;
     const double c = 900.0;
-    for (bool cg : {false, true}) {
-      const std::string what = std::to_string(copies) + (cg ? " copies, CG" : " copies, factor");
+    for (const std::string kind : {"factor", "CG", "product"}) {  // the product: Newton-CG's (K_c x)
+      const std::string what = std::to_string(copies) + " copies, " + kind;
       Eigen::MatrixX3d whole = Eigen::MatrixX3d::Zero(n, 3);
       Eigen::MatrixX3d some = Eigen::MatrixX3d::Constant(n, 3, 7.0);  // the rows not solved keep it
       Eigen::MatrixX3d start = Eigen::MatrixX3d::Zero(n, 3);
       for (std::size_t s = 0; s < scenes.size(); ++s)
         if (solved[s]) some.middleRows(batch.segments[s].first_particle, batch.segments[s].num_particles).setZero();
-      if (cg) {
+      if (kind == "CG") {
         system.solveConjugateGradient(c, rhs, whole, 5, 0.0);
         system.solveConjugateGradient(c, rhs, some, 5, 0.0, &solved);
+      } else if (kind == "product") {
+        system.multiply(c, rhs, whole);
+        system.multiply(c, rhs, some, &solved);
       } else {
         system.solve(c, rhs, whole);
         system.solve(c, rhs, some, &solved);

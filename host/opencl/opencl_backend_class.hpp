@@ -137,10 +137,12 @@ class OpenCLBackend final : public Backend {
 
   void massDots(int a, int b, std::vector<double>& out) override;
 
-  // Every segment, flagged in `which` or not (one launch; potentialsOf serves a few scenes).
+  // With `which`: the flagged segments alone where skippingRuns allows (potentialsOf), else every
+  // segment in one launch.
   void potentials(int x, double t, std::vector<PotentialEnergy>& out, const std::vector<char>* which) override;
 
-  // Every segment's elements, `running` or not (one launch for the batch).
+  // With `running`: the running segments' work-groups alone where skippingRuns allows
+  // (gatheredLocalStep), else every segment's in one launch.
   void localStepGradientPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& gradient,
                                  std::vector<PotentialEnergy>& per_scene, const std::vector<char>* running) override;
   void localStepRhsPerScene(int x, int y, double c, double t, Eigen::MatrixX3d& rhs,
@@ -323,8 +325,11 @@ class OpenCLBackend final : public Backend {
   } mass_dot_args_{};
   cl_uint gather_accel_dst_ = 0;
   cl::Event element_event_, gather_event_;
-  cl::Event element_first_event_;                 // the first launch of the last element pass (several: skipping)
-  std::vector<PotentialEnergy> some_potentials_;  // potentials() of some segments, reused
+  cl::Event element_first_event_;  // the first launch of the last element pass (several: skipping)
+  // skippingRuns' results and potentials() of some segments, reused (no allocation per pass).
+  std::vector<int> skip_segments_;
+  std::vector<std::pair<int, int>> skip_runs_;
+  std::vector<PotentialEnergy> some_potentials_;
 
   double fext_time_ = std::numeric_limits<double>::quiet_NaN();
   int fext_version_ = -1;

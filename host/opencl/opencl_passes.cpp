@@ -141,13 +141,11 @@ void OpenCLBackend<Real>::gatheredLocalStep(int flags, Launch& gather, const Gat
   const auto start = Clock::now();
   const int pass_flags = flags | (energy_at_x ? kPassEnergy : 0) | (per_scene ? kPassEnergyPerElement : 0);
   // The running segments' elements alone (the others' rows of `out` and sums are then stale).
-  std::vector<int> some;
-  std::vector<std::pair<int, int>> runs;
-  const bool skipping = per_scene && running && !energy_at_x && skippingRuns(*running, some, runs);
+  const bool skipping = per_scene && running && !energy_at_x && skippingRuns(*running, skip_segments_, skip_runs_);
   bool launched = false;
   if (skipping) {
-    for (std::size_t r = 0; r < runs.size(); ++r) {
-      enqueueElementGroups(x, pass_flags, runs[r].first, runs[r].second);
+    for (std::size_t r = 0; r < skip_runs_.size(); ++r) {
+      enqueueElementGroups(x, pass_flags, skip_runs_[r].first, skip_runs_[r].second);
       if (r == 0) element_first_event_ = element_event_;
       launched = true;
     }

@@ -57,12 +57,10 @@ void OpenCLBackend<Real>::potentials(int x, double t, std::vector<PotentialEnerg
     out.assign(1, potential(x, t));
     return;
   }
-  std::vector<int> some;
-  std::vector<std::pair<int, int>> runs;
-  if (which && skippingRuns(*which, some, runs)) {  // those segments alone, the others' entries kept
-    potentialsOf(some, x, t, some_potentials_);
+  if (which && skippingRuns(*which, skip_segments_, skip_runs_)) {  // those alone, the others' entries kept
+    potentialsOf(skip_segments_, x, t, some_potentials_);
     out.resize(segments_.size());
-    for (std::size_t i = 0; i < some.size(); ++i) out[std::size_t(some[i])] = some_potentials_[i];
+    for (std::size_t i = 0; i < skip_segments_.size(); ++i) out[std::size_t(skip_segments_[i])] = some_potentials_[i];
     return;
   }
   checkSlot(x);

@@ -271,8 +271,9 @@ void solveSimplicialForest(const cholmod_factor& factor, const EliminationForest
     parallelForRuns(forest.entries, solveTree);
     return;
   }
-  // The runs split the work of the trees solved.
-  std::vector<double> work_before(forest.entries.size(), 0.0);
+  // The runs split the work of the trees solved (per thread, kept: no allocation per solve).
+  thread_local std::vector<double> work_before;
+  work_before.assign(forest.entries.size(), 0.0);
   for (int tree = 0; tree < forest.trees(); ++tree) {
     const std::size_t t = std::size_t(tree);
     work_before[t + 1] = work_before[t] + ((*solved)[t] ? forest.entries[t + 1] - forest.entries[t] : 0.0);

@@ -297,7 +297,7 @@ void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy,
   yy.assign(rows_.size(), 0.0);
   ss.assign(rows_.size(), 0.0);
   forEachSegment(rows_, [&](std::size_t seg) {
-    if (stopped_[seg]) return;  // no pair (its products stay 0)
+    if (stopped(seg)) return;  // no pair (its products stay 0)
     Eigen::MatrixXd& gram = gram_[seg];
     std::vector<double>& sg = history_sg_[seg];
     for (int j = 0; j < window; ++j) gram(slot, j) = gram(j, slot) = sg[std::size_t(j)] = 0.0;
@@ -335,7 +335,7 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
   auto slotOf = [&](int k) { return std::size_t((newest - k + window) % window); };  // k-th newest
   search_.resize(n, 3);
   forEachSegment(rows_, [&](std::size_t seg) {
-    if (stopped_[seg]) return;  // takes no step (its slope is set to 0)
+    if (stopped(seg)) return;  // takes no step (its slope is set to 0)
     const Eigen::MatrixXd& gram = gram_[seg];
     for (int k = 0; k < pairs; ++k) {
       const std::size_t i = slotOf(k);
@@ -355,7 +355,7 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
   applyInitialInverseHessian(c, control, search_, direction_);
   slope.assign(rows_.size(), 0.0);
   forEachSegment(rows_, [&](std::size_t seg) {
-    if (stopped_[seg]) return;
+    if (stopped(seg)) return;
     thread_local std::vector<double> yr;  // y_i.r of the newest `pairs` pairs (no allocation per call)
     yr.assign(std::size_t(pairs), 0.0);
     forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
@@ -453,7 +453,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     if (by_gradient) {
       if (done == 1) initial_decrement.assign(segments, 0.0);
       for (std::size_t s = 0; s < segments; ++s) {
-        if (stopped_[s]) continue;
+        if (stopped(s)) continue;
         const double decrement = std::sqrt(std::max(0.0, -slope[s]));
         if (done == 1) initial_decrement[s] = decrement;
         // Converged: the direction's solve is spent, but the segment takes no step along it
@@ -463,7 +463,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
       if (running_segments_ == 0) break;
     }
     for (std::size_t s = 0; s < segments; ++s) {
-      if (stopped_[s]) slope[s] = 0.0;  // no step (lineSearch)
+      if (stopped(s)) slope[s] = 0.0;  // no step (lineSearch)
       plain_direction_[s] = pairs == 0 || !usesHistory(s);
     }
     // With positive curvature pairs H is positive definite and the direction descends; a slope
@@ -474,7 +474,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     // every later iteration would try the same step again: the segment stops there.
     lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
     for (std::size_t s = 0; s < segments; ++s) {
-      if (moved_[s] || stopped_[s]) continue;
+      if (moved_[s] || stopped(s)) continue;
       if (plain_direction_[s])
         stopSegment(s, done);
       else
@@ -495,7 +495,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
       // A segment that stayed for want of decrease has not converged: it restarts from the plain step.
       const bool stayed = !moved[s] && step[s] != 0.0;
       const double change = std::abs(objective[s] - trial_objective[s]);
-      if (to_tolerance && !stopped_[s] && !stayed &&
+      if (to_tolerance && !stopped(s) && !stayed &&
           change <= control.tolerance * std::max(std::abs(trial_objective[s]), segmentScale(control, s)))
         stopSegment(s, done);
       objective[s] = trial_objective[s];

@@ -81,7 +81,6 @@ int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationCo
 }
 
 void LocalGlobalSolver::startSegmentStops(std::size_t segments) {
-  stopped_.assign(segments, 0);
   running_.assign(segments, 1);
   segment_iterations_.assign(segments, 0);
   running_segments_ = segments;
@@ -90,7 +89,6 @@ void LocalGlobalSolver::startSegmentStops(std::size_t segments) {
 }
 
 void LocalGlobalSolver::stopSegment(std::size_t s, int done) {
-  stopped_[s] = 1;
   running_[s] = 0;
   segment_iterations_[s] = done;
   --running_segments_;
@@ -104,8 +102,8 @@ void LocalGlobalSolver::keepResultPotentials() {
 }
 
 void LocalGlobalSolver::finishSegmentStops(int done) {
-  for (std::size_t s = 0; s < stopped_.size(); ++s)
-    if (!stopped_[s]) segment_iterations_[s] = done;
+  for (std::size_t s = 0; s < running_.size(); ++s)
+    if (running_[s]) segment_iterations_[s] = done;
 }
 
 int LocalGlobalSolver::solvePlain(double c, int y, int x, double t, const IterationControl& control,
@@ -183,12 +181,12 @@ int LocalGlobalSolver::solvePlainPerSegment(double c, int y, int x, double t, co
     globalStep(c, x, control, /*to_host=*/true);
     ++done;
     for (std::size_t s = 0; s < segments && running_segments_ < segments; ++s)
-      if (stopped_[s])
+      if (stopped(s))
         x_host_.middleRows(rows_[s].first, rows_[s].count) = x_stopped_.middleRows(rows_[s].first, rows_[s].count);
     backend_.write(x, x_host_);
     objectives(current);
     for (std::size_t s = 0; s < segments; ++s) {
-      if (stopped_[s]) continue;
+      if (stopped(s)) continue;
       const double scale = segmentScale(control, s);
       if (to_tolerance &&
           std::abs(previous[s] - current[s]) <= control.tolerance * std::max(std::abs(current[s]), scale)) {
@@ -370,7 +368,7 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
     acceleratedObjectives(c, y, x, t, control, current);
     bool rejected = false;
     for (std::size_t s = 0; s < segments; ++s) {
-      if (stopped_[s]) continue;
+      if (stopped(s)) continue;
       // A rise within round-off of the objective is no rise: deciding on noise would make two
       // backends that agree to round-off take different iterates.
       const double noise = 1e-12 * std::max(std::abs(accepted_objective[s]), segmentScale(control, s));
@@ -387,7 +385,7 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
     }
     if (objective_history) objective_history->push_back(current[0]);
     for (std::size_t s = 0; s < segments; ++s) {
-      if (stopped_[s]) continue;
+      if (stopped(s)) continue;
       const bool converged = to_tolerance && have_accepted &&
                              std::abs(accepted_objective[s] - current[s]) <=
                                  control.tolerance * std::max(std::abs(current[s]), segmentScale(control, s));
@@ -403,7 +401,7 @@ int LocalGlobalSolver::solveAccelerated(double c, int y, int x, double t, const 
     ++done;
     const bool last = done >= limit;
     for (std::size_t s = 0; s < segments; ++s) {
-      if (stopped_[s]) continue;  // its rows of x_cur_ stay at its last iterate
+      if (stopped(s)) continue;  // its rows of x_cur_ stay at its last iterate
       extrapolated_[s] = proposeSegment(s) && !last;
       segmentRows(x_cur_, s) = extrapolated_[s] ? segmentRows(x_next_, s) : segmentRows(x_host_, s);
     }

@@ -190,8 +190,9 @@ class LocalGlobalSolver {
   std::vector<std::vector<double>> history_rho_, history_alpha_, history_sg_;
   std::vector<Eigen::MatrixXd> gram_;
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
-  std::vector<char> accepted_, moved_, stopped_;
-  std::vector<char> running_;            // not stopped_ (the mask the passes and solves take)
+  std::vector<char> accepted_, moved_;
+  std::vector<char> running_;  // per segment: not stopped in this solve (the mask the passes and solves take)
+  bool stopped(std::size_t s) const { return !running_[s]; }
   std::vector<char> next_solving_;       // setSolving, for the next solve
   std::vector<char> solving_;            // the solve's (next_solving_ taken at its start)
   std::vector<char> plain_direction_;    // L-BFGS: the segment's direction used no curvature pair

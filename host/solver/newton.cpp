@@ -117,7 +117,7 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
     dots(search_, cg_z_, rz);
     rz0 = rz;
     cg_running.assign(segments, 0);
-    for (std::size_t s = 0; s < segments; ++s) cg_running[s] = !stopped_[s];
+    for (std::size_t s = 0; s < segments; ++s) cg_running[s] = !stopped(s);
     for (int k = 0; k < kMaxCgPerStep; ++k) {
       hessianTimes(c, cg_p_, cg_hp_);
       dots(cg_p_, cg_hp_, product);  // the curvature along p
@@ -148,12 +148,12 @@ int LocalGlobalSolver::solveNewton(double c, int y, int x, double t, const Itera
     }
     segmentDots(gradient_, direction_, slope);
     for (std::size_t s = 0; s < segments; ++s)
-      if (stopped_[s]) slope[s] = 0.0;  // takes no step
+      if (stopped(s)) slope[s] = 0.0;  // takes no step
     lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
     gradient_ = trial_gradient_;
     x_cur_ = x_trial_;
     for (std::size_t s = 0; s < segments; ++s) {
-      if (stopped_[s]) continue;
+      if (stopped(s)) continue;
       if (!moved_[s]) {
         // No decrease along the Newton direction: the segment stays at its accepted iterate.
         stop(s);

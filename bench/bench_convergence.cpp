@@ -6,7 +6,11 @@
 //     scene   peercloth50: the peers' cloth (ShapeOp's and GenPD's comparison scene), 50 x 50
 //             particles, 1 m square, horizontal, the two corners of one edge pinned (k = 1e6),
 //             0.1 kg in all, structural, shear and skip-one bending springs of 1e4, 1e4, 1e3 N/m;
-//             30 frames;
+//             30 frames; the builder lumps the mass by area (an edge particle has half an inner
+//             one's, a corner a quarter);
+//             peercloth50uniform: the same cloth with GenPD's masses, every particle the same
+//             (its cloth builder's unit_mass = total mass / particles), as in issue 19's figures
+//             for GenPD; 30 frames;
 //             tetbar50x10x10: the reference tet bar (5,000 particles); 10 frames
 //     solver  plain, anderson, lbfgs (SimulatorOptions::acceleration); lbfgs-gradient<tol>: L-BFGS
 //             with SimulatorOptions::gradient_tolerance = tol, the budget its cap (100)
@@ -54,6 +58,12 @@ Scene peerCloth() {
   return s;
 }
 
+Scene peerClothUniformMass() {
+  Scene s = peerCloth();
+  s.masses.setConstant(s.masses.sum() / s.numParticles());
+  return s;
+}
+
 struct ConvergenceScene {
   std::string name;
   std::function<Scene()> make;
@@ -64,6 +74,7 @@ struct ConvergenceScene {
 const std::vector<ConvergenceScene>& convergenceScenes() {
   static const std::vector<ConvergenceScene> scenes{
       {"peercloth50", peerCloth, 30, {10, 20, 40}},
+      {"peercloth50uniform", peerClothUniformMass, 30, {10, 20, 40}},
       {"tetbar50x10x10", referenceScenes()[1].make, 10, {10, 20}},
   };
   return scenes;

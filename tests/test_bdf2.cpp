@@ -25,6 +25,7 @@ TEST_P(BDF2, FirstStepIsBackwardEuler) {
   o.integrator = Integrator::BDF2;
   Simulator bdf2(s, o);
   o.integrator = Integrator::BackwardEuler;
+  o.lbfgs_rigid_modes = 0;  // BDF2's solves, its first included, never take the rigid motions
   Simulator be(s, o);
   bdf2.step();
   be.step();

@@ -146,7 +146,7 @@ TEST_P(LocalGlobalTest, ConvergedSolutionHasVanishingGradient) {
 // Accelerated iterations (Chebyshev, Anderson) keep the objective monotone (the safeguard
 // replaces any iterate that would raise it by the plain one; rises within 1e-12 relative are
 // round-off) and get closer to the minimum than plain ones in the same number of iterations.
-void checkAcceleration(const Scene& s, double max_gap_ratio, Acceleration acceleration) {
+void checkAcceleration(const Scene& s, double max_gap_ratio, Acceleration acceleration, bool contact = false) {
   SCOPED_TRACE(accelerationName(acceleration));
   Fixture f(s);
   const Eigen::MatrixX3d y = inertialTarget(s);
@@ -180,9 +180,15 @@ void checkAcceleration(const Scene& s, double max_gap_ratio, Acceleration accele
   // 1.6e-10 Anderson. Contact switching on and off between iterates (the cloth cut by
   // colliders) breaks the extrapolation's model: 11.1 plain, 7.6 Chebyshev, 7.1 Anderson.
   EXPECT_LE(gap_fast, max_gap_ratio * gap_plain);
-  // Iterated to a tolerance it finds the same minimum.
+  // Iterated to a tolerance it finds the same minimum, or with contact a lower one: the cloth cut
+  // by a sphere has several, and L-BFGS's rigid motions (docs/method.md, "Rigid motions in the
+  // initial Hessian") slide it over the sphere into a lower one than plain iterations stop in
+  // (measured: 6.53 against 7.25).
   const std::vector<double> fast_converged = run(acceleration, 0, 1e-15);
-  EXPECT_NEAR(fast_converged.back(), minimum, 1e-9 * std::abs(minimum));
+  if (contact)
+    EXPECT_LE(fast_converged.back(), minimum + 1e-9 * std::abs(minimum));
+  else
+    EXPECT_NEAR(fast_converged.back(), minimum, 1e-9 * std::abs(minimum));
 }
 
 TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
@@ -191,14 +197,55 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
   // apart relative). The triangle cloth without limits has one.
   const Scene s = GetParam() == SceneKind::Triangles ? testing::triangleCloth(6, 5, false) : scene();
   const double max_gap_ratio = GetParam() == SceneKind::Tets ? 1.01 : GetParam() == SceneKind::Contact ? 0.75 : 0.5;
+  const bool contact = GetParam() == SceneKind::Contact;
   for (Acceleration acceleration : {Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS})
-    checkAcceleration(s, max_gap_ratio, acceleration);
+    checkAcceleration(s, max_gap_ratio, acceleration, contact);
   // Newton-CG has Hessians for springs only; elsewhere its Hessian is K_c, its direction the plain
   // step's, and it must not be worse than plain iterations. Measured gaps after 10 iterations:
   // spring cloth 0.895 (plain 2.77); with colliders 9.28 (plain 11.1): the contact terms keep
   // their PD matrix, far stiffer than their Hessian (zero out of contact).
   const double newton_ratio = GetParam() == SceneKind::Springs ? 0.5 : GetParam() == SceneKind::Contact ? 0.9 : 1.01;
-  checkAcceleration(s, newton_ratio, Acceleration::Newton);
+  checkAcceleration(s, newton_ratio, Acceleration::Newton, contact);
+}
+
+// L-BFGS's rigid motions (SimulatorOptions::lbfgs_rigid_modes, docs/method.md "Rigid motions in
+// the initial Hessian"): BE on a horizontal cloth pinned at the two corners of one edge and
+// released at rest (the peers' cloth, 12 x 12), which falls by turning about its pins, a motion
+// K_c^-1 takes in tiny steps. After 30 frames at 10 iterations the positions are at least 10x
+// closer to the run with every solve converged (measured: RMS 0.058 m against 0.93 m without, the
+// cloth barely falls then). Converged, both are the same BE (to the 1e-13 objective tolerance's
+// 7e-5 m).
+TEST(LbfgsRigidModes, AClothThatTurnsAboutItsPins) {
+  ClothGridParams p;
+  p.nx = p.ny = 12;
+  p.stretch_stiffness = p.shear_stiffness = 1e4;
+  p.bend_stiffness = 1e3;
+  p.pin_stiffness = 1e6;
+  p.pinned = {0, p.nx - 1};
+  Scene s = makeClothGrid(p);
+  for (int r = 0; r < s.numParticles(); ++r) {  // horizontal: y becomes -z
+    s.positions(r, 2) = -s.positions(r, 1);
+    s.positions(r, 1) = 0.0;
+  }
+  s.rest_positions = s.positions;
+  for (Pin& pin : s.pins) pin.target.position = s.positions.row(pin.vertex).transpose();
+  auto run = [&](int rigid_modes, double tolerance) {
+    SimulatorOptions o;
+    o.integrator = Integrator::BackwardEuler;
+    o.lbfgs_rigid_modes = rigid_modes;
+    o.tolerance = tolerance;
+    o.max_iterations = 20000;
+    Simulator sim(s, o);
+    for (int frame = 0; frame < 30; ++frame) sim.step();
+    return Eigen::MatrixX3d(sim.positions());
+  };
+  const Eigen::MatrixX3d converged = run(1, 1e-13);
+  EXPECT_LT((run(0, 1e-13) - converged).cwiseAbs().maxCoeff(), 1e-3);  // the same BE either way
+  auto rms = [&](const Eigen::MatrixX3d& x) { return std::sqrt((x - converged).rowwise().squaredNorm().mean()); };
+  const double with = rms(run(1, 0.0)), without = rms(run(0, 0.0));
+  std::printf("  RMS distance from the converged run after 30 frames: rigid motions %.3g m, without %.3g m\n", with,
+              without);
+  EXPECT_LT(with, 0.1 * without);
 }
 
 // A body at rest in its rest shape with no gravity sits at the solve's minimum: the gradient is

@@ -18,7 +18,7 @@ namespace stabint {
 namespace {
 
 // A valid value other than `value`, one field at a time (the others keep their defaults).
-int changed(int value) { return value + 1; }
+int changed(int value) { return value == 1 ? 0 : value + 1; }  // a 0/1 switch (lbfgs_rigid_modes) flips
 double changed(double value) { return 0.5 * value + 0.25; }
 std::string changed(const std::string&) { return "0"; }
 // The previous enum value, wrapping: BackendKind goes from CpuReference to Auto, which runs
@@ -98,7 +98,7 @@ TEST(OptionsFields, EveryFieldRoundTripsThroughTheCApi) {
 #undef CHANGE_NESTED
 #undef CHANGE_SUB
   };
-  EXPECT_EQ(std::size(changes), 23u);  // 20 fields and opencl's 3
+  EXPECT_EQ(std::size(changes), 24u);  // 21 fields and opencl's 3
 
   stabint_scene* scene = nullptr;
   ASSERT_EQ(stabint_scene_create_builtin("oscillator", nullptr, &scene), STABINT_OK);

@@ -349,7 +349,8 @@ void BatchDriver::blend(double t1, bool forced) {
     // kScratch.
     solver_.setSolving(not_finite);
     backend_->copy(kXTrial, kX);
-    const int iterations = steps.backwardEuler(h, t_, kXTrial, kScratch, control, /*warm_start=*/true);
+    const int iterations =
+        steps.backwardEuler(h, t_, kXTrial, kScratch, withoutRigidModes(control), /*warm_start=*/true);
     backend_->readBoth(kXTrial, x_aux_, kScratch, v_aux_);
     const bool evaluated = potentialsOfStep(steps, kXTrial, t1, not_finite);
     if (forced) backend_->potentials(kXTrial, tm, aux_mid_, &not_finite);
@@ -376,7 +377,8 @@ void BatchDriver::blend(double t1, bool forced) {
   control.iterations = options_.be_iterations;
   solver_.setSolving(needs_partner);
   backend_->copy(kXPartner, kX);
-  const int be_iterations = steps.backwardEuler(h, t_, kXPartner, kVPartner, endingPlain(control), /*warm_start=*/true);
+  const int be_iterations =
+      steps.backwardEuler(h, t_, kXPartner, kVPartner, withoutRigidModes(endingPlain(control)), /*warm_start=*/true);
   backend_->readBoth(kXPartner, x_aux_, kVPartner, v_aux_);
   for (std::size_t s = 0; s < n; ++s) {
     if (!needs_partner[s]) continue;

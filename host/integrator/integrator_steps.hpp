@@ -83,6 +83,9 @@ class IntegratorSteps {
 /// for the solves whose error the step carries on, implicit midpoint's and BDF2's, and the
 /// blend's BE partner, which the blend combines with the IM candidate.
 IterationControl endingPlain(IterationControl control);
+/// `control` without the rigid motions in L-BFGS's initial Hessian (every solve but the
+/// backward-Euler integrator's).
+IterationControl withoutRigidModes(IterationControl control);
 
 /// The solver's controls for one solve of `iterations` (the budget) from the options, with the
 /// energy scale the tolerance stop and the line search measure against: one place for Simulator

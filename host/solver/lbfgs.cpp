@@ -352,7 +352,7 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
       }
     });
   });
-  applyInitialInverseHessian(c, control, search_, direction_);
+  applyTwoLevelInverse(c, control, search_, direction_);
   slope.assign(rows_.size(), 0.0);
   forEachSegment(rows_, [&](std::size_t seg) {
     if (stopped(seg)) return;
@@ -421,6 +421,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   startSegmentStops(segments);
   localStepObjectives(c, y, x, t, objective);
   gradient_ = trial_gradient_;
+  prepareRigidModes(c, t, control);
   // The stopping rule by accuracy (IterationControl::gradient_tolerance): each segment's gradient
   // in the norm of the current inverse Hessian H, sqrt(g.H g) = sqrt(-g.d) (the Newton decrement:
   // half its square estimates the objective's distance to the minimum), against its value at the
@@ -464,21 +465,26 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     }
     for (std::size_t s = 0; s < segments; ++s) {
       if (stopped(s)) slope[s] = 0.0;  // no step (lineSearch)
-      plain_direction_[s] = pairs == 0 || !usesHistory(s);
+      // The plain step is K_c^-1's alone: the rigid motions' coarse space, like a curvature pair,
+      // is a guess the line search may reject.
+      plain_direction_[s] = (pairs == 0 || !usesHistory(s)) && !usesRigidModes(s);
     }
     // With positive curvature pairs H is positive definite and the direction descends; a slope
     // >= 0 is round-off (or a converged segment). A segment that does not move restarts from the
     // plain step. A plain step decreases the objective in exact arithmetic (f(x + d) <= f(x) -
     // 1/2 d^T K_c d); where even it does not, the segment's objective is at its round-off floor
     // (in float on a device, long before the budget: the objective's round-off is 1e-7 of it), and
-    // every later iteration would try the same step again: the segment stops there.
+    // every later iteration would try the same step again: the segment stops there. One whose
+    // direction used the rigid motions drops them too for the rest of the solve.
     lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
     for (std::size_t s = 0; s < segments; ++s) {
       if (moved_[s] || stopped(s)) continue;
-      if (plain_direction_[s])
+      if (plain_direction_[s]) {
         stopSegment(s, done);
-      else
+      } else {
         forgetSegment(s);
+        if (usesRigidModes(s)) rigid_on_[s] = 0;
+      }
     }
 
     // The curvature pair of the step, kept where s.y > 0.

@@ -39,6 +39,11 @@ struct IterationControl {
   /// L-BFGS: the last iteration of a budget is a plain one (IntegratorSteps sets it for implicit
   /// midpoint's and BDF2's solves and the blend's partner: docs/method.md, "L-BFGS").
   bool plain_last_iteration = false;
+  /// L-BFGS: the initial inverse Hessian has the scene's rigid motions as a coarse space
+  /// (host/solver/rigid_modes.cpp; docs/method.md, "Rigid motions in the initial Hessian").
+  /// From SimulatorOptions::lbfgs_rigid_modes; IntegratorSteps clears it for every solve but the
+  /// backward-Euler integrator's (withoutRigidModes).
+  bool rigid_modes = false;
   GlobalSolve global_solve = GlobalSolve::Factor;
   int cg_iterations = 20;     // CG iterations per global step (at most, with cg_tolerance > 0)
   double cg_tolerance = 0.0;  // relative residual at which CG stops early (0: fixed count)
@@ -139,8 +144,14 @@ class LocalGlobalSolver {
                   std::vector<double>& trial_objective);
   void storePair(int slot, int stored, std::vector<double>& sy, std::vector<double>& yy, std::vector<double>& ss);
   void lbfgsDirection(double c, const IterationControl& control, int pairs, int newest, std::vector<double>& slope);
+  // r = K_c^-1 q (the factor's solve, or the host CG).
   void applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
                                   Eigen::MatrixX3d& r);
+  // L-BFGS's H0: K_c^-1 with each segment's rigid motions as a coarse space where rigid_on_ says
+  // so (host/solver/rigid_modes.cpp), else K_c^-1.
+  void prepareRigidModes(double c, double t, const IterationControl& control);
+  void applyTwoLevelInverse(double c, const IterationControl& control, const Eigen::MatrixX3d& q, Eigen::MatrixX3d& r);
+  bool usesRigidModes(std::size_t s) const { return !rigid_on_.empty() && rigid_on_[s]; }
   void segmentDots(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b, std::vector<double>& out) const;
   // The global step of the iterate in slot `x`, whose local step was the last one. Factor or host
   // CG: from rhs_ into x_host_, and into slot x unless `to_host` (the caller writes slot x). On
@@ -189,6 +200,13 @@ class LocalGlobalSolver {
   // the products s_i.y_j of the ring's pairs and s_i.g at x_cur_.
   std::vector<std::vector<double>> history_rho_, history_alpha_, history_sg_;
   std::vector<Eigen::MatrixXd> gram_;
+  // L-BFGS's coarse space (rigid_modes.cpp): per particle its arm x_i - (its segment's mass
+  // centre) at the warm start and its weight c m_i + (its pins' and contacts' weights); per
+  // segment the inverse of the 6 x 6 coarse matrix and whether the coarse space is in use.
+  Eigen::MatrixX3d rigid_arms_, rigid_q_;
+  Eigen::VectorXd rigid_weights_;
+  std::vector<Eigen::Matrix<double, 6, 6>> rigid_inverse_;
+  std::vector<char> rigid_on_;
   std::vector<double> scalars_[8];  // per-segment scalars of one solve (no allocation per solve)
   std::vector<char> accepted_, moved_;
   std::vector<char> running_;  // per segment: not stopped in this solve (the mask the passes and solves take)

@@ -1,0 +1,167 @@
+// The rigid motions of each scene segment as a coarse space in L-BFGS's initial inverse Hessian
+// (docs/method.md, "Rigid motions in the initial Hessian"). The Projective-Dynamics matrix
+// K_c = c M + L resists a rotation as it resists a stretch: its springs' and tets' A^T A do not
+// know that a rotated element keeps its energy. So K_c^-1 g takes a rotation (a pinned cloth's
+// swing, a falling cloth turning about its pins) in tiny steps, and the curvature pairs learn it
+// only over many iterations. Every element but the one-particle ones (pins, contacts) keeps its
+// energy under a rigid motion, so on the six rigid motions Z of a segment (three translations,
+// three rotations about its mass centre at the warm start) the objective's Hessian is about
+// A = c M + W, W the one-particle elements' weights. The two-level (balancing) inverse
+//   H0 q = Z S^+ Z^T q + (I - Z S^+ Z^T A) K_c^-1 (I - A Z S^+ Z^T) q,   S = Z^T A Z,
+// is symmetric and positive definite; it takes the rigid part of a step from S and the rest from
+// K_c. S^+ drops the directions that move nothing (a chain's rotation about its own axis) and
+// those of negative curvature. Measured: BE on the peer cloth is 0.051 m (RMS) from the converged
+// run after 30 frames at 10 iterations, against 0.93 m with K_c^-1 alone (docs/method.md).
+#include "elements/element_type.hpp"
+#include "scene/scene_data.hpp"
+#include "solver/local_global.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <cstring>
+
+namespace stabint {
+
+namespace {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+// An eigenvalue of S below this fraction of the largest is a motion that moves (almost) nothing.
+constexpr double kNullMotion = 1e-12;
+
+// Z^T v over rows [first, first + count): the sum of v and the sum of arm x v.
+template <class Weight>
+Vector6d rigidComponents(const Eigen::MatrixX3d& arms, const Eigen::MatrixX3d& v, int first, int count, Weight&& w) {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
+  for (int i = first; i < first + count; ++i) {
+    const Eigen::Vector3d vi = w(i) * v.row(i).transpose();
+    force += vi;
+    torque += arms.row(i).transpose().cross(vi);
+  }
+  Vector6d out;
+  out << force, torque;
+  return out;
+}
+
+// The rigid motion u (translation, rotation) at particle i: u_t + u_r x arm_i.
+inline Eigen::RowVector3d rigidMotionAt(const Vector6d& u, const Eigen::MatrixX3d& arms, int i) {
+  return (u.head<3>() + u.tail<3>().cross(arms.row(i).transpose())).transpose();
+}
+
+}  // namespace
+
+void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationControl& control) {
+  const std::size_t segments = rows_.size();
+  rigid_on_.assign(segments, 0);
+  if (!control.rigid_modes || scene_ == nullptr) return;
+  const Eigen::Index n = x_cur_.rows();
+  // The one-particle elements (pins, contacts): their weights go into A, their forces
+  // w (p - x_j) are taken out of the element forces below.
+  rigid_weights_ = c * masses_;
+  rigid_q_.setZero(n, 3);  // the one-particle elements' forces, for now
+  thread_local std::vector<double> params;
+  for (const ElementBlock& block : scene_->blocks()) {
+    if (block.count == 0 || block.type->shape().vertices != 1) continue;
+    const std::size_t stride = static_cast<std::size_t>(block.type->shape().params);
+    const bool timed = block.type->timeDependent(*scene_);
+    if (timed) block.type->paramsAt(*scene_, t, params);
+    const std::vector<double>& p = timed ? params : block.params;
+    for (int e = 0; e < block.count; ++e) {
+      const double* element = p.data() + stride * std::size_t(e);
+      if (element[0] == 0.0) continue;
+      const int j = block.vertices[std::size_t(e)];
+      const Eigen::Vector3d x = x_cur_.row(j).transpose();
+      Eigen::Vector3d projected;
+      block.type->project(x.data(), element, projected.data());
+      rigid_weights_[j] += element[0];
+      rigid_q_.row(j) += element[0] * (projected - x).transpose();
+    }
+  }
+  // The other elements keep their energy under a rigid motion, so along rotations their Hessian
+  // is -g_el . (e_k x (e_l x arm)) summed over the particles (the second derivative of the
+  // invariant energy along R(theta) x, whose path curves away from the linear motion), g_el their
+  // energy's gradient: the gradient less the inertia, the external forces and the one-particle
+  // elements' part. A stretched body's tension makes it positive, a compressed one's negative.
+  Eigen::MatrixX3d& elastic_gradient = rigid_q_;
+  scene_->externalForces(t, rigid_arms_);  // f_ext, for now
+  elastic_gradient = (gradient_ - ((x_cur_ - y_host_).array().colwise() * (c * masses_).array()).matrix() +
+                      rigid_arms_ + rigid_q_);
+  rigid_inverse_.resize(segments);
+  for (std::size_t s = 0; s < segments; ++s) {
+    if (stopped(s)) continue;
+    const Segment& seg = rows_[s];
+    // Serial sums in particle order: a batch's scene gets the arms its own Simulator gets, bit for
+    // bit (a vectorised reduction would add in an order that depends on where the rows start).
+    Eigen::RowVector3d moment = Eigen::RowVector3d::Zero();
+    double mass = 0.0;
+    for (int i = seg.first; i < seg.first + seg.count; ++i) {
+      moment += masses_[i] * x_cur_.row(i);
+      mass += masses_[i];
+    }
+    const Eigen::RowVector3d centre = moment / mass;
+    for (int i = seg.first; i < seg.first + seg.count; ++i) rigid_arms_.row(i) = x_cur_.row(i) - centre;
+    // S = Z^T A Z, column by column: the rigid components of A times each unit motion; then the
+    // elastic curvature along the rotations.
+    Matrix6d coarse;
+    for (int k = 0; k < 6; ++k) {
+      const Vector6d unit = Vector6d::Unit(k);
+      Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
+      for (int i = seg.first; i < seg.first + seg.count; ++i) {
+        const Eigen::Vector3d f = rigid_weights_[i] * rigidMotionAt(unit, rigid_arms_, i).transpose();
+        force += f;
+        torque += rigid_arms_.row(i).transpose().cross(f);
+      }
+      coarse.col(k) << force, torque;
+    }
+    Eigen::Matrix3d tension = Eigen::Matrix3d::Zero();
+    for (int i = seg.first; i < seg.first + seg.count; ++i) {
+      const Eigen::Vector3d g = elastic_gradient.row(i).transpose(), arm = rigid_arms_.row(i).transpose();
+      tension += g.dot(arm) * Eigen::Matrix3d::Identity() - arm * g.transpose();
+    }
+    coarse.bottomRightCorner<3, 3>() += 0.5 * (tension + tension.transpose());
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(0.5 * (coarse + coarse.transpose()));
+    const double largest = eigen.eigenvalues().maxCoeff();
+    if (!(largest > 0.0) || !std::isfinite(largest)) continue;
+    // Directions of no or negative curvature (a compressed body's rotation) get no coarse step.
+    Vector6d inverse = Vector6d::Zero();
+    for (int k = 0; k < 6; ++k)
+      if (eigen.eigenvalues()[k] > kNullMotion * largest) inverse[k] = 1.0 / eigen.eigenvalues()[k];
+    rigid_inverse_[s] = eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
+    rigid_on_[s] = 1;
+  }
+}
+
+void LocalGlobalSolver::applyTwoLevelInverse(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
+                                             Eigen::MatrixX3d& r) {
+  const std::size_t segments = rows_.size();
+  bool any = false;
+  for (std::size_t s = 0; s < segments; ++s) any = any || (usesRigidModes(s) && !stopped(s));
+  if (!any) {
+    applyInitialInverseHessian(c, control, q, r);
+    return;
+  }
+  // u = S^+ Z^T q, then q - A Z u through K_c^-1, then r + Z (u - S^+ Z^T A r).
+  thread_local std::vector<Vector6d> coarse_step;
+  coarse_step.assign(segments, Vector6d::Zero());
+  rigid_q_ = q;
+  auto one = [](int) { return 1.0; };
+  auto weight = [&](int i) { return rigid_weights_[i]; };
+  for (std::size_t s = 0; s < segments; ++s) {
+    if (!usesRigidModes(s) || stopped(s)) continue;
+    const Segment& seg = rows_[s];
+    coarse_step[s] = rigid_inverse_[s] * rigidComponents(rigid_arms_, q, seg.first, seg.count, one);
+    for (int i = seg.first; i < seg.first + seg.count; ++i)
+      rigid_q_.row(i) -= rigid_weights_[i] * rigidMotionAt(coarse_step[s], rigid_arms_, i);
+  }
+  applyInitialInverseHessian(c, control, rigid_q_, r);
+  for (std::size_t s = 0; s < segments; ++s) {
+    if (!usesRigidModes(s) || stopped(s)) continue;
+    const Segment& seg = rows_[s];
+    const Vector6d correction =
+        coarse_step[s] - rigid_inverse_[s] * rigidComponents(rigid_arms_, r, seg.first, seg.count, weight);
+    for (int i = seg.first; i < seg.first + seg.count; ++i) r.row(i) += rigidMotionAt(correction, rigid_arms_, i);
+  }
+}
+
+}  // namespace stabint

@@ -85,8 +85,8 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
   // elements' part. A stretched body's tension makes it positive, a compressed one's negative.
   Eigen::MatrixX3d& elastic_gradient = rigid_q_;
   scene_->externalForces(t, rigid_arms_);  // f_ext, for now
-  elastic_gradient = (gradient_ - ((x_cur_ - y_host_).array().colwise() * (c * masses_).array()).matrix() +
-                      rigid_arms_ + rigid_q_);
+  elastic_gradient =
+      (gradient_ - ((x_cur_ - y_host_).array().colwise() * (c * masses_).array()).matrix() + rigid_arms_ + rigid_q_);
   rigid_inverse_.resize(segments);
   for (std::size_t s = 0; s < segments; ++s) {
     if (stopped(s)) continue;

@@ -201,9 +201,10 @@ class LocalGlobalSolver {
   std::vector<std::vector<double>> history_rho_, history_alpha_, history_sg_;
   std::vector<Eigen::MatrixXd> gram_;
   // L-BFGS's coarse space (rigid_modes.cpp): per particle its arm x_i - (its segment's mass
-  // centre) at the warm start and its weight c m_i + (its pins' and contacts' weights); per
-  // segment the inverse of the 6 x 6 coarse matrix and whether the coarse space is in use.
-  Eigen::MatrixX3d rigid_arms_, rigid_q_;
+  // centre) at the warm start, its weight c m_i + (its pins' and contacts' weights) and the other
+  // elements' energy gradient there; per segment the inverse of the 6 x 6 coarse matrix and
+  // whether the coarse space is in use; rigid_q_ is the two-level inverse's right-hand side.
+  Eigen::MatrixX3d rigid_arms_, rigid_gradient_, rigid_q_;
   Eigen::VectorXd rigid_weights_;
   std::vector<Eigen::Matrix<double, 6, 6>> rigid_inverse_;
   std::vector<char> rigid_on_;

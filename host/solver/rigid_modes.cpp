@@ -18,7 +18,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include <cstring>
+#include <cmath>
 
 namespace stabint {
 
@@ -57,9 +57,9 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
   if (!control.rigid_modes || scene_ == nullptr) return;
   const Eigen::Index n = x_cur_.rows();
   // The one-particle elements (pins, contacts): their weights go into A, their forces
-  // w (p - x_j) are taken out of the element forces below.
+  // w (p - x_j) into rigid_gradient_, which then becomes the other elements' energy gradient.
   rigid_weights_ = c * masses_;
-  rigid_q_.setZero(n, 3);  // the one-particle elements' forces, for now
+  rigid_gradient_.setZero(n, 3);
   thread_local std::vector<double> params;
   for (const ElementBlock& block : scene_->blocks()) {
     if (block.count == 0 || block.type->shape().vertices != 1) continue;
@@ -75,7 +75,7 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
       Eigen::Vector3d projected;
       block.type->project(x.data(), element, projected.data());
       rigid_weights_[j] += element[0];
-      rigid_q_.row(j) += element[0] * (projected - x).transpose();
+      rigid_gradient_.row(j) += element[0] * (projected - x).transpose();
     }
   }
   // The other elements keep their energy under a rigid motion, so along rotations their Hessian
@@ -83,10 +83,10 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
   // invariant energy along R(theta) x, whose path curves away from the linear motion), g_el their
   // energy's gradient: the gradient less the inertia, the external forces and the one-particle
   // elements' part. A stretched body's tension makes it positive, a compressed one's negative.
-  Eigen::MatrixX3d& elastic_gradient = rigid_q_;
-  scene_->externalForces(t, rigid_arms_);  // f_ext, for now
-  elastic_gradient =
-      (gradient_ - ((x_cur_ - y_host_).array().colwise() * (c * masses_).array()).matrix() + rigid_arms_ + rigid_q_);
+  thread_local Eigen::MatrixX3d external;
+  scene_->externalForces(t, external);
+  rigid_gradient_ += gradient_ - ((x_cur_ - y_host_).array().colwise() * (c * masses_).array()).matrix() + external;
+  rigid_arms_.resize(n, 3);
   rigid_inverse_.resize(segments);
   for (std::size_t s = 0; s < segments; ++s) {
     if (stopped(s)) continue;
@@ -100,27 +100,28 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
       mass += masses_[i];
     }
     const Eigen::RowVector3d centre = moment / mass;
-    for (int i = seg.first; i < seg.first + seg.count; ++i) rigid_arms_.row(i) = x_cur_.row(i) - centre;
-    // S = Z^T A Z, column by column: the rigid components of A times each unit motion; then the
-    // elastic curvature along the rotations.
-    Matrix6d coarse;
-    for (int k = 0; k < 6; ++k) {
-      const Vector6d unit = Vector6d::Unit(k);
-      Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
-      for (int i = seg.first; i < seg.first + seg.count; ++i) {
-        const Eigen::Vector3d f = rigid_weights_[i] * rigidMotionAt(unit, rigid_arms_, i).transpose();
-        force += f;
-        torque += rigid_arms_.row(i).transpose().cross(f);
-      }
-      coarse.col(k) << force, torque;
-    }
-    Eigen::Matrix3d tension = Eigen::Matrix3d::Zero();
+    // S = Z^T A Z in one pass: the weight sum (translations), the weighted first moment of the
+    // arms (translation x rotation) and the weighted inertia tensor (rotations); then the elastic
+    // tension along the rotations.
+    double weight = 0.0;
+    Eigen::Vector3d first_moment = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero(), tension = Eigen::Matrix3d::Zero();
     for (int i = seg.first; i < seg.first + seg.count; ++i) {
-      const Eigen::Vector3d g = elastic_gradient.row(i).transpose(), arm = rigid_arms_.row(i).transpose();
+      rigid_arms_.row(i) = x_cur_.row(i) - centre;
+      const Eigen::Vector3d arm = rigid_arms_.row(i).transpose(), g = rigid_gradient_.row(i).transpose();
+      const double a = rigid_weights_[i];
+      weight += a;
+      first_moment += a * arm;
+      inertia += a * (arm.squaredNorm() * Eigen::Matrix3d::Identity() - arm * arm.transpose());
       tension += g.dot(arm) * Eigen::Matrix3d::Identity() - arm * g.transpose();
     }
-    coarse.bottomRightCorner<3, 3>() += 0.5 * (tension + tension.transpose());
-    const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(0.5 * (coarse + coarse.transpose()));
+    // Z^T A Z's off-diagonal block: sum_i a_i e_k . (e_l x arm_i) = (e_l x first_moment)_k.
+    Eigen::Matrix3d cross;
+    for (int l = 0; l < 3; ++l) cross.col(l) = Eigen::Vector3d::Unit(l).cross(first_moment);
+    Matrix6d coarse;
+    coarse << weight * Eigen::Matrix3d::Identity(), cross, cross.transpose(),
+        inertia + 0.5 * (tension + tension.transpose());
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(coarse);
     const double largest = eigen.eigenvalues().maxCoeff();
     if (!(largest > 0.0) || !std::isfinite(largest)) continue;
     // Directions of no or negative curvature (a compressed body's rotation) get no coarse step.

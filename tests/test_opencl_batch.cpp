@@ -598,7 +598,10 @@ double distanceFromTheEdge(const StepReport& r, const EnergyReport& previous, do
 // trajectory, of which the blend still holds H within tau of H*. The thrown chain is chaotic: float round-off grows on
 // it without any different decision (measured: positions 1e-3 apart at step 14, 4e-3 at step 15, branches the same), so
 // in float it is compared over its first 10 steps, as test_opencl_integrators compares float runs over a horizon rather
-// than chaos.
+// than chaos. In double it is compared over 30 steps: L-BFGS's rigid motions resolve its swing about the stiff pin
+// (coarse eigenvalues about 7e2 against the pin's 1e6), which amplifies the backends' round-off in the pin's force by
+// that ratio (measured: 2e-13 apart after one step, 2e-10 at step 29, then chaos: 1e-8 at step 39; 7e-12 at step 39
+// without the rigid motions).
 TEST(OpenCLBatchSimulator, BlendFollowsTheCpuBatch) {
   const std::vector<Scene> scenes = blendBatchScenes();
   const BatchCase c{Integrator::EnergyBlend, 1.0 / 60.0, 40};
@@ -619,7 +622,7 @@ TEST(OpenCLBatchSimulator, BlendFollowsTheCpuBatch) {
     }
     std::vector<int> diverged_at(scenes.size(), -1);
     std::vector<int> horizon(scenes.size(), c.steps);
-    if (precision == Precision::Float) horizon.back() = 10;  // the thrown chain
+    horizon.back() = precision == Precision::Float ? 10 : 30;  // the thrown chain
     int to_compare = 0;
     for (int h : horizon) to_compare += h;
     std::vector<int> branches(4, 0);

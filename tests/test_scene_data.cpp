@@ -149,6 +149,51 @@ TEST(SceneData, StaticSceneHasNoTimeDependentForcing) {
   EXPECT_FALSE(data.hasTimeDependentForces());
 }
 
+// Per scene of a batch: only the scenes whose own pins, fields, user forces or colliders change
+// over [t0, t1] are forced (the driver keeps L-BFGS's rigid motions out of those scenes'
+// implicit-midpoint solves).
+TEST(SceneData, ForcingChangesPerSceneOfABatch) {
+  std::vector<Scene> scenes(5, twoTetScene());
+  scenes[1].pins[1].target.velocity = Eigen::Vector3d(0, 1, 0);  // a moving pin law
+  ForceField local;
+  local.particles = {2};
+  local.rate = Eigen::Vector3d(0, 0, 1);
+  scenes[2].force_fields = {local};
+  Collider plane;
+  plane.center = Eigen::Vector3d(0, -1, 0);
+  scenes[3].colliders = {plane};
+  scenes[4].colliders = {plane};
+  scenes[4].colliders[0].velocity = Eigen::Vector3d(0, 0.1, 0);  // a moving collider law
+  const SceneBatch batch = concatenateScenes(scenes);
+  SceneData data(batch.scene);
+  const double h = 0.01;
+  using Flags = std::vector<char>;
+  EXPECT_EQ(data.forcingChangesDuring(0.0, h, batch.segments), (Flags{0, 1, 1, 0, 1}));
+
+  // Run-time ramps over [h, 2h]: scene 0's user forces, scene 3's pin and collider.
+  const SceneSegment& s0 = batch.segments[0];
+  data.rampUserForceRows(s0.first_particle, Eigen::MatrixX3d::Ones(s0.num_particles, 3), h, 2 * h);
+  EXPECT_EQ(data.forcingChangesDuring(h, 2 * h, batch.segments), (Flags{1, 1, 1, 0, 1}));
+  data.rampPinTarget(2 * 3 + 1, Eigen::Vector3d(1, 2, 3), h, 2 * h);  // scene 3's second pin
+  EXPECT_EQ(data.forcingChangesDuring(h, 2 * h, batch.segments), (Flags{1, 1, 1, 1, 1}));
+  // After the ramps' end only the laws move.
+  EXPECT_EQ(data.forcingChangesDuring(2 * h, 3 * h, batch.segments), (Flags{0, 1, 1, 0, 1}));
+  data.rampColliderPosition(batch.segments[3].first_collider, Eigen::Vector3d(0, -0.5, 0), 3 * h, 4 * h);
+  EXPECT_EQ(data.forcingChangesDuring(3 * h, 4 * h, batch.segments), (Flags{0, 1, 1, 1, 1}));
+
+  // A scene's field without a particle list acts on its own particles in a batch, on every
+  // particle of a Simulator's scene.
+  std::vector<Scene> with_wind = scenes;
+  ForceField wind;
+  wind.rate = Eigen::Vector3d(1, 0, 0);
+  with_wind[0].force_fields = {wind};
+  const SceneBatch windy = concatenateScenes(with_wind);
+  EXPECT_EQ(SceneData(windy.scene).forcingChangesDuring(0.0, h, windy.segments), (Flags{1, 1, 1, 0, 1}));
+  const SceneBatch alone = batchOfOne(with_wind[0]);
+  EXPECT_EQ(SceneData(alone.scene).forcingChangesDuring(0.0, h, alone.segments), (Flags{1}));
+  EXPECT_EQ(SceneData(scenes[0]).forcingChangesDuring(0.0, h, batchOfOne(scenes[0]).segments), (Flags{0}));
+}
+
 TEST(SceneTimeLaws, OscillationNeedsBothAmplitudeAndFrequency) {
   PinTarget pin;
   pin.position = Eigen::Vector3d(1, 2, 3);

@@ -141,11 +141,18 @@ const BatchStepReport& BatchDriver::step() {
   updateContactSets();
   // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
   // exactly 0 (its terms at t_m and t_1 are the same numbers).
-  const bool forced = data_.forcingChangesDuring(t_, t1);
+  const std::vector<char> forced_scenes = data_.forcingChangesDuring(t_, t1, segments_);
+  const bool forced = std::any_of(forced_scenes.begin(), forced_scenes.end(), [](char f) { return f != 0; });
+  // Implicit midpoint's solves take the rigid motions into L-BFGS's initial Hessian only in the
+  // scenes whose forcing is constant over the step (docs/method.md, "Rigid motions in the initial
+  // Hessian"): with them a dragged cloth's candidate carried more energy than the forcing's
+  // booking, and the blend left its band.
+  std::vector<char> steady(forced_scenes.size());
+  for (std::size_t s = 0; s < steady.size(); ++s) steady[s] = forced_scenes[s] ? 0 : 1;
   if (options_.integrator == Integrator::EnergyBlend)
-    blend(t1, forced);
+    blend(t1, forced, steady);
   else
-    integrate(t1, forced);
+    integrate(t1, forced, steady);
 
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     PerScene& p = per_scene_[s];
@@ -266,12 +273,13 @@ IterationControl BatchDriver::iterationControl(int iterations) const {
   return stabint::iterationControl(options_, iterations, per_scene_.size() == 1 ? per_scene_[0].energy_scale : 1.0);
 }
 
-void BatchDriver::integrate(double t1, bool forced) {
+void BatchDriver::integrate(double t1, bool forced, const std::vector<char>& steady) {
   const double h = options_.time_step;
   const IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
   const std::vector<char> stepping = steppingScenes();
   solver_.setSolving(stepping);
+  if (options_.integrator == Integrator::ImplicitMidpoint) solver_.setRigidModes(steady);
   const int iterations = steps.step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
   const bool evaluated = potentialsOfStep(steps, kXNew, t1, stepping);
   if (forced) {
@@ -296,7 +304,7 @@ void BatchDriver::integrate(double t1, bool forced) {
   }
 }
 
-void BatchDriver::blend(double t1, bool forced) {
+void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady) {
   const double h = options_.time_step;
   const double tm = t_ + 0.5 * h;
   const std::size_t n = segments_.size();
@@ -304,6 +312,7 @@ void BatchDriver::blend(double t1, bool forced) {
   IntegratorSteps steps(*backend_, solver_);
   const std::vector<char> stepping = steppingScenes();
   solver_.setSolving(stepping);
+  solver_.setRigidModes(steady);
   const int im_iterations = steps.implicitMidpoint(h, t_, kXNew, kVNew, control);
   backend_->readBoth(kXNew, x_new_, kVNew, v_new_);
   backend_->potentials(kXNew, t1, p_all_, &stepping);
@@ -376,9 +385,9 @@ void BatchDriver::blend(double t1, bool forced) {
   // The BE partner of the scenes that need it; the others take no part in its solve.
   control.iterations = options_.be_iterations;
   solver_.setSolving(needs_partner);
+  solver_.setRigidModes(steady);
   backend_->copy(kXPartner, kX);
-  const int be_iterations =
-      steps.backwardEuler(h, t_, kXPartner, kVPartner, withoutRigidModes(endingPlain(control)), /*warm_start=*/true);
+  const int be_iterations = steps.backwardEuler(h, t_, kXPartner, kVPartner, endingPlain(control), /*warm_start=*/true);
   backend_->readBoth(kXPartner, x_aux_, kVPartner, v_aux_);
   for (std::size_t s = 0; s < n; ++s) {
     if (!needs_partner[s]) continue;

@@ -37,7 +37,7 @@ int IntegratorSteps::implicitMidpoint(double h, double t, int x_out, int v_out, 
   // The solve finds the midpoint and the step extrapolates it, x_1 = 2 x_mid - x_n, doubling
   // its error: L-BFGS ends on a plain iteration, which smooths the error its curvature pairs
   // leave in stiff modes before that doubling turns it into elastic energy.
-  const int done = solver_.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, withoutRigidModes(endingPlain(control)));
+  const int done = solver_.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, endingPlain(control));
   potentials_of_step_.clear();
   backend_.combine(v_out, 4.0 / h, x_out, -4.0 / h, kX);
   backend_.combine(v_out, 1.0, v_out, -1.0, kV);
@@ -73,13 +73,12 @@ int IntegratorSteps::step(Integrator integrator, double h, double t, bool has_hi
   switch (integrator) {
     case Integrator::ForwardEuler: explicitEuler(h, t, x_out, v_out, false); return 0;
     case Integrator::SymplecticEuler: explicitEuler(h, t, x_out, v_out, true); return 0;
-    // The backward-Euler integrator's solves alone take the rigid motions into L-BFGS's initial
-    // Hessian (control.rigid_modes, from lbfgs_rigid_modes; docs/method.md, "Rigid motions in the
-    // initial Hessian"): with them, implicit midpoint's candidate left the blend's energy band on a
-    // dragged cloth, and BDF2 gained energy on the stiff cloth.
+    // BDF2's solves keep K_c^-1 as L-BFGS's initial Hessian (control.rigid_modes off): with the
+    // rigid motions BDF2 gained energy on the stiff cloth (docs/method.md, "Rigid motions in the
+    // initial Hessian"). Implicit midpoint's take them where the driver allows (setRigidModes).
     case Integrator::BackwardEuler: return backwardEuler(h, t, x_out, v_out, control, false);
     case Integrator::BDF2:
-      // The first step has no history: BE, without the rigid motions.
+      // The first step has no history: BE, as BDF2's.
       return has_history ? bdf2(h, t, x_out, v_out, withoutRigidModes(control))
                          : backwardEuler(h, t, x_out, v_out, withoutRigidModes(control), false);
     case Integrator::ImplicitMidpoint: return implicitMidpoint(h, t, x_out, v_out, control);

@@ -118,12 +118,35 @@ void SceneData::pinTargets(double t, Eigen::MatrixX3d& out) const {
   for (size_t i = 0; i < scene_.pins.size(); ++i) out.row(i) = pinTarget(static_cast<int>(i), t).transpose();
 }
 
-bool SceneData::forcingChangesDuring(double t0, double t1) const {
-  if (moving_pins_ || time_dependent_fields_) return true;
-  auto changes = [&](const Ramp& r) { return r.active && r.t1 > t0 && r.t0 < t1 && r.start != r.end; };
-  return changes(user_forces_) || std::any_of(pin_ramps_.begin(), pin_ramps_.end(), changes) ||
-         std::any_of(collider_motion_.begin(), collider_motion_.end(),
-                     [&](const ColliderMotion& m) { return m.movesDuring(t0, t1); });
+std::vector<char> SceneData::forcingChangesDuring(double t0, double t1,
+                                                  const std::vector<SceneSegment>& segments) const {
+  std::vector<char> forced(segments.size(), 0);
+  if (segments.empty()) return forced;
+  auto segmentOf = [&](int particle) {
+    const auto after = std::upper_bound(segments.begin(), segments.end(), particle,
+                                        [](int j, const SceneSegment& seg) { return j < seg.first_particle; });
+    return static_cast<std::size_t>(after - segments.begin()) - 1;
+  };
+  auto during = [&](const Ramp& r) { return r.active && r.t1 > t0 && r.t0 < t1; };
+  for (std::size_t i = 0; i < scene_.pins.size(); ++i) {
+    const Ramp& ramp = pin_ramps_[i];
+    if (scene_.pins[i].target.moving() || (during(ramp) && ramp.start != ramp.end))
+      forced[segmentOf(scene_.pins[i].vertex)] = 1;
+  }
+  for (const ForceField& field : scene_.force_fields) {
+    if (!field.timeDependent()) continue;
+    if (field.particles.empty()) std::fill(forced.begin(), forced.end(), 1);
+    for (int j : field.particles) forced[segmentOf(j)] = 1;
+  }
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    const SceneSegment& seg = segments[s];
+    if (during(user_forces_) && user_forces_.start.middleRows(seg.first_particle, seg.num_particles) !=
+                                    user_forces_.end.middleRows(seg.first_particle, seg.num_particles))
+      forced[s] = 1;
+    for (int c = seg.first_collider; c < seg.first_collider + seg.num_colliders; ++c)
+      if (collider_motion_[static_cast<std::size_t>(c)].movesDuring(t0, t1)) forced[s] = 1;
+  }
+  return forced;
 }
 
 void SceneData::rampPinTarget(int pin, const Eigen::Vector3d& target, double t0, double t1) {

@@ -10,6 +10,7 @@
 // velocities, each scene's SceneBook), the backends' slots and the factors (GlobalSystem), which
 // follow the element weights through GlobalSystem::apply.
 #include "elements/element_type.hpp"
+#include "scene/scene_batch.hpp"
 
 #include <stabint/scene.hpp>
 
@@ -66,9 +67,12 @@ class SceneData final : public RunningScene {
   bool hasMovingPins() const override { return moving_pins_ || ramped_pins_ > 0; }
   /// setExternalForces was called: the scene no longer conserves momentum.
   bool hasUserForces() const { return user_forces_.active; }
-  /// True when the forcing differs anywhere between t0 and t1 (so a step over [t0, t1] does work
-  /// through it); false once every ramp has reached its end value and no law moves.
-  bool forcingChangesDuring(double t0, double t1) const;
+  /// Per segment of `segments` (a batch's scenes; a Simulator's one scene): whether its forcing
+  /// differs anywhere between t0 and t1, so that a step over [t0, t1] does work through it: a
+  /// moving or ramped pin on its particles, a time-dependent force field or a user-force ramp
+  /// acting on them, one of its colliders moving. False once every ramp has reached its end value
+  /// and no law moves.
+  std::vector<char> forcingChangesDuring(double t0, double t1, const std::vector<SceneSegment>& segments) const;
 
   // ---- input of a running simulation: linear ramps over the next step ------------------------
   /// Pin `pin`'s target moves linearly from its value at t0 to `target` at t1 and stays there;

@@ -150,8 +150,8 @@ TEST(SceneData, StaticSceneHasNoTimeDependentForcing) {
 }
 
 // Per scene of a batch: only the scenes whose own pins, fields, user forces or colliders change
-// over [t0, t1] are forced (the blend then books the forcing of the state it accepts, which costs
-// an energy pass of the partner for those scenes alone).
+// over [t0, t1] are forced (the driver keeps L-BFGS's rigid motions out of those scenes'
+// implicit-midpoint solves).
 TEST(SceneData, ForcingChangesPerSceneOfABatch) {
   std::vector<Scene> scenes(5, twoTetScene());
   scenes[1].pins[1].target.velocity = Eigen::Vector3d(0, 1, 0);  // a moving pin law

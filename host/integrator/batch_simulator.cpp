@@ -33,11 +33,6 @@ auto blockOf(const Eigen::MatrixX3d& m, const SceneSegment& s) {
 // As a matrix, for the public per-scene copies.
 Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) { return blockOf(m, s); }
 
-// Whether any scene is flagged (a per-scene mask of char flags).
-bool anyFlag(const std::vector<char>& flags) {
-  return std::any_of(flags.begin(), flags.end(), [](char f) { return f != 0; });
-}
-
 }  // namespace
 
 BatchDriver::BatchDriver(const std::vector<Scene>& scenes, const SimulatorOptions& options)
@@ -147,10 +142,17 @@ const BatchStepReport& BatchDriver::step() {
   // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
   // exactly 0 (its terms at t_m and t_1 are the same numbers).
   const std::vector<char> forced_scenes = data_.forcingChangesDuring(t_, t1, segments_);
+  const bool forced = std::any_of(forced_scenes.begin(), forced_scenes.end(), [](char f) { return f != 0; });
+  // Implicit midpoint's solves take the rigid motions into L-BFGS's initial Hessian only in the
+  // scenes whose forcing is constant over the step (docs/method.md, "Rigid motions in the initial
+  // Hessian"): with them a dragged cloth's candidate carried more energy than the forcing's
+  // booking, and the blend left its band.
+  std::vector<char> steady(forced_scenes.size());
+  for (std::size_t s = 0; s < steady.size(); ++s) steady[s] = forced_scenes[s] ? 0 : 1;
   if (options_.integrator == Integrator::EnergyBlend)
-    blend(t1, forced_scenes);
+    blend(t1, forced, steady);
   else
-    integrate(t1, anyFlag(forced_scenes));
+    integrate(t1, forced, steady);
 
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     PerScene& p = per_scene_[s];
@@ -162,10 +164,7 @@ const BatchStepReport& BatchDriver::step() {
       if (p.stepping) p.blend.beginCorrections(p.x_new, p.v_new, p.target_now, p.p_new);
     evaluateBlendPotentials(t1);
     for (PerScene& p : per_scene_)
-      if (p.stepping) {
-        p.velocities_changed = p.blend.finishCorrections(p.x_new, p.v_new, p.p_new, *backend_);
-        p.target_now += p.blend.partnerWork();
-      }
+      if (p.stepping) p.velocities_changed = p.blend.finishCorrections(p.x_new, p.v_new, p.p_new, *backend_);
   }
   resolveContact(t1);
   acceptScenes(t1);
@@ -274,12 +273,13 @@ IterationControl BatchDriver::iterationControl(int iterations) const {
   return stabint::iterationControl(options_, iterations, per_scene_.size() == 1 ? per_scene_[0].energy_scale : 1.0);
 }
 
-void BatchDriver::integrate(double t1, bool forced) {
+void BatchDriver::integrate(double t1, bool forced, const std::vector<char>& steady) {
   const double h = options_.time_step;
   const IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
   const std::vector<char> stepping = steppingScenes();
   solver_.setSolving(stepping);
+  if (options_.integrator == Integrator::ImplicitMidpoint) solver_.setRigidModes(steady);
   const int iterations = steps.step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
   const bool evaluated = potentialsOfStep(steps, kXNew, t1, stepping);
   if (forced) {
@@ -304,7 +304,7 @@ void BatchDriver::integrate(double t1, bool forced) {
   }
 }
 
-void BatchDriver::blend(double t1, const std::vector<char>& forced_scenes) {
+void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady) {
   const double h = options_.time_step;
   const double tm = t_ + 0.5 * h;
   const std::size_t n = segments_.size();
@@ -312,7 +312,7 @@ void BatchDriver::blend(double t1, const std::vector<char>& forced_scenes) {
   IntegratorSteps steps(*backend_, solver_);
   const std::vector<char> stepping = steppingScenes();
   solver_.setSolving(stepping);
-  const bool forced = anyFlag(forced_scenes);
+  solver_.setRigidModes(steady);
   const int im_iterations = steps.implicitMidpoint(h, t_, kXNew, kVNew, control);
   backend_->readBoth(kXNew, x_new_, kVNew, v_new_);
   backend_->potentials(kXNew, t1, p_all_, &stepping);
@@ -358,7 +358,8 @@ void BatchDriver::blend(double t1, const std::vector<char>& forced_scenes) {
     // kScratch.
     solver_.setSolving(not_finite);
     backend_->copy(kXTrial, kX);
-    const int iterations = steps.backwardEuler(h, t_, kXTrial, kScratch, control, /*warm_start=*/true);
+    const int iterations =
+        steps.backwardEuler(h, t_, kXTrial, kScratch, withoutRigidModes(control), /*warm_start=*/true);
     backend_->readBoth(kXTrial, x_aux_, kScratch, v_aux_);
     const bool evaluated = potentialsOfStep(steps, kXTrial, t1, not_finite);
     if (forced) backend_->potentials(kXTrial, tm, aux_mid_, &not_finite);
@@ -384,28 +385,17 @@ void BatchDriver::blend(double t1, const std::vector<char>& forced_scenes) {
   // The BE partner of the scenes that need it; the others take no part in its solve.
   control.iterations = options_.be_iterations;
   solver_.setSolving(needs_partner);
+  solver_.setRigidModes(steady);
   backend_->copy(kXPartner, kX);
   const int be_iterations = steps.backwardEuler(h, t_, kXPartner, kVPartner, endingPlain(control), /*warm_start=*/true);
   backend_->readBoth(kXPartner, x_aux_, kVPartner, v_aux_);
-  // A scene whose forcing changes books the forcing work of the state the blend accepts, so its
-  // partner's potential at the midpoint time is wanted too (docs/method.md, "The forcing of a
-  // blended state").
-  std::vector<char> forced_partner(n, 0);
-  for (std::size_t s = 0; s < n; ++s) forced_partner[s] = needs_partner[s] && forced_scenes[s] ? 1 : 0;
-  if (anyFlag(forced_partner)) backend_->potentials(kXPartner, tm, aux_mid_, &forced_partner);
   for (std::size_t s = 0; s < n; ++s) {
     if (!needs_partner[s]) continue;
     PerScene& p = per_scene_[s];
-    StepReport& r = report_.scenes[s];
-    r.iterations += sceneIterations(s, be_iterations);
+    report_.scenes[s].iterations += sceneIterations(s, be_iterations);
     p.blend.partnerPositions() = blockOf(x_aux_, segments_[s]);
     p.blend.partnerVelocities() = blockOf(v_aux_, segments_[s]);
-    if (forced_partner[s]) {
-      ++r.energy_evaluations;
-      p.blend.partnerRead(PartnerForcing{aux_mid_[s], old_mid_[s], p.potential});
-    } else {
-      p.blend.partnerRead();
-    }
+    p.blend.partnerRead();
   }
   partner_potentials_ = steps.potentialsOfStep();
   evaluateBlendPotentials(t1, partner_potentials_);

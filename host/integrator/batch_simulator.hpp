@@ -164,9 +164,10 @@ struct BatchDriver {
   void startScenes(double t1);
   void acceptScenes(double t1);
   void commit(double t1);
-  // The integrators but the blend: the candidates of every stepping scene, with their forcing
-  // (`forced`: some scene's forcing changes over the step).
-  void integrate(double t1, bool forced);
+  // The integrators but the blend: the candidates of every stepping scene, with their forcing.
+  // `forced`: some scene's forcing changes over the step; `steady`: one flag per scene, its
+  // forcing does not (its implicit-midpoint solves may take the rigid motions).
+  void integrate(double t1, bool forced, const std::vector<char>& steady);
   IterationControl iterationControl(int iterations) const;
   // Scene s's iterations in the solve that did `done` (LocalGlobalSolver::segmentIterations).
   int sceneIterations(std::size_t s, int done) const;
@@ -174,8 +175,7 @@ struct BatchDriver {
   std::vector<char> steppingScenes() const;
   // The blend in lockstep: one IM solve, at most one partner solve (and one full-budget BE solve
   // when some scene's IM candidate blew up), one batched energy pass per root-find round.
-  // `forced_scenes`: one flag per scene, its forcing changes over the step.
-  void blend(double t1, const std::vector<char>& forced_scenes);
+  void blend(double t1, bool forced, const std::vector<char>& steady);
   // The potentials every scene's BlendStep asks for, one batched pass per round: the trial
   // positions are formed on the host (no per-scene combine on the backend interface yet).
   void evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner = {});

@@ -33,9 +33,6 @@ void BlendStep::start(const BlendScene& scene, const SimulatorOptions& options, 
   moving_ = false;
   over_ = false;
   positions_moved_ = false;
-  partner_forcing_.reset();
-  partner_extra_work_ = 0.0;
-  partner_work_booked_ = 0.0;
 }
 
 double BlendStep::kinetic(const Eigen::MatrixX3d& v) const { return kineticEnergy(*scene_.masses, v); }
@@ -70,9 +67,8 @@ bool BlendStep::judge(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, const PotentialE
   return true;
 }
 
-void BlendStep::partnerRead(const std::optional<PartnerForcing>& forcing) {
+void BlendStep::partnerRead() {
   partner_known_ = true;
-  partner_forcing_ = forcing;
   // H(alpha) = K(alpha) + P(alpha). The kinetic part is an exact quadratic in alpha:
   // K = 1/2 (vv + 2 alpha vd + alpha^2 dd) with d = v_partner - v_IM.
   v_scratch_ = 1.0 * v_partner_ + -1.0 * v_im_;  // as Backend::combine(d, 1, partner, -1, IM) forms it
@@ -91,57 +87,38 @@ void BlendStep::askNext() {
 }
 
 void BlendStep::consider(double beta, const PotentialEnergy& p) {
-  const double g = movedPotential(beta, p) - potential_wanted_;
-  if (std::abs(g) < std::abs(best_g_)) best_ = p, best_beta_ = beta, best_g_ = g;
-}
-
-// The position move goes beta of the way from the blended positions (weight alpha) to the
-// partner's: weight alpha + beta (1 - alpha).
-double BlendStep::movedPotential(double beta, const PotentialEnergy& p) const {
-  return foldedPotential(beta * (1.0 - report_->alpha), p);
+  if (std::abs(p.total() - potential_wanted_) < std::abs(best_g_))
+    best_ = p, best_beta_ = beta, best_g_ = p.total() - potential_wanted_;
 }
 
 void BlendStep::take(const PotentialEnergy& p, bool evaluated) {
   if (evaluated) ++report_->energy_evaluations;
   if (stage_ == Stage::Search) {
-    if (evaluations_.empty() && partner_forcing_) {
-      // The partner whole comes first (weight 1): its forcing work, less the IM candidate's.
-      const PartnerForcing& f = *partner_forcing_;
-      partner_extra_work_ = forcingWork(p, f.partner_mid, f.old_mid, f.old_potential) - report_->forcing;
-    }
-    const double folded = foldedPotential(weight_, p);
-    evaluations_.push_back({weight_, k_alpha_.at(weight_) + folded - target_, p});
+    evaluations_.push_back({weight_, k_alpha_.at(weight_) + p.total() - target_, p});
     if (evaluations_.size() == 1) {
       partner_potential_ = p;
       partner_cannot_reach_target_ = evaluations_.front().g >= 0.0;
       if (!partner_cannot_reach_target_ && std::abs(evaluations_.front().g) > scene_.tolerance)
-        search_.emplace(k_alpha_, target_, 0.0, p_im_.total(), 1.0, folded, scene_.tolerance,
+        search_.emplace(k_alpha_, target_, 0.0, p_im_.total(), 1.0, p.total(), scene_.tolerance,
                         options_->max_root_evaluations);
     } else {
-      search_->take(weight_, folded);
+      search_->take(weight_, p.total());
     }
   } else {  // Stage::Moving
     consider(weight_, p);
-    search_->take(weight_, movedPotential(weight_, p));
+    search_->take(weight_, p.total());
   }
   askNext();
 }
 
 PotentialEnergy BlendStep::blend(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, const Backend& storage) {
-  // The best evaluation. When even the partner has too much energy, the end with less of it: the
-  // partner whole, or the IM candidate where the forcing work the partner's state books is so much
-  // lower that it ends further above its target. When the root find runs out of evaluations the
-  // residual is left to the velocity scale of the corrections.
+  // The best evaluation; the partner whole when even it has too much energy. When the root find
+  // runs out of evaluations the residual is left to the velocity scale of the corrections.
   Evaluation accepted = evaluations_.front();
-  if (!partner_cannot_reach_target_) {
+  if (!partner_cannot_reach_target_)
     for (const Evaluation& e : evaluations_)
       if (std::abs(e.g) < std::abs(accepted.g)) accepted = e;
-  } else if (const double g_im = 0.5 * vv_im_ + p_im_.total() - target_; g_im < accepted.g) {
-    accepted = Evaluation{0.0, g_im, p_im_};
-  }
   report_->alpha = accepted.alpha;
-  partner_work_booked_ = accepted.alpha * partner_extra_work_;
-  report_->forcing += partner_work_booked_;
   // As Backend::combine forms it (bit for bit on the CPU reference; a device's own combine may
   // round differently, by an ulp), rounded to what the slots hold.
   const double w = accepted.alpha;
@@ -185,7 +162,7 @@ bool BlendStep::scaleVelocities(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, 
 //    rigid velocities.
 void BlendStep::beginCorrections(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double target,
                                  const PotentialEnergy& p_new) {
-  target_ = target + partner_work_booked_;  // the caller's target holds the IM candidate's forcing
+  target_ = target;
   p_new_ = p_new;
   changed_ = false;
   moving_ = false;
@@ -225,10 +202,9 @@ void BlendStep::beginCorrections(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
       // potential the blend's root find has evaluated already.
       consider(1.0, partner_potential_);
       search_.reset();
-      const double moved_whole = movedPotential(1.0, partner_potential_);
-      if (moved_whole - potential_wanted_ < -tau)
-        search_.emplace(KineticQuadratic{}, potential_wanted_, 0.0, p_new_.total(), 1.0, moved_whole, tau,
-                        options_->max_root_evaluations);
+      if (partner_potential_.total() - potential_wanted_ < -tau)
+        search_.emplace(KineticQuadratic{}, potential_wanted_, 0.0, p_new_.total(), 1.0, partner_potential_.total(),
+                        tau, options_->max_root_evaluations);
       from_ = &x;
       askNext();
     }
@@ -246,10 +222,6 @@ bool BlendStep::finishCorrections(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, Pote
       x = (1.0 - best_beta_) * x + best_beta_ * x_partner_;
       storage.roundToStorage(x);
       positions_moved_ = true;
-      const double moved_work = best_beta_ * (1.0 - report_->alpha) * partner_extra_work_;
-      partner_work_booked_ += moved_work;
-      report_->forcing += moved_work;
-      target_ += moved_work;
     }
     p_new_ = best_;
     // Moving the positions moved the angular momentum about the origin with them.

@@ -38,12 +38,6 @@ struct BlendScene {
   double tolerance = 0.0;
 };
 
-/// A forced step's potentials for the partner's forcing work (forcingWork, integrator_steps.hpp):
-/// the partner's at the midpoint time t + h/2, and the step's start's at t + h/2 and at t.
-struct PartnerForcing {
-  PotentialEnergy partner_mid, old_mid, old_potential;
-};
-
 /// No pins, no force fields, no user forces and no colliders: IM keeps linear and angular momentum.
 bool momentumConserved(const Scene& scene, bool has_user_forces);
 /// tau of docs/method.md section 7.
@@ -68,13 +62,7 @@ class BlendStep {
   bool judge(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, const PotentialEnergy& p_im, double vv_im, double target);
   Eigen::MatrixX3d& partnerPositions() { return x_partner_; }
   Eigen::MatrixX3d& partnerVelocities() { return v_partner_; }
-  /// `forcing`: in a step whose forcing changes (none otherwise), what forcingWork needs of the
-  /// partner besides its potential at t + h. The blend then books the forcing work of the state
-  /// it accepts, not the IM candidate's (docs/method.md, "The forcing of a blended state").
-  void partnerRead(const std::optional<PartnerForcing>& forcing = std::nullopt);
-  /// The forcing work booked on top of the IM candidate's (0 but in a forced step that took some
-  /// of the partner); the caller adds it to its target after finishCorrections().
-  double partnerWork() const { return partner_work_booked_; }
+  void partnerRead();
 
   /// Whether the machine wants the potential at t + h of (1 - weight()) from() + weight()
   /// partnerPositions(); the caller evaluates it and take()s it.
@@ -114,10 +102,6 @@ class BlendStep {
   double excess(const Eigen::MatrixX3d& v) const;  // K(v) + P - H* of the corrections
   void askNext();
   void consider(double beta, const PotentialEnergy& p);  // the position move's best so far
-  // The potential at weight w of the root find, or at beta of the position move, less the forcing
-  // work that state books beyond the blended state's.
-  double foldedPotential(double w, const PotentialEnergy& p) const { return p.total() - w * partner_extra_work_; }
-  double movedPotential(double beta, const PotentialEnergy& p) const;
 
   BlendScene scene_;
   const SimulatorOptions* options_ = nullptr;
@@ -137,12 +121,6 @@ class BlendStep {
   std::vector<Evaluation> evaluations_;
   std::optional<BlendWeightSearch> search_;
   bool partner_cannot_reach_target_ = false;
-  // A forced step: the partner's forcing work less the IM candidate's, dW. The work is linear in
-  // the positions (pins' and external energies are), so the state at weight w books W_IM + w dW:
-  // the root find folds -w dW into the potentials it sees. What the blend booked beyond W_IM.
-  std::optional<PartnerForcing> partner_forcing_;
-  double partner_extra_work_ = 0.0;
-  double partner_work_booked_ = 0.0;
   PotentialEnergy partner_potential_;
   // The corrections.
   double k_before_ = 0.0;

@@ -75,7 +75,7 @@ int IntegratorSteps::step(Integrator integrator, double h, double t, bool has_hi
     case Integrator::SymplecticEuler: explicitEuler(h, t, x_out, v_out, true); return 0;
     // BDF2's solves keep K_c^-1 as L-BFGS's initial Hessian (control.rigid_modes off): with the
     // rigid motions BDF2 gained energy on the stiff cloth (docs/method.md, "Rigid motions in the
-    // initial Hessian").
+    // initial Hessian"). Implicit midpoint's take them where the driver allows (setRigidModes).
     case Integrator::BackwardEuler: return backwardEuler(h, t, x_out, v_out, control, false);
     case Integrator::BDF2:
       // The first step has no history: BE, as BDF2's.

@@ -83,7 +83,8 @@ class IntegratorSteps {
 /// for the solves whose error the step carries on, implicit midpoint's and BDF2's, and the
 /// blend's BE partner, which the blend combines with the IM candidate.
 IterationControl endingPlain(IterationControl control);
-/// `control` without the rigid motions in L-BFGS's initial Hessian (BDF2's solves).
+/// `control` without the rigid motions in L-BFGS's initial Hessian (BDF2's solves, the blend's
+/// backward-Euler step after a candidate that blew up).
 IterationControl withoutRigidModes(IterationControl control);
 
 /// The solver's controls for one solve of `iterations` (the budget) from the options, with the

@@ -59,6 +59,8 @@ int LocalGlobalSolver::solve(double c, int y, int x, double t, const IterationCo
   result_potentials_.clear();
   solving_.swap(next_solving_);  // this solve's flags; the next solve's are set anew
   next_solving_.clear();
+  rigid_.swap(next_rigid_);
+  next_rigid_.clear();
   running_.clear();  // no stops yet: every pass and solve over the whole batch
   running_segments_ = 0;
   const std::size_t segments = std::max<std::size_t>(1, rows_.size());

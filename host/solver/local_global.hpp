@@ -42,7 +42,8 @@ struct IterationControl {
   /// L-BFGS: the initial inverse Hessian has the scene's rigid motions as a coarse space
   /// (host/solver/rigid_modes.cpp; docs/method.md, "Rigid motions in the initial Hessian").
   /// From SimulatorOptions::lbfgs_rigid_modes; IntegratorSteps clears it for BDF2's solves
-  /// (withoutRigidModes).
+  /// (withoutRigidModes), and the driver keeps it off in the implicit-midpoint solves of the
+  /// scenes whose forcing changes (LocalGlobalSolver::setRigidModes).
   bool rigid_modes = false;
   GlobalSolve global_solve = GlobalSolve::Factor;
   int cg_iterations = 20;     // CG iterations per global step (at most, with cg_tolerance > 0)
@@ -98,6 +99,10 @@ class LocalGlobalSolver {
   /// factor's solve are not run, and its history work on the host is not done either way.
   /// The flags hold for the next solve only (a caller that sets none gets every segment solved).
   void setSolving(std::vector<char> segments) { next_solving_ = std::move(segments); }
+  /// The segments whose L-BFGS initial Hessian may take their rigid motions in the next solve
+  /// (with IterationControl::rigid_modes), one flag per segment; empty: all of them. Like
+  /// setSolving, for the next solve only.
+  void setRigidModes(std::vector<char> segments) { next_rigid_ = std::move(segments); }
 
   /// The scene whose springs Newton-CG takes its Hessians from (Acceleration::Newton); without
   /// one its Hessian is K_c.
@@ -212,12 +217,13 @@ class LocalGlobalSolver {
   std::vector<char> accepted_, moved_;
   std::vector<char> running_;  // per segment: not stopped in this solve (the mask the passes and solves take)
   bool stopped(std::size_t s) const { return !running_[s]; }
-  std::vector<char> next_solving_;       // setSolving, for the next solve
-  std::vector<char> solving_;            // the solve's (next_solving_ taken at its start)
-  std::vector<char> plain_direction_;    // L-BFGS: the segment's direction used no curvature pair
-  std::size_t running_segments_ = 0;     // not stopped yet in this solve
-  std::vector<int> segment_iterations_;  // of the last solve, per segment
-  Eigen::MatrixX3d x_stopped_;           // plain iterations: the stopped segments' iterates
+  std::vector<char> next_solving_;        // setSolving, for the next solve
+  std::vector<char> rigid_, next_rigid_;  // setRigidModes: this solve's, the next solve's
+  std::vector<char> solving_;             // the solve's (next_solving_ taken at its start)
+  std::vector<char> plain_direction_;     // L-BFGS: the segment's direction used no curvature pair
+  std::size_t running_segments_ = 0;      // not stopped yet in this solve
+  std::vector<int> segment_iterations_;   // of the last solve, per segment
+  Eigen::MatrixX3d x_stopped_;            // plain iterations: the stopped segments' iterates
   // Chebyshev and Anderson: one rule per segment (kept with the rule's kind and constant), whether
   // each segment's iterate is extrapolated, and a segment's rows for its rule (and for Newton-CG's
   // dot products).

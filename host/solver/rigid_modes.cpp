@@ -18,6 +18,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 
 namespace stabint {
@@ -54,7 +55,8 @@ inline Eigen::RowVector3d rigidMotionAt(const Vector6d& u, const Eigen::MatrixX3
 void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationControl& control) {
   const std::size_t segments = rows_.size();
   rigid_on_.assign(segments, 0);
-  if (!control.rigid_modes || scene_ == nullptr) return;
+  const bool none = !rigid_.empty() && std::none_of(rigid_.begin(), rigid_.end(), [](char on) { return on != 0; });
+  if (!control.rigid_modes || scene_ == nullptr || none) return;
   const Eigen::Index n = x_cur_.rows();
   // The one-particle elements (pins, contacts): their weights go into A, their forces
   // w (p - x_j) into rigid_gradient_, which then becomes the other elements' energy gradient.
@@ -89,7 +91,7 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
   rigid_arms_.resize(n, 3);
   rigid_inverse_.resize(segments);
   for (std::size_t s = 0; s < segments; ++s) {
-    if (stopped(s)) continue;
+    if (stopped(s) || (!rigid_.empty() && !rigid_[s])) continue;  // setRigidModes
     const Segment& seg = rows_[s];
     // Serial sums in particle order: a batch's scene gets the arms its own Simulator gets, bit for
     // bit (a vectorised reduction would add in an order that depends on where the rows start).

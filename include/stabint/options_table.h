@@ -52,8 +52,10 @@
   FIELD(T(int), anderson_window, 5, inRange(1, 50), "past iterates Anderson acceleration combines, in [1, 50]")        \
   FIELD(T(int), lbfgs_history, 5, inRange(1, 50), "curvature pairs L-BFGS keeps, in [1, 50]")                          \
   /* L-BFGS: 1 puts the scene's rigid motions into the initial Hessian as a coarse space (a pinned                     \
-     cloth's swing in a few iterations instead of hundreds), 0 keeps K_c^-1 alone. Taken by every                      \
-     solve but BDF2's (docs/method.md, "Rigid motions in the initial Hessian"). */                                     \
+     cloth's swing in a few iterations instead of hundreds), 0 keeps K_c^-1 alone. Taken by backward                   \
+     Euler's solves, and by implicit midpoint's and the blend partner's in the steps where the                         \
+     scene's forcing does not change; never by BDF2's (docs/method.md, "Rigid motions in the                           \
+     initial Hessian"). */                                                                                             \
   FIELD(T(int), lbfgs_rigid_modes, 1, inRange(0, 1), "L-BFGS: rigid motions in the initial Hessian (1) or not (0)")    \
   /* L-BFGS's stopping rule by accuracy (Acceleration::LBFGS only; 0: off): a solve stops once the                     \
      gradient of its objective, in the norm of L-BFGS's inverse Hessian (sqrt(g.H g), the Newton                       \

@@ -215,7 +215,7 @@ TEST_P(LocalGlobalTest, AccelerationIsMonotoneAndConvergesFaster) {
 // closer to the run with every solve converged (measured: RMS 0.058 m against 0.93 m without, the
 // cloth barely falls then). Converged, both are the same BE (to the 1e-13 objective tolerance's
 // 7e-5 m).
-TEST(LbfgsRigidModes, AClothThatTurnsAboutItsPins) {
+Scene peersCloth12() {
   ClothGridParams p;
   p.nx = p.ny = 12;
   p.stretch_stiffness = p.shear_stiffness = 1e4;
@@ -229,6 +229,11 @@ TEST(LbfgsRigidModes, AClothThatTurnsAboutItsPins) {
   }
   s.rest_positions = s.positions;
   for (Pin& pin : s.pins) pin.target.position = s.positions.row(pin.vertex).transpose();
+  return s;
+}
+
+TEST(LbfgsRigidModes, AClothThatTurnsAboutItsPins) {
+  const Scene s = peersCloth12();
   auto run = [&](int rigid_modes, double tolerance) {
     SimulatorOptions o;
     o.integrator = Integrator::BackwardEuler;
@@ -246,6 +251,40 @@ TEST(LbfgsRigidModes, AClothThatTurnsAboutItsPins) {
   std::printf("  RMS distance from the converged run after 30 frames: rigid motions %.3g m, without %.3g m\n", with,
               without);
   EXPECT_LT(with, 0.1 * without);
+}
+
+// Implicit midpoint's solves take the rigid motions only in the steps whose forcing is constant
+// (docs/method.md, "Which solves take them"): on the same cloth released at rest, IM's run is
+// closer to the converged one with them (measured after 10 frames: RMS 0.056 m against 0.34 m;
+// after 3 frames both 0.011 m, the turn has barely begun; after 30 IM's own instability leaves
+// both far off); with its pins moving, every step is forced, and the blend's and IM's runs are the
+// ones without them bit for bit.
+TEST(LbfgsRigidModes, ImplicitMidpointTakesThemWhereTheForcingIsConstant) {
+  auto run = [](const Scene& s, Integrator integrator, int rigid_modes, double tolerance, int frames) {
+    SimulatorOptions o;
+    o.integrator = integrator;
+    o.lbfgs_rigid_modes = rigid_modes;
+    o.tolerance = tolerance;
+    o.max_iterations = 20000;
+    Simulator sim(s, o);
+    for (int frame = 0; frame < frames; ++frame) sim.step();
+    return Eigen::MatrixX3d(sim.positions());
+  };
+  const Scene still = peersCloth12();
+  const Eigen::MatrixX3d converged = run(still, Integrator::ImplicitMidpoint, 0, 1e-13, 10);
+  auto rms = [&](const Eigen::MatrixX3d& x) { return std::sqrt((x - converged).rowwise().squaredNorm().mean()); };
+  const double with = rms(run(still, Integrator::ImplicitMidpoint, 1, 0.0, 10));
+  const double without = rms(run(still, Integrator::ImplicitMidpoint, 0, 0.0, 10));
+  std::printf("  IM, RMS distance from the converged run after 10 frames: rigid motions %.3g m, without %.3g m\n", with,
+              without);
+  EXPECT_LT(with, 0.3 * without);
+
+  Scene moving = still;
+  for (Pin& pin : moving.pins) pin.target.velocity = Eigen::Vector3d(0.0, 0.5, 0.2);
+  for (Integrator integrator : {Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {
+    SCOPED_TRACE(integratorName(integrator));
+    EXPECT_EQ(run(moving, integrator, 1, 0.0, 20), run(moving, integrator, 0, 0.0, 20));
+  }
 }
 
 // A body at rest in its rest shape with no gravity sits at the solve's minimum: the gradient is

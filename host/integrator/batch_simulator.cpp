@@ -143,10 +143,10 @@ const BatchStepReport& BatchDriver::step() {
   // exactly 0 (its terms at t_m and t_1 are the same numbers).
   const std::vector<char> forced_scenes = data_.forcingChangesDuring(t_, t1, segments_);
   const bool forced = std::any_of(forced_scenes.begin(), forced_scenes.end(), [](char f) { return f != 0; });
-  // Implicit midpoint's solves take the rigid motions into L-BFGS's initial Hessian only in the
-  // scenes whose forcing is constant over the step (docs/method.md, "Rigid motions in the initial
-  // Hessian"): with them a dragged cloth's candidate carried more energy than the forcing's
-  // booking, and the blend left its band.
+  // Implicit midpoint's solves and the blend partner's take the rigid motions into L-BFGS's initial
+  // Hessian only in the scenes whose forcing is constant over the step (docs/method.md, "Rigid
+  // motions in the initial Hessian"): with them a dragged cloth's partner lagged behind the hand
+  // with more elastic energy than the forcing booked, and the blend left its band.
   std::vector<char> steady(forced_scenes.size());
   for (std::size_t s = 0; s < steady.size(); ++s) steady[s] = forced_scenes[s] ? 0 : 1;
   if (options_.integrator == Integrator::EnergyBlend)

@@ -42,8 +42,8 @@ struct IterationControl {
   /// L-BFGS: the initial inverse Hessian has the scene's rigid motions as a coarse space
   /// (host/solver/rigid_modes.cpp; docs/method.md, "Rigid motions in the initial Hessian").
   /// From SimulatorOptions::lbfgs_rigid_modes; IntegratorSteps clears it for BDF2's solves
-  /// (withoutRigidModes), and the driver keeps it off in the implicit-midpoint solves of the
-  /// scenes whose forcing changes (LocalGlobalSolver::setRigidModes).
+  /// (withoutRigidModes), and the driver keeps it off in the implicit-midpoint and blend-partner
+  /// solves of the scenes whose forcing changes (LocalGlobalSolver::setRigidModes).
   bool rigid_modes = false;
   GlobalSolve global_solve = GlobalSolve::Factor;
   int cg_iterations = 20;     // CG iterations per global step (at most, with cg_tolerance > 0)

@@ -17,7 +17,8 @@
 // two threads (host/cpu/threaded_pass.cpp): est_serial_us, est_owned_us, est_buffered_us.
 //   thread_pass_wake/threads:2                      one parallelFor of two tasks, each waiting until
 //                                                   both have started: a worker's wake-up
-//   thread_pass_chain                               a sum of 100,000 energies in order, per element
+//   thread_pass_sum/<chunks|chain>                  a sum of 100,000 stored energies, per element:
+//                                                   the passes' rule (sumEnergies) or one chain
 //   thread_pass_kind/<scene>/<kind>                 one block's pass alone on one thread (the
 //                                                   local step's flags): its ns_per_element
 //                                                   beside the kind's declared_ns (kElementNs)
@@ -27,6 +28,7 @@
 #include "cpu/cpu_backend.hpp"
 #include "cpu/worker_pool.hpp"
 #include "elements/element_type.hpp"
+#include "elements/energy_sum.hpp"
 
 #include <array>
 #include <atomic>
@@ -165,14 +167,19 @@ void runWake(benchmark::State& state) {
   }
 }
 
-// The calling thread's sum of a block's element energies in element order (a chain of dependent
-// additions, as the threaded paths do after their threads): per element, counter ns_per_element.
-void runChain(benchmark::State& state) {
+// The calling thread's sum of a block's stored element energies after a threaded pass: by the
+// passes' rule (sumEnergies, chunks side by side) or, for comparison, as one chain of dependent
+// additions in element order (the rule before): per element, counter ns_per_element.
+void runSum(benchmark::State& state, bool chunks) {
   std::vector<double> energies(100'000);
   for (std::size_t i = 0; i < energies.size(); ++i) energies[i] = 1.0 + 1e-6 * double(i % 1000);
   for (auto _ : state) {
     double sum = 0.0;
-    for (double e : energies) sum += e;
+    if (chunks) {
+      sum = sumEnergies(energies.data(), static_cast<int>(energies.size()));
+    } else {
+      for (double e : energies) sum += e;
+    }
     benchmark::DoNotOptimize(sum);
   }
   state.counters["ns_per_element"] = benchmark::Counter(
@@ -182,7 +189,8 @@ void runChain(benchmark::State& state) {
 }  // namespace
 
 void registerThreadPassCases() {
-  benchmark::RegisterBenchmark("thread_pass_chain", runChain)->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark("thread_pass_sum/chunks", runSum, true)->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark("thread_pass_sum/chain", runSum, false)->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("thread_pass_wake/threads:2", runWake)->UseRealTime()->Unit(benchmark::kMicrosecond);
   for (const SceneCase& scene : passScenes())
     for (auto [pass, label] : {std::pair{Pass::Local, "local"}, std::pair{Pass::LocalEnergy, "local_energy"},

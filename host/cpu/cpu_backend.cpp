@@ -2,6 +2,7 @@
 
 #include "cpu/threaded_pass.hpp"
 #include "cpu/worker_pool.hpp"
+#include "elements/energy_sum.hpp"
 
 #include "scene/scene_data.hpp"
 
@@ -262,8 +263,8 @@ class CpuBackend final : public Backend {
   ///   order, every element with a vertex in its range, adding only the contributions to its own
   ///   vertices (ElementType::ownedResults). One wake-up, no buffer; the elements across two
   ///   ranges are computed on both.
-  /// Either way each block's energy is then summed over its elements in element order on the
-  /// calling thread.
+  /// Either way each block's energy is then summed from the stored energies on the calling
+  /// thread, by the rule every pass sums by (sumEnergies, elements/energy_sum.hpp).
   size_t threadedPass(const Eigen::MatrixX3d& x, double t, int flags, Eigen::MatrixX3d* out, PotentialEnergy& e) {
     last_pass_path = ThreadedPassPath::Serial;
     const std::vector<ElementBlock>& blocks = scene_.blocks();
@@ -291,8 +292,6 @@ class CpuBackend final : public Backend {
       base += blocks[b].count;
     }
     element_energies_.resize(static_cast<size_t>(elements));
-    block_sums_.assign(count, 0.0);
-    block_summed_.assign(count, 0);
     if (path == ThreadedPassPath::Owned) {
       ownedPass(x, count, threads, flags, out);
     } else {
@@ -300,11 +299,8 @@ class CpuBackend final : public Backend {
     }
     for (size_t b = 0; b < count; ++b) {
       if (blocks[b].count == 0) continue;
-      double energy = block_sums_[b];
-      if (flags & kPassEnergy) {
-        const double* energies = element_energies_.data() + element_base_[b];
-        for (int i = block_summed_[b]; i < blocks[b].count; ++i) energy += energies[i];
-      }
+      const double energy =
+          (flags & kPassEnergy) ? sumEnergies(element_energies_.data() + element_base_[b], blocks[b].count) : 0.0;
       (blocks[b].type->term() == EnergyTerm::Pins ? e.pins : e.internal) += energy;
     }
     last_pass_path = path;
@@ -363,14 +359,8 @@ class CpuBackend final : public Backend {
       parallelFor(threads, [&](int part) {
         for (const Run& run : split.runs[size_t(part)]) {
           const ElementBlock& block = blocks[run.block];
-          const std::vector<double>& params = *block_params_[run.block];
-          if (run.first == 0) {
-            block_sums_[run.block] = block.type->passRange(block, params, x, 0, run.count, flags, nullptr);
-            block_summed_[run.block] = run.count;
-          } else {
-            block.type->elementResults(block, params, x, run.first, run.count, flags,
-                                       element_energies_.data() + element_base_[run.block] + run.first, nullptr);
-          }
+          block.type->elementResults(block, *block_params_[run.block], x, run.first, run.count, flags,
+                                     element_energies_.data() + element_base_[run.block] + run.first, nullptr);
         }
       });
       return;
@@ -448,9 +438,7 @@ class CpuBackend final : public Backend {
   std::vector<const std::vector<double>*> block_params_;
   std::vector<int> element_base_;
   std::vector<double> element_energies_, contributions_;
-  Eigen::MatrixX3d force_;          // localStepGradient's forces, reused
-  std::vector<double> block_sums_;  // per block: the sum of its first block_summed_ energies
-  std::vector<int> block_summed_;
+  Eigen::MatrixX3d force_;  // localStepGradient's forces, reused
   OwnedPlan plan_;
 };
 

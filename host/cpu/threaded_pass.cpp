@@ -18,20 +18,22 @@ namespace {
 //   kDispatchNs  what a parallelFor costs the calling thread before its first task (waking the
 //                workers: a system call)
 //   kWakeNs      how much later than the calling thread a sleeping worker starts its first task
-//                (thread_pass_wake measures the two together)
+//                (thread_pass_wake measures the two together: 33-45 us on the Intel Xeon host
+//                of the VM, 4.3 us on the AMD EPYC one; the constants sit between the two, and
+//                a threaded pass gives the serial pass's results bit for bit either way)
 //   kSharedNs    what each element costs more on one of two threads working at once than alone
 //                (the memory traffic the cores share): fitted to the spring cloths' passes
-//   kChainNs     one stored energy added to its block's sum on the calling thread afterwards (a
-//                chain of dependent additions, which a single-threaded pass overlaps with its work)
+//   kSumNs       one stored energy added to its block's sum on the calling thread afterwards
+//                (sumEnergies: chunks side by side, at the additions' throughput)
 //   kBufferNs, kGatherNs  a contribution's extra write to the buffer and its read in the gather
 // A pass goes on threads only when its estimated time there is at most kThreadedGain of its
 // estimated time on one thread: a margin for the estimates, and for a second core that the
 // machine's other work takes now and then.
 constexpr double kScatterNs = 1.3;
-constexpr double kDispatchNs = 10'000.0;
-constexpr double kWakeNs = 20'000.0;
+constexpr double kDispatchNs = 5'000.0;
+constexpr double kWakeNs = 10'000.0;
 constexpr double kSharedNs = 1.2;
-constexpr double kChainNs = 0.8;
+constexpr double kSumNs = 0.2;
 constexpr double kBufferNs = 1.0;
 constexpr double kGatherNs = 1.5;
 constexpr double kThreadedGain = 0.85;
@@ -148,7 +150,6 @@ EnergySplit splitEnergyPass(const std::vector<ElementBlock>& blocks, std::size_t
         split.runs[size_t(part)].push_back({b, e, take});
         split.work[size_t(part)] += take * cost;
         sum += take * cost;
-        if (e > 0) split.stored += take;
         e += take;
       }
       if (e < blocks[b].count) ++part, limit += other;  // this part is full
@@ -159,25 +160,24 @@ EnergySplit splitEnergyPass(const std::vector<ElementBlock>& blocks, std::size_t
 
 ThreadedPassEstimate estimatePass(const std::vector<ElementBlock>& blocks, std::size_t count, const PassWork& w,
                                   const OwnedPlan& plan, int threads, int flags) {
-  const double chain = (flags & kPassEnergy) ? kChainNs * w.count : 0.0;
+  const double sum = (flags & kPassEnergy) ? kSumNs * w.count : 0.0;
   ThreadedPassEstimate est;
   est.serial = w.elements;
-  // Owned: each part's share of the pass after its thread starts, then the energies it stored.
+  // Owned: each part's share of the pass after its thread starts, then the energies' sums.
   if (w.contributions > 0.0) {
     for (std::size_t p = 0; p < plan.work.size(); ++p)
       est.owned = std::max(est.owned, plan.work[p] + (p == 0 ? 0.0 : kWakeNs));
-    est.owned += kDispatchNs + chain;
   } else {
     const EnergySplit split = splitEnergyPass(blocks, count, threads, flags);
     for (std::size_t p = 0; p < split.work.size(); ++p)
       est.owned = std::max(est.owned, split.work[p] + (p == 0 ? 0.0 : kWakeNs));
-    est.owned += kDispatchNs + kChainNs * split.stored;
   }
+  est.owned += kDispatchNs + sum;
   // Buffered: chunks taken by whichever thread is free (a worker from kWakeNs on), then the
   // gather the same way: each phase (its work + one wake-up) / threads.
   const double shared = w.elements + kSharedNs * w.count;
   const double gather = w.contributions > 0.0 ? kDispatchNs + (kGatherNs * w.contributions + kWakeNs) / threads : 0.0;
-  est.buffered = kDispatchNs + (shared + kBufferNs * w.contributions + kWakeNs) / threads + gather + chain;
+  est.buffered = kDispatchNs + (shared + kBufferNs * w.contributions + kWakeNs) / threads + gather + sum;
   const double best = std::min(est.owned, est.buffered);
   est.path = best > kThreadedGain * est.serial ? ThreadedPassPath::Serial
              : est.owned <= est.buffered       ? ThreadedPassPath::Owned

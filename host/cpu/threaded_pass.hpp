@@ -42,14 +42,11 @@ struct OwnedPlan {
 };
 
 // The Owned path of an energy pass (no contributions, so no vertices to own): `parts` contiguous
-// ranges of the elements, blocks in order, part 0 larger as in OwnedPlan. The piece of a block
-// that starts at its first element is summed as the single-threaded pass sums it (passRange: the
-// same chain of additions, overlapped with the work); the other pieces store their elements'
-// energies, which the calling thread adds on in element order afterwards.
+// ranges of the elements, blocks in order, part 0 larger as in OwnedPlan. Every piece stores its
+// elements' energies, which the calling thread sums afterwards (sumEnergies).
 struct EnergySplit {
   std::vector<std::vector<Run>> runs;  // per part
   std::vector<double> work;            // per part, ns
-  double stored = 0.0;                 // elements outside the leading pieces
 };
 
 /// The leading blocks a threaded path can take: those whose types give per-element results and

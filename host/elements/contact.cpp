@@ -12,6 +12,7 @@
 #include "elements/contact.hpp"
 
 #include "elements/element_kind.hpp"
+#include "elements/energy_sum.hpp"
 
 #include <cmath>
 
@@ -179,7 +180,7 @@ class ContactElementType final : public ElementType {
     const Eigen::Index n = x.rows();
     const double* xs = x.data();
     double* os = write ? out->data() : nullptr;
-    double energy = 0.0;
+    EnergySum energy;
     for (int e = first; e < first + count; ++e) {
       const double* prm = params.data() + std::size_t(P) * std::size_t(e);
       const double w = prm[0];
@@ -188,14 +189,14 @@ class ContactElementType final : public ElementType {
       const double ax[3] = {xs[j], xs[n + j], xs[2 * n + j]};
       double p[3];
       const double element_energy = ContactKind::project(ax, prm, p);
-      if (flags & kPassEnergy) energy += element_energy;
+      if (flags & kPassEnergy) energy.add(e - first, element_energy);
       if (!write) continue;
       for (int i = 0; i < 3; ++i) p[i] = w * (force ? p[i] - ax[i] : p[i]);
       os[j] += p[0];
       os[n + j] += p[1];
       os[2 * n + j] += p[2];
     }
-    return energy;
+    return energy.total();
   }
 
   // Colliders have their own JSON form (host/io/json/scene_reader.cpp, scene_writer.cpp).

@@ -139,7 +139,8 @@ class ElementType {
   /// One pass over the block at positions x (`n by 3`) with `params` (block.params, or
   /// paramsAt's for a time-dependent type): adds the contributions of `flags` (kPassProjection or
   /// kPassForce) into `out` (`n by 3`, may be null without them) in element order, and returns
-  /// the summed energy when kPassEnergy is set (else 0).
+  /// the energy summed by EnergySum's rule (elements/energy_sum.hpp) when kPassEnergy is set
+  /// (else 0).
   double pass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int flags,
               Eigen::MatrixX3d* out) const {
     return passRange(block, params, x, 0, block.count, flags, out);
@@ -153,7 +154,8 @@ class ElementType {
   /// (host/cpu/cpu_backend.cpp): element e's energy w/2 ||A x - p||^2 at energies[e - first] when
   /// kPassEnergy is set, and with kPassProjection or kPassForce the 3 reals its vertex k
   /// contributes at contributions[3 (K (e - first) + k)], the very values passRange adds into
-  /// `out`. Adding them in element order is passRange bit for bit. False (nothing written) for a
+  /// `out`. Adding the contributions in element order and summing the energies with sumEnergies
+  /// is passRange bit for bit. False (nothing written) for a
   /// type that does not provide it (its blocks take passRange); a call with count 0 asks.
   virtual bool elementResults(const ElementBlock& /*block*/, const std::vector<double>& /*params*/,
                               const Eigen::MatrixX3d& /*x*/, int /*first*/, int /*count*/, int /*flags*/,

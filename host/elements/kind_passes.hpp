@@ -4,6 +4,7 @@
 // kind projects lanes (Kind::projectLanes) and one element at a time otherwise, and the layout
 // of its data in lanes.
 #include "elements/element_type.hpp"
+#include "elements/energy_sum.hpp"
 #include "elements/projections.hpp"
 #include "simd.hpp"
 
@@ -223,7 +224,7 @@ inline void kindSharedCoefficients(double* shared) {
 
 /// ElementType::pass of a Kind (ElementTypeOf's, and that of types whose elements are not a
 /// Scene list, such as contact): kindGroup per group, the contributions added into `out` in
-/// element order.
+/// element order, the energies summed by EnergySum's rule.
 template <class Kind>
 double kindPass(const ElementBlock& block, const std::vector<double>& params, const Eigen::MatrixX3d& x, int first,
                 int count, int flags, Eigen::MatrixX3d* out) {
@@ -235,15 +236,15 @@ double kindPass(const ElementBlock& block, const std::vector<double>& params, co
   double* os = write ? out->data() : nullptr;
   double shared[Kind::kRows * K];
   kindSharedCoefficients<Kind>(shared);
-  double energy = 0.0;
+  EnergySum energy;
   forEachGroup(first, count, [&](int group, int lo, int hi) {
     // (Kind's and projections' constants spelled out: GCC 12 fails on the enclosing function's
     // constexpr locals in a lambda's array bounds.)
     double c[3 * Kind::kVertices * projections::kLanes], energies[projections::kLanes];
     kindGroup<Kind>(block, params, xs, n, shared, group, lo, hi, write, force, energies, c);
+    if (flags & kPassEnergy) energy.add(group + lo - first, energies, hi - lo);
+    if (!write) return;
     for (int l = 0; l < hi - lo; ++l) {
-      if (flags & kPassEnergy) energy += energies[l];
-      if (!write) continue;
       const int* v = block.vertices.data() + K * (group + lo + l);
       for (int k = 0; k < K; ++k) {
         os[v[k]] += c[contributionAt<Kind>(lo, l, k, 0)];
@@ -252,7 +253,7 @@ double kindPass(const ElementBlock& block, const std::vector<double>& params, co
       }
     }
   });
-  return energy;
+  return energy.total();
 }
 
 /// ElementType::elementResults of a Kind: kindGroup per group, stored.

@@ -83,8 +83,7 @@ TEST(EnergySum, IsAccurate) {
   long double exact = 0.0L;
   for (double v : e) exact += static_cast<long double>(v);
   const double bound = (kEnergyChunk - 1 + n / kEnergyChunk + 1) * std::ldexp(1.0, -53);
-  EXPECT_LE(std::abs(static_cast<double>((static_cast<long double>(sumEnergies(e.data(), n)) - exact) / exact)),
-            bound);
+  EXPECT_LE(std::abs(static_cast<double>((static_cast<long double>(sumEnergies(e.data(), n)) - exact) / exact)), bound);
 }
 
 }  // namespace

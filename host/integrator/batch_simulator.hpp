@@ -176,6 +176,11 @@ struct BatchDriver {
   // The blend in lockstep: one IM solve, at most one partner solve (and one full-budget BE solve
   // when some scene's IM candidate blew up), one batched energy pass per root-find round.
   void blend(double t1, bool forced, const std::vector<char>& steady);
+  // The partner solve of the scenes whose partner, whole, still has more energy than the target:
+  // on from where it stopped, up to the candidate's budget (partner_potentials_ then holds every
+  // partner scene's potential).
+  void extendPartner(double t1, IterationControl control, const std::vector<char>& needs_partner,
+                     const std::vector<char>& steady);
   // The potentials every scene's BlendStep asks for, one batched pass per round: the trial
   // positions are formed on the host (no per-scene combine on the backend interface yet).
   void evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner = {});

@@ -63,6 +63,10 @@ class BlendStep {
   Eigen::MatrixX3d& partnerPositions() { return x_partner_; }
   Eigen::MatrixX3d& partnerVelocities() { return v_partner_; }
   void partnerRead();
+  /// After partnerRead(), with the partner's potential `p`: whether the partner whole brings the
+  /// energy below the target (the root find's first evaluation decides the same way). Where it
+  /// does not, the caller may solve the partner on and call partnerRead() again.
+  bool partnerReachesTarget(const PotentialEnergy& p) const { return k_alpha_.at(1.0) + p.total() - target_ < 0.0; }
 
   /// Whether the machine wants the potential at t + h of (1 - weight()) from() + weight()
   /// partnerPositions(); the caller evaluates it and take()s it.

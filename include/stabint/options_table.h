@@ -72,9 +72,11 @@
   FIELD(T(double), cg_tolerance, 0.0, unitInterval(),                                                                  \
         "CG stops earlier at this relative residual (0: always cg_iterations)")                                        \
   /* The energy-tracking blend (docs/method.md, "The blend"): the budget of its BE partner solve,                      \
-     warm-started at x_n; its tolerance; the largest factor by which one step may scale the                            \
-     velocities up to restore missing energy (energy comes back over a few steps, never as a kinetic                   \
-     jump of a nearly resting body); the energy evaluations of its root find. */                                       \
+     warm-started at x_n (solved on, up to `iterations` in all, where even the whole partner keeps                     \
+     more energy than the target: docs/method.md, "A partner that cannot reach the target"); its                       \
+     tolerance; the largest factor by which one step may scale the velocities up to restore missing                    \
+     energy (energy comes back over a few steps, never as a kinetic jump of a nearly resting body);                    \
+     the energy evaluations of its root find. */                                                                       \
   FIELD(T(int), be_iterations, 3, atLeast(1), "iterations of the blend's backward-Euler partner solve, >= 1")          \
   FIELD(T(double), energy_tolerance, 1e-3, positive(),                                                                 \
         "the blend's tolerance tau = energy_tolerance * (K + E_int + E_scale), > 0")                                   \

@@ -304,6 +304,34 @@ TEST(BatchInputBlend, InputEndsASceneConservingMomentumAsInItsOwnSimulator) {
   EXPECT_GT(corrected[1], 0);
 }
 
+// A hand drags a cloth corner with a budget of 30 iterations, where the blend's partner often
+// cannot reach the target whole and goes on (BatchDriver::extendPartner, for that scene only):
+// the dragged cloth and the scenes beside it each follow their own Simulator.
+TEST(BatchInputBlend, APartnerThatGoesOnStepsAsInItsOwnSimulator) {
+  const Scene cloth = makeClothGrid(ClothGridParams{});
+  const int corner = cloth.numParticles() - 1;
+  // (Beside it scenes that do not amplify round-off: the grab updates the batch's one factor, so the
+  // scenes differ from their own Simulators by round-off from then on, file comment.)
+  const std::vector<Scene> scenes = {mixedBatchScenes()[1], cloth, mixedBatchScenes()[2]};
+  SimulatorOptions options;
+  options.iterations = 30;
+  BatchAndOwn both(scenes, options);
+  const int hand = both.batch.grab(1, corner, 1e4);
+  EXPECT_EQ(hand, both.alone[1].grab(corner, 1e4));
+  const Eigen::Vector3d start = cloth.positions.row(corner).transpose(), up(1.0, 0.2, 0.4);
+  int went_on = 0;
+  for (int step = 0; step < 30; ++step) {
+    const double s = (step + 1) / 30.0;
+    const Eigen::Vector3d target = (1 - s) * start + s * up;
+    both.batch.setPinTarget(1, hand, target);
+    both.alone[1].setPinTarget(hand, target);
+    const BatchStepReport& report = both.step(step);
+    // The IM candidate's 30 and the partner's 3 iterations, and 27 more where it went on.
+    went_on += report.scenes[1].iterations > options.iterations + options.be_iterations ? 1 : 0;
+  }
+  EXPECT_GT(went_on, 0) << "no step of the dragged cloth took the longer partner";
+}
+
 // Everything a refused call could have changed: every scene's state, time, target, energies, pin
 // targets and pin flags.
 struct Snapshot {

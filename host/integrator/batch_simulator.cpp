@@ -414,11 +414,10 @@ void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady)
 // [project rule] The partner is a few iterations (be_iterations) from x_n, far less converged than
 // the candidate where the budget is large. Where even the partner whole keeps more energy than
 // the target, the corrections take the velocities to zero, and a cloth dragged by a hand then
-// froze step after step while the hand stretched it: with 20 or 30 L-BFGS iterations it left its
-// energy band by 0.3-0.4 J in scenes/cloth_drag.json, and a faster hand did so at the default 10
-// (docs/method.md, "A partner that cannot reach the target"). Such a partner goes on from where it
-// stopped, warm-started: BE's objective still only decreases from x_n, so it cannot pile up
-// energy, and a converged partner reaches the target there.
+// froze step after step while the hand stretched it (docs/method.md, "A partner that cannot reach
+// the target"). Such a partner goes on from where it stopped, warm-started: BE's objective still
+// only decreases from x_n, so it cannot pile up energy, and a better-converged partner follows
+// the hand as the candidate does.
 void BatchDriver::extendPartner(double t1, IterationControl control, const std::vector<char>& needs_partner,
                                 const std::vector<char>& steady) {
   const int extra = options_.iterations - options_.be_iterations;

@@ -330,7 +330,8 @@ void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady)
     r.iterations = sceneIterations(s, im_iterations);
     r.energy_evaluations = 1;
     p.blend.start(BlendScene{&masses, p.momentum_conserved, p.energy_scale,
-                             blendTolerance(options_, p.kinetic, p.potential, p.energy_scale)},
+                             blendTolerance(options_, p.kinetic, p.potential, p.energy_scale),
+                             std::max(0.0, p.kinetic + p.potential.total() - p.target)},
                   options_, r);
     p.x_new = blockOf(x_new_, segments_[s]);
     p.v_new = blockOf(v_new_, segments_[s]);
@@ -417,7 +418,7 @@ void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady)
 // froze step after step while the hand stretched it (docs/method.md, "A partner that cannot reach
 // the target"). Such a partner goes on from where it stopped, warm-started: BE's objective still
 // only decreases from x_n, so it cannot pile up energy, and a better-converged partner follows
-// the hand as the candidate does.
+// the hand as the candidate does (and takes out more of an excess the step inherited).
 void BatchDriver::extendPartner(double t1, IterationControl control, const std::vector<char>& needs_partner,
                                 const std::vector<char>& steady) {
   const int extra = options_.iterations - options_.be_iterations;

@@ -28,6 +28,7 @@ void BlendStep::start(const BlendScene& scene, const SimulatorOptions& options, 
   from_ = nullptr;
   im_momenta_known_ = false;
   partner_known_ = false;
+  partner_cannot_reach_target_ = false;
   search_.reset();
   evaluations_.clear();
   moving_ = false;
@@ -163,6 +164,15 @@ bool BlendStep::scaleVelocities(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, 
 void BlendStep::beginCorrections(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double target,
                                  const PotentialEnergy& p_new) {
   target_ = target;
+  // [project rule] Where even the partner whole keeps more energy than the target, the step takes
+  // out what it would add to the excess its start already had, not the whole excess: that excess
+  // sits in the stretch, which a body stopped at every step cannot give up (a poked cloth then
+  // hung frozen for seconds); the partner's BE steps take it out as the body moves
+  // (docs/method.md, "A partner that cannot reach the target").
+  // Within the band (tau) the rule is as before.
+  allowance_ = partner_known_ && partner_cannot_reach_target_ && scene_.inherited_excess > scene_.tolerance
+                   ? scene_.inherited_excess
+                   : 0.0;
   p_new_ = p_new;
   changed_ = false;
   moving_ = false;
@@ -177,24 +187,26 @@ void BlendStep::beginCorrections(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
   stage_ = Stage::Moving;
   k_before_ = kinetic(v);
   const Eigen::VectorXd& m = *scene_.masses;
-  if (branch == BlendBranch::BackwardEuler && im_momenta_known_ && report_->alpha > 0.0) {
+  // (Not where the excess is left: the candidate's momenta would add to it.)
+  if (branch == BlendBranch::BackwardEuler && im_momenta_known_ && report_->alpha > 0.0 && allowance_ == 0.0) {
     setMomenta(rigidMotion(m, x, v), im_momenta_.momentum, im_momenta_.angularMomentumAboutOrigin(), x, v);
     changed_ = true;
   }
   const double tau = scene_.tolerance;
+  const double over = std::max(tau, allowance_);  // the excess the corrections leave
   if (excess(v) < -tau) {
     changed_ |= scaleVelocities(x, v, target_ - p_new_.total(), /*keep_rigid=*/scene_.momentum_conserved, 1.0,
                                 options_->max_velocity_scale);
-  } else if (excess(v) > tau) {
+  } else if (excess(v) > over) {
     over_ = true;
-    changed_ |= scaleVelocities(x, v, target_ - p_new_.total(), /*keep_rigid=*/true, 0.0, 1.0);
+    changed_ |= scaleVelocities(x, v, target_ + allowance_ - p_new_.total(), /*keep_rigid=*/true, 0.0, 1.0);
     // Only toward this step's partner: after a non-finite IM candidate the state is the BE solve
     // itself and there is no partner.
-    if (excess(v) > tau && branch == BlendBranch::BackwardEuler && partner_known_) {
+    if (excess(v) > over && branch == BlendBranch::BackwardEuler && partner_known_) {
       // Moves the blended positions toward the partner's, which carry less elastic energy, until
       // their potential is `potential_wanted_` or they reach the partner's. Velocities stay.
       moving_ = true;
-      potential_wanted_ = target_ - kinetic(v);
+      potential_wanted_ = target_ + allowance_ - kinetic(v);
       best_ = p_new_;
       best_beta_ = 0.0;
       best_g_ = p_new_.total() - potential_wanted_;
@@ -230,8 +242,8 @@ bool BlendStep::finishCorrections(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, Pote
     if (scene_.momentum_conserved && im_momenta_known_)
       setMomenta(rigidMotion(m, x, v), im_momenta_.momentum, im_momenta_.angularMomentumAboutOrigin(), x, v);
   }
-  if (over_ && excess(v) > scene_.tolerance && !scene_.momentum_conserved)
-    changed_ |= scaleVelocities(x, v, target_ - p_new_.total(), /*keep_rigid=*/false, 0.0, 1.0);
+  if (over_ && excess(v) > std::max(scene_.tolerance, allowance_) && !scene_.momentum_conserved)
+    changed_ |= scaleVelocities(x, v, target_ + allowance_ - p_new_.total(), /*keep_rigid=*/false, 0.0, 1.0);
   if (k_before_ > 0.0) report_->velocity_scale = std::sqrt(kinetic(v) / k_before_);
   p_new = p_new_;
   return changed_;

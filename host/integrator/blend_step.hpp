@@ -36,6 +36,8 @@ struct BlendScene {
   double energy_scale = 0.0;        // E_scale
   /// tau = energy_tolerance (K_n + E_int,n + E_scale), of the state at the step's start.
   double tolerance = 0.0;
+  /// max(0, H_n - H*_n): how far above its target the step's start already is.
+  double inherited_excess = 0.0;
 };
 
 /// No pins, no force fields, no user forces and no colliders: IM keeps linear and angular momentum.
@@ -67,7 +69,6 @@ class BlendStep {
   /// energy below the target (the root find's first evaluation decides the same way). Where it
   /// does not, the caller may solve the partner on and call partnerRead() again.
   bool partnerReachesTarget(const PotentialEnergy& p) const { return k_alpha_.at(1.0) + p.total() - target_ < 0.0; }
-
   /// Whether the machine wants the potential at t + h of (1 - weight()) from() + weight()
   /// partnerPositions(); the caller evaluates it and take()s it.
   bool wantsPotential() const { return wants_; }
@@ -132,6 +133,7 @@ class BlendStep {
   bool over_ = false;    // the state had too much energy
   bool moving_ = false;  // the position move toward the partner was wanted
   double potential_wanted_ = 0.0;
+  double allowance_ = 0.0;  // the excess above target_ the corrections leave (inherited_excess)
   PotentialEnergy best_;
   double best_beta_ = 0.0, best_g_ = 0.0;
   PotentialEnergy p_new_;

@@ -165,11 +165,10 @@ void BlendStep::beginCorrections(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
                                  const PotentialEnergy& p_new) {
   target_ = target;
   // [project rule] Where even the partner whole keeps more energy than the target, the step takes
-  // out what it would add to the excess its start already had, not the whole excess: that excess
-  // sits in the stretch, which a body stopped at every step cannot give up (a poked cloth then
-  // hung frozen for seconds); the partner's BE steps take it out as the body moves
-  // (docs/method.md, "A partner that cannot reach the target").
-  // Within the band (tau) the rule is as before.
+  // out what it would add to the excess its start already had (when that was above the band),
+  // not the whole excess: that excess sits in the stretch, which a body stopped at every step
+  // cannot give up (a poked cloth then hung frozen for seconds); the partner's BE steps take it out
+  // as the body moves (docs/method.md, "A partner that cannot reach the target").
   allowance_ = partner_known_ && partner_cannot_reach_target_ && scene_.inherited_excess > scene_.tolerance
                    ? scene_.inherited_excess
                    : 0.0;
@@ -187,8 +186,10 @@ void BlendStep::beginCorrections(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
   stage_ = Stage::Moving;
   k_before_ = kinetic(v);
   const Eigen::VectorXd& m = *scene_.masses;
-  // (Not where the excess is left: the candidate's momenta would add to it.)
-  if (branch == BlendBranch::BackwardEuler && im_momenta_known_ && report_->alpha > 0.0 && allowance_ == 0.0) {
+  // Not where an excess is left in a pinned or driven scene: the candidate's momenta would add to
+  // it. A scene that conserves momentum keeps it.
+  if (branch == BlendBranch::BackwardEuler && im_momenta_known_ && report_->alpha > 0.0 &&
+      (allowance_ == 0.0 || scene_.momentum_conserved)) {
     setMomenta(rigidMotion(m, x, v), im_momenta_.momentum, im_momenta_.angularMomentumAboutOrigin(), x, v);
     changed_ = true;
   }

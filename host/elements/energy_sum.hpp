@@ -8,9 +8,8 @@
 //
 // Why chunks rather than one chain in element order: a pass split over threads stores its
 // elements' energies and the calling thread sums them afterwards. One chain of dependent
-// additions cost that thread about 0.8 ns per element (the addition's latency), 12 us of the
-// 14,500-spring cloth's 74 us force pass on two threads; independent chunk sums run at the
-// additions' throughput instead (docs/benchmarks.md, "Threads in the element passes").
+// additions waits on each addition's latency; independent chunk sums run at the additions'
+// throughput (the measurements: docs/benchmarks.md, "Threads in the element passes").
 
 namespace stabint {
 

@@ -95,7 +95,7 @@ void BlendStep::consider(double beta, const PotentialEnergy& p) {
 void BlendStep::take(const PotentialEnergy& p, bool evaluated) {
   if (evaluated) ++report_->energy_evaluations;
   if (stage_ == Stage::Search) {
-    evaluations_.push_back({weight_, k_alpha_.at(weight_) + p.total() - target_, p});
+    evaluations_.push_back({weight_, excessAt(weight_, p), p});
     if (evaluations_.size() == 1) {
       partner_potential_ = p;
       partner_cannot_reach_target_ = evaluations_.front().g >= 0.0;
@@ -194,7 +194,7 @@ void BlendStep::beginCorrections(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
     changed_ = true;
   }
   const double tau = scene_.tolerance;
-  const double over = std::max(tau, allowance_);  // the excess the corrections leave
+  const double over = excessLeft();
   if (excess(v) < -tau) {
     changed_ |= scaleVelocities(x, v, target_ - p_new_.total(), /*keep_rigid=*/scene_.momentum_conserved, 1.0,
                                 options_->max_velocity_scale);
@@ -243,7 +243,7 @@ bool BlendStep::finishCorrections(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, Pote
     if (scene_.momentum_conserved && im_momenta_known_)
       setMomenta(rigidMotion(m, x, v), im_momenta_.momentum, im_momenta_.angularMomentumAboutOrigin(), x, v);
   }
-  if (over_ && excess(v) > std::max(scene_.tolerance, allowance_) && !scene_.momentum_conserved)
+  if (over_ && excess(v) > excessLeft() && !scene_.momentum_conserved)
     changed_ |= scaleVelocities(x, v, target_ + allowance_ - p_new_.total(), /*keep_rigid=*/false, 0.0, 1.0);
   if (k_before_ > 0.0) report_->velocity_scale = std::sqrt(kinetic(v) / k_before_);
   p_new = p_new_;

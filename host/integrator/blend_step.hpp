@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <optional>
 #include <vector>
 
@@ -68,7 +69,7 @@ class BlendStep {
   /// After partnerRead(), with the partner's potential `p`: whether the partner whole brings the
   /// energy below the target (the root find's first evaluation decides the same way). Where it
   /// does not, the caller may solve the partner on and call partnerRead() again.
-  bool partnerReachesTarget(const PotentialEnergy& p) const { return k_alpha_.at(1.0) + p.total() - target_ < 0.0; }
+  bool partnerReachesTarget(const PotentialEnergy& p) const { return excessAt(1.0, p) < 0.0; }
   /// Whether the machine wants the potential at t + h of (1 - weight()) from() + weight()
   /// partnerPositions(); the caller evaluates it and take()s it.
   bool wantsPotential() const { return wants_; }
@@ -102,9 +103,13 @@ class BlendStep {
   };
   enum class Stage { Idle, Partner, Search, Blended, Moving, Done };  // Moving: the corrections
   double kinetic(const Eigen::MatrixX3d& v) const;
+  // H(alpha) - H* of the blend at weight alpha whose positions have potential p.
+  double excessAt(double alpha, const PotentialEnergy& p) const { return k_alpha_.at(alpha) + p.total() - target_; }
   bool scaleVelocities(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double kinetic_wanted, bool keep_rigid,
                        double s_min, double s_max) const;
   double excess(const Eigen::MatrixX3d& v) const;  // K(v) + P - H* of the corrections
+  // The excess the corrections leave: the band, or the carried inherited excess.
+  double excessLeft() const { return std::max(scene_.tolerance, allowance_); }
   void askNext();
   void consider(double beta, const PotentialEnergy& p);  // the position move's best so far
 

@@ -574,6 +574,8 @@ def motion_table(results):
             fmt(100 * frac) if c == "blend" else "" for c in cols) + " |")
     out.append(line("handle cloth: mean K 5-10 s / reference's", "handle", "mean_K_ratio"))
     out.append(line("handle cloth: flicker of K", "handle", "flicker"))
+    out.append(line("stiff cloth dragged by a hand: mean K 5-10 s / reference's", "stiff_drag", "mean_K_ratio"))
+    out.append(line("stiff cloth dragged by a hand: flicker of K", "stiff_drag", "flicker"))
     out.append(line("stiff cloth (h = 1/15): drop of the centre of mass within 1 s [m]", "cloth_stiff",
                     "com_drop_1s_m", until=1.0))
     out.append(line("stiff cloth: flicker of K over 10 s", "cloth_stiff", "flicker"))

@@ -282,7 +282,7 @@ TEST_F(SceneJson, WhereSelectsByBoxForForceFieldsAndBodies) {
 }
 
 TEST_F(SceneJson, ExampleScenesLoad) {
-  for (const char* name : {"chain", "cloth_handle", "tetbar", "cloth_wind"}) {
+  for (const char* name : {"chain", "cloth_handle", "tetbar", "cloth_wind", "cloth_stiff_drag"}) {
     SCOPED_TRACE(name);
     const Scene s = loadSceneFile(kScenesDir + "/" + name + ".json");
     EXPECT_GT(s.numParticles(), 0);
@@ -296,6 +296,13 @@ TEST_F(SceneJson, ExampleScenesLoad) {
   for (int j = 0; j < 6; ++j) EXPECT_NEAR(chain.masses[j], reference.masses[j], 1e-15);
   EXPECT_EQ(loadSceneFile(kScenesDir + "/tetbar.json").pins.size(), 4u);
   EXPECT_EQ(loadSceneFile(kScenesDir + "/cloth_handle.json").pins.size(), 2u);
+  // Two fixed top corners and the hand at the bottom-right corner (1, 0, 0), moving.
+  const Scene drag = loadSceneFile(kScenesDir + "/cloth_stiff_drag.json");
+  ASSERT_EQ(drag.pins.size(), 3u);
+  EXPECT_EQ(drag.positions.row(drag.pins[2].vertex), Eigen::RowVector3d(1, 0, 0));
+  EXPECT_TRUE(drag.pins[2].target.moving());
+  EXPECT_FALSE(drag.pins[0].target.moving());
+  EXPECT_EQ(drag.triangle_strains.size(), 200u);  // 10 x 10 cells of cloth_square.obj, two each
 }
 
 TEST_F(SceneJson, DocumentedExampleLoads) {

@@ -7,6 +7,8 @@
 //                by 20 %, about a general axis: angular momentum kept after 10 s;
 //   moving_pin   one particle on a sinusoidally moving pin: max |H* - H_IM| (IM is exact there);
 //   handle       scenes/cloth_handle.json: steps whose blend took its partner whole, mean K;
+//   stiff_drag   scenes/cloth_stiff_drag.json: a hand drags a stiff cloth against its fixed corners,
+//                which flails in the reference: mean K over 5-10 s, flicker;
 //   cloth_stiff  the cloth with 1e6 N/m springs at h = 1/15: centre-of-mass drop within 1 s, flicker.
 // Writes motion.csv (one row per scene and integrator), moving_pin.csv, motion_reference.csv,
 // motion_series.csv (per frame: K, H, H*, y of the centre of mass; the references as integrator
@@ -202,7 +204,8 @@ std::vector<MotionSeries> motionSeries() {
   return series;
 }
 
-// Every integrator on a scene with a motion reference (cloth, chain, handle cloth, stiff cloth).
+// Every integrator on a scene with a motion reference (cloth, chain, handle cloth, stiff cloth,
+// stiff drag).
 void referenceScene(const StudyScene& s, const StudyOptions& options, MotionTable& table, SeriesWriter& series,
                     CsvWriter& references) {
   const MotionReference& ref = motionReference(s, options);
@@ -415,7 +418,8 @@ void runMotion(const StudyOptions& options) {
   SeriesWriter series(options);
   {
     MotionTable table(options);
-    for (const StudyScene& s : {clothScene(), chainScene(), handleClothScene(), clothScene(kStiffClothStretch)})
+    for (const StudyScene& s :
+         {clothScene(), chainScene(), handleClothScene(), clothScene(kStiffClothStretch), stiffDragScene()})
       referenceScene(s, options, table, series, references);
     spinningBar(false, options, table);
     spinningBar(true, options, table);

@@ -114,6 +114,10 @@ MotionReference compute(const StudyScene& scene, int frames) {
   r.kinetic = kineticSeries(fine);
   for (const FrameSample& f : fine.samples) r.energy.push_back(f.total());
   r.available = availableEnergy(scene);
+  if (scene.driven_energy_unit) {
+    const double equilibrium = fine.samples.front().total() - r.available;
+    for (const FrameSample& f : fine.samples) r.available = std::max(r.available, f.total() - equilibrium);
+  }
   for (const FrameSample& f : fine.samples)
     r.energy_error = std::max(r.energy_error, std::abs(f.total() - f.target) / r.available);
   const int one_second = std::min(frames, static_cast<int>(std::lround(kLongRmsSeconds / scene.frame_step)));

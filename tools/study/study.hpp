@@ -51,6 +51,9 @@ struct StudyScene {
   int reference_substeps = 2000;
   double reference_tolerance = 0.0;
   double reference_seconds = 10.0;
+  /// A scene driven from rest (E_avail about 0): its energy unit is instead the most energy the
+  /// reference holds above its static equilibrium over the run, what the drive puts in.
+  bool driven_energy_unit = false;
 };
 
 /// makeChainPendulum() with the given spring stiffness (default scene: 1e4 N/m).
@@ -73,6 +76,9 @@ constexpr double kTriangleClothHinge = 1e-4;  // J: bending hinge stiffness of t
 /// handle swings at `frequency` Hz (the file's 0.5 Hz keeps the key "handle"; any other is
 /// "handle_<frequency>Hz").
 StudyScene handleClothScene(double frequency = kHandleFrequency);
+/// scenes/cloth_stiff_drag.json (key "stiff_drag"): a stiff triangle cloth on its two top corners
+/// whose bottom corner a hand moves along a path that stretches it, so that it flails.
+StudyScene stiffDragScene();
 /// The tet bar with no pins and no gravity, spinning rigidly at `omega` rad/s about an axis
 /// through its centre of mass. `general`: about the axis (1, 2, 3)/|.| (not a principal axis)
 /// and stretched by 20 % along its length; else about y (end over end), at its rest shape.

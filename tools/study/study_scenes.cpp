@@ -168,6 +168,15 @@ StudyScene handleClothScene(double frequency) {
   return s;
 }
 
+StudyScene stiffDragScene() {
+  StudyScene s;
+  s.scene = stabint::loadSceneFile(std::string(STABINT_STUDY_SCENES_DIR) + "/cloth_stiff_drag.json");
+  s.key = "stiff_drag";
+  s.params = "cloth_stiff_drag.json fingerprint=" + fingerprint(s.scene) + " energy unit: the drive's";
+  s.driven_energy_unit = true;  // it starts at rest in its rest shape
+  return s;
+}
+
 StudyScene spinningBarScene(bool general, double omega) {
   StudyScene s = tetBarScene();
   s.key = general ? "spinbar_general" : "spinbar";

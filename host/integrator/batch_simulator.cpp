@@ -143,10 +143,10 @@ const BatchStepReport& BatchDriver::step() {
   // exactly 0 (its terms at t_m and t_1 are the same numbers).
   const std::vector<char> forced_scenes = data_.forcingChangesDuring(t_, t1, segments_);
   const bool forced = std::any_of(forced_scenes.begin(), forced_scenes.end(), [](char f) { return f != 0; });
-  // Implicit midpoint's solves and the blend partner's take the rigid motions into L-BFGS's initial
-  // Hessian only in the scenes whose forcing is constant over the step (docs/method.md, "Rigid
-  // motions in the initial Hessian"): with them a dragged cloth's partner lagged behind the hand
-  // with more elastic energy than the forcing booked, and the blend left its band.
+  // The blend partner's solves take the rigid motions into L-BFGS's initial Hessian only in the
+  // scenes whose forcing is constant over the step (docs/method.md, "Rigid motions in the initial
+  // Hessian"): with them a dragged cloth's partner lagged behind the hand with more elastic energy
+  // than the forcing booked, and the blend left its band. Implicit midpoint's: midpointRigidMotions.
   std::vector<char> steady(forced_scenes.size());
   for (std::size_t s = 0; s < steady.size(); ++s) steady[s] = forced_scenes[s] ? 0 : 1;
   if (options_.integrator == Integrator::EnergyBlend)
@@ -273,13 +273,32 @@ IterationControl BatchDriver::iterationControl(int iterations) const {
   return stabint::iterationControl(options_, iterations, per_scene_.size() == 1 ? per_scene_[0].energy_scale : 1.0);
 }
 
+// [project rule] Implicit midpoint's solves (the IM integrator's, the blend's candidate) take the
+// rigid motions in the scenes whose forcing is constant over the step, and in a forced scene that
+// swings (its kinetic energy above the blend's band) and is not held far from its rest shape (its
+// elastic energy, pins included, at most E_scale): a cloth swinging on a moving handle then keeps
+// its period, and the handle stops pumping it (docs/method.md, "Which solves take them"). A hand
+// stretching a cloth against its fixed corners, or pulling a body from rest, keeps K_c^-1: the
+// coarse space made such drags gain 2.5-4x their references' motion. Decided from the scene's
+// book at the step's start, so a checkpoint continues as the run did and a batch's scene steps as
+// its own Simulator.
+std::vector<char> BatchDriver::midpointRigidMotions(const std::vector<char>& steady) const {
+  std::vector<char> rigid = steady;
+  for (std::size_t s = 0; s < rigid.size(); ++s) {
+    const PerScene& p = per_scene_[s];
+    const bool swinging = p.kinetic > blendTolerance(options_, p.kinetic, p.potential, p.energy_scale);
+    if (swinging && p.potential.elastic() <= p.energy_scale) rigid[s] = 1;
+  }
+  return rigid;
+}
+
 void BatchDriver::integrate(double t1, bool forced, const std::vector<char>& steady) {
   const double h = options_.time_step;
   const IterationControl control = iterationControl(options_.iterations);
   IntegratorSteps steps(*backend_, solver_);
   const std::vector<char> stepping = steppingScenes();
   solver_.setSolving(stepping);
-  if (options_.integrator == Integrator::ImplicitMidpoint) solver_.setRigidModes(steady);
+  if (options_.integrator == Integrator::ImplicitMidpoint) solver_.setRigidModes(midpointRigidMotions(steady));
   const int iterations = steps.step(options_.integrator, h, t_, has_history_, kXNew, kVNew, control);
   const bool evaluated = potentialsOfStep(steps, kXNew, t1, stepping);
   if (forced) {
@@ -312,7 +331,7 @@ void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady)
   IntegratorSteps steps(*backend_, solver_);
   const std::vector<char> stepping = steppingScenes();
   solver_.setSolving(stepping);
-  solver_.setRigidModes(steady);
+  solver_.setRigidModes(midpointRigidMotions(steady));
   const int im_iterations = steps.implicitMidpoint(h, t_, kXNew, kVNew, control);
   backend_->readBoth(kXNew, x_new_, kVNew, v_new_);
   backend_->potentials(kXNew, t1, p_all_, &stepping);

@@ -168,6 +168,9 @@ struct BatchDriver {
   // `forced`: some scene's forcing changes over the step; `steady`: one flag per scene, its
   // forcing does not (its implicit-midpoint solves may take the rigid motions).
   void integrate(double t1, bool forced, const std::vector<char>& steady);
+  // One flag per scene: its implicit-midpoint solves take the rigid motions (`steady`: its
+  // forcing is constant over the step).
+  std::vector<char> midpointRigidMotions(const std::vector<char>& steady) const;
   IterationControl iterationControl(int iterations) const;
   // Scene s's iterations in the solve that did `done` (LocalGlobalSolver::segmentIterations).
   int sceneIterations(std::size_t s, int done) const;

@@ -260,10 +260,9 @@ TEST(LbfgsRigidModes, AClothThatTurnsAboutItsPins) {
 // both 0.011 m, the turn has barely begun; after 30 IM's own instability leaves both far off).
 // With its pins moving, the first step from rest keeps K_c^-1, and the swing that follows takes
 // them: IM's run is again closer to its converged one (measured after 10 frames: RMS 0.025 m
-// against 0.43 m). A hand that pulls the free corner 1 m away from the pinned edge and on holds
-// the cloth far from its rest shape (its elastic energy, the hand's pin included, above E_scale):
-// every step keeps K_c^-1, and the runs with and without the option are the
-// same bit for bit.
+// against 0.43 m); not where the scene has colliders. A hand that pulls the free corner 1 m away from the pinned edge
+// and on holds the cloth far from its rest shape (its elastic energy, the hand's pin included, above E_scale): every
+// step keeps K_c^-1, and the runs with and without the option are the same bit for bit.
 TEST(LbfgsRigidModes, ImplicitMidpointTakesThemWhereABodySwings) {
   auto run = [](const Scene& s, Integrator integrator, int rigid_modes, double tolerance, int frames, int pulled = -1) {
     SimulatorOptions o;
@@ -305,6 +304,14 @@ TEST(LbfgsRigidModes, ImplicitMidpointTakesThemWhereABodySwings) {
   }
   const auto [with_moving, without_moving] = distances(moving, "pins moving");
   EXPECT_LT(with_moving, 0.5 * without_moving);
+  // A scene with colliders keeps K_c^-1 in its forced steps, even with a ground 10 m below that
+  // nothing touches.
+  Scene grounded = moving;
+  Collider ground;
+  ground.center = Eigen::Vector3d(0.0, -10.0, 0.0);
+  grounded.colliders.push_back(ground);
+  EXPECT_EQ(run(grounded, Integrator::ImplicitMidpoint, 1, 0.0, 10),
+            run(grounded, Integrator::ImplicitMidpoint, 0, 0.0, 10));
 
   const int free_corner = still.numParticles() - 1;
   for (Integrator integrator : {Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {

@@ -274,20 +274,22 @@ IterationControl BatchDriver::iterationControl(int iterations) const {
 }
 
 // [project rule] Implicit midpoint's solves (the IM integrator's, the blend's candidate) take the
-// rigid motions in the scenes whose forcing is constant over the step, and in a forced scene that
-// swings (its kinetic energy above the blend's band) and is not held far from its rest shape (its
-// elastic energy, pins included, at most E_scale): a cloth swinging on a moving handle then keeps
-// its period, and the handle stops pumping it (docs/method.md, "Which solves take them"). A hand
-// stretching a cloth against its fixed corners, or pulling a body from rest, keeps K_c^-1: the
-// coarse space made such drags gain 2.5-4x their references' motion. Decided from the scene's
-// book at the step's start, so a checkpoint continues as the run did and a batch's scene steps as
-// its own Simulator.
+// rigid motions in the scenes whose forcing is constant over the step, and in a forced scene
+// without colliders that swings (its kinetic energy above the blend's band) and is not held far
+// from its rest shape (its elastic energy, pins included, at most E_scale): a cloth swinging on a
+// moving handle then keeps its period, and the handle stops pumping it (docs/method.md, "The
+// forced steps of a swinging body"). A hand stretching a cloth against its fixed corners, or
+// pulling a body from rest, keeps K_c^-1: the coarse space made such drags gain 2.5-4x their
+// references' motion. So does a scene with colliders: on a cloth poked by a moving tool the
+// candidate's coarse motion went into the tool, and friction took joules from it at every third
+// step. Decided from the scene's book at the step's start, so a checkpoint continues as the run
+// did and a batch's scene steps as its own Simulator.
 std::vector<char> BatchDriver::midpointRigidMotions(const std::vector<char>& steady) const {
   std::vector<char> rigid = steady;
   for (std::size_t s = 0; s < rigid.size(); ++s) {
     const PerScene& p = per_scene_[s];
     const bool swinging = p.kinetic > blendTolerance(options_, p.kinetic, p.potential, p.energy_scale);
-    if (swinging && p.potential.elastic() <= p.energy_scale) rigid[s] = 1;
+    if (segments_[s].num_colliders == 0 && swinging && p.potential.elastic() <= p.energy_scale) rigid[s] = 1;
   }
   return rigid;
 }

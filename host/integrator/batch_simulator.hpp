@@ -166,7 +166,8 @@ struct BatchDriver {
   void commit(double t1);
   // The integrators but the blend: the candidates of every stepping scene, with their forcing.
   // `forced`: some scene's forcing changes over the step; `steady`: one flag per scene, its
-  // forcing does not (its implicit-midpoint solves may take the rigid motions).
+  // forcing does not (its solves take the rigid motions; midpointRigidMotions adds forced scenes
+  // for implicit midpoint's).
   void integrate(double t1, bool forced, const std::vector<char>& steady);
   // One flag per scene: its implicit-midpoint solves take the rigid motions (`steady`: its
   // forcing is constant over the step).

@@ -14,6 +14,7 @@
 // run after 30 frames at 10 iterations, against 0.93 m with K_c^-1 alone (docs/method.md).
 #include "elements/element_type.hpp"
 #include "scene/scene_data.hpp"
+#include "simd.hpp"
 #include "solver/local_global.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -31,23 +32,70 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 // An eigenvalue of S below this fraction of the largest is a motion that moves (almost) nothing.
 constexpr double kNullMotion = 1e-12;
 
-// Z^T v over rows [first, first + count): the sum of v and the sum of arm x v.
-template <class Weight>
-Vector6d rigidComponents(const Eigen::MatrixX3d& arms, const Eigen::MatrixX3d& v, int first, int count, Weight&& w) {
-  Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
-  for (int i = first; i < first + count; ++i) {
-    const Eigen::Vector3d vi = w(i) * v.row(i).transpose();
-    force += vi;
-    torque += arms.row(i).transpose().cross(vi);
+// Z^T (w v) over rows [first, first + count) of v and the arms (n by 3, column-major): the sum
+// of w_i v_i and the sum of arm_i x w_i v_i (Weighted = false: w_i = 1). Serial sums in row order,
+// as six independent chains: a batch's scene gets its own Simulator's sums bit for bit (lanes
+// would add in an order that depends on where its rows start).
+template <bool Weighted>
+Vector6d rigidComponents(const Eigen::MatrixX3d& arms, const Eigen::MatrixX3d& v, int first, int count,
+                         const double* w) {
+  const Eigen::Index n = v.rows();
+  const double *vx = v.data() + first, *vy = vx + n, *vz = vy + n;
+  const double *ax = arms.data() + first, *ay = ax + n, *az = ay + n;
+  double f0 = 0.0, f1 = 0.0, f2 = 0.0, t0 = 0.0, t1 = 0.0, t2 = 0.0;
+  for (int i = 0; i < count; ++i) {
+    double v0 = vx[i], v1 = vy[i], v2 = vz[i];
+    if constexpr (Weighted) {
+      const double wi = w[first + i];
+      v0 = wi * v0;
+      v1 = wi * v1;
+      v2 = wi * v2;
+    }
+    f0 += v0;
+    f1 += v1;
+    f2 += v2;
+    t0 += ay[i] * v2 - az[i] * v1;
+    t1 += az[i] * v0 - ax[i] * v2;
+    t2 += ax[i] * v1 - ay[i] * v0;
   }
   Vector6d out;
-  out << force, torque;
+  out << f0, f1, f2, t0, t1, t2;
   return out;
 }
 
-// The rigid motion u (translation, rotation) at particle i: u_t + u_r x arm_i.
-inline Eigen::RowVector3d rigidMotionAt(const Vector6d& u, const Eigen::MatrixX3d& arms, int i) {
-  return (u.head<3>() + u.tail<3>().cross(arms.row(i).transpose())).transpose();
+// The rigid motion u (translation, rotation) at particle i, u_t + u_r x arm_i, subtracted with
+// weight w_i (Weighted) or added, over `count` rows of three columns, in SIMD lanes: Eigen's
+// arithmetic of u.head<3>() + u.tail<3>().cross(arm_i), row by row.
+template <bool Weighted>
+STABINT_TARGET_CLONES_TEMPLATE void moveByRigidMotion(int count, const double* u, const double* ax, const double* ay,
+                                                      const double* az, const double* w, double* x, double* y,
+                                                      double* z) {
+  const double u0 = u[0], u1 = u[1], u2 = u[2], u3 = u[3], u4 = u[4], u5 = u[5];
+  STABINT_LANES for (int i = 0; i < count; ++i) {
+    const double m0 = u0 + (u4 * az[i] - u5 * ay[i]);
+    const double m1 = u1 + (u5 * ax[i] - u3 * az[i]);
+    const double m2 = u2 + (u3 * ay[i] - u4 * ax[i]);
+    if constexpr (Weighted) {
+      x[i] = x[i] - w[i] * m0;
+      y[i] = y[i] - w[i] * m1;
+      z[i] = z[i] - w[i] * m2;
+    } else {
+      x[i] = x[i] + m0;
+      y[i] = y[i] + m1;
+      z[i] = z[i] + m2;
+    }
+  }
+}
+
+// moveByRigidMotion on rows [first, first + count) of the n by 3 matrix x.
+template <bool Weighted>
+void moveRows(const Vector6d& u, const Eigen::MatrixX3d& arms, const double* w, int first, int count,
+              Eigen::MatrixX3d& x) {
+  const Eigen::Index n = x.rows();
+  const double* a = arms.data() + first;
+  double* p = x.data() + first;
+  moveByRigidMotion<Weighted>(count, u.data(), a, a + n, a + 2 * n, w == nullptr ? nullptr : w + first, p, p + n,
+                              p + 2 * n);
 }
 
 }  // namespace
@@ -148,22 +196,20 @@ void LocalGlobalSolver::applyTwoLevelInverse(double c, const IterationControl& c
   thread_local std::vector<Vector6d> coarse_step;
   coarse_step.assign(segments, Vector6d::Zero());
   rigid_q_ = q;
-  auto one = [](int) { return 1.0; };
-  auto weight = [&](int i) { return rigid_weights_[i]; };
   for (std::size_t s = 0; s < segments; ++s) {
     if (!usesRigidModes(s) || stopped(s)) continue;
     const Segment& seg = rows_[s];
-    coarse_step[s] = rigid_inverse_[s] * rigidComponents(rigid_arms_, q, seg.first, seg.count, one);
-    for (int i = seg.first; i < seg.first + seg.count; ++i)
-      rigid_q_.row(i) -= rigid_weights_[i] * rigidMotionAt(coarse_step[s], rigid_arms_, i);
+    coarse_step[s] = rigid_inverse_[s] * rigidComponents<false>(rigid_arms_, q, seg.first, seg.count, nullptr);
+    moveRows<true>(coarse_step[s], rigid_arms_, rigid_weights_.data(), seg.first, seg.count, rigid_q_);
   }
   applyInitialInverseHessian(c, control, rigid_q_, r);
   for (std::size_t s = 0; s < segments; ++s) {
     if (!usesRigidModes(s) || stopped(s)) continue;
     const Segment& seg = rows_[s];
     const Vector6d correction =
-        coarse_step[s] - rigid_inverse_[s] * rigidComponents(rigid_arms_, r, seg.first, seg.count, weight);
-    for (int i = seg.first; i < seg.first + seg.count; ++i) r.row(i) += rigidMotionAt(correction, rigid_arms_, i);
+        coarse_step[s] -
+        rigid_inverse_[s] * rigidComponents<true>(rigid_arms_, r, seg.first, seg.count, rigid_weights_.data());
+    moveRows<false>(correction, rigid_arms_, nullptr, seg.first, seg.count, r);
   }
 }
 

@@ -98,6 +98,62 @@ void moveRows(const Vector6d& u, const Eigen::MatrixX3d& arms, const double* w, 
                               p + 2 * n);
 }
 
+// S = Z^T A Z's sums over rows [first, first + count), with the arms (x_i - centre) written into
+// `arms`: the weight sum (translations), the weighted first moment of the arms (translation x
+// rotation), the weighted inertia tensor sum a_i (|arm_i|^2 I - arm_i arm_i^T) (rotations) and the
+// elastic tension sum (g_i.arm_i I - arm_i g_i^T) along the rotations. Eigen's arithmetic of one row
+// at a time (Matrix3d expressions), in row order, on scalar sums in two loops: in one loop the 19
+// sums did not fit the registers, and every addition waited on a store to the stack.
+struct CoarseSums {
+  double weight = 0.0;
+  Eigen::Vector3d first_moment;
+  Eigen::Matrix3d inertia, tension;
+};
+
+CoarseSums coarseSums(const Eigen::MatrixX3d& x, const Eigen::RowVector3d& centre, const Eigen::VectorXd& w,
+                      const Eigen::MatrixX3d& g, int first, int count, Eigen::MatrixX3d& arms) {
+  const Eigen::Index n = x.rows();
+  const double *x0 = x.data() + first, *x1 = x0 + n, *x2 = x1 + n;
+  double *a0 = arms.data() + first, *a1 = a0 + n, *a2 = a1 + n;
+  const double c0 = centre[0], c1 = centre[1], c2 = centre[2];
+  // (k, l) and (l, k) of the inertia add the same terms (a_k a_l = a_l a_k): six sums.
+  double weight = 0.0, f0 = 0.0, f1 = 0.0, f2 = 0.0;
+  double i00 = 0.0, i01 = 0.0, i02 = 0.0, i11 = 0.0, i12 = 0.0, i22 = 0.0;
+  for (int i = 0; i < count; ++i) {
+    const double r0 = x0[i] - c0, r1 = x1[i] - c1, r2 = x2[i] - c2;
+    a0[i] = r0;
+    a1[i] = r1;
+    a2[i] = r2;
+    const double a = w[first + i];
+    weight += a;
+    f0 += a * r0;
+    f1 += a * r1;
+    f2 += a * r2;
+    const double squared = (r0 * r0 + r1 * r1) + r2 * r2;
+    const double on = squared * 1.0, off = squared * 0.0;  // |arm|^2 I's entries
+    i00 += a * (on - r0 * r0);
+    i01 += a * (off - r0 * r1);
+    i02 += a * (off - r0 * r2);
+    i11 += a * (on - r1 * r1);
+    i12 += a * (off - r1 * r2);
+    i22 += a * (on - r2 * r2);
+  }
+  const double *g0 = g.data() + first, *g1 = g0 + n, *g2 = g1 + n;
+  double t[3][3] = {};
+  for (int i = 0; i < count; ++i) {
+    const double r[3] = {a0[i], a1[i], a2[i]}, gi[3] = {g0[i], g1[i], g2[i]};
+    const double dot = (gi[0] * r[0] + gi[1] * r[1]) + gi[2] * r[2];
+    for (int k = 0; k < 3; ++k)
+      for (int l = 0; l < 3; ++l) t[k][l] += dot * (k == l ? 1.0 : 0.0) - r[k] * gi[l];
+  }
+  CoarseSums out;
+  out.weight = weight;
+  out.first_moment << f0, f1, f2;
+  out.inertia << i00, i01, i02, i01, i11, i12, i02, i12, i22;
+  out.tension << t[0][0], t[0][1], t[0][2], t[1][0], t[1][1], t[1][2], t[2][0], t[2][1], t[2][2];
+  return out;
+}
+
 }  // namespace
 
 void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationControl& control) {
@@ -150,21 +206,11 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
       mass += masses_[i];
     }
     const Eigen::RowVector3d centre = moment / mass;
-    // S = Z^T A Z in one pass: the weight sum (translations), the weighted first moment of the
-    // arms (translation x rotation) and the weighted inertia tensor (rotations); then the elastic
-    // tension along the rotations.
-    double weight = 0.0;
-    Eigen::Vector3d first_moment = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero(), tension = Eigen::Matrix3d::Zero();
-    for (int i = seg.first; i < seg.first + seg.count; ++i) {
-      rigid_arms_.row(i) = x_cur_.row(i) - centre;
-      const Eigen::Vector3d arm = rigid_arms_.row(i).transpose(), g = rigid_gradient_.row(i).transpose();
-      const double a = rigid_weights_[i];
-      weight += a;
-      first_moment += a * arm;
-      inertia += a * (arm.squaredNorm() * Eigen::Matrix3d::Identity() - arm * arm.transpose());
-      tension += g.dot(arm) * Eigen::Matrix3d::Identity() - arm * g.transpose();
-    }
+    const CoarseSums sums =
+        coarseSums(x_cur_, centre, rigid_weights_, rigid_gradient_, seg.first, seg.count, rigid_arms_);
+    const double weight = sums.weight;
+    const Eigen::Vector3d& first_moment = sums.first_moment;
+    const Eigen::Matrix3d &inertia = sums.inertia, &tension = sums.tension;
     // Z^T A Z's off-diagonal block: sum_i a_i e_k . (e_l x arm_i) = (e_l x first_moment)_k.
     Eigen::Matrix3d cross;
     for (int l = 0; l < 3; ++l) cross.col(l) = Eigen::Vector3d::Unit(l).cross(first_moment);

@@ -26,3 +26,21 @@
 #else
 #define STABINT_TARGET_CLONES_TEMPLATE STABINT_TARGET_CLONES
 #endif
+
+namespace stabint {
+
+/// The sum of N lanes' partial sums (N a power of two) in a fixed tree: lane l + N/2 folded onto
+/// lane l, then the same on the half, down to one. The same bits on any machine, for any clone.
+template <int N>
+inline double laneSum(const double* acc) {
+  static_assert(N >= 1 && (N & (N - 1)) == 0, "a power of two");
+  if constexpr (N == 1) {
+    return acc[0];
+  } else {
+    double half[N / 2];
+    for (int l = 0; l < N / 2; ++l) half[l] = acc[l] + acc[l + N / 2];
+    return laneSum<N / 2>(half);
+  }
+}
+
+}  // namespace stabint

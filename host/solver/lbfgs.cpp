@@ -152,15 +152,6 @@ namespace {
 
 constexpr int kLanes = 16;
 
-// The lanes' sums in a fixed tree.
-inline double laneSum(const double* acc) {
-  double half[kLanes / 2];
-  for (int l = 0; l < kLanes / 2; ++l) half[l] = acc[l] + acc[l + kLanes / 2];
-  double quarter[kLanes / 4];
-  for (int l = 0; l < kLanes / 4; ++l) quarter[l] = half[l] + half[l + kLanes / 4];
-  return (quarter[0] + quarter[2]) + (quarter[1] + quarter[3]);
-}
-
 // Value i of a pass goes to lane i % kLanes, in both the whole groups and the tail.
 STABINT_TARGET_CLONES
 double dot(int len, const double* __restrict a, const double* __restrict b) {
@@ -168,7 +159,7 @@ double dot(int len, const double* __restrict a, const double* __restrict b) {
   int i = 0;
   for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) acc[l] += a[i + l] * b[i + l];
   for (int l = 0; i + l < len; ++l) acc[l] += a[i + l] * b[i + l];
-  return laneSum(acc);
+  return laneSum<kLanes>(acc);
 }
 
 // The new pair: s = x_trial - x, y = g_trial - g, then x = x_trial, g = g_trial; out = s.y, y.y,
@@ -191,10 +182,10 @@ void newPair(int len, const double* __restrict x_trial, const double* __restrict
   int i = 0;
   for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) body(i + l, l);
   for (int l = 0; i + l < len; ++l) body(i + l, l);
-  out[0] = laneSum(sy);
-  out[1] = laneSum(yy);
-  out[2] = laneSum(ss);
-  out[3] = laneSum(sg);
+  out[0] = laneSum<kLanes>(sy);
+  out[1] = laneSum<kLanes>(yy);
+  out[2] = laneSum<kLanes>(ss);
+  out[3] = laneSum<kLanes>(sg);
 }
 
 // An older pair j against the new one: out = s.y_j, s_j.y, s_j.g_trial.
@@ -213,9 +204,9 @@ void pairProducts(int len, const double* __restrict s, const double* __restrict 
     b[l] += s_j[i + l] * y[i + l];
     c[l] += s_j[i + l] * g_trial[i + l];
   }
-  out[0] = laneSum(a);
-  out[1] = laneSum(b);
-  out[2] = laneSum(c);
+  out[0] = laneSum<kLanes>(a);
+  out[1] = laneSum<kLanes>(b);
+  out[2] = laneSum<kLanes>(c);
 }
 
 // q -= a v (Eigen's q - a * v, value by value).
@@ -243,7 +234,7 @@ double negateAndSlope(int len, double* __restrict d, const double* __restrict g)
     d[i + l] = -d[i + l];
     acc[l] += g[i + l] * d[i + l];
   }
-  return laneSum(acc);
+  return laneSum<kLanes>(acc);
 }
 
 // The rows of one segment in each of the three columns of an `n by 3` (column-major) matrix, in

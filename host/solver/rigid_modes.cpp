@@ -32,34 +32,51 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 // An eigenvalue of S below this fraction of the largest is a motion that moves (almost) nothing.
 constexpr double kNullMotion = 1e-12;
 
-// Z^T (w v) over rows [first, first + count) of v and the arms (n by 3, column-major): the sum
-// of w_i v_i and the sum of arm_i x w_i v_i (Weighted = false: w_i = 1). Serial sums in row order,
-// as six independent chains: a batch's scene gets its own Simulator's sums bit for bit (lanes
-// would add in an order that depends on where its rows start).
+// Z^T (w v) over `count` rows of three columns (Weighted = false: w_i = 1): the sums of w_i v_i
+// and of arm_i x w_i v_i, in kRigidLanes lanes (row j of the segment in lane j % kRigidLanes), the
+// lanes then summed in a fixed tree (laneSum): the same bits on any machine, and a batch's scene
+// gets its own Simulator's sums (the lanes count from the segment's first row). In row order the
+// six sums were one chain of additions each, which the two-level inverse waited on twice per
+// iteration.
+constexpr int kRigidLanes = 8;
+
+template <bool Weighted>
+STABINT_TARGET_CLONES_TEMPLATE void rigidSums(int count, const double* __restrict vx, const double* __restrict vy,
+                                              const double* __restrict vz, const double* __restrict ax,
+                                              const double* __restrict ay, const double* __restrict az,
+                                              const double* __restrict w, double* out) {
+  constexpr int L = kRigidLanes;
+  double f0[L] = {}, f1[L] = {}, f2[L] = {}, t0[L] = {}, t1[L] = {}, t2[L] = {};
+  auto row = [&](int i, int l) {
+    double v0 = vx[i], v1 = vy[i], v2 = vz[i];
+    if constexpr (Weighted) {
+      v0 = w[i] * v0;
+      v1 = w[i] * v1;
+      v2 = w[i] * v2;
+    }
+    f0[l] += v0;
+    f1[l] += v1;
+    f2[l] += v2;
+    t0[l] += ay[i] * v2 - az[i] * v1;
+    t1[l] += az[i] * v0 - ax[i] * v2;
+    t2[l] += ax[i] * v1 - ay[i] * v0;
+  };
+  int i = 0;
+  for (; i + L <= count; i += L) STABINT_LANES for (int l = 0; l < L; ++l) row(i + l, l);
+  for (int l = 0; i + l < count; ++l) row(i + l, l);
+  const double* sums[6] = {f0, f1, f2, t0, t1, t2};
+  for (int k = 0; k < 6; ++k) out[k] = laneSum<L>(sums[k]);
+}
+
+// rigidSums over rows [first, first + count) of the n by 3 (column-major) v and arms.
 template <bool Weighted>
 Vector6d rigidComponents(const Eigen::MatrixX3d& arms, const Eigen::MatrixX3d& v, int first, int count,
                          const double* w) {
   const Eigen::Index n = v.rows();
-  const double *vx = v.data() + first, *vy = vx + n, *vz = vy + n;
-  const double *ax = arms.data() + first, *ay = ax + n, *az = ay + n;
-  double f0 = 0.0, f1 = 0.0, f2 = 0.0, t0 = 0.0, t1 = 0.0, t2 = 0.0;
-  for (int i = 0; i < count; ++i) {
-    double v0 = vx[i], v1 = vy[i], v2 = vz[i];
-    if constexpr (Weighted) {
-      const double wi = w[first + i];
-      v0 = wi * v0;
-      v1 = wi * v1;
-      v2 = wi * v2;
-    }
-    f0 += v0;
-    f1 += v1;
-    f2 += v2;
-    t0 += ay[i] * v2 - az[i] * v1;
-    t1 += az[i] * v0 - ax[i] * v2;
-    t2 += ax[i] * v1 - ay[i] * v0;
-  }
+  const double* p = v.data() + first;
+  const double* a = arms.data() + first;
   Vector6d out;
-  out << f0, f1, f2, t0, t1, t2;
+  rigidSums<Weighted>(count, p, p + n, p + 2 * n, a, a + n, a + 2 * n, w == nullptr ? nullptr : w + first, out.data());
   return out;
 }
 

@@ -3,8 +3,8 @@
 // loader picking the widest the machine has (GCC/Clang target_clones on x86-64 Linux), so the
 // library stays one portable binary; and loops over SIMD lanes. The build has no FMA contraction
 // (-ffp-contract=off), so each clone does the same operations in the same order: the same bits on
-// any machine. Used by the element passes (elements/projections.hpp) and L-BFGS's history passes
-// (solver/lbfgs.cpp).
+// any machine. Used by the element passes (elements/projections.hpp), L-BFGS's history passes
+// (solver/lbfgs.cpp) and the rigid motions' two-level inverse (solver/rigid_modes.cpp).
 #if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
     !defined(STABINT_NO_TARGET_CLONES)
 #define STABINT_TARGET_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))

@@ -147,7 +147,9 @@ CoarseSums coarseSums(const Eigen::MatrixX3d& x, const Eigen::RowVector3d& centr
     f1 += a * r1;
     f2 += a * r2;
     const double squared = (r0 * r0 + r1 * r1) + r2 * r2;
-    const double on = squared * 1.0, off = squared * 0.0;  // |arm|^2 I's entries
+    // |arm|^2 I's entries as |arm|^2 * Identity() forms them (the products by 1 and 0 keep the
+    // sums the Matrix3d expression gave, bit for bit, signed zeros included).
+    const double on = squared * 1.0, off = squared * 0.0;
     i00 += a * (on - r0 * r0);
     i01 += a * (off - r0 * r1);
     i02 += a * (off - r0 * r2);

@@ -39,6 +39,13 @@ namespace stabint {
 class IntegratorSteps;
 struct StepRefusal;
 
+// The segment's rows (so that its reductions run as the scene alone's, on an `n_s by 3` matrix).
+// As a view: assigned to a per-scene matrix of the same size, it copies the rows without
+// allocating a new matrix per scene and step (heap traffic O(scenes) per batch step).
+inline auto blockOf(const Eigen::MatrixX3d& m, const SceneSegment& s) {
+  return m.middleRows(s.first_particle, s.num_particles);
+}
+
 // The one stepping driver: BatchSimulator's (its Impl, below) and, as a batch of one, Simulator's
 // (forSimulator, simulator.cpp).
 struct BatchDriver {
@@ -177,7 +184,7 @@ struct BatchDriver {
   int sceneIterations(std::size_t s, int done) const;
   // One flag per scene: it steps (the solves of the others' blocks are not run).
   std::vector<char> steppingScenes() const;
-  // The blend in lockstep: one IM solve, at most one partner solve (and one full-budget BE solve
+  // The blend in lockstep (batch_blend.cpp): one IM solve, at most one partner solve (and one full-budget BE solve
   // when some scene's IM candidate blew up), one batched energy pass per root-find round.
   void blend(double t1, bool forced, const std::vector<char>& steady);
   // The partner solve of the scenes whose partner, whole, still has more energy than the target:

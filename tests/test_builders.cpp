@@ -225,5 +225,29 @@ TEST(Builders, BadParametersAreRejectedWithTheirName) {
               HasSubstr("tet 0: stiffness -1 must be >= 0"));
 }
 
+// A cloth of zero width (or one whose edges underflow) has flat triangles, which lump no mass:
+// refused, where the spring cloth once stepped made-up 1e-6 kg particles on zero-length springs.
+TEST(Builders, FlatClothAndFlatTrianglesAreRefused) {
+  for (double width : {0.0, 1e-200}) {
+    SCOPED_TRACE(width);
+    for (ClothModel model : {ClothModel::Springs, ClothModel::Triangles}) {
+      ClothGridParams p;
+      p.width = width;
+      p.model = model;
+      EXPECT_THAT(messageOf([&] { makeClothGrid(p); }), HasSubstr("triangle 0: zero rest area"));
+    }
+  }
+  const Eigen::MatrixX3d collinear = (Eigen::MatrixX3d(3, 3) << 0, 0, 0, 1, 0, 0, 2, 0, 0).finished();
+  EXPECT_THAT(messageOf([&] {
+                lumpMassesFromTriangles(collinear, {{0, 1, 2}}, 1.0);
+              }),
+              HasSubstr("triangle 0: zero rest area 0"));
+  // A particle in no triangle still gets min_mass.
+  const Eigen::MatrixX3d four = (Eigen::MatrixX3d(4, 3) << 0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5).finished();
+  const Eigen::VectorXd m = lumpMassesFromTriangles(four, {{0, 1, 2}}, 3.0, 1e-6);
+  EXPECT_DOUBLE_EQ(m[0], 0.5);  // 3 kg/m^2 x 0.5 m^2 / 3
+  EXPECT_EQ(m[3], 1e-6);
+}
+
 }  // namespace
 }  // namespace stabint

@@ -505,7 +505,14 @@ TEST_F(SceneJson, TopLevelErrors) {
   expectError(twoParticles(R"(, "gravity": [0, -9.81])"),
               "gravity: expected an array of 3 numbers [x, y, z], got [0,-9.81]");
   expectError(twoParticles(R"(, "gravity": [0, "down", 0])"), "gravity[1]: expected a number, got string");
-  expectError(twoParticles(R"(, "gravity": [0, 1e999, 0])"), "malformed JSON: number overflow parsing '1e999'");
+  expectError(twoParticles(R"(, "gravity": [0, 1e999, 0])"), "number overflow parsing '1e999'", 1);
+}
+
+// A number too large for a double comes from the parser without a position; the number it quotes
+// is found outside strings (a name holding the same text does not count) to give the line.
+TEST_F(SceneJson, NumberOverflowNamesItsLine) {
+  expectError("{\n  \"name\": \"-1e400\",\n  \"particles\": {\"positions\": [[0,0,0]],\n    \"masses\": -1e400}\n}\n",
+              "malformed JSON (column 15): number overflow parsing '-1e400'", 4);
 }
 
 TEST_F(SceneJson, ParticleErrors) {

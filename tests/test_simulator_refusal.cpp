@@ -4,6 +4,7 @@
 // history, H* and last report as they were, and it steps again.
 #include <stabint/stabint.hpp>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <string>
@@ -56,6 +57,41 @@ TEST(SimulatorRefusal, ARefusedStepChangesNothingAndTheSimulatorStepsAgain) {
     EXPECT_EQ(sim.velocities(), fresh.velocities());
     EXPECT_EQ(sim.target(), fresh.target());
   }
+}
+
+// A blow-up that stays finite: forward Euler on 1e9 N/m springs of 1 kg particles grows by about
+// 10^3 a step and passes 1e150, the largest value setState and a checkpoint take, before it
+// overflows. Such a step is refused like a non-finite one, so the last accepted state can be set,
+// saved and restored (a checkpoint of a state beyond it could not be read back).
+TEST(SimulatorRefusal, AStateBeyondTheInputLimitIsRefusedAndEveryAcceptedStateRestores) {
+  Scene scene;
+  scene.rest_positions = (Eigen::MatrixX3d(3, 3) << 0, 0, 0, 1, 0, 0, 2, 0, 0).finished();
+  scene.positions = scene.rest_positions;
+  scene.velocities = Eigen::MatrixX3d::Zero(3, 3);
+  scene.masses = Eigen::VectorXd::Ones(3);
+  scene.springs = {{0, 1, 1.0, 1e9}, {1, 2, 1.0, 1e9}};
+  Pin pin;
+  pin.vertex = 0;
+  pin.stiffness = 1e9;
+  scene.pins = {pin};
+  SimulatorOptions o;
+  o.integrator = Integrator::ForwardEuler;
+  Simulator sim(scene, o);
+  int accepted = 0;
+  try {
+    for (; accepted < 1000; ++accepted) sim.step();
+    FAIL() << "forward Euler did not blow up";
+  } catch (const NonFiniteStateError& e) {
+    EXPECT_THAT(e.what(), testing::HasSubstr("beyond 1e+150 in magnitude"));
+  }
+  ASSERT_GT(accepted, 10);
+  EXPECT_LE(sim.velocities().cwiseAbs().maxCoeff(), 1e150);
+  EXPECT_LE(sim.positions().cwiseAbs().maxCoeff(), 1e150);
+  const Checkpoint saved = sim.checkpoint();
+  EXPECT_NO_THROW(Checkpoint::fromBytes(saved.bytes()));
+  EXPECT_NO_THROW(sim.restore(saved));
+  EXPECT_NO_THROW(sim.setState(sim.positions(), sim.velocities()));
+  EXPECT_EQ(sim.checkpoint().bytes(), saved.bytes());
 }
 
 }  // namespace

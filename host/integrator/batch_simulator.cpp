@@ -202,7 +202,8 @@ void BatchDriver::acceptScenes(double t1) {
     if (p.velocities_changed) backend_->roundToStorage(p.v_new);
     p.target_now -= r.damping;
     const double k_new = stabint::kineticEnergy(scenes_[s].masses, p.v_new);
-    const StepRefusal refusal = checkStepEnergy(r.step, t_, t1, options_, k_new, p.p_new, p.target_now, p.energy_scale);
+    StepRefusal refusal = checkStepEnergy(r.step, t_, t1, options_, k_new, p.p_new, p.target_now, p.energy_scale);
+    if (refusal.message.empty()) refusal = checkStepState(r.step, t_, t1, options_.integrator, p.x_new, p.v_new);
     if (!refusal.message.empty()) {
       refuse(s, refusal);
       continue;

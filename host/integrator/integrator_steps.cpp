@@ -1,5 +1,8 @@
 #include "integrator/integrator_steps.hpp"
 
+#include "validation.hpp"
+
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -162,6 +165,16 @@ StepRefusal stepRefusal(int step, double t, double t1, Integrator integrator, co
 
 StepRefusal nonFiniteState(int step, double t, double t1, Integrator integrator) {
   return stepRefusal(step, t, t1, integrator, "non-finite position or velocity", false);
+}
+
+StepRefusal checkStepState(int step, double t, double t1, Integrator integrator, const Eigen::MatrixX3d& x,
+                           const Eigen::MatrixX3d& v) {
+  const double largest = std::max(x.size() ? x.cwiseAbs().maxCoeff() : 0.0, v.size() ? v.cwiseAbs().maxCoeff() : 0.0);
+  if (largest <= validation::kMaxMagnitude) return StepRefusal{};
+  std::ostringstream what;
+  what << "position or velocity " << largest << " beyond " << validation::kMaxMagnitude
+       << " in magnitude (the largest state setState and a checkpoint take)";
+  return stepRefusal(step, t, t1, integrator, what.str(), false);
 }
 
 StepRefusal checkStepEnergy(int step, double t, double t1, const SimulatorOptions& options, double kinetic,

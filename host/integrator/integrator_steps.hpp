@@ -124,5 +124,10 @@ StepRefusal checkStepEnergy(int step, double t, double t1, const SimulatorOption
                             const PotentialEnergy& potential, double target, double energy_scale);
 /// The refusal of a non-finite position or velocity.
 StepRefusal nonFiniteState(int step, double t, double t1, Integrator integrator);
+/// A blow-up that is still finite: a position or velocity beyond validation::kMaxMagnitude, the
+/// largest value setState and a checkpoint take, is refused like a non-finite one, so that every
+/// accepted state can be saved, restored and set again.
+StepRefusal checkStepState(int step, double t, double t1, Integrator integrator, const Eigen::MatrixX3d& x,
+                           const Eigen::MatrixX3d& v);
 
 }  // namespace stabint

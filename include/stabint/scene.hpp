@@ -339,7 +339,8 @@ Eigen::VectorXd lumpMassesFromTets(const Eigen::MatrixX3d& rest_positions, const
 std::vector<std::array<int, 3>> tetSurface(const std::vector<Tet>& tets);
 
 /// Lumped masses from a triangle surface: each triangle gives areal_density * area / 3 to each
-/// of its vertices. Particles touched by no triangle get `min_mass`. Throws as lumpMassesFromTets.
+/// of its vertices. Particles touched by no triangle get `min_mass`. Throws as lumpMassesFromTets,
+/// and for a degenerate (flat) or overflowing rest triangle (naming it).
 Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
                                         const std::vector<std::array<int, 3>>& triangles, double areal_density,
                                         double min_mass = 1e-6);

@@ -8,12 +8,15 @@
 #include <stabint/errors.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <climits>
 #include <cmath>
 #include <cstddef>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace stabint::io {
@@ -234,6 +237,33 @@ void checkNoNul(const std::string& text, const std::string& file) {
   throw FileFormatError(file, line, "NUL byte at offset " + std::to_string(at) + ": not a JSON text");
 }
 
+// Line and column (1-based) of the first occurrence of the number `token` outside strings and not
+// inside a longer number or word.
+std::optional<std::pair<int, size_t>> findNumberToken(const std::string& text, const std::string& token) {
+  const auto part = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '.'; };
+  int line = 1;
+  size_t line_start = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '\n') {
+      ++line;
+      line_start = i + 1;
+    } else if (text.compare(i, token.size(), token) == 0 && (i == 0 || !part(text[i - 1])) &&
+               (i + token.size() >= text.size() || !part(text[i + token.size()]))) {
+      return std::make_pair(line, i - line_start + 1);
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 json parseJson(const std::string& text, const std::string& file) {
@@ -262,10 +292,18 @@ json parseJson(const std::string& text, const std::string& file) {
     throw FileFormatError(file, line,
                           "malformed JSON (column " + std::to_string(end - line_start + 1) + "): " + shown(what, 400));
   } catch (const json::exception& e) {
-    // Number overflow ("1e999") comes without a position.
+    // Number overflow ("1e999") comes without a position: the number it quotes is found in the
+    // text, outside strings, to give its line.
     std::string what = e.what();
     const size_t bracket = what.find("] ");
     if (bracket != std::string::npos) what = what.substr(bracket + 2);
+    const size_t open = what.find('\'');
+    const size_t close = open == std::string::npos ? std::string::npos : what.find('\'', open + 1);
+    if (close != std::string::npos && close > open + 1) {
+      if (const auto at = findNumberToken(text, what.substr(open + 1, close - open - 1)))
+        throw FileFormatError(file, at->first,
+                              "malformed JSON (column " + std::to_string(at->second) + "): " + shown(what, 400));
+    }
     throw FileFormatError(file, 0, "malformed JSON: " + shown(what, 400));
   }
 }

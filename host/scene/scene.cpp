@@ -327,8 +327,8 @@ Eigen::VectorXd lumpMassesFromTriangles(const Eigen::MatrixX3d& rest_positions,
   // A flat triangle lumps no mass: its corners would get min_mass, a made-up mass, and a cloth
   // builder given width 0 stepped particles of 1e-6 kg on zero-length springs.
   for (size_t i = 0; i < triangles.size(); ++i) {
-    const validation::RestShape r = validation::restTriangle(rest_positions, triangles[i]);
-    if (!r.fine()) invalid("triangle ", i, ": ", validation::restShapeProblem(r));
+    const std::array<int, 3>& t = triangles[i];
+    validation::checkRestTriangle(rest_positions, t[0], t[1], t[2], validation::Owner{"triangle", i});
   }
   Eigen::VectorXd masses = Eigen::VectorXd::Zero(rest_positions.rows());
   if (const auto failure = lumping::addTriangles(rest_positions, triangles, areal_density, "areal_density", masses)) {

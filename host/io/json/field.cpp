@@ -16,7 +16,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace stabint::io {
@@ -237,12 +236,10 @@ void checkNoNul(const std::string& text, const std::string& file) {
   throw FileFormatError(file, line, "NUL byte at offset " + std::to_string(at) + ": not a JSON text");
 }
 
-// Line and column (1-based) of the first occurrence of the number `token` outside strings and not
-// inside a longer number or word.
-std::optional<std::pair<int, size_t>> findNumberToken(const std::string& text, const std::string& token) {
+// The offset of the first occurrence of the number `token` outside strings and not inside a
+// longer number or word.
+std::optional<size_t> findNumberToken(const std::string& text, const std::string& token) {
   const auto part = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '.'; };
-  int line = 1;
-  size_t line_start = 0;
   bool in_string = false;
   for (size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
@@ -253,15 +250,27 @@ std::optional<std::pair<int, size_t>> findNumberToken(const std::string& text, c
         in_string = false;
     } else if (c == '"') {
       in_string = true;
-    } else if (c == '\n') {
-      ++line;
-      line_start = i + 1;
     } else if (text.compare(i, token.size(), token) == 0 && (i == 0 || !part(text[i - 1])) &&
                (i + token.size() >= text.size() || !part(text[i + token.size()]))) {
-      return std::make_pair(line, i - line_start + 1);
+      return i;
     }
   }
   return std::nullopt;
+}
+
+// Malformed JSON at byte `offset` of `text`: its line and column, and what the parser said.
+[[noreturn]] void throwMalformedAt(const std::string& text, const std::string& file, size_t offset,
+                                   const std::string& what) {
+  int line = 1;
+  size_t line_start = 0;
+  for (size_t i = 0; i < offset; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+  }
+  throw FileFormatError(file, line,
+                        "malformed JSON (column " + std::to_string(offset - line_start + 1) + "): " + shown(what, 400));
 }
 
 }  // namespace
@@ -275,22 +284,12 @@ json parseJson(const std::string& text, const std::string& file) {
     return doc;
   } catch (const json::parse_error& e) {
     // e.byte is the 1-based offset of the offending character; report line and column.
-    const size_t end = std::min<size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size());
-    int line = 1;
-    size_t line_start = 0;
-    for (size_t i = 0; i < end; ++i) {
-      if (text[i] == '\n') {
-        ++line;
-        line_start = i + 1;
-      }
-    }
     std::string what = e.what();
     const size_t column_at = what.find("column");
     const size_t colon = column_at == std::string::npos ? std::string::npos : what.find(": ", column_at);
     if (colon != std::string::npos) what = what.substr(colon + 2);
     // The message quotes what was last read, raw bytes included.
-    throw FileFormatError(file, line,
-                          "malformed JSON (column " + std::to_string(end - line_start + 1) + "): " + shown(what, 400));
+    throwMalformedAt(text, file, std::min<size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size()), what);
   } catch (const json::exception& e) {
     // Number overflow ("1e999") comes without a position: the number it quotes is found in the
     // text, outside strings, to give its line.
@@ -301,8 +300,7 @@ json parseJson(const std::string& text, const std::string& file) {
     const size_t close = open == std::string::npos ? std::string::npos : what.find('\'', open + 1);
     if (close != std::string::npos && close > open + 1) {
       if (const auto at = findNumberToken(text, what.substr(open + 1, close - open - 1)))
-        throw FileFormatError(file, at->first,
-                              "malformed JSON (column " + std::to_string(at->second) + "): " + shown(what, 400));
+        throwMalformedAt(text, file, *at, what);
     }
     throw FileFormatError(file, 0, "malformed JSON: " + shown(what, 400));
   }

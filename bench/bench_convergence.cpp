@@ -28,6 +28,7 @@
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "opencl/opencl_backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
@@ -144,16 +145,17 @@ struct PhaseFixture {
       : scene(s),
         data(s),
         backend(choice == BackendChoice::Cpu
-                    ? makeCpuBackend(data, kSlots)
-                    : makeOpenCLBackend(data, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl)),
+                    ? makeCpuBackend(data, forcing, kSlots)
+                    : makeOpenCLBackend(data, forcing, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl)),
         system(data),
         solver(*backend, system, kScratch) {
     y = s.positions;
     for (Eigen::Index j = 0; j < y.rows(); ++j) y.row(j) += (kH * kH * s.gravity).transpose();
-    solver.setScene(&data);  // the rigid motions' coarse space needs the one-particle elements
+    solver.setScene(data, forcing);  // the rigid motions' coarse space needs the one-particle elements
   }
   Scene scene;
   SceneData data;
+  Forcing forcing{data.scene()};
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   LocalGlobalSolver solver;

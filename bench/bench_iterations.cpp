@@ -25,6 +25,7 @@
 #include "cpu/cpu_backend.hpp"
 #include "elements/projections.hpp"
 #include "opencl/opencl_backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
@@ -46,9 +47,9 @@ enum { kX, kY, kScratch, kSlots };
 
 constexpr double kTimeStep = 1.0 / 30.0;
 
-std::unique_ptr<Backend> makeBackend(const SceneData& data, BackendChoice choice) {
-  if (choice == BackendChoice::Cpu) return makeCpuBackend(data, kSlots);
-  return makeOpenCLBackend(data, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl);
+std::unique_ptr<Backend> makeBackend(const SceneData& data, const Forcing& forcing, BackendChoice choice) {
+  if (choice == BackendChoice::Cpu) return makeCpuBackend(data, forcing, kSlots);
+  return makeOpenCLBackend(data, forcing, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl);
 }
 
 /// The solve's constant c = (factor / h^2) per integrator (docs/method.md section 2).
@@ -76,7 +77,12 @@ Eigen::MatrixX3d inertialTarget(const Scene& s) {
 
 struct IterationFixture {
   IterationFixture(const Scene& s, BackendChoice choice, double c_, int cg_iterations = 0)
-      : scene(s), data(s), backend(makeBackend(data, choice)), system(data), solver(*backend, system, kScratch), c(c_) {
+      : scene(s),
+        data(s),
+        backend(makeBackend(data, forcing, choice)),
+        system(data),
+        solver(*backend, system, kScratch),
+        c(c_) {
     if (cg_iterations > 0) {
       control.global_solve = GlobalSolve::ConjugateGradient;
       control.cg_iterations = cg_iterations;
@@ -90,6 +96,7 @@ struct IterationFixture {
   }
   Scene scene;
   SceneData data;
+  Forcing forcing{data.scene()};
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   LocalGlobalSolver solver;
@@ -157,7 +164,7 @@ void runGlobalSolve(benchmark::State& state, const std::string& key, const Scene
   setSizeCounters(state, f.scene);
   setPhaseCounters(state, f.backend->times());
   // Accuracy, outside the timed loop: the frame's result against the CPU factor's.
-  auto cpu = makeCpuBackend(f.data, kSlots);
+  auto cpu = makeCpuBackend(f.data, f.forcing, kSlots);
   const Eigen::MatrixX3d reference = frameSolve(*cpu, f.data, f.scene, IterationControl{10, 0.0, 10, 1.0});
   const Eigen::MatrixX3d x = frameSolve(*f.backend, f.data, f.scene, f.control);
   const double size = (f.scene.positions.colwise().maxCoeff() - f.scene.positions.colwise().minCoeff()).norm();

@@ -53,7 +53,7 @@ std::vector<SceneCase> passScenes() {
 }
 
 struct PassFixture {
-  explicit PassFixture(const Scene& s) : scene(s), data(scene), backend(makeCpuBackend(data, kSlots)) {
+  explicit PassFixture(const Scene& s) : scene(s), data(scene), backend(makeCpuBackend(data, forcing, kSlots)) {
     Simulator sim(scene, optionsFor(BackendChoice::Cpu, Integrator::BackwardEuler));
     for (int i = 0; i < 10; ++i) sim.step();
     Eigen::MatrixX3d y = sim.positions() + kTimeStep * sim.velocities();
@@ -62,6 +62,7 @@ struct PassFixture {
   }
   Scene scene;
   SceneData data;
+  Forcing forcing{data.scene()};
   std::unique_ptr<Backend> backend;
   Eigen::MatrixX3d rhs;
 };

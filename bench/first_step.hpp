@@ -6,6 +6,7 @@
 #include "backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "opencl/opencl_backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 
@@ -24,8 +25,8 @@ struct Fixture {
       : scene(s),
         data(s),
         backend(choice == BackendChoice::Cpu
-                    ? makeCpuBackend(data, kSlots)
-                    : makeOpenCLBackend(data, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl)),
+                    ? makeCpuBackend(data, forcing, kSlots)
+                    : makeOpenCLBackend(data, forcing, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl)),
         system(data) {
     Eigen::MatrixX3d y = s.positions;
     for (Eigen::Index j = 0; j < y.rows(); ++j) y.row(j) += (kTimeStep * kTimeStep * s.gravity).transpose();
@@ -36,6 +37,7 @@ struct Fixture {
   }
   Scene scene;
   SceneData data;
+  Forcing forcing{data.scene()};
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   Eigen::MatrixX3d rhs, x;

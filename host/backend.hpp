@@ -16,6 +16,7 @@
 
 namespace stabint {
 
+class Forcing;
 class SceneData;
 
 /// Potential energy split by the way the blend books it: the internal energy of the elements

@@ -6,6 +6,7 @@
 #include "contact_scenes.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "cpu/worker_pool.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 
@@ -143,7 +144,8 @@ struct PassResults {
 
 PassResults passResults(const Scene& scene, const Eigen::MatrixX3d& x) {
   const SceneData data(scene);
-  auto backend = makeCpuBackend(data, 2);
+  Forcing forcing(data.scene());
+  auto backend = makeCpuBackend(data, forcing, 2);
   backend->write(0, x);
   backend->write(1, scene.positions);
   PassResults r;

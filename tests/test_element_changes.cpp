@@ -140,6 +140,35 @@ TEST(ElementChanges, ChangesAreBookedAsEvents) {
   EXPECT_EQ(sim.step().event_energy, 0.0);
 }
 
+// A pin whose target moves has params that depend on time, which the backends cache per time:
+// a change of its stiffness (or its flag) at the same time must reach the cached params. Its
+// energy k/2 |x - q(t)|^2 is linear in k: with the pin's energy e the elastic energy goes from
+// others + e to others + 4 e when k is quadrupled, and to others when it is disabled (round-off of
+// the sums over the pins).
+TEST(ElementChanges, AMovingPinsStiffnessReachesItsTimedParams) {
+  for (BackendKind backend : {BackendKind::CpuReference, BackendKind::OpenCL}) {
+    if (backend == BackendKind::OpenCL && listOpenCLDevices().empty()) continue;
+    SCOPED_TRACE(backendName(backend));
+    ClothGridParams cp;
+    cp.nx = cp.ny = 6;
+    Scene scene = makeClothGrid(cp);
+    ASSERT_FALSE(scene.pins.empty());
+    scene.pins[0].target.velocity = Eigen::Vector3d(0.3, 0.0, 0.0);  // a moving target: timed params
+    SimulatorOptions o;
+    o.backend = backend;
+    Simulator sim(scene, o);
+    for (int i = 0; i < 5; ++i) sim.step();
+    const double before = sim.energy().elastic;
+    sim.setElementStiffness(ElementKind::Pin, 0, 4.0 * scene.pins[0].stiffness);
+    const double stiffer = sim.energy().elastic;
+    sim.setElementEnabled(ElementKind::Pin, 0, false);
+    const double others = sim.energy().elastic;
+    const double e = before - others;
+    ASSERT_GT(e, 1e-3 * before) << "the moving pin's target has left its particle behind";
+    EXPECT_NEAR(stiffer - others, 4.0 * e, 1e-9 * before);
+  }
+}
+
 TEST(ElementChanges, BadCallsAreNamedAndChangeNothing) {
   const Scene cloth = testing::triangleCloth();
   SimulatorOptions o;

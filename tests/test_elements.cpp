@@ -8,6 +8,7 @@
 #include "cpu/cpu_backend.hpp"
 #include "elements/element_type.hpp"
 #include "elements/projections.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "triangle_cloth_scene.hpp"
 
@@ -189,7 +190,8 @@ TEST_P(ElementEnergyTest, EnergyIsZeroAtRestAndInvariantUnderRigidMotion) {
   s.gravity.setZero();
   s.force_fields.clear();
   SceneData data(s);
-  auto backend = makeCpuBackend(data, 1);
+  Forcing forcing(data.scene());
+  auto backend = makeCpuBackend(data, forcing, 1);
   backend->write(0, s.rest_positions);
   // At rest each projection returns A x itself up to round-off (1e-16 relative), whose square
   // is far below 1e-20 of the deformed energy below.
@@ -211,7 +213,8 @@ TEST_P(ElementEnergyTest, EnergyIsZeroAtRestAndInvariantUnderRigidMotion) {
 TEST_P(ElementEnergyTest, ForcesAreTheNegativeEnergyGradient) {
   const Scene s = forcesScene(GetParam());
   SceneData data(s);
-  auto backend = makeCpuBackend(data, 2);
+  Forcing forcing(data.scene());
+  auto backend = makeCpuBackend(data, forcing, 2);
   const double t = 0.37;
   const Eigen::MatrixX3d x = perturbed(s.rest_positions, 0.05, 2);
   backend->write(0, x);

@@ -6,6 +6,7 @@
 #include <stabint/stabint.hpp>
 
 #include "cpu/cpu_backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
@@ -46,6 +47,7 @@ class HostCgTest : public ::testing::TestWithParam<bool> {
 
 TEST_P(HostCgTest, SolvesToTheRequestedToleranceAgainstTheFactor) {
   const SceneData data(scene());
+  Forcing forcing(data.scene());
   GlobalSystem system(data);
   const double h = 1.0 / 30.0;
   for (const double c : {1.0 / (h * h), 4.0 / (h * h)}) {
@@ -68,6 +70,7 @@ TEST_P(HostCgTest, SolvesToTheRequestedToleranceAgainstTheFactor) {
 
 TEST_P(HostCgTest, WarmStartAtTheSolutionStaysThere) {
   const SceneData data(scene());
+  Forcing forcing(data.scene());
   GlobalSystem system(data);
   const double c = 900.0;
   const Eigen::MatrixX3d rhs = randomRhs(data.numParticles(), 5);
@@ -80,6 +83,7 @@ TEST_P(HostCgTest, WarmStartAtTheSolutionStaysThere) {
 
 TEST_P(HostCgTest, FollowsChangesOfTheMatrix) {
   const SceneData data(scene());
+  Forcing forcing(data.scene());
   GlobalSystem system(data);
   const double c = 900.0;
   const Eigen::MatrixX3d rhs = randomRhs(data.numParticles(), 7);
@@ -102,7 +106,8 @@ INSTANTIATE_TEST_SUITE_P(Scenes, HostCgTest, ::testing::Values(false, true),
 TEST(HostCgLocalGlobal, ObjectiveNeverIncreasesWithFewCgIterations) {
   for (const Scene& s : {cgClothScene(), cgTetScene()}) {
     const SceneData data(s);
-    auto backend = makeCpuBackend(data, kSlots);
+    Forcing forcing(data.scene());
+    auto backend = makeCpuBackend(data, forcing, kSlots);
     GlobalSystem system(data);
     LocalGlobalSolver solver(*backend, system, kScratch);
     Eigen::MatrixX3d y = s.positions;

@@ -5,6 +5,7 @@
 
 #include "cpu/cpu_backend.hpp"
 #include "elements/element_type.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
@@ -37,10 +38,11 @@ Scene tetScene() {
 
 struct Fixture {
   explicit Fixture(const Scene& s)
-      : data(s), backend(makeCpuBackend(data, kSlots)), system(data), solver(*backend, system, kScratch) {
-    solver.setScene(&data);
+      : data(s), backend(makeCpuBackend(data, forcing, kSlots)), system(data), solver(*backend, system, kScratch) {
+    solver.setScene(data, forcing);
   }
   SceneData data;
+  Forcing forcing{data.scene()};
   std::unique_ptr<Backend> backend;
   GlobalSystem system;
   LocalGlobalSolver solver;

@@ -17,6 +17,7 @@
 
 #include "cpu/cpu_backend.hpp"
 #include "opencl/opencl_backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "test_opencl_support.hpp"
 #include "triangle_cloth_scene.hpp"
@@ -66,13 +67,15 @@ class OpenCLBackendTest : public ::testing::TestWithParam<Precision> {
   // Both backends with slot 0 = x, slot 1 = y (or v), slot 2 = scratch.
   struct Pair {
     std::unique_ptr<SceneData> data;
+    std::unique_ptr<Forcing> forcing;
     std::unique_ptr<Backend> cpu, ocl;
   };
   Pair makePair(const Case& c) {
     Pair p;
     p.data = std::make_unique<SceneData>(c.scene);
-    p.cpu = makeCpuBackend(*p.data, kSlots);
-    p.ocl = makeOpenCLBackend(*p.data, kSlots, testing::openclOptions(precision()));
+    p.forcing = std::make_unique<Forcing>(p.data->scene());
+    p.cpu = makeCpuBackend(*p.data, *p.forcing, kSlots);
+    p.ocl = makeOpenCLBackend(*p.data, *p.forcing, kSlots, testing::openclOptions(precision()));
     const Eigen::MatrixX3d x = perturbed(c.scene.rest_positions, c.noise, 1);
     const Eigen::MatrixX3d y = perturbed(c.scene.rest_positions, c.noise, 2);
     for (Backend* b : {p.cpu.get(), p.ocl.get()}) {
@@ -158,7 +161,7 @@ TEST_P(OpenCLBackendTest, PotentialMatchesCpu) {
       const PotentialEnergy got = p.ocl->potential(0, t);
       // External energy -sum f.x can cancel; judge it against the sum of |f| |x|.
       Eigen::MatrixX3d f, x;
-      p.data->externalForces(t, f);
+      p.forcing->externalForces(t, f);
       p.cpu->read(0, x);
       const double external_scale = f.cwiseAbs().cwiseProduct(x.cwiseAbs()).sum();
       EXPECT_LE(std::abs(got.internal - ref.internal), energyTol() * std::abs(ref.internal)) << "t = " << t;
@@ -194,7 +197,8 @@ TEST_P(OpenCLBackendTest, MassDotCombineCopyMatchCpu) {
 TEST_P(OpenCLBackendTest, WriteReadRoundTrip) {
   const Scene scene = makeClothGrid({});
   SceneData data(scene);
-  auto ocl = makeOpenCLBackend(data, 2, testing::openclOptions(precision()));
+  Forcing forcing(data.scene());
+  auto ocl = makeOpenCLBackend(data, forcing, 2, testing::openclOptions(precision()));
   const Eigen::MatrixX3d x = perturbed(scene.positions, 0.1, 3);
   ocl->write(1, x);
   Eigen::MatrixX3d back;
@@ -212,6 +216,7 @@ TEST_P(OpenCLBackendTest, WriteReadRoundTrip) {
 TEST_P(OpenCLBackendTest, ResultsAreBitIdenticalAcrossRunsAndInstances) {
   const Case c{"random", testing::randomScene(5, 2000, 20000, 3000, 20), 0.05};
   SceneData data(c.scene);
+  Forcing forcing(data.scene());
   auto run = [&](Backend& b) {
     b.write(0, perturbed(c.scene.rest_positions, c.noise, 1));
     b.write(1, perturbed(c.scene.rest_positions, c.noise, 2));
@@ -228,8 +233,8 @@ TEST_P(OpenCLBackendTest, ResultsAreBitIdenticalAcrossRunsAndInstances) {
     }
     return out;
   };
-  auto first = makeOpenCLBackend(data, kSlots, testing::openclOptions(precision()));
-  auto second = makeOpenCLBackend(data, kSlots, testing::openclOptions(precision()));
+  auto first = makeOpenCLBackend(data, forcing, kSlots, testing::openclOptions(precision()));
+  auto second = makeOpenCLBackend(data, forcing, kSlots, testing::openclOptions(precision()));
   const std::vector<double> a = run(*first);
   const std::vector<double> b = run(*second);
   ASSERT_EQ(a.size(), b.size());
@@ -244,7 +249,8 @@ TEST_P(OpenCLBackendTest, ResultsAreBitIdenticalAcrossRunsAndInstances) {
 TEST_P(OpenCLBackendTest, LargeReductionMatchesCompensatedSum) {
   const Scene scene = testing::randomScene(3, 20000, 200000, 0, 0);
   SceneData data(scene);
-  auto ocl = makeOpenCLBackend(data, 1, testing::openclOptions(precision()));
+  Forcing forcing(data.scene());
+  auto ocl = makeOpenCLBackend(data, forcing, 1, testing::openclOptions(precision()));
   const Eigen::MatrixX3d x = perturbed(scene.rest_positions, 0.02, 9);
   ocl->write(0, x);
   std::vector<double> energies;
@@ -267,7 +273,8 @@ TEST_P(OpenCLBackendTest, LargeReductionMatchesCompensatedSum) {
 
 TEST_P(OpenCLBackendTest, DescriptionNamesDeviceAndPrecision) {
   SceneData data(makeChainPendulum({}));
-  auto ocl = makeOpenCLBackend(data, 1, testing::openclOptions(precision()));
+  Forcing forcing(data.scene());
+  auto ocl = makeOpenCLBackend(data, forcing, 1, testing::openclOptions(precision()));
   const std::string d = ocl->description();
   EXPECT_EQ(d.rfind("OpenCL: ", 0), 0u) << d;
   EXPECT_NE(d.find(" / "), std::string::npos) << d;
@@ -276,7 +283,8 @@ TEST_P(OpenCLBackendTest, DescriptionNamesDeviceAndPrecision) {
 
 TEST_P(OpenCLBackendTest, PhaseTimersAccumulate) {
   SceneData data(makeClothGrid({}));
-  auto ocl = makeOpenCLBackend(data, 2, testing::openclOptions(precision()));
+  Forcing forcing(data.scene());
+  auto ocl = makeOpenCLBackend(data, forcing, 2, testing::openclOptions(precision()));
   ocl->write(0, data.scene().positions);
   ocl->write(1, data.scene().positions);
   ocl->times() = PhaseTimes{};

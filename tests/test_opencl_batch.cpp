@@ -12,6 +12,7 @@
 #include "integrator/batch_simulator.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_batch.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 
 #include <gtest/gtest.h>
@@ -46,9 +47,9 @@ double orderChangeTolerance(Precision p) { return p == Precision::Double ? 1e-12
 
 // sum_j |f_j . x_j| over rows [first, first + count): the size of the external potential's terms,
 // against which its error is judged (the sum itself may cancel).
-double externalMagnitude(const SceneData& data, const Eigen::MatrixX3d& x, double t, int first, int count) {
+double externalMagnitude(const Forcing& forcing, const Eigen::MatrixX3d& x, double t, int first, int count) {
   Eigen::MatrixX3d f;
-  data.externalForces(t, f);
+  forcing.externalForces(t, f);
   return f.middleRows(first, count).cwiseProduct(x.middleRows(first, count)).rowwise().sum().cwiseAbs().sum();
 }
 
@@ -65,11 +66,12 @@ struct MixedBatchOnDevice {
   explicit MixedBatchOnDevice(Precision precision, int copies = 1)
       : batch(concatenateScenes(mixedCopies(copies))),
         data(batch.scene),
-        backend(makeOpenCLBackend(data, 2, openclOptions(precision))) {
+        backend(makeOpenCLBackend(data, forcing, 2, openclOptions(precision))) {
     backend->setSegments(batch.segments);
   }
   const SceneBatch batch;
   const SceneData data;
+  Forcing forcing{data.scene()};
   const std::unique_ptr<Backend> backend;
 };
 
@@ -82,7 +84,8 @@ TEST(OpenCLBatch, OneSegmentEqualsTheSingleValueCalls) {
     const SceneBatch whole = concatenateScenes({batch.scene});
     ASSERT_EQ(whole.segments.size(), 1u);
     const SceneData data(batch.scene);
-    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    Forcing forcing(data.scene());
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, forcing, 2, openclOptions(precision));
     ASSERT_TRUE(backend->computesPerScene());
     backend->setSegments(whole.segments);
     const Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 3);
@@ -100,7 +103,7 @@ TEST(OpenCLBatch, OneSegmentEqualsTheSingleValueCalls) {
       EXPECT_NEAR(per_scene[0].internal, single.internal, tol * single.internal) << "t = " << t;
       EXPECT_NEAR(per_scene[0].pins, single.pins, tol * single.pins) << "t = " << t;
       EXPECT_NEAR(per_scene[0].external, single.external,
-                  tol * externalMagnitude(data, x, t, 0, batch.scene.numParticles()))
+                  tol * externalMagnitude(forcing, x, t, 0, batch.scene.numParticles()))
           << "t = " << t;
     }
     std::vector<double> dots;
@@ -115,7 +118,7 @@ TEST(OpenCLBatch, OneSegmentEqualsTheSingleValueCalls) {
 // Each scene's potential and mass dot from the OpenCL batch equal the CPU reference's per-scene
 // values (which are each scene's own backend's, tests/test_scene_batch.cpp), to the cross-backend
 // tolerance, relative to the size of the scene's terms.
-void expectPerSceneEqualsCpu(const SceneData& data, const SceneBatch& batch, Backend& opencl, Backend& cpu,
+void expectPerSceneEqualsCpu(const Forcing& forcing, const SceneBatch& batch, Backend& opencl, Backend& cpu,
                              const Eigen::MatrixX3d& x, double t, Precision precision) {
   std::vector<PotentialEnergy> got, want;
   opencl.potentials(0, t, got);
@@ -134,7 +137,7 @@ void expectPerSceneEqualsCpu(const SceneData& data, const SceneBatch& batch, Bac
     EXPECT_NEAR(got[s].internal, want[s].internal, tol * want[s].internal);
     EXPECT_NEAR(got[s].pins, want[s].pins, tol * want[s].pins);
     EXPECT_NEAR(got[s].external, want[s].external,
-                tol * externalMagnitude(data, x, t, seg.first_particle, seg.num_particles));
+                tol * externalMagnitude(forcing, x, t, seg.first_particle, seg.num_particles));
     EXPECT_GT(want_dots[s], 0.0);
     EXPECT_NEAR(got_dots[s], want_dots[s], tol * want_dots[s]);
   }
@@ -145,8 +148,9 @@ TEST(OpenCLBatch, PerSceneValuesEqualTheCpuReferences) {
     SCOPED_TRACE(precisionName(precision));
     const SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
     const SceneData data(batch.scene);
-    const std::unique_ptr<Backend> opencl = makeOpenCLBackend(data, 2, openclOptions(precision));
-    const std::unique_ptr<Backend> cpu = makeCpuBackend(data, 2);
+    Forcing forcing(data.scene());
+    const std::unique_ptr<Backend> opencl = makeOpenCLBackend(data, forcing, 2, openclOptions(precision));
+    const std::unique_ptr<Backend> cpu = makeCpuBackend(data, forcing, 2);
     opencl->setSegments(batch.segments);
     cpu->setSegments(batch.segments);
     Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 5);
@@ -158,7 +162,7 @@ TEST(OpenCLBatch, PerSceneValuesEqualTheCpuReferences) {
       b->write(1, v);
     }
     // The chain's field has grown by its rate at t = 0.7; the bar's pins hold at t = 0.
-    for (double t : {0.0, 0.7}) expectPerSceneEqualsCpu(data, batch, *opencl, *cpu, x, t, precision);
+    for (double t : {0.0, 0.7}) expectPerSceneEqualsCpu(forcing, batch, *opencl, *cpu, x, t, precision);
   }
 }
 
@@ -257,8 +261,9 @@ TEST(OpenCLBatch, SegmentsFollowAChangeOfThePins) {
     SCOPED_TRACE(precisionName(precision));
     SceneBatch batch = concatenateScenes(testing::mixedBatchScenes());
     SceneData data(batch.scene);
-    const std::unique_ptr<Backend> opencl = makeOpenCLBackend(data, 2, openclOptions(precision));
-    const std::unique_ptr<Backend> cpu = makeCpuBackend(data, 2);
+    Forcing forcing(data.scene());
+    const std::unique_ptr<Backend> opencl = makeOpenCLBackend(data, forcing, 2, openclOptions(precision));
+    const std::unique_ptr<Backend> cpu = makeCpuBackend(data, forcing, 2);
     opencl->setSegments(batch.segments);
     // A pin on the last scene's first particle, at the end of the pins block: the last segment's.
     std::vector<Pin> pins = batch.scene.pins;
@@ -281,7 +286,7 @@ TEST(OpenCLBatch, SegmentsFollowAChangeOfThePins) {
       b->write(0, x);
       b->write(1, v);
     }
-    expectPerSceneEqualsCpu(data, batch, *opencl, *cpu, x, 0.3, precision);
+    expectPerSceneEqualsCpu(forcing, batch, *opencl, *cpu, x, 0.3, precision);
   }
 }
 
@@ -329,7 +334,8 @@ TEST(OpenCLBatch, OneScenesRowsAndPotentialAreItsPartOfTheWholeSlotsAndPass) {
     SCOPED_TRACE(precisionName(precision));
     const SceneBatch batch = concatenateScenes(manyScenes());
     const SceneData data(batch.scene);
-    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    Forcing forcing(data.scene());
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, forcing, 2, openclOptions(precision));
     ASSERT_TRUE(backend->writesRows());
     backend->setSegments(batch.segments);
     const Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 9);
@@ -401,7 +407,8 @@ TEST(OpenCLBatch, SeveralScenesPotentialsAreTheWholePassValues) {
     SCOPED_TRACE(precisionName(precision));
     const SceneBatch batch = concatenateScenes(std::vector<Scene>(300, makeChainPendulum(params)));
     const SceneData data(batch.scene);
-    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    Forcing forcing(data.scene());
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, forcing, 2, openclOptions(precision));
     backend->setSegments(batch.segments);
     backend->write(0, testing::perturbed(batch.scene.positions, 0.02, 3));
     backend->write(1, testing::perturbed(batch.scene.positions, 0.05, 4));
@@ -431,7 +438,8 @@ TEST(OpenCLBatch, ElementChangesReachTheDeviceAsAFreshUploadWould) {
     SCOPED_TRACE(precisionName(precision));
     const SceneBatch batch = concatenateScenes(manyScenes());
     SceneData data(batch.scene);
-    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 1, openclOptions(precision));
+    Forcing forcing(data.scene());
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, forcing, 1, openclOptions(precision));
     backend->setSegments(batch.segments);
     const Eigen::MatrixX3d x = testing::perturbed(batch.scene.positions, 0.02, 14);
     backend->write(0, x);
@@ -442,7 +450,7 @@ TEST(OpenCLBatch, ElementChangesReachTheDeviceAsAFreshUploadWould) {
     const double k = batch.scene.springs[0].stiffness;
     const auto expectAsFresh = [&](const char* what) {
       backend->potentials(0, 0.0, got);
-      const std::unique_ptr<Backend> fresh = makeOpenCLBackend(data, 1, openclOptions(precision));
+      const std::unique_ptr<Backend> fresh = makeOpenCLBackend(data, forcing, 1, openclOptions(precision));
       fresh->setSegments(batch.segments);
       fresh->write(0, x);
       std::vector<PotentialEnergy> want;
@@ -466,7 +474,8 @@ TEST(OpenCLBatch, TheOneSegmentOfABatchOfOneIsTheSingleValuePass) {
     SCOPED_TRACE(precisionName(precision));
     const SceneBatch whole = concatenateScenes({testing::mixedBatchScenes()[2]});
     const SceneData data(whole.scene);
-    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, 2, openclOptions(precision));
+    Forcing forcing(data.scene());
+    const std::unique_ptr<Backend> backend = makeOpenCLBackend(data, forcing, 2, openclOptions(precision));
     backend->setSegments(whole.segments);
     backend->write(0, testing::perturbed(whole.scene.positions, 0.02, 11));
     const PotentialEnergy one = backend->potentialOf(0, 0, 0.0), single = backend->potential(0, 0.0);

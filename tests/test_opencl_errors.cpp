@@ -7,6 +7,7 @@
 
 #include "opencl/cl_runtime.hpp"
 #include "opencl/opencl_backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "test_opencl_support.hpp"
 
@@ -54,10 +55,11 @@ TEST_F(OpenCLErrorsTest, ListedDevicesHaveNames) {
 
 TEST_F(OpenCLErrorsTest, SelectorMatchingNothingIsNoDeviceError) {
   SceneData data(makeChainPendulum({}));
+  Forcing forcing(data.scene());
   OpenCLOptions options;
   options.device = "no-such-device-xyz";
   try {
-    makeOpenCLBackend(data, 1, options);
+    makeOpenCLBackend(data, forcing, 1, options);
     FAIL() << "expected NoOpenCLDeviceError";
   } catch (const NoOpenCLDeviceError& e) {
     const std::string what = e.what();
@@ -67,28 +69,29 @@ TEST_F(OpenCLErrorsTest, SelectorMatchingNothingIsNoDeviceError) {
   }
   options.device.clear();
   options.platform = "99";
-  EXPECT_THROW(makeOpenCLBackend(data, 1, options), NoOpenCLDeviceError);
+  EXPECT_THROW(makeOpenCLBackend(data, forcing, 1, options), NoOpenCLDeviceError);
 }
 
 TEST_F(OpenCLErrorsTest, EnvironmentVariablesSelectTheDevice) {
   const OpenCLDeviceInfo first = listOpenCLDevices().front();
   SceneData data(makeChainPendulum({}));
+  Forcing forcing(data.scene());
   {
     ScopedEnv platform("STABINT_OPENCL_PLATFORM", std::to_string(first.platform_index).c_str());
     // A case-changed substring of the name selects by name.
     std::string part = first.device_name.substr(0, std::min<std::size_t>(6, first.device_name.size()));
     for (char& ch : part) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
     ScopedEnv device("STABINT_OPENCL_DEVICE", part.c_str());
-    auto backend = makeOpenCLBackend(data, 1, testing::openclOptions(Precision::Float));
+    auto backend = makeOpenCLBackend(data, forcing, 1, testing::openclOptions(Precision::Float));
     EXPECT_NE(backend->description().find(first.device_name), std::string::npos);
   }
   {
     ScopedEnv device("STABINT_OPENCL_DEVICE", "no-such-device-xyz");
-    EXPECT_THROW(makeOpenCLBackend(data, 1, testing::openclOptions(Precision::Float)), NoOpenCLDeviceError);
+    EXPECT_THROW(makeOpenCLBackend(data, forcing, 1, testing::openclOptions(Precision::Float)), NoOpenCLDeviceError);
     // Options take precedence over the environment.
     OpenCLOptions options = testing::openclOptions(Precision::Float);
     options.device = std::to_string(first.device_index);
-    EXPECT_NO_THROW(makeOpenCLBackend(data, 1, options));
+    EXPECT_NO_THROW(makeOpenCLBackend(data, forcing, 1, options));
   }
 }
 

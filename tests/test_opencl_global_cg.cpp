@@ -7,6 +7,7 @@
 
 #include "cpu/cpu_backend.hpp"
 #include "opencl/opencl_backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
@@ -69,9 +70,10 @@ TEST_P(OpenCLGlobalCgTest, FixedCountAgreesWithTheCpuReference) {
   STABINT_SKIP_WITHOUT_OPENCL(p);
   for (const Scene& s : {cgClothScene(), cgTetScene()}) {
     const SceneData data(s);
+    Forcing forcing(data.scene());
     for (const int cg : {1, 5, 20}) {
-      auto cpu = makeCpuBackend(data, kSlots);
-      auto device = makeOpenCLBackend(data, kSlots, openclOptions(p));
+      auto cpu = makeCpuBackend(data, forcing, kSlots);
+      auto device = makeOpenCLBackend(data, forcing, kSlots, openclOptions(p));
       const IterationControl control = cgControl(5, cg, 0.0);
       const Eigen::MatrixX3d reference = solveOn(*cpu, data, s, control);
       const Eigen::MatrixX3d x = solveOn(*device, data, s, control);
@@ -90,8 +92,9 @@ TEST_P(OpenCLGlobalCgTest, SolvesToTheRequestedToleranceAgainstTheFactor) {
   const double tolerance = p == Precision::Double ? 1e-10 : 1e-5;
   for (const Scene& s : {cgClothScene(), cgTetScene()}) {
     const SceneData data(s);
-    auto cpu = makeCpuBackend(data, kSlots);
-    auto device = makeOpenCLBackend(data, kSlots, openclOptions(p));
+    Forcing forcing(data.scene());
+    auto cpu = makeCpuBackend(data, forcing, kSlots);
+    auto device = makeOpenCLBackend(data, forcing, kSlots, openclOptions(p));
     const Eigen::MatrixX3d exact = solveOn(*cpu, data, s, IterationControl{1, 0.0, 1, 1.0});
     const Eigen::MatrixX3d x = solveOn(*device, data, s, cgControl(1, 1000, tolerance));
     EXPECT_LE(relativeError(x, exact), 100.0 * tolerance);
@@ -135,6 +138,7 @@ TEST(OpenCLGlobalCg, TrackedAndAcceleratedSolvesAgreeWithTheCpuReference) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
   const Scene s = cgTetScene();
   const SceneData data(s);
+  Forcing forcing(data.scene());
   for (const Acceleration acceleration :
        {Acceleration::None, Acceleration::Chebyshev, Acceleration::Anderson, Acceleration::LBFGS}) {
     IterationControl control = cgControl(15, 8, 0.0);
@@ -142,8 +146,8 @@ TEST(OpenCLGlobalCg, TrackedAndAcceleratedSolvesAgreeWithTheCpuReference) {
     control.tolerance = acceleration == Acceleration::None ? 1e-9 : 0.0;  // tracked to a tolerance
     control.max_iterations = 15;
     control.energy_scale = 1.0;
-    auto cpu = makeCpuBackend(data, kSlots);
-    auto device = makeOpenCLBackend(data, kSlots, openclOptions(Precision::Double));
+    auto cpu = makeCpuBackend(data, forcing, kSlots);
+    auto device = makeOpenCLBackend(data, forcing, kSlots, openclOptions(Precision::Double));
     const Eigen::MatrixX3d reference = solveOn(*cpu, data, s, control);
     const Eigen::MatrixX3d x = solveOn(*device, data, s, control);
     // Measured 5e-16: the same iterates and the same decisions.
@@ -186,8 +190,9 @@ TEST(OpenCLGlobalCg, ToleranceStopsEarly) {
   STABINT_SKIP_WITHOUT_OPENCL(Precision::Double);
   const Scene s = cgClothScene();
   const SceneData data(s);
+  Forcing forcing(data.scene());
   GlobalSystem system(data);
-  auto device = makeOpenCLBackend(data, kSlots, openclOptions(Precision::Double));
+  auto device = makeOpenCLBackend(data, forcing, kSlots, openclOptions(Precision::Double));
   device->setGlobalMatrix(system.stiffnessLaplacian());
   const Eigen::MatrixX3d y = stretched(s);
   const double h = 1.0 / 30.0, c = 1.0 / (h * h);

@@ -6,6 +6,7 @@
 #include <stabint/simulator.hpp>
 
 #include "opencl/opencl_backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 
 #include <gtest/gtest.h>
@@ -42,11 +43,12 @@ TEST(OpenCLNoDevice, ListIsEmptyAndDoesNotThrow) {
 
 TEST(OpenCLNoDevice, BackendConstructionThrowsNoDeviceError) {
   SceneData data(makeChainPendulum({}));
+  Forcing forcing(data.scene());
   for (Precision precision : {Precision::Double, Precision::Float}) {
     OpenCLOptions options;
     options.precision = precision;
     try {
-      makeOpenCLBackend(data, 2, options);
+      makeOpenCLBackend(data, forcing, 2, options);
       FAIL() << "expected NoOpenCLDeviceError";
     } catch (const NoOpenCLDeviceError& e) {
       const std::string what = e.what();

@@ -11,6 +11,7 @@
 #include "cpu/worker_pool.hpp"
 #include "elements/element_type.hpp"
 #include "scene/scene_batch.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
@@ -125,7 +126,8 @@ TEST(SceneBatch, CpuPerSceneEnergiesAreEachScenesOwn) {
   const std::vector<Scene> scenes = mixedBatchScenes();
   const SceneBatch batch = concatenateScenes(scenes);
   const SceneData data(batch.scene);
-  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
+  Forcing forcing(data.scene());
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, forcing, 2);
   ASSERT_TRUE(backend->computesPerScene());
   backend->setSegments(batch.segments);
   backend->write(0, perturbed(batch.scene.positions, 0.02));
@@ -140,7 +142,8 @@ TEST(SceneBatch, CpuPerSceneEnergiesAreEachScenesOwn) {
   for (std::size_t s = 0; s < scenes.size(); ++s) {
     const SceneSegment& seg = batch.segments[s];
     const SceneData own_data(scenes[s]);
-    const std::unique_ptr<Backend> own = makeCpuBackend(own_data, 2);
+    Forcing own_forcing(own_data.scene());
+    const std::unique_ptr<Backend> own = makeCpuBackend(own_data, own_forcing, 2);
     own->write(0, perturbed(batch.scene.positions, 0.02).middleRows(seg.first_particle, seg.num_particles));
     own->write(1, perturbed(batch.scene.velocities, 0.5).middleRows(seg.first_particle, seg.num_particles));
     const PotentialEnergy p = own->potential(0, t);
@@ -189,7 +192,8 @@ TEST(SceneBatch, PotentialsOfAnLbfgsResultAreThePerScenePass) {
   const std::vector<Scene> scenes = mixedBatchScenes();
   const SceneBatch batch = concatenateScenes(scenes);
   const SceneData data(batch.scene);
-  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 3);
+  Forcing forcing(data.scene());
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, forcing, 3);
   backend->setSegments(batch.segments);
   GlobalSystem system(data);
   LocalGlobalSolver solver(*backend, system, 2);
@@ -223,7 +227,8 @@ TEST(SceneBatch, CpuPerScenePassesOnThreadsAreTheSerialOnes) {
     for (const Scene& s : mixedBatchScenes()) scenes.push_back(s);
   const SceneBatch batch = concatenateScenes(scenes);
   const SceneData data(batch.scene);
-  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
+  Forcing forcing(data.scene());
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, forcing, 2);
   backend->setSegments(batch.segments);
   backend->write(0, perturbed(batch.scene.positions, 0.02));
   backend->write(1, batch.scene.positions);
@@ -318,6 +323,7 @@ TEST(SceneBatch, ScenesThatTakeNoPartInASolveKeepTheirWarmStart) {
   const std::vector<Scene> scenes = mixedBatchScenes();
   const SceneBatch batch = concatenateScenes(scenes);
   const SceneData data(batch.scene);
+  Forcing forcing(data.scene());
   const std::vector<char> solving = {1, 0, 1, 0};
   ASSERT_EQ(solving.size(), scenes.size());
   const Eigen::MatrixX3d warm = perturbed(batch.scene.positions, 0.02);
@@ -340,7 +346,7 @@ TEST(SceneBatch, ScenesThatTakeNoPartInASolveKeepTheirWarmStart) {
       control.global_solve = global;
       auto run = [&](const std::vector<char>& taking_part, Eigen::MatrixX3d& x, std::vector<int>& iterations,
                      std::vector<PotentialEnergy>& potentials) {
-        const std::unique_ptr<Backend> backend = makeCpuBackend(data, 3);
+        const std::unique_ptr<Backend> backend = makeCpuBackend(data, forcing, 3);
         backend->setSegments(batch.segments);
         GlobalSystem system(data);
         LocalGlobalSolver solver(*backend, system, 2);
@@ -387,7 +393,7 @@ TEST(SceneBatch, ScenesThatTakeNoPartInASolveKeepTheirWarmStart) {
     }
   // The flags hold for one solve: the next one, given none, solves every scene.
   {
-    const std::unique_ptr<Backend> backend = makeCpuBackend(data, 3);
+    const std::unique_ptr<Backend> backend = makeCpuBackend(data, forcing, 3);
     backend->setSegments(batch.segments);
     GlobalSystem system(data);
     LocalGlobalSolver solver(*backend, system, 2);
@@ -404,7 +410,7 @@ TEST(SceneBatch, ScenesThatTakeNoPartInASolveKeepTheirWarmStart) {
     }
   }
   // The CPU reference's pass skips the scenes not flagged: their entries stay as they were.
-  const std::unique_ptr<Backend> backend = makeCpuBackend(data, 2);
+  const std::unique_ptr<Backend> backend = makeCpuBackend(data, forcing, 2);
   backend->setSegments(batch.segments);
   backend->write(0, warm);
   backend->write(1, batch.scene.positions);

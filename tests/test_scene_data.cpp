@@ -3,6 +3,7 @@
 #include <stabint/errors.hpp>
 #include <stabint/scene.hpp>
 
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 
 #include <gtest/gtest.h>
@@ -101,7 +102,7 @@ TEST(SceneData, ContributionCsrFollowsTheDocumentedNumbering) {
   EXPECT_EQ(list(5), (std::vector<int>{0, 3, 13}));
 }
 
-TEST(SceneData, ExternalForcesAddFieldsToGravity) {
+TEST(Forcing, ExternalForcesAddFieldsToGravity) {
   Scene s = twoTetScene();
   ForceField everywhere;
   everywhere.force = Eigen::Vector3d(1, 0, 0);
@@ -111,9 +112,9 @@ TEST(SceneData, ExternalForcesAddFieldsToGravity) {
   growing.amplitude = Eigen::Vector3d(0, 1, 0);
   growing.frequency = 0.25;
   s.force_fields = {everywhere, growing};
-  const SceneData data(s);
+  const Forcing forcing(s);
   Eigen::MatrixX3d f;
-  data.externalForces(1.0, f);
+  forcing.externalForces(1.0, f);
   ASSERT_EQ(f.rows(), 6);
   for (int j = 0; j < 6; ++j) {
     const bool in_field = j == 2 || j == 4;
@@ -121,38 +122,34 @@ TEST(SceneData, ExternalForcesAddFieldsToGravity) {
     const Eigen::RowVector3d expected(1.0, -10.0 * s.masses[j] + (in_field ? 1.0 : 0.0), in_field ? 2.0 : 0.0);
     EXPECT_TRUE(f.row(j).isApprox(expected, 1e-12)) << "particle " << j << ": " << f.row(j);
   }
-  EXPECT_TRUE(data.hasTimeDependentForces());
-  EXPECT_FALSE(data.hasMovingPins());
-  EXPECT_TRUE(data.hasTimeDependentForcing());
+  EXPECT_TRUE(forcing.hasTimeDependentForces());
+  EXPECT_FALSE(forcing.hasMovingPins());
 }
 
-TEST(SceneData, PinTargetsFollowTheirTimeLaw) {
+TEST(Forcing, PinTargetsFollowTheirTimeLaw) {
   Scene s = twoTetScene();
   s.pins[1].target.velocity = Eigen::Vector3d(0, 1, 0);
   s.pins[1].target.amplitude = Eigen::Vector3d(0, 0, 0.5);
   s.pins[1].target.frequency = 1.0;
-  const SceneData data(s);
-  Eigen::MatrixX3d q;
-  data.pinTargets(0.25, q);
-  ASSERT_EQ(q.rows(), 2);
-  EXPECT_TRUE(q.row(0).isZero());
-  EXPECT_TRUE(q.row(1).isApprox(Eigen::RowVector3d(3.0, 0.25, 0.5), 1e-12));
-  EXPECT_TRUE(data.hasMovingPins());
-  EXPECT_FALSE(data.hasTimeDependentForces());
-  EXPECT_TRUE(data.hasTimeDependentForcing());
+  const Forcing forcing(s);
+  EXPECT_TRUE(forcing.pinTarget(0, 0.25).isZero());
+  EXPECT_TRUE(forcing.pinTarget(1, 0.25).isApprox(Eigen::Vector3d(3.0, 0.25, 0.5), 1e-12));
+  EXPECT_TRUE(forcing.hasMovingPins());
+  EXPECT_FALSE(forcing.hasTimeDependentForces());
 }
 
-TEST(SceneData, StaticSceneHasNoTimeDependentForcing) {
-  const SceneData data(twoTetScene());
-  EXPECT_FALSE(data.hasTimeDependentForcing());
-  EXPECT_FALSE(data.hasMovingPins());
-  EXPECT_FALSE(data.hasTimeDependentForces());
+TEST(Forcing, StaticSceneHasNoTimeDependentForcing) {
+  const Scene s = twoTetScene();
+  const Forcing forcing(s);
+  EXPECT_FALSE(forcing.hasMovingPins());
+  EXPECT_FALSE(forcing.hasTimeDependentForces());
+  EXPECT_FALSE(forcing.hasMovingColliders());
 }
 
 // Per scene of a batch: only the scenes whose own pins, fields, user forces or colliders change
 // over [t0, t1] are forced (the driver keeps L-BFGS's rigid motions out of those scenes'
 // implicit-midpoint solves).
-TEST(SceneData, ForcingChangesPerSceneOfABatch) {
+TEST(Forcing, ChangesPerSceneOfABatch) {
   std::vector<Scene> scenes(5, twoTetScene());
   scenes[1].pins[1].target.velocity = Eigen::Vector3d(0, 1, 0);  // a moving pin law
   ForceField local;
@@ -165,21 +162,21 @@ TEST(SceneData, ForcingChangesPerSceneOfABatch) {
   scenes[4].colliders = {plane};
   scenes[4].colliders[0].velocity = Eigen::Vector3d(0, 0.1, 0);  // a moving collider law
   const SceneBatch batch = concatenateScenes(scenes);
-  SceneData data(batch.scene);
+  Forcing forcing(batch.scene);
   const double h = 0.01;
   using Flags = std::vector<char>;
-  EXPECT_EQ(data.forcingChangesDuring(0.0, h, batch.segments), (Flags{0, 1, 1, 0, 1}));
+  EXPECT_EQ(forcing.changesDuring(0.0, h, batch.segments), (Flags{0, 1, 1, 0, 1}));
 
   // Run-time ramps over [h, 2h]: scene 0's user forces, scene 3's pin and collider.
   const SceneSegment& s0 = batch.segments[0];
-  data.rampUserForceRows(s0.first_particle, Eigen::MatrixX3d::Ones(s0.num_particles, 3), h, 2 * h);
-  EXPECT_EQ(data.forcingChangesDuring(h, 2 * h, batch.segments), (Flags{1, 1, 1, 0, 1}));
-  data.rampPinTarget(2 * 3 + 1, Eigen::Vector3d(1, 2, 3), h, 2 * h);  // scene 3's second pin
-  EXPECT_EQ(data.forcingChangesDuring(h, 2 * h, batch.segments), (Flags{1, 1, 1, 1, 1}));
+  forcing.rampUserForceRows(s0.first_particle, Eigen::MatrixX3d::Ones(s0.num_particles, 3), h, 2 * h);
+  EXPECT_EQ(forcing.changesDuring(h, 2 * h, batch.segments), (Flags{1, 1, 1, 0, 1}));
+  forcing.rampPinTarget(2 * 3 + 1, Eigen::Vector3d(1, 2, 3), h, 2 * h);  // scene 3's second pin
+  EXPECT_EQ(forcing.changesDuring(h, 2 * h, batch.segments), (Flags{1, 1, 1, 1, 1}));
   // After the ramps' end only the laws move.
-  EXPECT_EQ(data.forcingChangesDuring(2 * h, 3 * h, batch.segments), (Flags{0, 1, 1, 0, 1}));
-  data.rampColliderPosition(batch.segments[3].first_collider, Eigen::Vector3d(0, -0.5, 0), 3 * h, 4 * h);
-  EXPECT_EQ(data.forcingChangesDuring(3 * h, 4 * h, batch.segments), (Flags{0, 1, 1, 1, 1}));
+  EXPECT_EQ(forcing.changesDuring(2 * h, 3 * h, batch.segments), (Flags{0, 1, 1, 0, 1}));
+  forcing.rampColliderPosition(batch.segments[3].first_collider, Eigen::Vector3d(0, -0.5, 0), 3 * h, 4 * h);
+  EXPECT_EQ(forcing.changesDuring(3 * h, 4 * h, batch.segments), (Flags{0, 1, 1, 1, 1}));
 
   // A scene's field without a particle list acts on its own particles in a batch, on every
   // particle of a Simulator's scene.
@@ -188,10 +185,10 @@ TEST(SceneData, ForcingChangesPerSceneOfABatch) {
   wind.rate = Eigen::Vector3d(1, 0, 0);
   with_wind[0].force_fields = {wind};
   const SceneBatch windy = concatenateScenes(with_wind);
-  EXPECT_EQ(SceneData(windy.scene).forcingChangesDuring(0.0, h, windy.segments), (Flags{1, 1, 1, 0, 1}));
+  EXPECT_EQ(Forcing(windy.scene).changesDuring(0.0, h, windy.segments), (Flags{1, 1, 1, 0, 1}));
   const SceneBatch alone = batchOfOne(with_wind[0]);
-  EXPECT_EQ(SceneData(alone.scene).forcingChangesDuring(0.0, h, alone.segments), (Flags{1}));
-  EXPECT_EQ(SceneData(scenes[0]).forcingChangesDuring(0.0, h, batchOfOne(scenes[0]).segments), (Flags{0}));
+  EXPECT_EQ(Forcing(alone.scene).changesDuring(0.0, h, alone.segments), (Flags{1}));
+  EXPECT_EQ(Forcing(scenes[0]).changesDuring(0.0, h, batchOfOne(scenes[0]).segments), (Flags{0}));
 }
 
 TEST(SceneTimeLaws, OscillationNeedsBothAmplitudeAndFrequency) {

@@ -17,16 +17,18 @@ constexpr int kMaxContactLogColumns = 4096;
 
 }  // namespace
 
-ContactResolver::ContactResolver(SceneData& scene, GlobalSystem& system, const SimulatorOptions& options, double t,
-                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v)
+ContactResolver::ContactResolver(SceneData& scene, const Forcing& forcing, GlobalSystem& system,
+                                 const SimulatorOptions& options, double t, const Eigen::MatrixX3d& x,
+                                 const Eigen::MatrixX3d& v)
     : scene_(scene),
+      forcing_(forcing),
       system_(system),
       time_step_(options.time_step),
       tolerance_(options.contact_tolerance),
       block_(scene.blockIndex(contactElementType())) {
   if (count() == 0) return;
   for (int e = 0; e < count(); ++e) scene_.setElementEnabled(block_, e, false);
-  const ContactSetChange change = contactSetChange(scene_, wholeScene(scene_), t, time_step_, margin(), x, v);
+  const ContactSetChange change = contactSetChange(scene_, forcing_, wholeScene(scene_), t, time_step_, margin(), x, v);
   for (int e : change.entering) scene_.setElementEnabled(block_, e, true);
   system_.assemble(scene_);
 }
@@ -62,7 +64,7 @@ std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x
   // The parts' changes as one (ascending: parts in order, each a contiguous run of pairs).
   ContactSetChange change;
   for (std::size_t i = 0; i < parts.size(); ++i) {
-    ContactSetChange part = contactSetChange(scene_, parts[i], t, time_step_, margin(), x, v);
+    ContactSetChange part = contactSetChange(scene_, forcing_, parts[i], t, time_step_, margin(), x, v);
     change.entering.insert(change.entering.end(), part.entering.begin(), part.entering.end());
     change.leaving.insert(change.leaving.end(), part.leaving.begin(), part.leaving.end());
     entered_inside[i] = part.entered_inside ? 1 : 0;
@@ -86,9 +88,9 @@ ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const Cont
                                                                       double& target, StepReport& report) const {
   Resolved resolved;
   if (part.colliders.count == 0) return resolved;
-  resolved.velocities_changed = applyFriction(scene_, part, t1, time_step_, x, v, report.friction) > 0;
+  resolved.velocities_changed = applyFriction(scene_, forcing_, part, t1, time_step_, x, v, report.friction) > 0;
   target -= report.friction;
-  resolved.positions_moved = projectOutOfColliders(scene_, part, t1, tolerance_, x) > 0;
+  resolved.positions_moved = projectOutOfColliders(scene_, forcing_, part, t1, tolerance_, x) > 0;
   return resolved;
 }
 

@@ -19,15 +19,17 @@
 
 namespace stabint {
 
+class Forcing;
 class GlobalSystem;
 class SceneData;
 
 class ContactResolver {
  public:
   /// The set at time t from (x, v): the pairs near their colliders are in, the others get weight
-  /// 0, and L is assembled from that (before anything is factored).
-  ContactResolver(SceneData& scene, GlobalSystem& system, const SimulatorOptions& options, double t,
-                  const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
+  /// 0, and L is assembled from that (before anything is factored). The colliders move as
+  /// `forcing` says (it must outlive the resolver).
+  ContactResolver(SceneData& scene, const Forcing& forcing, GlobalSystem& system, const SimulatorOptions& options,
+                  double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
   /// The number of (collider, particle) pairs: 0 without colliders.
   int count() const;
@@ -84,6 +86,7 @@ class ContactResolver {
   bool changeSet(const std::vector<int>& entering, const std::vector<int>& leaving, bool refactor);
 
   SceneData& scene_;
+  const Forcing& forcing_;
   GlobalSystem& system_;
   double time_step_, tolerance_;
   int block_ = -1;

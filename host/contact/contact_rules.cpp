@@ -2,6 +2,7 @@
 
 #include "elements/contact.hpp"
 #include "elements/element_type.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 
 #include <algorithm>
@@ -14,11 +15,11 @@ namespace {
 // Calls visit(c, j, r, p, depth) for each particle j (row r of x) of `part` inside collider c at
 // time t, with p the closest point outside and depth = |p - x_j| > 0.
 template <typename Visit>
-void forEachContact(const SceneData& scene, const ContactPart& part, double t, const Eigen::MatrixX3d& x,
-                    Visit&& visit) {
+void forEachContact(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
+                    const Eigen::MatrixX3d& x, Visit&& visit) {
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
     double g[kColliderGeometry];
-    scene.colliderGeometry(c, t, g);
+    forcing.colliderGeometry(c, t, g);
     const IndexRange particles = colliderParticles(scene.scene(), c);
     for (int j = particles.first; j < particles.end(); ++j) {
       const Eigen::Index r = j - part.first_row;
@@ -60,15 +61,15 @@ ContactPart wholeScene(const SceneData& scene) {
   return ContactPart{IndexRange{0, static_cast<int>(scene.scene().colliders.size())}, 0};
 }
 
-ContactSetChange contactSetChange(const SceneData& scene, const ContactPart& part, double t, double h, double margin,
-                                  const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
+ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
+                                  double h, double margin, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
   ContactSetChange change;
   const int block = scene.blockIndex(contactElementType());
   int e = firstContactElement(scene.scene(), part.colliders.first);
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
     double now[kColliderGeometry], next[kColliderGeometry];
-    scene.colliderGeometry(c, t, now);
-    scene.colliderGeometry(c, t + h, next);
+    forcing.colliderGeometry(c, t, now);
+    forcing.colliderGeometry(c, t + h, next);
     const IndexRange particles = colliderParticles(scene.scene(), c);
     for (int j = particles.first; j < particles.end(); ++j, ++e) {
       const Eigen::Index r = j - part.first_row;
@@ -87,18 +88,18 @@ ContactSetChange contactSetChange(const SceneData& scene, const ContactPart& par
   return change;
 }
 
-int applyFriction(const SceneData& scene, const ContactPart& part, double t, double h, const Eigen::MatrixX3d& x,
-                  Eigen::MatrixX3d& v, double& removed) {
+int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
+                  const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& removed) {
   const std::vector<Collider>& colliders = scene.scene().colliders;
   const Eigen::VectorXd& m = scene.masses();
   removed = 0.0;
   int changed = 0;
-  forEachContact(scene, part, t, x, [&](int c, int j, Eigen::Index r, const Eigen::Vector3d& p, double depth) {
+  forEachContact(scene, forcing, part, t, x, [&](int c, int j, Eigen::Index r, const Eigen::Vector3d& p, double depth) {
     const Collider& collider = colliders[static_cast<std::size_t>(c)];
     if (collider.friction == 0.0) return;
     const Eigen::Vector3d normal = (p - x.row(r).transpose()) / depth;
     const Eigen::Vector3d before = v.row(r).transpose();
-    const Eigen::Vector3d relative = before - scene.colliderVelocity(c, t);
+    const Eigen::Vector3d relative = before - forcing.colliderVelocity(c, t);
     const Eigen::Vector3d tangential = relative - relative.dot(normal) * normal;
     const double speed = tangential.norm();
     if (!(speed > 0.0)) return;
@@ -112,8 +113,8 @@ int applyFriction(const SceneData& scene, const ContactPart& part, double t, dou
   return changed;
 }
 
-int projectOutOfColliders(const SceneData& scene, const ContactPart& part, double t, double tolerance,
-                          Eigen::MatrixX3d& x) {
+int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
+                          double tolerance, Eigen::MatrixX3d& x) {
   // A particle pushed out of one collider into another is pushed out of that one in the next
   // sweep; three sweeps settle any corner of two or three shapes we have met, and the last
   // sweep's result stands.
@@ -121,7 +122,7 @@ int projectOutOfColliders(const SceneData& scene, const ContactPart& part, doubl
   int moves = 0;
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     int moved = 0;
-    forEachContact(scene, part, t, x, [&](int, int, Eigen::Index r, const Eigen::Vector3d& p, double depth) {
+    forEachContact(scene, forcing, part, t, x, [&](int, int, Eigen::Index r, const Eigen::Vector3d& p, double depth) {
       if (!(depth > tolerance)) return;
       // Straight toward p, stopping `tolerance` short of it.
       x.row(r) = (p + (x.row(r).transpose() - p) * (tolerance / depth)).transpose();

@@ -12,6 +12,7 @@
 
 namespace stabint {
 
+class Forcing;
 class SceneData;
 
 /// Which pairs a rule looks at: those of `colliders` (every collider of the scene, or one batch
@@ -25,6 +26,9 @@ struct ContactPart {
 /// Every collider of the scene, on the scene's whole host copies.
 ContactPart wholeScene(const SceneData& scene);
 
+/// Every rule reads the scene's colliders and contact block from `scene` and where the colliders
+/// are at a time from `forcing`.
+///
 /// The broad phase's change of the contact set of `part` at the start of a step of length h from
 /// (x, v) at time t. A contact element (firstContactElement) is active when its flag in the
 /// scene's contact block is set. A pair enters when x_j (against collider c at t) or its
@@ -36,8 +40,8 @@ struct ContactSetChange {
   bool entered_inside = false;         // a pair entered with x_j already inside: E jumps from 0
   bool empty() const { return entering.empty() && leaving.empty(); }
 };
-ContactSetChange contactSetChange(const SceneData& scene, const ContactPart& part, double t, double h, double margin,
-                                  const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
+ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
+                                  double h, double margin, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
 /// Coulomb friction at the end of a step of length h, on the velocities `v` of the particles in
 /// contact at positions `x` at time t: for each (collider, particle) of `part` in contact, the tangential
@@ -45,14 +49,14 @@ ContactSetChange contactSetChange(const SceneData& scene, const ContactPart& par
 /// J = h w_j d (d the depth, w_j the contact weight) over m_j, and never reverses. Returns the
 /// number of velocities changed; `removed` receives the kinetic energy removed (negative when a
 /// moving collider drags a particle along).
-int applyFriction(const SceneData& scene, const ContactPart& part, double t, double h, const Eigen::MatrixX3d& x,
-                  Eigen::MatrixX3d& v, double& removed);
+int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
+                  const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& removed);
 
 /// The final projection over `part`: every particle deeper than `tolerance` inside a collider at time t is
 /// moved straight out to depth `tolerance` (velocities unchanged), colliders in order, repeated
 /// while that pushes a particle into an earlier one (at most a few sweeps). Returns the number of
 /// moves.
-int projectOutOfColliders(const SceneData& scene, const ContactPart& part, double t, double tolerance,
-                          Eigen::MatrixX3d& x);
+int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
+                          double tolerance, Eigen::MatrixX3d& x);
 
 }  // namespace stabint

@@ -5,6 +5,7 @@
 #include "elements/energy_sum.hpp"
 
 #include "scene/scene_data.hpp"
+#include "scene/scene_view.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -26,8 +27,10 @@ double secondsSince(Clock::time_point start) { return std::chrono::duration<doub
 
 class CpuBackend final : public Backend {
  public:
-  CpuBackend(const SceneData& scene, int num_slots)
+  CpuBackend(const SceneData& scene, const Forcing& forcing, int num_slots)
       : scene_(scene),
+        forcing_(forcing),
+        running_(scene, forcing),
         slots_(num_slots, Eigen::MatrixX3d::Zero(scene.numParticles(), 3)),
         params_(scene.blocks().size()) {}
 
@@ -388,14 +391,16 @@ class CpuBackend final : public Backend {
   }
 
   // Params of block b at time t: the block's own unless its type depends on time; cached
-  // because the driver asks for the same t many times per step.
+  // because the driver asks for the same t many times per step, until the forcing or the block
+  // changes (its weights carry into the timed params).
   const std::vector<double>& paramsAt(size_t b, double t) {
     const ElementBlock& block = scene_.blocks()[b];
-    if (!block.type->timeDependent(scene_)) return block.params;
+    if (!block.type->timeDependent(running_)) return block.params;
     TimedParams& cached = params_[b];
-    if (!cached.key.matches(t, scene_.forcingVersion())) {
-      block.type->paramsAt(scene_, t, cached.values);
-      cached.key = {t, scene_.forcingVersion()};
+    const ForcingKey key{t, forcing_.version(), block.revision, block.params_revision};
+    if (!cached.key.matches(key)) {
+      block.type->paramsAt(running_, t, cached.values);
+      cached.key = key;
     }
     return cached.values;
   }
@@ -403,9 +408,10 @@ class CpuBackend final : public Backend {
   // External forces at time t, cached like the params (by their own version: an element change
   // leaves them).
   const Eigen::MatrixX3d& externalForces(double t) {
-    if (!external_key_.matches(t, scene_.forcesVersion())) {
-      scene_.externalForces(t, external_);
-      external_key_ = {t, scene_.forcesVersion()};
+    const ForcingKey key{t, forcing_.forcesVersion()};
+    if (!external_key_.matches(key)) {
+      forcing_.externalForces(t, external_);
+      external_key_ = key;
     }
     return external_;
   }
@@ -413,7 +419,11 @@ class CpuBackend final : public Backend {
   struct ForcingKey {
     double time = std::numeric_limits<double>::quiet_NaN();
     int version = -1;
-    bool matches(double t, int v) const { return t == time && v == version; }
+    int block_revision = -1, params_revision = -1;
+    bool matches(const ForcingKey& k) const {
+      return k.time == time && k.version == version && k.block_revision == block_revision &&
+             k.params_revision == params_revision;
+    }
   };
   struct TimedParams {
     std::vector<double> values;
@@ -425,6 +435,8 @@ class CpuBackend final : public Backend {
   static constexpr int kChunkVertices = 1024;
 
   const SceneData& scene_;
+  const Forcing& forcing_;
+  const SceneView running_;  // what the element types read
   std::vector<Eigen::MatrixX3d> slots_;
   std::vector<TimedParams> params_;  // per block
   Eigen::MatrixX3d external_;
@@ -448,8 +460,8 @@ void setThreadedPassPath(ThreadedPassPath path) { forced_path.store(path); }
 ThreadedPassPath threadedPassPath() { return forced_path.load(); }
 ThreadedPassPath lastPassPath() { return last_pass_path; }
 
-std::unique_ptr<Backend> makeCpuBackend(const SceneData& scene, int num_slots) {
-  return std::make_unique<CpuBackend>(scene, num_slots);
+std::unique_ptr<Backend> makeCpuBackend(const SceneData& scene, const Forcing& forcing, int num_slots) {
+  return std::make_unique<CpuBackend>(scene, forcing, num_slots);
 }
 
 }  // namespace stabint

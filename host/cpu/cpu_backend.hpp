@@ -7,9 +7,11 @@
 
 namespace stabint {
 
+class Forcing;
 class SceneData;
 
-std::unique_ptr<Backend> makeCpuBackend(const SceneData& scene, int num_slots);
+/// The CPU reference of `scene` driven by `forcing` (both must outlive it).
+std::unique_ptr<Backend> makeCpuBackend(const SceneData& scene, const Forcing& forcing, int num_slots);
 
 /// How the CPU reference splits an element pass over cpuThreads() threads (docs/method.md
 /// section 12). Every path gives the single-threaded pass's results bit for bit, so the choice is

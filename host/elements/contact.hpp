@@ -38,7 +38,7 @@ IndexRange colliderParticles(const Scene& scene, int c);
 int firstContactElement(const Scene& scene, int c);
 
 /// The geometry of `collider` translated so that its reference point (Collider::center) is at
-/// `position` (SceneData::colliderPosition says where that is at a time).
+/// `position` (Forcing::colliderPosition says where that is at a time).
 void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& position, double* geometry);
 
 /// p = the closest point of the collider's outside to x; returns false (and p = x) when x is

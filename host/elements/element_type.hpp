@@ -26,8 +26,8 @@ namespace stabint {
 class ElementType;
 
 /// What an element type reads of a running simulation, beyond its scene: which elements are
-/// enabled and where the forcing has moved pins and colliders at a time. SceneData implements
-/// it; the element types see only this, so that they sit below the scene layer (docs/
+/// enabled and where the forcing has moved pins and colliders at a time. SceneView implements
+/// it over a SceneData and its Forcing; the element types see only this, so that they sit below the scene layer (docs/
 /// development.md, "Layering").
 class RunningScene {
  public:
@@ -116,7 +116,7 @@ class ElementType {
   virtual ElementBlock build(const Scene& scene) const = 0;
   /// True when the params depend on time (pins with moving or user-driven targets); then
   /// paramsAt gives them. Both read the forcing of `data`, which a running simulation may change
-  /// (SceneData::forcingVersion()).
+  /// (Forcing::version()).
   virtual bool timeDependent(const RunningScene& data) const = 0;
   virtual void paramsAt(const RunningScene& data, double t, std::vector<double>& params) const = 0;
   /// Appends the elements of `part` to `into`, with vertex indices shifted by `offset`.

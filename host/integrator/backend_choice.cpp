@@ -109,9 +109,10 @@ BackendSelection selectBackend(const SimulatorOptions& o, SceneSize size) {
   return chooseBackend(o, o.backend == BackendKind::Auto ? listOpenCLDevices() : std::vector<OpenCLDeviceInfo>{}, size);
 }
 
-std::unique_ptr<Backend> makeBackend(const SceneData& scene, int num_slots, const BackendSelection& selection) {
-  return selection.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, num_slots, selection.opencl)
-                                               : makeCpuBackend(scene, num_slots);
+std::unique_ptr<Backend> makeBackend(const SceneData& scene, const Forcing& forcing, int num_slots,
+                                     const BackendSelection& selection) {
+  return selection.kind == BackendKind::OpenCL ? makeOpenCLBackend(scene, forcing, num_slots, selection.opencl)
+                                               : makeCpuBackend(scene, forcing, num_slots);
 }
 
 double inputLimit(const BackendSelection& selection) {

@@ -37,8 +37,9 @@ BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<Open
 
 /// chooseBackend with this machine's OpenCL devices (listed only for BackendKind::Auto).
 BackendSelection selectBackend(const SimulatorOptions& o, SceneSize size);
-/// The backend of a selection with `num_slots` slots for `scene` (OpenCLError subtypes for OpenCL
-/// problems), for every simulator: the one place a backend is created.
-std::unique_ptr<Backend> makeBackend(const SceneData& scene, int num_slots, const BackendSelection& selection);
+/// The backend of a selection with `num_slots` slots for `scene` driven by `forcing` (OpenCLError
+/// subtypes for OpenCL problems), for every simulator: the one place a backend is created.
+std::unique_ptr<Backend> makeBackend(const SceneData& scene, const Forcing& forcing, int num_slots,
+                                     const BackendSelection& selection);
 
 }  // namespace stabint

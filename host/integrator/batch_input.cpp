@@ -22,11 +22,11 @@ InputScope BatchDriver::scope(int scene, const char* call) const {
 }
 
 FrameInput BatchDriver::frameInput(int scene, const char* call) {
-  return FrameInput(data_, options_.time_step, inputLimit(choice_), scope(scene, call));
+  return FrameInput(data_, forcing_, options_.time_step, inputLimit(choice_), scope(scene, call));
 }
 
 ElementChanges BatchDriver::elementChanges(int scene, const char* call) {
-  return ElementChanges(data_, system_, *backend_, scope(scene, call));
+  return ElementChanges(data_, forcing_, system_, *backend_, scope(scene, call));
 }
 
 void BatchDriver::bookEvent(int scene, double h_before) {

@@ -47,20 +47,21 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
       segments_(std::move(batch.segments)),
       options_(options),
       data_(batch.scene),
+      forcing_(data_.scene()),
       choice_(selectBackend(options_, sceneSize(batch.scene))),
-      backend_(makeBackend(data_, kNumDriverSlots, choice_)),
+      backend_(makeBackend(data_, forcing_, kNumDriverSlots, choice_)),
       system_(data_),
       solver_(*backend_, system_, kSolverScratch),
       x_(batch.scene.positions),
       v_(batch.scene.velocities),
       v_slot_(batch.scene.velocities),
-      contact_(data_, system_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
+      contact_(data_, forcing_, system_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
       per_scene_(segments_.size()) {
   // Any backend with per-scene energies steps a batch (the OpenCL backend once it has them).
   if (!backend_->computesPerScene())
     throw InvalidInputError("batch simulator: the backend (" + backend_->description() +
                             ") computes no per-scene energies yet (docs/batch_design.md)");
-  solver_.setScene(&data_);  // Newton-CG's spring Hessians
+  solver_.setScene(data_, forcing_);  // Newton-CG's spring Hessians, the rigid motions' one-particle elements
   factorIntegratorSystems(system_, options_);
   backend_->setSegments(segments_);
   backend_->write(kX, x_);
@@ -136,7 +137,7 @@ const BatchStepReport& BatchDriver::step() {
   updateContactSets();
   // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
   // exactly 0 (its terms at t_m and t_1 are the same numbers).
-  const std::vector<char> forced_scenes = data_.forcingChangesDuring(t_, t1, segments_);
+  const std::vector<char> forced_scenes = forcing_.changesDuring(t_, t1, segments_);
   const bool forced = std::any_of(forced_scenes.begin(), forced_scenes.end(), [](char f) { return f != 0; });
   // The blend partner's solves take the rigid motions into L-BFGS's initial Hessian only in the
   // scenes whose forcing is constant over the step (docs/method.md, "Rigid motions in the initial

@@ -18,6 +18,7 @@
 #include "integrator/element_changes.hpp"
 #include "integrator/frame_input.hpp"
 #include "integrator/input_scope.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
@@ -213,6 +214,7 @@ struct BatchDriver {
   std::vector<SceneSegment> segments_;
   SimulatorOptions options_;
   SceneData data_;
+  Forcing forcing_;  // data_'s: pin targets, forces and collider motion
   BackendSelection choice_;
   std::unique_ptr<Backend> backend_;
   GlobalSystem system_;

@@ -1,6 +1,7 @@
 #include "integrator/element_changes.hpp"
 
 #include "elements/element_type.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "validation.hpp"
 
@@ -25,8 +26,9 @@ bool samePins(const std::vector<Pin>& a, const std::vector<Pin>& b) {
 
 }  // namespace
 
-ElementChanges::ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend, InputScope scope)
-    : scene_(scene), system_(system), backend_(backend), scope_(std::move(scope)) {}
+ElementChanges::ElementChanges(SceneData& scene, Forcing& forcing, GlobalSystem& system, Backend& backend,
+                               InputScope scope)
+    : scene_(scene), forcing_(forcing), system_(system), backend_(backend), scope_(std::move(scope)) {}
 
 int ElementChanges::block(ElementKind kind) const {
   try {
@@ -123,17 +125,19 @@ void ElementChanges::changePins(const std::vector<Pin>& pins, int inserted) {
   const int old_count = static_cast<int>(scene_.scene().pins.size());
   const bool shifts = inserted >= 0 && inserted < old_count;
   const int pin_block = scene_.blockIndex(pinElementType());
-  SceneData::ForcingState forcing;
+  Forcing::State forcing;
   std::vector<bool> flags;
   if (shifts) {
-    forcing = scene_.forcingState();
-    forcing.pins.insert(forcing.pins.begin() + inserted, SceneData::Ramp{});
+    forcing = forcing_.state();
+    forcing.pins.insert(forcing.pins.begin() + inserted, Forcing::Ramp{});
     for (int i = 0; i < old_count; ++i) flags.push_back(scene_.elementEnabled(pin_block, i));
     flags.insert(flags.begin() + inserted, true);  // a grabbed pin is enabled
   }
+  const std::vector<Pin> before = scene_.scene().pins;
   scene_.setPins(pins);
+  forcing_.pinsChanged(before);
   if (shifts) {
-    scene_.setForcingState(forcing);
+    forcing_.setState(forcing);
     for (int i = inserted; i < static_cast<int>(pins.size()); ++i)
       if (scene_.elementEnabled(pin_block, i) != flags[static_cast<std::size_t>(i)])
         scene_.setElementEnabled(pin_block, i, flags[static_cast<std::size_t>(i)]);

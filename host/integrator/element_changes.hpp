@@ -18,12 +18,14 @@
 
 namespace stabint {
 
+class Forcing;
 class SceneData;
 
 class ElementChanges {
  public:
-  /// Element indices and messages are the scope's (the whole scene by default).
-  ElementChanges(SceneData& scene, GlobalSystem& system, Backend& backend, InputScope scope = {});
+  /// Element indices and messages are the scope's (the whole scene by default). `forcing` follows
+  /// the pin set (its ramps go with their pins).
+  ElementChanges(SceneData& scene, Forcing& forcing, GlobalSystem& system, Backend& backend, InputScope scope = {});
 
   /// The block of an element kind, by the type's identifier (the names agree by construction);
   /// InvalidInputError for a value that is no ElementKind or a kind without a type.
@@ -57,6 +59,7 @@ class ElementChanges {
   void addTerm(GlobalSystem::WeightChange& change, int block, int e, double w_old) const;
 
   SceneData& scene_;
+  Forcing& forcing_;
   GlobalSystem& system_;
   Backend& backend_;
   InputScope scope_;

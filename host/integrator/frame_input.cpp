@@ -10,8 +10,8 @@
 
 namespace stabint {
 
-FrameInput::FrameInput(SceneData& scene, double time_step, double limit, InputScope scope)
-    : scene_(scene), time_step_(time_step), limit_(limit), scope_(std::move(scope)) {}
+FrameInput::FrameInput(const SceneData& scene, Forcing& forcing, double time_step, double limit, InputScope scope)
+    : scene_(scene), forcing_(forcing), time_step_(time_step), limit_(limit), scope_(std::move(scope)) {}
 
 void FrameInput::checkRows(const Eigen::MatrixX3d& m, const char* field) const {
   validation::checkInputRows(m, scope_.particles(scene_).count, scope_.where() + field, limit_);
@@ -43,44 +43,44 @@ void FrameInput::checkColliderVector(int collider, const Eigen::Vector3d& value,
 void FrameInput::setPinTarget(int pin, const Eigen::Vector3d& q, double t) {
   checkPin(pin);
   validation::checkInputVector(q, scope_.where() + "pin " + std::to_string(pin) + ": target", limit_);
-  scene_.rampPinTarget(scope_.pins(scene_).first + pin, q, t, t + time_step_);
+  forcing_.rampPinTarget(scope_.pins(scene_).first + pin, q, t, t + time_step_);
 }
 
 void FrameInput::setColliderPosition(int collider, const Eigen::Vector3d& position, double t) {
   checkColliderVector(collider, position, "position");
-  scene_.rampColliderPosition(scope_.colliders(scene_).first + collider, position, t, t + time_step_);
+  forcing_.rampColliderPosition(scope_.colliders(scene_).first + collider, position, t, t + time_step_);
 }
 
 void FrameInput::setColliderVelocity(int collider, const Eigen::Vector3d& velocity, double t) {
   checkColliderVector(collider, velocity, "velocity");
-  scene_.setColliderVelocity(scope_.colliders(scene_).first + collider, velocity, t);
+  forcing_.setColliderVelocity(scope_.colliders(scene_).first + collider, velocity, t);
 }
 
 void FrameInput::setExternalForces(const Eigen::MatrixX3d& forces, double t) {
   checkRows(forces, "external forces");
   const InputRange rows = scope_.particles(scene_);
   if (rows.count == scene_.numParticles()) {
-    scene_.rampUserForces(forces, t, t + time_step_);
+    forcing_.rampUserForces(forces, t, t + time_step_);
     return;
   }
   // One ramp holds every particle's forces: the other rows go on to the values they were given
   // (a scene set earlier in this frame keeps its ramp over the same step).
-  scene_.rampUserForceRows(rows.first, forces, t, t + time_step_);
+  forcing_.rampUserForceRows(rows.first, forces, t, t + time_step_);
 }
 
 Eigen::Vector3d FrameInput::pinTarget(int pin, double t) const {
   checkPin(pin);
-  return scene_.pinTarget(scope_.pins(scene_).first + pin, t);
+  return forcing_.pinTarget(scope_.pins(scene_).first + pin, t);
 }
 
 Eigen::Vector3d FrameInput::colliderPosition(int collider, double t) const {
   checkCollider(collider);
-  return scene_.colliderPosition(scope_.colliders(scene_).first + collider, t);
+  return forcing_.colliderPosition(scope_.colliders(scene_).first + collider, t);
 }
 
 Eigen::Vector3d FrameInput::colliderVelocity(int collider, double t) const {
   checkCollider(collider);
-  return scene_.colliderVelocity(scope_.colliders(scene_).first + collider, t);
+  return forcing_.colliderVelocity(scope_.colliders(scene_).first + collider, t);
 }
 
 std::vector<Pin> FrameInput::pinsAfterGrab(int vertex, double stiffness, const Eigen::MatrixX3d& x) const {
@@ -110,7 +110,7 @@ std::vector<Pin> FrameInput::pinsAfterRelease(int pin, double t) const {
                             " is already released (stiffness 0)");
   pins[i].stiffness = 0.0;
   pins[i].target = PinTarget{};  // a released pin does no work
-  pins[i].target.position = scene_.pinTarget(i, t);
+  pins[i].target.position = forcing_.pinTarget(i, t);
   return pins;
 }
 

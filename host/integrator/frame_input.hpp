@@ -5,6 +5,7 @@
 // positions are ramped over the coming step; the driver books what changes H at once (grab,
 // release) as an event.
 #include "integrator/input_scope.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 
 #include <Eigen/Core>
@@ -17,7 +18,7 @@ class FrameInput {
  public:
   /// `limit`: the bound of input magnitudes on the backend (inputLimit()). Indices and row counts
   /// are the scope's (the whole scene by default).
-  FrameInput(SceneData& scene, double time_step, double limit, InputScope scope = {});
+  FrameInput(const SceneData& scene, Forcing& forcing, double time_step, double limit, InputScope scope = {});
 
   /// InvalidInputError, naming `field`, unless `m` has a finite row within the bound per particle.
   void checkRows(const Eigen::MatrixX3d& m, const char* field) const;
@@ -47,7 +48,8 @@ class FrameInput {
  private:
   void checkColliderVector(int collider, const Eigen::Vector3d& value, const char* what) const;
 
-  SceneData& scene_;
+  const SceneData& scene_;
+  Forcing& forcing_;
   double time_step_, limit_;
   InputScope scope_;
 };

@@ -195,10 +195,11 @@ template class OpenCLBackend<float>;
 
 }  // namespace ocl
 
-std::unique_ptr<Backend> makeOpenCLBackend(const SceneData& scene, int num_slots, const OpenCLOptions& options) {
+std::unique_ptr<Backend> makeOpenCLBackend(const SceneData& scene, const Forcing& forcing, int num_slots,
+                                           const OpenCLOptions& options) {
   if (options.precision == Precision::Float)
-    return std::make_unique<ocl::OpenCLBackend<float>>(scene, num_slots, options);
-  return std::make_unique<ocl::OpenCLBackend<double>>(scene, num_slots, options);
+    return std::make_unique<ocl::OpenCLBackend<float>>(scene, forcing, num_slots, options);
+  return std::make_unique<ocl::OpenCLBackend<double>>(scene, forcing, num_slots, options);
 }
 
 }  // namespace stabint

@@ -12,6 +12,7 @@ namespace stabint {
 /// variables STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE), UnsupportedPrecisionError when
 /// double is requested on a device without fp64, KernelBuildError with the build log when the
 /// program does not compile.
-std::unique_ptr<Backend> makeOpenCLBackend(const SceneData& scene, int num_slots, const OpenCLOptions& options);
+std::unique_ptr<Backend> makeOpenCLBackend(const SceneData& scene, const Forcing& forcing, int num_slots,
+                                           const OpenCLOptions& options);
 
 }  // namespace stabint

@@ -8,6 +8,7 @@
 #include "opencl/device_solver.hpp"
 #include "opencl/element_program.hpp"
 #include "scene/scene_data.hpp"
+#include "scene/scene_view.hpp"
 
 #include <stabint/errors.hpp>
 
@@ -62,8 +63,8 @@ struct Launch {
 template <typename Real>
 class OpenCLBackend final : public Backend {
  public:
-  OpenCLBackend(const SceneData& scene, int num_slots, const OpenCLOptions& options)
-      : scene_(scene), n_(scene.numParticles()) {
+  OpenCLBackend(const SceneData& scene, const Forcing& forcing, int num_slots, const OpenCLOptions& options)
+      : scene_(scene), forcing_(forcing), running_(scene, forcing), n_(scene.numParticles()) {
     device_ = ocl::selectDevice(options);
     ocl::checkPrecisionSupported(kDouble ? Precision::Double : Precision::Float, device_.fp64, device_.device_name);
     context_ = ocl::sharedContext(device_.device);
@@ -159,7 +160,7 @@ class OpenCLBackend final : public Backend {
   static constexpr bool kDouble = std::is_same<Real, double>::value;
 
   // An element block on the device; the params of a time-dependent type are rewritten whenever
-  // the time or the forcing (SceneData's version) changes.
+  // the time or the forcing (Forcing::version) changes.
   struct DeviceBlock {
     const ElementBlock* block = nullptr;
     int revision = -1;
@@ -277,6 +278,8 @@ class OpenCLBackend final : public Backend {
   void buildKernels();
 
   const SceneData& scene_;
+  const Forcing& forcing_;
+  const SceneView running_;  // what the element types read
   const int n_;
   std::vector<DeviceBlock> blocks_;
   // First group of each element segment, then of the vertex segment; full_groups_ ends it.

@@ -90,16 +90,16 @@ cl::Buffer OpenCLBackend<Real>::zeroBuffer(std::size_t count) {
 template <typename Real>
 void OpenCLBackend<Real>::uploadForcing(double t, bool force) {
   const auto start = Clock::now();
-  const int version = scene_.forcingVersion(), forces_version = scene_.forcesVersion();
-  if (force || forces_version != fext_version_ || (scene_.hasTimeDependentForces() && t != fext_time_)) {
-    scene_.externalForces(t, host_fext_);
+  const int version = forcing_.version(), forces_version = forcing_.forcesVersion();
+  if (force || forces_version != fext_version_ || (forcing_.hasTimeDependentForces() && t != fext_time_)) {
+    forcing_.externalForces(t, host_fext_);
     writeAsync(fext_, host_fext_.data(), std::size_t(host_fext_.size()));
     fext_time_ = t;
     fext_version_ = forces_version;
   }
   for (DeviceBlock& d : blocks_) {
     if (d.block->count == 0) continue;
-    const bool timed = d.block->type->timeDependent(scene_);
+    const bool timed = d.block->type->timeDependent(running_);
     // Constant params are uploaded once, and again only when they replace time-dependent ones
     // (a restored checkpoint without pin ramps) or changed in place (a stiffness change).
     const bool stale = !d.params_uploaded || d.params_revision != d.block->params_revision ||
@@ -107,7 +107,7 @@ void OpenCLBackend<Real>::uploadForcing(double t, bool force) {
     if (!force && !stale) continue;
     if (!force && !timed && !d.params_timed && d.params_uploaded && uploadChangedParams(d)) continue;
     if (timed) {
-      d.block->type->paramsAt(scene_, t, d.host_params);
+      d.block->type->paramsAt(running_, t, d.host_params);
     } else {
       d.host_params = d.block->params;
     }

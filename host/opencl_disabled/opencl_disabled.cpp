@@ -8,7 +8,7 @@
 
 namespace stabint {
 
-std::unique_ptr<Backend> makeOpenCLBackend(const SceneData&, int, const OpenCLOptions&) {
+std::unique_ptr<Backend> makeOpenCLBackend(const SceneData&, const Forcing&, int, const OpenCLOptions&) {
   throw NoOpenCLDeviceError(
       "this stabint was built without OpenCL (STABINT_WITH_OPENCL=OFF): "
       "use BackendKind::CpuReference or Auto");

@@ -19,6 +19,7 @@
 
 namespace stabint {
 
+class Forcing;
 class SceneData;
 class Extrapolation;  // Chebyshev's or Anderson's rule (local_global.cpp)
 
@@ -104,9 +105,11 @@ class LocalGlobalSolver {
   /// setSolving, for the next solve only.
   void setRigidModes(std::vector<char> segments) { next_rigid_ = std::move(segments); }
 
-  /// The scene whose springs Newton-CG takes its Hessians from (Acceleration::Newton); without
-  /// one its Hessian is K_c.
-  void setScene(const SceneData* scene);
+  /// The scene whose springs Newton-CG takes its Hessians from (Acceleration::Newton) and whose
+  /// one-particle elements and external forces the rigid motions read, with its forcing (both
+  /// must outlive the solver); without one Newton-CG's Hessian is K_c and no solve takes the
+  /// rigid motions.
+  void setScene(const SceneData& scene, const Forcing& forcing);
 
  private:
   int solvePlain(double c, int y, int x, double t, const IterationControl& control,
@@ -234,6 +237,7 @@ class LocalGlobalSolver {
   // Newton-CG: the scene, each spring's transverse coefficient w min(1, r/|u|) and direction at
   // the iterate, the CG vectors.
   const SceneData* scene_ = nullptr;
+  const Forcing* forcing_ = nullptr;
   struct SpringCurvature {
     int a, b;
     double beta;

@@ -25,7 +25,10 @@ constexpr double kForcing = 0.05;
 constexpr int kMaxCgPerStep = 5;
 }  // namespace
 
-void LocalGlobalSolver::setScene(const SceneData* scene) { scene_ = scene; }
+void LocalGlobalSolver::setScene(const SceneData& scene, const Forcing& forcing) {
+  scene_ = &scene;
+  forcing_ = &forcing;
+}
 
 // The springs' transverse coefficients at x_trial_: beta_e = w min(1, r/|u|) and n_e, of the
 // segments still running (a batch's).

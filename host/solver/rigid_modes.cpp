@@ -14,6 +14,7 @@
 // run after 30 frames at 10 iterations, against 0.93 m with K_c^-1 alone (docs/method.md).
 #include "elements/element_type.hpp"
 #include "scene/scene_data.hpp"
+#include "scene/scene_view.hpp"
 #include "simd.hpp"
 #include "solver/local_global.hpp"
 
@@ -186,11 +187,12 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
   rigid_weights_ = c * masses_;
   rigid_gradient_.setZero(n, 3);
   thread_local std::vector<double> params;
+  const SceneView running(*scene_, *forcing_);
   for (const ElementBlock& block : scene_->blocks()) {
     if (block.count == 0 || block.type->shape().vertices != 1) continue;
     const std::size_t stride = static_cast<std::size_t>(block.type->shape().params);
-    const bool timed = block.type->timeDependent(*scene_);
-    if (timed) block.type->paramsAt(*scene_, t, params);
+    const bool timed = block.type->timeDependent(running);
+    if (timed) block.type->paramsAt(running, t, params);
     const std::vector<double>& p = timed ? params : block.params;
     for (int e = 0; e < block.count; ++e) {
       const double* element = p.data() + stride * std::size_t(e);
@@ -209,7 +211,7 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
   // energy's gradient: the gradient less the inertia, the external forces and the one-particle
   // elements' part. A stretched body's tension makes it positive, a compressed one's negative.
   thread_local Eigen::MatrixX3d external;
-  scene_->externalForces(t, external);
+  forcing_->externalForces(t, external);
   rigid_gradient_ += gradient_ - ((x_cur_ - y_host_).array().colwise() * (c * masses_).array()).matrix() + external;
   rigid_arms_.resize(n, 3);
   rigid_inverse_.resize(segments);

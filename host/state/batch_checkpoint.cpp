@@ -50,7 +50,7 @@ int pinBlock(const SceneData& data) { return data.blockIndex(pinElementType()); 
 // ramp `own` at time t. The batch keeps one ramp (one t0, t1) for all particles: a scene's ramp
 // over a step other than the batch's fits only when one of the two is over by t (its value then
 // stays, evaluated as (1 - s) f + s f: round-off, as in setExternalForces).
-void spliceForces(SceneData::Ramp& all, int first, int count, const SceneData::Ramp& own, double t, int particles,
+void spliceForces(Forcing::Ramp& all, int first, int count, const Forcing::Ramp& own, double t, int particles,
                   const std::string& where) {
   if (!own.active) {
     if (all.active) {
@@ -60,8 +60,8 @@ void spliceForces(SceneData::Ramp& all, int first, int count, const SceneData::R
     return;
   }
   if (!all.active) {
-    all = SceneData::Ramp{own.t0, own.t1, Eigen::MatrixX3d::Zero(particles, 3), Eigen::MatrixX3d::Zero(particles, 3),
-                          true};
+    all =
+        Forcing::Ramp{own.t0, own.t1, Eigen::MatrixX3d::Zero(particles, 3), Eigen::MatrixX3d::Zero(particles, 3), true};
   } else if (own.t0 != all.t0 || own.t1 != all.t1) {
     if (!(own.t1 > t)) {
       all.start.middleRows(first, count) = own.end;
@@ -95,9 +95,9 @@ CheckpointData BatchDriver::batchData() {
   d.v = v_;
   backend_->read(kXPrev, d.x_prev);
   backend_->read(kVPrev, d.v_prev);
-  d.forcing = data_.forcingState();
+  d.forcing = forcing_.state();
   d.contact_log = contact_.log();
-  ElementChanges(data_, system_, *backend_).save(d);
+  ElementChanges(data_, forcing_, system_, *backend_).save(d);
   return d;
 }
 
@@ -122,9 +122,9 @@ CheckpointData BatchDriver::sceneData(const CheckpointData& all, int scene) cons
   // The batch's ramp has rows of zeros for the scenes never given forces: those have none, as
   // their own Simulators (for which an active ramp means a pushed scene, no conserved momentum).
   if (p.has_user_forces) {
-    const SceneData::Ramp& r = all.forcing.user_forces;
-    d.forcing.user_forces = SceneData::Ramp{r.t0, r.t1, r.start.middleRows(seg.first_particle, seg.num_particles),
-                                            r.end.middleRows(seg.first_particle, seg.num_particles), true};
+    const Forcing::Ramp& r = all.forcing.user_forces;
+    d.forcing.user_forces = Forcing::Ramp{r.t0, r.t1, r.start.middleRows(seg.first_particle, seg.num_particles),
+                                          r.end.middleRows(seg.first_particle, seg.num_particles), true};
   }
   d.forcing.colliders = rangeOf(all.forcing.colliders, seg.first_collider, seg.num_colliders);
   for (std::size_t b = 0; b < all.stiffness.size(); ++b) {
@@ -190,7 +190,7 @@ void BatchDriver::splice(CheckpointData& all, std::vector<SceneSegment>& segment
     // A checkpoint without collider motion (version 2) has its colliders on their scene laws.
     const Collider& own = colliders[std::size_t(c)];
     all.forcing.colliders[std::size_t(seg.first_collider + c)] =
-        d.forcing.colliders.empty() ? SceneData::ColliderMotion{0.0, 0.0, own.center, own.center, own.velocity, false}
+        d.forcing.colliders.empty() ? Forcing::ColliderMotion{0.0, 0.0, own.center, own.center, own.velocity, false}
                                     : d.forcing.colliders[std::size_t(c)];
   }
   spliceForces(all.forcing.user_forces, seg.first_particle, seg.num_particles, d.forcing.user_forces, time,
@@ -234,7 +234,7 @@ std::vector<std::int32_t> BatchDriver::mergeContactLogs(const std::vector<Checkp
 
 void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegment>& segments,
                         const std::vector<PerScene>& per_scene, bool assemble) {
-  ElementChanges elements(data_, system_, *backend_);
+  ElementChanges elements(data_, forcing_, system_, *backend_);
   if (assemble) {
     const std::vector<std::uint8_t> base = contact_.baseFlags(all.enabled, all.contact_log);
     elements.restore(all, contact_.block(), &base);
@@ -254,7 +254,7 @@ void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegmen
   host_copies_stored_ = false;
   t_ = all.time;
   has_history_ = all.has_history;
-  data_.setForcingState(all.forcing);
+  forcing_.setState(all.forcing);
   per_scene_ = per_scene;
   for (int s = 0; s < size(); ++s) pinsChanged(s);
 }
@@ -319,7 +319,7 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
   CheckpointData all = batchData();
   all.time = time;
   all.has_history = false;
-  all.forcing.user_forces = SceneData::Ramp{};  // the scenes' own ramps only
+  all.forcing.user_forces = Forcing::Ramp{};  // the scenes' own ramps only
   std::vector<SceneSegment> segments = segments_;
   std::vector<PerScene> per_scene = per_scene_;
   for (int s = 0; s < size(); ++s) {

@@ -65,14 +65,14 @@ class Writer {
     vector(p.target.amplitude);
     value(p.target.frequency);
   }
-  void ramp(const SceneData::Ramp& r) {
+  void ramp(const Forcing::Ramp& r) {
     flag(r.active);
     value(r.t0);
     value(r.t1);
     matrix(r.start);
     matrix(r.end);
   }
-  void motion(const SceneData::ColliderMotion& m) {
+  void motion(const Forcing::ColliderMotion& m) {
     value(m.t0);
     value(m.t1);
     vector(m.start);
@@ -148,8 +148,8 @@ class Reader {
     p.target.frequency = real("a pin's target");
     return p;
   }
-  SceneData::Ramp ramp(std::int64_t rows, const char* what) {
-    SceneData::Ramp r;
+  Forcing::Ramp ramp(std::int64_t rows, const char* what) {
+    Forcing::Ramp r;
     r.active = flag(what);
     r.t0 = real(what);
     r.t1 = real(what);
@@ -158,8 +158,8 @@ class Reader {
     r.end = matrix(r.active ? rows : 0, what);
     return r;
   }
-  SceneData::ColliderMotion motion() {
-    SceneData::ColliderMotion m;
+  Forcing::ColliderMotion motion() {
+    Forcing::ColliderMotion m;
     m.t0 = real("a collider's motion");
     m.t1 = real("a collider's motion");
     m.start = vector("a collider's motion");
@@ -292,7 +292,7 @@ std::string serializeCheckpoint(const CheckpointData& d) {
   out.matrix(d.x_prev);
   out.matrix(d.v_prev);
   for (const Pin& p : d.pin_list) out.pin(p);
-  for (const SceneData::Ramp& r : d.forcing.pins) out.ramp(r);
+  for (const Forcing::Ramp& r : d.forcing.pins) out.ramp(r);
   out.ramp(d.forcing.user_forces);
   out.value(static_cast<std::int64_t>(d.stiffness.size()));
   for (std::size_t b = 0; b < d.stiffness.size(); ++b) {
@@ -301,7 +301,7 @@ std::string serializeCheckpoint(const CheckpointData& d) {
     for (std::uint8_t e : d.enabled[b]) out.flag(e != 0);
   }
   out.value(static_cast<std::int64_t>(d.forcing.colliders.size()));
-  for (const SceneData::ColliderMotion& m : d.forcing.colliders) out.motion(m);
+  for (const Forcing::ColliderMotion& m : d.forcing.colliders) out.motion(m);
   out.value(static_cast<std::int64_t>(d.contact_log.size()));
   for (std::int32_t entry : d.contact_log) out.value(entry);
   std::string bytes = out.take();

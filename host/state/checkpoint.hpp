@@ -2,6 +2,7 @@
 // The contents of a Checkpoint and its binary form: one place that writes and one that reads
 // (with every size checked), shared by the in-memory and the file checkpoints.
 #include "backend.hpp"
+#include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 
 #include <Eigen/Core>
@@ -32,7 +33,7 @@ struct CheckpointData : SceneBook {
   std::vector<Pin> pin_list;  // `pins` of them: the scene's, grabbed and released
   bool has_history = false;
   Eigen::MatrixX3d x, v, x_prev, v_prev;
-  SceneData::ForcingState forcing;
+  Forcing::State forcing;
   /// Per element block (in the order of elementTypes()): each element's stiffness (0 for a type
   /// without one) and enabled flag, as run-time changes left them.
   std::vector<std::vector<double>> stiffness;

@@ -1,5 +1,7 @@
 #include "device_profiles.hpp"
 
+#include "io/text_reader.hpp"  // shown: the name is user text
+
 #include <stabint/errors.hpp>
 
 #include <algorithm>
@@ -118,7 +120,7 @@ const DeviceProfile& deviceProfileNamed(const std::string& name) {
     if (name == row.profile.name) return row.profile;
     names += std::string(names.empty() ? "" : ", ") + row.profile.name;
   }
-  throw InvalidInputError("no device profile '" + name + "' (STABINT_OPENCL_PROFILE); the rows: " + names);
+  throw InvalidInputError("no device profile '" + io::shown(name) + "' (STABINT_OPENCL_PROFILE); the rows: " + names);
 }
 
 }  // namespace stabint

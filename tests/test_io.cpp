@@ -117,6 +117,13 @@ TEST_F(MeshFiles, ObjErrorsNameFileLineAndProblem) {
 
   f = write("short.obj", "v 0 0 0\nv 1 0\n");
   expectError([&] { loadObjCloth(f); }, f, 2, "vertex 2: expected 'v <x> <y> <z>'");
+  // After x y z a weight, a colour or both, each a number; any other count is refused.
+  f = write("extra.obj", "v 0 0 0\nv 1 0 0 1 0.5\n");
+  expectError([&] { loadObjCloth(f); }, f, 2, "vertex 2: expected 'v <x> <y> <z>' with an optional <w>");
+  f = write("colour.obj", "v 0 0 0 1 red 0\n");
+  expectError([&] { loadObjCloth(f); }, f, 1, "expected a number for vertex 1 value 5, got 'red'");
+  f = write("weighted.obj", "v 0 0 0 1\nv 1 0 0 0.2 0.3 0.4\nv 0 1 0 1 0.2 0.3 0.4\nf 1 2 3\n");
+  EXPECT_EQ(loadObjCloth(f).numParticles(), 3);
 
   f = write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 7\n");
   expectError([&] { loadObjCloth(f); }, f, 5, "face 2: vertex index 7 out of range [1, 3]");
@@ -229,7 +236,21 @@ TEST_F(MeshFiles, TetGenErrors) {
   expectError([&] { loadTetGen(base); }, ele, 3, "unexpected end of file, expected tetrahedron 2 of 3");
 
   ele = write("m.ele", "2 4 0\n1 1 2 3\n");
-  expectError([&] { loadTetGen(base); }, ele, 2, "tetrahedron 0: expected '<index>' and 4 node numbers, got 4 fields");
+  expectError([&] { loadTetGen(base); }, ele, 2,
+              "tetrahedron 0: expected 5 fields (<index>, 4 node numbers, 0 attributes), got 4");
+  // A line has the fields its header announces, no more: a trailing token, or an attribute the
+  // header does not count, would be read as data of another column.
+  ele = write("m.ele", "1 4 0\n1 1 2 3 4 5\n");
+  expectError([&] { loadTetGen(base); }, ele, 2,
+              "tetrahedron 0: expected 5 fields (<index>, 4 node numbers, 0 attributes), got 6");
+  ele = write("m.ele", "1 4 1\n1 1 2 3 4\n");
+  expectError([&] { loadTetGen(base); }, ele, 2,
+              "tetrahedron 0: expected 6 fields (<index>, 4 node numbers, 1 attributes), got 5");
+  ele = write("m.ele", "1 4 1\n1 1 2 3 4 heavy\n");
+  expectError([&] { loadTetGen(base); }, ele, 2, "tet 1 attribute 0");
+  ele = write("m.ele", "1 4 0 0\n1 1 2 3 4\n");
+  expectError([&] { loadTetGen(base); }, ele, 1,
+              "the .ele header is '<#tetrahedra> <nodes per tet> [<#attributes>]', got 4 fields");
 
   ele = write("m.ele", "2 8 0\n");
   expectError([&] { loadTetGen(base); }, ele, 1, "nodes per tetrahedron 8 must be 4 or 10");
@@ -250,6 +271,17 @@ TEST_F(MeshFiles, TetGenErrors) {
 
   write("n.node", "2 3 0 0\n1 0 0 0\n2 1 inf 0\n");
   expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 3, "point 2 coordinate y is not finite");
+
+  write("n.node", "2 3 0 0\n1 0 0 0\n2 1 0 0 7.5\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 3,
+              "point 1: expected 4 fields (<index> <x> <y> <z>, 0 attributes, 0 boundary markers), got 5");
+  write("n.node", "2 3 1 1\n1 0 0 0 7.5 1\n2 1 0 0 7.5\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 3,
+              "point 1: expected 6 fields (<index> <x> <y> <z>, 1 attributes, 1 boundary markers), got 5");
+  write("n.node", "2 3 0 2\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 1, "number of boundary markers 2 must be at most 1");
+  write("n.node", "2 3 0 1\n1 0 0 0 1\n2 1 0 0 b\n");
+  expectError([&] { loadTetGen((dir_ / "n").string()); }, node, 3, "point 2 marker");
 
   const std::string missing_base = (dir_ / "absent").string();
   expectError([&] { loadTetGen(missing_base); }, missing_base + ".node", 0, "cannot open file");
@@ -298,6 +330,15 @@ TEST_F(MeshFiles, MeditNegativeOrientationAndErrors) {
 
   path = write("short.mesh", head + "Tetrahedra\n3\n1 2 3 4 0\n5 2 4 3 0\n");
   expectError([&] { loadMedit(path); }, path, 13, "unexpected end of file, expected tet 3 of 3");
+
+  // A record without its reference: the error is at the record's line, not at the keyword that
+  // was read in its place.
+  path = write("noref.mesh", head + "Tetrahedra\n2\n1 3 2 4 0\n5 4 2 3\n\nEnd\n");
+  expectError([&] { loadMedit(path); }, path, 13,
+              "tet 2: no reference after its numbers (found the keyword 'End' on line 15)");
+  path = write("novref.mesh", "Dimension 3\nVertices 2\n0 0 0 0\n1 0 0\nTetrahedra 0\n");
+  expectError([&] { loadMedit(path); }, path, 4,
+              "vertex 2: no reference after its numbers (found the keyword 'Tetrahedra' on line 5)");
 
   path = write("notets.mesh", head + "End\n");
   expectError([&] { loadMedit(path); }, path, 10, "no Tetrahedra section");

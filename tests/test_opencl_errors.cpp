@@ -70,6 +70,17 @@ TEST_F(OpenCLErrorsTest, SelectorMatchingNothingIsNoDeviceError) {
   options.device.clear();
   options.platform = "99";
   EXPECT_THROW(makeOpenCLBackend(data, forcing, 1, options), NoOpenCLDeviceError);
+  // A selector is user text: its bytes outside printable ASCII are escaped, never echoed raw.
+  options.platform.clear();
+  options.device = "gpu\xff\x1b[2J";
+  try {
+    makeOpenCLBackend(data, forcing, 1, options);
+    FAIL() << "expected NoOpenCLDeviceError";
+  } catch (const NoOpenCLDeviceError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("device selector 'gpu\\xff\\x1b[2J'"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\x1b'), std::string::npos) << what;
+  }
 }
 
 TEST_F(OpenCLErrorsTest, EnvironmentVariablesSelectTheDevice) {

@@ -25,6 +25,16 @@ bool sameKeyword(const std::string& a, const char* b) {
 // Keywords start with a letter; everything in a section's body is a number.
 bool isKeyword(const std::string& token) { return std::isalpha(static_cast<unsigned char>(token[0])) != 0; }
 
+// The integer reference that ends a record starting on `line`. A keyword in its place means the
+// record lacks it: the error names the record's line, where the mistake is, and the keyword.
+void readReference(io::TextReader& in, const std::string& record, int line) {
+  const std::string token = in.requireToken(record + " reference");
+  if (isKeyword(token))
+    in.failAt(line, record + ": no reference after its numbers (found the keyword '" + io::shown(token) + "' on line " +
+                        std::to_string(in.line()) + ")");
+  in.parseInt(token, record + " reference");
+}
+
 Eigen::MatrixX3d readVertices(io::TextReader& in, io::VertexLines& lines) {
   const int count = in.parseCount(in.requireToken("the number of vertices"), "number of vertices");
   std::vector<double> xyz;                   // row after row; the header's count is not trusted with an allocation
@@ -36,7 +46,7 @@ Eigen::MatrixX3d readVertices(io::TextReader& in, io::VertexLines& lines) {
       if (c == 0) lines.lines.push_back(in.line());
       xyz.push_back(in.parseCoordinate(token, vertex + " coordinate " + "xyz"[c]));
     }
-    in.parseInt(in.requireToken(vertex + " reference"), vertex + " reference");
+    readReference(in, vertex, lines.lines.back());
   }
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(xyz.data(), count, 3);
 }
@@ -53,7 +63,7 @@ std::vector<io::TetRecord> readTetrahedra(io::TextReader& in, int num_vertices) 
       if (k == 0) tet.line = in.line();
       tet.vertices[k] = io::parseVertexIndex(in, token, 1, num_vertices, name);
     }
-    in.parseInt(in.requireToken(name + " reference"), name + " reference");
+    readReference(in, name, tet.line);
     tets.push_back(tet);
   }
   return tets;

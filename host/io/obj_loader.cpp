@@ -123,11 +123,16 @@ static Scene loadObjClothUnguarded(const std::string& path, const ClothMaterial&
   for (std::vector<std::string> tokens; in.nextLine(tokens);) {
     if (tokens[0] == "v") {
       const std::string name = "vertex " + std::to_string(positions.size() + 1);
-      if (tokens.size() < 4)
-        in.fail(name + ": expected 'v <x> <y> <z>', got " + std::to_string(tokens.size() - 1) + " values");
+      // x y z, then an optional weight w (the OBJ standard) or a colour r g b (a common
+      // extension) or both, each a number; another count is not a vertex line this reader knows.
+      const std::size_t values = tokens.size() - 1;
+      if (values != 3 && values != 4 && values != 6 && values != 7)
+        in.fail(name + ": expected 'v <x> <y> <z>' with an optional <w> and an optional colour <r> <g> <b>, got " +
+                std::to_string(values) + " values");
       lines.lines.push_back(in.line());
       Eigen::Vector3d x;
       for (int c = 0; c < 3; ++c) x[c] = in.parseCoordinate(tokens[1 + c], name + " coordinate " + "xyz"[c]);
+      for (std::size_t k = 4; k < tokens.size(); ++k) in.parseReal(tokens[k], name + " value " + std::to_string(k));
       positions.push_back(x);
     } else if (tokens[0] == "f") {
       faces.push_back(readFace(in, tokens, static_cast<int>(faces.size()) + 1, static_cast<long>(positions.size())));

@@ -1,5 +1,6 @@
 #include "opencl/cl_runtime.hpp"
 
+#include "io/text_reader.hpp"  // shown: the selectors are user text
 #include "kernel_constants.hpp"
 
 #include <algorithm>
@@ -215,7 +216,8 @@ SelectedDevice selectDevice(const OpenCLOptions& options) {
     }
   }
   std::ostringstream msg;
-  msg << "OpenCL: no device matches platform selector '" << platform_sel << "' and device selector '" << device_sel
+  msg << "OpenCL: no device matches platform selector '" << io::shown(platform_sel) << "' and device selector '"
+      << io::shown(device_sel)
       << "' (from OpenCLOptions or STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE); available:";
   const std::string list = available.str();
   msg << (list.empty() ? std::string(" none") : list);

@@ -29,7 +29,8 @@ struct SolidMaterial {
   double stiffness = 1e5;   ///< tet strain stiffness (Pa)
 };
 
-/// Loads a Wavefront OBJ triangle mesh as cloth: vertices (`v`), faces (`f`, polygons are
+/// Loads a Wavefront OBJ triangle mesh as cloth: vertices (`v x y z`, with an optional weight
+/// `w` and an optional colour `r g b` after them, both ignored), faces (`f`, polygons are
 /// fanned into triangles, `v/vt/vn` forms accepted, negative indices allowed) into
 /// Scene::triangles; the elements of `material.model` (springs along edges and bending springs
 /// across interior edges, or triangle strain and bending hinges); masses from the area. No pins,
@@ -37,7 +38,8 @@ struct SolidMaterial {
 Scene loadObjCloth(const std::string& path, const ClothMaterial& material = {});
 
 /// Loads a TetGen mesh from `<base>.node` and `<base>.ele` (0- or 1-based, attributes and
-/// boundary markers ignored). Tets with negative signed volume are reoriented only when every
+/// boundary markers ignored; every line has the fields its file's header announces, no more and
+/// no fewer; a quadratic tet's mid-edge nodes are checked and ignored). Tets with negative signed volume are reoriented only when every
 /// tet of the mesh has that orientation (a mesh-wide convention); mixed or zero volumes are an
 /// error naming the element. Every point must be in a tet (TetGen's -j drops those that are not).
 Scene loadTetGen(const std::string& base_path, const SolidMaterial& material = {});

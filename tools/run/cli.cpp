@@ -2,11 +2,13 @@
 
 #include <stabint/options_table.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <optional>
+#include <set>
 #include <sstream>
 
 namespace stabint_run {
@@ -30,11 +32,35 @@ std::string flagOf(const char* field) {
   return flag;
 }
 
+// A decimal number: digits with an optional sign, point and exponent (strtod alone also takes
+// hexadecimal floats, "inf", "nan" and leading spaces, which no option means).
+bool decimalNumber(const std::string& text) {
+  std::size_t i = 0;
+  const auto digits = [&] {
+    const std::size_t from = i;
+    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i;
+    return i > from;
+  };
+  if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+  bool mantissa = digits();
+  if (i < text.size() && text[i] == '.') {
+    ++i;
+    mantissa = digits() || mantissa;
+  }
+  if (!mantissa) return false;
+  if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+    if (!digits()) return false;
+  }
+  return i == text.size();
+}
+
 double parseNumber(const std::string& option, const std::string& text) {
   char* end = nullptr;
   errno = 0;
   const double x = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(x)) {
+  if (!decimalNumber(text) || *end != '\0' || errno == ERANGE || !std::isfinite(x)) {
     throw UsageError(option + ": expected a number, got '" + text + "'");
   }
   return x;
@@ -44,7 +70,8 @@ int parseInteger(const std::string& option, const std::string& text) {
   char* end = nullptr;
   errno = 0;
   const long x = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno == ERANGE || x < INT32_MIN || x > INT32_MAX) {
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) || *end != '\0' || errno == ERANGE ||
+      x < INT32_MIN || x > INT32_MAX) {
     throw UsageError(option + ": expected an integer, got '" + text + "'");
   }
   return static_cast<int>(x);
@@ -218,6 +245,7 @@ std::string usage() {
 Options parseArgs(int argc, char** argv) {
   Options o;
   o.sim = defaultSimulatorOptions();
+  std::set<std::string> seen;  // the options given so far
   for (int i = 1; i < argc; ++i) {
     std::string arg = argv[i];
     std::optional<std::string> inline_value;
@@ -233,8 +261,16 @@ Options parseArgs(int argc, char** argv) {
     const auto value = [&]() -> std::string {
       if (inline_value) return *inline_value;
       if (i + 1 >= argc) throw UsageError(arg + ": missing value");
+      // No value starts with "--": that is the next option, and this one lacks its value.
+      if (std::strncmp(argv[i + 1], "--", 2) == 0)
+        throw UsageError(arg + ": missing value (the next argument is the option '" + argv[i + 1] + "')");
       return argv[++i];
     };
+    // Each option once (--param once per key: paramsAsJson): a second value would silently
+    // replace the first.
+    const std::string name = arg == "--dt" ? "--time-step" : arg;
+    if (name != "--param" && !seen.insert(name).second)
+      throw UsageError(arg + ": given twice" + (name == "--time-step" ? " (--dt is --time-step)" : std::string()));
     const auto flag = [&]() {
       if (inline_value) throw UsageError(arg + ": takes no value");
     };

@@ -12,15 +12,25 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
 namespace stabint_run {
 
+// The directory `dir` of the option `flag`, made with its parents where missing; a path that is
+// a file or cannot be made is a usage error naming the option.
+inline void makeOutputDirectory(const char* flag, const std::string& dir) {
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (!error && !std::filesystem::is_directory(dir, error)) error = std::make_error_code(std::errc::not_a_directory);
+  if (error) throw UsageError(std::string(flag) + ": cannot make the directory '" + dir + "': " + error.message());
+}
+
 class ObjWriter {
  public:
   ObjWriter(std::string dir, const stabint::Scene& scene) : dir_(std::move(dir)) {
-    std::filesystem::create_directories(dir_);
+    makeOutputDirectory("--obj-dir", dir_);
     triangles_ = scene.triangles.empty() ? stabint::tetSurface(scene.tets) : scene.triangles;
     if (triangles_.empty()) {
       for (const stabint::Spring& s : scene.springs) lines_.push_back({s.a, s.b});
@@ -60,7 +70,7 @@ class ObjWriter {
 class VtkWriter {
  public:
   VtkWriter(std::string dir, const stabint::Scene& scene) : dir_(std::move(dir)) {
-    std::filesystem::create_directories(dir_);
+    makeOutputDirectory("--vtk", dir_);
     // VTK cell types: 10 tetra, 5 triangle, 3 line, 1 vertex.
     if (!scene.tets.empty()) {
       for (const stabint::Tet& t : scene.tets) addCell(10, t.vertices);

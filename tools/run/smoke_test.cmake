@@ -140,6 +140,24 @@ elseif(CASE STREQUAL "bad_option")
   expect_run(1 "^stabint-run: error: unknown option '--no-such-option'" --scene chain --no-such-option)
 elseif(CASE STREQUAL "bad_value")
   expect_run(1 "^stabint-run: error: --dt: expected a number, got 'fast'" --scene chain --dt fast)
+elseif(CASE STREQUAL "bad_arguments")
+  # Each mistake is named: an option given twice (a second value would silently win), an option
+  # whose value is missing (the next option is not taken as its value), a number strtod reads but
+  # no user means (hexadecimal), an output directory that is a file.
+  expect_run(1 "^stabint-run: error: --scene: given twice" --scene chain --scene cloth --frames 1)
+  expect_run(1 "^stabint-run: error: --time-step: given twice \\(--dt is --time-step\\)" --scene chain --dt 0.01
+             --time-step 0.02)
+  expect_run(1 "^stabint-run: error: --frames: missing value \\(the next argument is the option '--quiet'\\)"
+             --scene chain --frames --quiet)
+  expect_run(1 "^stabint-run: error: --dt: expected a number, got '0x10'" --scene chain --dt 0x10)
+  expect_run(1 "^stabint-run: error: --frames: expected an integer, got ' 3'" --scene chain --frames " 3")
+  file(WRITE "${dir}/a_file" "")
+  expect_run(1 "^stabint-run: error: --obj-dir: cannot make the directory '${dir}/a_file'" --scene chain --backend cpu
+             --frames 1 --quiet --obj-dir "${dir}/a_file")
+  expect_run(1 "^stabint-run: error: --vtk: cannot make the directory '${dir}/a_file/frames'" --scene chain
+             --backend cpu --frames 1 --quiet --vtk "${dir}/a_file/frames")
+  # Decimal forms are all numbers.
+  expect_run(0 "" --scene chain --backend cpu --frames 1 --quiet --dt .5e-2)
 elseif(CASE STREQUAL "bad_integrator")
   expect_run(1 "^stabint-run: error: --integrator: unknown integrator 'RK4'" --scene chain --integrator RK4)
 elseif(CASE STREQUAL "bad_param")

@@ -149,28 +149,16 @@ void ElementChanges::changePins(const std::vector<Pin>& pins, int inserted) {
   system_.apply(weights, scene_);
 }
 
-void ElementChanges::save(CheckpointData& d) const {
-  for (std::size_t b = 0; b < scene_.blocks().size(); ++b) {
-    const ElementBlock& block = scene_.blocks()[b];
-    d.stiffness.emplace_back();
-    d.enabled.emplace_back();
-    for (int e = 0; e < block.count; ++e) {
-      d.stiffness.back().push_back(block.type->stiffness(scene_.scene(), e));
-      d.enabled.back().push_back(scene_.elementEnabled(static_cast<int>(b), e) ? 1 : 0);
-    }
-  }
-}
-
-void ElementChanges::restore(const CheckpointData& d, int contact_block,
+void ElementChanges::restore(const ElementState& state, int contact_block,
                              const std::vector<std::uint8_t>* contact_flags) {
-  if (!samePins(d.pin_list, scene_.scene().pins)) changePins(d.pin_list);
+  if (!samePins(state.pins, scene_.scene().pins)) changePins(state.pins);
   GlobalSystem::WeightChange weights;
   for (std::size_t b = 0; b < scene_.blocks().size(); ++b) {
     const ElementBlock& block = scene_.blocks()[b];
     const int bi = static_cast<int>(b);
     for (int e = 0; e < block.count; ++e) {
-      const double k = d.stiffness[b][static_cast<std::size_t>(e)];
-      const bool on = (contact_flags && bi == contact_block ? *contact_flags : d.enabled[b])[std::size_t(e)] != 0;
+      const double k = state.stiffness[b][static_cast<std::size_t>(e)];
+      const bool on = (contact_flags && bi == contact_block ? *contact_flags : state.enabled[b])[std::size_t(e)] != 0;
       const bool k_differs = block.type->hasStiffness() && block.type->stiffness(scene_.scene(), e) != k;
       if (!k_differs && scene_.elementEnabled(bi, e) == on) continue;
       const double w_old = scene_.elementWeight(bi, e);

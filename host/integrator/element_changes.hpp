@@ -7,8 +7,8 @@
 // ContactResolver's. A batch changes one scene's elements through the same code (InputScope: its
 // indices and messages).
 #include "backend.hpp"
-#include "state/checkpoint.hpp"
 #include "integrator/input_scope.hpp"
+#include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 
 #include <stabint/types.hpp>
@@ -19,7 +19,6 @@
 namespace stabint {
 
 class Forcing;
-class SceneData;
 
 class ElementChanges {
  public:
@@ -47,13 +46,11 @@ class ElementChanges {
   /// with their pins; -1 when every pin keeps its index.
   void changePins(const std::vector<Pin>& pins, int inserted = -1);
 
-  /// Every element's stiffness and enabled flag, into a checkpoint.
-  void save(CheckpointData& d) const;
-  /// A checkpoint's pin set, stiffnesses and enabled flags (counts checked by the caller):
-  /// elements that differ are changed as change() would, without an event (H* is restored).
-  /// With `contact_flags` the contact block (`contact_block`) takes those flags and L and the
-  /// factors are left to the caller, who assembles and factors them again.
-  void restore(const CheckpointData& d, int contact_block, const std::vector<std::uint8_t>* contact_flags);
+  /// A saved element state (SceneData::elementState; counts checked by the caller): its pin set,
+  /// stiffnesses and enabled flags. Elements that differ are changed as change() would, without an
+  /// event (H* is restored). With `contact_flags` the contact block (`contact_block`) takes those
+  /// flags and L and the factors are left to the caller, who assembles and factors them again.
+  void restore(const ElementState& state, int contact_block, const std::vector<std::uint8_t>* contact_flags);
 
  private:
   void addTerm(GlobalSystem::WeightChange& change, int block, int e, double w_old) const;

@@ -88,6 +88,21 @@ void SceneData::setElementEnabled(int block, int element, bool enabled) {
   paramsChanged(b, element);
 }
 
+ElementState SceneData::elementState() const {
+  ElementState state;
+  state.pins = scene_.pins;
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    const ElementBlock& block = blocks_[b];
+    state.stiffness.emplace_back();
+    state.enabled.emplace_back();
+    for (int e = 0; e < block.count; ++e) {
+      state.stiffness.back().push_back(block.type->stiffness(scene_, e));
+      state.enabled.back().push_back(elementEnabled(static_cast<int>(b), e) ? 1 : 0);
+    }
+  }
+  return state;
+}
+
 void SceneData::numberContributions() {
   int base = 0;
   for (ElementBlock& block : blocks_) {

@@ -5,10 +5,11 @@
 // caches on (docs/method.md, "Per-frame input"):
 // - element stiffnesses and enabled flags: the params in place (ElementBlock::params_revision);
 // - the pin set (grab, release): the pin block and the contribution lists rebuilt (layoutVersion).
-// The rest is fixed. The other owners of the running state are the driver (positions,
-// velocities, each scene's SceneBook, the Forcing: pin targets, forces and collider motion), the
-// backends' slots and the factors (GlobalSystem), which follow the element weights through
-// GlobalSystem::apply.
+// The rest is fixed. Those changes as a value are its ElementState (elementState()), one part of
+// the state a checkpoint holds (state/checkpoint.hpp: CheckpointData); the other parts are the
+// driver's (positions, velocities, each scene's SceneBook, the Forcing: pin targets, forces and
+// collider motion) and the backends' slots. The factors (GlobalSystem) follow the element weights
+// through GlobalSystem::apply.
 #include "elements/element_type.hpp"
 #include "scene/scene_batch.hpp"
 
@@ -30,6 +31,16 @@ struct ContributionCsr {
   std::vector<int> offsets;        // size n + 1
   std::vector<int> contributions;  // contribution indices, sorted ascending per vertex
   int numContributions = 0;
+};
+
+/// The elements as run-time changes left them, as one value: the pin set (the scene's, grabbed
+/// and released) and per element block, in the order of elementTypes(), each element's stiffness
+/// (0 for a type without one) and enabled flag. SceneData::elementState gives it; a checkpoint
+/// saves it and ElementChanges::restore puts it back.
+struct ElementState {
+  std::vector<Pin> pins;
+  std::vector<std::vector<double>> stiffness;
+  std::vector<std::vector<std::uint8_t>> enabled;
 };
 
 class SceneData final {
@@ -65,6 +76,8 @@ class SceneData final {
     return flags.empty() || flags[static_cast<std::size_t>(element)] != 0;
   }
   bool elementEnabled(const ElementType& type, int element) const { return elementEnabled(blockIndex(type), element); }
+  /// The pins, stiffnesses and enabled flags as they are now.
+  ElementState elementState() const;
   /// w_e as the global matrix has it: params[P e] (0 for a disabled element).
   double elementWeight(int block, int element) const {
     const ElementBlock& b = blocks_[static_cast<std::size_t>(block)];

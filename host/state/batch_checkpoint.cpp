@@ -87,17 +87,15 @@ CheckpointData BatchDriver::batchData() {
   CheckpointData d;
   d.scene_fingerprint = sceneFingerprint(data_.scene());
   d.particles = data_.numParticles();
-  d.pin_list = data_.scene().pins;
-  d.pins = static_cast<std::int64_t>(d.pin_list.size());
   d.time = t_;
-  d.has_history = has_history_;
-  d.x = x_;
-  d.v = v_;
-  backend_->read(kXPrev, d.x_prev);
-  backend_->read(kVPrev, d.v_prev);
+  d.motion.has_history = has_history_;
+  d.motion.x = x_;
+  d.motion.v = v_;
+  backend_->read(kXPrev, d.motion.x_prev);
+  backend_->read(kVPrev, d.motion.v_prev);
   d.forcing = forcing_.state();
+  d.elements = data_.elementState();
   d.contact_log = contact_.log();
-  ElementChanges(data_, forcing_, system_, *backend_).save(d);
   return d;
 }
 
@@ -108,16 +106,15 @@ CheckpointData BatchDriver::sceneData(const CheckpointData& all, int scene) cons
   d.scene_fingerprint = sceneFingerprint(scenes_[std::size_t(scene)]);
   d.particles = seg.num_particles;
   const std::size_t pb = std::size_t(pinBlock(data_));
-  d.pin_list = rangeOf(all.pin_list, seg.first_element[pb], seg.num_elements[pb]);
-  for (Pin& pin : d.pin_list) pin.vertex -= seg.first_particle;
-  d.pins = static_cast<std::int64_t>(d.pin_list.size());
+  d.elements.pins = rangeOf(all.elements.pins, seg.first_element[pb], seg.num_elements[pb]);
+  for (Pin& pin : d.elements.pins) pin.vertex -= seg.first_particle;
   static_cast<SceneBook&>(d) = p;
   // An inactive scene's rows of the history slots hold its kept state, not its history.
-  d.has_history = all.has_history && p.active;
-  d.x = all.x.middleRows(seg.first_particle, seg.num_particles);
-  d.v = all.v.middleRows(seg.first_particle, seg.num_particles);
-  d.x_prev = all.x_prev.middleRows(seg.first_particle, seg.num_particles);
-  d.v_prev = all.v_prev.middleRows(seg.first_particle, seg.num_particles);
+  d.motion.has_history = all.motion.has_history && p.active;
+  d.motion.x = all.motion.x.middleRows(seg.first_particle, seg.num_particles);
+  d.motion.v = all.motion.v.middleRows(seg.first_particle, seg.num_particles);
+  d.motion.x_prev = all.motion.x_prev.middleRows(seg.first_particle, seg.num_particles);
+  d.motion.v_prev = all.motion.v_prev.middleRows(seg.first_particle, seg.num_particles);
   d.forcing.pins = rangeOf(all.forcing.pins, seg.first_element[pb], seg.num_elements[pb]);
   // The batch's ramp has rows of zeros for the scenes never given forces: those have none, as
   // their own Simulators (for which an active ramp means a pushed scene, no conserved momentum).
@@ -127,9 +124,9 @@ CheckpointData BatchDriver::sceneData(const CheckpointData& all, int scene) cons
                                           r.end.middleRows(seg.first_particle, seg.num_particles), true};
   }
   d.forcing.colliders = rangeOf(all.forcing.colliders, seg.first_collider, seg.num_colliders);
-  for (std::size_t b = 0; b < all.stiffness.size(); ++b) {
-    d.stiffness.push_back(rangeOf(all.stiffness[b], seg.first_element[b], seg.num_elements[b]));
-    d.enabled.push_back(rangeOf(all.enabled[b], seg.first_element[b], seg.num_elements[b]));
+  for (std::size_t b = 0; b < all.elements.stiffness.size(); ++b) {
+    d.elements.stiffness.push_back(rangeOf(all.elements.stiffness[b], seg.first_element[b], seg.num_elements[b]));
+    d.elements.enabled.push_back(rangeOf(all.elements.enabled[b], seg.first_element[b], seg.num_elements[b]));
   }
   // The scene's entries of the batch's contact log, numbered from its first pair. Every group's
   // end (0) is kept, so that the scenes' logs of one batch line up group by group
@@ -167,24 +164,24 @@ void BatchDriver::splice(CheckpointData& all, std::vector<SceneSegment>& segment
   SceneSegment& seg = segments[std::size_t(scene)];
   const std::size_t pb = std::size_t(pinBlock(data_));
   const int first_pin = seg.first_element[pb], pins = seg.num_elements[pb];
-  std::vector<Pin> pin_list = d.pin_list;
+  std::vector<Pin> pin_list = d.elements.pins;
   for (Pin& pin : pin_list) pin.vertex += seg.first_particle;
-  replaceRange(all.pin_list, first_pin, pins, pin_list);
+  replaceRange(all.elements.pins, first_pin, pins, pin_list);
   replaceRange(all.forcing.pins, first_pin, pins, d.forcing.pins);
-  all.pins = static_cast<std::int64_t>(all.pin_list.size());
-  for (std::size_t b = 0; b < all.stiffness.size(); ++b) {
-    replaceRange(all.stiffness[b], seg.first_element[b], seg.num_elements[b], d.stiffness[b]);
-    replaceRange(all.enabled[b], seg.first_element[b], seg.num_elements[b], d.enabled[b]);
+  for (std::size_t b = 0; b < all.elements.stiffness.size(); ++b) {
+    replaceRange(all.elements.stiffness[b], seg.first_element[b], seg.num_elements[b], d.elements.stiffness[b]);
+    replaceRange(all.elements.enabled[b], seg.first_element[b], seg.num_elements[b], d.elements.enabled[b]);
   }
   // The scene's pin range takes the checkpoint's count: the later scenes' pins move with it.
   const int moved = static_cast<int>(pin_list.size()) - pins;
   seg.num_elements[pb] += moved;
   for (std::size_t s = std::size_t(scene) + 1; s < segments.size(); ++s) segments[s].first_element[pb] += moved;
 
-  all.x.middleRows(seg.first_particle, seg.num_particles) = d.x;
-  all.v.middleRows(seg.first_particle, seg.num_particles) = d.v;
-  all.x_prev.middleRows(seg.first_particle, seg.num_particles) = d.x_prev;
-  all.v_prev.middleRows(seg.first_particle, seg.num_particles) = d.v_prev;
+  const auto rows = [&](Eigen::MatrixX3d& m) { return m.middleRows(seg.first_particle, seg.num_particles); };
+  rows(all.motion.x) = d.motion.x;
+  rows(all.motion.v) = d.motion.v;
+  rows(all.motion.x_prev) = d.motion.x_prev;
+  rows(all.motion.v_prev) = d.motion.v_prev;
   const std::vector<Collider>& colliders = scenes_[std::size_t(scene)].colliders;
   for (int c = 0; c < seg.num_colliders; ++c) {
     // A checkpoint without collider motion (version 2) has its colliders on their scene laws.
@@ -236,24 +233,25 @@ void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegmen
                         const std::vector<PerScene>& per_scene, bool assemble) {
   ElementChanges elements(data_, forcing_, system_, *backend_);
   if (assemble) {
-    const std::vector<std::uint8_t> base = contact_.baseFlags(all.enabled, all.contact_log);
-    elements.restore(all, contact_.block(), &base);
+    const std::vector<std::uint8_t> base = contact_.baseFlags(all.elements.enabled, all.contact_log);
+    elements.restore(all.elements, contact_.block(), &base);
     contact_.restore(all.contact_log);
   } else {
-    elements.restore(all, contact_.block(), nullptr);
+    elements.restore(all.elements, contact_.block(), nullptr);
   }
   segments_ = segments;
   backend_->setSegments(segments_);
-  backend_->write(kX, all.x);
-  backend_->write(kV, all.v);
-  backend_->write(kXPrev, all.x_prev);
-  backend_->write(kVPrev, all.v_prev);
-  x_ = all.x;
-  v_ = all.v;
-  v_slot_ = all.v;
+  const MotionState& motion = all.motion;
+  backend_->write(kX, motion.x);
+  backend_->write(kV, motion.v);
+  backend_->write(kXPrev, motion.x_prev);
+  backend_->write(kVPrev, motion.v_prev);
+  x_ = motion.x;
+  v_ = motion.v;
+  v_slot_ = motion.v;
   host_copies_stored_ = false;
   t_ = all.time;
-  has_history_ = all.has_history;
+  has_history_ = motion.has_history;
   forcing_.setState(all.forcing);
   per_scene_ = per_scene;
   for (int s = 0; s < size(); ++s) pinsChanged(s);
@@ -286,7 +284,7 @@ void BatchDriver::restoreScene(int scene, const CheckpointData& d) {
     throw InvalidInputError(target.where + "the checkpoint is at t = " + timeText(d.time) +
                             ", the batch at t = " + timeText(t_) +
                             ": its scenes share the batch's time, a scene is restored at that time only");
-  if (options_.integrator == Integrator::BDF2 && d.has_history != has_history_)
+  if (options_.integrator == Integrator::BDF2 && d.motion.has_history != has_history_)
     throw InvalidInputError(target.where +
                             (has_history_ ? "the checkpoint has no BDF2 history, the batch has"
                                           : "the checkpoint has BDF2 history, the batch has none") +
@@ -296,7 +294,8 @@ void BatchDriver::restoreScene(int scene, const CheckpointData& d) {
   // assembled from the flags and factored again, with an empty log.
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const std::size_t cb = std::size_t(contact_.block());
-  const bool assemble = rangeOf(all.enabled[cb], seg.first_element[cb], seg.num_elements[cb]) != d.enabled[cb];
+  const bool assemble =
+      rangeOf(all.elements.enabled[cb], seg.first_element[cb], seg.num_elements[cb]) != d.elements.enabled[cb];
   std::vector<SceneSegment> segments = segments_;
   splice(all, segments, scene, d, t_);
   if (assemble) all.contact_log.clear();
@@ -318,7 +317,7 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
   }
   CheckpointData all = batchData();
   all.time = time;
-  all.has_history = false;
+  all.motion.has_history = false;
   all.forcing.user_forces = Forcing::Ramp{};  // the scenes' own ramps only
   std::vector<SceneSegment> segments = segments_;
   std::vector<PerScene> per_scene = per_scene_;
@@ -327,7 +326,7 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
     splice(all, segments, s, d, time);
     restoreScalars(per_scene[std::size_t(s)], d, time);
     // The batch's history is that of its active scenes (an inactive one's is its kept state).
-    if (d.time == time) all.has_history = all.has_history || d.has_history;
+    if (d.time == time) all.motion.has_history = all.motion.has_history || d.motion.has_history;
   }
   all.contact_log = mergeContactLogs(scenes);
   restoreChecked(all, segments, per_scene, /*assemble=*/contact_.count() > 0);

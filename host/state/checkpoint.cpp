@@ -244,11 +244,11 @@ void checkRestorable(const CheckpointData& d, const RestoreTarget& target) {
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
                               " particles, or other masses, rest shape or colliders)");
     const std::size_t num_blocks = target.element_counts.size();
-    bool same_elements = d.stiffness.size() == num_blocks;
+    bool same_elements = d.elements.stiffness.size() == num_blocks;
     for (std::size_t b = 0; same_elements && b < num_blocks; ++b) {
       const std::size_t count =
-          int(b) == target.pin_block ? d.pin_list.size() : static_cast<std::size_t>(target.element_counts[b]);
-      same_elements = d.stiffness[b].size() == count;
+          int(b) == target.pin_block ? d.elements.pins.size() : static_cast<std::size_t>(target.element_counts[b]);
+      same_elements = d.elements.stiffness[b].size() == count;
     }
     if (!same_elements) throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
     const std::size_t motions = d.forcing.colliders.size();
@@ -258,8 +258,8 @@ void checkRestorable(const CheckpointData& d, const RestoreTarget& target) {
     if (target.contact_block < 0)
       ContactResolver::baseFlags(std::vector<std::uint8_t>(), d.contact_log);
     else
-      ContactResolver::baseFlags(d.enabled[std::size_t(target.contact_block)], d.contact_log);
-    for (const Pin& p : d.pin_list)
+      ContactResolver::baseFlags(d.elements.enabled[std::size_t(target.contact_block)], d.contact_log);
+    for (const Pin& p : d.elements.pins)
       if (p.vertex >= d.particles)
         throw InvalidInputError("checkpoint: pin vertex " + std::to_string(p.vertex) + " out of range (the scene has " +
                                 std::to_string(d.particles) + " particles)");
@@ -277,7 +277,7 @@ std::string serializeCheckpoint(const CheckpointData& d) {
   out.value(kVersion);
   out.value(d.scene_fingerprint);
   out.value(d.particles);
-  out.value(d.pins);
+  out.value(static_cast<std::int64_t>(d.elements.pins.size()));
   out.value(d.time);
   out.value(d.steps);
   out.value(d.target);
@@ -286,19 +286,20 @@ std::string serializeCheckpoint(const CheckpointData& d) {
   out.value(d.potential.pins);
   out.value(d.potential.external);
   out.value(d.pending_event_energy);
-  out.flag(d.has_history);
-  out.matrix(d.x);
-  out.matrix(d.v);
-  out.matrix(d.x_prev);
-  out.matrix(d.v_prev);
-  for (const Pin& p : d.pin_list) out.pin(p);
+  out.flag(d.motion.has_history);
+  out.matrix(d.motion.x);
+  out.matrix(d.motion.v);
+  out.matrix(d.motion.x_prev);
+  out.matrix(d.motion.v_prev);
+  for (const Pin& p : d.elements.pins) out.pin(p);
   for (const Forcing::Ramp& r : d.forcing.pins) out.ramp(r);
   out.ramp(d.forcing.user_forces);
-  out.value(static_cast<std::int64_t>(d.stiffness.size()));
-  for (std::size_t b = 0; b < d.stiffness.size(); ++b) {
-    out.value(static_cast<std::int64_t>(d.stiffness[b].size()));
-    for (double k : d.stiffness[b]) out.value(k);
-    for (std::uint8_t e : d.enabled[b]) out.flag(e != 0);
+  const ElementState& elements = d.elements;
+  out.value(static_cast<std::int64_t>(elements.stiffness.size()));
+  for (std::size_t b = 0; b < elements.stiffness.size(); ++b) {
+    out.value(static_cast<std::int64_t>(elements.stiffness[b].size()));
+    for (double k : elements.stiffness[b]) out.value(k);
+    for (std::uint8_t e : elements.enabled[b]) out.flag(e != 0);
   }
   out.value(static_cast<std::int64_t>(d.forcing.colliders.size()));
   for (const Forcing::ColliderMotion& m : d.forcing.colliders) out.motion(m);
@@ -333,9 +334,9 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
   CheckpointData d;
   d.scene_fingerprint = in.value<std::uint64_t>("the scene fingerprint");
   d.particles = in.value<std::int64_t>("the particle count");
-  d.pins = in.value<std::int64_t>("the pin count");
+  const auto pins = in.value<std::int64_t>("the pin count");
   checkCount(in, d.particles, payload, "particle count");
-  checkCount(in, d.pins, payload, "pin count");
+  checkCount(in, pins, payload, "pin count");
   d.time = in.real("the time");
   d.steps = in.value<std::int64_t>("the step count");
   if (d.steps < 0 || d.steps > kMostSteps)
@@ -347,15 +348,15 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
   d.potential.pins = in.energy("the potential energy");
   d.potential.external = in.energy("the potential energy");
   d.pending_event_energy = in.energy("the event energy");
-  d.has_history = in.flag("the history flag");
-  d.x = in.matrix(d.particles, "positions");
-  d.v = in.matrix(d.particles, "velocities");
-  d.x_prev = in.matrix(d.particles, "previous positions");
-  d.v_prev = in.matrix(d.particles, "previous velocities");
-  d.pin_list.reserve(static_cast<std::size_t>(d.pins));
-  for (std::int64_t i = 0; i < d.pins; ++i) d.pin_list.push_back(in.pin());
-  d.forcing.pins.reserve(static_cast<std::size_t>(d.pins));
-  for (std::int64_t i = 0; i < d.pins; ++i) d.forcing.pins.push_back(in.ramp(1, "a pin target"));
+  d.motion.has_history = in.flag("the history flag");
+  d.motion.x = in.matrix(d.particles, "positions");
+  d.motion.v = in.matrix(d.particles, "velocities");
+  d.motion.x_prev = in.matrix(d.particles, "previous positions");
+  d.motion.v_prev = in.matrix(d.particles, "previous velocities");
+  d.elements.pins.reserve(static_cast<std::size_t>(pins));
+  for (std::int64_t i = 0; i < pins; ++i) d.elements.pins.push_back(in.pin());
+  d.forcing.pins.reserve(static_cast<std::size_t>(pins));
+  for (std::int64_t i = 0; i < pins; ++i) d.forcing.pins.push_back(in.ramp(1, "a pin target"));
   d.forcing.user_forces = in.ramp(d.particles, "the external forces");
   // Element counts are checked against the scene when restored; here only against the data
   // (a stiffness and a flag each: 9 bytes).
@@ -372,8 +373,8 @@ CheckpointData parseCheckpoint(const std::string& bytes, const std::string& orig
     }
     std::vector<std::uint8_t> enabled(static_cast<std::size_t>(count));
     for (std::uint8_t& e : enabled) e = in.flag("an element flag") ? 1 : 0;
-    d.stiffness.push_back(std::move(stiffness));
-    d.enabled.push_back(std::move(enabled));
+    d.elements.stiffness.push_back(std::move(stiffness));
+    d.elements.enabled.push_back(std::move(enabled));
   }
   if (version >= 3) {
     // Checked against the scene's collider count when restored (the fingerprint covers them).

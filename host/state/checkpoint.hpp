@@ -25,21 +25,26 @@ struct SceneBook {
   double pending_event_energy = 0.0;  // booked by events since the last step
 };
 
-/// A checkpoint's contents: the scene's book (for a whole batch's, the batch's time only) and the
-/// rest of its state.
-struct CheckpointData : SceneBook {
-  std::uint64_t scene_fingerprint = 0;  // sceneFingerprint() of the scene it belongs to
-  std::int64_t particles = 0, pins = 0;
-  std::vector<Pin> pin_list;  // `pins` of them: the scene's, grabbed and released
+/// Where the particles are and how they move: positions, velocities and, for BDF2, the previous
+/// step's (has_history: the previous step is there).
+struct MotionState {
   bool has_history = false;
   Eigen::MatrixX3d x, v, x_prev, v_prev;
+};
+
+/// A scene's whole state as one value, and a checkpoint's contents: the parts its owners give and
+/// take as values (docs/method.md, "Checkpoints"): the book (the driver's per scene; for a whole
+/// batch's, the batch's time only), the motion (the driver's host copies and the backend's
+/// history slots), the forcing (Forcing::state), the elements (SceneData::elementState) and the
+/// contact set's changes (ContactResolver::log). serializeCheckpoint writes it as it is.
+struct CheckpointData : SceneBook {
+  std::uint64_t scene_fingerprint = 0;  // sceneFingerprint() of the scene it belongs to
+  std::int64_t particles = 0;
+  MotionState motion;
   Forcing::State forcing;
-  /// Per element block (in the order of elementTypes()): each element's stiffness (0 for a type
-  /// without one) and enabled flag, as run-time changes left them.
-  std::vector<std::vector<double>> stiffness;
-  std::vector<std::vector<std::uint8_t>> enabled;
-  /// The contact set's changes since the global matrix was last assembled (ContactResolver::log): e + 1 entering, -(e +
-  /// 1) leaving, 0 closing a step's batch.
+  ElementState elements;
+  /// The contact set's changes since the global matrix was last assembled: e + 1 entering,
+  /// -(e + 1) leaving, 0 closing a step's batch.
   std::vector<std::int32_t> contact_log;
 };
 

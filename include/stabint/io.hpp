@@ -39,9 +39,10 @@ Scene loadObjCloth(const std::string& path, const ClothMaterial& material = {});
 
 /// Loads a TetGen mesh from `<base>.node` and `<base>.ele` (0- or 1-based, attributes and
 /// boundary markers ignored; every line has the fields its file's header announces, no more and
-/// no fewer; a quadratic tet's mid-edge nodes are checked and ignored). Tets with negative signed volume are reoriented only when every
-/// tet of the mesh has that orientation (a mesh-wide convention); mixed or zero volumes are an
-/// error naming the element. Every point must be in a tet (TetGen's -j drops those that are not).
+/// no fewer; a quadratic tet's mid-edge nodes are checked and ignored). Tets with negative signed
+/// volume are reoriented only when every tet of the mesh has that orientation (a mesh-wide
+/// convention); mixed or zero volumes are an error naming the element. Every point must be in a
+/// tet (TetGen's -j drops those that are not).
 Scene loadTetGen(const std::string& base_path, const SolidMaterial& material = {});
 
 /// Loads a Medit `.mesh` file (sections Vertices and Tetrahedra; other sections are skipped),

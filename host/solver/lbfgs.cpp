@@ -18,14 +18,15 @@
 // length and history is the segment's own, so a scene takes the steps it takes alone.
 #include "solver/local_global.hpp"
 
-#include "cpu/worker_pool.hpp"
-#include "simd.hpp"
+#include "solver/history_passes.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 
 namespace stabint {
+
+using namespace history_passes;
 
 namespace {
 
@@ -140,136 +141,6 @@ void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const Itera
   }
 }
 
-namespace {
-
-// The history's passes are a few multiply-adds per value read. Eigen's dot at the library's
-// baseline (two SSE2 sums) waits on its additions' latency; these kernels keep kLanes independent
-// sums, compiled for AVX-512, AVX2 and the baseline (the loader picks the widest the machine has),
-// each lane adding its values in index order and the lanes then summed in a fixed tree: the same
-// bits on any machine (the build has no FMA contraction). The updates (q -= a y, d += c s) do
-// Eigen's arithmetic, value by value. What the passes cost now is memory traffic: the vectors come
-// from the last-level cache (docs/benchmarks.md, "L-BFGS's cost per iteration on the peer cloth").
-
-constexpr int kLanes = 16;
-
-// Value i of a pass goes to lane i % kLanes, in both the whole groups and the tail.
-STABINT_TARGET_CLONES
-double dot(int len, const double* __restrict a, const double* __restrict b) {
-  double acc[kLanes] = {};
-  int i = 0;
-  for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) acc[l] += a[i + l] * b[i + l];
-  for (int l = 0; i + l < len; ++l) acc[l] += a[i + l] * b[i + l];
-  return laneSum<kLanes>(acc);
-}
-
-// The new pair: s = x_trial - x, y = g_trial - g, then x = x_trial, g = g_trial; out = s.y, y.y,
-// s.s, s.g_trial.
-STABINT_TARGET_CLONES
-void newPair(int len, const double* __restrict x_trial, const double* __restrict g_trial, double* __restrict x,
-             double* __restrict g, double* __restrict s, double* __restrict y, double* out) {
-  double sy[kLanes] = {}, yy[kLanes] = {}, ss[kLanes] = {}, sg[kLanes] = {};
-  auto body = [&](int i, int l) {
-    const double si = x_trial[i] - x[i], yi = g_trial[i] - g[i];
-    s[i] = si;
-    y[i] = yi;
-    x[i] = x_trial[i];
-    g[i] = g_trial[i];
-    sy[l] += si * yi;
-    yy[l] += yi * yi;
-    ss[l] += si * si;
-    sg[l] += si * g_trial[i];
-  };
-  int i = 0;
-  for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) body(i + l, l);
-  for (int l = 0; i + l < len; ++l) body(i + l, l);
-  out[0] = laneSum<kLanes>(sy);
-  out[1] = laneSum<kLanes>(yy);
-  out[2] = laneSum<kLanes>(ss);
-  out[3] = laneSum<kLanes>(sg);
-}
-
-// An older pair j against the new one: out = s.y_j, s_j.y, s_j.g_trial.
-STABINT_TARGET_CLONES
-void pairProducts(int len, const double* __restrict s, const double* __restrict y, const double* __restrict g_trial,
-                  const double* __restrict s_j, const double* __restrict y_j, double* out) {
-  double a[kLanes] = {}, b[kLanes] = {}, c[kLanes] = {};
-  int i = 0;
-  for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) {
-      a[l] += s[i + l] * y_j[i + l];
-      b[l] += s_j[i + l] * y[i + l];
-      c[l] += s_j[i + l] * g_trial[i + l];
-    }
-  for (int l = 0; i + l < len; ++l) {
-    a[l] += s[i + l] * y_j[i + l];
-    b[l] += s_j[i + l] * y[i + l];
-    c[l] += s_j[i + l] * g_trial[i + l];
-  }
-  out[0] = laneSum<kLanes>(a);
-  out[1] = laneSum<kLanes>(b);
-  out[2] = laneSum<kLanes>(c);
-}
-
-// q -= a v (Eigen's q - a * v, value by value).
-STABINT_TARGET_CLONES
-void subtractScaled(int len, double* __restrict q, double a, const double* __restrict v) {
-  STABINT_LANES for (int i = 0; i < len; ++i) q[i] = q[i] - a * v[i];
-}
-
-// d += a v.
-STABINT_TARGET_CLONES
-void addScaled(int len, double* __restrict d, double a, const double* __restrict v) {
-  STABINT_LANES for (int i = 0; i < len; ++i) d[i] = d[i] + a * v[i];
-}
-
-// d = -d; returns g.d.
-STABINT_TARGET_CLONES
-double negateAndSlope(int len, double* __restrict d, const double* __restrict g) {
-  double acc[kLanes] = {};
-  int i = 0;
-  for (; i + kLanes <= len; i += kLanes) STABINT_LANES for (int l = 0; l < kLanes; ++l) {
-      d[i + l] = -d[i + l];
-      acc[l] += g[i + l] * d[i + l];
-    }
-  for (int l = 0; i + l < len; ++l) {
-    d[i + l] = -d[i + l];
-    acc[l] += g[i + l] * d[i + l];
-  }
-  return laneSum<kLanes>(acc);
-}
-
-// The rows of one segment in each of the three columns of an `n by 3` (column-major) matrix, in
-// chunks short enough that the chunk of every vector a fused pass reads stays in cache: f(offset,
-// length) per chunk, the offset into the matrix's data.
-template <class F>
-void forEachChunk(int first, int count, Eigen::Index n, F&& f) {
-  constexpr int kChunk = 512;
-  for (Eigen::Index col = 0; col < 3; ++col)
-    for (int i = 0; i < count; i += kChunk) f(col * n + first + i, std::min(kChunk, count - i));
-}
-
-// A batch's history passes go on threads from this many particles: its vectors then no longer fit
-// a core's caches, and a pass over them (milliseconds) dwarfs a worker's wake-up (20-30 us).
-constexpr int kThreadedHistoryParticles = 10'000;
-
-// f(seg) for every segment: on cpuThreads() threads, each a contiguous run of segments of about
-// equal rows, where a batch is that large. A segment's sums are its own and add in the same order
-// on any thread, so the results are the serial loop's bit for bit.
-template <class Rows, class F>
-void forEachSegment(const std::vector<Rows>& rows, F&& f) {
-  const std::size_t segments = rows.size();
-  const int threads = cpuThreads();
-  const int particles = segments == 0 ? 0 : rows.back().first + rows.back().count - rows.front().first;
-  if (segments < 2 || threads < 2 || particles < kThreadedHistoryParticles) {
-    for (std::size_t seg = 0; seg < segments; ++seg) f(seg);
-    return;
-  }
-  std::vector<double> work(segments + 1, 0.0);  // by rows
-  for (std::size_t seg = 0; seg < segments; ++seg) work[seg + 1] = work[seg] + rows[seg].count;
-  parallelForRuns(work, f);
-}
-
-}  // namespace
-
 // After an accepted line search: the new pair s = x_trial - x_cur, y = g_trial - g into ring slot
 // `slot`, with s.y, y.y, s.s and its products with the other stored pairs (gram_[seg](i, j) =
 // s_i.y_j) and s_j.g_trial for every stored pair (the next direction's first loop); and then
@@ -374,14 +245,8 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
   });
 }
 
-int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const IterationControl& control,
-                                  std::vector<double>* objective_history) {
-  const Eigen::Index n = masses_.size();
-  if (rows_.empty()) rows_.push_back({0, static_cast<int>(n)});
-  const std::size_t segments = rows_.size();
-  const bool to_tolerance = control.tolerance > 0.0;
-  const int limit = to_tolerance ? control.max_iterations : control.iterations;
-  const int window = std::max(1, control.lbfgs_history);
+// An empty ring of `window` pairs for every segment.
+void LocalGlobalSolver::resetLbfgsHistory(int window, std::size_t segments) {
   if (static_cast<int>(history_s_.size()) != window) {
     history_s_.assign(std::size_t(window), Eigen::MatrixX3d());
     history_y_.assign(std::size_t(window), Eigen::MatrixX3d());
@@ -398,6 +263,71 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     gram_[s].setZero(window, window);
     history_sg_[s].assign(std::size_t(window), 0.0);
   }
+}
+
+// The stopping rule by accuracy (IterationControl::gradient_tolerance): each segment's gradient
+// in the norm of the current inverse Hessian H, sqrt(g.H g) = sqrt(-g.d) (the Newton decrement:
+// half its square estimates the objective's distance to the minimum), against its value at the
+// warm start (`initial`, set in the first iteration), where H = K_c^-1. A converged segment's
+// direction is spent, but it takes no step along it (its rows of slot x and its objective stay
+// the accepted iterate's).
+void LocalGlobalSolver::stopConvergedByGradient(int done, const IterationControl& control,
+                                                const std::vector<double>& slope, std::vector<double>& initial) {
+  if (done == 1) initial.assign(rows_.size(), 0.0);
+  for (std::size_t s = 0; s < rows_.size(); ++s) {
+    if (stopped(s)) continue;
+    const double decrement = std::sqrt(std::max(0.0, -slope[s]));
+    if (done == 1) initial[s] = decrement;
+    if (done > 1 && decrement <= control.gradient_tolerance * initial[s]) stopSegment(s, done);
+  }
+}
+
+// A segment the line search left where it was: with a plain direction its objective is at its
+// round-off floor and it stops; else it drops its history (and the rigid motions) and restarts
+// from the plain step.
+void LocalGlobalSolver::handleStayedSegments(int done) {
+  for (std::size_t s = 0; s < rows_.size(); ++s) {
+    if (moved_[s] || stopped(s)) continue;
+    if (plain_direction_[s]) {
+      stopSegment(s, done);
+    } else {
+      for (auto& rho : history_rho_) rho[s] = 0.0;
+      if (usesRigidModes(s)) rigid_on_[s] = 0;
+    }
+  }
+}
+
+// Per segment, after its step: the new pair in ring slot `slot` counts where its curvature s.y is
+// positive (`dot`, `yy`, `ss`: its s.y, y.y, s.s), and the tolerance stop compares the objective
+// before and after the step (`objective` takes `trial_objective`).
+void LocalGlobalSolver::keepCurvaturePairs(int slot, int done, const IterationControl& control,
+                                           const std::vector<double>& step, const std::vector<double>& dot,
+                                           const std::vector<double>& yy, const std::vector<double>& ss,
+                                           std::vector<double>& objective, const std::vector<double>& trial_objective) {
+  const bool to_tolerance = control.tolerance > 0.0;
+  for (std::size_t s = 0; s < rows_.size(); ++s) {
+    // Positive curvature keeps H positive definite; a pair at round-off's angle would not.
+    const bool curvature = moved_[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);
+    history_rho_[std::size_t(slot)][s] = curvature ? 1.0 / dot[s] : 0.0;
+    // A segment that stayed for want of decrease has not converged: it restarts from the plain step.
+    const bool stayed = !moved_[s] && step[s] != 0.0;
+    const double change = std::abs(objective[s] - trial_objective[s]);
+    if (to_tolerance && !stopped(s) && !stayed &&
+        change <= control.tolerance * std::max(std::abs(trial_objective[s]), segmentScale(control, s)))
+      stopSegment(s, done);
+    objective[s] = trial_objective[s];
+  }
+}
+
+int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const IterationControl& control,
+                                  std::vector<double>* objective_history) {
+  const Eigen::Index n = masses_.size();
+  if (rows_.empty()) rows_.push_back({0, static_cast<int>(n)});
+  const std::size_t segments = rows_.size();
+  const bool to_tolerance = control.tolerance > 0.0;
+  const int limit = to_tolerance ? control.max_iterations : control.iterations;
+  const int window = std::max(1, control.lbfgs_history);
+  resetLbfgsHistory(window, segments);
   int stored = 0, newest = -1;  // pairs in the ring, index of the newest
 
   backend_.read(y, y_host_);
@@ -413,19 +343,10 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
   localStepObjectives(c, y, x, t, objective);
   gradient_ = trial_gradient_;
   prepareRigidModes(c, t, control);
-  // The stopping rule by accuracy (IterationControl::gradient_tolerance): each segment's gradient
-  // in the norm of the current inverse Hessian H, sqrt(g.H g) = sqrt(-g.d) (the Newton decrement:
-  // half its square estimates the objective's distance to the minimum), against its value at the
-  // warm start, where H = K_c^-1.
-  const bool by_gradient = control.gradient_tolerance > 0.0;
   std::vector<double>& initial_decrement = scalars_[7];
   if (objective_history) objective_history->assign(1, objective[0]);
 
   int done = 0;
-  const std::vector<char>& moved = moved_;
-  auto forgetSegment = [&](std::size_t s) {
-    for (auto& rho : history_rho_) rho[s] = 0.0;
-  };
   auto usesHistory = [&](std::size_t s) {
     for (const auto& rho : history_rho_)
       if (rho[s] != 0.0) return true;
@@ -442,16 +363,8 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     const int pairs = control.plain_last_iteration && !to_tolerance && done == limit - 1 ? 0 : stored;
     lbfgsDirection(c, control, pairs, newest, slope);
     ++done;
-    if (by_gradient) {
-      if (done == 1) initial_decrement.assign(segments, 0.0);
-      for (std::size_t s = 0; s < segments; ++s) {
-        if (stopped(s)) continue;
-        const double decrement = std::sqrt(std::max(0.0, -slope[s]));
-        if (done == 1) initial_decrement[s] = decrement;
-        // Converged: the direction's solve is spent, but the segment takes no step along it
-        // (its rows of slot x and its objective stay the accepted iterate's).
-        if (done > 1 && decrement <= control.gradient_tolerance * initial_decrement[s]) stopSegment(s, done);
-      }
+    if (control.gradient_tolerance > 0.0) {
+      stopConvergedByGradient(done, control, slope, initial_decrement);
       if (running_segments_ == 0) break;
     }
     for (std::size_t s = 0; s < segments; ++s) {
@@ -468,15 +381,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     // every later iteration would try the same step again: the segment stops there. One whose
     // direction used the rigid motions drops them too for the rest of the solve.
     lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
-    for (std::size_t s = 0; s < segments; ++s) {
-      if (moved_[s] || stopped(s)) continue;
-      if (plain_direction_[s]) {
-        stopSegment(s, done);
-      } else {
-        forgetSegment(s);
-        if (usesRigidModes(s)) rigid_on_[s] = 0;
-      }
-    }
+    handleStayedSegments(done);
 
     // The curvature pair of the step, kept where s.y > 0.
     const int slot = (newest + 1) % window;
@@ -485,18 +390,7 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     } else {  // the solve's last pair would never be used
       for (std::vector<double>* v : {&dot, &yy, &ss}) v->assign(segments, 0.0);
     }
-    for (std::size_t s = 0; s < segments; ++s) {
-      // Positive curvature keeps H positive definite; a pair at round-off's angle would not.
-      const bool curvature = moved[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);
-      history_rho_[std::size_t(slot)][s] = curvature ? 1.0 / dot[s] : 0.0;
-      // A segment that stayed for want of decrease has not converged: it restarts from the plain step.
-      const bool stayed = !moved[s] && step[s] != 0.0;
-      const double change = std::abs(objective[s] - trial_objective[s]);
-      if (to_tolerance && !stopped(s) && !stayed &&
-          change <= control.tolerance * std::max(std::abs(trial_objective[s]), segmentScale(control, s)))
-        stopSegment(s, done);
-      objective[s] = trial_objective[s];
-    }
+    keepCurvaturePairs(slot, done, control, step, dot, yy, ss, objective, trial_objective);
     newest = slot;
     stored = std::min(stored + 1, window);
     if (objective_history) objective_history->push_back(objective[0]);

@@ -152,6 +152,13 @@ class LocalGlobalSolver {
                   std::vector<double>& trial_objective);
   void storePair(int slot, int stored, std::vector<double>& sy, std::vector<double>& yy, std::vector<double>& ss);
   void lbfgsDirection(double c, const IterationControl& control, int pairs, int newest, std::vector<double>& slope);
+  void resetLbfgsHistory(int window, std::size_t segments);
+  void stopConvergedByGradient(int done, const IterationControl& control, const std::vector<double>& slope,
+                               std::vector<double>& initial);
+  void handleStayedSegments(int done);
+  void keepCurvaturePairs(int slot, int done, const IterationControl& control, const std::vector<double>& step,
+                          const std::vector<double>& dot, const std::vector<double>& yy, const std::vector<double>& ss,
+                          std::vector<double>& objective, const std::vector<double>& trial_objective);
   // r = K_c^-1 q (the factor's solve, or the host CG).
   void applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
                                   Eigen::MatrixX3d& r);

@@ -15,11 +15,26 @@
 namespace stabint {
 
 void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady) {
+  IntegratorSteps steps(*backend_, solver_);
+  const IterationControl control = iterationControl(options_.iterations);
+  std::vector<char> not_finite, needs_partner;
+  judgeMidpointCandidates(steps, control, t1, forced, steady, not_finite, needs_partner);
+  const auto any = [](const std::vector<char>& flags) {
+    return std::any_of(flags.begin(), flags.end(), [](char f) { return f != 0; });
+  };
+  if (any(not_finite)) replaceBlownUpCandidates(steps, control, t1, forced, not_finite);
+  if (any(needs_partner)) blendWithPartner(steps, control, t1, steady, needs_partner);
+}
+
+// Every stepping scene's IM candidate from one solve, its potentials (and, with `forced`, those
+// at the midpoint time that book the forcing), and its BlendStep's verdict: `not_finite` flags the
+// scenes whose candidate blew up, `needs_partner` those whose candidate keeps too much energy.
+void BatchDriver::judgeMidpointCandidates(IntegratorSteps& steps, const IterationControl& control, double t1,
+                                          bool forced, const std::vector<char>& steady, std::vector<char>& not_finite,
+                                          std::vector<char>& needs_partner) {
   const double h = options_.time_step;
   const double tm = t_ + 0.5 * h;
   const std::size_t n = segments_.size();
-  IterationControl control = iterationControl(options_.iterations);
-  IntegratorSteps steps(*backend_, solver_);
   const std::vector<char> stepping = steppingScenes();
   solver_.setSolving(stepping);
   solver_.setRigidModes(midpointRigidMotions(steady));
@@ -30,8 +45,8 @@ void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady)
     backend_->potentials(kXNew, tm, new_mid_, &stepping);
     backend_->potentials(kX, tm, old_mid_, &stepping);
   }
-  std::vector<char> not_finite(n, 0), needs_partner(n, 0);
-  bool any_not_finite = false, any_partner = false;
+  not_finite.assign(n, 0);
+  needs_partner.assign(n, 0);
   for (std::size_t s = 0; s < n; ++s) {
     PerScene& p = per_scene_[s];
     if (!p.stepping) continue;
@@ -50,7 +65,6 @@ void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady)
     if (!std::isfinite(0.5 * vv_im + p_im.total())) {
       p.blend.candidateNotFinite();
       not_finite[s] = 1;
-      any_not_finite = true;
       continue;
     }
     p.p_new = p_im;
@@ -61,44 +75,51 @@ void BatchDriver::blend(double t1, bool forced, const std::vector<char>& steady)
       p.target_now += r.forcing;
     }
     needs_partner[s] = p.blend.judge(p.x_new, p.v_new, p_im, vv_im, p.target_now) ? 1 : 0;
-    any_partner = any_partner || needs_partner[s];
   }
+}
 
-  if (any_not_finite) {
-    // The BE step with the full budget for the scenes whose IM candidate blew up, in kXTrial and
-    // kScratch.
-    solver_.setSolving(not_finite);
-    backend_->copy(kXTrial, kX);
-    const int iterations =
-        steps.backwardEuler(h, t_, kXTrial, kScratch, withoutRigidModes(control), /*warm_start=*/true);
-    backend_->readBoth(kXTrial, x_aux_, kScratch, v_aux_);
-    const bool evaluated = potentialsOfStep(steps, kXTrial, t1, not_finite);
-    if (forced) backend_->potentials(kXTrial, tm, aux_mid_, &not_finite);
-    for (std::size_t s = 0; s < n; ++s) {
-      if (!not_finite[s]) continue;
-      PerScene& p = per_scene_[s];
-      StepReport& r = report_.scenes[s];
-      r.iterations += sceneIterations(s, iterations);
-      r.energy_evaluations += evaluated ? 1 : 0;
-      p.x_new = blockOf(x_aux_, segments_[s]);
-      p.v_new = blockOf(v_aux_, segments_[s]);
-      v_new_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.v_new;  // Simulator's kVNew
-      p.p_new = p_all_[s];
-      if (forced) {
-        r.forcing = forcingWork(p.p_new, aux_mid_[s], old_mid_[s], p.potential);
-        r.energy_evaluations += 2;
-        p.target_now += r.forcing;
-      }
+// The BE step with the full budget for the scenes whose IM candidate blew up (`not_finite`), in
+// kXTrial and kScratch: their candidates now, with their forcing booked.
+void BatchDriver::replaceBlownUpCandidates(IntegratorSteps& steps, const IterationControl& control, double t1,
+                                           bool forced, const std::vector<char>& not_finite) {
+  const double h = options_.time_step;
+  const double tm = t_ + 0.5 * h;
+  solver_.setSolving(not_finite);
+  backend_->copy(kXTrial, kX);
+  const int iterations = steps.backwardEuler(h, t_, kXTrial, kScratch, withoutRigidModes(control), /*warm_start=*/true);
+  backend_->readBoth(kXTrial, x_aux_, kScratch, v_aux_);
+  const bool evaluated = potentialsOfStep(steps, kXTrial, t1, not_finite);
+  if (forced) backend_->potentials(kXTrial, tm, aux_mid_, &not_finite);
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    if (!not_finite[s]) continue;
+    PerScene& p = per_scene_[s];
+    StepReport& r = report_.scenes[s];
+    r.iterations += sceneIterations(s, iterations);
+    r.energy_evaluations += evaluated ? 1 : 0;
+    p.x_new = blockOf(x_aux_, segments_[s]);
+    p.v_new = blockOf(v_aux_, segments_[s]);
+    v_new_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.v_new;  // Simulator's kVNew
+    p.p_new = p_all_[s];
+    if (forced) {
+      r.forcing = forcingWork(p.p_new, aux_mid_[s], old_mid_[s], p.potential);
+      r.energy_evaluations += 2;
+      p.target_now += r.forcing;
     }
   }
+}
 
-  if (!any_partner) return;
-  // The BE partner of the scenes that need it; the others take no part in its solve.
+// The BE partner of the scenes that need it (the others take no part in its solve), solved on
+// where even the whole partner keeps too much energy, and each of those scenes' blend of its
+// candidate with it.
+void BatchDriver::blendWithPartner(IntegratorSteps& steps, IterationControl control, double t1,
+                                   const std::vector<char>& steady, const std::vector<char>& needs_partner) {
+  const std::size_t n = segments_.size();
   control.iterations = options_.be_iterations;
   solver_.setSolving(needs_partner);
   solver_.setRigidModes(steady);
   backend_->copy(kXPartner, kX);
-  const int be_iterations = steps.backwardEuler(h, t_, kXPartner, kVPartner, endingPlain(control), /*warm_start=*/true);
+  const int be_iterations =
+      steps.backwardEuler(options_.time_step, t_, kXPartner, kVPartner, endingPlain(control), /*warm_start=*/true);
   backend_->readBoth(kXPartner, x_aux_, kVPartner, v_aux_);
   for (std::size_t s = 0; s < n; ++s) {
     if (!needs_partner[s]) continue;

@@ -188,6 +188,15 @@ struct BatchDriver {
   // The blend in lockstep (batch_blend.cpp): one IM solve, at most one partner solve (and one full-budget BE solve
   // when some scene's IM candidate blew up), one batched energy pass per root-find round.
   void blend(double t1, bool forced, const std::vector<char>& steady);
+  // blend()'s three stages: the IM candidates and their verdicts; the full-budget BE step of the
+  // scenes whose candidate blew up; the partner solve and the blends.
+  void judgeMidpointCandidates(IntegratorSteps& steps, const IterationControl& control, double t1, bool forced,
+                               const std::vector<char>& steady, std::vector<char>& not_finite,
+                               std::vector<char>& needs_partner);
+  void replaceBlownUpCandidates(IntegratorSteps& steps, const IterationControl& control, double t1, bool forced,
+                                const std::vector<char>& not_finite);
+  void blendWithPartner(IntegratorSteps& steps, IterationControl control, double t1, const std::vector<char>& steady,
+                        const std::vector<char>& needs_partner);
   // The partner solve of the scenes whose partner, whole, still has more energy than the target:
   // on from where it stopped, up to the candidate's budget (partner_potentials_ then holds every
   // partner scene's potential).

@@ -64,6 +64,50 @@ void pretty(std::string& out, const ordered& v, int indent) {
   out += v.is_object() ? '}' : ']';
 }
 
+namespace {
+
+// A pin, its target's motion only where it has one.
+ordered pinJson(const Pin& p) {
+  ordered target = {{"position", vec(p.target.position)}};
+  if (!plainZero(p.target.velocity) || !plainZero(p.target.amplitude) || !plainZero(p.target.frequency)) {
+    target["velocity"] = vec(p.target.velocity);
+    target["amplitude"] = vec(p.target.amplitude);
+    target["frequency"] = p.target.frequency;
+  }
+  return {{"vertex", p.vertex}, {"stiffness", p.stiffness}, {"target", std::move(target)}};
+}
+
+ordered forceFieldJson(const ForceField& f) {
+  ordered e;
+  if (!f.particles.empty()) e["particles"] = f.particles;
+  e["force"] = vec(f.force);
+  e["rate"] = vec(f.rate);
+  e["amplitude"] = vec(f.amplitude);
+  e["frequency"] = f.frequency;
+  return e;
+}
+
+// A collider with the fields of its shape.
+ordered colliderJson(const Collider& c) {
+  ordered e;
+  e["shape"] = colliderShapeName(c.shape);  // validated by saveSceneFile
+  e["center"] = vec(c.center);
+  if (c.shape == ColliderShape::Plane) e["normal"] = vec(c.normal);
+  if (c.shape == ColliderShape::Box) e["half_extents"] = vec(c.half_extents);
+  if (c.shape == ColliderShape::Capsule) e["end"] = vec(c.end);
+  if (c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule) e["radius"] = c.radius;
+  if (c.moving()) e["velocity"] = vec(c.velocity);
+  e["friction"] = c.friction;
+  e["stiffness"] = c.stiffness;
+  if (c.num_particles != -1) {  // -1: every particle, the default
+    e["first_particle"] = c.first_particle;
+    e["num_particles"] = c.num_particles;
+  }
+  return e;
+}
+
+}  // namespace
+
 ordered sceneToJson(const Scene& s) {
   ordered doc;
   doc["format"] = kFormatName;
@@ -108,49 +152,17 @@ ordered sceneToJson(const Scene& s) {
   }
   if (!s.pins.empty()) {
     ordered a = ordered::array();
-    for (const Pin& p : s.pins) {
-      ordered target = {{"position", vec(p.target.position)}};
-      if (!plainZero(p.target.velocity) || !plainZero(p.target.amplitude) || !plainZero(p.target.frequency)) {
-        target["velocity"] = vec(p.target.velocity);
-        target["amplitude"] = vec(p.target.amplitude);
-        target["frequency"] = p.target.frequency;
-      }
-      a.push_back({{"vertex", p.vertex}, {"stiffness", p.stiffness}, {"target", std::move(target)}});
-    }
+    for (const Pin& p : s.pins) a.push_back(pinJson(p));
     doc["pins"] = std::move(a);
   }
   if (!s.force_fields.empty()) {
     ordered a = ordered::array();
-    for (const ForceField& f : s.force_fields) {
-      ordered e;
-      if (!f.particles.empty()) e["particles"] = f.particles;
-      e["force"] = vec(f.force);
-      e["rate"] = vec(f.rate);
-      e["amplitude"] = vec(f.amplitude);
-      e["frequency"] = f.frequency;
-      a.push_back(std::move(e));
-    }
+    for (const ForceField& f : s.force_fields) a.push_back(forceFieldJson(f));
     doc["force_fields"] = std::move(a);
   }
   if (!s.colliders.empty()) {
     ordered a = ordered::array();
-    for (const Collider& c : s.colliders) {
-      ordered e;
-      e["shape"] = colliderShapeName(c.shape);  // validated by saveSceneFile
-      e["center"] = vec(c.center);
-      if (c.shape == ColliderShape::Plane) e["normal"] = vec(c.normal);
-      if (c.shape == ColliderShape::Box) e["half_extents"] = vec(c.half_extents);
-      if (c.shape == ColliderShape::Capsule) e["end"] = vec(c.end);
-      if (c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule) e["radius"] = c.radius;
-      if (c.moving()) e["velocity"] = vec(c.velocity);
-      e["friction"] = c.friction;
-      e["stiffness"] = c.stiffness;
-      if (c.num_particles != -1) {  // -1: every particle, the default
-        e["first_particle"] = c.first_particle;
-        e["num_particles"] = c.num_particles;
-      }
-      a.push_back(std::move(e));
-    }
+    for (const Collider& c : s.colliders) a.push_back(colliderJson(c));
     doc["colliders"] = std::move(a);
   }
   if (!s.bodies.empty()) {

@@ -1,8 +1,9 @@
 #pragma once
 // SceneData: the validated scene in the form both backends consume, built once per Simulator or
-// batch: the element blocks and the contribution lists. Not yet immutable: element changes
-// rewrite two parts of it, each through its own calls and a version the backends key their
-// caches on (docs/method.md, "Per-frame input"):
+// batch: the element blocks and the contribution lists. The owner of the element set of a running
+// simulation: element changes rewrite two parts of it in place, where the kernels' layout has
+// them (a one-element change costs that element, not a copy of the blocks), each through its own
+// calls and a version the backends key their caches on (docs/method.md, "Per-frame input"):
 // - element stiffnesses and enabled flags: the params in place (ElementBlock::params_revision);
 // - the pin set (grab, release): the pin block and the contribution lists rebuilt (layoutVersion).
 // The rest is fixed. Those changes as a value are its ElementState (elementState()), one part of

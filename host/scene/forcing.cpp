@@ -7,7 +7,7 @@
 
 namespace stabint {
 
-Forcing::Forcing(const Scene& scene) : scene_(&scene), n_(scene.numParticles()) {
+Forcing::Forcing(const Scene& scene) : scene_(&scene) {
   moving_pins_ = std::any_of(scene.pins.begin(), scene.pins.end(), [](const Pin& p) { return p.target.moving(); });
   time_dependent_fields_ = std::any_of(scene.force_fields.begin(), scene.force_fields.end(),
                                        [](const ForceField& f) { return f.timeDependent(); });
@@ -126,7 +126,8 @@ void Forcing::rampPinTarget(int pin, const Eigen::Vector3d& target, double t0, d
 }
 
 void Forcing::rampUserForces(const Eigen::MatrixX3d& forces, double t0, double t1) {
-  const Eigen::MatrixX3d start = user_forces_.active ? user_forces_.at(t0) : Eigen::MatrixX3d::Zero(n_, 3);
+  const Eigen::MatrixX3d start =
+      user_forces_.active ? user_forces_.at(t0) : Eigen::MatrixX3d::Zero(scene_->numParticles(), 3);
   user_forces_ = Ramp{t0, t1, start, forces, true};
   ++version_;
   ++forces_version_;
@@ -135,7 +136,7 @@ void Forcing::rampUserForces(const Eigen::MatrixX3d& forces, double t0, double t
 void Forcing::rampUserForceRows(int first, const Eigen::MatrixX3d& forces, double t0, double t1) {
   if (!user_forces_.active || user_forces_.t0 != t0 || user_forces_.t1 != t1) {
     // A new ramp for every row, each going on to the value it was given (start: its value at t0).
-    Eigen::MatrixX3d all = user_forces_.active ? user_forces_.end : Eigen::MatrixX3d::Zero(n_, 3);
+    Eigen::MatrixX3d all = user_forces_.active ? user_forces_.end : Eigen::MatrixX3d::Zero(scene_->numParticles(), 3);
     all.middleRows(first, forces.rows()) = forces;
     rampUserForces(all, t0, t1);
     return;

@@ -112,7 +112,6 @@ class Forcing {
   void countRampedPins();
 
   const Scene* scene_;
-  int n_ = 0;
   bool moving_pins_ = false;
   bool moving_colliders_ = false;
   bool time_dependent_fields_ = false;

@@ -131,7 +131,6 @@ void SceneData::setPins(const std::vector<Pin>& pins) {
     applyEnabled(b);
   }
   numberContributions();
-  ++layout_version_;
 }
 
 }  // namespace stabint

@@ -5,7 +5,8 @@
 // them (a one-element change costs that element, not a copy of the blocks), each through its own
 // calls and a version the backends key their caches on (docs/method.md, "Per-frame input"):
 // - element stiffnesses and enabled flags: the params in place (ElementBlock::params_revision);
-// - the pin set (grab, release): the pin block and the contribution lists rebuilt (layoutVersion).
+// - the pin set (grab, release): the pin block (ElementBlock::revision) and the contribution
+//   lists rebuilt.
 // The rest is fixed. Those changes as a value are its ElementState (elementState()), one part of
 // the state a checkpoint holds (state/checkpoint.hpp: CheckpointData); the other parts are the
 // driver's (positions, velocities, each scene's SceneBook, the Forcing: pin targets, forces and
@@ -61,8 +62,6 @@ class SceneData final {
   /// changed then) and rebuilds the pin block and the contribution lists. The forcing, the
   /// backends (Backend::elementsChanged) and the global system must then be told.
   void setPins(const std::vector<Pin>& pins);
-  /// Incremented by every setPins.
-  int layoutVersion() const { return layout_version_; }
 
   // ---- element stiffness and enabled flags (Simulator::setElementStiffness, setElementEnabled) --
   /// Index of `type`'s block in blocks().
@@ -76,7 +75,6 @@ class SceneData final {
     const std::vector<std::uint8_t>& flags = enabled_[static_cast<std::size_t>(block)];
     return flags.empty() || flags[static_cast<std::size_t>(element)] != 0;
   }
-  bool elementEnabled(const ElementType& type, int element) const { return elementEnabled(blockIndex(type), element); }
   /// The pins, stiffnesses and enabled flags as they are now.
   ElementState elementState() const;
   /// w_e as the global matrix has it: params[P e] (0 for a disabled element).
@@ -98,7 +96,6 @@ class SceneData final {
   int n_ = 0;
   std::vector<ElementBlock> blocks_;
   ContributionCsr csr_;
-  int layout_version_ = 0;
   std::vector<std::vector<std::uint8_t>> enabled_;  // per block; empty: all enabled
 };
 

@@ -284,16 +284,15 @@ TEST_P(DraggedCorner, KeepsMovingWhateverTheBudget) {
 
 STABINT_ON_EVERY_BACKEND(DraggedCorner);
 
-// The tool of scenes/cloth_poke.json pushes into the cloth and pulls back out. At 30 iterations,
-// or at h = 1/15, a step of the pull books the tool's work lower than the energy its state keeps,
-// so H starts above H* by 0.01-0.06 E_scale, in the stretch, where even the blend's partner whole
-// cannot take it out. Before, every following step zeroed the velocities to try, and the cloth
-// was stopped at each step until BE's steps from rest had removed it: 99 and 40 steps (c1b5089,
-// measured). Now a step removes only what it would add to that excess (BlendStep's allowance),
-// and the partner, solved on (BatchDriver::extendPartner), takes it out: measured, 75 and 39
-// steps carry it, one step zeroes the velocities (the one that first finds the excess), and the
-// excess never grows.
-TEST(Interaction, PokedClothIsNotStoppedWhileAnExcessItCannotRemoveDecays) {
+// The tool of scenes/cloth_poke.json pushes into the cloth and pulls back out, at 30 iterations
+// and at h = 1/15. The forcing rule's sum charged the pull for less than the energy the cloth's
+// state kept, so H started above H* by 0.01-0.06 E_scale in the stretch, where even the blend's
+// partner whole could not take it out (75 and 39 steps carried such an excess, c1b5089's rule
+// kept it from growing). A moving collider's work is now its contact forces at the step's
+// midpoint times its displacement (contactWork, docs/method.md "Contact"): H stays within the
+// band (measured: largest excess 1.0e-3 and 1.7e-3 E_scale, the band being about 1.1e-3) and at
+// most one step zeroes the velocities (measured 0 and 1), where 99 and 40 did before c1b5089.
+TEST(Interaction, PokedClothsToolWorkIsBookedWithoutAnExcess) {
   const std::string path =
       (std::filesystem::path(__FILE__).parent_path().parent_path() / "scenes" / "cloth_poke.json").string();
   for (const auto& [iterations, h] : {std::pair{30, 1.0 / 30.0}, std::pair{10, 1.0 / 15.0}}) {
@@ -303,23 +302,22 @@ TEST(Interaction, PokedClothIsNotStoppedWhileAnExcessItCannotRemoveDecays) {
     o.time_step = h;
     o.backend = BackendKind::CpuReference;
     Simulator sim(file.scene, o);
-    double previous = 0.0, growth = 0.0;
+    double forcing = 0.0, worst = 0.0;
     int frozen = 0, carried = 0;
     for (int i = 0; i < int(8.0 / h); ++i) {
       file.events.apply(sim);
       const StepReport& r = sim.step();
       const double excess = (r.energy.total() - r.target) / sim.energyScale();
-      if (previous > 2e-3) {  // above the band (about 1.1e-3 E_scale) at the step's start
-        growth = std::max(growth, excess - previous);
-        ++carried;
-      }
+      worst = std::max(worst, excess);
+      carried += excess > 2e-3 ? 1 : 0;
       frozen += r.velocity_scale == 0.0 ? 1 : 0;
-      previous = excess;
+      forcing += std::abs(r.forcing);
     }
     const std::string what = std::to_string(iterations) + " iterations, h = " + std::to_string(h);
-    EXPECT_GT(carried, 10) << what << ": no excess to carry; the test no longer tests the rule";
-    EXPECT_LE(frozen, 1) << what;      // the step that first finds the excess still zeroes
-    EXPECT_LE(growth, 1e-12) << what;  // round-off of the energies' difference
+    std::printf("%s: largest excess %.3g E_scale, tool's work |W| summed %.3g J\n", what.c_str(), worst, forcing);
+    EXPECT_GT(forcing, 0.0) << what << ": the tool must reach the cloth";
+    EXPECT_EQ(carried, 0) << what;
+    EXPECT_LE(frozen, 1) << what;
   }
 }
 

@@ -63,13 +63,14 @@ TEST(OpenCLContact, ClothOnCollidersMatchesCpu) {
 }
 
 // Colliders moved at run time (Simulator::setColliderPosition every frame for the box, a velocity
-// set at frame 10 for the sphere): the same tolerances, the forcing they book included.
+// set at frame 6 for the sphere, once the cloth lies on it: BDF2's cloth bounces off it by frame
+// 10): the same tolerances, the forcing they book included.
 TEST(OpenCLContact, CollidersMovedAtRunTimeMatchCpu) {
   const Scene scene = testing::clothOnColliders();
   auto input = [](Simulator& sim) {
     const double t = sim.time() + sim.options().time_step;
     sim.setColliderPosition(2, Eigen::Vector3d(-0.6 + 0.8 * t, -0.2, 0.15 * std::sin(4.0 * t)));
-    if (sim.stepCount() == 10) sim.setColliderVelocity(0, Eigen::Vector3d(0.0, 0.3, 0.0));
+    if (sim.stepCount() == 6) sim.setColliderVelocity(0, Eigen::Vector3d(0.0, 0.3, 0.0));
   };
   for (Precision precision : testing::availablePrecisions()) {
     const double tol = testing::crossBackendTolerance(precision);
@@ -85,7 +86,8 @@ TEST(OpenCLContact, CollidersMovedAtRunTimeMatchCpu) {
         EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << what;
         forcing += std::abs(ref.reports[i].forcing);
       }
-      EXPECT_GT(forcing, 0.0) << "the moved colliders must do work within the run";
+      EXPECT_GT(forcing, 0.0) << integratorName(integrator) << " " << precisionName(precision)
+                              << ": the moved colliders must do work within the run";
     }
   }
 }

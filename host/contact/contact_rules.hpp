@@ -43,6 +43,23 @@ struct ContactSetChange {
 ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
                                   double h, double margin, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
+/// The work the colliders of `part` that move between t0 and t0 + h do on its pairs in the contact
+/// set over a step from positions x0 to x1 (both with part.first_row's rows), in two forms:
+/// `midpoint`, each pair's contact force at the midpoint state ((x0 + x1) / 2 against the
+/// collider at t0 + h/2) dotted with the collider's displacement, and `split`, the same pairs'
+/// share of the forcing rule's sum E(x1, t1) - E(x1, tm) + E(x0, tm) - E(x0, t0) (forcingWork).
+/// Both agree while every pair stays inside over the step (the energy is then quadratic in the
+/// collider's position and the rule exact); where contact switches on within the step the split
+/// sum charges the collider for pushing into x0 as if the particle stayed there, w dc^2 / 8 for a
+/// displacement dc, which a stiff pair makes far larger than the work of the force that moved it
+/// (docs/method.md, "Contact", "A moving collider's work").
+struct ContactWork {
+  double midpoint = 0.0;
+  double split = 0.0;
+};
+ContactWork contactWork(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t0, double h,
+                        const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& x1);
+
 /// Coulomb friction at the end of a step of length h, on the velocities `v` of the particles in
 /// contact at positions `x` at time t: for each (collider, particle) of `part` in contact, the tangential
 /// velocity relative to the collider's shrinks by at most mu times the normal impulse

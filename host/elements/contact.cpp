@@ -48,6 +48,28 @@ namespace {
 
 using validation::invalid;
 
+// The diagonal of L at each particle from the elements of the internal energy (not the pins,
+// not contact): sum over its elements of w_e times the squared coefficients of its column of A_e.
+std::vector<double> elasticDiagonal(int n, const std::vector<ElementBlock>& blocks) {
+  std::vector<double> diagonal(static_cast<std::size_t>(n), 0.0);
+  for (const ElementBlock& block : blocks) {
+    if (block.type->term() != EnergyTerm::Internal) continue;
+    const ElementShape shape = block.type->shape();
+    const std::size_t K = static_cast<std::size_t>(shape.vertices), R = static_cast<std::size_t>(shape.rows);
+    const std::size_t P = static_cast<std::size_t>(shape.params);
+    for (std::size_t e = 0; e < static_cast<std::size_t>(block.count); ++e) {
+      const double w = block.params[P * e];
+      const double* a = block.coefficients.data() + (shape.shared_coefficients ? 0 : R * K * e);
+      for (std::size_t k = 0; k < K; ++k) {
+        double column = 0.0;
+        for (std::size_t r = 0; r < R; ++r) column += a[r * K + k] * a[r * K + k];
+        diagonal[static_cast<std::size_t>(block.vertices[K * e + k])] += w * column;
+      }
+    }
+  }
+  return diagonal;
+}
+
 // One vertex, one row, the shared coefficient 1 (A x = x_j).
 struct ContactKind {
   static constexpr int kParams = kContactGeometry + kColliderGeometry;  // w_j, the collider's geometry
@@ -72,6 +94,8 @@ void checkCollider(const Scene& scene, const Collider& c, const validation::Owne
     invalid(owner, ": friction ", c.friction, " must be finite and >= 0");
   if (!std::isfinite(c.stiffness) || !(c.stiffness > 0.0) || !(c.stiffness <= validation::kMaxMagnitude))
     invalid(owner, ": stiffness ", c.stiffness, " must be finite and > 0");
+  if (!std::isfinite(c.elastic_ratio) || !(c.elastic_ratio >= 0.0) || !(c.elastic_ratio <= validation::kMaxMagnitude))
+    invalid(owner, ": elastic_ratio ", c.elastic_ratio, " must be finite and >= 0");
   // w_j = stiffness m_j enters the global matrix: it must be a finite number for every particle.
   if (scene.masses.size() > 0 && !std::isfinite(c.stiffness * scene.masses.maxCoeff()))
     invalid(owner, ": stiffness ", c.stiffness, " times the largest mass is not finite");
@@ -136,11 +160,37 @@ class ContactElementType final : public ElementType {
   bool timeDependent(const RunningScene& data) const override { return data.hasMovingColliders(); }
   void paramsAt(const RunningScene& data, double t, std::vector<double>& params) const override {
     writeParams(data.scene(), &data, t, params);
-    // Pairs out of the contact set have weight 0 (SceneData::setElementEnabled).
+    // The weights as the scene has them: weightsFromBlocks' in the contact set, 0 out of it
+    // (SceneData::setElementEnabled).
     const int block = data.blockIndex(*this);
     const int pairs = count(data.scene());
-    for (int e = 0; e < pairs; ++e)
-      if (!data.elementEnabled(block, e)) params[std::size_t(P) * std::size_t(e)] = 0.0;
+    for (int e = 0; e < pairs; ++e) params[std::size_t(P) * std::size_t(e)] = data.elementWeight(block, e);
+  }
+
+  // [project rule] w_j = stiffness m_j + elastic_ratio D_j, D_j the diagonal of L at the
+  // particle from the elements of the internal energy (docs/method.md, "Contact", "The contact
+  // weight"): with the default ratio 1 a pair is at least as stiff as the elements that press its
+  // particle into the collider, so a heavy or stiff body stops on its contact layer within the
+  // step instead of sinking into the collider (where the final projection then crushed the
+  // layer). Computed once, from the scene's elements as built: a run-time stiffness change does
+  // not move it, so a checkpoint's restore rebuilds the same weights.
+  std::vector<double> weightsFromBlocks(const Scene& scene, const std::vector<ElementBlock>& blocks) const override {
+    const std::vector<double> diagonal = elasticDiagonal(scene.numParticles(), blocks);
+    std::vector<double> weights(static_cast<std::size_t>(count(scene)));
+    std::size_t e = 0;
+    for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
+      const IndexRange particles = colliderParticles(scene, static_cast<int>(c));
+      for (int j = particles.first; j < particles.end(); ++j, ++e) {
+        const Collider& collider = scene.colliders[c];
+        weights[e] =
+            collider.stiffness * scene.masses[j] + collider.elastic_ratio * diagonal[static_cast<std::size_t>(j)];
+        if (!std::isfinite(weights[e]))
+          invalid(validation::Owner{"collider", c}, ": its contact weight at particle ", j, " (stiffness ",
+                  collider.stiffness, ", elastic_ratio ", collider.elastic_ratio, ", element stiffness ",
+                  diagonal[static_cast<std::size_t>(j)], ") is not finite");
+      }
+    }
+    return weights;
   }
 
   // The params of pair e as build() writes them (SceneData::setElementEnabled puts them back when

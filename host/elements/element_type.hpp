@@ -35,6 +35,8 @@ class RunningScene {
   /// Index of `type`'s block (the order of elementTypes()).
   virtual int blockIndex(const ElementType& type) const = 0;
   virtual bool elementEnabled(int block, int element) const = 0;
+  /// w_e as the global matrix has it now (0 for a disabled element).
+  virtual double elementWeight(int block, int element) const = 0;
   /// Pin targets move (by the scene's law or the user's ramps); then pinTarget gives them.
   virtual bool hasMovingPins() const = 0;
   virtual Eigen::Vector3d pinTarget(int pin, double t) const = 0;
@@ -131,6 +133,13 @@ class ElementType {
   virtual void setStiffness(Scene& /*scene*/, int /*element*/, double /*stiffness*/) const {}
   /// The P params of one element of a validated scene at t = 0, as build() writes them.
   virtual void elementParams(const Scene& /*scene*/, int /*element*/, double* /*params*/) const {}
+  /// Weights that depend on the other types' elements of the scene, called once every block of
+  /// `blocks` is built: element e of an enabled element then has weight weights[e] (SceneData
+  /// keeps them and puts them in params[P e]). Empty (the default): the weights are the type's own.
+  virtual std::vector<double> weightsFromBlocks(const Scene& /*scene*/,
+                                                const std::vector<ElementBlock>& /*blocks*/) const {
+    return {};
+  }
 
   // ---- the math (reference, double) ------------------------------------------------------------
   /// p = projection of `ax` (R by 3, row-major) for an element with these params; returns the

@@ -70,7 +70,7 @@ void BatchDriver::judgeMidpointCandidates(IntegratorSteps& steps, const Iteratio
     p.p_new = p_im;
     // The target must include this step's forcing before the candidate is judged.
     if (forced) {
-      r.forcing = forcingWork(p_im, new_mid_[s], old_mid_[s], p.potential);
+      r.forcing = forcingOfStep(s, p_im, new_mid_[s], old_mid_[s], p.x_new);
       r.energy_evaluations += 2;
       p.target_now += r.forcing;
     }
@@ -101,7 +101,7 @@ void BatchDriver::replaceBlownUpCandidates(IntegratorSteps& steps, const Iterati
     v_new_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.v_new;  // Simulator's kVNew
     p.p_new = p_all_[s];
     if (forced) {
-      r.forcing = forcingWork(p.p_new, aux_mid_[s], old_mid_[s], p.potential);
+      r.forcing = forcingOfStep(s, p.p_new, aux_mid_[s], old_mid_[s], p.x_new);
       r.energy_evaluations += 2;
       p.target_now += r.forcing;
     }

@@ -315,7 +315,7 @@ void BatchDriver::integrate(double t1, bool forced, const std::vector<char>& ste
     p.v_new = blockOf(v_new_, segments_[s]);
     p.p_new = p_all_[s];
     if (forced && std::isfinite(p.p_new.total())) {
-      r.forcing = forcingWork(p.p_new, new_mid_[s], old_mid_[s], p.potential);
+      r.forcing = forcingOfStep(s, p.p_new, new_mid_[s], old_mid_[s], p.x_new);
       r.energy_evaluations += 2;
       p.target_now += r.forcing;
     }
@@ -337,6 +337,17 @@ bool BatchDriver::potentialsOfStep(const IntegratorSteps& steps, int slot, doubl
 ContactPart BatchDriver::contactPart(std::size_t s, int first_row) const {
   const SceneSegment& seg = segments_[s];
   return ContactPart{IndexRange{seg.first_collider, seg.num_colliders}, first_row};
+}
+
+double BatchDriver::forcingOfStep(std::size_t s, const PotentialEnergy& p_new, const PotentialEnergy& new_mid,
+                                  const PotentialEnergy& old_mid, const Eigen::MatrixX3d& x1) const {
+  const PerScene& p = per_scene_[s];
+  const double rule = forcingWork(p_new, new_mid, old_mid, p.potential);
+  const SceneSegment& seg = segments_[s];
+  if (seg.num_colliders == 0) return rule;
+  const ContactWork work =
+      contactWork(data_, forcing_, contactPart(s, seg.first_particle), t_, options_.time_step, blockOf(x_, seg), x1);
+  return rule - work.split + work.midpoint;
 }
 
 void BatchDriver::updateContactSets() {

@@ -208,6 +208,11 @@ struct BatchDriver {
   bool potentialsOfStep(const IntegratorSteps& steps, int slot, double t1, const std::vector<char>& which);
   // Scene s's colliders on host copies whose row 0 is particle `first_row` (0: the batch's).
   ContactPart contactPart(std::size_t s, int first_row) const;
+  // The forcing of scene s over the step to its candidate x1 (its own rows): the forcing rule's
+  // sum from its potentials, with its moving colliders' share taken by the midpoint rule
+  // (contactWork) instead.
+  double forcingOfStep(std::size_t s, const PotentialEnergy& p_new, const PotentialEnergy& new_mid,
+                       const PotentialEnergy& old_mid, const Eigen::MatrixX3d& x1) const;
   // The broad phase of the stepping scenes at the step's start from (x_, v_), as Simulator's (an
   // inactive scene's set stays as its refusal left it): a scene with a pair that entered inside
   // gets its potential again.

@@ -37,7 +37,25 @@ SceneData::SceneData(const Scene& scene) {
 void SceneData::buildBlocks() {
   for (const ElementType* type : elementTypes()) blocks_.push_back(type->build(scene_));
   enabled_.resize(blocks_.size());
+  weights_.resize(blocks_.size());
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    ElementBlock& block = blocks_[b];
+    weights_[b] = block.type->weightsFromBlocks(scene_, blocks_);
+    const std::size_t p = static_cast<std::size_t>(block.type->shape().params);
+    for (std::size_t e = 0; e < weights_[b].size(); ++e) block.params[p * e] = weights_[b][e];
+  }
   numberContributions();
+}
+
+void SceneData::writeElementParams(std::size_t block, int element) {
+  ElementBlock& b = blocks_[block];
+  const std::size_t at = static_cast<std::size_t>(b.type->shape().params) * static_cast<std::size_t>(element);
+  b.type->elementParams(scene_, element, &b.params[at]);
+  if (!weights_[block].empty()) b.params[at] = weights_[block][static_cast<std::size_t>(element)];
+}
+
+double SceneData::enabledWeight(int block, int element) const {
+  return weights_[static_cast<std::size_t>(block)][static_cast<std::size_t>(element)];
 }
 
 int SceneData::blockIndex(const ElementType& type) const {
@@ -58,7 +76,7 @@ void SceneData::setElementStiffness(int block, int element, double stiffness) {
   ElementBlock& b = blocks_[static_cast<std::size_t>(block)];
   b.type->setStiffness(scene_, element, stiffness);
   const std::size_t p = static_cast<std::size_t>(b.type->shape().params);
-  b.type->elementParams(scene_, element, &b.params[p * static_cast<std::size_t>(element)]);
+  writeElementParams(static_cast<std::size_t>(block), element);
   if (!elementEnabled(block, element)) b.params[p * static_cast<std::size_t>(element)] = 0.0;
   paramsChanged(b, element);
 }
@@ -81,7 +99,7 @@ void SceneData::setElementEnabled(int block, int element, bool enabled) {
   flags[static_cast<std::size_t>(element)] = enabled ? 1 : 0;
   const std::size_t p = static_cast<std::size_t>(b.type->shape().params);
   if (enabled) {
-    b.type->elementParams(scene_, element, &b.params[p * static_cast<std::size_t>(element)]);
+    writeElementParams(static_cast<std::size_t>(block), element);
   } else {
     b.params[p * static_cast<std::size_t>(element)] = 0.0;
   }

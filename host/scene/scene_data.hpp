@@ -82,12 +82,17 @@ class SceneData final {
     const ElementBlock& b = blocks_[static_cast<std::size_t>(block)];
     return b.params[static_cast<std::size_t>(b.type->shape().params) * static_cast<std::size_t>(element)];
   }
+  /// w_e while the element is enabled, whether it is or not, for a block whose type gives
+  /// ElementType::weightsFromBlocks (contact: a pair's weight in the contact set).
+  double enabledWeight(int block, int element) const;
 
  private:
   void buildBlocks();
   void numberContributions();
   // Zeroes the weights of the disabled elements of a freshly built block.
   void applyEnabled(std::size_t block);
+  // Element `element`'s params from its type, with weights_' weight where the block has them.
+  void writeElementParams(std::size_t block, int element);
   // Element `element`'s params were rewritten in place: a new params revision, and the element
   // in the block's log (ElementBlock::changed_params).
   void paramsChanged(ElementBlock& block, int element);
@@ -97,6 +102,8 @@ class SceneData final {
   std::vector<ElementBlock> blocks_;
   ContributionCsr csr_;
   std::vector<std::vector<std::uint8_t>> enabled_;  // per block; empty: all enabled
+  // Per block: the weights ElementType::weightsFromBlocks gave (empty: the type's own params).
+  std::vector<std::vector<double>> weights_;
 };
 
 }  // namespace stabint

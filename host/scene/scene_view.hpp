@@ -14,6 +14,7 @@ class SceneView final : public RunningScene {
   const Scene& scene() const override { return data_->scene(); }
   int blockIndex(const ElementType& type) const override { return data_->blockIndex(type); }
   bool elementEnabled(int block, int element) const override { return data_->elementEnabled(block, element); }
+  double elementWeight(int block, int element) const override { return data_->elementWeight(block, element); }
   bool hasMovingPins() const override { return forcing_->hasMovingPins(); }
   Eigen::Vector3d pinTarget(int pin, double t) const override { return forcing_->pinTarget(pin, t); }
   bool hasMovingColliders() const override { return forcing_->hasMovingColliders(); }

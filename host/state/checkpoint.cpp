@@ -226,7 +226,8 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
                              c.velocity.y(),
                              c.velocity.z(),
                              c.friction,
-                             c.stiffness};
+                             c.stiffness,
+                             c.elastic_ratio};
     mix(fields, static_cast<Eigen::Index>(std::size(fields)));
     // A collider on some particles only; one on all of them (the default) mixes nothing more, so
     // checkpoints written before colliders had particle ranges still match.

@@ -190,10 +190,11 @@ ColliderShape parseColliderShape(const std::string& name);
 /// A rigid obstacle that no particle may enter (docs/method.md, "Contact"). The particles it acts
 /// on (every particle of the scene by default) collide with it through the contact energy
 /// E = w_j/2 |x_j - p_j|^2, p_j the closest point of the collider's outside (x_j itself out of
-/// contact, so E = 0 there), w_j = stiffness * m_j while the particle is near the collider (the
-/// contact set, chosen at each step's start; 0 elsewhere). The collider translates with `velocity`
-/// (0: static): its geometry at time t is that at t = 0 moved by velocity * t, until a running
-/// Simulator moves it (Simulator::setColliderPosition, setColliderVelocity).
+/// contact, so E = 0 there), w_j = stiffness * m_j + elastic_ratio * D_j while the particle is
+/// near the collider (the contact set, chosen at each step's start; 0 elsewhere), D_j the
+/// stiffness of the particle's own elements (the diagonal of their global matrix at j). The collider translates with
+/// `velocity` (0: static): its geometry at time t is that at t = 0 moved by velocity * t, until a running Simulator
+/// moves it (Simulator::setColliderPosition, setColliderVelocity).
 struct Collider {
   ColliderShape shape = ColliderShape::Plane;  ///< which of the fields below describe it
   /// Plane: a point of the plane; sphere and box: the center; capsule: one end of its axis.
@@ -207,6 +208,11 @@ struct Collider {
   /// Contact weight per unit of particle mass, 1/s^2 (> 0): a particle at rest on a collider
   /// under gravity g sinks about |g| / stiffness into it.
   double stiffness = 1e4;
+  /// The contact weight's share of the stiffness D_j of the particle's elements, dimensionless
+  /// (>= 0): at the default 1 a pair is at least as stiff as the elements that press its particle
+  /// into the collider, so a heavy or stiff body stops on its contact layer within the step
+  /// whatever its mass, material and mesh; 0 leaves the per-mass weight alone (a soft contact).
+  double elastic_ratio = 1.0;
   /// The particles it acts on: `num_particles` of them from `first_particle` on, or, when
   /// num_particles is -1 (the default), every particle of the scene. A batch
   /// (include/stabint/batch.hpp) gives each scene's colliders that scene's particles.
@@ -230,6 +236,7 @@ struct Collider {
   FIELD(velocity, "translation in m/s (0: static)")                                                      \
   FIELD(friction, "Coulomb coefficient mu >= 0 (0: frictionless)")                                       \
   FIELD(stiffness, "contact weight per unit of particle mass, 1/s^2 (> 0)")                              \
+  FIELD(elastic_ratio, "contact weight per unit of the particle's element stiffness (>= 0; default 1)")  \
   FIELD(first_particle, "the first particle it acts on (with num_particles; a batch sets each scene's)") \
   FIELD(num_particles, "how many particles from first_particle it acts on; -1 (default): every particle")
 /// @cond

@@ -663,7 +663,8 @@ def test_colliders_book_friction_and_refuse_other_checkpoints():
     ground.shape = stabint.ColliderShape.Plane
     ground.friction = 0.5
     scene.colliders.append(ground)
-    assert len(scene.colliders) == 1 and scene.colliders[0].stiffness == 1e4  # the default
+    assert len(scene.colliders) == 1 and scene.colliders[0].stiffness == 1e4  # the defaults
+    assert scene.colliders[0].elastic_ratio == 1.0
     sim = stabint.Simulator(scene, stabint.SimulatorOptions(contact_tolerance=0.03))
     assert sim.options.contact_tolerance == 0.03
     h0, k0 = sim.energy().total, sim.energy().kinetic
@@ -673,9 +674,10 @@ def test_colliders_book_friction_and_refuse_other_checkpoints():
     projection = sum(r.contact_projection for r in reports)
     # The books: H* moved by exactly what friction and the projection reported (90 terms of
     # size up to H0: round-off), and friction took nearly all the kinetic energy (measured
-    # 99.7 % in the C++ test; the rest is the bar's vibration and the blend's band).
+    # 97.0 % in the C++ test; the rest is the bar's vibration on a contact as stiff as its
+    # elements, and the blend's band).
     assert sim.target == pytest.approx(h0 - friction + projection, abs=1e-12 * 90 * abs(h0))
-    assert friction == pytest.approx(k0, rel=0.03)
+    assert friction == pytest.approx(k0, rel=0.05)
     assert sim.energy().kinetic < 0.02 * k0
 
     # A checkpoint belongs to its colliders: one of another friction is refused.

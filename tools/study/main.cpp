@@ -33,6 +33,9 @@ void usage(std::FILE* to) {
                "  interaction grab, drag and release of a cloth corner through the per-frame input API, BE,\n"
                "              BDF2 and the blend: H, H*, the hand's work and the events (interaction.csv);\n"
                "              a tet bar bouncing on the ground: H, H*, friction, final projection (bounce.csv)\n"
+               "  contact     tet bars of 1e5, 1e6 and 1e7 Pa thrown at 1, 3 and 6 m/s onto a plane, a sphere and\n"
+               "              a box with BE, BDF2, IM and the blend: max(H - H*) / K_max, the deepest vertex, the\n"
+               "              rebound, ms per frame (printed; contact_table.csv, contact_table.md)\n"
                "  all         all of the above in order\n"
                "  drop        a TetGen soft body (--mesh BASE, made by scripts/soft_body_mesh.sh) dropped on the\n"
                "              ground with BE, BDF2 and the blend (drop_surface.csv, drop_energy.csv,\n"
@@ -100,6 +103,7 @@ int main(int argc, char** argv) {
                           {"motion", runMotion},
                           {"teaser", runTeaser},
                           {"interaction", runInteraction},
+                          {"contact", runContact},
                           {"drop", runDrop}};
     bool found = false;
     for (const Step& s : steps) {

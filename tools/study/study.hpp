@@ -329,6 +329,7 @@ void runCrosscheck(const StudyOptions& options);
 void runMotion(const StudyOptions& options);
 void runTeaser(const StudyOptions& options);       // cmd_teaser.cpp
 void runInteraction(const StudyOptions& options);  // cmd_interaction.cpp
+void runContact(const StudyOptions& options);      // cmd_contact.cpp
 void runDrop(const StudyOptions& options);         // cmd_drop.cpp (needs options.mesh; not in `all`)
 
 // ---- small helpers -------------------------------------------------------------------------

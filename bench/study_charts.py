@@ -326,8 +326,8 @@ def chart_interaction(results, charts):
         ax.set_ylabel("height [m]")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
-        title += ("\nBottom: a free tet bar (62.5 kg) dropped from 0.5 m onto the ground (contact stiffness 1.5e3/s^2, "
-                  "friction 0.3, tolerance 0.2 m).")
+        title += ("\nBottom: a free tet bar (62.5 kg) dropped from 0.5 m onto the ground (the default contact, "
+                  "friction 0.3).")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout(rect=(0, 0, 1, 0.95 if bounce else 0.93))
     save(fig, charts, "interaction")
@@ -730,8 +730,8 @@ def write_summary(results):
     if bounce:
         drop = 0.5  # cmd_interaction.cpp: the bar's bottom starts 0.5 m above the ground, at rest
         out.append("## Bounce on the ground (`stabint-study interaction`, bounce.csv)\n")
-        out.append("A free tet bar (62.5 kg) dropped from 0.5 m onto the ground (contact stiffness 1.5e3/s^2, friction "
-                   "0.3, contact tolerance 0.2 m), h = 1/30 s, 10 iterations, 4 s. Lands: when the bar's centre first "
+        out.append("A free tet bar (62.5 kg) dropped from 0.5 m onto the ground (the default contact, friction "
+                   "0.3), h = 1/30 s, 10 iterations, 4 s. Lands: when the bar's centre first "
                    "reaches its resting height (free fall: 0.32 s). Rebound: the highest the centre gets after that, "
                    "as a fraction of the drop. Friction and final projection: the energy they took out of H* over "
                    "the run.\n")

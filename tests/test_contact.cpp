@@ -340,14 +340,21 @@ TEST(Contact, FrictionDragsABodyAlongAMovingCollider) {
   EXPECT_NEAR(sim.target(), h0 - friction, 1e-9 * std::abs(h0));
 }
 
+// The bar resting on a frictionless ground, a box beside it (x in [-0.55, -0.05]) moving along +x
+// at `speed`; both colliders of contact stiffness `stiffness`.
+Scene barPushedByABox(double stiffness, double speed) {
+  Scene s = freeBar(0.0);
+  s.colliders.push_back(groundPlane(0.0, stiffness));
+  s.colliders.push_back(boxCollider(Eigen::Vector3d(-0.3, 0.125, 0.125), Eigen::Vector3d(0.25, 0.1, 0.5), stiffness,
+                                    Eigen::Vector3d(speed, 0.0, 0.0)));
+  return s;
+}
+
 // A box moving at 0.5 m/s pushes a bar resting on the frictionless ground along x: the
 // collider's work goes into H* through the forcing rule, the blend keeps H within its tolerance
 // band of H*, and a checkpoint taken mid-contact continues bit for bit.
 TEST(Contact, MovingColliderWorkIsBookedAndCheckpointsContinue) {
-  Scene s = freeBar(0.0);
-  s.colliders.push_back(groundPlane(0.0, 1e4));
-  s.colliders.push_back(boxCollider(Eigen::Vector3d(-0.3, 0.125, 0.125), Eigen::Vector3d(0.25, 0.1, 0.5), 1e4,
-                                    Eigen::Vector3d(0.5, 0.0, 0.0)));
+  const Scene s = barPushedByABox(1e4, 0.5);
   SimulatorOptions o;
   o.contact_tolerance = 0.03;
   Simulator sim(s, o);
@@ -376,10 +383,7 @@ TEST(Contact, MovingColliderWorkIsBookedAndCheckpointsContinue) {
 // 10 % of it (measured 130.6 J at the default 10 iterations, 118.4 J at 200). The forcing rule's
 // sum booked 327 J and 539 J (docs/method.md, "Contact", "A moving collider's work").
 TEST(Contact, AStiffPushBooksTheElasticWork) {
-  Scene s = freeBar(0.0);
-  s.colliders.push_back(groundPlane(0.0, 3e5));
-  s.colliders.push_back(boxCollider(Eigen::Vector3d(-0.3, 0.125, 0.125), Eigen::Vector3d(0.25, 0.1, 0.5), 3e5,
-                                    Eigen::Vector3d(1.0, 0.0, 0.0)));
+  const Scene s = barPushedByABox(3e5, 1.0);
   SimulatorOptions o;
   o.contact_tolerance = 0.03;
   Simulator sim(s, o);

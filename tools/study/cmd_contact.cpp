@@ -23,9 +23,9 @@ namespace study {
 
 namespace {
 
-constexpr double kLift = 0.05;      // m: the bar's bottom above the collider's top at the start
-constexpr double kFriction = 0.5;   // every collider's
-constexpr double kSeconds = 2.0;    // per run
+constexpr double kLift = 0.05;     // m: the bar's bottom above the collider's top at the start
+constexpr double kFriction = 0.5;  // every collider's
+constexpr double kSeconds = 2.0;   // per run
 
 struct ContactRun {
   double excess = 0.0;  // max(H - H*) / K_max
@@ -157,8 +157,9 @@ void runContact(const StudyOptions& options) {
       }
     }
   }
-  md += "\nEach cell: max(H - H*) / K_max, the deepest vertex after a step, the rebound (% of the fall), ms "
-        "per frame.\n";
+  md +=
+      "\nEach cell: max(H - H*) / K_max, the deepest vertex after a step, the rebound (% of the fall), ms "
+      "per frame.\n";
   std::ofstream(joinPath(options.out, "contact_table.md")) << md;
   std::printf("%s", md.c_str());
   std::fflush(stdout);

@@ -465,6 +465,7 @@ TEST(Contact, CheckpointOfOtherCollidersIsRefused) {
   vary("velocity", [](Scene& t) { t.colliders[1].velocity.x() = 0.1; });
   vary("friction", [](Scene& t) { t.colliders[0].friction = 0.31; });
   vary("stiffness", [](Scene& t) { t.colliders[0].stiffness = 2e4; });
+  vary("elastic_ratio", [](Scene& t) { t.colliders[0].elastic_ratio = 0.5; });
   vary("order", [](Scene& t) { std::swap(t.colliders[0], t.colliders[1]); });
   for (const auto& [what, other_scene] : others) {
     Simulator other(other_scene, o);
@@ -561,12 +562,13 @@ TEST(Contact, AColliderOnSomeParticlesLetsTheOthersThrough) {
 
 using ContactJson = testing::TempDirTest;
 
-// Every shape, a moving one, friction, stiffness and a collider's particles survive a save and
-// load unchanged.
+// Every shape, a moving one, friction, stiffness, elastic_ratio and a collider's particles survive a
+// save and load unchanged.
 TEST_F(ContactJson, RoundTrip) {
   Scene scene = testing::clothOnColliders();
   scene.colliders[1].first_particle = 12;  // the ground under the cloth's rows 1 to 3 only
   scene.colliders[1].num_particles = 36;
+  scene.colliders[0].elastic_ratio = 0.25;
   const std::string path = (dir_ / "colliders.json").string();
   saveSceneFile(scene, path);
   const Scene back = loadSceneFile(path);
@@ -579,6 +581,7 @@ TEST_F(ContactJson, RoundTrip) {
     EXPECT_EQ(a.velocity, b.velocity) << i;
     EXPECT_EQ(a.friction, b.friction) << i;
     EXPECT_EQ(a.stiffness, b.stiffness) << i;
+    EXPECT_EQ(a.elastic_ratio, b.elastic_ratio) << i;
     EXPECT_EQ(a.first_particle, b.first_particle) << i;
     EXPECT_EQ(a.num_particles, b.num_particles) << i;
     // A shape's unused fields are not written; the scene has their defaults, as a loaded one.

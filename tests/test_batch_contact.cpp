@@ -9,6 +9,7 @@
 #include "elements/contact.hpp"
 #include "elements/element_type.hpp"
 #include "scene/scene_batch.hpp"
+#include "scene/scene_data.hpp"
 
 #include <gtest/gtest.h>
 
@@ -33,6 +34,7 @@ TEST(SceneBatchContact, EachCollidersParticlesAreItsScenes) {
   const std::vector<Scene> scenes = contactBatchScenes();
   const SceneBatch batch = concatenateScenes(scenes);
   const ElementBlock all = contactElementType().build(batch.scene);
+  const SceneData batch_data(batch.scene);
   const int contact = testing::typeIndex("contact");
   int colliders = 0;
   for (std::size_t s = 0; s < scenes.size(); ++s) {
@@ -45,12 +47,14 @@ TEST(SceneBatchContact, EachCollidersParticlesAreItsScenes) {
       EXPECT_EQ(particles.count, seg.num_particles) << "collider " << c;
     }
     const ElementBlock own = contactElementType().build(scenes[s]);
+    const SceneData own_data(scenes[s]);
     ASSERT_EQ(seg.num_elements[std::size_t(contact)], own.count);
     for (int e = 0; e < own.count; ++e) {
       const int in_batch = seg.first_element[std::size_t(contact)] + e;
       EXPECT_EQ(all.vertices[std::size_t(in_batch)], own.vertices[std::size_t(e)] + seg.first_particle);
-      EXPECT_EQ(all.params[std::size_t(in_batch) * (all.params.size() / std::size_t(all.count))],
-                own.params[std::size_t(e) * (own.params.size() / std::size_t(own.count))]);  // w_j
+      // w_j, from the scene's own elements (Collider::elastic_ratio): the batch's is its scene's.
+      EXPECT_EQ(batch_data.enabledWeight(contact, in_batch), own_data.enabledWeight(contact, e));
+      EXPECT_GT(own_data.enabledWeight(contact, e), scenes[s].colliders[0].stiffness * scenes[s].masses.minCoeff());
     }
     colliders += seg.num_colliders;
   }

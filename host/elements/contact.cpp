@@ -202,7 +202,7 @@ class ContactElementType final : public ElementType {
     IndexRange particles = colliderParticles(scene, 0);
     for (; e >= particles.count; particles = colliderParticles(scene, ++c)) e -= particles.count;
     const Collider& collider = scene.colliders[static_cast<std::size_t>(c)];
-    params[0] = collider.stiffness * scene.masses[particles.first + e];
+    params[0] = 0.0;  // the weight is SceneData's, from weightsFromBlocks
     colliderGeometryAt(collider, collider.center, params + kContactGeometry);
   }
 
@@ -255,7 +255,9 @@ class ContactElementType final : public ElementType {
   void appendRecord(Scene&, const std::vector<int>&, const std::vector<double>&) const override {}
 
  private:
-  // The colliders where `data`'s motion has them at t (without it: where the scene puts them).
+  // The colliders where `data`'s motion has them at t (without it: where the scene puts them), with
+  // weight 0: the weights depend on the other types' elements, so SceneData puts them in
+  // (weightsFromBlocks) and paramsAt reads them back.
   static void writeParams(const Scene& scene, const RunningScene* data, double t, std::vector<double>& params) {
     const int colliders = static_cast<int>(scene.colliders.size());
     params.resize(std::size_t(P) * std::size_t(firstContactElement(scene, colliders)));
@@ -266,7 +268,7 @@ class ContactElementType final : public ElementType {
       colliderGeometryAt(collider, data ? data->colliderPosition(c, t) : collider.center, geometry);
       const IndexRange particles = colliderParticles(scene, c);
       for (int j = particles.first; j < particles.end(); ++j, out += P) {
-        out[0] = collider.stiffness * scene.masses[j];
+        out[0] = 0.0;
         for (int i = 0; i < kColliderGeometry; ++i) out[kContactGeometry + i] = geometry[i];
       }
     }

@@ -97,7 +97,7 @@ ContactRun throwBar(const Scene& scene, Integrator integrator, const StudyOption
     if (!landed) lowest = std::min(lowest, y);
     if (landed) run.rebound = std::max(run.rebound, (y - lowest) / fall);
   }
-  run.excess = excess / largest_kinetic;
+  run.excess = largest_kinetic > 0.0 ? excess / largest_kinetic : 0.0;  // 0: refused at its first step
   run.ms = done > 0 ? 1e3 * seconds / done : 0.0;
   return run;
 }

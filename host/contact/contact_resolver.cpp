@@ -30,6 +30,7 @@ ContactResolver::ContactResolver(SceneData& scene, const Forcing& forcing, Globa
   for (int e = 0; e < count(); ++e) scene_.setElementEnabled(block_, e, false);
   const ContactSetChange change = contactSetChange(scene_, forcing_, wholeScene(scene_), t, time_step_, margin(), x, v);
   for (int e : change.entering) scene_.setElementEnabled(block_, e, true);
+  writeHalfSpaces(scene_, forcing_, wholeScene(scene_), t, time_step_, x, v);
   system_.assemble(scene_);
 }
 
@@ -59,28 +60,32 @@ bool ContactResolver::changeSet(const std::vector<int>& entering, const std::vec
 
 std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
                                              const std::vector<ContactPart>& parts) {
-  std::vector<char> entered_inside(parts.size(), 0);
-  if (count() == 0) return entered_inside;
+  std::vector<char> potential_changed(parts.size(), 0);
+  if (count() == 0) return potential_changed;
   // The parts' changes as one (ascending: parts in order, each a contiguous run of pairs).
   ContactSetChange change;
   for (std::size_t i = 0; i < parts.size(); ++i) {
     ContactSetChange part = contactSetChange(scene_, forcing_, parts[i], t, time_step_, margin(), x, v);
     change.entering.insert(change.entering.end(), part.entering.begin(), part.entering.end());
     change.leaving.insert(change.leaving.end(), part.leaving.begin(), part.leaving.end());
-    entered_inside[i] = part.entered_inside ? 1 : 0;
+    potential_changed[i] = part.entered_inside ? 1 : 0;
   }
-  if (change.empty()) return entered_inside;
-  const int columns = static_cast<int>(change.entering.size() + change.leaving.size());
-  if (changeSet(change.entering, change.leaving, log_columns_ + columns > kMaxContactLogColumns)) {
-    log_.clear();
-    log_columns_ = 0;
-  } else {
-    for (int e : change.entering) log_.push_back(e + 1);
-    for (int e : change.leaving) log_.push_back(-(e + 1));
-    log_.push_back(0);
-    log_columns_ += columns;
+  if (!change.empty()) {
+    const int columns = static_cast<int>(change.entering.size() + change.leaving.size());
+    if (changeSet(change.entering, change.leaving, log_columns_ + columns > kMaxContactLogColumns)) {
+      log_.clear();
+      log_columns_ = 0;
+    } else {
+      for (int e : change.entering) log_.push_back(e + 1);
+      for (int e : change.leaving) log_.push_back(-(e + 1));
+      log_.push_back(0);
+      log_columns_ += columns;
+    }
   }
-  return entered_inside;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    if (writeHalfSpaces(scene_, forcing_, parts[i], t, time_step_, x, v)) potential_changed[i] = 1;
+  }
+  return potential_changed;
 }
 
 ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const ContactPart& part, double t1,
@@ -101,8 +106,9 @@ void ContactResolver::bookProjection(const PotentialEnergy& projected, Potential
   // like a hard impact); energy it adds, by lifting particles against gravity or stretching
   // their elements, is the solver's residual and is left to the blend to take out: booked,
   // it let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
-  report.contact_projection = std::min(0.0, projected.total() - p.total());
-  target += report.contact_projection;
+  const double removed = std::min(0.0, projected.total() - p.total());
+  report.contact_projection += removed;
+  target += removed;
   p = projected;
 }
 

@@ -37,15 +37,15 @@ class ContactResolver {
   int block() const { return block_; }
 
   /// The broad phase at the start of a step from (x, v) at time t (and after setState), before
-  /// anything is solved. A change of the set updates the factors, or, when it is large (a
+  /// anything is solved: the contact set, then the half-space of each pair in it
+  /// (writeHalfSpaces). A change of the set updates the factors, or, when it is large (a
   /// landing) or the updates since L was last assembled are many, assembles L and factors it
-  /// again. Energy: a pair enters or leaves out of contact (E = 0 both sides), so nothing is
-  /// booked; one that enters already inside (it moved farther than the margin) makes H jump by
-  /// its contact energy, which is not booked either: the blend takes it out, as it takes the
-  /// final projection's additions. For the pairs of `parts` only (a batch's active scenes: the
-  /// pairs of the others stay as they are), from the whole scene's (x, v), with one change of L
-  /// and the factors for all; entry i of the result is 1 when a pair of parts[i] entered inside
-  /// (the potential of its x changed).
+  /// again. For the pairs of `parts` only (a batch's active scenes: the pairs of the others stay
+  /// as they are), from the whole scene's (x, v), with one change of L and the factors for all.
+  /// Entry i of the result is 1 when the contact energy of x in parts[i] may have changed: a pair
+  /// acts with a half-space (it follows x), or a pair entered already inside. The caller evaluates that part's
+  /// potential again and books the change (BatchDriver::updateContactSets: a half-space that follows x only ever lowers
+  /// it).
   std::vector<char> updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
                               const std::vector<ContactPart>& parts);
 

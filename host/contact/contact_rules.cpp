@@ -7,10 +7,24 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace stabint {
 namespace {
+
+// The geometry contact pair e acts with: in the contact set, its half-space (block params, where
+// the collider's reference point is at Collider::center) moved by `shift`, written to `pair`;
+// out of it, the collider's geometry `collider`.
+const double* pairGeometry(const SceneData& scene, int block, int e, const double* collider,
+                           const Eigen::Vector3d& shift, double* pair) {
+  if (!scene.elementEnabled(block, e)) return collider;
+  const ElementBlock& b = scene.blocks()[static_cast<std::size_t>(block)];
+  const double* params = b.params.data() + std::size_t(b.type->shape().params) * std::size_t(e) + kContactGeometry;
+  std::copy(params, params + kColliderGeometry, pair);
+  translateGeometry(shift, pair);
+  return pair;
+}
 
 // Calls visit(c, j, r, p, depth, e) for each particle j (row r of x) of `part` inside collider c
 // at time t, with p the closest point outside, depth = |p - x_j| > 0 and e the pair's contact
@@ -18,14 +32,18 @@ namespace {
 template <typename Visit>
 void forEachContact(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
                     const Eigen::MatrixX3d& x, Visit&& visit) {
+  const int block = scene.blockIndex(contactElementType());
   int e = firstContactElement(scene.scene(), part.colliders.first);
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
-    double g[kColliderGeometry];
-    forcing.colliderGeometry(c, t, g);
+    double collider[kColliderGeometry];
+    forcing.colliderGeometry(c, t, collider);
+    const Eigen::Vector3d shift = forcing.colliderPosition(c, t) - scene.scene().colliders[std::size_t(c)].center;
     const IndexRange particles = colliderParticles(scene.scene(), c);
     for (int j = particles.first; j < particles.end(); ++j, ++e) {
       const Eigen::Index r = j - part.first_row;
       const double xj[3] = {x(r, 0), x(r, 1), x(r, 2)};
+      double pair[kColliderGeometry];
+      const double* g = pairGeometry(scene, block, e, collider, shift, pair);
       double p[3];
       if (!closestPointOutside(g, xj, p)) continue;
       const Eigen::Vector3d pj(p[0], p[1], p[2]);
@@ -52,6 +70,183 @@ bool withinMargin(const double* g, const double* x, double margin) {
   return closestPointOutside(grown, x, p);
 }
 
+// The distance from x to the collider's surface, negative inside (the depth).
+double signedDistance(const double* g, const double* x) {
+  const int shape = static_cast<int>(g[kGeometryShape]);
+  const double* center = g + kGeometryCenter;
+  const double* a = g + kGeometryA;
+  if (shape == static_cast<int>(ColliderShape::Plane))
+    return (x[0] - center[0]) * a[0] + (x[1] - center[1]) * a[1] + (x[2] - center[2]) * a[2];
+  if (shape == static_cast<int>(ColliderShape::Box)) {
+    double outside = 0.0, largest = -std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 3; ++c) {
+      const double q = std::abs(x[c] - center[c]) - a[c];
+      outside += q > 0.0 ? q * q : 0.0;
+      largest = std::max(largest, q);
+    }
+    return std::sqrt(outside) + std::min(largest, 0.0);
+  }
+  Eigen::Vector3d s(center[0], center[1], center[2]);
+  const Eigen::Vector3d xv(x[0], x[1], x[2]);
+  if (shape == static_cast<int>(ColliderShape::Capsule)) {
+    const Eigen::Vector3d ab = Eigen::Vector3d(a[0], a[1], a[2]) - s;
+    const double length2 = ab.squaredNorm();
+    const double u = length2 > 0.0 ? std::clamp((xv - s).dot(ab) / length2, 0.0, 1.0) : 0.0;
+    s += u * ab;
+  }
+  return (xv - s).norm() - g[kGeometryRadius];
+}
+
+// The plane geometry through `point` with outward unit normal `normal`.
+void planeGeometry(const Eigen::Vector3d& point, const Eigen::Vector3d& normal, double* plane) {
+  plane[kGeometryShape] = static_cast<double>(static_cast<int>(ColliderShape::Plane));
+  for (int c = 0; c < 3; ++c) plane[kGeometryCenter + c] = point[c], plane[kGeometryA + c] = normal[c];
+  plane[kGeometryRadius] = 0.0;
+}
+
+// A plane that supports collider g (the collider lies on its inner side) at the surface point
+// nearest to y, inside or outside: a sphere's or a capsule's radial one (through s + r n, n the
+// direction from the nearest point s of its axis to y, well conditioned on the surface), a box's
+// face nearest to y from inside and the plane through its nearest surface point q facing y from
+// outside. A plane collider is its own.
+void supportingPlane(const double* g, const Eigen::Vector3d& y, double* plane) {
+  const int shape = static_cast<int>(g[kGeometryShape]);
+  if (shape == static_cast<int>(ColliderShape::Plane)) {
+    std::copy(g, g + kColliderGeometry, plane);
+    return;
+  }
+  const double* center = g + kGeometryCenter;
+  const double* a = g + kGeometryA;
+  if (shape == static_cast<int>(ColliderShape::Box)) {
+    const double yv[3] = {y[0], y[1], y[2]};
+    double p[3];
+    if (closestPointOutside(g, yv, p)) {  // inside: p moved y along one axis, to its nearest face
+      int axis = 0;
+      for (int c = 1; c < 3; ++c)
+        if (std::abs(p[c] - yv[c]) > std::abs(p[axis] - yv[axis])) axis = c;
+      planeGeometry(Eigen::Vector3d(p[0], p[1], p[2]),
+                    Eigen::Vector3d::Unit(axis) * (y[axis] < center[axis] ? -1.0 : 1.0), plane);
+      return;
+    }
+    Eigen::Vector3d q;  // the nearest surface point
+    for (int c = 0; c < 3; ++c) q[c] = std::clamp(y[c], center[c] - a[c], center[c] + a[c]);
+    Eigen::Vector3d d = y - q;
+    if (!(d.norm() > 0.0)) {  // y on a face: that face's normal
+      int axis = 0;
+      for (int c = 1; c < 3; ++c)
+        if (std::abs(y[c] - center[c]) - a[c] > std::abs(y[axis] - center[axis]) - a[axis]) axis = c;
+      d = Eigen::Vector3d::Unit(axis) * (y[axis] < center[axis] ? -1.0 : 1.0);
+    }
+    planeGeometry(q, d / d.norm(), plane);
+    return;
+  }
+  // A sphere, or a capsule: about the nearest point s of its axis.
+  Eigen::Vector3d s(center[0], center[1], center[2]);
+  if (shape == static_cast<int>(ColliderShape::Capsule)) {
+    const Eigen::Vector3d ab = Eigen::Vector3d(a[0], a[1], a[2]) - s;
+    const double length2 = ab.squaredNorm();
+    s += (length2 > 0.0 ? std::clamp((y - s).dot(ab) / length2, 0.0, 1.0) : 0.0) * ab;
+  }
+  const Eigen::Vector3d r = y - s;
+  const Eigen::Vector3d normal = r.norm() > 0.0 ? Eigen::Vector3d(r / r.norm()) : Eigen::Vector3d::UnitY();
+  planeGeometry(s + g[kGeometryRadius] * normal, normal, plane);
+}
+
+// [project rule] The swept test's searches: golden-section steps for a box's closest approach
+// (a convex function of the segment's parameter) and bisection steps for the entry; 60 of each
+// take the parameter to 1e-12 of the segment.
+constexpr int kSearchSteps = 60;
+
+// The parameter u in [0, 1] of the point of segment a + u d nearest to segment c + w e (w in
+// [0, 1]): Ericson's closest points of two segments, well conditioned but for parallel ones,
+// where any nearest pair serves.
+double closestOnSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& d, const Eigen::Vector3d& c,
+                        const Eigen::Vector3d& e) {
+  const double dd = d.squaredNorm(), ee = e.squaredNorm();
+  if (!(dd > 0.0)) return 0.0;
+  const Eigen::Vector3d r = a - c;
+  const double f = e.dot(r);
+  if (!(ee > 0.0)) return std::clamp(-d.dot(r) / dd, 0.0, 1.0);
+  const double de = d.dot(e), dr = d.dot(r), denominator = dd * ee - de * de;
+  double u = denominator > 0.0 ? std::clamp((de * f - dr * ee) / denominator, 0.0, 1.0) : 0.0;
+  const double w = (de * u + f) / ee;
+  if (w < 0.0) u = std::clamp(-dr / dd, 0.0, 1.0);
+  if (w > 1.0) u = std::clamp((de - dr) / dd, 0.0, 1.0);
+  return u;
+}
+
+// The segment from a to b against collider g: the parameter s in [0, 1] where it first meets the
+// collider (the signed distance first reaches 0), or, when it stays outside, where it comes
+// closest; `distance` gets the signed distance there. A sphere's and a capsule's closest approach
+// is closed-form (the nearest point of the path to the center or the axis), a box's a search.
+double sweep(const double* g, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double& distance,
+             bool* enters = nullptr) {
+  const auto f = [&](double s) {
+    const Eigen::Vector3d y = a + s * (b - a);
+    const double yv[3] = {y[0], y[1], y[2]};
+    return signedDistance(g, yv);
+  };
+  const int shape = static_cast<int>(g[kGeometryShape]);
+  const Eigen::Vector3d center(g[kGeometryCenter], g[kGeometryCenter + 1], g[kGeometryCenter + 2]);
+  double best = 1.0;
+  if (shape == static_cast<int>(ColliderShape::Box)) {
+    double lo = 0.0, hi = 1.0, f_best = f(1.0);
+    constexpr double kGolden = 0.6180339887498949;
+    double s1 = hi - kGolden * (hi - lo), s2 = lo + kGolden * (hi - lo), f1 = f(s1), f2 = f(s2);
+    for (int i = 0; i < kSearchSteps && f_best >= 0.0; ++i) {
+      if (f1 < f_best) best = s1, f_best = f1;
+      if (f2 < f_best) best = s2, f_best = f2;
+      if (f1 < f2) {
+        hi = s2, s2 = s1, f2 = f1, s1 = hi - kGolden * (hi - lo), f1 = f(s1);
+      } else {
+        lo = s1, s1 = s2, f1 = f2, s2 = lo + kGolden * (hi - lo), f2 = f(s2);
+      }
+    }
+  } else {
+    const Eigen::Vector3d axis =
+        shape == static_cast<int>(ColliderShape::Capsule)
+            ? Eigen::Vector3d(Eigen::Vector3d(g[kGeometryA], g[kGeometryA + 1], g[kGeometryA + 2]) - center)
+            : Eigen::Vector3d(Eigen::Vector3d::Zero());
+    best = closestOnSegment(a, b - a, center, axis);
+  }
+  distance = f(best);
+  if (enters) *enters = distance < 0.0;
+  if (distance >= 0.0) return best;
+  // It enters between 0 (outside) and `best` (inside): the crossing, from the outside.
+  double out = 0.0, in = best;
+  for (int i = 0; i < kSearchSteps; ++i) {
+    const double mid = 0.5 * (out + in);
+    (f(mid) < 0.0 ? in : out) = mid;
+  }
+  distance = f(out);
+  return out;
+}
+
+// Half the collider's thinnest size: a box's smallest half extent, a radius (a plane: infinite).
+double halfThickness(const Collider& collider) {
+  if (collider.shape == ColliderShape::Box) return collider.half_extents.minCoeff();
+  if (collider.shape == ColliderShape::Plane) return std::numeric_limits<double>::infinity();
+  return collider.radius;
+}
+
+// How deep the middle of the collider is below its face of outward normal n: a box's half
+// extent along the axis n is most aligned with, a radius (a plane: infinite).
+double halfDepthBelow(const Collider& collider, const Eigen::Vector3d& n) {
+  if (collider.shape != ColliderShape::Box) return halfThickness(collider);
+  Eigen::Index axis = 0;
+  n.cwiseAbs().maxCoeff(&axis);
+  return collider.half_extents[axis];
+}
+
+// [project rule] A pair of a collider at rest over the step acts with a half-space when its
+// path goes deeper than this part of the way from its face to the collider's middle (it may then
+// cross the middle, where the nearest face is the far one), and with the collider itself
+// otherwise: a half-space is chosen once per step, so near a box's edge round-off can pick one
+// face or the other, and slow contact keeps the collider's own nearest point, which is
+// continuous there. (A moving collider keeps its own geometry: its half-spaces booked 142 J
+// for the stiff push of 125 J, tests/test_contact.cpp.)
+constexpr double kSweptPath = 0.25;
+
 // [project rule] A pair leaves the set only beyond this many margins, so that a body bouncing a
 // few centimetres off a collider does not leave the set and come back, refactoring twice
 // (docs/method.md, "Contact", has the counts).
@@ -72,6 +267,7 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
     double now[kColliderGeometry], next[kColliderGeometry];
     forcing.colliderGeometry(c, t, now);
     forcing.colliderGeometry(c, t + h, next);
+    const Eigen::Vector3d moved = forcing.colliderPosition(c, t + h) - forcing.colliderPosition(c, t);
     const IndexRange particles = colliderParticles(scene.scene(), c);
     for (int j = particles.first; j < particles.end(); ++j, ++e) {
       const Eigen::Index r = j - part.first_row;
@@ -80,14 +276,73 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
       if (scene.elementEnabled(block, e)) {
         if (!withinMargin(now, xj, kLeaveMargins * margin) && !withinMargin(next, predicted, kLeaveMargins * margin))
           change.leaving.push_back(e);
-      } else if (withinMargin(now, xj, margin) || withinMargin(next, predicted, margin)) {
-        change.entering.push_back(e);
-        double p[3];
-        change.entered_inside = change.entered_inside || closestPointOutside(now, xj, p);
+        continue;
       }
+      bool near = withinMargin(now, xj, margin) || withinMargin(next, predicted, margin);
+      if (!near) {
+        // Swept: the path x_j -> x_j + h v_j relative to the collider passes within the margin (a
+        // fast particle crossing a thin collider within the step; both ends are far from it).
+        const Eigen::Vector3d a = x.row(r).transpose();
+        const Eigen::Vector3d b = a + h * v.row(r).transpose() - moved;
+        double distance = margin;
+        if (signedDistance(now, xj) - (b - a).norm() < margin) sweep(now, a, b, distance);
+        near = distance < margin;
+      }
+      if (!near) continue;
+      change.entering.push_back(e);
+      double p[3];
+      change.entered_inside = change.entered_inside || closestPointOutside(now, xj, p);
     }
   }
   return change;
+}
+
+bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
+                     const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
+  const int block = scene.blockIndex(contactElementType());
+  const ElementBlock& contact = scene.blocks()[static_cast<std::size_t>(block)];
+  const std::size_t P = static_cast<std::size_t>(contact.type->shape().params);
+  bool derived = false;
+  int e = firstContactElement(scene.scene(), part.colliders.first);
+  for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
+    const Collider& collider = scene.scene().colliders[static_cast<std::size_t>(c)];
+    double now[kColliderGeometry], own[kColliderGeometry];
+    forcing.colliderGeometry(c, t, now);
+    colliderGeometryAt(collider, collider.center, own);
+    const Eigen::Vector3d shift = forcing.colliderPosition(c, t) - collider.center;
+    const Eigen::Vector3d moved = forcing.colliderPosition(c, t + h) - forcing.colliderPosition(c, t);
+    const IndexRange particles = colliderParticles(scene.scene(), c);
+    for (int j = particles.first; j < particles.end(); ++j, ++e) {
+      if (!scene.elementEnabled(block, e) || collider.shape == ColliderShape::Plane) continue;
+      const Eigen::Index r = j - part.first_row;
+      const Eigen::Vector3d a = x.row(r).transpose();
+      const Eigen::Vector3d b = a + h * v.row(r).transpose() - moved;
+      double plane[kColliderGeometry];
+      const double* geometry = own;
+      if (moved.isZero(0.0) && (b - a).norm() > kSweptPath * halfThickness(collider)) {
+        const double xj[3] = {a[0], a[1], a[2]};
+        Eigen::Vector3d y = a;  // inside: x_j; outside: where the path enters
+        bool enters = signedDistance(now, xj) < 0.0;
+        if (!enters) {
+          double distance = 0.0;
+          y = a + sweep(now, a, b, distance, &enters) * (b - a);
+        }
+        if (enters) {
+          supportingPlane(now, y, plane);
+          const Eigen::Vector3d normal(plane[kGeometryA], plane[kGeometryA + 1], plane[kGeometryA + 2]);
+          if (std::abs((b - a).dot(normal)) > kSweptPath * halfDepthBelow(collider, normal)) {
+            translateGeometry(-shift, plane);
+            geometry = plane;
+            derived = true;
+          }
+        }
+      }
+      const double* current = contact.params.data() + P * std::size_t(e) + kContactGeometry;
+      if (!std::equal(geometry, geometry + kColliderGeometry, current))
+        scene.setElementParams(block, e, kContactGeometry, geometry, kColliderGeometry);
+    }
+  }
+  return derived;
 }
 
 ContactWork contactWork(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t0, double h,
@@ -103,10 +358,10 @@ ContactWork contactWork(const SceneData& scene, const Forcing& forcing, const Co
       e += particles.count;
       continue;
     }
-    double g0[kColliderGeometry], gm[kColliderGeometry], g1[kColliderGeometry];
-    forcing.colliderGeometry(c, t0, g0);
-    forcing.colliderGeometry(c, tm, gm);
-    forcing.colliderGeometry(c, t1, g1);
+    const Eigen::Vector3d reference = scene.scene().colliders[std::size_t(c)].center;
+    const Eigen::Vector3d shift0 = forcing.colliderPosition(c, t0) - reference,
+                          shiftm = forcing.colliderPosition(c, tm) - reference,
+                          shift1 = forcing.colliderPosition(c, t1) - reference;
     // The pair's energy w/2 |x - p(x)|^2 against geometry g, and its force w (p - x) into f.
     const auto energy = [](const double* g, const double* x, double w, double* f) {
       double p[3];
@@ -121,6 +376,11 @@ ContactWork contactWork(const SceneData& scene, const Forcing& forcing, const Co
     for (int j = particles.first; j < particles.end(); ++j, ++e) {
       const double w = scene.elementWeight(block, e);
       if (w == 0.0) continue;  // out of the contact set
+      // The pair's half-space where the collider is at t0, tm and t1.
+      double g0[kColliderGeometry], gm[kColliderGeometry], g1[kColliderGeometry];
+      pairGeometry(scene, block, e, nullptr, shift0, g0);
+      pairGeometry(scene, block, e, nullptr, shiftm, gm);
+      pairGeometry(scene, block, e, nullptr, shift1, g1);
       const Eigen::Index r = j - part.first_row;
       const double a[3] = {x0(r, 0), x0(r, 1), x0(r, 2)}, b[3] = {x1(r, 0), x1(r, 1), x1(r, 2)};
       const double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
@@ -163,6 +423,14 @@ int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactP
 
 int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
                           double tolerance, Eigen::MatrixX3d& x) {
+  // [project rule] A particle is left no deeper than a quarter of its collider's thinnest size
+  // (half a box's smallest half extent, half a radius) either: the next step's half-space is the
+  // face nearest to it, which must be the face it came in by.
+  std::vector<double> depth(static_cast<std::size_t>(part.colliders.count));
+  for (int c = 0; c < part.colliders.count; ++c) {
+    const Collider& collider = scene.scene().colliders[std::size_t(part.colliders.first + c)];
+    depth[std::size_t(c)] = std::min(tolerance, 0.5 * halfThickness(collider));
+  }
   // A particle pushed out of one collider into another is pushed out of that one in the next
   // sweep; three sweeps settle any corner of two or three shapes we have met, and the last
   // sweep's result stands.
@@ -171,10 +439,11 @@ int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const 
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     int moved = 0;
     forEachContact(scene, forcing, part, t, x,
-                   [&](int, int, Eigen::Index r, const Eigen::Vector3d& p, double depth, int) {
-                     if (!(depth > tolerance)) return;
-                     // Straight toward p, stopping `tolerance` short of it.
-                     x.row(r) = (p + (x.row(r).transpose() - p) * (tolerance / depth)).transpose();
+                   [&](int c, int, Eigen::Index r, const Eigen::Vector3d& p, double d, int) {
+                     const double allowed = depth[std::size_t(c - part.colliders.first)];
+                     if (!(d > allowed)) return;
+                     // Straight toward p, stopping `allowed` short of it.
+                     x.row(r) = (p + (x.row(r).transpose() - p) * (allowed / d)).transpose();
                      ++moved;
                    });
     moves += moved;

@@ -31,10 +31,11 @@ ContactPart wholeScene(const SceneData& scene);
 ///
 /// The broad phase's change of the contact set of `part` at the start of a step of length h from
 /// (x, v) at time t. A contact element (firstContactElement) is active when its flag in the
-/// scene's contact block is set. A pair enters when x_j (against collider c at t) or its
-/// prediction x_j + h v_j (against c at t + h) is within `margin` of the collider, inside
-/// included; it leaves only when both are farther than 8 margins (hysteresis, so the set and the
-/// global matrix change rarely).
+/// scene's contact block is set. A pair enters when x_j (against collider c at t), its
+/// prediction x_j + h v_j (against c at t + h) or the path between them (relative to the
+/// collider: swept) passes within `margin` of the collider, inside included; it leaves only when
+/// both ends are farther than 8 margins (hysteresis, so the set and the global matrix change
+/// rarely).
 struct ContactSetChange {
   std::vector<int> entering, leaving;  // contact element indices, ascending
   bool entered_inside = false;         // a pair entered with x_j already inside: E jumps from 0
@@ -42,6 +43,23 @@ struct ContactSetChange {
 };
 ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
                                   double h, double margin, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
+
+/// The geometry each pair of `part` in the contact set acts with over a step of length h from
+/// (x, v) at time t (docs/method.md, "Contact", "The pair's half-space"), written to its params.
+/// A pair of a collider at rest over the step whose path x_j -> x_j + h v_j goes deeper than a
+/// quarter of the way from the face to the collider's middle (a box's half extent under that
+/// face, a radius), and which is inside or enters within the step, acts with the
+/// plane that supports the collider (it lies inside) at the surface point nearest to x_j when
+/// x_j is inside, else at the point where the path enters: a fast particle then meets the face
+/// it comes in by whatever it crosses within the step, and a particle inside stays pushed out of
+/// the face nearest to it. Every other pair acts with its collider, whose nearest point is
+/// continuous where a half-space chosen once per step is not (near a box's edges). A plane
+/// collider is its own geometry. Returns whether a pair acts with a half-space (the potential of
+/// x may then be lower than the one the last step left: the caller books the loss). A pair
+/// that stops acting with one goes back to its collider, whose energy at x is never above the
+/// half-space's (the collider is convex), and that loss is not booked.
+bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
+                     const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
 /// The work the colliders of `part` that move between t0 and t0 + h do on its pairs in the contact
 /// set over a step from positions x0 to x1 (both with part.first_row's rows), in two forms:
@@ -69,8 +87,9 @@ ContactWork contactWork(const SceneData& scene, const Forcing& forcing, const Co
 int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
                   const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& removed);
 
-/// The final projection over `part`: every particle deeper than `tolerance` inside a collider at time t is
-/// moved straight out to depth `tolerance` (velocities unchanged), colliders in order, repeated
+/// The final projection over `part`: every particle deeper than `tolerance` (or a quarter of the
+/// collider's thinnest size) inside its pair's half-space (a collider, for a pair out of the
+/// set) at time t is moved straight out to that depth (velocities unchanged), colliders in order, repeated
 /// while that pushes a particle into an earlier one (at most a few sweeps). Returns the number of
 /// moves.
 int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,

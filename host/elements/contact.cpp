@@ -153,18 +153,22 @@ class ContactElementType final : public ElementType {
       const IndexRange particles = colliderParticles(scene, static_cast<int>(c));
       for (int j = particles.first; j < particles.end(); ++j) block.vertices.push_back(j);
     }
-    writeParams(scene, nullptr, 0.0, block.params);
+    writeParams(scene, block.params);
     return block;
   }
 
   bool timeDependent(const RunningScene& data) const override { return data.hasMovingColliders(); }
+  // The scene's params (weights, and each pair's geometry where the collider's reference point is
+  // at Collider::center) with every pair's geometry moved by its collider's translation at t.
   void paramsAt(const RunningScene& data, double t, std::vector<double>& params) const override {
-    writeParams(data.scene(), &data, t, params);
-    // The weights as the scene has them: weightsFromBlocks' in the contact set, 0 out of it
-    // (SceneData::setElementEnabled).
-    const int block = data.blockIndex(*this);
-    const int pairs = count(data.scene());
-    for (int e = 0; e < pairs; ++e) params[std::size_t(P) * std::size_t(e)] = data.elementWeight(block, e);
+    const Scene& scene = data.scene();
+    params = data.blockParams(data.blockIndex(*this));
+    double* out = params.data();
+    for (int c = 0; c < static_cast<int>(scene.colliders.size()); ++c) {
+      const Eigen::Vector3d shift = data.colliderPosition(c, t) - scene.colliders[static_cast<std::size_t>(c)].center;
+      for (int k = 0; k < colliderParticles(scene, c).count; ++k, out += P)
+        translateGeometry(shift, out + kContactGeometry);
+    }
   }
 
   // [project rule] w_j = stiffness m_j + elastic_ratio D_j, D_j the diagonal of L at the
@@ -255,17 +259,16 @@ class ContactElementType final : public ElementType {
   void appendRecord(Scene&, const std::vector<int>&, const std::vector<double>&) const override {}
 
  private:
-  // The colliders where `data`'s motion has them at t (without it: where the scene puts them), with
-  // weight 0: the weights depend on the other types' elements, so SceneData puts them in
-  // (weightsFromBlocks) and paramsAt reads them back.
-  static void writeParams(const Scene& scene, const RunningScene* data, double t, std::vector<double>& params) {
+  // Each pair with its collider's geometry where the scene puts it, and weight 0: the weights
+  // depend on the other types' elements, so SceneData puts them in (weightsFromBlocks).
+  static void writeParams(const Scene& scene, std::vector<double>& params) {
     const int colliders = static_cast<int>(scene.colliders.size());
     params.resize(std::size_t(P) * std::size_t(firstContactElement(scene, colliders)));
     double* out = params.data();
     for (int c = 0; c < colliders; ++c) {
       const Collider& collider = scene.colliders[static_cast<std::size_t>(c)];
       double geometry[kColliderGeometry];
-      colliderGeometryAt(collider, data ? data->colliderPosition(c, t) : collider.center, geometry);
+      colliderGeometryAt(collider, collider.center, geometry);
       const IndexRange particles = colliderParticles(scene, c);
       for (int j = particles.first; j < particles.end(); ++j, out += P) {
         out[0] = 0.0;

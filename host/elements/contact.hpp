@@ -41,6 +41,15 @@ int firstContactElement(const Scene& scene, int c);
 /// `position` (Forcing::colliderPosition says where that is at a time).
 void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& position, double* geometry);
 
+/// Moves geometry `g` by `shift` (its center, and a capsule's other end).
+inline void translateGeometry(const Eigen::Vector3d& shift, double* g) {
+  const bool capsule = static_cast<int>(g[kGeometryShape]) == static_cast<int>(ColliderShape::Capsule);
+  for (int c = 0; c < 3; ++c) {
+    g[kGeometryCenter + c] += shift[c];
+    if (capsule) g[kGeometryA + c] += shift[c];
+  }
+}
+
 /// p = the closest point of the collider's outside to x; returns false (and p = x) when x is
 /// not inside. Points on the surface are outside. A point at the exact center of a sphere or on
 /// a capsule's axis is pushed out along +y; a point equally deep below two faces of a box goes

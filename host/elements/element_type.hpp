@@ -37,6 +37,8 @@ class RunningScene {
   virtual bool elementEnabled(int block, int element) const = 0;
   /// w_e as the global matrix has it now (0 for a disabled element).
   virtual double elementWeight(int block, int element) const = 0;
+  /// Block `block`'s params as they are now (ElementBlock::params).
+  virtual const std::vector<double>& blockParams(int block) const = 0;
   /// Pin targets move (by the scene's law or the user's ramps); then pinTarget gives them.
   virtual bool hasMovingPins() const = 0;
   virtual Eigen::Vector3d pinTarget(int pin, double t) const = 0;

@@ -359,14 +359,26 @@ void BatchDriver::updateContactSets() {
     scenes.push_back(s);
     parts.push_back(contactPart(s, 0));
   }
-  const std::vector<char> entered_inside = contact_.updateSet(t_, x_, v_, parts);
-  if (std::find(entered_inside.begin(), entered_inside.end(), 1) == entered_inside.end()) return;
+  const std::vector<char> changed = contact_.updateSet(t_, x_, v_, parts);
+  if (std::find(changed.begin(), changed.end(), 1) == changed.end()) return;
   std::vector<char> which(segments_.size(), 0);
-  for (std::size_t i = 0; i < scenes.size(); ++i) which[scenes[i]] = entered_inside[i];
+  for (std::size_t i = 0; i < scenes.size(); ++i) which[scenes[i]] = changed[i];
   std::vector<PotentialEnergy> potentials;
   backend_->potentials(kX, t_, potentials, &which);
-  for (std::size_t i = 0; i < scenes.size(); ++i)
-    if (entered_inside[i]) per_scene_[scenes[i]].potential = potentials[scenes[i]];
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    if (!changed[i]) continue;
+    PerScene& p = per_scene_[scenes[i]];
+    // [project rule] The contact energy of the same positions under the step's half-spaces: a
+    // half-space that follows x lowers it (the collider is convex: its nearest face is never
+    // farther than the last step's), and that loss is booked like the final projection's (H and
+    // H* move together, now, whether or not the step is accepted). A pair that entered already
+    // inside raises it, and that is not booked: the blend takes it out.
+    const double change = std::min(0.0, potentials[scenes[i]].total() - p.potential.total());
+    report_.scenes[scenes[i]].contact_projection += change;
+    p.target += change;
+    p.target_now += change;
+    p.potential = potentials[scenes[i]];
+  }
 }
 
 void BatchDriver::resolveContact(double t1) {

@@ -106,6 +106,13 @@ void SceneData::setElementEnabled(int block, int element, bool enabled) {
   paramsChanged(b, element);
 }
 
+void SceneData::setElementParams(int block, int element, int first, const double* values, int count) {
+  ElementBlock& b = blocks_[static_cast<std::size_t>(block)];
+  const std::size_t p = static_cast<std::size_t>(b.type->shape().params);
+  std::copy(values, values + count, b.params.begin() + std::ptrdiff_t(p * std::size_t(element) + std::size_t(first)));
+  paramsChanged(b, element);
+}
+
 ElementState SceneData::elementState() const {
   ElementState state;
   state.pins = scene_.pins;

@@ -75,6 +75,11 @@ class SceneData final {
     const std::vector<std::uint8_t>& flags = enabled_[static_cast<std::size_t>(block)];
     return flags.empty() || flags[static_cast<std::size_t>(element)] != 0;
   }
+  /// Writes `count` params of element `element` of block `block` from index `first` >= 1 on (the
+  /// weight, params[0], stays the set's): a pair's step geometry that the contact broad phase
+  /// derives (docs/method.md, "Contact", "The pair's half-space"). Not part of ElementState: the
+  /// broad phase writes it again at every step's start.
+  void setElementParams(int block, int element, int first, const double* values, int count);
   /// The pins, stiffnesses and enabled flags as they are now.
   ElementState elementState() const;
   /// w_e as the global matrix has it: params[P e] (0 for a disabled element).

@@ -15,6 +15,9 @@ class SceneView final : public RunningScene {
   int blockIndex(const ElementType& type) const override { return data_->blockIndex(type); }
   bool elementEnabled(int block, int element) const override { return data_->elementEnabled(block, element); }
   double elementWeight(int block, int element) const override { return data_->elementWeight(block, element); }
+  const std::vector<double>& blockParams(int block) const override {
+    return data_->blocks()[static_cast<std::size_t>(block)].params;
+  }
   bool hasMovingPins() const override { return forcing_->hasMovingPins(); }
   Eigen::Vector3d pinTarget(int pin, double t) const override { return forcing_->pinTarget(pin, t); }
   bool hasMovingColliders() const override { return forcing_->hasMovingColliders(); }

@@ -258,18 +258,18 @@ TEST(Contact, ThrownBodiesKeepTheBooksAtImpact) {
 
 // A fast body meets a thin collider (docs/method.md, "Contact", "The pair's half-space"): a tet
 // bar at 10 m/s onto a 2 cm thick box and a cloth at 5 m/s onto a sphere of 5 cm radius, each
-// crossing it within one step of 1/30 s. With BE and the blend no vertex passes through (the
-// bar's vertices stay above the box's middle, the cloth's over the sphere stay above its center)
-// and none is deeper than the tolerance after a step; the blend keeps its books (H at most
-// 5 % of the largest kinetic energy above H*). Before the half-spaces both went straight
-// through. (Not yet met: BDF2's bar leaves a vertex 0.6 mm below the box, implicit midpoint's
-// cloth goes through the sphere.)
+// crossing it within one step of 1/30 s. With every integrator (but implicit midpoint's cloth,
+// which blows up) no vertex passes through (the
+// bar's vertices stay above the box's middle, the cloth's that start over the sphere stay above
+// its center) and none is deeper than the tolerance after a step; the blend keeps its books (H
+// at most 5 % of the largest kinetic energy above H*). Before the half-spaces both went
+// straight through.
 TEST(Contact, FastBodiesDoNotPassThroughThinColliders) {
   struct Throw {
     std::string name;
     Scene scene;
     Eigen::Vector3d center;  // the collider's
-    double reach;            // vertices this close to the collider's vertical axis must stay above it
+    double reach;            // vertices that start this close to its vertical axis must stay above it
   };
   std::vector<Throw> throws;
   Scene bar = freeBar(0.05);
@@ -284,7 +284,11 @@ TEST(Contact, FastBodiesDoNotPassThroughThinColliders) {
   cloth.colliders.push_back(sphereCollider(sphere_center, 0.05, 1e4, 0.5));
   throws.push_back({"cloth at 5 m/s onto a 5 cm sphere", cloth, sphere_center, 0.05});
   for (const Throw& t : throws) {
-    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+    for (Integrator integrator :
+         {Integrator::BackwardEuler, Integrator::BDF2, Integrator::ImplicitMidpoint, Integrator::EnergyBlend}) {
+      // Implicit midpoint's cloth blows up at the impact (its energy grows 5,000-fold within 30
+      // steps and throws the cloth metres away): the blend exists for that.
+      if (integrator == Integrator::ImplicitMidpoint && t.scene.tets.empty()) continue;
       SimulatorOptions o;
       o.integrator = integrator;
       Simulator sim(t.scene, o);
@@ -296,7 +300,8 @@ TEST(Contact, FastBodiesDoNotPassThroughThinColliders) {
         deepest = std::max(deepest, deepestPenetration(t.scene, sim.positions(), sim.time()));
         const Eigen::MatrixX3d& x = sim.positions();
         for (Eigen::Index j = 0; j < x.rows(); ++j)
-          if (std::hypot(x(j, 0) - t.center.x(), x(j, 2) - t.center.z()) < t.reach) lowest = std::min(lowest, x(j, 1));
+          if (std::hypot(t.scene.positions(j, 0) - t.center.x(), t.scene.positions(j, 2) - t.center.z()) < t.reach)
+            lowest = std::min(lowest, x(j, 1));
       }
       const std::string where = t.name + ", " + integratorName(integrator);
       std::printf("%s: deepest %.4f m, lowest near the axis %.4f m\n", where.c_str(), deepest, lowest);

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace stabint {
@@ -58,6 +59,30 @@ TEST(OpenCLContact, ClothOnCollidersMatchesCpu) {
         friction += ref.reports[i].friction;
       }
       EXPECT_GT(friction, 0.0) << "the cloth must reach the colliders within the run";
+    }
+  }
+}
+
+// A tet bar at 10 m/s onto a 2 cm thick box (test_contact's FastBodiesDoNotPassThroughThinColliders):
+// the pairs' half-spaces, derived on the host and uploaded with the contact params, give the
+// device the CPU reference's motion within the same tolerances, and no vertex of the device's
+// run goes below the box's middle.
+TEST(OpenCLContact, FastBarOnAThinBoxMatchesCpu) {
+  Scene scene = testing::freeBar(0.05);
+  scene.velocities.col(1).setConstant(-10.0);
+  scene.colliders.push_back(
+      testing::boxCollider(Eigen::Vector3d(0.5, -0.01, 0.125), Eigen::Vector3d(2.0, 0.01, 2.0), 1e4));
+  for (Precision precision : testing::availablePrecisions()) {
+    const double tol = testing::crossBackendTolerance(precision);
+    for (Integrator integrator : testing::crossBackendIntegrators(precision)) {
+      const ContactRun ref = run(scene, integrator, BackendKind::CpuReference, Precision::Double, 20);
+      const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 20);
+      for (std::size_t i = 0; i < ref.x.size(); ++i) {
+        const std::string what =
+            std::string(integratorName(integrator)) + " " + precisionName(precision) + " step " + std::to_string(i);
+        EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
+        EXPECT_GT(got.x[i].col(1).minCoeff(), -0.01) << what;
+      }
     }
   }
 }

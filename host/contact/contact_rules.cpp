@@ -319,10 +319,16 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart
       const Eigen::Vector3d b = a + h * v.row(r).transpose() - moved;
       double plane[kColliderGeometry];
       const double* geometry = own;
-      if (moved.isZero(0.0) && (b - a).norm() > kSweptPath * halfThickness(collider)) {
-        const double xj[3] = {a[0], a[1], a[2]};
+      const double xj[3] = {a[0], a[1], a[2]};
+      const bool inside = signedDistance(now, xj) < 0.0;
+      if (inside && collider.shape == ColliderShape::Box) {
+        // Its nearest face, whatever its speed: what the box's nearest point picks at x_j, kept
+        // over the step so that no iterate goes out through the far face of a thin box.
+        supportingPlane(now, a, plane);
+        geometry = plane;
+      } else if (moved.isZero(0.0) && (b - a).norm() > kSweptPath * halfThickness(collider)) {
         Eigen::Vector3d y = a;  // inside: x_j; outside: where the path enters
-        bool enters = signedDistance(now, xj) < 0.0;
+        bool enters = inside;
         if (!enters) {
           double distance = 0.0;
           y = a + sweep(now, a, b, distance, &enters) * (b - a);
@@ -330,12 +336,12 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart
         if (enters) {
           supportingPlane(now, y, plane);
           const Eigen::Vector3d normal(plane[kGeometryA], plane[kGeometryA + 1], plane[kGeometryA + 2]);
-          if (std::abs((b - a).dot(normal)) > kSweptPath * halfDepthBelow(collider, normal)) {
-            translateGeometry(-shift, plane);
-            geometry = plane;
-            derived = true;
-          }
+          if (std::abs((b - a).dot(normal)) > kSweptPath * halfDepthBelow(collider, normal)) geometry = plane;
         }
+      }
+      if (geometry == plane) {
+        translateGeometry(-shift, plane);
+        derived = true;
       }
       const double* current = contact.params.data() + P * std::size_t(e) + kContactGeometry;
       if (!std::equal(geometry, geometry + kColliderGeometry, current))

@@ -95,18 +95,30 @@ ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const Cont
   if (part.colliders.count == 0) return resolved;
   resolved.velocities_changed = applyFriction(scene_, forcing_, part, t1, time_step_, x, v, report.friction) > 0;
   target -= report.friction;
-  resolved.positions_moved = projectOutOfColliders(scene_, forcing_, part, t1, tolerance_, x) > 0;
+  std::vector<double> drops;
+  resolved.positions_moved = projectOutOfColliders(scene_, forcing_, part, t1, tolerance_, x, &drops) > 0;
+  // The share of the projection's removal the colliders' restitution keeps, weighed by the
+  // contact energy each collider's moves took.
+  double total = 0.0, kept = 0.0;
+  for (int c = 0; c < part.colliders.count; ++c) {
+    const double e = scene_.scene().colliders[std::size_t(part.colliders.first + c)].restitution;
+    total += drops[std::size_t(c)];
+    kept += drops[std::size_t(c)] * e * e;
+  }
+  resolved.kept = total > 0.0 ? kept / total : 1.0;
   return resolved;
 }
 
-void ContactResolver::bookProjection(const PotentialEnergy& projected, PotentialEnergy& p, double& target,
+void ContactResolver::bookProjection(const PotentialEnergy& projected, double kept, PotentialEnergy& p, double& target,
                                      StepReport& report) {
   ++report.energy_evaluations;
-  // [project rule] Only the energy the projection removes is booked (an inelastic correction,
-  // like a hard impact); energy it adds, by lifting particles against gravity or stretching
-  // their elements, is the solver's residual and is left to the blend to take out: booked,
-  // it let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
-  const double removed = std::min(0.0, projected.total() - p.total());
+  // [project rule] Only the energy the projection removes is booked, and of that only the share
+  // the colliders' restitution does not keep (1 - e^2: an impact that keeps e of its normal
+  // speed keeps e^2 of its energy); the kept share stays in H*, and the blend gives it back as
+  // the bounce. Energy the projection adds, by lifting particles against gravity or stretching
+  // their elements, is the solver's residual and is left to the blend to take out: booked, it
+  // let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
+  const double removed = std::min(0.0, projected.total() - p.total()) * (1.0 - kept);
   report.contact_projection += removed;
   target += removed;
   p = projected;

@@ -56,13 +56,16 @@ class ContactResolver {
   struct Resolved {
     bool velocities_changed = false;
     bool positions_moved = false;
+    double kept = 1.0;  // the share of the projection's removal the colliders' restitution keeps
   };
   Resolved applyFrictionAndProjection(const ContactPart& part, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
                                       double& target, StepReport& report) const;
   /// Books the final projection of a part whose potential went from `p` to `projected` (one
-  /// energy evaluation): the energy it removed leaves `target` (report.contact_projection); `p`
-  /// becomes `projected`.
-  static void bookProjection(const PotentialEnergy& projected, PotentialEnergy& p, double& target, StepReport& report);
+  /// energy evaluation): of the energy it removed, the share its restitution does not keep
+  /// (1 - `kept`, Resolved::kept) leaves `target` (report.contact_projection); `p` becomes
+  /// `projected`.
+  static void bookProjection(const PotentialEnergy& projected, double kept, PotentialEnergy& p, double& target,
+                             StepReport& report);
 
   /// The set's changes since L was last assembled, in order: e + 1 for pair e entering, -(e + 1)
   /// for one leaving, 0 closing each step's batch; checkpoints carry it.

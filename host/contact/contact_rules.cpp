@@ -428,7 +428,9 @@ int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactP
 }
 
 int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
-                          double tolerance, Eigen::MatrixX3d& x) {
+                          double tolerance, Eigen::MatrixX3d& x, std::vector<double>* drops) {
+  const int block = scene.blockIndex(contactElementType());
+  if (drops) drops->assign(static_cast<std::size_t>(part.colliders.count), 0.0);
   // [project rule] A particle is left no deeper than a quarter of its collider's thinnest size
   // (half a box's smallest half extent, half a radius) either: the next step's half-space is the
   // face nearest to it, which must be the face it came in by.
@@ -445,9 +447,12 @@ int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const 
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     int moved = 0;
     forEachContact(scene, forcing, part, t, x,
-                   [&](int c, int, Eigen::Index r, const Eigen::Vector3d& p, double d, int) {
+                   [&](int c, int, Eigen::Index r, const Eigen::Vector3d& p, double d, int e) {
                      const double allowed = depth[std::size_t(c - part.colliders.first)];
                      if (!(d > allowed)) return;
+                     if (drops)
+                       (*drops)[std::size_t(c - part.colliders.first)] +=
+                           0.5 * scene.enabledWeight(block, e) * (d * d - allowed * allowed);
                      // Straight toward p, stopping `allowed` short of it.
                      x.row(r) = (p + (x.row(r).transpose() - p) * (allowed / d)).transpose();
                      ++moved;

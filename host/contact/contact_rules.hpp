@@ -91,8 +91,9 @@ int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactP
 /// collider's thinnest size) inside its pair's half-space (a collider, for a pair out of the
 /// set) at time t is moved straight out to that depth (velocities unchanged), colliders in order, repeated
 /// while that pushes a particle into an earlier one (at most a few sweeps). Returns the number of
-/// moves.
+/// moves; `drops`, when given, receives per collider of the part the contact energy the moves
+/// took out of its pairs (w_j/2 (d^2 - depth^2), weighing what each collider's restitution keeps).
 int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
-                          double tolerance, Eigen::MatrixX3d& x);
+                          double tolerance, Eigen::MatrixX3d& x, std::vector<double>* drops = nullptr);
 
 }  // namespace stabint

@@ -96,6 +96,8 @@ void checkCollider(const Scene& scene, const Collider& c, const validation::Owne
     invalid(owner, ": stiffness ", c.stiffness, " must be finite and > 0");
   if (!std::isfinite(c.elastic_ratio) || !(c.elastic_ratio >= 0.0) || !(c.elastic_ratio <= validation::kMaxMagnitude))
     invalid(owner, ": elastic_ratio ", c.elastic_ratio, " must be finite and >= 0");
+  if (!(c.restitution >= 0.0) || !(c.restitution <= 1.0))
+    invalid(owner, ": restitution ", c.restitution, " must be in [0, 1]");
   // w_j = stiffness m_j enters the global matrix: it must be a finite number for every particle.
   if (scene.masses.size() > 0 && !std::isfinite(c.stiffness * scene.masses.maxCoeff()))
     invalid(owner, ": stiffness ", c.stiffness, " times the largest mass is not finite");

@@ -384,6 +384,7 @@ void BatchDriver::updateContactSets() {
 void BatchDriver::resolveContact(double t1) {
   if (contact_.count() == 0) return;
   std::vector<char> projected(segments_.size(), 0);
+  std::vector<double> kept(segments_.size(), 1.0);
   bool any = false;
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     PerScene& p = per_scene_[s];
@@ -392,6 +393,7 @@ void BatchDriver::resolveContact(double t1) {
         contactPart(s, segments_[s].first_particle), t1, p.x_new, p.v_new, p.target_now, report_.scenes[s]);
     p.velocities_changed = p.velocities_changed || resolved.velocities_changed;
     if (!resolved.positions_moved) continue;
+    kept[s] = resolved.kept;
     if (!any && x_trial_.rows() != x_.rows()) x_trial_ = x_;
     any = true;
     projected[s] = 1;
@@ -407,7 +409,7 @@ void BatchDriver::resolveContact(double t1) {
     if (!projected[s]) continue;
     PerScene& p = per_scene_[s];
     p.x_new = blockOf(x_trial_, segments_[s]);
-    ContactResolver::bookProjection(potentials[s], p.p_new, p.target_now, report_.scenes[s]);
+    ContactResolver::bookProjection(potentials[s], kept[s], p.p_new, p.target_now, report_.scenes[s]);
   }
 }
 

@@ -229,6 +229,11 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
                              c.stiffness,
                              c.elastic_ratio};
     mix(fields, static_cast<Eigen::Index>(std::size(fields)));
+    // A restitution other than the default: checkpoints written before it existed still match.
+    if (c.restitution != 1.0) {
+      const double restitution[] = {c.restitution};
+      mix(restitution, 1);
+    }
     // A collider on some particles only; one on all of them (the default) mixes nothing more, so
     // checkpoints written before colliders had particle ranges still match.
     if (c.num_particles != -1) {

@@ -213,6 +213,13 @@ struct Collider {
   /// into the collider, so a heavy or stiff body stops on its contact layer within the step
   /// whatever its mass, material and mesh; 0 leaves the per-mass weight alone (a soft contact).
   double elastic_ratio = 1.0;
+  /// Coefficient of restitution in [0, 1]: the share of an impact's normal speed a body keeps
+  /// off this collider. The final projection out of it (docs/method.md, "Contact",
+  /// "Restitution") removes energy; 1 - restitution^2 of that is booked as lost (H* drops with
+  /// it), the rest is the energy the bounce keeps, and the energy-tracking integrator gives it
+  /// back. 1 (default): an elastic contact, the body's material decides the bounce; 0: a fully
+  /// inelastic one. BE and BDF2 damp the bounce whatever it is.
+  double restitution = 1.0;
   /// The particles it acts on: `num_particles` of them from `first_particle` on, or, when
   /// num_particles is -1 (the default), every particle of the scene. A batch
   /// (include/stabint/batch.hpp) gives each scene's colliders that scene's particles.
@@ -237,6 +244,7 @@ struct Collider {
   FIELD(friction, "Coulomb coefficient mu >= 0 (0: frictionless)")                                       \
   FIELD(stiffness, "contact weight per unit of particle mass, 1/s^2 (> 0)")                              \
   FIELD(elastic_ratio, "contact weight per unit of the particle's element stiffness (>= 0; default 1)")  \
+  FIELD(restitution, "share of the normal speed an impact keeps, in [0, 1] (default 1: elastic)")        \
   FIELD(first_particle, "the first particle it acts on (with num_particles; a batch sets each scene's)") \
   FIELD(num_particles, "how many particles from first_particle it acts on; -1 (default): every particle")
 /// @cond

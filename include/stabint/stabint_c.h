@@ -201,8 +201,9 @@ typedef struct stabint_step_report {
   double velocity_scale;       /**< factor the blend applied to the velocities */
   double event_energy;         /**< jump of H booked in H* by set_state/positions/velocities before it */
   /** Colliders (scene files' "colliders"): kinetic energy friction removed (taken from H*;
-   * negative when a moving collider drags particles along), and the energy the final
-   * projection out of the colliders removed (<= 0, added to H*). */
+   * negative when a moving collider drags particles along), and the energy the contact booked
+   * as lost (<= 0, added to H*): the final projection's removal beyond what the colliders'
+   * restitution keeps, and the step's half-spaces' (docs/method.md, "Contact"). */
   /** @{ */
   double friction;
   double contact_projection;

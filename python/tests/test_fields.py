@@ -41,7 +41,7 @@ DEFAULTS = {
     stabint.ForceField: dict(particles=[], force=ZERO, rate=ZERO, amplitude=ZERO, frequency=0.0),
     stabint.Body: dict(name="", particles=[], damping=0.0),
     stabint.Collider: dict(shape=ColliderShape.Plane, center=ZERO, normal=[0.0, 1.0, 0.0], half_extents=ZERO,
-                           end=ZERO, radius=0.0, velocity=ZERO, friction=0.0, stiffness=1e4, elastic_ratio=1.0,
+                           end=ZERO, radius=0.0, velocity=ZERO, friction=0.0, stiffness=1e4, elastic_ratio=1.0, restitution=1.0,
                            first_particle=0, num_particles=-1),
     stabint.PathKey: dict(frame=0, position=ZERO),
     stabint.GrabEvent: GRAB.fields,

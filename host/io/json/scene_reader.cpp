@@ -350,14 +350,14 @@ void readBodies(const Field& list, Scene& s) {
 
 // Colliders (docs/scene-format.md): {"shape": "plane" | "sphere" | "box" | "capsule", "center",
 // the shape's own fields (normal; radius; half_extents; end, radius), and optionally velocity,
-// friction, stiffness, elastic_ratio and the particles it acts on (first_particle, num_particles)}; the values
-// are checked by validateScene.
+// friction, stiffness, elastic_ratio, restitution and the particles it acts on (first_particle, num_particles)}; the
+// values are checked by validateScene.
 
 void readColliders(const Field& list, Scene& s) {
   for (size_t i = 0; i < list.size(); ++i) {
     const Field e = list[i];
     e.allowOnly({"shape", "center", "normal", "radius", "half_extents", "end", "velocity", "friction", "stiffness",
-                 "elastic_ratio", "first_particle", "num_particles"});
+                 "elastic_ratio", "restitution", "first_particle", "num_particles"});
     Collider c;
     const Field shape = e.member("shape");
     const std::string name = shape.string();
@@ -375,6 +375,7 @@ void readColliders(const Field& list, Scene& s) {
     if (auto f = e.find("friction")) c.friction = f->number();
     if (auto f = e.find("stiffness")) c.stiffness = f->number();
     if (auto f = e.find("elastic_ratio")) c.elastic_ratio = f->number();
+    if (auto f = e.find("restitution")) c.restitution = f->number();
     if (auto f = e.find("first_particle")) c.first_particle = f->integer();
     if (auto f = e.find("num_particles")) c.num_particles = f->integer();
     s.colliders.push_back(c);

@@ -100,6 +100,7 @@ ordered colliderJson(const Collider& c) {
   e["friction"] = c.friction;
   e["stiffness"] = c.stiffness;
   e["elastic_ratio"] = c.elastic_ratio;
+  e["restitution"] = c.restitution;
   if (c.num_particles != -1) {  // -1: every particle, the default
     e["first_particle"] = c.first_particle;
     e["num_particles"] = c.num_particles;

@@ -236,22 +236,6 @@ TEST(Contact, TheDroppedBarBouncesByItsRestitution) {
   }
 }
 
-// A restitution outside [0, 1] (or NaN) is refused, naming the collider and the field.
-TEST(Contact, ARestitutionOutsideZeroToOneIsRefused) {
-  for (double restitution : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
-    Scene s = freeBar(0.0);
-    s.colliders.push_back(groundPlane(0.0, 1e4));
-    s.colliders.back().restitution = restitution;
-    try {
-      Simulator sim(s, SimulatorOptions{});
-      ADD_FAILURE() << "restitution " << restitution << " was accepted";
-    } catch (const InvalidInputError& e) {
-      EXPECT_NE(std::string(e.what()).find("collider 0"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("restitution"), std::string::npos) << e.what();
-    }
-  }
-}
-
 // An impact keeps the books (docs/method.md, "Contact", "The contact weight"): soft bodies of
 // three stiffnesses (a 16 x 4 x 4 tet bar, 62.5 kg, 1e5, 1e6 and 1e7 Pa) thrown onto the ground
 // (friction 0.5) at 1, 3 and 6 m/s, and a 30 x 30 cloth thrown at 5 m/s onto a sphere and the
@@ -361,19 +345,25 @@ TEST(Contact, FastBodiesDoNotPassThroughThinColliders) {
   }
 }
 
-// A collider's elastic_ratio is checked like its other fields: a negative or non-finite one is
-// refused, naming the collider and the field.
-TEST(Contact, ANegativeElasticRatioIsRefused) {
-  for (double ratio : {-1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
-    Scene s = freeBar(0.0);
-    s.colliders.push_back(groundPlane(0.0, 1e4));
-    s.colliders.back().elastic_ratio = ratio;
-    try {
-      Simulator sim(s, SimulatorOptions{});
-      ADD_FAILURE() << "elastic_ratio " << ratio << " was accepted";
-    } catch (const InvalidInputError& e) {
-      EXPECT_NE(std::string(e.what()).find("collider 0"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("elastic_ratio"), std::string::npos) << e.what();
+// A collider's elastic_ratio and restitution are checked like its other fields: an elastic_ratio
+// that is negative or not finite and a restitution outside [0, 1] (or NaN) are refused, naming
+// the collider and the field.
+TEST(Contact, ContactParametersOutOfRangeAreRefused) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::pair<std::string, std::vector<double>>> cases = {{"elastic_ratio", {-1.0, nan, inf}},
+                                                                          {"restitution", {-0.1, 1.5, nan}}};
+  for (const auto& [field, values] : cases) {
+    for (double value : values) {
+      Scene s = freeBar(0.0);
+      s.colliders.push_back(groundPlane(0.0, 1e4));
+      (field == "restitution" ? s.colliders.back().restitution : s.colliders.back().elastic_ratio) = value;
+      try {
+        Simulator sim(s, SimulatorOptions{});
+        ADD_FAILURE() << field << " " << value << " was accepted";
+      } catch (const InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("collider 0"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+      }
     }
   }
 }

@@ -122,9 +122,11 @@ TEST(Contact, ClothComesToRestOnSphereAndGround) {
   // ground (within the tolerance and the rest sink |g| / stiffness = 1 mm).
   EXPECT_NEAR(x.col(1).maxCoeff(), 0.15, 0.01);
   EXPECT_NEAR(x.col(1).minCoeff(), 0.0, o.contact_tolerance);
+  // How it folds is chaotic: start heights 1e-9 to 2e-3 m apart leave 11 to 69 of the 256
+  // vertices on the ground; a few always are.
   int on_ground = 0;
   for (Eigen::Index j = 0; j < x.rows(); ++j) on_ground += x(j, 1) < 0.005;
-  EXPECT_GT(on_ground, 16);
+  EXPECT_GE(on_ground, 8);
 }
 
 // Rebound heights of a bar dropped on the ground: for each flight between two contacts (a
@@ -487,6 +489,31 @@ TEST(Contact, AStiffPushBooksTheElasticWork) {
   std::printf("booked %.1f J for an elastic push of 125 J\n", forcing);
   EXPECT_NEAR(forcing, 125.0, 12.5);
   EXPECT_GT(sim.velocities().col(0).mean(), 1.5);  // pushed along, faster than the box
+}
+
+// The pairs' half-spaces are a function of the state, refreshed after every step and by a restore
+// (docs/method.md, "Contact", "The pair's half-space"), not a checkpoint's field: a checkpoint
+// taken while a bar at 10 m/s lands on a 2 cm box (its bottom pairs acting with the box's faces)
+// and restored into a fresh simulator continues bit for bit, through a stiffness change that
+// evaluates the potential before the next step.
+TEST(Contact, ACheckpointMidImpactContinuesBitForBit) {
+  Scene s = freeBar(0.05);
+  s.velocities.col(1).setConstant(-10.0);
+  s.colliders.push_back(boxCollider(Eigen::Vector3d(0.5, -0.01, 0.125), Eigen::Vector3d(2.0, 0.01, 2.0), 1e4));
+  const SimulatorOptions o;
+  Simulator sim(s, o);
+  sim.step();
+  const Checkpoint mid = sim.checkpoint();
+  Simulator fresh(s, o);
+  fresh.restore(mid);
+  for (Simulator* run : {&sim, &fresh}) run->setElementStiffness(ElementKind::Tet, 0, 2e5);
+  for (int i = 0; i < 10; ++i) {
+    const StepReport a = sim.step();
+    const StepReport b = fresh.step();
+    EXPECT_EQ(sim.positions(), fresh.positions()) << "step " << i;
+    EXPECT_EQ(a.target, b.target) << "step " << i;
+    EXPECT_EQ(a.contact_projection, b.contact_projection) << "step " << i;
+  }
 }
 
 // The contact set's changes since the global matrix was last assembled travel with a checkpoint

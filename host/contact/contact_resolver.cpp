@@ -82,10 +82,18 @@ std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x
       log_columns_ += columns;
     }
   }
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    if (writeHalfSpaces(scene_, forcing_, parts[i], t, time_step_, x, v)) potential_changed[i] = 1;
-  }
+  const std::vector<char> changed = refreshHalfSpaces(t, x, v, parts);
+  for (std::size_t i = 0; i < parts.size(); ++i) potential_changed[i] = potential_changed[i] || changed[i];
   return potential_changed;
+}
+
+std::vector<char> ContactResolver::refreshHalfSpaces(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
+                                                     const std::vector<ContactPart>& parts) {
+  std::vector<char> changed(parts.size(), 0);
+  if (count() == 0) return changed;
+  for (std::size_t i = 0; i < parts.size(); ++i)
+    changed[i] = writeHalfSpaces(scene_, forcing_, parts[i], t, time_step_, x, v) ? 1 : 0;
+  return changed;
 }
 
 ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const ContactPart& part, double t1,

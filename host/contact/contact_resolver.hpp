@@ -42,12 +42,18 @@ class ContactResolver {
   /// landing) or the updates since L was last assembled are many, assembles L and factors it
   /// again. For the pairs of `parts` only (a batch's active scenes: the pairs of the others stay
   /// as they are), from the whole scene's (x, v), with one change of L and the factors for all.
-  /// Entry i of the result is 1 when the contact energy of x in parts[i] may have changed: a pair
-  /// acts with a half-space (it follows x), or a pair entered already inside. The caller evaluates that part's
+  /// Entry i of the result is 1 when the contact energy of x in parts[i] may have changed: a
+  /// pair's geometry changed (refreshHalfSpaces), or a pair entered already inside. The caller evaluates that part's
   /// potential again and books the change (BatchDriver::updateContactSets: a half-space that follows x only ever lowers
   /// it).
   std::vector<char> updateSet(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
                               const std::vector<ContactPart>& parts);
+  /// The geometry each pair of the set of `parts` acts with from (x, v) at time t
+  /// (writeHalfSpaces), the set as it is: after each accepted step, so that the params are always
+  /// those of the state (a checkpoint's restore calls it too and continues bit for bit), and in
+  /// updateSet. Entry i of the result is 1 when a pair of parts[i] changed.
+  std::vector<char> refreshHalfSpaces(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
+                                      const std::vector<ContactPart>& parts);
 
   /// After the solve, for `part` on its host copies (x, v) of the accepted state at t1: friction takes kinetic energy
   /// out of v and out of `target` (H*) with it, like damping (report.friction); the final projection moves the

@@ -302,7 +302,7 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart
   const int block = scene.blockIndex(contactElementType());
   const ElementBlock& contact = scene.blocks()[static_cast<std::size_t>(block)];
   const std::size_t P = static_cast<std::size_t>(contact.type->shape().params);
-  bool derived = false;
+  bool changed = false;
   int e = firstContactElement(scene.scene(), part.colliders.first);
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
     const Collider& collider = scene.scene().colliders[static_cast<std::size_t>(c)];
@@ -339,16 +339,15 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart
           if (std::abs((b - a).dot(normal)) > kSweptPath * halfDepthBelow(collider, normal)) geometry = plane;
         }
       }
-      if (geometry == plane) {
-        translateGeometry(-shift, plane);
-        derived = true;
-      }
+      if (geometry == plane) translateGeometry(-shift, plane);
       const double* current = contact.params.data() + P * std::size_t(e) + kContactGeometry;
-      if (!std::equal(geometry, geometry + kColliderGeometry, current))
+      if (!std::equal(geometry, geometry + kColliderGeometry, current)) {
         scene.setElementParams(block, e, kContactGeometry, geometry, kColliderGeometry);
+        changed = true;
+      }
     }
   }
-  return derived;
+  return changed;
 }
 
 ContactWork contactWork(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t0, double h,

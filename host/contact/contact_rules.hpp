@@ -54,10 +54,11 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
 /// it comes in by whatever it crosses within the step, and a particle inside stays pushed out of
 /// the face nearest to it. Every other pair acts with its collider, whose nearest point is
 /// continuous where a half-space chosen once per step is not (near a box's edges). A plane
-/// collider is its own geometry. Returns whether a pair acts with a half-space (the potential of
-/// x may then be lower than the one the last step left: the caller books the loss). A pair
-/// that stops acting with one goes back to its collider, whose energy at x is never above the
-/// half-space's (the collider is convex), and that loss is not booked.
+/// collider is its own geometry. The geometry is a function of (x, v, t) and the set alone, so a
+/// restored state gets it back by calling this again. Returns whether a pair's geometry changed:
+/// the potential of x may then be lower than before (the collider is convex: its nearest face
+/// is never farther than a half-space it supports), and the caller evaluates it again and books
+/// the loss.
 bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
                      const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 

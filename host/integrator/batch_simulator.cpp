@@ -252,6 +252,9 @@ void BatchDriver::commit(double t1) {
   x_.swap(x_new_);
   v_slot_.swap(v_new_);
   t_ = t1;
+  // The pairs' geometry of the new state, so that the params are always the state's (a restore
+  // rebuilds them from it) and the step's potential is booked under them.
+  refreshContactGeometry();
 }
 
 std::vector<char> BatchDriver::steppingScenes() const {
@@ -350,16 +353,40 @@ double BatchDriver::forcingOfStep(std::size_t s, const PotentialEnergy& p_new, c
   return rule - work.split + work.midpoint;
 }
 
-void BatchDriver::updateContactSets() {
-  if (contact_.count() == 0) return;
+std::vector<std::size_t> BatchDriver::contactScenes(std::vector<ContactPart>& parts) const {
   std::vector<std::size_t> scenes;
-  std::vector<ContactPart> parts;
+  parts.clear();
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     if (!per_scene_[s].stepping || segments_[s].num_colliders == 0) continue;
     scenes.push_back(s);
     parts.push_back(contactPart(s, 0));
   }
-  const std::vector<char> changed = contact_.updateSet(t_, x_, v_, parts);
+  return scenes;
+}
+
+void BatchDriver::updateContactSets() {
+  if (contact_.count() == 0) return;
+  std::vector<ContactPart> parts;
+  const std::vector<std::size_t> scenes = contactScenes(parts);
+  bookContactGeometry(scenes, contact_.updateSet(t_, x_, v_, parts));
+}
+
+void BatchDriver::refreshContactGeometry() {
+  if (contact_.count() == 0) return;
+  std::vector<ContactPart> parts;
+  const std::vector<std::size_t> scenes = contactScenes(parts);
+  const std::vector<char> changed = contact_.refreshHalfSpaces(t_, x_, v_, parts);
+  bookContactGeometry(scenes, changed);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    if (!changed[i]) continue;
+    const PerScene& p = per_scene_[scenes[i]];
+    StepReport& r = report_.scenes[scenes[i]];
+    r.energy = EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
+    r.target = p.target;
+  }
+}
+
+void BatchDriver::bookContactGeometry(const std::vector<std::size_t>& scenes, const std::vector<char>& changed) {
   if (std::find(changed.begin(), changed.end(), 1) == changed.end()) return;
   std::vector<char> which(segments_.size(), 0);
   for (std::size_t i = 0; i < scenes.size(); ++i) which[scenes[i]] = changed[i];
@@ -368,11 +395,11 @@ void BatchDriver::updateContactSets() {
   for (std::size_t i = 0; i < scenes.size(); ++i) {
     if (!changed[i]) continue;
     PerScene& p = per_scene_[scenes[i]];
-    // [project rule] The contact energy of the same positions under the step's half-spaces: a
+    // [project rule] The contact energy of the same positions under the pairs' new geometry: a
     // half-space that follows x lowers it (the collider is convex: its nearest face is never
-    // farther than the last step's), and that loss is booked like the final projection's (H and
-    // H* move together, now, whether or not the step is accepted). A pair that entered already
-    // inside raises it, and that is not booked: the blend takes it out.
+    // farther than a plane that supports it), and that loss is booked like the final projection's
+    // (H and H* move together, now, whether or not the next step is accepted). A pair that
+    // entered already inside raises it, and that is not booked: the blend takes it out.
     const double change = std::min(0.0, potentials[scenes[i]].total() - p.potential.total());
     report_.scenes[scenes[i]].contact_projection += change;
     p.target += change;

@@ -214,9 +214,16 @@ struct BatchDriver {
   double forcingOfStep(std::size_t s, const PotentialEnergy& p_new, const PotentialEnergy& new_mid,
                        const PotentialEnergy& old_mid, const Eigen::MatrixX3d& x1) const;
   // The broad phase of the stepping scenes at the step's start from (x_, v_), as Simulator's (an
-  // inactive scene's set stays as its refusal left it): a scene with a pair that entered inside
-  // gets its potential again.
+  // inactive scene's set stays as its refusal left it), then bookContactGeometry.
   void updateContactSets();
+  // The pairs' geometry (ContactResolver::refreshHalfSpaces) of the stepping scenes from the
+  // state just committed, then bookContactGeometry; their step reports follow.
+  void refreshContactGeometry();
+  // The stepping scenes with colliders, and their parts on the whole scene's host copies.
+  std::vector<std::size_t> contactScenes(std::vector<ContactPart>& parts) const;
+  // Scenes[i] with changed[i] get the potential of x_ at t_ again; a loss is booked in H* and
+  // StepReport::contact_projection.
+  void bookContactGeometry(const std::vector<std::size_t>& scenes, const std::vector<char>& changed);
   // Friction and the final projection of every stepping scene on its candidate, booked in its
   // own target, as Simulator's after its corrections; one energy pass for the projected scenes.
   void resolveContact(double t1);

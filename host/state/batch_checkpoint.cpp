@@ -255,6 +255,13 @@ void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegmen
   forcing_.setState(all.forcing);
   per_scene_ = per_scene;
   for (int s = 0; s < size(); ++s) pinsChanged(s);
+  // The pairs' geometry is the state's (refreshed after every step), not a checkpoint's field.
+  if (contact_.count() > 0) {
+    std::vector<ContactPart> parts;
+    for (std::size_t s = 0; s < segments_.size(); ++s)
+      if (segments_[s].num_colliders > 0) parts.push_back(contactPart(s, 0));
+    contact_.refreshHalfSpaces(t_, x_, v_, parts);
+  }
 }
 
 void BatchDriver::restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,

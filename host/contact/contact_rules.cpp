@@ -241,10 +241,10 @@ double halfDepthBelow(const Collider& collider, const Eigen::Vector3d& n) {
 // [project rule] A pair of a collider at rest over the step acts with a half-space when its
 // path goes deeper than this part of the way from its face to the collider's middle (it may then
 // cross the middle, where the nearest face is the far one), and with the collider itself
-// otherwise: a half-space is chosen once per step, so near a box's edge round-off can pick one
-// face or the other, and slow contact keeps the collider's own nearest point, which is
-// continuous there. (A moving collider keeps its own geometry: its half-spaces booked 142 J
-// for the stiff push of 125 J, tests/test_contact.cpp.)
+// otherwise (a particle inside a box always acts with the box's nearest face): a half-space is
+// chosen once per step from the particle's path, and slow contact keeps the collider's own
+// nearest point, which follows the particle continuously. (A moving collider keeps its own
+// geometry: its half-spaces booked 142 J for the stiff push of 125 J, tests/test_contact.cpp.)
 constexpr double kSweptPath = 0.25;
 
 // [project rule] A pair leaves the set only beyond this many margins, so that a body bouncing a

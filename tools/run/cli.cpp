@@ -70,9 +70,13 @@ int parseInteger(const std::string& option, const std::string& text) {
   char* end = nullptr;
   errno = 0;
   const long x = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) || *end != '\0' || errno == ERANGE ||
-      x < INT32_MIN || x > INT32_MAX) {
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) || *end != '\0') {
     throw UsageError(option + ": expected an integer, got '" + text + "'");
+  }
+  // An integer, but not one an int holds.
+  if (errno == ERANGE || x < INT32_MIN || x > INT32_MAX) {
+    throw UsageError(option + ": " + text + " is out of range (" + std::to_string(INT32_MIN) + " to " +
+                     std::to_string(INT32_MAX) + ")");
   }
   return static_cast<int>(x);
 }

@@ -151,6 +151,10 @@ elseif(CASE STREQUAL "bad_arguments")
              --scene chain --frames --quiet)
   expect_run(1 "^stabint-run: error: --dt: expected a number, got '0x10'" --scene chain --dt 0x10)
   expect_run(1 "^stabint-run: error: --frames: expected an integer, got ' 3'" --scene chain --frames " 3")
+  expect_run(1 "^stabint-run: error: --frames: 2147483648 is out of range \\(-2147483648 to 2147483647\\)" --scene chain
+             --frames 2147483648)
+  expect_run(1 "^stabint-run: error: --frames: 99999999999999999999999 is out of range" --scene chain
+             --frames 99999999999999999999999)
   file(WRITE "${dir}/a_file" "")
   expect_run(1 "^stabint-run: error: --obj-dir: cannot make the directory '${dir}/a_file'" --scene chain --backend cpu
              --frames 1 --quiet --obj-dir "${dir}/a_file")

@@ -12,6 +12,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 #include <string>
 
@@ -110,6 +111,41 @@ TEST(CheckpointMutation, DamagedBatchCheckpointsAreRefusedOrStep) {
 TEST(CheckpointMutation, ResignedBatchCheckpointsKeepTheRestorePromises) {
   const Tally t = run(true, mutationCount() / 5, /*batch=*/true);
   EXPECT_GT(t.restored, 0);
+}
+
+// A batch checkpoint's time follows the 1e150 rule of every real a checkpoint holds, and a
+// restore refuses a time too large for a step to advance (every scene would stay at one time for
+// ever; before, 1e151 restored and every scene went inactive): re-signed seeds with the time set
+// to 1e151 are unreadable (FileFormatError), to 1e20 refused by the restore (InvalidInputError
+// naming restore), which changes nothing.
+TEST(CheckpointMutation, ABatchCheckpointsTimeIsBounded) {
+  const std::string seed = bp::seed();
+  const auto withTime = [&](double t) {
+    std::string bytes = seed;
+    std::memcpy(&bytes[8 + 4], &t, sizeof t);  // after the magic and the version
+    bp::resign(bytes);
+    return bytes;
+  };
+  try {
+    BatchCheckpoint::fromBytes(withTime(1e151), "far.bckpt");
+    ADD_FAILURE() << "a time of 1e151 was read";
+  } catch (const FileFormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("1e150"), std::string::npos) << e.what();
+  }
+  const BatchCheckpoint late = BatchCheckpoint::fromBytes(withTime(1e20), "late.bckpt");
+  BatchSimulator batch(bp::scenes(), cp::options());
+  batch.step();
+  const Eigen::MatrixX3d before = batch.positions(0);
+  const double time = batch.time(0);
+  try {
+    batch.restore(late);
+    ADD_FAILURE() << "a time of 1e20 was restored";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("restore: "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("too large for a step"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(batch.positions(0), before);
+  EXPECT_EQ(batch.time(0), time);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "integrator/integrator_steps.hpp"
 #include "io/text_reader.hpp"
 #include "out_of_memory.hpp"
+#include "validation.hpp"
 
 #include <stabint/errors.hpp>
 
@@ -315,6 +316,10 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
   if (int(scenes.size()) != size())
     throw InvalidInputError("restore: the checkpoint has " + std::to_string(scenes.size()) + " scenes, the batch " +
                             std::to_string(size()));
+  // A clock that a step no longer moves would leave every scene at one time for ever.
+  if (!(time + options_.time_step > time))
+    throw InvalidInputError("restore: the checkpoint's time t = " + timeText(time) +
+                            " is too large for a step of h = " + timeText(options_.time_step) + " to advance it");
   for (int s = 0; s < size(); ++s) {
     const RestoreTarget target = restoreTarget(s, "restore");
     checkRestorable(scenes[std::size_t(s)], target);
@@ -441,6 +446,8 @@ BatchCheckpoint BatchCheckpoint::fromBytes(const std::string& bytes, const std::
   BatchCheckpoint batch;
   take(&batch.time_, sizeof batch.time_, "the time");
   if (!std::isfinite(batch.time_)) fail("the time is not finite");
+  // The 1e150 rule of every real a checkpoint holds (a scene's time among them).
+  if (!(std::abs(batch.time_) <= validation::kMaxMagnitude)) fail("the time is beyond 1e150 in magnitude");
   std::int64_t count = 0;
   take(&count, sizeof count, "the scene count");
   if (count < 0 || static_cast<std::uint64_t>(count) > (end - pos) / sizeof(std::int64_t))

@@ -182,7 +182,7 @@ TEST(ColliderMotionApi, BadInputIsRefusedAndChangesNothing) {
   refused([&] { sim.setColliderPosition(-1, Eigen::Vector3d::Zero()); }, "collider -1 out of range");
   refused([&] { sim.setColliderVelocity(5, Eigen::Vector3d::Zero()); }, "collider 5 out of range");
   refused([&] { sim.setColliderPosition(1, Eigen::Vector3d(0.0, nan, 0.0)); }, "collider 1: position is not finite");
-  refused([&] { sim.setColliderPosition(1, Eigen::Vector3d(1e200, 0.0, 0.0)); }, "exceeds 1e150");
+  refused([&] { sim.setColliderPosition(1, Eigen::Vector3d(1e200, 0.0, 0.0)); }, "exceeds 1e+150");
   refused([&] { sim.setColliderVelocity(0, Eigen::Vector3d(inf, 0.0, 0.0)); }, "collider 0: velocity is not finite");
   refused([&] { sim.colliderPosition(2); }, "collider 2 out of range");
   refused([&] { sim.colliderVelocity(-1); }, "collider -1 out of range");

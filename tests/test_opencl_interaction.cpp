@@ -215,5 +215,46 @@ TEST(OpenCLInteraction, FloatDevicesRefuseValuesBeyondTheirRange) {
   }
 }
 
+// The float device's bound holds at construction, at restore and for collider motion too: a
+// scene built with a velocity of 1e100 lost it in its first float step, a restored one likewise,
+// and a collider moved to 1e20 made every later step refused. Each is refused naming the value,
+// and a refused restore or collider input changes nothing.
+TEST(OpenCLInteraction, FloatDevicesRefuseStatesAndCollidersBeyondTheirRange) {
+  STABINT_SKIP_WITHOUT_OPENCL(Precision::Float);
+  Scene scene = drivenCloth(Integrator::BackwardEuler).scene;
+  Collider ground;
+  ground.center = Eigen::Vector3d(0.0, -10.0, 0.0);
+  scene.colliders.push_back(ground);
+  SimulatorOptions o;
+  o.backend = BackendKind::OpenCL;
+  o.opencl = testing::openclOptions(Precision::Float);
+  auto refused = [&](const std::function<void()>& call, const std::string& names) {
+    try {
+      call();
+      ADD_FAILURE() << "accepted: " << names;
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("the limit of a float device"), std::string::npos) << e.what();
+    }
+  };
+  Scene fast = scene;
+  fast.velocities(3, 0) = 1e100;
+  refused([&] { Simulator bad(fast, o); }, "velocities: row 3");
+  Simulator sim(scene, o);
+  sim.step();
+  const Eigen::MatrixX3d x = sim.positions();
+  refused([&] { sim.setColliderPosition(0, Eigen::Vector3d(1e20, 0.0, 0.0)); }, "collider 0: position");
+  refused([&] { sim.setColliderVelocity(0, Eigen::Vector3d(0.0, 1e20, 0.0)); }, "collider 0: velocity");
+  // A checkpoint of a double run whose velocities a float device cannot hold.
+  SimulatorOptions cpu;
+  Simulator wide(scene, cpu);
+  Eigen::MatrixX3d v = Eigen::MatrixX3d::Zero(x.rows(), 3);
+  v(2, 1) = 1e100;
+  wide.setVelocities(v);
+  refused([&] { sim.restore(wide.checkpoint()); }, "velocities: row 2");
+  EXPECT_EQ(sim.positions(), x);
+  EXPECT_NO_THROW(sim.step());
+}
+
 }  // namespace
 }  // namespace stabint

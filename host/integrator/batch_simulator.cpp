@@ -3,6 +3,7 @@
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
+#include "validation.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -57,6 +58,20 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
       v_slot_(batch.scene.velocities),
       contact_(data_, forcing_, system_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
       per_scene_(segments_.size()) {
+  // A float device holds coordinates and speeds up to validation::kMaxMagnitudeFloat, not the
+  // scene's 1e150: beyond it a scene lost its speeds in its first step, silently.
+  const double limit = inputLimit(choice_);
+  for (std::size_t s = 0; limit < validation::kMaxMagnitude && s < scenes_.size(); ++s) {
+    const Scene& own = scenes_[s];
+    const std::string where = "scene " + std::to_string(s) + ": ";
+    validation::checkInputRows(own.positions, own.positions.rows(), where + "positions", limit);
+    validation::checkInputRows(own.velocities, own.velocities.rows(), where + "velocities", limit);
+    for (std::size_t c = 0; c < own.colliders.size(); ++c) {
+      const std::string collider = where + "collider " + std::to_string(c) + ": ";
+      validation::checkInputVector(own.colliders[c].center, collider + "center", limit);
+      validation::checkInputVector(own.colliders[c].velocity, collider + "velocity", limit);
+    }
+  }
   // Any backend with per-scene energies steps a batch (the OpenCL backend once it has them).
   if (!backend_->computesPerScene())
     throw InvalidInputError("batch simulator: the backend (" + backend_->description() +

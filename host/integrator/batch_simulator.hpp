@@ -145,6 +145,10 @@ struct BatchDriver {
   RestoreTarget restoreTarget(int scene, const char* call) const;
   void restoreScene(int scene, const CheckpointData& d);
   void restoreAll(double time, const std::vector<CheckpointData>& scenes);
+  // A float device holds coordinates and speeds up to validation::kMaxMagnitudeFloat (1e15), not
+  // the scene's 1e150: InvalidInputError, prefixed `where`, for a checkpoint's state or collider
+  // motion beyond what the backend holds (per-frame input checks its own).
+  void checkDeviceRange(const CheckpointData& d, const std::string& where) const;
   // Writes scene `scene`'s checkpoint `d` into `all` and `segments` (its pins may be more or
   // fewer than the scene has now) as of the batch's time `time`.
   void splice(CheckpointData& all, std::vector<SceneSegment>& segments, int scene, const CheckpointData& d,

@@ -31,13 +31,11 @@ void FrameInput::checkCollider(int collider) const {
                             std::to_string(colliders) + " colliders)");
 }
 
-// The bound of the scene's coordinates and speeds (validateScene): beyond it the contact
-// energies overflow.
+// The bound of per-frame input on the backend (the scene's 1e150, a float device's 1e15): beyond
+// it the contact energies overflow and every later step is refused.
 void FrameInput::checkColliderVector(int collider, const Eigen::Vector3d& value, const char* what) const {
   checkCollider(collider);
-  if (!value.allFinite() || !(value.cwiseAbs().maxCoeff() <= validation::kMaxMagnitude))
-    throw InvalidInputError(scope_.where() + "collider " + std::to_string(collider) + ": " + what +
-                            " is not finite or exceeds 1e150 in magnitude");
+  validation::checkInputVector(value, scope_.where() + "collider " + std::to_string(collider) + ": " + what, limit_);
 }
 
 void FrameInput::setPinTarget(int pin, const Eigen::Vector3d& q, double t) {

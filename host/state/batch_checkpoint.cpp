@@ -285,9 +285,29 @@ void BatchDriver::restoreScalars(PerScene& p, const CheckpointData& d, double ti
   p.has_user_forces = d.forcing.user_forces.active;
 }
 
+void BatchDriver::checkDeviceRange(const CheckpointData& d, const std::string& where) const {
+  const double limit = inputLimit(choice_);
+  if (!(limit < validation::kMaxMagnitude)) return;
+  const MotionState& m = d.motion;
+  validation::checkInputRows(m.x, m.x.rows(), where + "positions", limit);
+  validation::checkInputRows(m.v, m.v.rows(), where + "velocities", limit);
+  if (m.has_history) {
+    validation::checkInputRows(m.x_prev, m.x_prev.rows(), where + "previous positions", limit);
+    validation::checkInputRows(m.v_prev, m.v_prev.rows(), where + "previous velocities", limit);
+  }
+  for (std::size_t c = 0; c < d.forcing.colliders.size(); ++c) {
+    const Forcing::ColliderMotion& motion = d.forcing.colliders[c];
+    const std::string collider = where + "collider " + std::to_string(c) + ": ";
+    validation::checkInputVector(motion.start, collider + "position", limit);
+    validation::checkInputVector(motion.end, collider + "position", limit);
+    validation::checkInputVector(motion.velocity, collider + "velocity", limit);
+  }
+}
+
 void BatchDriver::restoreScene(int scene, const CheckpointData& d) {
   const RestoreTarget target = restoreTarget(scene, "restore");
   checkRestorable(d, target);
+  checkDeviceRange(d, target.where);
   if (d.time != t_)
     throw InvalidInputError(target.where + "the checkpoint is at t = " + timeText(d.time) +
                             ", the batch at t = " + timeText(t_) +
@@ -323,6 +343,7 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
   for (int s = 0; s < size(); ++s) {
     const RestoreTarget target = restoreTarget(s, "restore");
     checkRestorable(scenes[std::size_t(s)], target);
+    checkDeviceRange(scenes[std::size_t(s)], target.where);
     if (!(scenes[std::size_t(s)].time <= time))
       throw InvalidInputError(target.where + "its time t = " + timeText(scenes[std::size_t(s)].time) +
                               " is after the batch's, t = " + timeText(time));

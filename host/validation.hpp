@@ -55,15 +55,21 @@ inline void checkIndex(int index, int n, const Owner& owner, const char* field, 
 }
 
 /// NaN fails every comparison, so `!(k >= 0)` rejects it along with negatives.
-inline void checkStiffness(double k, const Owner& owner) {
-  if (!(k >= 0.0) || !std::isfinite(k)) invalid(owner, ": stiffness ", k, " must be >= 0");
-}
 
 /// Largest magnitude of a quantity that the simulation squares or multiplies by a time or a
 /// stiffness (coordinates, speeds, gravity, rest lengths, pin and force targets, frequencies), so
 /// that squares and their sums stay finite. Finite inputs beyond it (a rest length of 1e200, a
 /// frequency of 1e308) overflowed in the first step and were reported as a blow-up.
 constexpr double kMaxMagnitude = 1e150;
+
+/// An element's or a pin's stiffness: >= 0 and at most kMaxMagnitude, the one rule every path
+/// keeps (the scene, per-frame input, a checkpoint, which holds no larger real), so that every
+/// simulator that runs saves a checkpoint it can load again.
+inline void checkStiffness(double k, const Owner& owner) {
+  if (!(k >= 0.0) || !std::isfinite(k)) invalid(owner, ": stiffness ", k, " must be >= 0");
+  if (!(k <= kMaxMagnitude))
+    invalid(owner, ": stiffness ", k, " exceeds ", kMaxMagnitude, " (every stiffness's bound)");
+}
 
 /// Finite and at most kMaxMagnitude in each component.
 inline void checkFinite(const Eigen::Vector3d& v, const Owner& owner, const char* field) {

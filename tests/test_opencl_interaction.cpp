@@ -181,6 +181,16 @@ TEST(OpenCLInteraction, CheckpointsContinueBitForBit) {
   }
 }
 
+// `call` is refused with an InvalidInputError whose message contains `names`.
+void refused(const std::function<void()>& call, const std::string& names) {
+  try {
+    call();
+    ADD_FAILURE() << "accepted: " << names;
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+  }
+}
+
 // On a float device per-frame values are bounded by validation::kMaxMagnitudeFloat (1e15), not
 // 1e150: a pin target of 1e20 or velocities of 1e100 used to overflow the device, after which
 // every step was refused. They are refused, the simulator unchanged; a double device takes 1e20.
@@ -193,14 +203,6 @@ TEST(OpenCLInteraction, FloatDevicesRefuseValuesBeyondTheirRange) {
   Simulator sim(d.scene, o);
   sim.step();
   const Eigen::MatrixX3d x = sim.positions();
-  auto refused = [&](const std::function<void()>& call, const std::string& names) {
-    try {
-      call();
-      ADD_FAILURE() << "accepted: " << names;
-    } catch (const InvalidInputError& e) {
-      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
-    }
-  };
   refused([&] { sim.setPinTarget(0, Eigen::Vector3d(1e20, 0.0, 0.0)); }, "the limit of a float device");
   Eigen::MatrixX3d fast = Eigen::MatrixX3d::Zero(x.rows(), 3);
   fast(2, 1) = 1e100;
@@ -228,23 +230,17 @@ TEST(OpenCLInteraction, FloatDevicesRefuseStatesAndCollidersBeyondTheirRange) {
   SimulatorOptions o;
   o.backend = BackendKind::OpenCL;
   o.opencl = testing::openclOptions(Precision::Float);
-  auto refused = [&](const std::function<void()>& call, const std::string& names) {
-    try {
-      call();
-      ADD_FAILURE() << "accepted: " << names;
-    } catch (const InvalidInputError& e) {
-      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("the limit of a float device"), std::string::npos) << e.what();
-    }
-  };
   Scene fast = scene;
   fast.velocities(3, 0) = 1e100;
+  const std::string limit = "(the limit of a float device)";
   refused([&] { Simulator bad(fast, o); }, "velocities: row 3");
+  refused([&] { Simulator bad(fast, o); }, limit);
   Simulator sim(scene, o);
   sim.step();
   const Eigen::MatrixX3d x = sim.positions();
   refused([&] { sim.setColliderPosition(0, Eigen::Vector3d(1e20, 0.0, 0.0)); }, "collider 0: position");
-  refused([&] { sim.setColliderVelocity(0, Eigen::Vector3d(0.0, 1e20, 0.0)); }, "collider 0: velocity");
+  refused([&] { sim.setColliderVelocity(0, Eigen::Vector3d(0.0, 1e20, 0.0)); },
+          "collider 0: velocity (0, 1e+20, 0) exceeds 1e+15 in magnitude " + limit);
   // A checkpoint of a double run whose velocities a float device cannot hold.
   SimulatorOptions cpu;
   Simulator wide(scene, cpu);
@@ -252,6 +248,7 @@ TEST(OpenCLInteraction, FloatDevicesRefuseStatesAndCollidersBeyondTheirRange) {
   v(2, 1) = 1e100;
   wide.setVelocities(v);
   refused([&] { sim.restore(wide.checkpoint()); }, "velocities: row 2");
+  refused([&] { sim.restore(wide.checkpoint()); }, limit);
   EXPECT_EQ(sim.positions(), x);
   EXPECT_NO_THROW(sim.step());
 }

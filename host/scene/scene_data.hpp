@@ -77,8 +77,8 @@ class SceneData final {
   }
   /// Writes `count` params of element `element` of block `block` from index `first` >= 1 on (the
   /// weight, params[0], stays the set's): a pair's step geometry that the contact broad phase
-  /// derives (docs/method.md, "Contact", "The pair's half-space"). Not part of ElementState: the
-  /// broad phase writes it again at every step's start.
+  /// derives (docs/method.md, "Contact", "The pair's half-space"). Not part of ElementState: it is
+  /// a function of the state, written again after every step and by a restore.
   void setElementParams(int block, int element, int first, const double* values, int count);
   /// The pins, stiffnesses and enabled flags as they are now.
   ElementState elementState() const;

@@ -116,7 +116,9 @@ class GlobalSystem {
   /// instead.
   void addElementTerm(const int* vertices, int K, const double* coefficients, int R, double delta,
                       FactorChange how = FactorChange::RankUpdate);
-  /// Factors every c factored so far again from the current L.
+  /// Factors every c factored so far again from the current L. Where the pattern of K_c is the
+  /// one a factor was analysed for (a change of weights, as the contact set makes), the factor
+  /// keeps its fill-reducing order and elimination tree and only its numbers are computed again.
   void refactorAll();
 
   /// L(v_i, v_i) += delta_i for each i, every existing factor updated with one rank-k CHOLMOD
@@ -201,7 +203,13 @@ class GlobalSystem {
     // element's rows instead of a search over every row (a batch's element change).
     std::vector<int> row_of;
     const std::vector<int>& rowOf();
+    // The pattern of the K_c it was analysed for (column starts, row indices): refactorAll keeps
+    // the analysis while a new K_c has the same.
+    std::vector<int> pattern_starts, pattern_rows;
+    bool analysedFor(const Eigen::SparseMatrix<double>& k) const;
   };
+  // factor(c, c_name), computing the numbers into `reused` where it was analysed for K_c's pattern.
+  void factor(double c, const char* c_name, std::unique_ptr<Factor> reused);
   int factorizations_ = 0;
   int laplacian_version_ = 0;
   // K_c = c M + L (or one diagonal block of it) and its CG solver (which keeps a reference to it),

@@ -2,7 +2,10 @@
 // cloth dropped flat onto a sphere and the ground (friction 0.5), stepped next to the same cloth
 // without colliders. Both restart from their first state every 90 steps (3 s: the fall, the
 // landing and the settling), so the timed steps mix all three. The counter `contact_vs_none` is
-// the colliders' step time over the plain one (issue 10: at most 1.15).
+// the colliders' step time over the plain one (issue 10: at most 1.15); the others split each
+// run's step into its phases (`_solves`: the local steps, gathers, transfers and global solves;
+// `_energy`: the energy passes; `_bookkeeping`: the rest, the contact set's changes of the factors
+// included) and count its BE-partner steps (the share of steps), iterations and energy passes.
 #include "bench_common.hpp"
 
 #include "scene/scene_data.hpp"
@@ -71,10 +74,20 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
   ContactFixture& f = *fixture;
   using Clock = std::chrono::steady_clock;
   double contact = 0, none = 0;
-  auto timed = [](double& sum, Simulator& sim) {
+  // Where the time goes, per run: the phases, the blend's BE-partner steps, the iterations and
+  // energy passes.
+  struct Sums {
+    PhaseTimes times;
+    double partner_steps = 0, iterations = 0, energy_passes = 0;
+  } contact_sums, none_sums;
+  auto timed = [](double& sum, Sums& sums, Simulator& sim) {
     const auto start = Clock::now();
-    sim.step();
+    const StepReport& r = sim.step();
     sum += std::chrono::duration<double>(Clock::now() - start).count();
+    sums.times += r.times;
+    sums.partner_steps += r.branch == BlendBranch::BackwardEuler ? 1 : 0;
+    sums.iterations += r.iterations;
+    sums.energy_passes += r.energy_evaluations;
   };
   try {
     for (auto _ : state) {
@@ -82,8 +95,8 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
         f.contact->restore(f.contact_start);
         f.none->restore(f.none_start);
       }
-      timed(contact, *f.contact);
-      timed(none, *f.none);
+      timed(contact, contact_sums, *f.contact);
+      timed(none, none_sums, *f.none);
     }
   } catch (const NonFiniteStateError& e) {
     state.SkipWithError(e.what());
@@ -93,6 +106,16 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
   state.counters["contact_step"] = Counter(contact, Counter::kAvgIterations);
   state.counters["none_step"] = Counter(none, Counter::kAvgIterations);
   state.counters["contact_vs_none"] = none > 0 ? contact / none : 0.0;
+  for (const auto& [name, sums] : {std::pair<const char*, const Sums&>{"contact", contact_sums}, {"none", none_sums}}) {
+    const std::string n(name);
+    state.counters[n + "_bookkeeping"] = Counter(sums.times.bookkeeping, Counter::kAvgIterations);
+    state.counters[n + "_solves"] = Counter(
+        sums.times.local + sums.times.gather + sums.times.transfer + sums.times.global, Counter::kAvgIterations);
+    state.counters[n + "_energy"] = Counter(sums.times.energy, Counter::kAvgIterations);
+    state.counters[n + "_partner_steps"] = Counter(sums.partner_steps, Counter::kAvgIterations);
+    state.counters[n + "_iterations"] = Counter(sums.iterations, Counter::kAvgIterations);
+    state.counters[n + "_energy_passes"] = Counter(sums.energy_passes, Counter::kAvgIterations);
+  }
   state.SetLabel(f.contact->backendDescription());
 }
 

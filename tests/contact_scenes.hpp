@@ -4,6 +4,9 @@
 #include <stabint/builders.hpp>
 #include <stabint/scene.hpp>
 
+#include <map>
+#include <utility>
+
 namespace stabint::testing {
 
 /// An n x n spring cloth, 1 m square, lying flat at `height` (the x-z plane), centred on the y
@@ -79,6 +82,62 @@ inline Scene clothOnColliders() {
   capsule.stiffness = 1e4;
   s.colliders.push_back(capsule);
   return s;
+}
+
+/// A mesh collider: an icosphere about `center` with its vertices at `radius`, the icosahedron's
+/// 20 triangles split in four `subdivisions` times (5: 20,480 triangles), counter-clockwise seen
+/// from outside.
+inline Collider icosphereCollider(const Eigen::Vector3d& center, double radius, int subdivisions,
+                                  double friction = 0.0) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  for (Eigen::Vector3d& p : v) p.normalize();
+  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                       {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (int level = 0; level < subdivisions; ++level) {
+    std::map<std::pair<int, int>, int> middle;
+    const auto mid = [&](int a, int b) {
+      const std::pair<int, int> key(std::min(a, b), std::max(a, b));
+      const auto found = middle.find(key);
+      if (found != middle.end()) return found->second;
+      v.push_back((v[std::size_t(a)] + v[std::size_t(b)]).normalized());
+      return middle[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> next;
+    for (const auto& [a, b, c] : f) {
+      const int ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+      next.insert(next.end(), {{a, ab, ca}, {b, bc, ab}, {c, ca, bc}, {ab, bc, ca}});
+    }
+    f = std::move(next);
+  }
+  Collider c;
+  c.shape = ColliderShape::Mesh;
+  c.center = center;
+  c.friction = friction;
+  c.mesh_vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i)
+    c.mesh_vertices.row(Eigen::Index(i)) = (center + radius * v[i]).transpose();
+  c.mesh_triangles = f;
+  return c;
+}
+
+/// A mesh collider that is the axis-aligned box of `center` and `half_extents`: 12 triangles.
+inline Collider boxMeshCollider(const Eigen::Vector3d& center, const Eigen::Vector3d& half_extents) {
+  Collider c;
+  c.shape = ColliderShape::Mesh;
+  c.center = center;
+  c.mesh_vertices.resize(8, 3);
+  for (int i = 0; i < 8; ++i)
+    c.mesh_vertices.row(i) =
+        (center + half_extents.cwiseProduct(Eigen::Vector3d(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1)))
+            .transpose();
+  // Vertex i has x = +-1 by bit 0, y by bit 1, z by bit 2; each face counter-clockwise from outside.
+  c.mesh_triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                      {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  return c;
 }
 
 }  // namespace stabint::testing

@@ -87,8 +87,9 @@ TEST(FieldTables, NameTheFieldsOfTheStructs) {
   EXPECT_EQ(names<Pin>(), (V{"vertex", "stiffness", "target"}));
   EXPECT_EQ(names<PinTarget>(), (V{"position", "velocity", "amplitude", "frequency"}));
   EXPECT_EQ(names<ForceField>(), (V{"particles", "force", "rate", "amplitude", "frequency"}));
-  EXPECT_EQ(names<Collider>(), (V{"shape", "center", "normal", "half_extents", "end", "radius", "velocity", "friction",
-                                  "stiffness", "elastic_ratio", "restitution", "first_particle", "num_particles"}));
+  EXPECT_EQ(names<Collider>(), (V{"shape", "center", "normal", "half_extents", "end", "radius", "mesh_vertices",
+                                  "mesh_triangles", "velocity", "friction", "stiffness", "elastic_ratio", "restitution",
+                                  "first_particle", "num_particles"}));
   EXPECT_EQ(names<Body>(), (V{"name", "particles", "damping"}));
   EXPECT_EQ(names<EnergyReport>(), (V{"kinetic", "elastic", "external"}));
   EXPECT_EQ(names<PhaseTimes>(), (V{"local", "gather", "transfer", "global", "energy", "bookkeeping"}));

@@ -106,6 +106,10 @@ class Viewer:
             edges = np.array([[sp.a, sp.b] for sp in s.springs], dtype=np.int64).reshape(-1, 2)
             self.body = ps.register_curve_network("body", x, edges, radius=0.004)
             ps.register_point_cloud("particles", x, radius=0.008)
+        # Mesh colliders, drawn where they are (their vertices move with the collider's center).
+        self.meshes = [(i, c) for i, c in enumerate(s.colliders) if c.shape == stabint.ColliderShape.Mesh]
+        for i, c in self.meshes:
+            ps.register_surface_mesh(f"collider {i}", c.mesh_vertices, c.mesh_triangles, color=(0.6, 0.6, 0.65))
 
     def draw(self):
         x = self.sim.positions
@@ -115,6 +119,9 @@ class Viewer:
             self.body.update_vertex_positions(x)
         if ps.has_point_cloud("particles"):
             ps.get_point_cloud("particles").update_point_positions(x)
+        for i, c in self.meshes:
+            shift = np.asarray(self.sim.collider_position(i)) - np.asarray(c.center)
+            ps.get_surface_mesh(f"collider {i}").update_vertex_positions(c.mesh_vertices + shift)
         # The rubber band from the grabbed particle to the mouse.
         if self.handle is not None:
             nodes = np.array([x[self.vertex], self.sim.pin_target(self.handle)])

@@ -23,14 +23,16 @@ ContactResolver::ContactResolver(SceneData& scene, const Forcing& forcing, Globa
     : scene_(scene),
       forcing_(forcing),
       system_(system),
+      meshes_(meshColliders(scene.scene())),
       time_step_(options.time_step),
       tolerance_(options.contact_tolerance),
       block_(scene.blockIndex(contactElementType())) {
   if (count() == 0) return;
   for (int e = 0; e < count(); ++e) scene_.setElementEnabled(block_, e, false);
-  const ContactSetChange change = contactSetChange(scene_, forcing_, wholeScene(scene_), t, time_step_, margin(), x, v);
+  const ContactSetChange change =
+      contactSetChange(scene_, forcing_, meshes_, wholeScene(scene_), t, time_step_, margin(), x, v);
   for (int e : change.entering) scene_.setElementEnabled(block_, e, true);
-  writeHalfSpaces(scene_, forcing_, wholeScene(scene_), t, time_step_, x, v);
+  writeHalfSpaces(scene_, forcing_, meshes_, wholeScene(scene_), t, time_step_, x, v);
   system_.assemble(scene_);
 }
 
@@ -65,7 +67,7 @@ std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x
   // The parts' changes as one (ascending: parts in order, each a contiguous run of pairs).
   ContactSetChange change;
   for (std::size_t i = 0; i < parts.size(); ++i) {
-    ContactSetChange part = contactSetChange(scene_, forcing_, parts[i], t, time_step_, margin(), x, v);
+    ContactSetChange part = contactSetChange(scene_, forcing_, meshes_, parts[i], t, time_step_, margin(), x, v);
     change.entering.insert(change.entering.end(), part.entering.begin(), part.entering.end());
     change.leaving.insert(change.leaving.end(), part.leaving.begin(), part.leaving.end());
     potential_changed[i] = part.entered_inside ? 1 : 0;
@@ -92,7 +94,7 @@ std::vector<char> ContactResolver::refreshHalfSpaces(double t, const Eigen::Matr
   std::vector<char> changed(parts.size(), 0);
   if (count() == 0) return changed;
   for (std::size_t i = 0; i < parts.size(); ++i)
-    changed[i] = writeHalfSpaces(scene_, forcing_, parts[i], t, time_step_, x, v) ? 1 : 0;
+    changed[i] = writeHalfSpaces(scene_, forcing_, meshes_, parts[i], t, time_step_, x, v) ? 1 : 0;
   return changed;
 }
 
@@ -101,10 +103,11 @@ ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const Cont
                                                                       double& target, StepReport& report) const {
   Resolved resolved;
   if (part.colliders.count == 0) return resolved;
-  resolved.velocities_changed = applyFriction(scene_, forcing_, part, t1, time_step_, x, v, report.friction) > 0;
+  resolved.velocities_changed =
+      applyFriction(scene_, forcing_, meshes_, part, t1, time_step_, x, v, report.friction) > 0;
   target -= report.friction;
   std::vector<double> drops;
-  resolved.positions_moved = projectOutOfColliders(scene_, forcing_, part, t1, tolerance_, x, &drops) > 0;
+  resolved.positions_moved = projectOutOfColliders(scene_, forcing_, meshes_, part, t1, tolerance_, x, &drops) > 0;
   // The share of the projection's removal the colliders' restitution keeps, weighed by the
   // contact energy each collider's moves took.
   double total = 0.0, kept = 0.0;

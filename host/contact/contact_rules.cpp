@@ -30,18 +30,28 @@ const double* pairGeometry(const SceneData& scene, int block, int e, const doubl
 // at time t, with p the closest point outside, depth = |p - x_j| > 0 and e the pair's contact
 // element.
 template <typename Visit>
-void forEachContact(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
-                    const Eigen::MatrixX3d& x, Visit&& visit) {
+void forEachContact(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
+                    const ContactPart& part, double t, const Eigen::MatrixX3d& x, Visit&& visit) {
   const int block = scene.blockIndex(contactElementType());
   int e = firstContactElement(scene.scene(), part.colliders.first);
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
     double collider[kColliderGeometry];
     forcing.colliderGeometry(c, t, collider);
     const Eigen::Vector3d shift = forcing.colliderPosition(c, t) - scene.scene().colliders[std::size_t(c)].center;
+    const MeshCollider* mesh = meshes[std::size_t(c)].get();
     const IndexRange particles = colliderParticles(scene.scene(), c);
     for (int j = particles.first; j < particles.end(); ++j, ++e) {
       const Eigen::Index r = j - part.first_row;
       const double xj[3] = {x(r, 0), x(r, 1), x(r, 2)};
+      if (mesh && !scene.elementEnabled(block, e)) {
+        // A mesh's pair out of the set acts with the mesh itself: the nearest surface point of a
+        // particle inside (one the solve pushed in, which the set has not seen yet).
+        const Eigen::Vector3d y = x.row(r).transpose() - shift;
+        MeshCollider::Nearest n;
+        if (!mesh->bounds().contains(y) || !mesh->nearest(y, 0.0, n) || !(n.signed_distance < 0.0)) continue;
+        visit(c, j, r, Eigen::Vector3d(n.point + shift), -n.signed_distance, e);
+        continue;
+      }
       double pair[kColliderGeometry];
       const double* g = pairGeometry(scene, block, e, collider, shift, pair);
       double p[3];
@@ -252,18 +262,55 @@ constexpr double kSweptPath = 0.25;
 // (docs/method.md, "Contact", has the counts).
 constexpr double kLeaveMargins = 8.0;
 
+// contactSetChange's rule for the pairs of mesh collider c (elements from e on).
+void meshSetChange(const SceneData& scene, const Forcing& forcing, const MeshCollider& mesh, int c, int e,
+                   const ContactPart& part, double t, double h, double margin, const Eigen::MatrixX3d& x,
+                   const Eigen::MatrixX3d& v, ContactSetChange& change) {
+  const int block = scene.blockIndex(contactElementType());
+  const Eigen::Vector3d reference = scene.scene().colliders[std::size_t(c)].center;
+  const Eigen::Vector3d now = forcing.colliderPosition(c, t) - reference,
+                        next = forcing.colliderPosition(c, t + h) - reference;
+  // Within `distance` of the surface, or inside.
+  const auto near = [&](const Eigen::Vector3d& y, double distance) {
+    MeshCollider::Nearest n;
+    return mesh.nearest(y, distance, n) && n.signed_distance < distance;
+  };
+  const IndexRange particles = colliderParticles(scene.scene(), c);
+  for (int j = particles.first; j < particles.end(); ++j, ++e) {
+    const Eigen::Index r = j - part.first_row;
+    const Eigen::Vector3d a = x.row(r).transpose() - now;  // in the mesh's frame
+    const Eigen::Vector3d predicted = x.row(r).transpose() + h * v.row(r).transpose() - next;
+    if (scene.elementEnabled(block, e)) {
+      if (!near(a, kLeaveMargins * margin) && !near(predicted, kLeaveMargins * margin)) change.leaving.push_back(e);
+      continue;
+    }
+    double s = 0.0;
+    Eigen::Vector3d normal;
+    if (!near(a, margin) && !near(predicted, margin) && !mesh.firstEntry(a, predicted, s, normal)) continue;
+    change.entering.push_back(e);
+    MeshCollider::Nearest n;
+    change.entered_inside = change.entered_inside || (mesh.nearest(a, 0.0, n) && n.signed_distance < 0.0);
+  }
+}
+
 }  // namespace
 
 ContactPart wholeScene(const SceneData& scene) {
   return ContactPart{IndexRange{0, static_cast<int>(scene.scene().colliders.size())}, 0};
 }
 
-ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
-                                  double h, double margin, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
+ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
+                                  const ContactPart& part, double t, double h, double margin, const Eigen::MatrixX3d& x,
+                                  const Eigen::MatrixX3d& v) {
   ContactSetChange change;
   const int block = scene.blockIndex(contactElementType());
   int e = firstContactElement(scene.scene(), part.colliders.first);
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
+    if (const MeshCollider* mesh = meshes[std::size_t(c)].get()) {
+      meshSetChange(scene, forcing, *mesh, c, e, part, t, h, margin, x, v, change);
+      e += colliderParticles(scene.scene(), c).count;
+      continue;
+    }
     double now[kColliderGeometry], next[kColliderGeometry];
     forcing.colliderGeometry(c, t, now);
     forcing.colliderGeometry(c, t + h, next);
@@ -297,15 +344,49 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
   return change;
 }
 
-bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
-                     const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
+bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const MeshColliders& meshes, const ContactPart& part,
+                     double t, double h, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
   const int block = scene.blockIndex(contactElementType());
   const ElementBlock& contact = scene.blocks()[static_cast<std::size_t>(block)];
   const std::size_t P = static_cast<std::size_t>(contact.type->shape().params);
   bool changed = false;
+  const auto write = [&](int e, const double* geometry) {
+    const double* current = contact.params.data() + P * std::size_t(e) + kContactGeometry;
+    if (std::equal(geometry, geometry + kColliderGeometry, current)) return;
+    scene.setElementParams(block, e, kContactGeometry, geometry, kColliderGeometry);
+    changed = true;
+  };
   int e = firstContactElement(scene.scene(), part.colliders.first);
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
     const Collider& collider = scene.scene().colliders[static_cast<std::size_t>(c)];
+    if (const MeshCollider* mesh = meshes[std::size_t(c)].get()) {
+      // In the mesh's frame (where its reference point is at Collider::center), as the params
+      // hold a pair's geometry.
+      const Eigen::Vector3d now = forcing.colliderPosition(c, t) - collider.center,
+                            next = forcing.colliderPosition(c, t + h) - collider.center;
+      const IndexRange particles = colliderParticles(scene.scene(), c);
+      for (int j = particles.first; j < particles.end(); ++j, ++e) {
+        if (!scene.elementEnabled(block, e)) continue;
+        const Eigen::Index r = j - part.first_row;
+        const Eigen::Vector3d a = x.row(r).transpose() - now;
+        const Eigen::Vector3d b = x.row(r).transpose() + h * v.row(r).transpose() - next;
+        double plane[kColliderGeometry], s = 0.0;
+        Eigen::Vector3d normal;
+        MeshCollider::Nearest n;
+        const bool found = mesh->nearest(a, std::numeric_limits<double>::infinity(), n);
+        if (found && n.signed_distance < 0.0) {
+          planeGeometry(n.point, n.normal, plane);
+        } else if (mesh->firstEntry(a, b, s, normal)) {
+          planeGeometry(a + s * (b - a), normal, plane);
+        } else if (found) {
+          planeGeometry(n.point, n.normal, plane);
+        } else {
+          continue;
+        }
+        write(e, plane);
+      }
+      continue;
+    }
     double now[kColliderGeometry], own[kColliderGeometry];
     forcing.colliderGeometry(c, t, now);
     colliderGeometryAt(collider, collider.center, own);
@@ -340,11 +421,7 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart
         }
       }
       if (geometry == plane) translateGeometry(-shift, plane);
-      const double* current = contact.params.data() + P * std::size_t(e) + kContactGeometry;
-      if (!std::equal(geometry, geometry + kColliderGeometry, current)) {
-        scene.setElementParams(block, e, kContactGeometry, geometry, kColliderGeometry);
-        changed = true;
-      }
+      write(e, geometry);
     }
   }
   return changed;
@@ -398,14 +475,14 @@ ContactWork contactWork(const SceneData& scene, const Forcing& forcing, const Co
   return work;
 }
 
-int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
-                  const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& removed) {
+int applyFriction(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes, const ContactPart& part,
+                  double t, double h, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& removed) {
   const std::vector<Collider>& colliders = scene.scene().colliders;
   const Eigen::VectorXd& m = scene.masses();
   removed = 0.0;
   int changed = 0;
   const int block = scene.blockIndex(contactElementType());
-  forEachContact(scene, forcing, part, t, x,
+  forEachContact(scene, forcing, meshes, part, t, x,
                  [&](int c, int j, Eigen::Index r, const Eigen::Vector3d& p, double depth, int e) {
                    const Collider& collider = colliders[static_cast<std::size_t>(c)];
                    if (collider.friction == 0.0) return;
@@ -426,8 +503,9 @@ int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactP
   return changed;
 }
 
-int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
-                          double tolerance, Eigen::MatrixX3d& x, std::vector<double>* drops) {
+int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
+                          const ContactPart& part, double t, double tolerance, Eigen::MatrixX3d& x,
+                          std::vector<double>* drops) {
   const int block = scene.blockIndex(contactElementType());
   if (drops) drops->assign(static_cast<std::size_t>(part.colliders.count), 0.0);
   // [project rule] A particle is left no deeper than a quarter of its collider's thinnest size
@@ -435,8 +513,10 @@ int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const 
   // face nearest to it, which must be the face it came in by.
   std::vector<double> depth(static_cast<std::size_t>(part.colliders.count));
   for (int c = 0; c < part.colliders.count; ++c) {
-    const Collider& collider = scene.scene().colliders[std::size_t(part.colliders.first + c)];
-    depth[std::size_t(c)] = std::min(tolerance, 0.5 * halfThickness(collider));
+    const std::size_t i = std::size_t(part.colliders.first + c);
+    const MeshCollider* mesh = meshes[i].get();
+    depth[std::size_t(c)] =
+        std::min(tolerance, 0.5 * (mesh ? 0.5 * mesh->thickness() : halfThickness(scene.scene().colliders[i])));
   }
   // A particle pushed out of one collider into another is pushed out of that one in the next
   // sweep; three sweeps settle any corner of two or three shapes we have met, and the last
@@ -445,7 +525,7 @@ int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const 
   int moves = 0;
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     int moved = 0;
-    forEachContact(scene, forcing, part, t, x,
+    forEachContact(scene, forcing, meshes, part, t, x,
                    [&](int c, int, Eigen::Index r, const Eigen::Vector3d& p, double d, int e) {
                      const double allowed = depth[std::size_t(c - part.colliders.first)];
                      if (!(d > allowed)) return;

@@ -4,10 +4,12 @@
 // velocities and the final projection of the positions. ContactResolver (contact_resolver.hpp)
 // applies them in the step; the contact energy itself is an element (host/elements/contact.cpp)
 // and acts inside every solve.
+#include "contact/mesh_collider.hpp"
 #include "elements/contact.hpp"  // IndexRange
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <vector>
 
 namespace stabint {
@@ -25,6 +27,8 @@ struct ContactPart {
 };
 /// Every collider of the scene, on the scene's whole host copies.
 ContactPart wholeScene(const SceneData& scene);
+/// The queries of the scene's mesh colliders (meshColliders), indexed like its colliders.
+using MeshColliders = std::vector<std::unique_ptr<const MeshCollider>>;
 
 /// Every rule reads the scene's colliders and contact block from `scene` and where the colliders
 /// are at a time from `forcing`.
@@ -41,8 +45,9 @@ struct ContactSetChange {
   bool entered_inside = false;         // a pair entered with x_j already inside: E jumps from 0
   bool empty() const { return entering.empty() && leaving.empty(); }
 };
-ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
-                                  double h, double margin, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
+ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
+                                  const ContactPart& part, double t, double h, double margin, const Eigen::MatrixX3d& x,
+                                  const Eigen::MatrixX3d& v);
 
 /// The geometry each pair of `part` in the contact set acts with over a step of length h from
 /// (x, v) at time t (docs/method.md, "Contact", "The pair's half-space"), written to its params.
@@ -58,9 +63,12 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
 /// restored state gets it back by calling this again. Returns whether a pair's geometry changed:
 /// the potential of x may then be lower than before (the collider is convex: its nearest face
 /// is never farther than a half-space it supports), and the caller evaluates it again and books
-/// the loss.
-bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
-                     const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
+/// the loss. A pair of a mesh collider always acts with a half-space: the plane at the path's
+/// entry into the mesh (with the crossed triangle's normal) when the path enters it from outside,
+/// else the plane through the surface point nearest to x_j, facing x_j from outside and away from
+/// it from inside (docs/method.md, "Mesh colliders").
+bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const MeshColliders& meshes, const ContactPart& part,
+                     double t, double h, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
 /// The work the colliders of `part` that move between t0 and t0 + h do on its pairs in the contact
 /// set over a step from positions x0 to x1 (both with part.first_row's rows), in two forms:
@@ -85,16 +93,17 @@ ContactWork contactWork(const SceneData& scene, const Forcing& forcing, const Co
 /// J = h w_j d (d the depth, w_j the contact weight) over m_j, and never reverses. Returns the
 /// number of velocities changed; `removed` receives the kinetic energy removed (negative when a
 /// moving collider drags a particle along).
-int applyFriction(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t, double h,
-                  const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& removed);
+int applyFriction(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes, const ContactPart& part,
+                  double t, double h, const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& removed);
 
 /// The final projection over `part`: every particle deeper than `tolerance` (or a quarter of the
 /// collider's thinnest size) inside its pair's half-space (a collider, for a pair out of the
-/// set) at time t is moved straight out to that depth (velocities unchanged), colliders in order, repeated
-/// while that pushes a particle into an earlier one (at most a few sweeps). Returns the number of
-/// moves; `drops`, when given, receives per collider of the part the contact energy the moves
-/// took out of its pairs (w_j/2 (d^2 - depth^2), weighing what each collider's restitution keeps).
-int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t,
-                          double tolerance, Eigen::MatrixX3d& x, std::vector<double>* drops = nullptr);
+/// set; a mesh's own nearest surface point) at time t is moved straight out to that depth (velocities unchanged),
+/// colliders in order, repeated while that pushes a particle into an earlier one (at most a few sweeps). Returns the
+/// number of moves; `drops`, when given, receives per collider of the part the contact energy the moves took out of its
+/// pairs (w_j/2 (d^2 - depth^2), weighing what each collider's restitution keeps).
+int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
+                          const ContactPart& part, double t, double tolerance, Eigen::MatrixX3d& x,
+                          std::vector<double>* drops = nullptr);
 
 }  // namespace stabint

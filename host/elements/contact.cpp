@@ -14,7 +14,10 @@
 #include "elements/element_kind.hpp"
 #include "elements/energy_sum.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <utility>
 
 namespace stabint {
 
@@ -27,9 +30,12 @@ void colliderGeometryAt(const Collider& collider, const Eigen::Vector3d& positio
     case ColliderShape::Box: a = collider.half_extents; break;
     case ColliderShape::Capsule: a = collider.end + (position - collider.center); break;
     case ColliderShape::Sphere: break;
+    case ColliderShape::Mesh: break;
   }
   for (int c = 0; c < 3; ++c) g[kGeometryCenter + c] = center[c], g[kGeometryA + c] = a[c];
-  g[kGeometryRadius] = collider.radius;
+  // A mesh's pairs in the contact set act with half-spaces only (host/contact/); as a geometry of
+  // its own it is a point sphere, which holds nothing.
+  g[kGeometryRadius] = collider.shape == ColliderShape::Mesh ? 0.0 : collider.radius;
 }
 
 IndexRange colliderParticles(const Scene& scene, int c) {
@@ -85,6 +91,48 @@ struct ContactKind {
   }
 };
 
+// A mesh collider's surface: finite vertices, triangles of three distinct vertices with an area,
+// closed and consistently oriented (every edge run once in each direction, by two triangles),
+// enclosing a positive volume (counter-clockwise seen from outside), so that its inside is defined.
+void checkMesh(const Collider& c, const validation::Owner& owner) {
+  const Eigen::MatrixX3d& v = c.mesh_vertices;
+  const auto& triangles = c.mesh_triangles;
+  if (v.rows() < 4 || triangles.size() < 4)
+    invalid(owner, ": a mesh needs at least 4 vertices and 4 triangles (it has ", v.rows(), " and ", triangles.size(),
+            ")");
+  for (Eigen::Index i = 0; i < v.rows(); ++i) {
+    const Eigen::Vector3d p = v.row(i).transpose();
+    if (!p.allFinite() || !(p.cwiseAbs().maxCoeff() <= validation::kMaxMagnitude))
+      invalid(owner, ": mesh_vertices[", i, "] ", validation::vec(p), " is not finite or exceeds ",
+              validation::kMaxMagnitude);
+  }
+  const int n = static_cast<int>(v.rows());
+  std::map<std::pair<int, int>, int> directed;  // edge -> how many triangles run it that way
+  double volume = 0.0;
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const std::array<int, 3>& f = triangles[t];
+    for (int k = 0; k < 3; ++k) validation::checkIndex(f[k], n, owner, "mesh_triangles", long(3 * t + k));
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2])
+      invalid(owner, ": mesh_triangles[", t, "] repeats a vertex (", f[0], ", ", f[1], ", ", f[2], ")");
+    const Eigen::Vector3d a = v.row(f[0]).transpose(), b = v.row(f[1]).transpose(), d = v.row(f[2]).transpose();
+    const double scale = std::max({(b - a).squaredNorm(), (d - a).squaredNorm(), (d - b).squaredNorm()});
+    if (!((b - a).cross(d - a).squaredNorm() > 1e-24 * scale * scale))
+      invalid(owner, ": mesh_triangles[", t, "] has no area");
+    volume += a.dot(b.cross(d)) / 6.0;
+    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
+  }
+  for (const auto& [edge, count] : directed) {
+    const auto back = directed.find({edge.second, edge.first});
+    if (count != 1 || back == directed.end() || back->second != 1)
+      invalid(owner, ": the mesh is not a closed, consistently oriented surface at its edge (", edge.first, ", ",
+              edge.second, "): ", count, " triangle(s) run it that way and ", back == directed.end() ? 0 : back->second,
+              " the other way (each edge must be run once each way)");
+  }
+  if (!(volume > 0.0))
+    invalid(owner, ": the mesh encloses a volume of ", volume,
+            " (its triangles must run counter-clockwise seen from outside)");
+}
+
 void checkCollider(const Scene& scene, const Collider& c, const validation::Owner& owner) {
   const int shape = static_cast<int>(c.shape);
   if (shape < 0 || shape >= kColliderShapeCount) invalid(owner, ": shape ", shape, " is not a ColliderShape value");
@@ -116,6 +164,7 @@ void checkCollider(const Scene& scene, const Collider& c, const validation::Owne
       if (!(c.half_extents.minCoeff() > 0.0))
         invalid(owner, ": half_extents ", validation::vec(c.half_extents), " of the box must be > 0");
       break;
+    case ColliderShape::Mesh: checkMesh(c, owner); break;
     case ColliderShape::Capsule: validation::checkFinite(c.end, owner, "end"); [[fallthrough]];
     case ColliderShape::Sphere:
       validation::checkFinite(c.radius, owner, "radius");

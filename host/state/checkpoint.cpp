@@ -240,6 +240,14 @@ std::uint64_t sceneFingerprint(const Scene& scene) {
       const double particles[] = {static_cast<double>(c.first_particle), static_cast<double>(c.num_particles)};
       mix(particles, 2);
     }
+    // A mesh's surface (other shapes have none, and mix nothing here).
+    if (c.shape == ColliderShape::Mesh) {
+      mix(c.mesh_vertices.data(), c.mesh_vertices.size());
+      for (const std::array<int, 3>& t : c.mesh_triangles) {
+        const double indices[] = {double(t[0]), double(t[1]), double(t[2])};
+        mix(indices, 3);
+      }
+    }
   }
   return hash;
 }

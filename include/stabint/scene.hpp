@@ -173,7 +173,8 @@ STABINT_FIELD_TABLE_(ForceField, STABINT_FORCE_FIELD_FIELDS,
   X(Plane, "plane", "the half-space behind a plane: a point `center` and the outward `normal`") \
   X(Sphere, "sphere", "a ball: `center`, `radius`")                                             \
   X(Box, "box", "an axis-aligned box: `center`, `half_extents`")                                \
-  X(Capsule, "capsule", "the points within `radius` of the segment from `center` to `end`")
+  X(Capsule, "capsule", "the points within `radius` of the segment from `center` to `end`")     \
+  X(Mesh, "mesh", "the inside of a closed triangle mesh: `mesh_vertices`, `mesh_triangles`")
 
 /// Shape of a Collider (what each is: STABINT_COLLIDER_SHAPE_VALUES).
 enum class ColliderShape { STABINT_COLLIDER_SHAPE_VALUES(STABINT_ENUMERATOR_) };
@@ -203,8 +204,15 @@ struct Collider {
   Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< box (axis-aligned): half sizes, > 0
   Eigen::Vector3d end = Eigen::Vector3d::Zero();           ///< capsule: the other end of its axis
   double radius = 0.0;                                     ///< sphere and capsule, > 0
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      ///< m/s
-  double friction = 0.0;                                   ///< Coulomb coefficient mu >= 0 (0: frictionless)
+  /// Mesh: the vertices (where Collider::center is its reference point; the mesh moves with it)
+  /// and the triangles, a closed surface with every triangle counter-clockwise seen from outside
+  /// (each edge shared by two triangles that run it in opposite directions), at least 4.
+  ///@{
+  Eigen::MatrixX3d mesh_vertices;
+  std::vector<std::array<int, 3>> mesh_triangles;
+  ///@}
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< m/s
+  double friction = 0.0;                               ///< Coulomb coefficient mu >= 0 (0: frictionless)
   /// Contact weight per unit of particle mass, 1/s^2 (> 0): a particle at rest on a collider
   /// under gravity g sinks about |g| / stiffness into it.
   double stiffness = 1e4;
@@ -240,6 +248,8 @@ struct Collider {
   FIELD(half_extents, "box (axis-aligned): half sizes, > 0")                                             \
   FIELD(end, "capsule: the other end of its axis")                                                       \
   FIELD(radius, "sphere and capsule, > 0")                                                               \
+  FIELD(mesh_vertices, "mesh: (n, 3) vertices, moving with center")                                      \
+  FIELD(mesh_triangles, "mesh: (m, 3) triangles of a closed surface, counter-clockwise from outside")    \
   FIELD(velocity, "translation in m/s (0: static)")                                                      \
   FIELD(friction, "Coulomb coefficient mu >= 0 (0: frictionless)")                                       \
   FIELD(stiffness, "contact weight per unit of particle mass, 1/s^2 (> 0)")                              \

@@ -648,6 +648,45 @@ def test_a_collider_on_a_range_of_particles_lets_the_others_through():
         stabint.Simulator(bad, options)
 
 
+def test_a_mesh_collider_from_arrays_holds_a_particle_and_belongs_to_its_checkpoints():
+    # A closed box mesh (8 vertices, 12 triangles counter-clockwise from outside, its top at y = 0)
+    # given as numpy arrays: a particle dropped on it rests on its top (within the contact
+    # tolerance and the rest sink |g| / stiffness = 1 mm), and a checkpoint of the scene is refused
+    # by a scene whose mesh differs.
+    corners = np.array([[x, y, z] for z in (-1.0, 1.0) for y in (-1.0, 0.0) for x in (-1.0, 1.0)])
+    triangles = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+                          [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]])
+    scene = stabint.Scene()
+    scene.positions = np.array([[0.2, 0.5, 0.1]])
+    scene.rest_positions = scene.positions
+    scene.velocities = np.zeros((1, 3))
+    scene.masses = np.array([1.0])
+    box = stabint.Collider()
+    box.shape = stabint.ColliderShape.Mesh
+    box.mesh_vertices = corners
+    box.mesh_triangles = triangles
+    scene.colliders.append(box)
+    assert scene.colliders[0].mesh_triangles.shape == (12, 3)
+    options = stabint.SimulatorOptions(contact_tolerance=0.01)
+    sim = stabint.Simulator(scene, options)
+    for _ in range(60):
+        sim.step()
+    assert sim.positions[0, 1] == pytest.approx(0.0, abs=0.011)
+    checkpoint = sim.checkpoint()
+    other = stabint.Scene(scene)
+    moved = other.colliders[0]
+    moved.mesh_vertices = corners + np.array([0.0, -0.1, 0.0])
+    other.colliders[0] = moved
+    with pytest.raises(stabint.InvalidInputError, match="another scene"):
+        stabint.Simulator(other, options).restore(checkpoint)
+    flipped = stabint.Scene(scene)
+    inside_out = flipped.colliders[0]
+    inside_out.mesh_triangles = triangles[:, ::-1].copy()
+    flipped.colliders[0] = inside_out
+    with pytest.raises(stabint.InvalidInputError, match="volume"):
+        stabint.Simulator(flipped, options)
+
+
 def test_colliders_book_friction_and_refuse_other_checkpoints():
     # tests/test_contact.cpp's FrictionStopsASlidingBarAndReportsTheEnergy through the bindings:
     # the default tet bar (62.5 kg) slides on the ground at 2 m/s with mu = 0.5 and stops.

@@ -61,7 +61,8 @@ double depthInside(const stabint::Collider& c, const Eigen::Vector3d& x) {
       const Eigen::Vector3d q = (x - c.center).cwiseAbs() - c.half_extents;
       return std::max(0.0, -q.maxCoeff());
     }
-    case stabint::ColliderShape::Capsule: break;
+    case stabint::ColliderShape::Capsule:
+    case stabint::ColliderShape::Mesh: break;  // the table throws onto the other three
   }
   return 0.0;
 }

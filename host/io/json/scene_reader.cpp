@@ -348,16 +348,27 @@ void readBodies(const Field& list, Scene& s) {
   }
 }
 
-// Colliders (docs/scene-format.md): {"shape": "plane" | "sphere" | "box" | "capsule", "center",
-// the shape's own fields (normal; radius; half_extents; end, radius), and optionally velocity,
-// friction, stiffness, elastic_ratio, restitution and the particles it acts on (first_particle, num_particles)}; the
-// values are checked by validateScene.
+// Colliders (docs/scene-format.md): {"shape": "plane" | "sphere" | "box" | "capsule" | "mesh",
+// "center", the shape's own fields (normal; radius; half_extents; end, radius; a mesh's "mesh" file
+// entry, as the scene's, or its "vertices" and "triangles"), and optionally velocity, friction,
+// stiffness, elastic_ratio, restitution and the particles it acts on (first_particle,
+// num_particles)}; the values are checked by validateScene.
 
-void readColliders(const Field& list, Scene& s) {
+// A mesh collider's surface from a mesh file entry (paths relative to `dir`): an OBJ's triangles,
+// or a tet mesh's boundary faces.
+void readColliderMesh(const Field& entry, const fs::path& dir, Collider& c) {
+  Scene m = meshFromField(entry, dir);
+  if (auto t = entry.find("translate")) translate(m, t->vector3());
+  c.mesh_vertices = m.positions;
+  c.mesh_triangles = m.triangles.empty() ? tetSurface(m.tets) : m.triangles;
+}
+
+void readColliders(const Field& list, const fs::path& dir, Scene& s) {
   for (size_t i = 0; i < list.size(); ++i) {
     const Field e = list[i];
-    e.allowOnly({"shape", "center", "normal", "radius", "half_extents", "end", "velocity", "friction", "stiffness",
-                 "elastic_ratio", "restitution", "first_particle", "num_particles"});
+    e.allowOnly({"shape", "center", "normal", "radius", "half_extents", "end", "mesh", "vertices", "triangles",
+                 "velocity", "friction", "stiffness", "elastic_ratio", "restitution", "first_particle",
+                 "num_particles"});
     Collider c;
     const Field shape = e.member("shape");
     const std::string name = shape.string();
@@ -371,6 +382,9 @@ void readColliders(const Field& list, Scene& s) {
     if (auto f = e.find("radius")) c.radius = f->number();
     if (auto f = e.find("half_extents")) c.half_extents = f->vector3();
     if (auto f = e.find("end")) c.end = f->vector3();
+    if (auto f = e.find("mesh")) readColliderMesh(*f, dir, c);
+    if (auto f = e.find("vertices")) c.mesh_vertices = readRows(*f);
+    if (auto f = e.find("triangles")) c.mesh_triangles = readTriangles(*f, static_cast<int>(c.mesh_vertices.rows()));
     c.velocity = vectorOr(e, "velocity");
     if (auto f = e.find("friction")) c.friction = f->number();
     if (auto f = e.find("stiffness")) c.stiffness = f->number();
@@ -442,7 +456,7 @@ Scene sceneFromJson(const json& doc, const std::string& file) {
   if (auto f = root.find("pins")) readPins(*f, s);
   if (auto f = root.find("force_fields")) readForceFields(*f, s);
   if (auto f = root.find("bodies")) readBodies(*f, s);
-  if (auto f = root.find("colliders")) readColliders(*f, s);
+  if (auto f = root.find("colliders")) readColliders(*f, dir, s);
 
   if (auto f = root.find("gravity")) {
     s.gravity = f->vector3();

@@ -96,6 +96,12 @@ ordered colliderJson(const Collider& c) {
   if (c.shape == ColliderShape::Box) e["half_extents"] = vec(c.half_extents);
   if (c.shape == ColliderShape::Capsule) e["end"] = vec(c.end);
   if (c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule) e["radius"] = c.radius;
+  if (c.shape == ColliderShape::Mesh) {
+    e["vertices"] = rows(c.mesh_vertices);
+    ordered triangles = ordered::array();
+    for (const auto& t : c.mesh_triangles) triangles.push_back(ordered::array({t[0], t[1], t[2]}));
+    e["triangles"] = std::move(triangles);
+  }
   if (c.moving()) e["velocity"] = vec(c.velocity);
   e["friction"] = c.friction;
   e["stiffness"] = c.stiffness;

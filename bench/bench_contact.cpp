@@ -1,12 +1,17 @@
-// Colliders against no colliders, interleaved in one run (the machine is noisy): a 50 x 50
-// cloth dropped flat onto a sphere and the ground (friction 0.5), stepped next to the same cloth
-// without colliders. Both restart from their first state every 90 steps (3 s: the fall, the
-// landing and the settling), so the timed steps mix all three. The counter `contact_vs_none` is
-// the colliders' step time over the plain one (issue 10: at most 1.15); the others split each
-// run's step into its phases (`_solves`: the local steps, gathers, transfers and global solves;
-// `_energy`: the energy passes; `_bookkeeping`: the rest, the contact set's changes of the factors
-// included) and count its BE-partner steps (the share of steps), iterations and energy passes.
+// Two scenes stepped interleaved in one run (the machine is noisy), each restarting from its
+// first state every 90 steps (3 s: the fall, the landing and the settling), so the timed steps
+// mix all three:
+// - contact_vs_none: a 50 x 50 cloth dropped flat onto a sphere and the ground (friction 0.5)
+//   against the same cloth without colliders; the counter `contact_vs_none` is the colliders'
+//   step time over the plain one (issue 10: at most 1.15);
+// - mesh_vs_sphere: the cloth onto an icosphere mesh of 20,480 triangles and the ground against
+//   the analytic sphere's (docs/method.md, "Mesh colliders"); `mesh_vs_sphere` is the ratio.
+// The others split each run's step into its phases (`_solves`: the local steps, gathers,
+// transfers and global solves; `_energy`: the energy passes; `_bookkeeping`: the rest, the
+// contact set and its changes of the factors and a mesh's queries included) and count its
+// BE-partner steps (the share of steps), iterations and energy passes.
 #include "bench_common.hpp"
+#include "contact_scenes.hpp"
 
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
@@ -46,12 +51,31 @@ Scene clothOnSphereAndGround() {
   return s;
 }
 
+// The cloth over a mesh of the sphere: its vertices on the sphere, 5 subdivisions.
+Scene clothOnMeshSphereAndGround() {
+  Scene s = clothOnSphereAndGround();
+  const Collider& sphere = s.colliders.front();
+  s.colliders.front() = testing::icosphereCollider(sphere.center, sphere.radius, 5, sphere.friction);
+  return s;
+}
+
+// The scenes of one comparison, and the names of its counters.
+struct Comparison {
+  Scene (*first)();
+  Scene (*second)();
+  const char* first_name;
+  const char* second_name;
+};
+const Comparison kContactVsNone{clothOnSphereAndGround, flatCloth, "contact", "none"};
+const Comparison kMeshVsSphere{clothOnMeshSphereAndGround, clothOnSphereAndGround, "mesh", "sphere"};
+
 struct ContactFixture {
-  std::unique_ptr<Simulator> contact, none;
-  Checkpoint contact_start, none_start;
+  std::unique_ptr<Simulator> first, second;
+  Checkpoint first_start, second_start;
 };
 
-void runContact(benchmark::State& state, const std::string& key, BackendChoice backend, Integrator integrator) {
+void runContact(benchmark::State& state, const std::string& key, BackendChoice backend, Integrator integrator,
+                const Comparison& comparison) {
   if (const std::string why = skipReason(backend); !why.empty()) {
     state.SkipWithError(why.c_str());
     return;
@@ -61,10 +85,10 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
     fixture = &cachedFixture<ContactFixture>(key, [&] {
       auto f = std::make_unique<ContactFixture>();
       const SimulatorOptions o = optionsFor(backend, integrator);
-      f->contact = std::make_unique<Simulator>(clothOnSphereAndGround(), o);
-      f->none = std::make_unique<Simulator>(flatCloth(), o);
-      f->contact_start = f->contact->checkpoint();
-      f->none_start = f->none->checkpoint();
+      f->first = std::make_unique<Simulator>(comparison.first(), o);
+      f->second = std::make_unique<Simulator>(comparison.second(), o);
+      f->first_start = f->first->checkpoint();
+      f->second_start = f->second->checkpoint();
       return f;
     });
   } catch (const std::exception& e) {
@@ -73,13 +97,13 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
   }
   ContactFixture& f = *fixture;
   using Clock = std::chrono::steady_clock;
-  double contact = 0, none = 0;
+  double first_time = 0, second_time = 0;
   // Where the time goes, per run: the phases, the blend's BE-partner steps, the iterations and
   // energy passes.
   struct Sums {
     PhaseTimes times;
     double partner_steps = 0, iterations = 0, energy_passes = 0;
-  } contact_sums, none_sums;
+  } first_sums, second_sums;
   auto timed = [](double& sum, Sums& sums, Simulator& sim) {
     const auto start = Clock::now();
     const StepReport& r = sim.step();
@@ -91,22 +115,24 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
   };
   try {
     for (auto _ : state) {
-      if (f.contact->stepCount() >= 90) {
-        f.contact->restore(f.contact_start);
-        f.none->restore(f.none_start);
+      if (f.first->stepCount() >= 90) {
+        f.first->restore(f.first_start);
+        f.second->restore(f.second_start);
       }
-      timed(contact, contact_sums, *f.contact);
-      timed(none, none_sums, *f.none);
+      timed(first_time, first_sums, *f.first);
+      timed(second_time, second_sums, *f.second);
     }
   } catch (const NonFiniteStateError& e) {
     state.SkipWithError(e.what());
     return;
   }
   using benchmark::Counter;
-  state.counters["contact_step"] = Counter(contact, Counter::kAvgIterations);
-  state.counters["none_step"] = Counter(none, Counter::kAvgIterations);
-  state.counters["contact_vs_none"] = none > 0 ? contact / none : 0.0;
-  for (const auto& [name, sums] : {std::pair<const char*, const Sums&>{"contact", contact_sums}, {"none", none_sums}}) {
+  const std::string first = comparison.first_name, second = comparison.second_name;
+  state.counters[first + "_step"] = Counter(first_time, Counter::kAvgIterations);
+  state.counters[second + "_step"] = Counter(second_time, Counter::kAvgIterations);
+  state.counters[first + "_vs_" + second] = second_time > 0 ? first_time / second_time : 0.0;
+  for (const auto& [name, sums] :
+       {std::pair<const std::string&, const Sums&>{first, first_sums}, {second, second_sums}}) {
     const std::string n(name);
     state.counters[n + "_bookkeeping"] = Counter(sums.times.bookkeeping, Counter::kAvgIterations);
     state.counters[n + "_solves"] = Counter(
@@ -116,7 +142,7 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
     state.counters[n + "_iterations"] = Counter(sums.iterations, Counter::kAvgIterations);
     state.counters[n + "_energy_passes"] = Counter(sums.energy_passes, Counter::kAvgIterations);
   }
-  state.SetLabel(f.contact->backendDescription());
+  state.SetLabel(f.first->backendDescription());
 }
 
 // The landing cloth's global system with both blend factors (c = 1/h^2 and 4/h^2), and the
@@ -190,14 +216,16 @@ void registerContactCases() {
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("contact_active_set_updates/cloth50", runActiveSetUpdates)
       ->Unit(benchmark::kMicrosecond);
-  for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
-    for (BackendChoice backend : allBackends()) {
-      const std::string name =
-          std::string("contact_vs_none/cloth50/") + integratorName(integrator) + "/" + backendLabel(backend);
-      benchmark::RegisterBenchmark(name.c_str(),
-                                   [=](benchmark::State& state) { runContact(state, name, backend, integrator); })
-          ->UseRealTime()
-          ->Unit(benchmark::kMillisecond);
+  for (const Comparison* comparison : {&kContactVsNone, &kMeshVsSphere}) {
+    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+      for (BackendChoice backend : allBackends()) {
+        const std::string name = std::string(comparison->first_name) + "_vs_" + comparison->second_name + "/cloth50/" +
+                                 integratorName(integrator) + "/" + backendLabel(backend);
+        benchmark::RegisterBenchmark(
+            name.c_str(), [=](benchmark::State& state) { runContact(state, name, backend, integrator, *comparison); })
+            ->UseRealTime()
+            ->Unit(benchmark::kMillisecond);
+      }
     }
   }
 }

@@ -98,8 +98,9 @@ TEST(MeshCollider, NearestPointAndSideOnAnIcosphere) {
   // two balls' (the final projection leaves a particle no deeper than a quarter of it).
   EXPECT_GE(mesh.thickness(), 2.0 * r_in - 1e-12);
   EXPECT_LE(mesh.thickness(), 2.0 * r + 1e-12);
-  EXPECT_NEAR(MeshCollider(boxMeshCollider(Eigen::Vector3d(1.0, 2.0, 3.0), Eigen::Vector3d(1.0, 0.01, 2.0))).thickness(),
-              0.02, 1e-15);
+  EXPECT_NEAR(
+      MeshCollider(boxMeshCollider(Eigen::Vector3d(1.0, 2.0, 3.0), Eigen::Vector3d(1.0, 0.01, 2.0))).thickness(), 0.02,
+      1e-15);
 }
 
 // The first inward crossing of a segment: along a radius from outside it is where the surface is
@@ -121,8 +122,8 @@ TEST(MeshCollider, FirstEntryOfASegment) {
   ASSERT_TRUE(mesh.firstEntry(center + 2.0 * r * d, center - 2.0 * r * d, s, normal));  // through
   EXPECT_NEAR(s, 0.25, 0.25 * (r - r_in) / r + 1e-12);
   EXPECT_FALSE(mesh.firstEntry(center, center + 2.0 * r * d, s, normal));  // leaving
-  EXPECT_FALSE(mesh.firstEntry(center + Eigen::Vector3d(2.0 * r, 0.0, 0.0),
-                               center + Eigen::Vector3d(2.0 * r, 0.0, 1.0), s, normal));  // missing
+  EXPECT_FALSE(mesh.firstEntry(center + Eigen::Vector3d(2.0 * r, 0.0, 0.0), center + Eigen::Vector3d(2.0 * r, 0.0, 1.0),
+                               s, normal));  // missing
 }
 
 // A surface without a defined inside is refused by name when the scene is built.
@@ -327,8 +328,7 @@ TEST_F(MeshColliderFiles, SceneFileAndCheckpointKeepTheMesh) {
   write("box.obj",
         "v -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n"
         "f 1 3 2\nf 2 3 4\nf 5 6 7\nf 6 8 7\nf 1 2 5\nf 2 6 5\nf 3 7 4\nf 4 7 8\nf 1 5 3\nf 3 5 7\nf 2 4 6\nf 4 8 6\n");
-  const Scene from_obj = loadSceneFile(
-      write("obj.json", R"({"particles": {"positions": [[0,3,0]], "masses": 1},
+  const Scene from_obj = loadSceneFile(write("obj.json", R"({"particles": {"positions": [[0,3,0]], "masses": 1},
         "colliders": [{"shape": "mesh", "mesh": {"file": "box.obj", "translate": [0, -1, 0]}}]})"));
   ASSERT_EQ(from_obj.colliders.size(), 1u);
   EXPECT_EQ(from_obj.colliders[0].mesh_vertices.rows(), 8);

@@ -23,10 +23,10 @@ ContactResolver::ContactResolver(SceneData& scene, const Forcing& forcing, Globa
     : scene_(scene),
       forcing_(forcing),
       system_(system),
-      meshes_(meshColliders(scene.scene())),
       time_step_(options.time_step),
       tolerance_(options.contact_tolerance),
       block_(scene.blockIndex(contactElementType())) {
+  meshes_ = meshColliders(scene.scene(), count());
   if (count() == 0) return;
   for (int e = 0; e < count(); ++e) scene_.setElementEnabled(block_, e, false);
   const ContactSetChange change =

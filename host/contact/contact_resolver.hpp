@@ -97,7 +97,7 @@ class ContactResolver {
   SceneData& scene_;
   const Forcing& forcing_;
   GlobalSystem& system_;
-  MeshColliders meshes_;  // the queries of the mesh colliders, built once
+  MeshColliders meshes_;  // the queries of the mesh colliders, built once, and their pairs' bounds
   double time_step_, tolerance_;
   int block_ = -1;
   std::vector<std::int32_t> log_;

@@ -26,6 +26,28 @@ const double* pairGeometry(const SceneData& scene, int block, int e, const doubl
   return pair;
 }
 
+// How far y (in mesh collider `mesh`'s frame) is known to be outside the mesh, without a query:
+// its bounding box's distance, or pair e's cached bound; 0 when nothing is known.
+double knownOutside(const MeshColliders& meshes, const MeshCollider& mesh, int e, const Eigen::Vector3d& y) {
+  return std::max(std::sqrt(mesh.bounds().squaredExteriorDistance(y)), meshes.cache.outside(std::size_t(e), y));
+}
+
+// Whether a known bound is beyond `distance` with a slack far above the round-off of either, so
+// that the query it saves would surely have said the same.
+bool surelyBeyond(double bound, double distance, const Eigen::Vector3d& y) {
+  return bound > distance + MeshPairCache::kBoundSlack * (1.0 + distance + y.cwiseAbs().maxCoeff());
+}
+
+// The surface point of `mesh` nearest to y, pair e's particle (cached).
+MeshCollider::Nearest nearestOf(const MeshColliders& meshes, const MeshCollider& mesh, int e,
+                                const Eigen::Vector3d& y) {
+  if (const MeshCollider::Nearest* known = meshes.cache.nearest(std::size_t(e), y)) return *known;
+  MeshCollider::Nearest n;
+  mesh.nearest(y, std::numeric_limits<double>::infinity(), n);
+  meshes.cache.record(std::size_t(e), y, n);
+  return n;
+}
+
 // Calls visit(c, j, r, p, depth, e) for each particle j (row r of x) of `part` inside collider c
 // at time t, with p the closest point outside, depth = |p - x_j| > 0 and e the pair's contact
 // element.
@@ -38,7 +60,7 @@ void forEachContact(const SceneData& scene, const Forcing& forcing, const MeshCo
     double collider[kColliderGeometry];
     forcing.colliderGeometry(c, t, collider);
     const Eigen::Vector3d shift = forcing.colliderPosition(c, t) - scene.scene().colliders[std::size_t(c)].center;
-    const MeshCollider* mesh = meshes[std::size_t(c)].get();
+    const MeshCollider* mesh = meshes[c];
     const IndexRange particles = colliderParticles(scene.scene(), c);
     for (int j = particles.first; j < particles.end(); ++j, ++e) {
       const Eigen::Index r = j - part.first_row;
@@ -47,9 +69,9 @@ void forEachContact(const SceneData& scene, const Forcing& forcing, const MeshCo
         // A mesh's pair out of the set acts with the mesh itself: the nearest surface point of a
         // particle inside (one the solve pushed in, which the set has not seen yet).
         const Eigen::Vector3d y = x.row(r).transpose() - shift;
-        MeshCollider::Nearest n;
-        if (!mesh->bounds().contains(y) || !mesh->nearest(y, 0.0, n) || !(n.signed_distance < 0.0)) continue;
-        visit(c, j, r, Eigen::Vector3d(n.point + shift), -n.signed_distance, e);
+        if (surelyBeyond(knownOutside(meshes, *mesh, e, y), 0.0, y)) continue;
+        const MeshCollider::Nearest n = nearestOf(meshes, *mesh, e, y);
+        if (n.signed_distance < 0.0) visit(c, j, r, Eigen::Vector3d(n.point + shift), -n.signed_distance, e);
         continue;
       }
       double pair[kColliderGeometry];
@@ -263,9 +285,10 @@ constexpr double kSweptPath = 0.25;
 constexpr double kLeaveMargins = 8.0;
 
 // contactSetChange's rule for the pairs of mesh collider c (elements from e on).
-void meshSetChange(const SceneData& scene, const Forcing& forcing, const MeshCollider& mesh, int c, int e,
+void meshSetChange(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes, int c, int e,
                    const ContactPart& part, double t, double h, double margin, const Eigen::MatrixX3d& x,
                    const Eigen::MatrixX3d& v, ContactSetChange& change) {
+  const MeshCollider& mesh = *meshes[c];
   const int block = scene.blockIndex(contactElementType());
   const Eigen::Vector3d reference = scene.scene().colliders[std::size_t(c)].center;
   const Eigen::Vector3d now = forcing.colliderPosition(c, t) - reference,
@@ -280,16 +303,26 @@ void meshSetChange(const SceneData& scene, const Forcing& forcing, const MeshCol
     const Eigen::Index r = j - part.first_row;
     const Eigen::Vector3d a = x.row(r).transpose() - now;  // in the mesh's frame
     const Eigen::Vector3d predicted = x.row(r).transpose() + h * v.row(r).transpose() - next;
+    const double reach = (predicted - a).norm();
     if (scene.elementEnabled(block, e)) {
-      if (!near(a, kLeaveMargins * margin) && !near(predicted, kLeaveMargins * margin)) change.leaving.push_back(e);
+      // Both ends farther than the leaving distance (the prediction's known from x_j's when the
+      // path cannot come that near).
+      const double leave = kLeaveMargins * margin;
+      const double at_a = nearestOf(meshes, mesh, e, a).signed_distance;
+      if (!(at_a < leave)) {
+        if (surelyBeyond(at_a - reach, leave, a) || !near(predicted, leave)) change.leaving.push_back(e);
+      }
       continue;
     }
+    // Both ends beyond the margin and the path short of the surface, known without a query.
+    if (surelyBeyond(knownOutside(meshes, mesh, e, a), margin + reach, a)) continue;
+    const MeshCollider::Nearest at_a = nearestOf(meshes, mesh, e, a);
     double s = 0.0;
     Eigen::Vector3d normal;
-    if (!near(a, margin) && !near(predicted, margin) && !mesh.firstEntry(a, predicted, s, normal)) continue;
+    if (!(at_a.signed_distance < margin) && !near(predicted, margin) && !mesh.firstEntry(a, predicted, s, normal))
+      continue;
     change.entering.push_back(e);
-    MeshCollider::Nearest n;
-    change.entered_inside = change.entered_inside || (mesh.nearest(a, 0.0, n) && n.signed_distance < 0.0);
+    change.entered_inside = change.entered_inside || at_a.signed_distance < 0.0;
   }
 }
 
@@ -306,8 +339,8 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
   const int block = scene.blockIndex(contactElementType());
   int e = firstContactElement(scene.scene(), part.colliders.first);
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
-    if (const MeshCollider* mesh = meshes[std::size_t(c)].get()) {
-      meshSetChange(scene, forcing, *mesh, c, e, part, t, h, margin, x, v, change);
+    if (meshes[c]) {
+      meshSetChange(scene, forcing, meshes, c, e, part, t, h, margin, x, v, change);
       e += colliderParticles(scene.scene(), c).count;
       continue;
     }
@@ -359,7 +392,7 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const MeshCollide
   int e = firstContactElement(scene.scene(), part.colliders.first);
   for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
     const Collider& collider = scene.scene().colliders[static_cast<std::size_t>(c)];
-    if (const MeshCollider* mesh = meshes[std::size_t(c)].get()) {
+    if (const MeshCollider* mesh = meshes[c]) {
       // In the mesh's frame (where its reference point is at Collider::center), as the params
       // hold a pair's geometry.
       const Eigen::Vector3d now = forcing.colliderPosition(c, t) - collider.center,
@@ -372,17 +405,13 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const MeshCollide
         const Eigen::Vector3d b = x.row(r).transpose() + h * v.row(r).transpose() - next;
         double plane[kColliderGeometry], s = 0.0;
         Eigen::Vector3d normal;
-        MeshCollider::Nearest n;
-        const bool found = mesh->nearest(a, std::numeric_limits<double>::infinity(), n);
-        if (found && n.signed_distance < 0.0) {
+        const MeshCollider::Nearest n = nearestOf(meshes, *mesh, e, a);
+        // A path from outside that cannot reach the surface enters nowhere.
+        const bool may_enter = n.signed_distance >= 0.0 && !surelyBeyond(n.signed_distance, (b - a).norm(), a);
+        if (!may_enter || !mesh->firstEntry(a, b, s, normal))
           planeGeometry(n.point, n.normal, plane);
-        } else if (mesh->firstEntry(a, b, s, normal)) {
+        else
           planeGeometry(a + s * (b - a), normal, plane);
-        } else if (found) {
-          planeGeometry(n.point, n.normal, plane);
-        } else {
-          continue;
-        }
         write(e, plane);
       }
       continue;
@@ -514,7 +543,7 @@ int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const 
   std::vector<double> depth(static_cast<std::size_t>(part.colliders.count));
   for (int c = 0; c < part.colliders.count; ++c) {
     const std::size_t i = std::size_t(part.colliders.first + c);
-    const MeshCollider* mesh = meshes[i].get();
+    const MeshCollider* mesh = meshes[int(i)];
     depth[std::size_t(c)] =
         std::min(tolerance, 0.5 * (mesh ? 0.5 * mesh->thickness() : halfThickness(scene.scene().colliders[i])));
   }

@@ -27,8 +27,6 @@ struct ContactPart {
 };
 /// Every collider of the scene, on the scene's whole host copies.
 ContactPart wholeScene(const SceneData& scene);
-/// The queries of the scene's mesh colliders (meshColliders), indexed like its colliders.
-using MeshColliders = std::vector<std::unique_ptr<const MeshCollider>>;
 
 /// Every rule reads the scene's colliders and contact block from `scene` and where the colliders
 /// are at a time from `forcing`.

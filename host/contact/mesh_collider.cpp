@@ -99,7 +99,7 @@ MeshCollider::Nearest MeshCollider::nearestOnTriangle(int t, const Vec& x) const
   Nearest out;
   out.point = closestOnTriangle(x, vertices_.row(f[0]).transpose(), vertices_.row(f[1]).transpose(),
                                 vertices_.row(f[2]).transpose(), feature);
-  const Vec& pseudo = feature < 0    ? face_normals_[static_cast<std::size_t>(t)]
+  const Vec& pseudo = feature < 0   ? face_normals_[static_cast<std::size_t>(t)]
                       : feature < 3 ? vertex_normals_[static_cast<std::size_t>(f[feature])]
                                     : edge_normals_.at(edgeKey(f[feature - 3], f[(feature - 2) % 3]));
   const Vec d = x - out.point;
@@ -126,10 +126,10 @@ bool MeshCollider::nearest(const Vec& x, double cutoff, Nearest& out) const {
     double minimumOnObject(int t) {
       const std::array<int, 3>& f = mesh.triangles_[static_cast<std::size_t>(t)];
       int feature = -1;
-      const double d = (x - closestOnTriangle(x, mesh.vertices_.row(f[0]).transpose(),
-                                              mesh.vertices_.row(f[1]).transpose(),
-                                              mesh.vertices_.row(f[2]).transpose(), feature))
-                           .squaredNorm();
+      const double d =
+          (x - closestOnTriangle(x, mesh.vertices_.row(f[0]).transpose(), mesh.vertices_.row(f[1]).transpose(),
+                                 mesh.vertices_.row(f[2]).transpose(), feature))
+              .squaredNorm();
       if (d < best_squared || (d == best_squared && t < best)) best = t, best_squared = d;
       return d;
     }
@@ -195,10 +195,16 @@ bool MeshCollider::firstEntry(const Vec& a, const Vec& b, double& s, Vec& normal
   return true;
 }
 
-std::vector<std::unique_ptr<const MeshCollider>> meshColliders(const Scene& scene) {
-  std::vector<std::unique_ptr<const MeshCollider>> meshes(scene.colliders.size());
-  for (std::size_t c = 0; c < scene.colliders.size(); ++c)
-    if (scene.colliders[c].shape == ColliderShape::Mesh) meshes[c] = std::make_unique<MeshCollider>(scene.colliders[c]);
+MeshColliders meshColliders(const Scene& scene, int pairs) {
+  MeshColliders meshes;
+  meshes.queries.resize(scene.colliders.size());
+  bool any = false;
+  for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
+    if (scene.colliders[c].shape != ColliderShape::Mesh) continue;
+    meshes.queries[c] = std::make_unique<MeshCollider>(scene.colliders[c]);
+    any = true;
+  }
+  if (any) meshes.cache = MeshPairCache(static_cast<std::size_t>(pairs));
   return meshes;
 }
 

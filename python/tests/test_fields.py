@@ -41,8 +41,9 @@ DEFAULTS = {
     stabint.ForceField: dict(particles=[], force=ZERO, rate=ZERO, amplitude=ZERO, frequency=0.0),
     stabint.Body: dict(name="", particles=[], damping=0.0),
     stabint.Collider: dict(shape=ColliderShape.Plane, center=ZERO, normal=[0.0, 1.0, 0.0], half_extents=ZERO,
-                           end=ZERO, radius=0.0, velocity=ZERO, friction=0.0, stiffness=1e4, elastic_ratio=1.0, restitution=1.0,
-                           first_particle=0, num_particles=-1),
+                           end=ZERO, radius=0.0, mesh_vertices=np.zeros((0, 3)),
+                           mesh_triangles=np.zeros((0, 3), dtype=np.int64), velocity=ZERO, friction=0.0,
+                           stiffness=1e4, elastic_ratio=1.0, restitution=1.0, first_particle=0, num_particles=-1),
     stabint.PathKey: dict(frame=0, position=ZERO),
     stabint.GrabEvent: GRAB.fields,
     stabint.ReleaseEvent: dict(id="", vertex=-1),
@@ -61,6 +62,8 @@ CHANGED = {
     (stabint.ElementEvent, "stiffness"): 2.5,
     (stabint.ElementEvent, "enabled"): False,
     (stabint.ColliderEvent, "velocity"): [0.5, 0.0, -1.0],
+    (stabint.Collider, "mesh_vertices"): [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]],
+    (stabint.Collider, "mesh_triangles"): [[0, 1, 2]],
     (stabint.ColliderEvent, "path"): [Nested(stabint.PathKey, frame=4, position=[1.0, 2.0, 3.0])],
     (stabint.GrabEvent, "path"): [Nested(stabint.PathKey, frame=2, position=[0.0, 1.0, 0.0]),
                                   Nested(stabint.PathKey, frame=7, position=[0.0, 2.0, 0.0])],
@@ -101,13 +104,15 @@ def properties(cls):
 
 def python_value(value):
     # An expected value as the binding takes it: a nested struct as the struct, a vector of floats
-    # as a numpy array (as the properties take them).
+    # or a matrix as a numpy array (as the properties take them).
     if isinstance(value, Nested):
         obj = value.cls()
         for name, v in value.fields.items():
             setattr(obj, name, python_value(v))
         return obj
     if isinstance(value, list) and value and isinstance(value[0], float):
+        return np.array(value)
+    if isinstance(value, list) and value and isinstance(value[0], list):
         return np.array(value)
     if isinstance(value, list):
         return [python_value(v) for v in value]

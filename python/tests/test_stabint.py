@@ -648,11 +648,11 @@ def test_a_collider_on_a_range_of_particles_lets_the_others_through():
         stabint.Simulator(bad, options)
 
 
-def test_a_mesh_collider_from_arrays_holds_a_particle_and_belongs_to_its_checkpoints():
+def test_a_mesh_collider_from_arrays_stops_a_particle_and_belongs_to_its_checkpoints():
     # A closed box mesh (8 vertices, 12 triangles counter-clockwise from outside, its top at y = 0)
-    # given as numpy arrays: a particle dropped on it rests on its top (within the contact
-    # tolerance and the rest sink |g| / stiffness = 1 mm), and a checkpoint of the scene is refused
-    # by a scene whose mesh differs.
+    # given as numpy arrays: a particle dropped on it from 0.5 m stops on its top (no deeper than
+    # the contact tolerance) and bounces back up (the blend keeps the drop's energy), and a
+    # checkpoint of the scene is refused by a scene whose mesh differs.
     corners = np.array([[x, y, z] for z in (-1.0, 1.0) for y in (-1.0, 0.0) for x in (-1.0, 1.0)])
     triangles = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
                           [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]])
@@ -669,9 +669,12 @@ def test_a_mesh_collider_from_arrays_holds_a_particle_and_belongs_to_its_checkpo
     assert scene.colliders[0].mesh_triangles.shape == (12, 3)
     options = stabint.SimulatorOptions(contact_tolerance=0.01)
     sim = stabint.Simulator(scene, options)
+    heights = []
     for _ in range(60):
         sim.step()
-    assert sim.positions[0, 1] == pytest.approx(0.0, abs=0.011)
+        heights.append(sim.positions[0, 1])
+    assert -0.01 <= min(heights) < 0.05
+    assert max(heights[heights.index(min(heights)):]) > 0.4
     checkpoint = sim.checkpoint()
     other = stabint.Scene(scene)
     moved = other.colliders[0]

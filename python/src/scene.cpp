@@ -48,6 +48,10 @@ void bindScene(nb::module_& m) {
         "JSON object text; prefer the shortcuts cloth_grid(**params) etc. Raises FileFormatError for an "
         "unknown name or parameter.");
   m.def("builtin_scene_names", &builtinSceneNames);
+  m.def(
+      "tet_surface", [](const Scene& s) { return trianglesCopy(tetSurface(s.tets)); }, "scene"_a,
+      "The (m, 3) surface triangles of the scene's tets (positively oriented): the faces only one tet has, "
+      "wound so that their normals point out of the body.");
   m.def("builtin_scene_parameters", &builtinSceneParameters, "name"_a);
   m.def(
       "cloth_grid_triangles", [](int nx, int ny) { return trianglesCopy(clothGridTriangles(nx, ny)); }, "nx"_a, "ny"_a,

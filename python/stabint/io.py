@@ -37,7 +37,7 @@ import numpy as np
 from . import _stabint
 from ._stabint import ClothMaterial, FileFormatError, Scene, SolidMaterial
 
-__all__ = ["read_mesh", "vtk_cells", "VtkSeriesWriter", "write_vtk_series", "read_pvd", "MAX_FILE_BYTES"]
+__all__ = ["read_mesh", "read_mesh_collider", "vtk_cells", "VtkSeriesWriter", "write_vtk_series", "read_pvd", "MAX_FILE_BYTES"]
 
 Cells = List[Tuple[str, np.ndarray]]
 
@@ -241,6 +241,25 @@ def read_mesh(path: Union[str, os.PathLike], material: Optional[Union[SolidMater
     if velocity is not None:
         scene.velocities = velocity
     return scene
+
+
+def read_mesh_collider(path: Union[str, os.PathLike], *, file_format: Optional[str] = None,
+                       translate: Optional[Sequence[float]] = None) -> "_stabint.Collider":
+    """A mesh collider (``ColliderShape.Mesh``, docs/method.md "Mesh colliders") from any mesh file
+    :func:`read_mesh` reads: its triangles, or the surface of its tets, moved by ``translate``.
+    The file is checked as by :func:`read_mesh` (FileFormatError naming it); the surface must be
+    closed and wound counter-clockwise seen from outside, which building a Simulator checks
+    (InvalidInputError naming the collider). Set its other fields (friction, stiffness, center,
+    velocity, ...) on the result and append it to ``scene.colliders``."""
+    scene = read_mesh(path, file_format=file_format)
+    points = scene.positions
+    if translate is not None:
+        points = points + np.asarray(translate, dtype=np.float64).reshape(1, 3)
+    collider = _stabint.Collider()
+    collider.shape = _stabint.ColliderShape.Mesh
+    collider.mesh_vertices = points
+    collider.mesh_triangles = scene.triangles if len(scene.triangles) else _stabint.tet_surface(scene)
+    return collider
 
 
 def _load_tets(tmp: str, points: np.ndarray, tets: np.ndarray, material: SolidMaterial) -> Scene:

@@ -12,7 +12,7 @@ import stabint
 
 meshio = pytest.importorskip("meshio")  # the [io] extra; requirements.txt pins it
 
-from stabint.io import read_mesh, read_pvd, vtk_cells, VtkSeriesWriter, write_vtk_series  # noqa: E402
+from stabint.io import read_mesh, read_mesh_collider, read_pvd, vtk_cells, VtkSeriesWriter, write_vtk_series  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
@@ -57,6 +57,42 @@ def test_round_trip_mesh_in_scene_stepped_series_out_exact(tmp_path):
     restart = read_mesh(read_pvd(pvd)[-1][1])
     assert np.array_equal(restart.positions, positions[-1])
     assert np.array_equal(restart.velocities, velocities[-1])
+
+
+def test_a_mesh_file_becomes_a_collider_that_holds_a_cloth(tmp_path):
+    # A tet bar's surface through meshio (Gmsh 2.2) as a mesh collider, 0.25 m high and moved
+    # below the origin: a cloth dropped onto it stops on its top (no vertex deeper inside than the
+    # contact tolerance, which the mesh's own query measures), and a surface with a triangle
+    # flipped is refused by name.
+    bar = stabint.tet_bar(nx=4, ny=2, nz=2)
+    meshio.write(tmp_path / "bar.msh", meshio.Mesh(bar.positions, [("tetra", tets_of(bar))]), file_format="gmsh22",
+                 binary=False)
+    collider = read_mesh_collider(tmp_path / "bar.msh", translate=[-0.5, -0.25, -0.125])
+    assert collider.shape == stabint.ColliderShape.Mesh
+    assert np.array_equal(collider.mesh_vertices, bar.positions + np.array([-0.5, -0.25, -0.125]))
+    assert len(collider.mesh_triangles) == 2 * (4 * 2 + 4 * 2 + 2 * 2) * 2  # the box's faces, two per square
+    cloth = stabint.cloth_grid(nx=10, ny=10)
+    cloth.pins.clear()
+    x = cloth.positions
+    cloth.positions = np.column_stack([x[:, 0] - 0.5, np.full(len(x), 0.2), x[:, 1] - 0.5])
+    cloth.rest_positions = cloth.positions
+    cloth.colliders.append(collider)
+    options = stabint.SimulatorOptions(contact_tolerance=0.01)
+    sim = stabint.Simulator(cloth, options)
+    lowest_middle = []
+    middle = np.flatnonzero((np.abs(cloth.positions[:, 0]) < 0.4) & (np.abs(cloth.positions[:, 2]) < 0.1))
+    for _ in range(30):
+        sim.step()
+        lowest_middle.append(sim.positions[middle, 1].min())
+    assert min(lowest_middle) > -0.01  # the bar's top is at y = 0
+    flipped = stabint.Scene(cloth)
+    bad = flipped.colliders[0]
+    triangles = bad.mesh_triangles
+    triangles[0] = triangles[0][::-1]
+    bad.mesh_triangles = triangles
+    flipped.colliders[0] = bad
+    with pytest.raises(stabint.InvalidInputError, match="collider 0.*closed, consistently oriented"):
+        stabint.Simulator(flipped, options)
 
 
 def test_triangles_become_cloth_of_the_chosen_model(tmp_path):

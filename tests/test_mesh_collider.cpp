@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
@@ -334,6 +335,35 @@ TEST_F(MeshColliderFiles, SceneFileAndCheckpointKeepTheMesh) {
   EXPECT_EQ(from_obj.colliders[0].mesh_vertices.rows(), 8);
   EXPECT_EQ(from_obj.colliders[0].mesh_triangles.size(), 12u);
   EXPECT_EQ(from_obj.colliders[0].mesh_vertices.col(1).maxCoeff(), 0.0);  // translated
+}
+
+// scenes/cloth_on_mesh.json: a cloth dropped across a mesh collider read from a Medit file (the
+// surface of scenes/bar.mesh), gravity along -z. Over 3 s no vertex goes deeper inside the bar
+// than the tolerance, the vertices above the bar's middle never sink below its top (z = 0.25, less
+// the tolerance and the rest sink |g| / stiffness = 1 mm), and the sides fall past it.
+TEST(MeshCollider, TheExampleSceneDrapesAClothOverAMeshFromAFile) {
+  const Scene s = loadSceneFile(
+      (std::filesystem::path(__FILE__).parent_path().parent_path() / "scenes" / "cloth_on_mesh.json").string());
+  ASSERT_EQ(s.colliders.size(), 2u);
+  ASSERT_EQ(s.colliders[0].shape, ColliderShape::Mesh);
+  EXPECT_EQ(s.colliders[0].mesh_triangles.size(), 36u);  // the bar's 18 squares, two triangles each
+  std::vector<Eigen::Index> above;                       // the vertices above the bar's middle
+  for (Eigen::Index j = 0; j < s.positions.rows(); ++j)
+    if (std::abs(s.positions(j, 1) - 0.5) < 0.01 && s.positions(j, 0) > 0.15 && s.positions(j, 0) < 0.85)
+      above.push_back(j);
+  ASSERT_EQ(above.size(), 7u);
+  SimulatorOptions o;
+  Simulator sim(s, o);
+  const MeshCollider mesh(s.colliders[0]);
+  double deepest = 0.0, lowest_above = 1.0;
+  for (int i = 0; i < 90; ++i) {
+    sim.step();
+    deepest = std::max(deepest, deepestInside(mesh, sim.positions(), Eigen::Vector3d::Zero()));
+    for (Eigen::Index j : above) lowest_above = std::min(lowest_above, sim.positions()(j, 2));
+  }
+  EXPECT_LE(deepest, o.contact_tolerance + 1e-12);
+  EXPECT_GE(lowest_above, 0.25 - o.contact_tolerance - 1e-3);
+  EXPECT_LT(sim.positions().col(2).minCoeff(), 0.15);  // the sides hang down past the bar
 }
 
 }  // namespace

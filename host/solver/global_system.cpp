@@ -143,7 +143,7 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
   const Eigen::Index n = rhs.rows();
   x.resize(n, 3);
   // One pass over the factor for the three columns (the columns split over threads would each
-  // read the whole factor; docs/bench_summary.md, "Global solve against its bound"). A batch's
+  // read the whole factor; docs/benchmarks.md, "Global solve against its bound"). A batch's
   // factor, a forest of many trees none of which holds half the entries, is solved tree by tree on
   // every thread (the serial arithmetic); on other large systems the backward pass goes over two
   // subtrees on two threads. Both by the size alone, so that the arithmetic is the same on any

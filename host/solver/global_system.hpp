@@ -45,7 +45,7 @@ class GlobalSystem {
   /// stopped, or not stepping).
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, const std::vector<char>* solved = nullptr);
   /// From this many particles solve() splits the backward pass over two subtrees (below it the
-  /// second thread costs more than it saves; docs/bench_summary.md "Global solve against its
+  /// second thread costs more than it saves; docs/benchmarks.md "Global solve against its
   /// bound").
   static constexpr Eigen::Index kSubtreeRows = 15000;
   /// From this many particles solve() runs the trees of a factor that is a forest (a batch's: one

@@ -4,6 +4,8 @@
 // (common.hpp lists them); those with a field table are generated from it (fields.hpp).
 #include "fields.hpp"
 
+#include <cli.hpp>  // tools/run: stabint-run's runCli, for the `stabint-run` console command
+
 #include <cstring>
 #include <initializer_list>
 #include <string>
@@ -207,4 +209,16 @@ NB_MODULE(_stabint, m) {
   bindSimulator(m);
   bindBatch(m);
   bindEvents(m);
+  // The C++ tool itself rather than a Python copy of it, so that both commands are one program.
+  m.def(
+      "_run_cli",
+      [](std::vector<std::string> argv) {
+        std::vector<char*> pointers;
+        for (std::string& arg : argv) pointers.push_back(arg.data());
+        pointers.push_back(nullptr);
+        return stabint_run::runCli(static_cast<int>(argv.size()), pointers.data());
+      },
+      nb::arg("argv"), nb::call_guard<nb::gil_scoped_release>(),
+      "Runs stabint-run with `argv` (argv[0] the program's name) and returns its exit status; it writes to "
+      "the process's standard output and error. The `stabint-run` console command (stabint._cli).");
 }

@@ -1,10 +1,13 @@
 """The package's Python conventions (docs/guide.md, "Python conventions"): reprs, pickling and
-== of the options, enums by name, keyword errors that name the closest field."""
+== of the options, enums by name, keyword errors that name the closest field, a clean namespace,
+the `stabint-run` console command, the default backend, and which accessors are properties."""
 
 import copy
 import pathlib
 import pickle
 import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -203,3 +206,83 @@ def test_help_shows_every_option_with_its_type_and_default():
         assert f"{name}: " in signature, name
     stub = (pathlib.Path(stabint.__file__).parent / "_stabint.pyi").read_text()
     assert "def __init__(self, *, integrator: Integrator | str = Integrator.EnergyBlend," in stub
+
+
+# --- the namespace --------------------------------------------------------------------------------
+def test_dir_shows_the_library_alone():
+    names = set(dir(stabint))
+    assert not names & {"np", "json", "typing", "Any", "Dict", "Optional", "annotations"}
+    assert set(stabint.__all__) <= names
+    public = {n for n in names if not n.startswith("_") and n not in ("distributed", "io")}
+    assert public == set(stabint.__all__)
+    assert {"Simulator", "SimulatorOptions", "cloth_grid", "scene_from_arrays", "InvalidInputError"} <= public
+    namespace = {}
+    exec("from stabint import *", namespace)
+    assert "np" not in namespace and "Simulator" in namespace and "distributed" not in namespace
+
+
+# --- the default backend --------------------------------------------------------------------------
+def test_the_default_backend_is_the_libraries_and_the_cli_picks_auto():
+    # Python's defaults are the C++ struct's: the CPU reference (deterministic on every machine);
+    # the options table is where C++ takes it from.
+    header = (ROOT / "include" / "stabint" / "options_table.h").read_text()
+    assert re.search(r"FIELD\(T\(BackendKind\), backend, BackendKind::CpuReference,", header)
+    assert stabint.SimulatorOptions().backend == BackendKind.CpuReference
+    assert stabint.Simulator(stabint.linear_oscillator()).options.backend == BackendKind.CpuReference
+    # The command-line tool starts from auto (a GPU when one pays off), as its help says.
+    out = subprocess.run([str(stabint_run()), "--help"], capture_output=True, text=True, check=True).stdout
+    assert re.search(r"--backend cpu\|opencl\|auto\s+where the element work runs: cpu, opencl or auto\s+"
+                     r"\(default auto\)", out)
+
+
+# --- the console command --------------------------------------------------------------------------
+def stabint_run():
+    """The `stabint-run` command pip installed next to this interpreter."""
+    command = pathlib.Path(sys.executable).parent / "stabint-run"
+    assert command.exists(), command
+    return command
+
+
+def test_pip_installs_the_stabint_run_command():
+    version = subprocess.run([str(stabint_run()), "--version"], capture_output=True, text=True)
+    assert version.returncode == 0 and version.stdout == f"stabint-run {stabint.__version__}\n"
+    short = subprocess.run([str(stabint_run()), "-h"], capture_output=True, text=True)
+    assert short.returncode == 0 and short.stdout.startswith("Usage: stabint-run --scene NAME|FILE")
+    run = subprocess.run([str(stabint_run()), "--scene", "oscillator", "--integrator", "IM", "--frames", "3",
+                          "--csv", "-"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    rows = run.stdout.splitlines()
+    assert rows[0].startswith("frame,time,kinetic,") and [r.split(",")[0] for r in rows[1:]] == ["0", "1", "2", "3"]
+    assert "stabint-run: scene 'oscillator'" in run.stderr and "3 frames in" in run.stderr
+    bad = subprocess.run([str(stabint_run()), "--scene", "oscillator", "--integrator", "RK4"], capture_output=True,
+                         text=True)
+    assert bad.returncode == 1
+    assert bad.stderr == ("stabint-run: error: --integrator: unknown integrator 'RK4' "
+                          "(expected FE, SE, BE, BDF2, IM or blend)\n")
+
+
+def test_the_command_loads_mesh_files(tmp_path):
+    # The same tool as the C++ one: a mesh file is a scene (docs/guide.md, "Command line").
+    run = subprocess.run([str(stabint_run()), "--scene", str(ROOT / "scenes" / "bar.mesh"), "--frames", "2",
+                          "--quiet", "--csv", str(tmp_path / "bar.csv")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert len((tmp_path / "bar.csv").read_text().splitlines()) == 4
+
+
+# --- properties and methods -----------------------------------------------------------------------
+def test_state_is_a_property_without_an_argument_and_a_method_with_one():
+    # The rule (docs/guide.md, "Python conventions"): what needs no argument is a property
+    # (Simulator.positions, BatchSimulator.all_positions, .time, .size), what takes one is a method
+    # (BatchSimulator.positions(scene), .scene_time(scene)); a method without arguments does work.
+    does_work = {"step", "checkpoint", "energy"}
+    for cls in (stabint.Simulator, stabint.BatchSimulator):
+        for name, attribute in vars(cls).items():
+            if name.startswith("_") or isinstance(attribute, property):
+                continue
+            signatures = [s[0] for s in attribute.__nb_signature__]
+            if any(re.match(rf"def {name}\(self\)", s) for s in signatures):
+                assert name in does_work, f"{cls.__name__}.{name} takes no argument: a property"
+    assert isinstance(vars(stabint.BatchSimulator)["all_positions"], property)
+    assert isinstance(vars(stabint.Simulator)["positions"], property)
+    batch = stabint.BatchSimulator([stabint.chain_pendulum(particles=4), stabint.chain_pendulum(particles=3)])
+    np.testing.assert_array_equal(batch.all_positions[batch.first_particle(1):], batch.positions(1))

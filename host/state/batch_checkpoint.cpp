@@ -155,8 +155,8 @@ RestoreTarget BatchDriver::restoreTarget(int scene, const char* call) const {
   target.pin_block = pinBlock(data_);
   target.contact_block = contact_.block();
   target.colliders = std::size_t(seg.num_colliders);
-  // A Simulator's messages name neither the call nor a scene.
-  target.where = as_simulator_ ? std::string() : std::string(call) + ": scene " + std::to_string(scene) + ": ";
+  // A Simulator's messages name the call, not a scene.
+  target.where = std::string(call) + ": " + (as_simulator_ ? std::string() : "scene " + std::to_string(scene) + ": ");
   return target;
 }
 
@@ -266,17 +266,23 @@ void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegmen
 }
 
 void BatchDriver::restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
-                                 const std::vector<PerScene>& per_scene, bool assemble) {
+                                 const std::vector<PerScene>& per_scene, bool assemble, const std::string& where) {
   const CheckpointData before = batchData();
   const std::vector<SceneSegment> segments_before = segments_;
   const std::vector<PerScene> per_scene_before = per_scene_;
+  // L and the factors as they are now, put back bit for bit unless the restore succeeds.
+  GlobalSystem::Transaction transaction(system_);
   try {
     apply(all, segments, per_scene, assemble);
-  } catch (const Error&) {
-    // What only applying shows (a system that does not factor): the state before goes back.
+  } catch (const Error& e) {
+    // What only applying shows (a system that does not factor): the state before goes back
+    // (its L and factors, which applying it again would compute anew, are the transaction's).
     apply(before, segments_before, per_scene_before, assemble);
+    // The system's refusal names neither the call nor the scene.
+    if (dynamic_cast<const InvalidInputError*>(&e) != nullptr) throw InvalidInputError(where + e.what());
     throw;
   }
+  transaction.commit();
 }
 
 void BatchDriver::restoreScalars(PerScene& p, const CheckpointData& d, double time) {
@@ -329,7 +335,7 @@ void BatchDriver::restoreScene(int scene, const CheckpointData& d) {
   if (assemble) all.contact_log.clear();
   std::vector<PerScene> per_scene = per_scene_;
   restoreScalars(per_scene[std::size_t(scene)], d, t_);
-  restoreChecked(all, segments, per_scene, assemble);
+  restoreChecked(all, segments, per_scene, assemble, target.where);
 }
 
 void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& scenes) {
@@ -362,7 +368,7 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
     if (d.time == time) all.motion.has_history = all.motion.has_history || d.motion.has_history;
   }
   all.contact_log = mergeContactLogs(scenes);
-  restoreChecked(all, segments, per_scene, /*assemble=*/contact_.count() > 0);
+  restoreChecked(all, segments, per_scene, /*assemble=*/contact_.count() > 0, "restore: ");
 }
 
 // ---- the public classes ----------------------------------------------------------------------------
@@ -394,14 +400,15 @@ BatchCheckpoint BatchSimulator::checkpoint() const {
 
 void BatchSimulator::restore(int scene, const Checkpoint& checkpoint) {
   reportingOutOfMemory("BatchSimulator::restore",
-                       [&] { impl_->restoreScene(scene, parseCheckpoint(checkpoint.bytes(), "checkpoint")); });
+                       [&] { impl_->restoreScene(scene, parseCheckpoint(checkpoint.bytes(), "restore: checkpoint")); });
 }
 
 void BatchSimulator::restore(const BatchCheckpoint& checkpoint) {
   reportingOutOfMemory("BatchSimulator::restore", [&] {
     std::vector<CheckpointData> scenes;
     for (int s = 0; s < checkpoint.size(); ++s)
-      scenes.push_back(parseCheckpoint(checkpoint.scene(s).bytes(), "checkpoint of scene " + std::to_string(s)));
+      scenes.push_back(
+          parseCheckpoint(checkpoint.scene(s).bytes(), "restore: checkpoint of scene " + std::to_string(s)));
     impl_->restoreAll(checkpoint.time(), scenes);
   });
 }

@@ -2,8 +2,7 @@
 // either as one BatchSimulator (variant "batch": one solve and one factor for all, one launch per
 // phase on OpenCL) or as N Simulators one after another ("separate"), with BackwardEuler ("BE") or
 // the blend ("blend", EnergyBlend at the default iterations). The ratio of the two is the batch's
-// gain (docs/batch_design.md, the benchmark that judges issue 11 item 3: on OpenCL the batch must
-// be at least 20x "separate" and faster than the CPU reference's "separate").
+// gain (docs/benchmarks.md, "Many scenes at once").
 // bench/batch_chart.py draws and tabulates a run of the family. batch_stops/: solves stopped by
 // accuracy, per scene (runBatchStops).
 #include "bench_common.hpp"

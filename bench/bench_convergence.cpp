@@ -1,4 +1,4 @@
-// Accuracy per iteration budget (issue 19, docs/bench_summary.md "Convergence"): BE from rest for
+// Accuracy per iteration budget (issue 19, docs/benchmarks.md "Convergence"): BE from rest for
 // a fixed number of frames with each solver at a fixed budget, against the same BE with every
 // solve converged (L-BFGS to a 1e-13 relative objective change, at most 20,000 iterations, on the
 // CPU reference; cached per scene for the run).

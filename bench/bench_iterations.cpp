@@ -288,7 +288,7 @@ void registerIterationCases() {
       }
 
   // Factor (cg = 0) against the CG global step (GlobalSolve::ConjugateGradient), per iteration,
-  // with the accuracy counter; run interleaved (docs/bench_summary.md "Global solve on the device").
+  // with the accuracy counter; run interleaved (docs/benchmarks.md "Global solve on the device").
   auto registerGlobalStep = [](const std::string& family, const SceneCase& scene, std::initializer_list<int> cgs) {
     for (const int cg : cgs)
       for (BackendChoice backend : allBackends()) {
@@ -320,7 +320,7 @@ void registerIterationCases() {
 
   // BackendKind::Auto's rule: one BE iteration per backend on spring and triangle cloths and tet
   // bars of growing size (run with --benchmark_enable_random_interleaving so the backends of a
-  // scene see the same load; docs/bench_summary.md "Auto backend rule").
+  // scene see the same load; docs/benchmarks.md "Auto backend rule").
   for (const SceneCase& scene : autoRuleScenes())
     for (BackendChoice backend : allBackends()) {
       const std::string name = "auto_iteration/" + scene.name + "/BE/" + backendLabel(backend);

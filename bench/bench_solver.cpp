@@ -1,7 +1,7 @@
 // The global solve alone, K_c x = rhs with K_c = c M + L for the three columns x, y, z, on the
 // prefactored system, in the ways it can be done, each against its memory bound. The library uses
 // one of them in host/solver/global_system.cpp; these cases are how it was chosen
-// (docs/bench_summary.md, "Global solve against its bound").
+// (docs/benchmarks.md, "Global solve against its bound").
 //   global_solve/<scene>/library              GlobalSystem::solve as the library does it (one pass
 //                                             on the calling thread, whatever cpuThreads())
 //   global_solve/<scene>/cholmod-one-pass     cholmod_solve2 of the three columns at once on the

@@ -27,6 +27,7 @@ packages=(
   tetgen                 # meshes the main job's soft body (scripts/soft_body_mesh.sh)
   libcgal-demo           # ships the surface it meshes: CGAL's data/meshes/elephant.off (CC0)
   python3-venv python3-dev  # the Python package: .venv and the extension's headers (scripts/python.sh)
+  ccache                 # the compiler cache of isolated `pip install .` builds (scripts/isolated_install.sh)
   clang libclang-rt-14-dev  # sanitizer build and libFuzzer harnesses (scripts/sanitize.sh, fuzz.sh)
   clang-format           # the tree's style (.clang-format, scripts/format.sh; checked in CI)
   doxygen                # the API reference of include/stabint/ (scripts/apidocs.sh; checked in CI)

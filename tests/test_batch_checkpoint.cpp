@@ -11,6 +11,7 @@
 #include <stabint/errors.hpp>
 #include <stabint/simulator.hpp>
 
+#include "../fuzz/batch_checkpoint_properties.hpp"
 #include "batch_scenes.hpp"
 
 #include <gtest/gtest.h>
@@ -20,7 +21,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <string>
 #include <vector>
@@ -390,6 +393,65 @@ TEST(BatchCheckpointsRefused, BadInputNamesTheSceneAndChangesNothing) {
   expectRefusedUnchanged(
       batch, twin, [&] { batch.restore(swapped.checkpoint()); },
       "restore: scene 1: checkpoint: it belongs to another scene");
+}
+
+// A batch checkpoint restores into a batch of the same options (batch.hpp), and records them:
+// a restore into a batch of another time step or integrator was accepted silently (issue 46). Each
+// is refused, naming the option and both values, and changes nothing. The iteration budget
+// (setIterations changes it at run time) is not compared, and a version 1 file, which records no
+// options, restores unchecked as it did, and is written back as it was read.
+TEST(BatchCheckpointsRefused, OtherOptionsAreRefusedByName) {
+  const std::vector<Scene> scenes = mixedBatchScenes();
+  const SimulatorOptions options = checkpointOptions(Integrator::EnergyBlend);
+  BatchSimulator source(scenes, options);
+  for (int step = 0; step < 3; ++step) source.step();
+  const BatchCheckpoint whole = BatchCheckpoint::fromBytes(source.checkpoint().bytes());
+
+  struct Other {
+    SimulatorOptions options;
+    std::string part;
+  };
+  std::vector<Other> others(4, Other{options, ""});
+  others[0].options.time_step = 1.0 / 30.0;
+  others[0].part =
+      "restore: the batch checkpoint was taken with time_step = 0.016666666666666666, this batch has "
+      "time_step = 0.033333333333333333";
+  others[1].options.integrator = Integrator::BackwardEuler;
+  others[1].part = std::string("with integrator = ") + integratorName(Integrator::EnergyBlend) +
+                   ", this batch has integrator = " + integratorName(Integrator::BackwardEuler);
+  others[2].options.energy_limit = 0.0;
+  others[2].part = "with energy_limit = 100, this batch has energy_limit = 0";
+  others[3].options.acceleration = Acceleration::Anderson;
+  others[3].part = "this batch has acceleration = ";
+  for (const Other& other : others) {
+    BatchSimulator batch(scenes, other.options), twin(scenes, other.options);
+    batch.step();
+    twin.step();
+    expectRefusedUnchanged(
+        batch, twin, [&] { batch.restore(whole); }, other.part);
+  }
+
+  // Another iteration budget restores, and continues from the checkpoint's time.
+  SimulatorOptions budget = options;
+  budget.iterations = 3;
+  BatchSimulator fewer(scenes, budget);
+  fewer.restore(whole);
+  EXPECT_EQ(fewer.time(), whole.time());
+
+  // The same checkpoint in format version 1: the scenes' checkpoints without the options.
+  std::string bytes = whole.bytes();
+  std::size_t end = 8 + 4 + 8 + 8;  // the magic, the version, the time and the scene count
+  for (int s = 0; s < whole.size(); ++s) end += 8 + whole.scene(s).bytes().size();
+  std::string old = bytes.substr(0, end) + std::string(8, '\0');  // and its checksum
+  const std::uint32_t version = 1;
+  std::memcpy(&old[8], &version, sizeof version);
+  batch_checkpoint_properties::resign(old);
+  const BatchCheckpoint unchecked = BatchCheckpoint::fromBytes(old, "version 1");
+  EXPECT_EQ(unchecked.bytes(), old);
+  BatchSimulator other_step(scenes, others[0].options);
+  other_step.restore(unchecked);
+  EXPECT_EQ(other_step.time(), whole.time());
+  EXPECT_EQ(other_step.positions(2), source.positions(2));
 }
 
 // The serialized form: save and load give the same bytes; a changed byte, a truncation and

@@ -198,5 +198,52 @@ TEST(FactorSolve, ForestIsTheSerialSolveOnAnyThreadCount) {
   }
 }
 
+// GlobalSystem::Transaction around refactorAll, which keeps each factor's analysis while c M + L
+// keeps its pattern: within a Transaction the factors are computed again into copies (every
+// member of a Factor copied, the pattern it was analysed for included), and the result solves
+// as the refactorization in place does, bit for bit; a Transaction that does not commit puts L
+// and the updated factor back, so the solves are those before it, bit for bit.
+TEST(FactorSolve, ARefactorInATransactionIsTheRefactorInPlaceBitForBit) {
+  ClothGridParams cloth;
+  cloth.nx = cloth.ny = 20;
+  const SceneData data(makeClothGrid(cloth));
+  const double c = 900.0;
+  const Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Random(data.numParticles(), 3);
+  const auto updated = [&](GlobalSystem& system) {
+    Eigen::MatrixX3d x(rhs.rows(), 3);
+    system.solve(c, rhs, x);                    // factors K_c
+    system.addToDiagonal({7, 30}, {1e3, 5e2});  // a rank-2 update: an LDL' factor
+    system.solve(c, rhs, x);
+    return x;
+  };
+  GlobalSystem in_place(data), in_copy(data), refused(data);
+  updated(in_place);
+  updated(in_copy);
+  const Eigen::MatrixX3d before = updated(refused);
+  const Eigen::SparseMatrix<double> l_before = refused.stiffnessLaplacian();
+
+  in_place.refactorAll();
+  {
+    GlobalSystem::Transaction transaction(in_copy);
+    in_copy.refactorAll();
+    transaction.commit();
+  }
+  Eigen::MatrixX3d x_place(rhs.rows(), 3), x_copy(rhs.rows(), 3);
+  in_place.solve(c, rhs, x_place);
+  in_copy.solve(c, rhs, x_copy);
+  for (Eigen::Index i = 0; i < x_place.size(); ++i) ASSERT_EQ(x_place.data()[i], x_copy.data()[i]) << i;
+  EXPECT_EQ(in_copy.factorizations(), in_place.factorizations());
+
+  {
+    GlobalSystem::Transaction transaction(refused);
+    refused.addToDiagonal({3}, {2e3});
+    refused.refactorAll();
+  }
+  Eigen::MatrixX3d x_refused(rhs.rows(), 3);
+  refused.solve(c, rhs, x_refused);
+  for (Eigen::Index i = 0; i < before.size(); ++i) ASSERT_EQ(before.data()[i], x_refused.data()[i]) << i;
+  EXPECT_TRUE(Eigen::MatrixXd(refused.stiffnessLaplacian()) == Eigen::MatrixXd(l_before));
+}
+
 }  // namespace
 }  // namespace stabint

@@ -74,6 +74,9 @@ TEST(FieldTables, ListTheMembersInTheStructsOrder) {
   expectTableInStructOrder<ScriptedEvent>("ScriptedEvent");
   expectTableInStructOrder<ClothMaterial>("ClothMaterial");
   expectTableInStructOrder<SolidMaterial>("SolidMaterial");
+  // The options' tables come from the same rows as their members (stabint/options_table.h).
+  expectTableInStructOrder<OpenCLOptions>("OpenCLOptions");
+  expectTableInStructOrder<SimulatorOptions>("SimulatorOptions");
 }
 
 // The fields Python and the C API see, written out here by hand: a field added to a struct and

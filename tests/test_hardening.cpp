@@ -495,6 +495,32 @@ TEST_F(Hostile, SingularImplicitSystemIsRefusedAtConstructionSilently) {
   EXPECT_NO_THROW(Simulator(scene, o));
 }
 
+// Positive definiteness by an explicit test, not CHOLMOD's flag alone (issue 46). CHOLMOD refuses
+// a pivot <= 0 or NaN as it factors, but an infinite one passes: at time_step 1e-152, c = 1/h^2 is
+// 1e304 (4e304 for the midpoint), and c times a particle's 1e5 kg overflows to infinity on every
+// diagonal entry. CHOLMOD reported success with infinite pivots; the factor is now tested (every
+// pivot finite and positive, every entry finite) and the construction refuses the scene, naming
+// c, the largest mass and the stiffness, with nothing printed. A mass 1e10 times lighter builds.
+TEST_F(Hostile, AFactorWithInfinitePivotsIsRefusedByTheExplicitTest) {
+  ChainPendulumParams p;
+  p.particles = 3;
+  p.total_mass = 3e5;
+  SimulatorOptions o;
+  o.time_step = 1e-152;
+  for (const Integrator integrator :
+       {Integrator::BackwardEuler, Integrator::ImplicitMidpoint, Integrator::BDF2, Integrator::EnergyBlend}) {
+    o.integrator = integrator;
+    ::testing::internal::CaptureStdout();
+    expectInvalid([&] { Simulator sim(makeChainPendulum(p), o); },
+                  "is not numerically positive definite: its Cholesky factor has a pivot or an entry that is not "
+                  "finite: c times the largest mass, inf, ");
+    EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
+  }
+  p.total_mass = 3e-5;
+  o.integrator = Integrator::EnergyBlend;
+  EXPECT_NO_THROW(Simulator(makeChainPendulum(p), o));
+}
+
 // --- saving --------------------------------------------------------------------------------------
 
 // A name that is not UTF-8 (one the OBJ loader itself made from a Latin-1 file name) made

@@ -1,6 +1,7 @@
-// Scene concatenation for the batched simulator (docs/batch_design.md, step 1): the segments say
-// where each scene lies, and the concatenation, stepped by one Simulator, steps every scene as its
-// own Simulator does (the premise of the batch: no element couples two scenes).
+// Scene concatenation for the batched simulator (docs/batch_design.md, "Why concatenation is
+// block-diagonal"): the segments say where each scene lies, and the concatenation, stepped by one
+// Simulator, steps every scene as its own Simulator does (the premise of the batch: no element
+// couples two scenes).
 #include <stabint/batch.hpp>
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>

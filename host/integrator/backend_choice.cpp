@@ -59,7 +59,7 @@ std::string microseconds(double us) { return std::to_string(static_cast<long lon
 // than the CPU reference at any scene size measured on the 2-core VM. Since the tet and
 // triangle-strain rotations became Newton polar iterations, the CPU reference's local step is
 // about as fast as PoCL's, and PoCL adds launches, transfers and a host solve slowed by its
-// waiting threads, so small scenes lose and large ones tie (docs/bench_summary.md "Auto backend
+// waiting threads, so small scenes lose and large ones tie (docs/benchmarks.md "Auto backend
 // rule"). A tie goes to the CPU reference (double, no program build, one core);
 // BackendKind::OpenCL still selects PoCL.
 BackendSelection chooseBackend(const SimulatorOptions& o, const std::vector<OpenCLDeviceInfo>& devices,

@@ -164,9 +164,11 @@ struct BatchDriver {
   // Scene p's values as its checkpoint has them: active when at the batch's time `time` (its
   // E_scale stays its own, as a Simulator's does).
   static void restoreScalars(PerScene& p, const CheckpointData& d, double time);
-  // Checked, then applied; a refusal puts the state before back through the same path.
+  // Checked, then applied; a refusal puts the state before back through the same path, and L
+  // and the factors as they were (GlobalSystem::Transaction). `where` prefixes the refusals that
+  // only applying shows (a system that does not factor).
   void restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
-                      const std::vector<PerScene>& per_scene, bool assemble);
+                      const std::vector<PerScene>& per_scene, bool assemble, const std::string& where);
 
   BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
   double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;

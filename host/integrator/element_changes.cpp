@@ -102,19 +102,20 @@ void ElementChanges::change(ElementKind kind, std::vector<int> indices, const do
   }
   GlobalSystem::WeightChange weights;
   for (std::size_t i = 0; i < indices.size(); ++i) addTerm(weights, block, indices[i], w_old[i]);
+  // L and the factors as they are now, put back bit for bit unless the change succeeds.
+  GlobalSystem::Transaction transaction(system_);
   try {
     system_.apply(weights, scene_);
   } catch (const Error&) {
     // The new system does not factor (a stiffness too large for the masses, as the constructor
-    // refuses it): the old stiffnesses and flags go back, with L and the factors from them.
+    // refuses it): the old stiffnesses and flags go back, and the transaction L and the factors.
     for (std::size_t i = indices.size(); i-- > 0;) {
       scene_.setElementStiffness(block, indices[i], k_old[i]);
       scene_.setElementEnabled(block, indices[i], on_old[i]);
     }
-    system_.assemble(scene_);
-    system_.refactorAll();
     throw;
   }
+  transaction.commit();
 }
 
 void ElementChanges::changePins(const std::vector<Pin>& pins, int inserted) {

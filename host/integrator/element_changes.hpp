@@ -36,7 +36,7 @@ class ElementChanges {
 
   /// setElementStiffness (`stiffness` given) or setElementEnabled (`enabled`) of `indices`:
   /// everything is validated before L changes; a system that does not factor puts the old
-  /// stiffnesses and flags back and throws.
+  /// stiffnesses and flags back, and L and the factors as they were (bit for bit), and throws.
   void change(ElementKind kind, std::vector<int> indices, const double* stiffness, bool enabled);
 
   /// A new pin set (validated first: nothing changes when it throws): the element blocks and

@@ -155,9 +155,11 @@ double kineticEnergy(const Eigen::VectorXd& masses, const Eigen::MatrixX3d& v) {
 
 StepRefusal stepRefusal(int step, double t, double t1, Integrator integrator, const std::string& what,
                         bool energy_limit) {
-  // Nothing was committed: the state is the last accepted one, at t.
+  // Nothing was committed: the state is the last accepted one, at t. The step is named by its
+  // index from 0 (NonFiniteStateError::step()), and labelled so: frames and step counts elsewhere
+  // (stabint-run, sweeps) count from 1.
   std::ostringstream msg;
-  msg << "step " << step << " (t = " << t << " -> " << t1 << ", integrator " << integratorName(integrator)
+  msg << "step index " << step << " (t = " << t << " -> " << t1 << ", integrator " << integratorName(integrator)
       << "): " << what << (energy_limit ? "; step refused" : "; the simulation blew up, step refused")
       << ", state kept at t = " << t;
   return StepRefusal{msg.str(), energy_limit, step};

@@ -46,8 +46,8 @@ inline double quadraticRootInBracket(double c2, double c1, double c0, double a, 
 }  // namespace detail
 
 /// The root find as a resumable state machine, so that a batch of scenes can run one search per
-/// scene in lockstep, one batched energy pass per round (docs/batch_design.md, "The blend"):
-/// while !done(), evaluate the potential at next() and take() it. Finds alpha in [a, b] with
+/// scene in lockstep, one batched energy pass per round (docs/batch_design.md, "The step in
+/// lockstep"): while !done(), evaluate the potential at next() and take() it. Finds alpha in [a, b] with
 /// |K(alpha) + P(alpha) - target| <= tol, given P(a) = pa and P(b) = pb with K + P - target of
 /// opposite signs at a and b, using at most `max_evaluations` evaluations.
 class BlendWeightSearch {

@@ -101,10 +101,11 @@ bool Simulator::elementEnabled(ElementKind kind, int index) const {
 Checkpoint Simulator::checkpoint() const { return impl_->driver->checkpointOf(impl_->driver->batchData(), 0); }
 
 // The batch of one takes the checkpoint's time, as restoring a whole batch does; a refused
-// restore changes nothing (BatchDriver::restoreChecked).
+// restore changes nothing, its factors included (BatchDriver::restoreChecked), and its message
+// starts with "restore: ".
 void Simulator::restore(const Checkpoint& checkpoint) {
   reportingOutOfMemory("Simulator::restore", [&] {
-    const CheckpointData d = parseCheckpoint(checkpoint.bytes(), "checkpoint");
+    const CheckpointData d = parseCheckpoint(checkpoint.bytes(), "restore: checkpoint");
     impl_->driver->restoreAll(d.time, {d});
     impl_->report = StepReport{};
   });

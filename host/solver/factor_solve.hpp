@@ -6,7 +6,7 @@
 // scalar code (three loads, products and stores per factor entry, blocks of at most three
 // columns) and, for L^T, one dependent chain of subtractions per column; that, not the factor's
 // bytes, bounds it (2-5x the time to stream the factor twice, about twice this solve's time;
-// docs/bench_summary.md "Global solve against its bound"). Here a row of the right-hand side is
+// docs/benchmarks.md "Global solve against its bound"). Here a row of the right-hand side is
 // one vector of `lanes` doubles (x, y, z and a zero lane, or two of them); chained columns of the
 // factor (a supernode: each column has the rows of the one before, less its diagonal) go in
 // blocks of up to 8, whose rows below the block are read and written once for the block; L^T's

@@ -9,16 +9,39 @@
 #include <cmath>
 #include <cstddef>
 #include <iterator>
+#include <new>
 #include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace stabint {
+namespace {
+
+// The explicit test of a factor that CHOLMOD reports positive definite. CHOLMOD refuses a pivot
+// that is <= 0 or NaN as it factors, but an infinite one passes (a c m_i or a diagonal entry of L
+// that overflows: its column is then divided by infinity), and the solves would return zeros or
+// NaN. Every pivot (the diagonal of L, or D of an LDL' factor) finite and positive, and every
+// entry finite. O(entries), against the factorization's O(entries x column length).
+bool pivotsFiniteAndPositive(const cholmod_factor& f) {
+  const int* p = static_cast<const int*>(f.p);
+  const int* nz = static_cast<const int*>(f.nz);
+  const double* x = static_cast<const double*>(f.x);
+  for (std::size_t j = 0; j < f.n; ++j) {
+    const double* column = x + p[j];
+    if (!(column[0] > 0.0 && std::isfinite(column[0]))) return false;
+    for (int k = 1; k < nz[j]; ++k)
+      if (!std::isfinite(column[k])) return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 GlobalSystem::GlobalSystem(const SceneData& scene) : masses_(scene.masses()) { assemble(scene); }
 
 void GlobalSystem::assemble(const SceneData& scene) {
+  keepLaplacian();
   const int n = scene.numParticles();
   std::vector<Eigen::Triplet<double>> entries;
   std::size_t count = 0;
@@ -121,17 +144,29 @@ void GlobalSystem::factor(double c, const char* c_name, std::unique_ptr<Factor> 
     factor->pattern_starts.assign(k.outerIndexPtr(), k.outerIndexPtr() + k.outerSize() + 1);
     factor->pattern_rows.assign(k.innerIndexPtr(), k.innerIndexPtr() + k.nonZeros());
   }
-  if (factor->info() != Eigen::Success) {
+  const bool flagged = factor->info() != Eigen::Success;
+  if (!flagged && !simplicialSolveApplies(*factor->factor()))
+    throw Error("GlobalSystem::factor: CHOLMOD factor of an unexpected kind");
+  if (flagged || !pivotsFiniteAndPositive(*factor->factor())) {
     const double stiffest = laplacian_.nonZeros() > 0 ? laplacian_.diagonal().maxCoeff() : 0.0;
-    const double lightest = masses_.size() > 0 ? masses_.minCoeff() : 0.0;
     std::ostringstream what;
     what << "the implicit system c M + L (c = ";
     if (std::string(c_name) != "c") what << c_name << " = ";  // not "c = c = 900"
-    what << c << ") is not numerically positive definite: c times the smallest mass, " << c * lightest
-         << ", is lost against the largest element stiffness (diagonal of L), " << stiffest
-         << ", in double precision; raise the masses, shorten time_step or lower the stiffnesses";
+    what << c << ") is not numerically positive definite: ";
+    if (flagged) {
+      const double lightest = masses_.size() > 0 ? masses_.minCoeff() : 0.0;
+      what << "c times the smallest mass, " << c * lightest
+           << ", is lost against the largest element stiffness (diagonal of L), " << stiffest
+           << ", in double precision; raise the masses, shorten time_step or lower the stiffnesses";
+    } else {
+      const double heaviest = masses_.size() > 0 ? masses_.maxCoeff() : 0.0;
+      what << "its Cholesky factor has a pivot or an entry that is not finite: c times the largest mass, "
+           << c * heaviest << ", or the largest element stiffness (diagonal of L), " << stiffest
+           << ", is beyond double precision; lower the masses, lengthen time_step or lower the stiffnesses";
+    }
     throw InvalidInputError(what.str());
   }
+  keepFactors(true);
   factors_.emplace(c, std::move(factor));
   ++factorizations_;
 }
@@ -143,7 +178,7 @@ void GlobalSystem::solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d
   const Eigen::Index n = rhs.rows();
   x.resize(n, 3);
   // One pass over the factor for the three columns (the columns split over threads would each
-  // read the whole factor; docs/bench_summary.md, "Global solve against its bound"). A batch's
+  // read the whole factor; docs/benchmarks.md, "Global solve against its bound"). A batch's
   // factor, a forest of many trees none of which holds half the entries, is solved tree by tree on
   // every thread (the serial arithmetic); on other large systems the backward pass goes over two
   // subtrees on two threads. Both by the size alone, so that the arithmetic is the same on any
@@ -269,6 +304,9 @@ bool GlobalSystem::changeIsHuge(const int* vertices, int K, const double* a, int
 }
 
 void GlobalSystem::refactorAll() {
+  // Within a Transaction the factors are computed again into copies (keeping their analysis as
+  // below); the originals stay aside, bit for bit, until it commits.
+  keepFactors(true);
   std::map<double, std::unique_ptr<Factor>> previous;
   previous.swap(factors_);
   for (auto& [c, f] : previous) factor(c, "c", std::move(f));
@@ -286,6 +324,8 @@ const std::vector<int>& GlobalSystem::Factor::rowOf() {
 }
 
 void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, int R, double delta, FactorChange how) {
+  keepLaplacian();
+  keepFactors(how == FactorChange::RankUpdate);
   for (int i = 0; i < K; ++i) {
     for (int j = 0; j < K; ++j) {
       double sum = 0.0;
@@ -335,6 +375,8 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
 }
 
 void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::vector<double>& deltas) {
+  keepLaplacian();
+  keepFactors(true);
   for (std::size_t i = 0; i < vertices.size(); ++i) laplacian_.coeffRef(vertices[i], vertices[i]) += deltas[i];
   laplacianChanged();
   const int n = static_cast<int>(laplacian_.rows());
@@ -372,6 +414,79 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
     // As addElementTerm: a failed update leaves the factor unusable; factor it again on next use.
     it = updated ? std::next(it) : factors_.erase(it);
   }
+}
+
+std::unique_ptr<GlobalSystem::Factor> GlobalSystem::Factor::copy() {
+  auto f = std::make_unique<Factor>();
+  f->cholmod().print = 0;
+  f->m_cholmodFactor = cholmod_copy_factor(m_cholmodFactor, &f->cholmod());
+  if (f->m_cholmodFactor == nullptr) throw std::bad_alloc();
+  f->m_isInitialized = m_isInitialized;
+  f->m_info = m_info;
+  f->m_analysisIsOk = m_analysisIsOk;
+  f->m_factorizationIsOk = m_factorizationIsOk;
+  f->m_shiftOffset[0] = m_shiftOffset[0];
+  f->m_shiftOffset[1] = m_shiftOffset[1];
+  f->forest = forest;
+  f->split = split;
+  f->shape_known = shape_known;
+  f->trees = trees;
+  f->tree_block = tree_block;
+  f->trees_known = trees_known;
+  f->row_of = row_of;
+  f->pattern_starts = pattern_starts;
+  f->pattern_rows = pattern_rows;
+  return f;
+}
+
+void GlobalSystem::keepLaplacian() {
+  if (!kept_.open || kept_.has_laplacian) return;
+  kept_.laplacian = laplacian_;
+  kept_.has_laplacian = true;
+}
+
+void GlobalSystem::keepFactors(bool copy_back) {
+  if (!kept_.open || kept_.has_factors) return;
+  std::map<double, std::unique_ptr<Factor>> copies;
+  if (copy_back)
+    for (auto& [c, factor] : factors_) copies.emplace(c, factor->copy());
+  kept_.factors = std::move(factors_);
+  factors_ = std::move(copies);
+  kept_.has_factors = true;
+}
+
+void GlobalSystem::rollback() noexcept {
+  if (kept_.has_laplacian) {
+    laplacian_.swap(kept_.laplacian);
+    // A new version, not the old one: a copy of L made meanwhile must not pass for current.
+    laplacianChanged();
+  }
+  if (kept_.has_factors) factors_ = std::move(kept_.factors);
+  dropKept();
+}
+
+void GlobalSystem::dropKept() noexcept {
+  kept_.factors.clear();
+  try {
+    kept_.laplacian.resize(0, 0);  // frees its entries (keeps one index)
+  } catch (const std::bad_alloc&) {
+    // The copy stays until the next transaction replaces it.
+  }
+  kept_.open = kept_.has_laplacian = kept_.has_factors = false;
+}
+
+GlobalSystem::Transaction::Transaction(GlobalSystem& system) : system_(system) {
+  if (system_.kept_.open) throw Error("GlobalSystem::Transaction: one is open already");
+  system_.kept_.open = true;
+}
+
+GlobalSystem::Transaction::~Transaction() {
+  if (!committed_) system_.rollback();
+}
+
+void GlobalSystem::Transaction::commit() {
+  system_.dropKept();
+  committed_ = true;
 }
 
 int GlobalSystem::WeightChange::updatePrice() const {

@@ -26,10 +26,13 @@ class GlobalSystem {
   /// the changes that led to them.
   void assemble(const SceneData& scene);
 
-  /// Factors K_c unless it already is. A K_c that is not numerically positive definite (masses
-  /// too small for the stiffnesses at this c, e.g. 5e-324 kg against 1e308 N/m) is an
+  /// Factors K_c unless it already is. A K_c that is not numerically positive definite is an
   /// InvalidInputError naming the masses, the stiffness and `c_name` (how c follows from the
-  /// options, e.g. "1/time_step^2"). Nothing is printed (CHOLMOD would print on stdout).
+  /// options, e.g. "1/time_step^2"): one that CHOLMOD flags (masses too small for the stiffnesses
+  /// at this c, e.g. 1e-300 kg against 8e149 N/m), and, by an explicit test of the factor CHOLMOD
+  /// accepted, one whose pivots are not all finite and positive or whose entries are not all
+  /// finite (an infinite pivot passes CHOLMOD's test: c m_i beyond double's range, e.g. 1e5 kg at
+  /// time_step 1e-152). Nothing is printed (CHOLMOD would print on stdout).
   void factor(double c, const char* c_name = "c");
 
   /// Solves K_c x = rhs for the three columns of `rhs` (`n by 3`), factoring K_c on first use:
@@ -45,7 +48,7 @@ class GlobalSystem {
   /// stopped, or not stepping).
   void solve(double c, const Eigen::MatrixX3d& rhs, Eigen::MatrixX3d& x, const std::vector<char>* solved = nullptr);
   /// From this many particles solve() splits the backward pass over two subtrees (below it the
-  /// second thread costs more than it saves; docs/bench_summary.md "Global solve against its
+  /// second thread costs more than it saves; docs/benchmarks.md "Global solve against its
   /// bound").
   static constexpr Eigen::Index kSubtreeRows = 15000;
   /// From this many particles solve() runs the trees of a factor that is a forest (a batch's: one
@@ -76,7 +79,10 @@ class GlobalSystem {
 
   /// Drops every factor (GlobalSolve::ConjugateGradient factors only to validate the system, so
   /// element changes then update no factor).
-  void dropFactors() { factors_.clear(); }
+  void dropFactors() {
+    keepFactors(false);
+    factors_.clear();
+  }
 
   /// L = sum_e w_e A_e^T A_e (assembled once).
   const Eigen::SparseMatrix<double>& stiffnessLaplacian() const { return laplacian_; }
@@ -177,6 +183,27 @@ class GlobalSystem {
   bool apply(const WeightChange& change, const SceneData& scene, Update how = Update::Cheapest);
   static constexpr int kMaxUpdatePrice = 256;
 
+  /// [project rule] A refused change puts L and the factors back as they were, bit for bit: a
+  /// factor computed again from the old weights, or updated back, rounds differently from the one
+  /// it replaces (whose rank updates are part of it), and every later step would drift from an
+  /// untouched twin. While a Transaction is open the first change of L keeps a copy of it and the
+  /// first change of the factors keeps the factors (moved aside, with copies left in their place
+  /// where they are updated in place); its destructor puts them back unless commit() was called.
+  /// Nothing is copied when nothing changes. One at a time.
+  class Transaction {
+   public:
+    explicit Transaction(GlobalSystem& system);
+    ~Transaction();
+    Transaction(const Transaction&) = delete;
+    Transaction& operator=(const Transaction&) = delete;
+    /// Keeps the changes: what was kept is dropped.
+    void commit();
+
+   private:
+    GlobalSystem& system_;
+    bool committed_ = false;
+  };
+
  private:
   // Simplicial CHOLMOD: solve() reads its columns directly (factor_solve.hpp), which took 0.1-0.3
   // of the time of CHOLMOD's supernodal solve with Debian's reference BLAS and 0.3-0.6 with
@@ -207,9 +234,31 @@ class GlobalSystem {
     // the analysis while a new K_c has the same.
     std::vector<int> pattern_starts, pattern_rows;
     bool analysedFor(const Eigen::SparseMatrix<double>& k) const;
+    // An independent copy: CHOLMOD's factor (cholmod_copy_factor, into the copy's own workspace)
+    // and every member above (what was found about it, the pattern it was analysed for).
+    // std::bad_alloc when memory runs out.
+    std::unique_ptr<Factor> copy();
   };
   // factor(c, c_name), computing the numbers into `reused` where it was analysed for K_c's pattern.
   void factor(double c, const char* c_name, std::unique_ptr<Factor> reused);
+  // What an open Transaction keeps: L and the factors as they were before their first change.
+  struct Kept {
+    bool open = false;
+    bool has_laplacian = false;
+    bool has_factors = false;
+    Eigen::SparseMatrix<double> laplacian;
+    std::map<double, std::unique_ptr<Factor>> factors;
+  };
+  Kept kept_;
+  // Called by every change of L or of the factors before it changes them: within a Transaction,
+  // the first keeps L (a copy), respectively the factors (moved aside; `copy_back`: copies stay
+  // in factors_, for a change that updates them in place).
+  void keepLaplacian();
+  void keepFactors(bool copy_back);
+  // Puts what the Transaction kept back (noexcept: only moves and swaps) and closes it.
+  void rollback() noexcept;
+  // Frees what the Transaction kept and closes it.
+  void dropKept() noexcept;
   int factorizations_ = 0;
   int laplacian_version_ = 0;
   // K_c = c M + L (or one diagonal block of it) and its CG solver (which keeps a reference to it),

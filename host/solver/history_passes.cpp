@@ -11,7 +11,7 @@ namespace stabint::history_passes {
 // each lane adding its values in index order and the lanes then summed in a fixed tree: the same
 // bits on any machine (the build has no FMA contraction). The updates (q -= a y, d += c s) do
 // Eigen's arithmetic, value by value. What the passes cost now is memory traffic: the vectors come
-// from the last-level cache (docs/benchmarks.md, "L-BFGS's cost per iteration on the peer cloth").
+// from the last-level cache (docs/benchmarks.md, "L-BFGS's cost per iteration").
 
 // Value i goes to lane i % kLanes, in both the whole groups and the tail.
 STABINT_TARGET_CLONES

@@ -13,6 +13,7 @@
 
 #include <stabint/errors.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -79,6 +80,47 @@ void spliceForces(Forcing::Ramp& all, int first, int count, const Forcing::Ramp&
   }
   all.start.middleRows(first, count) = own.start;
   all.end.middleRows(first, count) = own.end;
+}
+
+// An option's value as a batch checkpoint records it: a double to the bit (17 digits), an int
+// in decimal, an enum by its name.
+std::string optionText(double value) { return timeText(value); }
+std::string optionText(int value) { return std::to_string(value); }
+std::string optionText(Integrator value) { return integratorName(value); }
+std::string optionText(Acceleration value) { return accelerationName(value); }
+std::string optionText(GlobalSolve value) { return globalSolveName(value); }
+std::string optionText(BackendKind value) { return backendName(value); }
+
+// The options a batch checkpoint records and a restore compares (include/stabint/batch.hpp):
+// every row of the options table (stabint/options_table.h) but `iterations`, which setIterations
+// changes at run time, and where the work runs (`backend` and the nested `opencl`): the state means
+// the same on every device, as a Simulator's checkpoint does.
+std::vector<std::pair<std::string, std::string>> recordedOptions(const SimulatorOptions& o) {
+  std::vector<std::pair<std::string, std::string>> out;
+#define STABINT_RECORD_OPTION(type, name, default_value, rule, doc)          \
+  if (std::string(#name) != "iterations" && std::string(#name) != "backend") \
+    out.emplace_back(#name, optionText(o.name));
+#define STABINT_RECORD_NESTED(type, name, fields, doc)
+  STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_RECORD_OPTION, STABINT_RECORD_NESTED)
+#undef STABINT_RECORD_OPTION
+#undef STABINT_RECORD_NESTED
+  return out;
+}
+
+// InvalidInputError naming the first option of `options` whose value differs from the one the
+// checkpoint recorded (or that it did not record).
+void checkSameOptions(const std::vector<std::pair<std::string, std::string>>& recorded,
+                      const SimulatorOptions& options) {
+  for (const auto& [name, value] : recordedOptions(options)) {
+    const auto found = std::find_if(recorded.begin(), recorded.end(), [&](const auto& r) { return r.first == name; });
+    if (found == recorded.end())
+      throw InvalidInputError("restore: the batch checkpoint does not record the option " + name +
+                              " (a batch checkpoint restores into a batch of the same options)");
+    if (found->second != value)
+      throw InvalidInputError("restore: the batch checkpoint was taken with " + name + " = " + found->second +
+                              ", this batch has " + name + " = " + value +
+                              ": a batch checkpoint restores into a batch of the same options");
+  }
 }
 
 }  // namespace
@@ -155,8 +197,8 @@ RestoreTarget BatchDriver::restoreTarget(int scene, const char* call) const {
   target.pin_block = pinBlock(data_);
   target.contact_block = contact_.block();
   target.colliders = std::size_t(seg.num_colliders);
-  // A Simulator's messages name neither the call nor a scene.
-  target.where = as_simulator_ ? std::string() : std::string(call) + ": scene " + std::to_string(scene) + ": ";
+  // A Simulator's messages name the call, not a scene.
+  target.where = std::string(call) + ": " + (as_simulator_ ? std::string() : "scene " + std::to_string(scene) + ": ");
   return target;
 }
 
@@ -266,17 +308,23 @@ void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegmen
 }
 
 void BatchDriver::restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
-                                 const std::vector<PerScene>& per_scene, bool assemble) {
+                                 const std::vector<PerScene>& per_scene, bool assemble, const std::string& where) {
   const CheckpointData before = batchData();
   const std::vector<SceneSegment> segments_before = segments_;
   const std::vector<PerScene> per_scene_before = per_scene_;
+  // L and the factors as they are now, put back bit for bit unless the restore succeeds.
+  GlobalSystem::Transaction transaction(system_);
   try {
     apply(all, segments, per_scene, assemble);
-  } catch (const Error&) {
-    // What only applying shows (a system that does not factor): the state before goes back.
+  } catch (const Error& e) {
+    // What only applying shows (a system that does not factor): the state before goes back
+    // (its L and factors, which applying it again would compute anew, are the transaction's).
     apply(before, segments_before, per_scene_before, assemble);
+    // The system's refusal names neither the call nor the scene.
+    if (dynamic_cast<const InvalidInputError*>(&e) != nullptr) throw InvalidInputError(where + e.what());
     throw;
   }
+  transaction.commit();
 }
 
 void BatchDriver::restoreScalars(PerScene& p, const CheckpointData& d, double time) {
@@ -329,7 +377,7 @@ void BatchDriver::restoreScene(int scene, const CheckpointData& d) {
   if (assemble) all.contact_log.clear();
   std::vector<PerScene> per_scene = per_scene_;
   restoreScalars(per_scene[std::size_t(scene)], d, t_);
-  restoreChecked(all, segments, per_scene, assemble);
+  restoreChecked(all, segments, per_scene, assemble, target.where);
 }
 
 void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& scenes) {
@@ -362,7 +410,7 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
     if (d.time == time) all.motion.has_history = all.motion.has_history || d.motion.has_history;
   }
   all.contact_log = mergeContactLogs(scenes);
-  restoreChecked(all, segments, per_scene, /*assemble=*/contact_.count() > 0);
+  restoreChecked(all, segments, per_scene, /*assemble=*/contact_.count() > 0, "restore: ");
 }
 
 // ---- the public classes ----------------------------------------------------------------------------
@@ -388,20 +436,25 @@ BatchCheckpoint BatchSimulator::checkpoint() const {
     BatchCheckpoint batch;
     batch.time_ = impl_->t_;
     for (int s = 0; s < size(); ++s) batch.scenes_.push_back(impl_->checkpointOf(all, s));
+    batch.options_ = recordedOptions(impl_->options_);
+    batch.has_options_ = true;
     return batch;
   });
 }
 
 void BatchSimulator::restore(int scene, const Checkpoint& checkpoint) {
   reportingOutOfMemory("BatchSimulator::restore",
-                       [&] { impl_->restoreScene(scene, parseCheckpoint(checkpoint.bytes(), "checkpoint")); });
+                       [&] { impl_->restoreScene(scene, parseCheckpoint(checkpoint.bytes(), "restore: checkpoint")); });
 }
 
 void BatchSimulator::restore(const BatchCheckpoint& checkpoint) {
   reportingOutOfMemory("BatchSimulator::restore", [&] {
+    // A version 1 checkpoint recorded no options: restored unchecked, as it was then.
+    if (checkpoint.has_options_) checkSameOptions(checkpoint.options_, impl_->options_);
     std::vector<CheckpointData> scenes;
     for (int s = 0; s < checkpoint.size(); ++s)
-      scenes.push_back(parseCheckpoint(checkpoint.scene(s).bytes(), "checkpoint of scene " + std::to_string(s)));
+      scenes.push_back(
+          parseCheckpoint(checkpoint.scene(s).bytes(), "restore: checkpoint of scene " + std::to_string(s)));
     impl_->restoreAll(checkpoint.time(), scenes);
   });
 }
@@ -409,11 +462,23 @@ void BatchSimulator::restore(const BatchCheckpoint& checkpoint) {
 namespace {
 
 constexpr char kBatchMagic[8] = {'S', 'T', 'B', 'B', 'T', 'C', 'H', '\n'};
-constexpr std::uint32_t kBatchVersion = 1;
+// 2: the batch's options (recordedOptions) after the scenes' checkpoints.
+constexpr std::uint32_t kBatchVersion = 2;
+constexpr std::uint32_t kOldestBatchVersion = 1;
+// An option's name or value is at most this long, and a checkpoint records at most this many:
+// bounds for a file's counts, far above the table's (its longest value is a double's 17 digits,
+// sign and exponent).
+constexpr std::uint32_t kMostOptionText = 64;
+constexpr std::int64_t kMostOptions = 256;
 
 template <typename T>
 void put(std::string& out, const T& v) {
   out.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+void putText(std::string& out, const std::string& text) {
+  put(out, static_cast<std::uint32_t>(text.size()));
+  out += text;
 }
 
 }  // namespace
@@ -426,15 +491,24 @@ const Checkpoint& BatchCheckpoint::scene(int scene) const {
 }
 
 // The magic, the version, the time, the scene count, each scene's checkpoint (its size, then its
-// bytes, which have their own checksum), and a checksum of everything before it.
+// bytes, which have their own checksum), the options (their count, then each name and value as a
+// size and its characters), and a checksum of everything before it. A checkpoint read from a
+// version 1 file is written as it was read (without options).
 std::string BatchCheckpoint::bytes() const {
   std::string out(kBatchMagic, sizeof kBatchMagic);
-  put(out, kBatchVersion);
+  put(out, has_options_ ? kBatchVersion : kOldestBatchVersion);
   put(out, time_);
   put(out, static_cast<std::int64_t>(scenes_.size()));
   for (const Checkpoint& c : scenes_) {
     put(out, static_cast<std::int64_t>(c.bytes().size()));
     out += c.bytes();
+  }
+  if (has_options_) {
+    put(out, static_cast<std::int64_t>(options_.size()));
+    for (const auto& [name, value] : options_) {
+      putText(out, name);
+      putText(out, value);
+    }
   }
   put(out, checkpointChecksum(out.data(), out.size()));
   return out;
@@ -456,8 +530,9 @@ BatchCheckpoint BatchCheckpoint::fromBytes(const std::string& bytes, const std::
   if (std::memcmp(magic, kBatchMagic, sizeof magic) != 0) fail("wrong header");
   std::uint32_t version = 0;
   take(&version, sizeof version, "the version");
-  if (version != kBatchVersion)
-    fail("format version " + std::to_string(version) + ", expected " + std::to_string(kBatchVersion));
+  if (version < kOldestBatchVersion || version > kBatchVersion)
+    fail("format version " + std::to_string(version) + ", expected " + std::to_string(kOldestBatchVersion) + " to " +
+         std::to_string(kBatchVersion));
   std::uint64_t stored = 0;
   if (end - pos < sizeof stored) fail("truncated at the checksum");
   end -= sizeof stored;
@@ -481,6 +556,31 @@ BatchCheckpoint BatchCheckpoint::fromBytes(const std::string& bytes, const std::
     batch.scenes_.push_back(
         Checkpoint::fromBytes(bytes.substr(pos, std::size_t(size)), origin + ", scene " + std::to_string(s)));
     pos += std::size_t(size);
+  }
+  if (version >= 2) {
+    // Names and values are printable ASCII without spaces, each name once; which names and values
+    // a batch accepts is the restore's to check.
+    const auto text = [&](const char* what) {
+      std::uint32_t size = 0;
+      take(&size, sizeof size, what);
+      if (size == 0 || size > kMostOptionText || size > end - pos) fail(std::string(what) + ": size out of range");
+      std::string t = bytes.substr(pos, size);
+      pos += size;
+      for (char c : t)
+        if (c < '!' || c > '~') fail(std::string(what) + ": not printable text");
+      return t;
+    };
+    std::int64_t options = 0;
+    take(&options, sizeof options, "the option count");
+    if (options < 0 || options > kMostOptions) fail("option count " + std::to_string(options) + " out of range");
+    for (std::int64_t i = 0; i < options; ++i) {
+      std::string name = text("an option's name");
+      std::string value = text("an option's value");
+      for (const auto& known : batch.options_)
+        if (known.first == name) fail("the option " + name + " is recorded twice");
+      batch.options_.emplace_back(std::move(name), std::move(value));
+    }
+    batch.has_options_ = true;
   }
   if (pos != end) fail(std::to_string(end - pos) + " bytes after the end");
   return batch;

@@ -61,7 +61,7 @@ struct RestoreTarget {
   int pin_block = -1;
   int contact_block = -1;  // -1: none
   std::size_t colliders = 0;
-  std::string where;  // the messages' prefix ("restore: scene 2: "; empty for a Simulator)
+  std::string where;  // the messages' prefix ("restore: scene 2: "; "restore: " for a Simulator)
 };
 
 /// What a restore can check before it changes anything: InvalidInputError unless `d` belongs to

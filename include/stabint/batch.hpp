@@ -10,6 +10,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace stabint {
@@ -37,8 +38,11 @@ struct BatchStepReport {
 /// stiffnesses as the checkpoint (the same batch, or a new one when no pin or element was changed
 /// before the checkpoint): the batch's one factor is then the same, as a Simulator's is (see
 /// Checkpoint). Otherwise the factor is updated rather than the same, and the run agrees to
-/// round-off. A scene that was inactive (refused) is restored inactive. The serialized form (bytes(),
-/// save()) is one file: a versioned header, the time, and each scene's checkpoint.
+/// round-off. A scene that was inactive (refused) is restored inactive. It records the batch's
+/// options, and a batch of other options refuses it (restore names the option that differs). The
+/// serialized form (bytes(), save()) is one file: a versioned header, the time, each scene's
+/// checkpoint and the options (format version 2; a version 1 file has no options and restores
+/// unchecked, as it did).
 class BatchCheckpoint {
  public:
   /// The batch's time (BatchSimulator::time()) at the snapshot.
@@ -62,6 +66,10 @@ class BatchCheckpoint {
   friend class BatchSimulator;
   double time_ = 0.0;
   std::vector<Checkpoint> scenes_;
+  // The options of the batch it was taken from that a restore compares, as (name, value) text;
+  // none in a version 1 file (has_options_ false).
+  std::vector<std::pair<std::string, std::string>> options_;
+  bool has_options_ = false;
 };
 
 /// Steps many scenes with one integrator and one set of options: one local/global solve and one
@@ -245,8 +253,11 @@ class BatchSimulator {
   /// Continues every scene from `checkpoint`, a snapshot of a batch of the same scenes (in the
   /// same order) and options: the batch's time, each scene's state, target, pins, elements,
   /// forcing and contact set, BDF2's history, which scenes are inactive. Refused, with nothing
-  /// changed, by an InvalidInputError: another number of scenes, or a scene's checkpoint of
-  /// another scene or of a time after the batch checkpoint's (naming the scene).
+  /// changed, by an InvalidInputError: other options (naming the first that differs; every option
+  /// is compared but `iterations`, which setIterations changes at run time, and where the work runs,
+  /// `backend` and `opencl`: a checkpoint moves between devices as a Simulator's does), another
+  /// number of scenes, or a scene's checkpoint of another scene or of a time after the batch
+  /// checkpoint's (naming the scene).
   void restore(const BatchCheckpoint& checkpoint);
 
  private:

@@ -168,8 +168,10 @@ class Simulator {
 
   /// Snapshot of the current simulation (see Checkpoint).
   Checkpoint checkpoint() const;
-  /// Continues from a snapshot of a Simulator of the same scene. Throws InvalidInputError when it
-  /// belongs to another scene (particle, pin or element counts, masses or rest shape differ).
+  /// Continues from a snapshot of a Simulator of the same scene. Throws InvalidInputError, its
+  /// message starting "restore: ", when it belongs to another scene (particle, pin or element
+  /// counts, masses or rest shape differ) or its system does not factor; a refused restore changes
+  /// nothing, the global factors included: the simulator steps on bit for bit as it would have.
   void restore(const Checkpoint& checkpoint);
 
  private:

@@ -205,6 +205,24 @@ struct SimulatorOptions {
   STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_OPTION_MEMBER_, STABINT_OPTION_NESTED_MEMBER_)
 };
 
+/// @cond
+// The field tables of the options (stabint/field_list.hpp), from the same rows as their members,
+// for the bindings (Python's keyword constructors, properties, repr and pickling). A row becomes
+// the table's entry `STABINT_FIELD_(name, doc)`; the lists ignore the FIELD they are given, since
+// STABINT_FIELD_TABLE_ passes them STABINT_FIELD_ itself.
+#define STABINT_OPTION_ENTRY_(type, name, default_value, rule, doc) STABINT_FIELD_(name, doc)
+#define STABINT_OPTION_SUB_ENTRY_(parent, type, name, default_value, rule, doc) STABINT_FIELD_(name, doc)
+#define STABINT_OPTION_NESTED_ENTRY_(type, name, fields, doc) STABINT_FIELD_(name, doc)
+#define STABINT_OPENCL_OPTIONS_ENTRIES_(FIELD) STABINT_OPENCL_OPTIONS_FIELDS(STABINT_OPTION_SUB_ENTRY_, opencl)
+#define STABINT_SIMULATOR_OPTIONS_ENTRIES_(FIELD) \
+  STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_OPTION_ENTRY_, STABINT_OPTION_NESTED_ENTRY_)
+STABINT_FIELD_TABLE_(OpenCLOptions, STABINT_OPENCL_OPTIONS_ENTRIES_,
+                     "OpenCL device choice: index or name substring; empty: STABINT_OPENCL_PLATFORM / "
+                     "STABINT_OPENCL_DEVICE, then the first.")
+STABINT_FIELD_TABLE_(SimulatorOptions, STABINT_SIMULATOR_OPTIONS_ENTRIES_,
+                     "Options of a Simulator; every field is a row of stabint/options_table.h.")
+/// @endcond
+
 /// Energies of a state (docs/method.md section 1). `elastic` includes every element's energy
 /// (springs, tets, triangle strain, hinges, pins and contact);
 /// `external` is gravity plus force fields, -sum (m g + f(t)).x.

@@ -25,7 +25,97 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
+
+// The public enums Python sees, `X(Enum, LIST, nameOf, parse, doc)`: module.cpp binds each with
+// the values of its LIST (stabint/types.hpp, stabint/scene.hpp) and its doc, and wherever Python
+// passes one (an argument, a field of an options struct or a scene part), the caster below also
+// takes its name as a str, the names the library's parser takes (the CLI's and scene files').
+#define STABINT_PY_ENUMS(X)                                                                                           \
+  X(Integrator, STABINT_INTEGRATORS, integratorName, parseIntegrator,                                                 \
+    "The six integrators (docs/method.md sections 2 and 3).")                                                         \
+  X(BackendKind, STABINT_BACKENDS, backendName, parseBackend, "Where the local step and the energies run.")           \
+  X(Precision, STABINT_PRECISIONS, precisionName, parsePrecision, "Floating-point precision of the OpenCL backend.")  \
+  X(Acceleration, STABINT_ACCELERATIONS, accelerationName, parseAcceleration,                                         \
+    "Acceleration of the local/global iterations (None_: 'None' is a Python keyword).")                               \
+  X(GlobalSolve, STABINT_GLOBAL_SOLVES, globalSolveName, parseGlobalSolve, "How the global step solves K_c x = rhs.") \
+  X(BlendBranch, STABINT_BLEND_BRANCHES, blendBranchName, parseBlendBranch,                                           \
+    "What the blend did with the IM candidate (None_: 'None' is a Python keyword).")                                  \
+  X(ColliderShape, STABINT_COLLIDER_SHAPE_VALUES, colliderShapeName, parseColliderShape, "Shape of a Collider.")      \
+  X(ClothModel, STABINT_CLOTH_MODELS, clothModelName, parseClothModel, "How a cloth resists deformation.")            \
+  X(ElementKind, STABINT_ELEMENT_KINDS, elementKindName, parseElementKind,                                            \
+    "An element list of a Scene, for set_element_stiffness and set_element_enabled.")
+
+namespace stabint::py {
+
+// An enum's name as the library prints it (integratorName, ...): what pickled options hold.
+#define STABINT_PY_ENUM_NAME(Enum, LIST, nameOf, parse, doc) \
+  inline const char* enumName(Enum value) { return nameOf(value); }
+STABINT_PY_ENUMS(STABINT_PY_ENUM_NAME)
+#undef STABINT_PY_ENUM_NAME
+
+// The value of enum E named `name`: a name the library's parser takes (any case: "BE", "blend",
+// "lbfgs", "cpu"), else the Python enumerator's name ("EnergyBlend", "CpuReference", as
+// stabint.distributed's option dicts hold them). Neither: the parser's InvalidInputError, which
+// lists the names ("unknown integrator 'x' (expected FE, SE, BE, BDF2, IM or blend)").
+template <class E>
+E enumFromName(const std::string& name);
+#define STABINT_PY_ENUM_PARSER(Enum, LIST, nameOf, parse, doc) \
+  template <>                                                  \
+  Enum enumFromName<Enum>(const std::string& name);
+STABINT_PY_ENUMS(STABINT_PY_ENUM_PARSER)
+#undef STABINT_PY_ENUM_PARSER
+
+}  // namespace stabint::py
+
+// The enums' caster: nanobind's (an instance of the Python enum), or a str naming a value. A str
+// that names none raises the parser's InvalidInputError from the call, rather than nanobind's
+// "incompatible function arguments" listing every overload. Declared for every enum of the list
+// before any binding uses one, in every file (this header), so that all agree.
+namespace nanobind::detail {
+// "stabint._stabint.Integrator | str" as an argument, the enum alone as a result (io_name: its
+// types are text, since the signature renderer resolves no type inside one).
+template <class E>
+struct stabint_enum_name;
+#define STABINT_PY_ENUM_CASTER_NAME(Enum, LIST, nameOf, parse, doc)                                      \
+  template <>                                                                                            \
+  struct stabint_enum_name<stabint::Enum> {                                                              \
+    static constexpr auto name = io_name("stabint._stabint." #Enum " | str", "stabint._stabint." #Enum); \
+  };
+STABINT_PY_ENUMS(STABINT_PY_ENUM_CASTER_NAME)
+#undef STABINT_PY_ENUM_CASTER_NAME
+
+template <class E>
+struct stabint_enum_caster {
+  NB_TYPE_CASTER(E, stabint_enum_name<E>::name)
+
+  bool from_python(handle src, uint32_t flags, cleanup_list* cleanup) {
+    int64_t result;
+    if (NB_CALL(enum_from_python)(NB_CTX_C(cleanup), &typeid(E), src.ptr(), &result, flags)) {
+      value = static_cast<E>(result);
+      return true;
+    }
+    if (!PyUnicode_Check(src.ptr())) return false;
+    Py_ssize_t size = 0;
+    const char* text = PyUnicode_AsUTF8AndSize(src.ptr(), &size);
+    if (text == nullptr) {
+      PyErr_Clear();
+      return false;
+    }
+    value = stabint::py::enumFromName<E>(std::string(text, static_cast<size_t>(size)));
+    return true;
+  }
+  static handle from_cpp(E src, rv_policy, cleanup_list* cleanup) noexcept {
+    return NB_CALL(enum_from_cpp)(NB_CTX_C(cleanup), &typeid(E), static_cast<int64_t>(src));
+  }
+};
+#define STABINT_PY_ENUM_CASTER(Enum, LIST, nameOf, parse, doc) \
+  template <>                                                  \
+  struct type_caster<stabint::Enum> : stabint_enum_caster<stabint::Enum> {};
+STABINT_PY_ENUMS(STABINT_PY_ENUM_CASTER)
+#undef STABINT_PY_ENUM_CASTER
+}  // namespace nanobind::detail
 
 // The lists of a Scene that Python sees as views (in every file, so that all agree on the
 // conversion): one per element type, from the element types' list, and the others.

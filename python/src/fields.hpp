@@ -28,6 +28,9 @@ struct PyStruct {
   static constexpr bool read_only = false;       // read-only properties, no constructor (reports)
   static constexpr const char* positional = "";  // leading fields that may also be passed by position
   static constexpr const char* required = "";    // leading fields without a default
+  // A value type (the options): a keyword-only constructor whose unknown keyword is a one-line
+  // TypeError naming the closest field, pickling (__getstate__/__setstate__) and ==.
+  static constexpr bool value_type = false;
 };
 // The element constructors of before the tables take their fields by position and require them,
 // as they did (Spring(a, b, rest_length, stiffness), TriangleStrain(vertices, stiffness,
@@ -35,24 +38,27 @@ struct PyStruct {
 // third positional argument of the constructor Pin(vertex, stiffness, position)). A new struct
 // takes keywords only, so that a field inserted into it cannot shift the arguments of a call;
 // for these, a field inserted among the named ones fails the build.
-#define STABINT_PY_STRUCT(type, positional_, required_, read_only_) \
-  template <>                                                       \
-  struct PyStruct<type> {                                           \
-    static constexpr bool read_only = read_only_;                   \
-    static constexpr const char* positional = positional_;          \
-    static constexpr const char* required = required_;              \
+#define STABINT_PY_STRUCT(type, positional_, required_, read_only_, value_type_) \
+  template <>                                                                    \
+  struct PyStruct<type> {                                                        \
+    static constexpr bool read_only = read_only_;                                \
+    static constexpr const char* positional = positional_;                       \
+    static constexpr const char* required = required_;                           \
+    static constexpr bool value_type = value_type_;                              \
   };
-STABINT_PY_STRUCT(Spring, "a, b, rest_length, stiffness", "a, b, rest_length, stiffness", false)
-STABINT_PY_STRUCT(Tet, "vertices, stiffness", "vertices, stiffness", false)
-STABINT_PY_STRUCT(TriangleStrain, "vertices, stiffness, strain_min, strain_max", "vertices, stiffness", false)
-STABINT_PY_STRUCT(BendingHinge, "vertices, stiffness", "vertices, stiffness", false)
-STABINT_PY_STRUCT(Pin, "vertex, stiffness", "vertex, stiffness, target", false)
-STABINT_PY_STRUCT(PathKey, "frame, position", "frame, position", false)
-STABINT_PY_STRUCT(ScriptedEvent, "frame, action", "frame, action", false)
-STABINT_PY_STRUCT(OpenCLDeviceInfo, "", "", true)
-STABINT_PY_STRUCT(EnergyReport, "", "", true)
-STABINT_PY_STRUCT(PhaseTimes, "", "", true)
-STABINT_PY_STRUCT(StepReport, "", "", true)
+STABINT_PY_STRUCT(Spring, "a, b, rest_length, stiffness", "a, b, rest_length, stiffness", false, false)
+STABINT_PY_STRUCT(Tet, "vertices, stiffness", "vertices, stiffness", false, false)
+STABINT_PY_STRUCT(TriangleStrain, "vertices, stiffness, strain_min, strain_max", "vertices, stiffness", false, false)
+STABINT_PY_STRUCT(BendingHinge, "vertices, stiffness", "vertices, stiffness", false, false)
+STABINT_PY_STRUCT(Pin, "vertex, stiffness", "vertex, stiffness, target", false, false)
+STABINT_PY_STRUCT(PathKey, "frame, position", "frame, position", false, false)
+STABINT_PY_STRUCT(ScriptedEvent, "frame, action", "frame, action", false, false)
+STABINT_PY_STRUCT(OpenCLDeviceInfo, "", "", true, false)
+STABINT_PY_STRUCT(EnergyReport, "", "", true, false)
+STABINT_PY_STRUCT(PhaseTimes, "", "", true, false)
+STABINT_PY_STRUCT(StepReport, "", "", true, false)
+STABINT_PY_STRUCT(OpenCLOptions, "", "", false, true)
+STABINT_PY_STRUCT(SimulatorOptions, "", "", false, true)
 #undef STABINT_PY_STRUCT
 
 // The number of names in a list "a, b, c".
@@ -227,17 +233,146 @@ void bindConstructor(nb::class_<T>& c, std::index_sequence<I...>) {
       std::tuple_cat(argumentOf<T, I>(defaults)...));
 }
 
-// "Spring(a=0, b=1, rest_length=1.0, stiffness=100.0)": every property's repr.
+// A value as a repr shows it: an enum value as the expression that names it
+// ("Integrator.EnergyBlend", not "<Integrator.EnergyBlend: 5>"), anything else as its repr.
+std::string valueRepr(nb::handle value);
+
+// "Spring(a=0, b=1, rest_length=1.0, stiffness=100.0)": every property's repr. A struct whose
+// repr shows less (Collider: its shape's fields) specializes structRepr where it is bound, as
+// bindExtras.
 template <class T, std::size_t... I>
-void bindRepr(nb::class_<T>& c, std::index_sequence<I...>) {
-  c.def("__repr__", [](nb::handle self) {
-    const char* names[] = {pythonName(fieldOf<T, I>().name)...};
-    std::string text = std::string(FieldTable<T>::name) + "(";
-    for (std::size_t i = 0; i < sizeof...(I); ++i) {
-      text += std::string(i ? ", " : "") + names[i] + "=" + nb::repr(self.attr(names[i])).c_str();
-    }
-    return text + ")";
+std::string structRepr(nb::handle self, std::index_sequence<I...>) {
+  const char* names[] = {pythonName(fieldOf<T, I>().name)...};
+  std::string text = std::string(FieldTable<T>::name) + "(";
+  for (std::size_t i = 0; i < sizeof...(I); ++i) {
+    text += std::string(i ? ", " : "") + names[i] + "=" + valueRepr(self.attr(names[i]));
+  }
+  return text + ")";
+}
+template <class T>
+std::string structRepr(nb::handle self) {
+  return structRepr<T>(self, std::make_index_sequence<kFieldCount<T>>());
+}
+
+template <class T>
+void bindRepr(nb::class_<T>& c) {
+  c.def("__repr__", [](nb::handle self) { return structRepr<T>(self); });
+}
+
+// --- value types (PyStruct::value_type: the options) --------------------------------------------
+
+// A field's type as a signature writes it: what the keyword takes.
+template <class V>
+std::string annotation() {
+  if constexpr (std::is_same_v<V, int>) {
+    return "int";
+  } else if constexpr (std::is_same_v<V, double>) {
+    return "float";
+  } else if constexpr (std::is_same_v<V, bool>) {
+    return "bool";
+  } else if constexpr (std::is_same_v<V, std::string>) {
+    return "str";
+  } else if constexpr (std::is_enum_v<V>) {
+    return nb::cast<std::string>(nb::type<V>().attr("__name__")) + " | str";
+  } else {
+    static_assert(HasFieldTable<V>::value, "a value type's field is a number, a string, an enum or a value type");
+    return FieldTable<V>::name;
+  }
+}
+
+// "def __init__(self, *, integrator: Integrator | str = Integrator.EnergyBlend, ...) -> None": the
+// keyword constructor's signature, for help() and the stub, from the table and the C++ defaults.
+template <class T, std::size_t... I>
+std::string keywordSignature(std::index_sequence<I...>) {
+  const T defaults{};
+  std::string text = "def __init__(self, *";
+  ((text += std::string(", ") + pythonName(fieldOf<T, I>().name) + ": " + annotation<FieldType<T, I>>() + " = " +
+            valueRepr(nb::cast(defaults.*(fieldOf<T, I>().member)))),
+   ...);
+  return text + ") -> None";
+}
+
+// The one-line TypeError of a keyword T has no field for: the closest field's name when one is
+// close (difflib, as Python's own "did you mean"), else every field's.
+[[noreturn]] void unknownKeyword(const char* type, const std::string& keyword, const std::vector<std::string>& fields);
+
+// Sets field I of `out` from a Python value; a value of another type is a one-line TypeError
+// naming the field. An enum's unknown name is the parser's InvalidInputError (common.hpp).
+template <class T, std::size_t I>
+void setField(T& out, nb::handle value) {
+  using V = FieldType<T, I>;
+  try {
+    out.*(fieldOf<T, I>().member) = nb::cast<V>(value);
+  } catch (const nb::cast_error&) {
+    throw nb::type_error((std::string(FieldTable<T>::name) + "." + pythonName(fieldOf<T, I>().name) + " takes " +
+                          annotation<V>() + ", not " + nb::cast<std::string>(nb::type_name(value.type())))
+                             .c_str());
+  }
+}
+
+// Sets the fields of `out` that `values` names (a dict of keywords, or the state of a pickle).
+template <class T, std::size_t... I>
+void setFields(T& out, nb::dict values, std::index_sequence<I...>) {
+  for (const auto& [key, value] : values) {
+    const std::string name = nb::cast<std::string>(nb::str(key));
+    const bool known = ((name == pythonName(fieldOf<T, I>().name) ? (setField<T, I>(out, value), true) : false) || ...);
+    if (!known) unknownKeyword(FieldTable<T>::name, name, {pythonName(fieldOf<T, I>().name)...});
+  }
+}
+
+// A field as pickled: an enum by its library name ("blend"), which stays valid when the enum's
+// values are renumbered; a nested value type as itself (it pickles too); the rest as it is.
+template <class V>
+nb::object pickled(const V& value) {
+  if constexpr (std::is_enum_v<V>)
+    return nb::str(enumName(value));
+  else
+    return nb::cast(value);
+}
+
+// Field by field, a nested value type by its own fields.
+template <class T, std::size_t... I>
+bool fieldsEqual(const T& a, const T& b, std::index_sequence<I...>) {
+  const auto equal = [](const auto& x, const auto& y) {
+    using V = std::decay_t<decltype(x)>;
+    if constexpr (HasFieldTable<V>::value)
+      return fieldsEqual(x, y, std::make_index_sequence<kFieldCount<V>>());
+    else
+      return x == y;
+  };
+  return (equal(a.*(fieldOf<T, I>().member), b.*(fieldOf<T, I>().member)) && ...);
+}
+
+template <class T, std::size_t... I>
+void bindValueType(nb::class_<T>& c, std::index_sequence<I...> fields) {
+  static const std::string signature = keywordSignature<T>(fields);
+  c.def(
+      "__init__",
+      [fields](T* self, nb::args args, nb::kwargs kwargs) {
+        if (args.size() != 0)
+          throw nb::type_error((std::string(FieldTable<T>::name) + "() takes keyword arguments only").c_str());
+        T value{};
+        setFields(value, kwargs, fields);
+        new (self) T(std::move(value));
+      },
+      nb::sig(signature.c_str()),
+      "Keyword arguments set the fields of the same names; the others keep the C++ defaults. An enum field also "
+      "takes a name as a str (the names the CLI and scene files use, e.g. 'BE', 'blend', 'lbfgs', 'cpu'). An "
+      "unknown keyword is a TypeError naming the closest field.");
+  c.def("__getstate__", [](const T& o) {
+    nb::dict state;
+    ((state[pythonName(fieldOf<T, I>().name)] = pickled(o.*(fieldOf<T, I>().member))), ...);
+    return state;
   });
+  c.def("__setstate__", [fields](T& o, nb::dict state) {
+    T value{};
+    setFields(value, state, fields);
+    new (&o) T(std::move(value));
+  });
+  c.def(
+      "__eq__", [fields](const T& a, const T& b) { return fieldsEqual(a, b, fields); }, nb::is_operator());
+  // Mutable, so unhashable, as a dataclass with eq.
+  c.attr("__hash__") = nb::none();
 }
 
 template <class T>
@@ -245,11 +380,13 @@ void defineStruct(nb::module_& m) {
   nb::class_<T> c(m, FieldTable<T>::name, FieldTable<T>::doc);
   bindProperties(m, c);
   constexpr auto fields = std::make_index_sequence<kFieldCount<T>>();
-  if constexpr (!PyStruct<T>::read_only) {
+  if constexpr (PyStruct<T>::value_type) {
+    bindValueType(c, fields);
+  } else if constexpr (!PyStruct<T>::read_only) {
     c.def(nb::init<>());
     bindConstructor(c, fields);
   }
-  bindRepr(c, fields);
+  bindRepr(c);
   bindExtras(c);
 }
 

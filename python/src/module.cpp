@@ -2,12 +2,15 @@
 // enums. The pure-Python package python/stabint re-exports it and adds scene_from_arrays and the
 // builder shortcuts. The classes are bound by topic in the other files of this folder
 // (common.hpp lists them); those with a field table are generated from it (fields.hpp).
-#include "common.hpp"
+#include "fields.hpp"
+
+#include <cli.hpp>  // tools/run: stabint-run's runCli, for the `stabint-run` console command
 
 #include <cstring>
 #include <initializer_list>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace stabint::py {
 
@@ -26,6 +29,34 @@ const char* pythonName(const char* name) {
   for (const auto& pair : renamed)
     if (std::strcmp(name, pair[0]) == 0) return pair[1];
   return name;
+}
+
+std::string valueRepr(nb::handle value) {
+  // Owned by the module (never freed), as the exception classes below.
+  static PyObject* const enum_class = nb::object(nb::module_::import_("enum").attr("Enum")).release().ptr();
+  if (PyObject_IsInstance(value.ptr(), enum_class) == 1)
+    return nb::cast<std::string>(value.type().attr("__name__")) + "." + nb::cast<std::string>(value.attr("name"));
+  // A short array (a point, a direction, a tet's vertices) as a list, "[0.0, 1.0, 0.0]", which the
+  // constructors take back; a long one as numpy writes it, abbreviated.
+  static PyObject* const ndarray_class = nb::object(nb::module_::import_("numpy").attr("ndarray")).release().ptr();
+  if (PyObject_IsInstance(value.ptr(), ndarray_class) == 1 && nb::cast<std::size_t>(value.attr("size")) <= 16)
+    return nb::cast<std::string>(nb::repr(value.attr("tolist")()));
+  return nb::cast<std::string>(nb::repr(value));
+}
+
+void unknownKeyword(const char* type, const std::string& keyword, const std::vector<std::string>& fields) {
+  nb::list known;
+  for (const std::string& field : fields) known.append(nb::str(field.c_str()));
+  const nb::list close =
+      nb::cast<nb::list>(nb::module_::import_("difflib").attr("get_close_matches")(keyword, known, 1, 0.6));
+  std::string text = std::string(type) + "() got an unexpected keyword argument '" + keyword + "'; ";
+  if (close.size() != 0) {
+    text += "did you mean '" + nb::cast<std::string>(close[0]) + "'?";
+  } else {
+    text += "its fields are ";
+    for (std::size_t i = 0; i < fields.size(); ++i) text += (i ? ", " : "") + fields[i];
+  }
+  throw nb::type_error(text.c_str());
 }
 
 namespace {
@@ -90,7 +121,27 @@ void translate(const std::exception_ptr& p, void*) {
   // Anything else propagates to nanobind's own translators (bad_alloc -> MemoryError, ...).
 }
 
+// A name the library's parser takes, else a Python enumerator's name; else the parser's error.
+template <class E>
+E fromName(const std::string& name, E (*parse)(const std::string&)) {
+  try {
+    return parse(name);
+  } catch (const InvalidInputError&) {
+    nb::object member = nb::type<E>().attr("__members__").attr("get")(name);
+    if (!member.is_none()) return nb::cast<E>(member);
+    throw;
+  }
+}
+
 }  // namespace
+
+#define STABINT_PY_ENUM_PARSER(Enum, LIST, nameOf, parse, doc) \
+  template <>                                                  \
+  Enum enumFromName<Enum>(const std::string& name) {           \
+    return fromName(name, parse);                              \
+  }
+STABINT_PY_ENUMS(STABINT_PY_ENUM_PARSER)
+#undef STABINT_PY_ENUM_PARSER
 
 void bindErrors(nb::module_& m) {
   errors.error =
@@ -118,31 +169,20 @@ void bindErrors(nb::module_& m) {
   nb::register_exception_translator(translate);
 }
 
-// Python's enum `cpp_enum` with the values of its list (stabint/types.hpp): the enumerators'
+// The enums of STABINT_PY_ENUMS (common.hpp), each with the values of its list: the enumerators'
 // names and, where the list has one, each value's doc (its third field).
-#define STABINT_PY_ENUM(cpp_enum, LIST, doc)           \
-  {                                                    \
-    using Enum = cpp_enum;                             \
-    auto py_enum = nb::enum_<Enum>(m, #cpp_enum, doc); \
-    LIST(STABINT_PY_VALUE)                             \
+#define STABINT_PY_ENUM(cpp_enum, LIST, nameOf, parse, doc) \
+  {                                                         \
+    using Enum = cpp_enum;                                  \
+    auto py_enum = nb::enum_<Enum>(m, #cpp_enum, doc);      \
+    LIST(STABINT_PY_VALUE)                                  \
   }
 #define STABINT_PY_VALUE(enumerator, ...) \
   py_enum.value(pythonName(#enumerator), Enum::enumerator, STABINT_PY_SECOND(__VA_ARGS__, nullptr, ));
 #define STABINT_PY_SECOND(first, second, ...) second
 
 void bindEnums(nb::module_& m) {
-  STABINT_PY_ENUM(Integrator, STABINT_INTEGRATORS, "The six integrators (docs/method.md sections 2 and 3).")
-  STABINT_PY_ENUM(BackendKind, STABINT_BACKENDS, "Where the local step and the energies run.")
-  STABINT_PY_ENUM(Precision, STABINT_PRECISIONS, "Floating-point precision of the OpenCL backend.")
-  STABINT_PY_ENUM(Acceleration, STABINT_ACCELERATIONS,
-                  "Acceleration of the local/global iterations (None_: 'None' is a Python keyword).")
-  STABINT_PY_ENUM(GlobalSolve, STABINT_GLOBAL_SOLVES, "How the global step solves K_c x = rhs.")
-  STABINT_PY_ENUM(BlendBranch, STABINT_BLEND_BRANCHES,
-                  "What the blend did with the IM candidate (None_: 'None' is a Python keyword).")
-  STABINT_PY_ENUM(ColliderShape, STABINT_COLLIDER_SHAPE_VALUES, "Shape of a Collider.")
-  STABINT_PY_ENUM(ClothModel, STABINT_CLOTH_MODELS, "How a cloth resists deformation.")
-  STABINT_PY_ENUM(ElementKind, STABINT_ELEMENT_KINDS,
-                  "An element list of a Scene, for set_element_stiffness and set_element_enabled.")
+  STABINT_PY_ENUMS(STABINT_PY_ENUM)
 #undef STABINT_PY_ENUM
 #undef STABINT_PY_VALUE
 #undef STABINT_PY_SECOND
@@ -169,4 +209,16 @@ NB_MODULE(_stabint, m) {
   bindSimulator(m);
   bindBatch(m);
   bindEvents(m);
+  // The C++ tool itself rather than a Python copy of it, so that both commands are one program.
+  m.def(
+      "_run_cli",
+      [](std::vector<std::string> argv) {
+        std::vector<char*> pointers;
+        for (std::string& arg : argv) pointers.push_back(arg.data());
+        pointers.push_back(nullptr);
+        return stabint_run::runCli(static_cast<int>(argv.size()), pointers.data());
+      },
+      nb::arg("argv"), nb::call_guard<nb::gil_scoped_release>(),
+      "Runs stabint-run with `argv` (argv[0] the program's name) and returns its exit status; it writes to "
+      "the process's standard output and error. The `stabint-run` console command (stabint._cli).");
 }

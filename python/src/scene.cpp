@@ -29,6 +29,35 @@ template <>
 void bindExtras(nb::class_<Collider>& c) {
   c.def("moving", &Collider::moving);
 }
+// A collider's repr names its shape and the fields that describe that shape, then only the fields
+// that differ from their defaults (a plane need not show a radius it ignores), e.g.
+// "Collider(shape=ColliderShape.Sphere, center=[0.0, 0.5, 0.0], radius=0.2, friction=0.3)".
+template <>
+std::string structRepr<Collider>(nb::handle self) {
+  const Collider& collider = nb::cast<const Collider&>(self);
+  static const Collider defaults{};
+  const auto describes = [&](const std::string& field) {
+    switch (collider.shape) {
+      case ColliderShape::Plane: return field == "center" || field == "normal";
+      case ColliderShape::Sphere: return field == "center" || field == "radius";
+      case ColliderShape::Box: return field == "center" || field == "half_extents";
+      case ColliderShape::Capsule: return field == "center" || field == "end" || field == "radius";
+    }
+    return true;
+  };
+  std::string text = "Collider(shape=" + valueRepr(self.attr("shape"));
+  std::apply(
+      [&](const auto&... field) {
+        const auto add = [&](const auto& f) {
+          const std::string name = f.name;
+          if (name != "shape" && (describes(name) || collider.*(f.member) != defaults.*(f.member)))
+            text += ", " + name + "=" + valueRepr(self.attr(f.name));
+        };
+        (add(field), ...);
+      },
+      FieldTable<Collider>::fields);
+  return text + ")";
+}
 
 void bindScene(nb::module_& m) {
   nb::class_<Scene> scene(m, "Scene",
@@ -38,6 +67,26 @@ void bindScene(nb::module_& m) {
   // Its fields from its table, and with them the classes of the elements and of the other parts
   // and their lists (SpringList, ...): a new element type's list in the table is all it takes.
   bindProperties(m, scene);
+  // A summary rather than every array (a cloth's repr would print thousands of numbers): the name,
+  // the counts the CLI prints, and what else the scene holds, e.g.
+  // "<Scene 'cloth': 900 particles, 5102 springs, 2 pins; 1 body, 1682 surface triangles>".
+  scene.def("__repr__", [](const Scene& s) {
+    const auto count = [](std::size_t n, const char* one, const char* many) {
+      return std::to_string(n) + " " + (n == 1 ? one : many);
+    };
+    std::string text = "<Scene " + nb::cast<std::string>(nb::repr(nb::str(s.name.c_str()))) + ": " +
+                       count(static_cast<std::size_t>(s.numParticles()), "particle", "particles") + ", " +
+                       elementSummary(s);
+    std::string parts;
+    const auto part = [&](std::size_t n, const char* one, const char* many) {
+      if (n != 0) parts += (parts.empty() ? "; " : ", ") + count(n, one, many);
+    };
+    part(s.colliders.size(), "collider", "colliders");
+    part(s.force_fields.size(), "force field", "force fields");
+    part(s.bodies.size(), "body", "bodies");
+    part(s.triangles.size(), "surface triangle", "surface triangles");
+    return text + parts + ">";
+  });
   scene.def_prop_ro("num_particles", &Scene::numParticles)
       .def(
           "validate", [](const Scene& s) { validateScene(s); },

@@ -2,8 +2,6 @@
 // reports (from their tables, stabint/types.hpp), Checkpoint and Simulator.
 #include "fields.hpp"
 
-#include <stabint/options_table.h>
-
 #include <string>
 
 namespace stabint::py {
@@ -21,40 +19,12 @@ void bindExtras(nb::class_<PhaseTimes>& c) {
 }
 
 void bindSimulator(nb::module_& m) {
-  const SimulatorOptions d;  // the defaults of every keyword come from the C++ struct
-  nb::class_<OpenCLOptions>(m, "OpenCLOptions",
-                            "OpenCL device choice: index or name substring; empty: "
-                            "STABINT_OPENCL_PLATFORM / STABINT_OPENCL_DEVICE, then the first.")
-      .def(nb::init<>())
-#define STABINT_PY_SUB(parent, type, name, default_value, rule, doc) .def_rw(#name, &OpenCLOptions::name, doc)
-          STABINT_OPENCL_OPTIONS_FIELDS(STABINT_PY_SUB, opencl);
-#undef STABINT_PY_SUB
+  // The options from their table (stabint/options_table.h, through FieldTable): a keyword per
+  // field with the C++ default, a property per field, repr, pickling and ==; OpenCLOptions comes
+  // with SimulatorOptions::opencl.
+  bindStruct<SimulatorOptions>(m);
   bindStruct<OpenCLDeviceInfo>(m);
   m.def("list_opencl_devices", &listOpenCLDevices, "Every OpenCL device; empty when none is installed.");
-
-  // Generated from the field list (stabint/options_table.h): one keyword per field, by name,
-  // with the C++ default, and one property per field.
-#define STABINT_PY_PARAM(type, name, ...) , type name
-#define STABINT_PY_SET(type, name, ...) o->name = name;
-#define STABINT_PY_KEYWORD(type, name, ...) , nb::arg(#name) = d.name
-#define STABINT_PY_PROPERTY(type, name, default_value, rule, doc) .def_rw(#name, &SimulatorOptions::name, doc)
-#define STABINT_PY_NESTED_PROPERTY(type, name, fields, doc) .def_rw(#name, &SimulatorOptions::name, doc)
-  nb::class_<SimulatorOptions>(m, "SimulatorOptions",
-                               "Options of a Simulator; every field is a row of stabint/options_table.h.")
-      .def(
-          "__init__",
-          [](SimulatorOptions* o STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_PARAM, STABINT_PY_PARAM)) {
-            new (o) SimulatorOptions{};
-            STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_SET, STABINT_PY_SET)
-          },
-          nb::kw_only() STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_KEYWORD, STABINT_PY_KEYWORD),
-          "Keyword arguments set the fields of the same names; values are checked when a Simulator is built.")
-          STABINT_SIMULATOR_OPTIONS_FIELDS(STABINT_PY_PROPERTY, STABINT_PY_NESTED_PROPERTY);
-#undef STABINT_PY_PARAM
-#undef STABINT_PY_SET
-#undef STABINT_PY_KEYWORD
-#undef STABINT_PY_PROPERTY
-#undef STABINT_PY_NESTED_PROPERTY
 
   // The reports from their tables; StepReport's energy and times bring EnergyReport and PhaseTimes.
   bindStruct<StepReport>(m);

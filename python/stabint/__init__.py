@@ -29,15 +29,17 @@ Example::
     x = sim.positions                # (900, 3) float64 copy
 """
 
-from __future__ import annotations
+# The helpers' modules and names under private aliases, so that `dir(stabint)` and
+# `from stabint import *` show the library alone (__all__ below); no `from __future__` import,
+# which would add the name `annotations`: the annotations below are valid at run time on 3.9.
+import json as _json
+from typing import Any as _Any, Dict as _Dict, Optional as _Optional
 
-import json
-from typing import Any, Optional
-
-import numpy as np
+import numpy as _np
 
 from ._stabint import *  # noqa: F401,F403  (the extension's public names)
-from ._stabint import InvalidInputError, Pin, Scene, Spring, Tet, builtin_scene
+from ._stabint import InvalidInputError as _InvalidInputError, Pin as _Pin, Scene as _Scene, Spring as _Spring
+from ._stabint import Tet as _Tet, builtin_scene as _builtin_scene
 from . import _stabint
 
 # The exception classes live in the extension (so that its stub declares them); they are used
@@ -51,8 +53,13 @@ __version__ = "0.1.0"
 
 _SUBMODULES = ("distributed", "io")
 
+# The public names: the extension's and this file's. Not the submodules: `from stabint import *`
+# would import them, and with them their optional extras (Dask, meshio).
+__all__ = sorted([name for name in dir(_stabint) if not name.startswith("_")] +
+                 ["cloth_grid", "tet_bar", "chain_pendulum", "linear_oscillator", "scene_from_arrays"])
 
-def __getattr__(name: str) -> Any:
+
+def __getattr__(name: str) -> _Any:
     # stabint.distributed / stabint.io on first use (PEP 562): `import stabint` must not import
     # Dask or meshio, which are optional extras.
     if name in _SUBMODULES:
@@ -62,48 +69,48 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module 'stabint' has no attribute '{name}'")
 
 
-def _builtin(name: str, params: dict[str, Any]) -> Scene:
+def _builtin(name: str, params: _Dict[str, _Any]) -> _Scene:
     # The builder's own parameter parsing (io.hpp builtinScene) checks names and types, so the
     # parameter lists are not repeated here; enum values are passed by name.
     text = {k: (v.name.lower() if hasattr(v, "name") else v) for k, v in params.items()}
-    return builtin_scene(name, json.dumps(text), label=name)
+    return _builtin_scene(name, _json.dumps(text), label=name)
 
 
-def cloth_grid(**params: Any) -> Scene:
+def cloth_grid(**params: _Any) -> _Scene:
     """Rectangular cloth (``ClothGridParams`` fields as keywords, e.g. ``nx=30, pinned=[0, 29]``)."""
     return _builtin("cloth", params)
 
 
-def tet_bar(**params: Any) -> Scene:
+def tet_bar(**params: _Any) -> _Scene:
     """Box of tets pinned at x = 0 (``TetBarParams`` fields as keywords, e.g. ``nx=8``)."""
     return _builtin("tetbar", params)
 
 
-def chain_pendulum(**params: Any) -> Scene:
+def chain_pendulum(**params: _Any) -> _Scene:
     """Chain of springs pinned at the origin (``ChainPendulumParams`` fields as keywords)."""
     return _builtin("chain", params)
 
 
-def linear_oscillator(**params: Any) -> Scene:
+def linear_oscillator(**params: _Any) -> _Scene:
     """One particle on a pin to the origin (``mass``, ``stiffness``, ``amplitude``)."""
     return _builtin("oscillator", params)
 
 
 def scene_from_arrays(
-    positions: Any,
-    masses: Any,
+    positions: _Any,
+    masses: _Any,
     *,
-    velocities: Optional[Any] = None,
-    springs: Optional[Any] = None,
+    velocities: _Optional[_Any] = None,
+    springs: _Optional[_Any] = None,
     spring_stiffness: float = 0.0,
-    tets: Optional[Any] = None,
+    tets: _Optional[_Any] = None,
     tet_stiffness: float = 0.0,
-    triangles: Optional[Any] = None,
-    pinned: Optional[Any] = None,
+    triangles: _Optional[_Any] = None,
+    pinned: _Optional[_Any] = None,
     pin_stiffness: float = 1e5,
-    gravity: Any = (0.0, -9.81, 0.0),
+    gravity: _Any = (0.0, -9.81, 0.0),
     name: str = "arrays",
-) -> Scene:
+) -> _Scene:
     """A scene from numpy arrays: ``positions`` (n, 3) (also the rest shape), ``masses`` (n,) or
     a scalar per particle, ``springs`` (m, 2) particle pairs (rest lengths from ``positions``),
     ``tets`` (m, 4), ``triangles`` (m, 3) surface, ``pinned`` particle indices held in place.
@@ -114,28 +121,28 @@ def scene_from_arrays(
         return _scene_from_arrays(positions, masses, velocities, springs, spring_stiffness, tets, tet_stiffness,
                                   triangles, pinned, pin_stiffness, gravity, name)
     except (ValueError, TypeError, IndexError) as e:
-        raise InvalidInputError(f"scene_from_arrays: {e}") from e
+        raise _InvalidInputError(f"scene_from_arrays: {e}") from e
 
 
 def _scene_from_arrays(positions, masses, velocities, springs, spring_stiffness, tets, tet_stiffness, triangles,
                        pinned, pin_stiffness, gravity, name):
-    x = np.asarray(positions, dtype=np.float64)
+    x = _np.asarray(positions, dtype=_np.float64)
     if x.ndim != 2 or x.shape[1] != 3:
         raise ValueError(f"positions have shape {x.shape}, expected (n, 3)")
-    scene = Scene()
+    scene = _Scene()
     scene.name = name
     scene.positions = x
     scene.rest_positions = x
-    scene.velocities = np.zeros_like(x) if velocities is None else np.asarray(velocities, np.float64)
-    scene.masses = np.broadcast_to(np.asarray(masses, np.float64), (x.shape[0],)).copy()
-    scene.gravity = np.asarray(gravity, np.float64)
-    for a, b in np.asarray(springs if springs is not None else np.empty((0, 2)), np.int64):
-        rest = float(np.linalg.norm(x[a] - x[b]))
-        scene.springs.append(Spring(int(a), int(b), rest, spring_stiffness))
-    for t in np.asarray(tets if tets is not None else np.empty((0, 4)), np.int64):
-        scene.tets.append(Tet([int(i) for i in t], tet_stiffness))
+    scene.velocities = _np.zeros_like(x) if velocities is None else _np.asarray(velocities, _np.float64)
+    scene.masses = _np.broadcast_to(_np.asarray(masses, _np.float64), (x.shape[0],)).copy()
+    scene.gravity = _np.asarray(gravity, _np.float64)
+    for a, b in _np.asarray(springs if springs is not None else _np.empty((0, 2)), _np.int64):
+        rest = float(_np.linalg.norm(x[a] - x[b]))
+        scene.springs.append(_Spring(int(a), int(b), rest, spring_stiffness))
+    for t in _np.asarray(tets if tets is not None else _np.empty((0, 4)), _np.int64):
+        scene.tets.append(_Tet([int(i) for i in t], tet_stiffness))
     if triangles is not None:
-        scene.triangles = np.ascontiguousarray(triangles, dtype=np.int32)
-    for v in np.asarray(pinned if pinned is not None else [], np.int64):
-        scene.pins.append(Pin(int(v), pin_stiffness, x[v]))
+        scene.triangles = _np.ascontiguousarray(triangles, dtype=_np.int32)
+    for v in _np.asarray(pinned if pinned is not None else [], _np.int64):
+        scene.pins.append(_Pin(int(v), pin_stiffness, x[v]))
     return scene

@@ -228,7 +228,7 @@ def _plain(value: Any) -> Any:
     if isinstance(value, enum.Enum):
         return value.name
     if isinstance(value, OpenCLOptions):
-        return {"platform": value.platform, "device": value.device, "precision": value.precision.name}
+        return {name: _plain(getattr(value, name)) for name in value.__getstate__()}
     return value
 
 
@@ -251,18 +251,12 @@ def _options_from_dict(values: Mapping[str, Any]) -> SimulatorOptions:
     for name, value in values.items():
         if name not in known:
             raise InvalidInputError(f"options: unknown SimulatorOptions field '{name}' (fields: {', '.join(sorted(known))})")
-        current = getattr(options, name)
+        # An enum field takes its value's name itself ("BE", "EnergyBlend"), as SimulatorOptions does.
         try:
-            if isinstance(current, enum.Enum) and isinstance(value, str):
-                value = type(current)[value]
-            elif isinstance(current, OpenCLOptions) and isinstance(value, Mapping):
-                opencl = OpenCLOptions()
-                opencl.platform = value["platform"]
-                opencl.device = value["device"]
-                opencl.precision = type(opencl.precision)[value["precision"]]
-                value = opencl
+            if isinstance(getattr(options, name), OpenCLOptions) and isinstance(value, Mapping):
+                value = OpenCLOptions(**value)
             setattr(options, name, value)
-        except (KeyError, TypeError, ValueError) as e:
+        except (InvalidInputError, TypeError, ValueError) as e:
             raise InvalidInputError(f"options.{name}: cannot take {value!r} ({e})") from e
     return options
 

@@ -191,13 +191,19 @@ std::string simulatorOptionsHelp() {
 
 std::string usage() {
   std::ostringstream s;
-  s << "Usage: stabint-run --scene NAME|FILE.json [options]\n"
+  s << "Usage: stabint-run --scene NAME|FILE [options]\n"
        "\n"
        "Steps one scene with one integrator and writes per-frame energies, timings and meshes.\n"
        "\n"
        "Scene:\n"
-       "  --scene NAME|FILE.json    built-in scene (oscillator, chain, cloth, tetbar) or a JSON scene\n"
-       "                            file (format: docs/scene-format.md)\n"
+       "  --scene NAME|FILE         built-in scene (oscillator, chain, cloth, tetbar), a JSON scene\n"
+       "                            file (.json, format: docs/scene-format.md) or a mesh file: OBJ\n"
+       "                            cloth (.obj), TetGen (.node or .ele) or Medit (.mesh) tets. A mesh\n"
+       "                            gets the loaders' default material (ClothMaterial, SolidMaterial),\n"
+       "                            no pins, default gravity and a ground plane a quarter of its\n"
+       "                            bounding-box diagonal below its lowest point; for anything else\n"
+       "                            write a JSON scene with a \"mesh\" entry. Gmsh (.msh) is not read:\n"
+       "                            convert it (meshio convert part.msh part.mesh)\n"
        "  --param KEY=VALUE         built-in scene parameter, repeatable (nx=50, pinned=[0,49])\n"
        "Simulator options, one per row of include/stabint/options_table.h;\n"
        "--dt is --time-step:\n"
@@ -210,7 +216,8 @@ std::string usage() {
        "  --device SEL              OpenCL device: index or name substring\n"
        "  --list-devices            list the OpenCL devices and exit\n"
        "Output:\n"
-       "  --frames N                number of time steps (default 100)\n"
+       "  --frames N                number of time steps (default 100): frames 1 to N, each after\n"
+       "                            its step (frame 0 is the initial state)\n"
        "  --csv FILE                per-frame CSV, '-' for standard output: frame, time, kinetic,\n"
        "                            elastic, external, total, target, forcing, damping,\n"
        "                            event_energy, friction, contact_projection (the step's\n"
@@ -229,7 +236,8 @@ std::string usage() {
        "  --every N                 write every Nth frame to the CSV, OBJ and VTK files (default 1;\n"
        "                            the last frame is always written)\n"
        "  --quiet                   no progress or summary on standard error\n"
-       "  --help                    this text\n"
+       "  -h, --help                this text\n"
+       "  --version                 the version, and exit\n"
        "\n"
        "Built-in scene parameters (see include/stabint/builders.hpp):\n";
   for (const std::string& name : stabint::builtinSceneNames()) {
@@ -253,6 +261,8 @@ Options parseArgs(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     std::string arg = argv[i];
     std::optional<std::string> inline_value;
+    // -h is the one short option: --help, as most tools spell it.
+    if (arg == "-h") arg = "--help";
     if (arg.rfind("--", 0) == 0) {
       const size_t eq = arg.find('=');
       if (eq != std::string::npos) {
@@ -279,9 +289,12 @@ Options parseArgs(int argc, char** argv) {
       if (inline_value) throw UsageError(arg + ": takes no value");
     };
     try {
-      if (arg == "--help" || arg == "-h") {
+      if (arg == "--help") {
         flag();
         o.help = true;
+      } else if (arg == "--version") {
+        flag();
+        o.version = true;
       } else if (arg == "--scene") {
         o.scene = value();
       } else if (arg == "--param") {
@@ -322,7 +335,7 @@ Options parseArgs(int argc, char** argv) {
       throw UsageError(arg + ": " + e.what());  // names from parseIntegrator / parseBackend
     }
   }
-  if (!o.help && !o.list_devices && o.scene.empty()) throw UsageError("missing --scene (see --help)");
+  if (!o.help && !o.version && !o.list_devices && o.scene.empty()) throw UsageError("missing --scene (see --help)");
   return o;
 }
 

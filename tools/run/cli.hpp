@@ -29,9 +29,14 @@ struct Options {
   std::string vtk_dir;
   bool list_devices = false;
   bool help = false;
+  bool version = false;
   bool quiet = false;
 };
 
+/// The whole tool: parses `argv` (argv[0] is the program), runs and returns the exit status,
+/// having printed any error as "stabint-run: error: ...". The executable's main() and Python's
+/// `stabint-run` command (stabint._stabint._run_cli) call it.
+int runCli(int argc, char** argv);
 /// The command line as options; a bad one is a UsageError naming the option.
 Options parseArgs(int argc, char** argv);
 /// The --help text: every option, with the simulator options' defaults.

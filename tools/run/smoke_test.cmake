@@ -126,8 +126,10 @@ elseif(CASE STREQUAL "blow_up")
   if(n LESS 2)
     message(FATAL_ERROR "the CSV should keep the frames before the blow-up")
   endif()
-  # The same run with an energy ceiling stops at once, the same way.
-  expect_run(2 "stabint-run: error: the energy limit was exceeded at frame 2 .*exceeds the target H"
+  # The same run with an energy ceiling stops at once, the same way. Frames count from 1 (frame 0
+  # is the initial state) and the library's message labels its step as an index from 0: frame 2
+  # is the step from t = 1/30 to 2/30, step index 1.
+  expect_run(2 "stabint-run: error: the energy limit was exceeded at frame 2 \\(t = 0\\.0666667 s\\); step index 1 \\(t = 0\\.0333333 -> 0\\.0666667, integrator FE\\): .*exceeds the target H"
              --scene chain --backend cpu --integrator FE --frames 2000 --energy-limit 10 --quiet)
 elseif(CASE STREQUAL "opencl_fallback")
   # An empty ICD vendor directory: the loader finds no platform. The default backend (auto) runs
@@ -220,6 +222,66 @@ elseif(CASE STREQUAL "help")
   expect_run(0 "" --help)
   if(NOT run_stdout MATCHES "Usage: stabint-run --scene")
     message(FATAL_ERROR "--help prints no usage:\n${run_stdout}")
+  endif()
+  # -h is --help, alone or among other options (which it ends, as --help does).
+  set(help "${run_stdout}")
+  foreach(args "-h" "--scene;chain;-h")
+    expect_run(0 "" ${args})
+    if(NOT run_stdout STREQUAL help)
+      message(FATAL_ERROR "stabint-run ${args} prints something else than --help:\n${run_stdout}")
+    endif()
+  endforeach()
+  expect_run(1 "^stabint-run: error: unexpected argument '-x'" --scene chain -x)
+elseif(CASE STREQUAL "version")
+  # The project's version (CMakeLists.txt), alone on standard output; no --scene needed.
+  file(STRINGS "${SCENES}/../CMakeLists.txt" project REGEX "^project\\(stabint VERSION ")
+  string(REGEX REPLACE ".*VERSION ([0-9.]+).*" "\\1" version "${project}")
+  expect_run(0 "^$" --version)
+  if(NOT run_stdout STREQUAL "stabint-run ${version}\n")
+    message(FATAL_ERROR "--version printed '${run_stdout}', expected 'stabint-run ${version}'")
+  endif()
+  expect_run(1 "^stabint-run: error: --version: takes no value" --version=2)
+elseif(CASE STREQUAL "mesh_scenes")
+  # A mesh file is a scene: each format the library's loaders read, by its extension (any case),
+  # TetGen by either of its two files.
+  file(COPY_FILE "${SCENES}/bar.mesh" "${dir}/BAR.MESH")
+  foreach(mesh "cloth_square.obj;121 particles" "bar.mesh;20 particles, 24 tets" "bar.node;20 particles, 24 tets"
+               "bar.ele;20 particles, 24 tets" "${dir}/BAR.MESH;20 particles, 24 tets")
+    list(GET mesh 0 file)
+    list(GET mesh 1 summary)
+    if(NOT IS_ABSOLUTE "${file}")
+      set(file "${SCENES}/${file}")
+    endif()
+    expect_run(0 "scene '[A-Za-z_]+' \\(${summary}" --scene "${file}" --backend cpu --frames 3 --csv -)
+    string(REGEX MATCHALL "\n[0-9]+," rows "\n${run_stdout}")
+    list(LENGTH rows n)
+    if(NOT n EQUAL 4)
+      message(FATAL_ERROR "${file}: expected 4 CSV rows, got ${n}:\n${run_stdout}")
+    endif()
+  endforeach()
+  # A mesh's own errors are the loader's (file and line), not a JSON parser's.
+  file(WRITE "${dir}/broken.obj" "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+  expect_run(1 "^stabint-run: error: ${dir}/broken.obj:4: .*out of range" --scene "${dir}/broken.obj")
+  expect_run(1 "^stabint-run: error: ${dir}/missing.obj: cannot open" --scene "${dir}/missing.obj")
+  # Gmsh is not among them: the error says so and how to convert, whether or not the file exists.
+  expect_run(1 "^stabint-run: error: --scene: '${dir}/part.msh': Gmsh .msh files are not read by the library's loaders.*meshio convert"
+             --scene "${dir}/part.msh")
+  expect_run(1 "^stabint-run: error: --param applies to built-in scenes only" --scene "${SCENES}/bar.mesh" --param nx=3)
+elseif(CASE STREQUAL "mesh_ground")
+  # A mesh lands on the ground plane the CLI adds, a quarter of its bounding-box diagonal below its
+  # lowest point: the bar (1 x 0.25 x 0.25 m, lowest at y = 0, diagonal 1.0607 m) falls onto
+  # y = -0.265 and rests there after 2 s (20 m below its start without the plane).
+  expect_run(0 "" --scene "${SCENES}/bar.mesh" --backend cpu --frames 60 --every 60 --quiet --obj-dir "${dir}/obj")
+  file(STRINGS "${dir}/obj/frame_00060.obj" vertices REGEX "^v ")
+  set(lowest 1e30)
+  foreach(v ${vertices})
+    string(REGEX REPLACE "^v [^ ]+ ([^ ]+) .*" "\\1" y "${v}")
+    if(y LESS lowest)
+      set(lowest "${y}")
+    endif()
+  endforeach()
+  if(lowest LESS -0.29 OR lowest GREATER -0.24)
+    message(FATAL_ERROR "the bar's lowest point after 2 s is at y = ${lowest}, expected on the ground at -0.265")
   endif()
 elseif(CASE STREQUAL "option_flags")
   # Every row of the options' table (include/stabint/options_table.h) has its flag, the

@@ -73,7 +73,7 @@ Simulator& Simulator::operator=(Simulator&&) noexcept = default;
 const StepReport& Simulator::step() {
   const StepReport& report =
       reportingOutOfMemory("Simulator::step", [&]() -> const StepReport& { return impl_->step(); });
-  impl_->runReporters(*this);
+  reportingOutOfMemory("Simulator::step", [&] { impl_->runReporters(*this); });
   return report;
 }
 

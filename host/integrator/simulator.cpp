@@ -10,6 +10,7 @@
 #include "state/checkpoint.hpp"
 #include "out_of_memory.hpp"
 
+#include <exception>
 #include <memory>
 #include <string>
 #include <vector>
@@ -30,8 +31,37 @@ struct Simulator::Impl {
     return report;
   }
 
+  // The reporters due after an accepted step, in the order they were added (a copy of the list:
+  // a reporter may add or remove reporters). One that throws stops the rest for this step and
+  // becomes a ReporterError; the step stands.
+  void runReporters(const Simulator& simulator) {
+    if (reporters.empty()) return;
+    const int steps = simulator.stepCount();
+    const std::vector<std::shared_ptr<Reporter>> due = reporters;
+    for (const std::shared_ptr<Reporter>& reporter : due) {
+      if (!reporter->due(steps)) continue;
+      try {
+        reporter->report(simulator, report);
+      } catch (...) {
+        const std::exception_ptr cause = std::current_exception();
+        std::string what;
+        try {
+          std::rethrow_exception(cause);
+        } catch (const std::exception& e) {
+          what = e.what();
+        } catch (...) {
+          what = "an exception not derived from std::exception";
+        }
+        throw ReporterError("reporter " + reporter->name() + " failed after step " + std::to_string(report.step) +
+                                " (the step is kept): " + what,
+                            report.step, cause);
+      }
+    }
+  }
+
   std::unique_ptr<BatchDriver> driver;
   StepReport report;  // of the last completed step (lastReport)
+  std::vector<std::shared_ptr<Reporter>> reporters;
 };
 
 Simulator::Simulator(const Scene& scene, const SimulatorOptions& options)
@@ -41,8 +71,31 @@ Simulator::Simulator(Simulator&&) noexcept = default;
 Simulator& Simulator::operator=(Simulator&&) noexcept = default;
 
 const StepReport& Simulator::step() {
-  return reportingOutOfMemory("Simulator::step", [&]() -> const StepReport& { return impl_->step(); });
+  const StepReport& report =
+      reportingOutOfMemory("Simulator::step", [&]() -> const StepReport& { return impl_->step(); });
+  reportingOutOfMemory("Simulator::step", [&] { impl_->runReporters(*this); });
+  return report;
 }
+
+void Simulator::addReporter(std::shared_ptr<Reporter> reporter) {
+  if (!reporter) throw InvalidInputError("addReporter: the reporter is null");
+  for (const std::shared_ptr<Reporter>& r : impl_->reporters) {
+    if (r == reporter) throw InvalidInputError("addReporter: " + reporter->name() + " is already attached");
+  }
+  reportingOutOfMemory("Simulator::addReporter", [&] { impl_->reporters.push_back(std::move(reporter)); });
+}
+bool Simulator::removeReporter(const std::shared_ptr<Reporter>& reporter) {
+  auto& list = impl_->reporters;
+  for (auto it = list.begin(); it != list.end(); ++it) {
+    if (*it == reporter) {
+      list.erase(it);
+      return true;
+    }
+  }
+  return false;
+}
+void Simulator::clearReporters() { impl_->reporters.clear(); }
+const std::vector<std::shared_ptr<Reporter>>& Simulator::reporters() const { return impl_->reporters; }
 const Eigen::MatrixX3d& Simulator::positions() const { return impl_->driver->x_; }
 const Eigen::MatrixX3d& Simulator::velocities() const { return impl_->driver->v_; }
 double Simulator::time() const { return impl_->time(); }

@@ -3,8 +3,10 @@
 /// Error types of stabint. Everything the library throws derives from stabint::Error, so a
 /// program can catch one type; the subtypes let it react to the cause (for example fall back to
 /// the CPU reference backend on NoOpenCLDeviceError).
+#include <exception>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 /// Everything of the C++ API: scenes, simulators, batches, loaders and errors.
 namespace stabint {
@@ -58,6 +60,24 @@ class EnergyLimitError : public NonFiniteStateError {
  public:
   /// As NonFiniteStateError's constructor: the message and the refused step.
   using NonFiniteStateError::NonFiniteStateError;
+};
+
+/// A reporter (stabint/reporters.hpp) threw after an accepted step: the step stands (state, time,
+/// step count and report are the step's), the message names the reporter and the step, and the
+/// reporter's own exception is cause(), for std::rethrow_exception.
+class ReporterError : public Error {
+ public:
+  /// `what` is the message, `step` the index of the reported step, `cause` what the reporter threw.
+  ReporterError(const std::string& what, int step, std::exception_ptr cause)
+      : Error(what), step_(step), cause_(std::move(cause)) {}
+  /// Index of the reported step (0 = the first step); the step was accepted.
+  int step() const { return step_; }
+  /// The exception the reporter threw.
+  const std::exception_ptr& cause() const { return cause_; }
+
+ private:
+  int step_;
+  std::exception_ptr cause_;
 };
 
 /// Memory ran out (std::bad_alloc inside the library): the message names the call. Refused like

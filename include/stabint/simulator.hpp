@@ -2,6 +2,7 @@
 /// @file
 /// The stepping API: build a Simulator from a Scene and options, call step() once per frame.
 #include <stabint/errors.hpp>
+#include <stabint/reporters.hpp>
 #include <stabint/scene.hpp>
 #include <stabint/types.hpp>
 
@@ -64,8 +65,20 @@ class Simulator {
 
   /// Advances one time step. Throws NonFiniteStateError (state unchanged) when the step would
   /// produce a non-finite position or velocity, and its subtype EnergyLimitError when the step
-  /// would exceed SimulatorOptions::energy_limit.
+  /// would exceed SimulatorOptions::energy_limit. After an accepted step it calls the reporters
+  /// that are due (stabint/reporters.hpp); one that throws leaves the step accepted and makes
+  /// step() throw ReporterError.
   const StepReport& step();
+
+  /// Attaches a reporter, called after every accepted step it is due for, after the reporters
+  /// attached before it. Throws InvalidInputError for a null reporter or one already attached.
+  void addReporter(std::shared_ptr<Reporter> reporter);
+  /// Detaches `reporter`; false when it was not attached.
+  bool removeReporter(const std::shared_ptr<Reporter>& reporter);
+  /// Detaches every reporter.
+  void clearReporters();
+  /// The attached reporters, in the order they are called.
+  const std::vector<std::shared_ptr<Reporter>>& reporters() const;
 
   ///@{
   /// The current state, `n by 3`.

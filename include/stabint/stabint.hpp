@@ -7,6 +7,7 @@
 #include <stabint/events.hpp>
 #include <stabint/io.hpp>
 #include <stabint/options_table.h>
+#include <stabint/reporters.hpp>
 #include <stabint/scene.hpp>
 #include <stabint/simulator.hpp>
 #include <stabint/types.hpp>

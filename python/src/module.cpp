@@ -73,6 +73,7 @@ struct ErrorTypes {
   PyObject* kernel_build = nullptr;
   PyObject* unsupported_precision = nullptr;
   PyObject* out_of_memory = nullptr;
+  PyObject* reporter = nullptr;
 } errors;
 
 PyObject* newErrorType(nb::module_& m, const char* name, PyObject* base, const char* doc) {
@@ -97,6 +98,17 @@ void raise(PyObject* type, const char* what,
 void translate(const std::exception_ptr& p, void*) {
   try {
     std::rethrow_exception(p);
+  } catch (const ReporterError& e) {
+    // A Python reporter's exception goes back to Python as itself (simulator.cpp's
+    // PyCallbackReporter); a C++ reporter's failure is a ReporterError.
+    try {
+      std::rethrow_exception(e.cause());
+    } catch (nb::python_error& cause) {
+      cause.restore();
+      return;
+    } catch (...) {
+    }
+    raise(errors.reporter, e.what(), {{"step", nb::int_(e.step())}});
   } catch (const EnergyLimitError& e) {
     raise(errors.energy_limit, e.what(), {{"step", nb::int_(e.step())}});
   } catch (const NonFiniteStateError& e) {
@@ -166,6 +178,9 @@ void bindErrors(nb::module_& m) {
   nb::object bases = nb::make_tuple(nb::handle(errors.error), nb::handle(PyExc_MemoryError));
   errors.out_of_memory = newErrorType(m, "OutOfMemoryError", bases.release().ptr(),
                                       "Memory ran out inside the call the message names; a simulator keeps its state.");
+  errors.reporter = newErrorType(
+      m, "ReporterError", errors.error,
+      "A reporter failed after an accepted step (the step stands); the message names it. Attribute: step.");
   nb::register_exception_translator(translate);
 }
 

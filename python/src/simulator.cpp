@@ -2,7 +2,11 @@
 // reports (from their tables, stabint/types.hpp), Checkpoint and Simulator.
 #include "fields.hpp"
 
+#include <nanobind/stl/shared_ptr.h>
+
+#include <memory>
 #include <string>
+#include <utility>
 
 namespace stabint::py {
 
@@ -17,6 +21,61 @@ template <>
 void bindExtras(nb::class_<PhaseTimes>& c) {
   c.def_prop_ro("total", &PhaseTimes::total, "The sum of the phases.");
 }
+
+namespace {
+
+// A Python callable as a reporter: called with the GIL (Simulator.step releases it), with the
+// simulator's own Python object and a copy of the report. What it raises leaves the library as a
+// ReporterError whose cause() is the nb::python_error; the translator (module.cpp) raises the
+// Python exception again, traceback and all.
+class PyCallbackReporter : public Reporter {
+ public:
+  PyCallbackReporter(nb::callable function, int every) : Reporter(every), function_(std::move(function)) {
+    name_ = nb::repr(function_).c_str();
+  }
+  ~PyCallbackReporter() override {
+    nb::gil_scoped_acquire gil;  // the last reference may go where the GIL is released
+    function_.reset();
+  }
+  void report(const Simulator& simulator, const StepReport& report) override {
+    nb::gil_scoped_acquire gil;
+    function_(nb::cast(&simulator, nb::rv_policy::reference), report);
+  }
+  std::string name() const override { return name_; }
+  const nb::callable& function() const { return function_; }
+
+ private:
+  nb::callable function_;
+  std::string name_;
+};
+
+void bindReporters(nb::module_& m) {
+  nb::class_<Reporter>(m, "Reporter",
+                       "Base of the per-frame reporters Simulator.add_reporter attaches: called after every "
+                       "`every`-th accepted step (when step_count is a multiple of it); a refused step reports "
+                       "nothing.")
+      .def_prop_ro("every", &Reporter::every, "Reports after the steps whose step_count is a multiple of this.")
+      .def_prop_ro("name", &Reporter::name, "The reporter as error messages name it.")
+      .def("__repr__", [](const Reporter& r) { return r.name() + " every " + std::to_string(r.every()); });
+  nb::class_<CsvReporter, Reporter>(
+      m, "CsvReporter",
+      "Writes one CSV row per reported step (stabint-run --csv's columns: frame = report.step + 1, time, "
+      "energies, target, energy book, branch, alpha, velocity scale, iterations, energy evaluations, phase "
+      "timings), 17 significant digits, each row flushed. Attach it with Simulator.add_reporter.")
+      .def(nb::init<const std::string&, int>(), "path"_a, "every"_a = 1,
+           "Creates or truncates `path` and writes the header; raises FileFormatError when it cannot be written.")
+      .def("initial_row", &CsvReporter::initialRow, "simulator"_a,
+           "Writes the row of the simulator's current state (frame step_count, its energy and target): call it "
+           "before the first step for frame 0, the reference of every drift.")
+      .def("row", &CsvReporter::row, "frame"_a, "report"_a, "Writes one row labelled `frame`.");
+  nb::class_<PyCallbackReporter, Reporter>(
+      m, "CallbackReporter",
+      "A Python callable `function(sim, report)` as a reporter; Simulator.add_reporter(function, every) makes one.")
+      .def(nb::init<nb::callable, int>(), "function"_a, "every"_a = 1)
+      .def_prop_ro("function", &PyCallbackReporter::function);
+}
+
+}  // namespace
 
 void bindSimulator(nb::module_& m) {
   // The options from their table (stabint/options_table.h, through FieldTable): a keyword per
@@ -62,6 +121,8 @@ void bindSimulator(nb::module_& m) {
                std::to_string(c.bytes().size()) + " bytes)";
       });
 
+  bindReporters(m);
+
   nb::class_<Simulator>(m, "Simulator",
                         "Steps a scene with one integrator. The scene is validated and copied at construction.")
       .def(nb::init<const Scene&, const SimulatorOptions&>(), "scene"_a, "options"_a = SimulatorOptions(),
@@ -70,7 +131,34 @@ void bindSimulator(nb::module_& m) {
           "step", [](Simulator& s) { return s.step(); }, nb::call_guard<nb::gil_scoped_release>(),
           "Advances one step and returns its report. Raises NonFiniteStateError (EnergyLimitError) when the "
           "step is refused; the simulator then keeps the last accepted state. The GIL is released while it "
-          "runs, so simulators may step in parallel threads; one Simulator must not be used by two threads at once.")
+          "runs, so simulators may step in parallel threads; one Simulator must not be used by two threads at once. "
+          "After an accepted step the reporters due are called (add_reporter); what a Python reporter raises "
+          "propagates from here as that exception, another reporter's failure as ReporterError, and the step "
+          "stays accepted either way.")
+      .def(
+          "add_reporter",
+          [](Simulator& s, std::shared_ptr<Reporter> reporter) {
+            s.addReporter(reporter);
+            return reporter;
+          },
+          "reporter"_a, "Attaches a Reporter (e.g. a CsvReporter) and returns it.")
+      .def(
+          "add_reporter",
+          [](Simulator& s, nb::callable function, int every) {
+            std::shared_ptr<Reporter> reporter = std::make_shared<PyCallbackReporter>(std::move(function), every);
+            s.addReporter(reporter);
+            return reporter;
+          },
+          "function"_a, "every"_a = 1,
+          "Calls `function(sim, report)` after every `every`-th accepted step (when step_count is a multiple of "
+          "it), after the reporters attached before; a refused step reports nothing. Returns the CallbackReporter "
+          "(for remove_reporter). An exception the function raises propagates from step() as itself, with the "
+          "step accepted; the reporters after it are skipped for that step. The function must not step the "
+          "simulator.")
+      .def("remove_reporter", &Simulator::removeReporter, "reporter"_a,
+           "Detaches a reporter add_reporter returned; False when it was not attached.")
+      .def("clear_reporters", &Simulator::clearReporters, "Detaches every reporter.")
+      .def_prop_ro("reporters", &Simulator::reporters, "The attached reporters, in the order they are called.")
       .def_prop_ro(
           "positions", [](const Simulator& s) { return rowsCopy(s.positions()); }, nb::rv_policy::move,
           "(n, 3) current positions, a C-contiguous float64 copy (x y z per particle).")

@@ -46,7 +46,7 @@ from . import _stabint
 # as stabint.<Name>, so they say so in tracebacks.
 for _name in ("Error", "InvalidInputError", "FileFormatError", "NonFiniteStateError", "EnergyLimitError",
               "OpenCLError", "NoOpenCLDeviceError", "KernelBuildError", "UnsupportedPrecisionError",
-              "OutOfMemoryError"):
+              "OutOfMemoryError", "ReporterError"):
     getattr(_stabint, _name).__module__ = "stabint"
 
 __version__ = "0.1.0"

@@ -274,7 +274,7 @@ def test_state_is_a_property_without_an_argument_and_a_method_with_one():
     # The rule (docs/guide.md, "Python conventions"): what needs no argument is a property
     # (Simulator.positions, BatchSimulator.all_positions, .time, .size), what takes one is a method
     # (BatchSimulator.positions(scene), .scene_time(scene)); a method without arguments does work.
-    does_work = {"step", "checkpoint", "energy"}
+    does_work = {"step", "checkpoint", "energy", "clear_reporters"}
     for cls in (stabint.Simulator, stabint.BatchSimulator):
         for name, attribute in vars(cls).items():
             if name.startswith("_") or isinstance(attribute, property):

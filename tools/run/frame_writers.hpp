@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -151,54 +152,37 @@ class VtkWriter {
   std::vector<std::pair<double, std::string>> frames_;
 };
 
-// Every write is checked: a full disk (--csv /dev/full) or a closed file must end the run with an
-// error, not exit 0 with nothing written.
+// --csv: the library's CsvReporter (stabint/reporters.hpp) writes the format, checks and flushes
+// every row, so that a full disk (--csv /dev/full) or a closed file ends the run with an error
+// naming the option, not exit 0 with nothing written. The run writes the rows itself rather
+// than attaching it: besides every --every-th frame it writes frame 0, the last frame and the
+// last finite frame of a blow-up.
 class CsvWriter {
- public:
-  explicit CsvWriter(const std::string& path) : name_(path == "-" ? "standard output" : "'" + path + "'") {
-    errno = 0;
-    if (path == "-") {
-      out_ = &std::cout;
-    } else {
-      file_.open(path);
-      if (!file_) throw UsageError("--csv: cannot write '" + path + "'");
-      out_ = &file_;
+  template <class Write>
+  static decltype(auto) named(Write&& write) {
+    try {
+      return write();
+    } catch (const stabint::FileFormatError& e) {
+      throw UsageError(std::string("--csv: ") + e.what());
     }
-    *out_
-        << "frame,time,kinetic,elastic,external,total,target,forcing,damping,event_energy,friction,contact_projection,"
-           "branch,alpha,velocity_scale,iterations,energy_evaluations,local_s,gather_s,transfer_s,global_s,energy_s,"
-           "bookkeeping_s\n";
-    check();
   }
+
+ public:
+  explicit CsvWriter(const std::string& path)
+      : csv_(named([&] {
+          return path == "-" ? std::make_unique<stabint::CsvReporter>(std::cout, "standard output")
+                             : std::make_unique<stabint::CsvReporter>(path);
+        })) {}
 
   void row(int frame, const stabint::StepReport& r) {
-    const auto& e = r.energy;
-    const auto& t = r.times;
-    char buf[768];
-    std::snprintf(
-        buf, sizeof(buf),
-        "%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%.17g,%d,%d,%.9g,%.9g,%."
-        "9g,%.9g,%.9g,%.9g\n",
-        frame, r.time, e.kinetic, e.elastic, e.external, e.total(), r.target, r.forcing, r.damping, r.event_energy,
-        r.friction, r.contact_projection, stabint::blendBranchName(r.branch), r.alpha, r.velocity_scale, r.iterations,
-        r.energy_evaluations, t.local, t.gather, t.transfer, t.global, t.energy, t.bookkeeping);
-    *out_ << buf;
-    check();
+    named([&] { csv_->row(frame, r); });
   }
-
-  void flush() {
-    out_->flush();
-    check();
+  void initialRow(const stabint::Simulator& sim) {
+    named([&] { csv_->initialRow(sim); });
   }
 
  private:
-  void check() const {
-    if (!*out_) throw UsageError("--csv: write failed for " + name_ + writeErrorText());
-  }
-
-  std::string name_;
-  std::ofstream file_;
-  std::ostream* out_ = nullptr;
+  std::unique_ptr<stabint::CsvReporter> csv_;
 };
 
 }  // namespace stabint_run

@@ -5,6 +5,7 @@
 // both call.
 #include "cli.hpp"
 #include "frame_writers.hpp"
+#include "progress.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -13,7 +14,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -28,7 +28,6 @@ namespace {
 
 using namespace stabint_run;
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 // --- the scene ------------------------------------------------------------------------------------
 
@@ -208,16 +207,12 @@ int run(Options& o) {
   if (!o.vtk_dir.empty()) vtk.emplace(o.vtk_dir, scene);
 
   // Frame 0 is the initial state: the reference every energy drift is measured against.
-  stabint::StepReport initial;
-  initial.energy = sim->energy();
-  initial.target = sim->target();
-  const double initial_total = initial.energy.total();
-  if (csv) csv->row(0, initial);
+  const double initial_total = sim->energy().total();
+  if (csv) csv->initialRow(*sim);
   if (obj) obj->write(0, sim->positions());
   if (vtk) vtk->write(0, sim->time(), sim->positions(), sim->velocities());
 
-  const auto start = Clock::now();
-  auto last_progress = start;
+  Progress progress(o.frames, o.quiet);
   int last_written = 0;
   const StopSignals stop_signals;
   for (int frame = 1; frame <= o.frames; ++frame) {
@@ -230,10 +225,10 @@ int run(Options& o) {
       const int bad = e.step() + 1;
       // Keep the last finite frame even when --every skipped it.
       if (csv && last_written != bad - 1 && bad - 1 > 0) csv->row(bad - 1, sim->lastReport());
-      if (csv) csv->flush();
       if (vtk && last_written != bad - 1 && bad - 1 > 0)
         vtk->write(bad - 1, sim->time(), sim->positions(), sim->velocities());  // as the CSV: the last finite frame
       if (vtk) vtk->finish();
+      progress.end();
       const bool limit = dynamic_cast<const stabint::EnergyLimitError*>(&e) != nullptr;
       std::cerr << kProgram << ": error: " << (limit ? "the energy limit was exceeded" : "the state became non-finite")
                 << " at frame " << bad << " (t = " << sim->time() + o.sim.time_step << " s); "
@@ -248,23 +243,18 @@ int run(Options& o) {
       last_written = frame;
     }
     if (stop_signal != 0) {
-      if (csv) csv->flush();
       if (vtk) vtk->finish();
+      progress.end();
       std::cerr << kProgram << ": interrupted by " << (stop_signal == SIGINT ? "SIGINT" : "SIGTERM") << " after frame "
                 << frame << (csv ? "; CSV kept up to frame " + std::to_string(frame) : std::string()) << "\n";
       return 128 + stop_signal;
     }
-    const auto now = Clock::now();
-    if (!o.quiet && now - last_progress >= std::chrono::seconds(1)) {
-      const double elapsed = std::chrono::duration<double>(now - start).count();
-      std::cerr << kProgram << ": frame " << frame << "/" << o.frames << ", " << 1e3 * elapsed / frame << " ms/frame\n";
-      last_progress = now;
-    }
+    progress.frame(frame);
   }
-  if (csv) csv->flush();
   if (vtk) vtk->finish();
+  progress.end();
   if (!o.quiet) {
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    const double elapsed = progress.elapsed();
     const double total = sim->energy().total();
     std::cerr << kProgram << ": " << o.frames << " frames in " << elapsed << " s ("
               << (o.frames ? 1e3 * elapsed / o.frames : 0.0) << " ms/frame); energy " << initial_total << " -> "

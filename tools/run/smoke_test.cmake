@@ -172,11 +172,11 @@ elseif(CASE STREQUAL "missing_scene_file")
   expect_run(1 "^stabint-run: error: ${WORK}/missing.json: cannot open file" --scene "${WORK}/missing.json")
 elseif(CASE STREQUAL "output_full")
   # A full disk is an error, not a silent success with nothing written.
-  expect_run(1 "^stabint-run: error: --csv: write failed for '/dev/full'" --scene chain --backend cpu --frames 3 --quiet
+  expect_run(1 "^stabint-run: error: --csv: /dev/full: write failed" --scene chain --backend cpu --frames 3 --quiet
              --csv /dev/full)
   execute_process(COMMAND "${RUN}" --scene chain --backend cpu --frames 3 --quiet --csv - OUTPUT_FILE /dev/full
                   RESULT_VARIABLE rc ERROR_VARIABLE err)
-  if(NOT rc EQUAL 1 OR NOT err MATCHES "^stabint-run: error: --csv: write failed for standard output")
+  if(NOT rc EQUAL 1 OR NOT err MATCHES "^stabint-run: error: --csv: standard output: write failed")
     message(FATAL_ERROR "--csv - into /dev/full: exit status ${rc} (expected 1), stderr:\n${err}")
   endif()
 elseif(CASE STREQUAL "param_splice")

@@ -2,6 +2,8 @@
 // tables (stabint/scene.hpp, through fields.hpp), Scene itself, the builders and the loaders.
 #include "fields.hpp"
 
+#include <type_traits>
+
 namespace stabint::py {
 
 using namespace nb::literals;
@@ -42,15 +44,24 @@ std::string structRepr<Collider>(nb::handle self) {
       case ColliderShape::Sphere: return field == "center" || field == "radius";
       case ColliderShape::Box: return field == "center" || field == "half_extents";
       case ColliderShape::Capsule: return field == "center" || field == "end" || field == "radius";
+      case ColliderShape::Mesh: return field == "center" || field == "mesh_vertices" || field == "mesh_triangles";
     }
     return true;
+  };
+  // Eigen compares matrices of one size only: a mesh's vertices differ from the empty default
+  // by their row count first.
+  const auto differs = [](const auto& value, const auto& other) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(value)>, Eigen::MatrixX3d>)
+      return value.rows() != other.rows() || value != other;
+    else
+      return value != other;
   };
   std::string text = "Collider(shape=" + valueRepr(self.attr("shape"));
   std::apply(
       [&](const auto&... field) {
         const auto add = [&](const auto& f) {
           const std::string name = f.name;
-          if (name != "shape" && (describes(name) || collider.*(f.member) != defaults.*(f.member)))
+          if (name != "shape" && (describes(name) || differs(collider.*(f.member), defaults.*(f.member))))
             text += ", " + name + "=" + valueRepr(self.attr(f.name));
         };
         (add(field), ...);

@@ -111,7 +111,10 @@ std::vector<std::pair<std::string, std::string>> recordedOptions(const Simulator
 // checkpoint recorded (or that it did not record).
 void checkSameOptions(const std::vector<std::pair<std::string, std::string>>& recorded,
                       const SimulatorOptions& options) {
-  for (const auto& [name, value] : recordedOptions(options)) {
+  for (const auto& option : recordedOptions(options)) {
+    // Named copies: a lambda may not capture a structured binding in C++17 (clang refuses it).
+    const std::string& name = option.first;
+    const std::string& value = option.second;
     const auto found = std::find_if(recorded.begin(), recorded.end(), [&](const auto& r) { return r.first == name; });
     if (found == recorded.end())
       throw InvalidInputError("restore: the batch checkpoint does not record the option " + name +

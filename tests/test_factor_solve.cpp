@@ -236,7 +236,7 @@ TEST(FactorSolve, ARefactorInATransactionIsTheRefactorInPlaceBitForBit) {
 
   {
     GlobalSystem::Transaction transaction(refused);
-    refused.addToDiagonal({3}, {2e3});
+    refused.addToDiagonal(3, 2e3);
     refused.refactorAll();
   }
   Eigen::MatrixX3d x_refused(rhs.rows(), 3);

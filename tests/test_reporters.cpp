@@ -62,7 +62,7 @@ TEST(Reporters, AddRemoveAndClear) {
   EXPECT_THROW(sim.addReporter(a), InvalidInputError);
   EXPECT_THROW(sim.addReporter(nullptr), InvalidInputError);
   EXPECT_THROW(CallbackReporter([](const Simulator&, const StepReport&) {}, 0), InvalidInputError);
-  EXPECT_THROW(CallbackReporter(CallbackReporter::Function()), InvalidInputError);
+  EXPECT_THROW(CallbackReporter{CallbackReporter::Function{}}, InvalidInputError);  // braces: not a declaration
   sim.step();
   EXPECT_TRUE(sim.removeReporter(a));
   EXPECT_FALSE(sim.removeReporter(a));

@@ -40,6 +40,27 @@ ContactRun run(const Scene& scene, Integrator integrator, BackendKind backend, P
   return out;
 }
 
+// The device's run against the CPU reference's, step by step, within `tol`: positions (relative
+// to their size), and friction, forcing and the target (relative to E_scale). Returns the
+// reference's friction and |forcing| summed over the run, for the callers' checks that the run
+// reached what it tests.
+struct Reached {
+  double friction = 0.0, forcing = 0.0;
+};
+Reached expectFollowsCpu(const ContactRun& got, const ContactRun& ref, double tol, const std::string& what) {
+  Reached reached;
+  for (std::size_t i = 0; i < ref.x.size(); ++i) {
+    const std::string step = what + " step " + std::to_string(i);
+    EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << step;
+    EXPECT_NEAR(got.reports[i].friction, ref.reports[i].friction, tol * ref.energy_scale) << step;
+    EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << step;
+    EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << step;
+    reached.friction += ref.reports[i].friction;
+    reached.forcing += std::abs(ref.reports[i].forcing);
+  }
+  return reached;
+}
+
 TEST(OpenCLContact, ClothOnCollidersMatchesCpu) {
   const Scene scene = testing::clothOnColliders();
   for (Precision precision : testing::availablePrecisions()) {
@@ -48,17 +69,9 @@ TEST(OpenCLContact, ClothOnCollidersMatchesCpu) {
     for (Integrator integrator : integrators) {
       const ContactRun ref = run(scene, integrator, BackendKind::CpuReference, Precision::Double, 30);
       const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 30);
-      double friction = 0.0;
-      for (std::size_t i = 0; i < ref.x.size(); ++i) {
-        const std::string what =
-            std::string(integratorName(integrator)) + " " + precisionName(precision) + " step " + std::to_string(i);
-        EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
-        EXPECT_NEAR(got.reports[i].friction, ref.reports[i].friction, tol * ref.energy_scale) << what;
-        EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << what;
-        EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << what;
-        friction += ref.reports[i].friction;
-      }
-      EXPECT_GT(friction, 0.0) << "the cloth must reach the colliders within the run";
+      const Reached reached =
+          expectFollowsCpu(got, ref, tol, std::string(integratorName(integrator)) + " " + precisionName(precision));
+      EXPECT_GT(reached.friction, 0.0) << "the cloth must reach the colliders within the run";
     }
   }
 }
@@ -89,7 +102,7 @@ TEST(OpenCLContact, FastBarOnAThinBoxMatchesCpu) {
 
 // Colliders moved at run time (Simulator::setColliderPosition every frame for the box, a velocity
 // set at frame 6 for the sphere, once the cloth lies on it: BDF2's cloth bounces off it by frame
-// 10): the same tolerances, the forcing they book included.
+// 10): the same tolerances, the friction and forcing they book included.
 TEST(OpenCLContact, CollidersMovedAtRunTimeMatchCpu) {
   const Scene scene = testing::clothOnColliders();
   auto input = [](Simulator& sim) {
@@ -102,17 +115,9 @@ TEST(OpenCLContact, CollidersMovedAtRunTimeMatchCpu) {
     for (Integrator integrator : testing::crossBackendIntegrators(precision)) {
       const ContactRun ref = run(scene, integrator, BackendKind::CpuReference, Precision::Double, 30, input);
       const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 30, input);
-      double forcing = 0.0;
-      for (std::size_t i = 0; i < ref.x.size(); ++i) {
-        const std::string what =
-            std::string(integratorName(integrator)) + " " + precisionName(precision) + " step " + std::to_string(i);
-        EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
-        EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << what;
-        EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << what;
-        forcing += std::abs(ref.reports[i].forcing);
-      }
-      EXPECT_GT(forcing, 0.0) << integratorName(integrator) << " " << precisionName(precision)
-                              << ": the moved colliders must do work within the run";
+      const std::string what = std::string(integratorName(integrator)) + " " + precisionName(precision);
+      EXPECT_GT(expectFollowsCpu(got, ref, tol, what).forcing, 0.0)
+          << what << ": the moved colliders must do work within the run";
     }
   }
 }
@@ -138,19 +143,10 @@ TEST(OpenCLContact, MeshCollidersMatchCpu) {
     for (Integrator integrator : testing::crossBackendIntegrators(precision)) {
       const ContactRun ref = run(scene, integrator, BackendKind::CpuReference, Precision::Double, 30, input);
       const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 30, input);
-      double friction = 0.0, forcing = 0.0;
-      for (std::size_t i = 0; i < ref.x.size(); ++i) {
-        const std::string what =
-            std::string(integratorName(integrator)) + " " + precisionName(precision) + " step " + std::to_string(i);
-        EXPECT_LT(relativeError(got.x[i], ref.x[i]), tol) << what;
-        EXPECT_NEAR(got.reports[i].friction, ref.reports[i].friction, tol * ref.energy_scale) << what;
-        EXPECT_NEAR(got.reports[i].forcing, ref.reports[i].forcing, tol * ref.energy_scale) << what;
-        EXPECT_NEAR(got.reports[i].target, ref.reports[i].target, tol * ref.energy_scale) << what;
-        friction += ref.reports[i].friction;
-        forcing += std::abs(ref.reports[i].forcing);
-      }
-      EXPECT_GT(friction, 0.0) << "the cloth must reach the sphere within the run";
-      EXPECT_GT(forcing, 0.0) << "the moved box must reach the cloth within the run";
+      const Reached reached =
+          expectFollowsCpu(got, ref, tol, std::string(integratorName(integrator)) + " " + precisionName(precision));
+      EXPECT_GT(reached.friction, 0.0) << "the cloth must reach the sphere within the run";
+      EXPECT_GT(reached.forcing, 0.0) << "the moved box must reach the cloth within the run";
     }
   }
 }

@@ -8,6 +8,8 @@ cd "$(dirname "$0")/.."
 
 command -v doxygen >/dev/null || bash scripts/install-deps.sh
 mkdir -p build/apidocs
+# The options' members come from an X-macro: their docs are generated from the same rows.
+python3 scripts/apidocs_options.py build/apidocs/generated/options.dox
 log=build/apidocs/warnings.log
 # Doxygen writes its warnings to stderr; keep them in a log and print them.
 if ! doxygen docs/Doxyfile 2> "$log" || [ -s "$log" ]; then

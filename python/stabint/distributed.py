@@ -1,18 +1,20 @@
-"""Parameter sweeps over many scenes on a Dask cluster: ``sweep`` and ``grid``.
+"""Parameter sweeps over many scenes, on the executor a user already runs: ``sweep`` and ``grid``.
 
-A sweep splits a list of scenes into batches; each batch is one Dask task that builds a
-:class:`stabint.BatchSimulator` in the worker, steps it and sends back, per scene, the trajectory
+A sweep splits a list of scenes into batches; each batch is one task that builds a
+:class:`stabint.BatchSimulator` where it runs, steps it and sends back, per scene, the trajectory
 (positions, and velocities, every ``stride``-th frame) and the per-step reports (energies, H*,
-the energy book, the blend's branch and alpha, refusals). Results come back in input order.
+the energy book, the blend's branch and alpha, refusals). ``sweep`` returns the results in input
+order; ``sweep_iter`` yields each batch's as it finishes, and ``sweep(on_batch=...)`` calls back
+with them, so that a progress bar can follow.
 
-Why Dask and not Ray: Dask's ``distributed`` is pure-Python wheels (no compiled daemon), a
-``LocalCluster`` of worker processes starts inside a test in seconds with no network beyond
-loopback and no services to install, and the very same client code runs unchanged on a
-multi-machine ``dask.distributed`` cluster (``Client("tcp://scheduler:8786")``, dask-jobqueue on
-SLURM/PBS, Kubernetes). Ray's wheel is about 100 MB and runs its own GCS and raylet daemons,
-which is a lot to bring in for "run this function on those workers and give me the arrays".
-Install with ``pip install stabint[distributed]``; ``import stabint`` never imports Dask, and
-without a client (and no default client) ``sweep`` runs the batches in this process.
+Executors, through one argument (``executor``): a ``dask.distributed.Client`` (a LocalCluster in
+one machine, or a multi-machine cluster: ``Client("tcp://scheduler:8786")``, dask-jobqueue on
+SLURM/PBS, Kubernetes), the ``ray`` module after ``ray.init()``, or a ``concurrent.futures``
+process or thread pool; without one, the batches run in this process. A batch gives the same
+numbers, bit for bit, on each of them. The ``[distributed]`` extra pins Dask (pure-Python
+wheels, a LocalCluster starts inside a test in seconds); Ray (about 100 MB, its own daemons) and
+the standard library's pools need nothing from stabint. ``import stabint`` never imports Dask or
+Ray.
 
 What travels to the workers is a picklable description, never a C++ handle: a
 :class:`BuiltinScene` (builder name and parameters), a :class:`stabint.Scene` (sent as the text
@@ -47,6 +49,7 @@ the block-diagonal factor's fill-reducing ordering may order its block different
 
 from __future__ import annotations
 
+import concurrent.futures
 import difflib
 import enum
 import itertools
@@ -55,16 +58,17 @@ import math
 import os
 import re
 import tempfile
+import types
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _stabint
 from ._stabint import BatchSimulator, FileFormatError, InvalidInputError, OpenCLOptions, Scene, SimulatorOptions
 
-__all__ = ["BuiltinScene", "Cell", "SceneResult", "SceneParameterError", "grid", "plan", "sweep", "run_batch",
-           "REPORT_FIELDS"]
+__all__ = ["BuiltinScene", "Cell", "SceneResult", "SceneParameterError", "grid", "plan", "sweep", "sweep_iter",
+           "run_batch", "REPORT_FIELDS"]
 
 
 class SceneParameterError(InvalidInputError, FileFormatError):
@@ -704,9 +708,109 @@ def _default_client() -> Any:
         return None
 
 
+# --- where the batches run --------------------------------------------------------------------
+
+class _Here:
+    """No executor: each batch runs in this process when the caller asks for the next result."""
+
+    def run(self, batches: List[_Batch], errors: str) -> Iterator[Tuple[_Batch, Any]]:
+        for b in batches:
+            yield b, lambda b=b: _run(b, errors)
+
+
+class _Futures:
+    """A ``concurrent.futures.Executor`` (a process or thread pool) or a ``dask.distributed.Client``:
+    both submit a function and hand back futures with ``result()`` and ``cancel()``."""
+
+    def __init__(self, executor: Any, dask: bool) -> None:
+        self.executor, self.dask = executor, dask
+
+    def run(self, batches: List[_Batch], errors: str) -> Iterator[Tuple[_Batch, Any]]:
+        if self.dask:
+            from distributed import as_completed
+            # pure=False: two identical batches are still two tasks (Dask would otherwise merge
+            # them by their hash, which is right but surprising when timing a sweep).
+            futures = {self.executor.submit(_run, b, errors, pure=False,
+                                            key=f"stabint-sweep-batch-{b.number}-{os.urandom(4).hex()}"): b
+                       for b in batches}
+        else:
+            from concurrent.futures import as_completed  # type: ignore[assignment]
+            futures = {self.executor.submit(_run, b, errors): b for b in batches}
+        try:
+            for future in as_completed(list(futures)):
+                yield futures[future], future.result
+        finally:  # a failure raised to the caller, or the caller stopped iterating
+            for future in futures:
+                future.cancel()
+
+
+class _Ray:
+    """Ray (the ``ray`` module, after ``ray.init()``): one remote task per batch."""
+
+    def __init__(self, ray: Any) -> None:
+        self.ray = ray
+
+    def run(self, batches: List[_Batch], errors: str) -> Iterator[Tuple[_Batch, Any]]:
+        ray = self.ray
+        task = ray.remote(_run)
+        refs = {task.remote(b, errors): b for b in batches}
+        pending = list(refs)
+        try:
+            while pending:
+                (ready,), pending = ray.wait(pending, num_returns=1)
+                yield refs[ready], lambda ready=ready: ray.get(ready)
+        finally:
+            for ref in pending:
+                ray.cancel(ref)
+
+
+def _executor(executor: Any, client: Any) -> Any:
+    if client is not None:
+        if executor is not None:
+            raise InvalidInputError("sweep: give executor or client (its former name), not both")
+        executor = client
+    if executor is None:
+        executor = _default_client()
+        if executor is None:
+            return _Here()
+    if isinstance(executor, types.ModuleType) and executor.__name__ == "ray":
+        if not executor.is_initialized():
+            raise InvalidInputError("sweep: executor is the ray module but Ray is not initialised: call ray.init() first")
+        return _Ray(executor)
+    if isinstance(executor, concurrent.futures.Executor):
+        return _Futures(executor, dask=False)
+    if type(executor).__module__.split(".")[0] == "distributed" and hasattr(executor, "submit"):
+        return _Futures(executor, dask=True)
+    raise InvalidInputError(
+        "sweep: executor must be a dask.distributed.Client, the ray module (after ray.init()), a "
+        f"concurrent.futures.Executor (a process or thread pool) or None, got {type(executor).__name__}")
+
+
+def sweep_iter(scenes: Sequence[Any], options: Union[SimulatorOptions, Mapping[str, Any], None] = None,
+               frames: int = 100, *, batch_size: int = 64, stride: int = 1, velocities: bool = True,
+               executor: Any = None, errors: str = "report", client: Any = None) -> Iterator[List[SceneResult]]:
+    """The same sweep as :func:`sweep`, given back one batch at a time as each batch finishes
+    (completion order, not input order): each item is that batch's list of SceneResults, whose
+    ``index`` says which input each one is. Every check runs, and every batch is submitted,
+    before the first item comes back; stopping early cancels the batches not yet finished."""
+    _check_counts(frames, batch_size, stride)
+    _check_errors(errors)
+    batches = _batches(scenes, options, frames, batch_size, stride, velocities)
+    runner = _executor(executor, client)
+    for batch, result in runner.run(batches, errors):
+        try:
+            batch_results = result()
+        except Exception as e:  # _run reports its own failures; this is a task lost by the executor
+            if errors == "raise":
+                raise
+            batch_results = _BatchRun(batch).failed(e)
+        yield batch_results
+
+
 def sweep(scenes: Sequence[Any], options: Union[SimulatorOptions, Mapping[str, Any], None] = None,
           frames: int = 100, *, batch_size: int = 64, stride: int = 1, velocities: bool = True,
-          client: Any = None, errors: str = "report") -> List[SceneResult]:
+          executor: Any = None, errors: str = "report", on_batch: Optional[Callable[[List[SceneResult]], Any]] = None,
+          client: Any = None) -> List[SceneResult]:
     """Steps every scene for ``frames`` steps and returns one SceneResult per input, in order.
 
     ``scenes``: stabint.Scene, BuiltinScene, functions returning a Scene (pickled to the worker
@@ -714,46 +818,41 @@ def sweep(scenes: Sequence[Any], options: Union[SimulatorOptions, Mapping[str, A
     :func:`grid`). ``options``: the SimulatorOptions shared by all cells (or a dict of fields).
     Cells with equal options are batched together, ``batch_size`` at most per BatchSimulator;
     ``stride``: record positions (and velocities) every ``stride``-th frame (reports: every
-    frame). ``client``: a ``dask.distributed.Client``; None uses the default client when one
-    exists, else runs the batches one after another in this process.
+    frame).
+
+    ``executor``: where the batches run, one task per batch: a ``dask.distributed.Client``, the
+    ``ray`` module after ``ray.init()``, or a ``concurrent.futures`` process or thread pool. None
+    uses Dask's default client when one exists, else runs the batches one after another in this
+    process. A batch gives the same numbers, bit for bit, wherever it runs. ``client`` is the
+    former name of ``executor``.
+
+    ``on_batch``: called here with each batch's list of SceneResults as that batch finishes (in
+    completion order), e.g. to advance a progress bar by ``len(results)``; :func:`sweep_iter`
+    gives the same as an iterator.
 
     Bad input raises InvalidInputError naming the scene or batch before any task is sent: an
     empty list, an object that is not a scene description, an unknown option field, a scene that
     does not validate, an option value the library refuses, scenes of one batch with different
-    gravity, and a BuiltinScene's unknown builder or parameter name, NaN or infinite value or
-    value its builder refuses (:class:`SceneParameterError`, also a FileFormatError).
+    gravity, an executor of none of the kinds above, and a BuiltinScene's unknown builder or
+    parameter name, NaN or infinite value or value its builder refuses
+    (:class:`SceneParameterError`, also a FileFormatError).
 
     ``errors``: what a batch that fails where it runs does (a factory raising or returning no
-    Scene, the BatchSimulator refusing the batch, a step raising, a Dask task lost).
+    Scene, the BatchSimulator refusing the batch, a step raising, a task the executor lost).
     ``"report"`` (the default): its scenes' results carry ``error`` (and ``refusal``), a message
     naming the scene (index and description) and the cause, with whatever was computed before
     the failure; every other batch's results are returned as usual. ``"raise"``: the first
     failure raises in the caller with its class (a factory's foreign exception as
-    InvalidInputError), naming the scene or the batch, and the other results are lost. A step a
-    scene's energy check refuses is never a failure of the batch: it is that scene's ``refusal``."""
-    _check_counts(frames, batch_size, stride)
-    _check_errors(errors)
-    batches = _batches(scenes, options, frames, batch_size, stride, velocities)
-    client = client if client is not None else _default_client()
-    if client is None:
-        per_batch = [_run(b, errors) for b in batches]
-    else:
-        # pure=False: two identical batches are still two tasks (Dask would otherwise merge them
-        # by their hash, which is right but surprising when timing a sweep).
-        futures = [client.submit(_run, b, errors, pure=False,
-                                 key=f"stabint-sweep-batch-{b.number}-{os.urandom(4).hex()}")
-                   for b in batches]
-        if errors == "raise":
-            per_batch = client.gather(futures)
-        else:
-            per_batch = []
-            for b, future in zip(batches, futures):
-                try:  # _run reports its own failures; this is a task Dask could not run or bring back
-                    per_batch.append(future.result())
-                except Exception as e:
-                    per_batch.append(_BatchRun(b).failed(e))
-    results: List[Optional[SceneResult]] = [None] * len(scenes)
-    for batch_results in per_batch:
+    InvalidInputError), naming the scene or the batch; the batches not yet finished are cancelled.
+    A step a scene's energy check refuses is never a failure of the batch: it is that scene's
+    ``refusal``."""
+    if on_batch is not None and not callable(on_batch):
+        raise InvalidInputError(f"sweep: on_batch must be callable, got {type(on_batch).__name__}")
+    results: List[Optional[SceneResult]] = [None] * (len(scenes) if isinstance(scenes, Sequence) else 0)
+    for batch_results in sweep_iter(scenes, options, frames, batch_size=batch_size, stride=stride,
+                                    velocities=velocities, executor=executor, errors=errors, client=client):
         for r in batch_results:
             results[r.index] = r
+        if on_batch is not None:
+            on_batch(batch_results)
     return results  # type: ignore[return-value]

@@ -99,15 +99,18 @@ std::vector<char> ContactResolver::refreshHalfSpaces(double t, const Eigen::Matr
 }
 
 ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const ContactPart& part, double t1,
-                                                                      Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
-                                                                      double& target, StepReport& report) const {
+                                                                      const Eigen::MatrixX3d& x0, Eigen::MatrixX3d& x,
+                                                                      Eigen::MatrixX3d& v, double& target,
+                                                                      StepReport& report) const {
   Resolved resolved;
   if (part.colliders.count == 0) return resolved;
   resolved.velocities_changed =
       applyFriction(scene_, forcing_, meshes_, part, t1, time_step_, x, v, report.friction) > 0;
   target -= report.friction;
   std::vector<double> drops;
-  resolved.positions_moved = projectOutOfColliders(scene_, forcing_, meshes_, part, t1, tolerance_, x, &drops) > 0;
+  const StepStart start{t1 - time_step_, x0};
+  resolved.positions_moved =
+      projectOutOfColliders(scene_, forcing_, meshes_, part, t1, tolerance_, x, &drops, &start) > 0;
   // The share of the projection's removal the colliders' restitution keeps, weighed by the
   // contact energy each collider's moves took.
   double total = 0.0, kept = 0.0;

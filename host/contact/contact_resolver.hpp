@@ -64,8 +64,10 @@ class ContactResolver {
     bool positions_moved = false;
     double kept = 1.0;  // the share of the projection's removal the colliders' restitution keeps
   };
-  Resolved applyFrictionAndProjection(const ContactPart& part, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
-                                      double& target, StepReport& report) const;
+  /// `x0`: the part's positions at the step's start (rows as x's), for the projection's path rule.
+  Resolved applyFrictionAndProjection(const ContactPart& part, double t1, const Eigen::MatrixX3d& x0,
+                                      Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target,
+                                      StepReport& report) const;
   /// Books the final projection of a part whose potential went from `p` to `projected` (one
   /// energy evaluation): of the energy it removed, the share its restitution does not keep
   /// (1 - `kept`, Resolved::kept) leaves `target` (report.contact_projection); `p` becomes

@@ -306,11 +306,15 @@ void meshSetChange(const SceneData& scene, const Forcing& forcing, const MeshCol
     const double reach = (predicted - a).norm();
     if (scene.elementEnabled(block, e)) {
       // Both ends farther than the leaving distance (the prediction's known from x_j's when the
-      // path cannot come that near).
+      // path cannot come that near), and a path that does not enter the mesh.
       const double leave = kLeaveMargins * margin;
       const double at_a = nearestOf(meshes, mesh, e, a).signed_distance;
       if (!(at_a < leave)) {
-        if (surelyBeyond(at_a - reach, leave, a) || !near(predicted, leave)) change.leaving.push_back(e);
+        double s = 0.0;
+        Eigen::Vector3d normal;
+        if (surelyBeyond(at_a - reach, leave, a) ||
+            (!near(predicted, leave) && !mesh.firstEntry(a, predicted, s, normal)))
+          change.leaving.push_back(e);
       }
       continue;
     }
@@ -353,22 +357,24 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
       const Eigen::Index r = j - part.first_row;
       const double xj[3] = {x(r, 0), x(r, 1), x(r, 2)};
       const double predicted[3] = {x(r, 0) + h * v(r, 0), x(r, 1) + h * v(r, 1), x(r, 2) + h * v(r, 2)};
-      if (scene.elementEnabled(block, e)) {
-        if (!withinMargin(now, xj, kLeaveMargins * margin) && !withinMargin(next, predicted, kLeaveMargins * margin))
-          change.leaving.push_back(e);
-        continue;
-      }
-      bool near = withinMargin(now, xj, margin) || withinMargin(next, predicted, margin);
-      if (!near) {
-        // Swept: the path x_j -> x_j + h v_j relative to the collider passes within the margin (a
-        // fast particle crossing a thin collider within the step; both ends are far from it).
+      // x_j, its prediction or the path between them (relative to the collider: swept, a fast
+      // particle crossing a thin collider within the step with both ends far from it) within
+      // `distance` of the collider.
+      const auto near = [&](double distance) {
+        if (withinMargin(now, xj, distance) || withinMargin(next, predicted, distance)) return true;
         const Eigen::Vector3d a = x.row(r).transpose();
         const Eigen::Vector3d b = a + h * v.row(r).transpose() - moved;
-        double distance = margin;
-        if (signedDistance(now, xj) - (b - a).norm() < margin) sweep(now, a, b, distance);
-        near = distance < margin;
+        double closest = distance;
+        if (signedDistance(now, xj) - (b - a).norm() < distance) sweep(now, a, b, closest);
+        return closest < distance;
+      };
+      if (scene.elementEnabled(block, e)) {
+        // A pair whose path still crosses the collider stays (a pair that entered by its path
+        // would otherwise leave when the set is next updated before the step that needs it).
+        if (!near(kLeaveMargins * margin)) change.leaving.push_back(e);
+        continue;
       }
-      if (!near) continue;
+      if (!near(margin)) continue;
       change.entering.push_back(e);
       double p[3];
       change.entered_inside = change.entered_inside || closestPointOutside(now, xj, p);
@@ -532,9 +538,84 @@ int applyFriction(const SceneData& scene, const Forcing& forcing, const MeshColl
   return changed;
 }
 
+namespace {
+
+// [project rule] The path rule of the final projection: a pair that acts with its collider itself
+// (out of the set, or a moving collider's) and whose path over the step, x0_j -> x_j relative to
+// the collider, crosses into it is moved out of the plane that supports the collider where the
+// path enters (or at x0_j's nearest face when x0_j was inside) to `allowed` deep: a particle its
+// neighbours pull through a thin part within one step, with no contact in the set to stop it,
+// goes back to the face it came in by, where the nearest-point projection would leave it beyond
+// the far face, or push it out there. A pair in the set acts with a half-space already.
+int projectCrossedPaths(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
+                        const ContactPart& part, double t, const std::vector<double>& allowed, const StepStart& start,
+                        Eigen::MatrixX3d& x, std::vector<double>* drops) {
+  const int block = scene.blockIndex(contactElementType());
+  int moves = 0;
+  int e = firstContactElement(scene.scene(), part.colliders.first);
+  for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
+    const Collider& collider = scene.scene().colliders[static_cast<std::size_t>(c)];
+    const IndexRange particles = colliderParticles(scene.scene(), c);
+    const double depth = allowed[std::size_t(c - part.colliders.first)];
+    if (collider.shape == ColliderShape::Plane) {
+      e += particles.count;
+      continue;
+    }
+    const Eigen::Vector3d carried = forcing.colliderPosition(c, t) - forcing.colliderPosition(c, start.t);
+    const Eigen::Vector3d shift = forcing.colliderPosition(c, t) - collider.center;
+    const MeshCollider* mesh = meshes[c];
+    double g[kColliderGeometry];
+    forcing.colliderGeometry(c, t, g);
+    for (int j = particles.first; j < particles.end(); ++j, ++e) {
+      const Eigen::Index r = j - part.first_row;
+      const Eigen::Vector3d a = start.x.row(r).transpose() + carried, b = x.row(r).transpose();
+      const double reach = (b - a).norm();
+      double plane[kColliderGeometry];
+      if (mesh) {
+        if (scene.elementEnabled(block, e)) continue;
+        const Eigen::Vector3d am = a - shift, bm = b - shift;  // in the mesh's frame
+        if (surelyBeyond(knownOutside(meshes, *mesh, e, am), reach, am)) continue;
+        double s = 0.0;
+        Eigen::Vector3d normal;
+        if (!mesh->firstEntry(am, bm, s, normal)) continue;
+        planeGeometry(a + s * (b - a), normal, plane);
+      } else {
+        double pair[kColliderGeometry];
+        if (static_cast<int>(pairGeometry(scene, block, e, g, shift, pair)[kGeometryShape]) ==
+            static_cast<int>(ColliderShape::Plane))
+          continue;
+        const double av[3] = {a[0], a[1], a[2]};
+        const double at_a = signedDistance(g, av);
+        if (at_a >= reach) continue;  // the path is too short to reach the collider
+        if (at_a < 0.0) {
+          supportingPlane(g, a, plane);
+        } else {
+          double distance = 0.0;
+          bool enters = false;
+          const double s = sweep(g, a, b, distance, &enters);
+          if (!enters) continue;
+          supportingPlane(g, a + s * (b - a), plane);
+        }
+      }
+      const Eigen::Vector3d point(plane[kGeometryCenter], plane[kGeometryCenter + 1], plane[kGeometryCenter + 2]);
+      const Eigen::Vector3d normal(plane[kGeometryA], plane[kGeometryA + 1], plane[kGeometryA + 2]);
+      const double d = -(b - point).dot(normal);
+      if (!(d > depth)) continue;
+      if (drops)
+        (*drops)[std::size_t(c - part.colliders.first)] +=
+            0.5 * scene.elementWeight(block, e) * (d * d - depth * depth);
+      x.row(r) = (b + (d - depth) * normal).transpose();
+      ++moves;
+    }
+  }
+  return moves;
+}
+
+}  // namespace
+
 int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
                           const ContactPart& part, double t, double tolerance, Eigen::MatrixX3d& x,
-                          std::vector<double>* drops) {
+                          std::vector<double>* drops, const StepStart* start) {
   const int block = scene.blockIndex(contactElementType());
   if (drops) drops->assign(static_cast<std::size_t>(part.colliders.count), 0.0);
   // [project rule] A particle is left no deeper than a quarter of its collider's thinnest size
@@ -547,11 +628,11 @@ int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const 
     depth[std::size_t(c)] =
         std::min(tolerance, 0.5 * (mesh ? 0.5 * mesh->thickness() : halfThickness(scene.scene().colliders[i])));
   }
+  int moves = start ? projectCrossedPaths(scene, forcing, meshes, part, t, depth, *start, x, drops) : 0;
   // A particle pushed out of one collider into another is pushed out of that one in the next
   // sweep; three sweeps settle any corner of two or three shapes we have met, and the last
   // sweep's result stands.
   constexpr int kSweeps = 3;
-  int moves = 0;
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     int moved = 0;
     forEachContact(scene, forcing, meshes, part, t, x,

@@ -36,8 +36,8 @@ ContactPart wholeScene(const SceneData& scene);
 /// scene's contact block is set. A pair enters when x_j (against collider c at t), its
 /// prediction x_j + h v_j (against c at t + h) or the path between them (relative to the
 /// collider: swept) passes within `margin` of the collider, inside included; it leaves only when
-/// both ends are farther than 8 margins (hysteresis, so the set and the global matrix change
-/// rarely).
+/// both ends and the path are farther than 8 margins (hysteresis, so the set and the global matrix
+/// change rarely; a pair that entered by its path stays while its path still crosses).
 struct ContactSetChange {
   std::vector<int> entering, leaving;  // contact element indices, ascending
   bool entered_inside = false;         // a pair entered with x_j already inside: E jumps from 0
@@ -100,8 +100,16 @@ int applyFriction(const SceneData& scene, const Forcing& forcing, const MeshColl
 /// colliders in order, repeated while that pushes a particle into an earlier one (at most a few sweeps). Returns the
 /// number of moves; `drops`, when given, receives per collider of the part the contact energy the moves took out of its
 /// pairs (w_j/2 (d^2 - depth^2), weighing what each collider's restitution keeps).
+/// With `start` (the step's start: its time and positions, rows as x's), a pair that acts with its
+/// collider itself and whose path from the start crosses into the collider is first moved out of
+/// the plane where the path enters, so that nothing pulled through a thin part within a step
+/// comes out beyond it (docs/method.md, "Final projection").
+struct StepStart {
+  double t;
+  const Eigen::MatrixX3d& x;
+};
 int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
                           const ContactPart& part, double t, double tolerance, Eigen::MatrixX3d& x,
-                          std::vector<double>* drops = nullptr);
+                          std::vector<double>* drops = nullptr, const StepStart* start = nullptr);
 
 }  // namespace stabint

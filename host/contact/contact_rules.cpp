@@ -293,10 +293,23 @@ void meshSetChange(const SceneData& scene, const Forcing& forcing, const MeshCol
   const Eigen::Vector3d reference = scene.scene().colliders[std::size_t(c)].center;
   const Eigen::Vector3d now = forcing.colliderPosition(c, t) - reference,
                         next = forcing.colliderPosition(c, t + h) - reference;
-  // Within `distance` of the surface, or inside.
-  const auto near = [&](const Eigen::Vector3d& y, double distance) {
-    MeshCollider::Nearest n;
-    return mesh.nearest(y, distance, n) && n.signed_distance < distance;
+  // Whether the path a -> b passes within `distance` of the surface (inside included), as the
+  // analytic shapes' swept test: sphere tracing, since the distance to the surface changes by at
+  // most the way travelled; a step is at least a quarter of `distance`, so a path that comes
+  // within three quarters of it is always found.
+  const auto pathNear = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double distance) {
+    const double length = (b - a).norm();
+    constexpr int kTraceSteps = 256;
+    double travelled = 0.0;
+    for (int i = 0; i < kTraceSteps; ++i) {
+      const Eigen::Vector3d y = length > 0.0 ? Eigen::Vector3d(a + (travelled / length) * (b - a)) : a;
+      MeshCollider::Nearest n;
+      if (!mesh.nearest(y, distance + (length - travelled), n)) return false;  // nothing ahead comes near
+      if (n.signed_distance < distance) return true;
+      if (travelled >= length) return false;
+      travelled = std::min(length, travelled + std::max(n.signed_distance - distance, 0.25 * distance));
+    }
+    return true;  // a path grazing the surface for 256 steps: near enough
   };
   const IndexRange particles = colliderParticles(scene.scene(), c);
   for (int j = particles.first; j < particles.end(); ++j, ++e) {
@@ -305,26 +318,18 @@ void meshSetChange(const SceneData& scene, const Forcing& forcing, const MeshCol
     const Eigen::Vector3d predicted = x.row(r).transpose() + h * v.row(r).transpose() - next;
     const double reach = (predicted - a).norm();
     if (scene.elementEnabled(block, e)) {
-      // Both ends farther than the leaving distance (the prediction's known from x_j's when the
-      // path cannot come that near), and a path that does not enter the mesh.
+      // The whole path farther than the leaving distance (known from x_j's when it cannot come
+      // that near).
       const double leave = kLeaveMargins * margin;
       const double at_a = nearestOf(meshes, mesh, e, a).signed_distance;
-      if (!(at_a < leave)) {
-        double s = 0.0;
-        Eigen::Vector3d normal;
-        if (surelyBeyond(at_a - reach, leave, a) ||
-            (!near(predicted, leave) && !mesh.firstEntry(a, predicted, s, normal)))
-          change.leaving.push_back(e);
-      }
+      if (!(at_a < leave) && (surelyBeyond(at_a - reach, leave, a) || !pathNear(a, predicted, leave)))
+        change.leaving.push_back(e);
       continue;
     }
     // Both ends beyond the margin and the path short of the surface, known without a query.
     if (surelyBeyond(knownOutside(meshes, mesh, e, a), margin + reach, a)) continue;
     const MeshCollider::Nearest at_a = nearestOf(meshes, mesh, e, a);
-    double s = 0.0;
-    Eigen::Vector3d normal;
-    if (!(at_a.signed_distance < margin) && !near(predicted, margin) && !mesh.firstEntry(a, predicted, s, normal))
-      continue;
+    if (!(at_a.signed_distance < margin) && !pathNear(a, predicted, margin)) continue;
     change.entering.push_back(e);
     change.entered_inside = change.entered_inside || at_a.signed_distance < 0.0;
   }
@@ -437,9 +442,31 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const MeshCollide
       const double* geometry = own;
       const double xj[3] = {a[0], a[1], a[2]};
       const bool inside = signedDistance(now, xj) < 0.0;
-      if (inside && collider.shape == ColliderShape::Box) {
-        // Its nearest face, whatever its speed: what the box's nearest point picks at x_j, kept
-        // over the step so that no iterate goes out through the far face of a thin box.
+      if (moved.isZero(0.0) && collider.shape == ColliderShape::Box) {
+        // [project rule] A box at rest: every pair acts with a plane that supports it, so that
+        // the solve itself keeps each particle on the side it came from, where a box's nearest
+        // point flips to the far face halfway through a thin plate and to a side face at its
+        // edges: the plane at the surface point nearest to x_j (its own face when inside), or
+        // where a path that goes deep enters. At x_j the plane's potential is the box's (0
+        // outside, the nearest face's depth inside), so the change books nothing. (A sphere's or
+        // a capsule's pairs keep their curved surface; see the next case.)
+        supportingPlane(now, a, plane);
+        geometry = plane;
+        if (!inside && (b - a).norm() > kSweptPath * halfThickness(collider)) {
+          double distance = 0.0;
+          bool enters = false;
+          const Eigen::Vector3d y = a + sweep(now, a, b, distance, &enters) * (b - a);
+          double entry[kColliderGeometry];
+          if (enters) {
+            supportingPlane(now, y, entry);
+            const Eigen::Vector3d normal(entry[kGeometryA], entry[kGeometryA + 1], entry[kGeometryA + 2]);
+            if (std::abs((b - a).dot(normal)) > kSweptPath * halfDepthBelow(collider, normal))
+              std::copy(entry, entry + kColliderGeometry, plane);
+          }
+        }
+      } else if (inside && collider.shape == ColliderShape::Box) {
+        // A moving box: its nearest face, whatever its speed, kept over the step so that no
+        // iterate goes out through the far face of a thin box.
         supportingPlane(now, a, plane);
         geometry = plane;
       } else if (moved.isZero(0.0) && (b - a).norm() > kSweptPath * halfThickness(collider)) {

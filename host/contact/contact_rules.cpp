@@ -442,14 +442,15 @@ bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const MeshCollide
       const double* geometry = own;
       const double xj[3] = {a[0], a[1], a[2]};
       const bool inside = signedDistance(now, xj) < 0.0;
-      if (moved.isZero(0.0) && collider.shape == ColliderShape::Box) {
-        // [project rule] A box at rest: every pair acts with a plane that supports it, so that
-        // the solve itself keeps each particle on the side it came from, where a box's nearest
-        // point flips to the far face halfway through a thin plate and to a side face at its
-        // edges: the plane at the surface point nearest to x_j (its own face when inside), or
-        // where a path that goes deep enters. At x_j the plane's potential is the box's (0
-        // outside, the nearest face's depth inside), so the change books nothing. (A sphere's or
-        // a capsule's pairs keep their curved surface; see the next case.)
+      if (moved.isZero(0.0) && (collider.shape == ColliderShape::Box || collider.shape == ColliderShape::Capsule)) {
+        // [project rule] A box or a capsule at rest: every pair acts with a plane that supports
+        // it, so that the solve itself keeps each particle on the side it came from, where the
+        // nearest point flips to the far side halfway through a thin plate or rod (and to a side
+        // face at a box's edges): the plane at the surface point nearest to x_j (its own face
+        // when inside), or where a path that goes deep enters. At x_j the plane's potential is
+        // the collider's (0 outside, the nearest face's depth inside), so the change books
+        // nothing. A sphere's pairs keep its curved surface, which a cloth draped over it follows
+        // within the step (see the next cases).
         supportingPlane(now, a, plane);
         geometry = plane;
         if (!inside && (b - a).norm() > kSweptPath * halfThickness(collider)) {
@@ -626,8 +627,13 @@ int projectCrossedPaths(const SceneData& scene, const Forcing& forcing, const Me
       }
       const Eigen::Vector3d point(plane[kGeometryCenter], plane[kGeometryCenter + 1], plane[kGeometryCenter + 2]);
       const Eigen::Vector3d normal(plane[kGeometryA], plane[kGeometryA + 1], plane[kGeometryA + 2]);
+      // Only past the collider's middle below that plane, where the nearest point is on the far
+      // side: a path that clips a rod's edge and ends beside it, or one that ends on the near side,
+      // is the nearest-point projection's (taking it back along the normal stretched the body that
+      // wrapped round a 3 cm rod, and the blend could not take that energy out).
       const double d = -(b - point).dot(normal);
-      if (!(d > depth)) continue;
+      const double middle = mesh ? 0.5 * mesh->thickness() : halfDepthBelow(collider, normal);
+      if (!(d > middle) || !(d > depth)) continue;
       if (drops)
         (*drops)[std::size_t(c - part.colliders.first)] +=
             0.5 * scene.elementWeight(block, e) * (d * d - depth * depth);

@@ -130,8 +130,9 @@ void ContactResolver::bookProjection(const PotentialEnergy& projected, double ke
   // the colliders' restitution does not keep (1 - e^2: an impact that keeps e of its normal
   // speed keeps e^2 of its energy); the kept share stays in H*, and the blend gives it back as
   // the bounce. Energy the projection adds, by lifting particles against gravity or stretching
-  // their elements, is the solver's residual and is left to the blend to take out: booked, it
-  // let the blend pump a cloth falling onto a sphere to 3,000 J in 15 steps.
+  // their elements, is the solver's residual, not booked (booked, it let the blend pump a cloth
+  // falling onto a sphere to 3,000 J in 15 steps): the blend takes it out of the step's motion
+  // where it lifts H above H* (BlendStep::takeOutProjectionExcess).
   const double removed = std::min(0.0, projected.total() - p.total()) * (1.0 - kept);
   report.contact_projection += removed;
   target += removed;

@@ -452,7 +452,12 @@ void BatchDriver::resolveContact(double t1) {
     if (!projected[s]) continue;
     PerScene& p = per_scene_[s];
     p.x_new = blockOf(x_trial_, segments_[s]);
+    const double before = p.p_new.total();
     ContactResolver::bookProjection(potentials[s], kept[s], p.p_new, p.target_now, report_.scenes[s]);
+    const double added = p.p_new.total() - before;
+    if (options_.integrator == Integrator::EnergyBlend && added > 0.0 &&
+        p.blend.takeOutProjectionExcess(p.x_new, p.v_new, added, p.target_now, p.p_new))
+      p.velocities_changed = true;
   }
 }
 

@@ -250,4 +250,22 @@ bool BlendStep::finishCorrections(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, Pote
   return changed_;
 }
 
+// [project rule] The energy the final projection adds (lifting particles out of a collider,
+// stretching the elements it moves them against) is no input and no loss: where it lifts H above
+// H*, the step pays for it out of its motion at once, as the blend's own correction 3 would, so
+// that H never runs above H* for want of a rule; at most what the projection added, never below
+// H*, and only down to zero motion (an excess the velocities cannot pay stays for the next steps'
+// blends to take out of the stretch).
+bool BlendStep::takeOutProjectionExcess(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double added, double target,
+                                        const PotentialEnergy& p_new) {
+  const double k = kinetic(v);
+  const double take = std::min(added, k + p_new.total() - target);
+  if (!(take > 0.0) || !(k > 0.0)) return false;
+  const double wanted = k - take;
+  bool changed = scaleVelocities(x, v, wanted, /*keep_rigid=*/true, 0.0, 1.0);
+  if (kinetic(v) > wanted * (1.0 + 1e-12)) changed |= scaleVelocities(x, v, wanted, /*keep_rigid=*/false, 0.0, 1.0);
+  if (changed) report_->velocity_scale *= std::sqrt(kinetic(v) / k);
+  return changed;
+}
+
 }  // namespace stabint

@@ -95,6 +95,13 @@ class BlendStep {
   bool finishCorrections(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, PotentialEnergy& p_new, const Backend& storage);
   bool positionsMoved() const { return positions_moved_; }
 
+  /// After the final projection moved the accepted positions and raised their potential by
+  /// `added` (> 0, energy nothing books): takes what of it lifts H = kinetic(v) + p_new above
+  /// `target` out of the motion, from the non-rigid velocities first (keeping the swing), then
+  /// from all of them (docs/method.md, "Final projection"). Returns true when v changed.
+  bool takeOutProjectionExcess(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double added, double target,
+                               const PotentialEnergy& p_new);
+
  private:
   struct Evaluation {
     double alpha;

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The API reference: Doxygen over the public headers (include/stabint/, docs/Doxyfile) into
-# build/apidocs/html/index.html. Installs doxygen if missing (scripts/install-deps.sh). Fails on
+# build/apidocs/html/index.html, and the Python reference (pydoc, scripts/apidocs_python.py) into
+# build/apidocs/python/index.html. Installs doxygen if missing (scripts/install-deps.sh). Fails on
 # any warning, an undocumented public declaration included (WARN_AS_ERROR = FAIL_ON_WARNINGS), so
 # CI keeps the headers' comments complete.
 set -euo pipefail
@@ -18,3 +19,10 @@ if ! doxygen docs/Doxyfile 2> "$log" || [ -s "$log" ]; then
   exit 1
 fi
 echo "apidocs: 0 warnings; build/apidocs/html/index.html"
+# The Python reference, from the installed package's docstrings (scripts/python.sh installs it
+# into .venv); a public name without a docstring fails, as an undocumented declaration does above.
+if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import stabint" 2>/dev/null; then
+  echo "apidocs: the Python reference needs the package in .venv: run bash scripts/python.sh first" >&2
+  exit 1
+fi
+.venv/bin/python scripts/apidocs_python.py build/apidocs/python

@@ -54,3 +54,4 @@ echo "  teaser:         results/charts/teaser.gif (animation), teaser.png (still
 echo "  soft-body drop: results/charts/drop.gif (animation), drop.png (still and energy curves);"
 echo "                  results/drop_table.md (printed above); the TetGen mesh: results/mesh/elephant.1.{node,ele}"
 echo "  all CSV files:  results/*.csv; cached reference trajectories: results/cache/"
+echo "  API reference:  bash scripts/apidocs.sh -> build/apidocs/html/index.html (C++), build/apidocs/python/index.html"

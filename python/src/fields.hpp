@@ -151,7 +151,10 @@ void bindFieldType(nb::module_& m) {
       if (!bound) {
         bound = true;
         static const std::string name = std::string(FieldTable<E>::name) + "List";
-        nb::bind_vector<V>(m, name.c_str());
+        auto list = nb::bind_vector<V>(m, name.c_str());
+        list.attr("__doc__") = "A Scene's list of " + std::string(FieldTable<E>::name) +
+                               ": a view of the scene's own (indexing, len, append, extend, insert, pop, clear "
+                               "change the scene), as a Python list behaves.";
       }
     }
   }

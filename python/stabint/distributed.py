@@ -153,6 +153,7 @@ class BuiltinScene:
     params: Mapping[str, Any] = field(default_factory=dict)
 
     def build(self) -> Scene:
+        """The Scene the builder makes from the parameters (SceneParameterError when it cannot)."""
         from . import _builtin  # the package's shortcut: enum values by name, JSON parameters
 
         params = _builtin_params(self.name, self.params)

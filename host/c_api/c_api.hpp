@@ -9,6 +9,7 @@
 #include <stabint/stabint_c.h>
 
 #include <limits>
+#include <memory>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -20,6 +21,9 @@ struct stabint_scene {
 };
 struct stabint_simulator {
   stabint::Simulator sim;
+  // The reporters the C API attached, by the ids it handed out.
+  std::vector<std::pair<int, std::shared_ptr<stabint::Reporter>>> reporters{};
+  int next_reporter = 1;
 };
 struct stabint_checkpoint {
   stabint::Checkpoint checkpoint;
@@ -77,6 +81,8 @@ stabint_status guarded(Body&& body) noexcept {
     return fail(STABINT_OPENCL, "OpenCLError", e.what());
   } catch (const OutOfMemoryError& e) {
     return fail(STABINT_OUT_OF_MEMORY, "OutOfMemoryError", e.what());
+  } catch (const ReporterError& e) {
+    return fail(STABINT_ERROR, "ReporterError", e.what(), e.step());
   } catch (const Error& e) {
     return fail(STABINT_ERROR, "Error", e.what());
   } catch (const std::bad_alloc&) {

@@ -2,6 +2,9 @@
 // changes and checkpoints (include/stabint/stabint_c.h over stabint::Simulator).
 #include "c_api/c_api.hpp"
 
+#include <algorithm>
+#include <memory>
+#include <stdexcept>
 #include <string>
 
 using namespace stabint::c_api;
@@ -62,6 +65,52 @@ stabint_status stabint_simulator_step(stabint_simulator* sim, stabint_step_repor
     require(sim, "simulator");
     const stabint::StepReport& r = sim->sim.step();
     if (report != nullptr) *report = toC(r);
+  });
+}
+
+stabint_status stabint_simulator_add_reporter(stabint_simulator* sim, stabint_reporter_fn fn, void* user_data,
+                                              int every, int* id) {
+  return guarded([&] {
+    require(sim, "simulator");
+    if (fn == nullptr) throw ArgumentError{"fn is NULL"};
+    const int own = sim->next_reporter;
+    const std::string name = "C reporter " + std::to_string(own);
+    auto reporter = std::make_shared<stabint::CallbackReporter>(
+        [sim, fn, user_data, name](const stabint::Simulator&, const stabint::StepReport& report) {
+          const stabint_step_report c = toC(report);
+          const int result = fn(sim, &c, user_data);
+          if (result != 0) throw std::runtime_error(name + " returned " + std::to_string(result));
+        },
+        every, name);
+    sim->sim.addReporter(reporter);
+    sim->reporters.emplace_back(own, std::move(reporter));
+    ++sim->next_reporter;
+    if (id != nullptr) *id = own;
+  });
+}
+
+stabint_status stabint_simulator_add_csv_reporter(stabint_simulator* sim, const char* path, int every, int initial_row,
+                                                  int* id) {
+  return guarded([&] {
+    require(sim, "simulator");
+    require(path, "path");
+    auto reporter = std::make_shared<stabint::CsvReporter>(path, every);
+    if (initial_row != 0) reporter->initialRow(sim->sim);
+    sim->sim.addReporter(reporter);
+    sim->reporters.emplace_back(sim->next_reporter, std::move(reporter));
+    if (id != nullptr) *id = sim->next_reporter;
+    ++sim->next_reporter;
+  });
+}
+
+stabint_status stabint_simulator_remove_reporter(stabint_simulator* sim, int id) {
+  return guarded([&] {
+    require(sim, "simulator");
+    const auto found = std::find_if(sim->reporters.begin(), sim->reporters.end(),
+                                    [id](const auto& entry) { return entry.first == id; });
+    if (found == sim->reporters.end()) throw ArgumentError{"no reporter of id " + std::to_string(id) + " is attached"};
+    sim->sim.removeReporter(found->second);
+    sim->reporters.erase(found);
   });
 }
 

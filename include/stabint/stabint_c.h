@@ -224,6 +224,25 @@ void stabint_simulator_destroy(stabint_simulator* sim);
  * ENERGY_LIMIT, keeps the last accepted state, and stabint_last_error_step() tells which. */
 stabint_status stabint_simulator_step(stabint_simulator* sim, stabint_step_report* report);
 
+/** A reporter function (stabint_simulator_add_reporter), in the spirit of OpenMM's reporters:
+ * called after every `every`-th accepted step with the simulator in the state after the step and
+ * that step's report, and `user_data` as given. A nonzero return fails the report, not the step:
+ * stabint_simulator_step returns STABINT_ERROR with a message naming the reporter and the step,
+ * and the step stays accepted (a C++ reporter that throws: ReporterError). */
+typedef int (*stabint_reporter_fn)(const stabint_simulator* sim, const stabint_step_report* report, void* user_data);
+/** Attaches `fn` after the reporters already attached, called after the steps whose count is a
+ * multiple of `every` (>= 1, else INVALID_INPUT); `*id` (may be NULL) receives the id that
+ * stabint_simulator_remove_reporter takes. INVALID_ARGUMENT for a NULL simulator or function. */
+stabint_status stabint_simulator_add_reporter(stabint_simulator* sim, stabint_reporter_fn fn, void* user_data,
+                                              int every, int* id);
+/** Attaches a CSV reporter (stabint::CsvReporter): creates or truncates `path`, writes its header
+ * and, with `initial_row` nonzero, the current state as frame 0, then one row every `every`-th
+ * step. FILE_FORMAT when the file cannot be written (nothing is attached). */
+stabint_status stabint_simulator_add_csv_reporter(stabint_simulator* sim, const char* path, int every, int initial_row,
+                                                  int* id);
+/** Detaches the reporter `id`; INVALID_ARGUMENT when none of that id is attached. */
+stabint_status stabint_simulator_remove_reporter(stabint_simulator* sim, int id);
+
 /** Number of particles; -1 for NULL. */
 int stabint_simulator_num_particles(const stabint_simulator* sim);
 /** Current state copied interleaved, x y z per particle (ready for a vertex buffer), into `out`

@@ -1598,6 +1598,60 @@ static void test_batch_set_iterations(void) {
   stabint_batch_destroy(batch);
 }
 
+/* Reporters from C: a function called after every second step with the step's report, one that
+ * fails its report (the step stays accepted, STABINT_ERROR names it), a CSV file with its header,
+ * the initial row and one row per step, and removal by id. */
+struct report_log {
+  int calls;
+  int last_step;
+  int fail_at;
+};
+static int log_report(const stabint_simulator* sim, const stabint_step_report* report, void* user_data) {
+  struct report_log* log = (struct report_log*)user_data;
+  ++log->calls;
+  log->last_step = report->step;
+  CHECK(stabint_simulator_step_count(sim) == report->step + 1); /* the state after the step */
+  return report->step == log->fail_at ? 7 : 0;
+}
+
+static void test_reporters(void) {
+  stabint_simulator* sim = small_cloth(STABINT_BACKWARD_EULER);
+  struct report_log log = {0, -1, -1};
+  int id = 0, csv = 0, f, lines = 0, c;
+  char path[256];
+  FILE* file;
+  snprintf(path, sizeof path, "/tmp/stabint_c_reporter_%d.csv", (int)getpid());
+  CHECK(stabint_simulator_add_reporter(sim, log_report, &log, 0, &id) == STABINT_INVALID_INPUT);
+  CHECK(stabint_simulator_add_reporter(sim, NULL, &log, 1, &id) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_add_reporter(sim, log_report, &log, 2, &id) == STABINT_OK);
+  CHECK(stabint_simulator_add_csv_reporter(sim, "/nonexistent/dir/steps.csv", 1, 1, &csv) == STABINT_FILE_FORMAT);
+  CHECK(stabint_simulator_add_csv_reporter(sim, path, 1, 1, &csv) == STABINT_OK);
+  CHECK(id != csv);
+  for (f = 0; f < 6; ++f) CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
+  CHECK(log.calls == 3 && log.last_step == 5); /* after steps 2, 4 and 6 */
+  log.fail_at = 7;
+  CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK); /* step 7: not due */
+  CHECK(stabint_simulator_step(sim, NULL) == STABINT_ERROR);
+  CHECK(strstr(stabint_last_error_message(), "C reporter") != NULL);
+  CHECK(stabint_simulator_step_count(sim) == 8); /* the step stands */
+  CHECK(stabint_simulator_remove_reporter(sim, id) == STABINT_OK);
+  CHECK(stabint_simulator_remove_reporter(sim, id) == STABINT_INVALID_ARGUMENT);
+  CHECK(stabint_simulator_step(sim, NULL) == STABINT_OK);
+  CHECK(log.calls == 4);
+  CHECK(stabint_simulator_remove_reporter(sim, csv) == STABINT_OK);
+  stabint_simulator_destroy(sim); /* closes the CSV file */
+  file = fopen(path, "r");
+  CHECK(file != NULL);
+  if (file != NULL) {
+    while ((c = fgetc(file)) != EOF) lines += c == '\n';
+    fclose(file);
+  }
+  /* The header, frame 0, steps 1-7 and 9: at step 8 the failing reporter, added first, kept the
+   * ones after it from reporting (as in C++). */
+  CHECK(lines == 1 + 1 + 8);
+  remove(path);
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     fprintf(stderr, "usage: %s SCENE_DIR\n", argv[0]);
@@ -1628,6 +1682,7 @@ int main(int argc, char** argv) {
   test_batch_refusal_leaves_the_other_scenes();
   test_batch_checkpoints();
   test_batch_checkpoint_of_the_whole_batch();
+  test_reporters();
   printf("%d passed, %d failed\n", passed, failed);
   return failed == 0 ? 0 : 1;
 }

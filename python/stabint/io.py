@@ -37,7 +37,8 @@ import numpy as np
 from . import _stabint
 from ._stabint import ClothMaterial, FileFormatError, Scene, SolidMaterial
 
-__all__ = ["read_mesh", "read_mesh_collider", "vtk_cells", "VtkSeriesWriter", "write_vtk_series", "read_pvd", "MAX_FILE_BYTES"]
+__all__ = ["read_mesh", "read_mesh_collider", "vtk_cells", "VtkSeriesWriter", "VtkReporter", "write_vtk_series",
+           "read_pvd", "MAX_FILE_BYTES"]
 
 Cells = List[Tuple[str, np.ndarray]]
 
@@ -450,6 +451,43 @@ class VtkSeriesWriter:
         return path
 
     def __enter__(self) -> "VtkSeriesWriter":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+class VtkReporter:
+    """A reporter that writes the simulation as a VTK time series: attach it with
+    ``sim.add_reporter(VtkReporter("out", scene), every)`` and it writes the positions and
+    velocities of every ``every``-th accepted step through a :class:`VtkSeriesWriter` (``out/
+    frame_00000.vtu``, ...; the initial state first when ``initial`` is a Simulator), and
+    ``close()`` (or leaving a ``with`` block) writes ``out/frames.pvd`` for ParaView. The reporter
+    rules are the Simulator's (docs/guide.md, "Reporters"): a write that fails raises
+    ``ReporterError`` from ``step()`` naming this reporter, and the step stands.
+
+    Example::
+
+        with stabint.io.VtkReporter("out", scene, initial=sim) as vtk:
+            sim.add_reporter(vtk, 10)
+            for _ in range(300):
+                sim.step()
+    """
+
+    def __init__(self, directory: Union[str, os.PathLike], cells: Any, initial: Any = None) -> None:
+        self.writer = VtkSeriesWriter(directory, cells)
+        if initial is not None:
+            self(initial, None)
+
+    def __call__(self, sim: Any, report: Any) -> None:
+        """Writes the simulator's current frame (what a reporter is called with after a step)."""
+        self.writer.write(sim.time, sim.positions, sim.velocities)
+
+    def close(self) -> str:
+        """Writes the ``frames.pvd`` collection and returns its path."""
+        return self.writer.close()
+
+    def __enter__(self) -> "VtkReporter":
         return self
 
     def __exit__(self, *exc: Any) -> None:

@@ -422,6 +422,45 @@ TEST(Contact, NothingPassesAThinPlateWhateverCarriesIt) {
   }
 }
 
+// A bar thrown at 20 m/s across a rod of 3 cm radius (a capsule at rest) wraps round it. With the
+// rod's curved surface in the solve, the final projection's path rule taking back the particles
+// whose straight paths clipped the rod, and nothing paying for the energy that added, H ran 0.16
+// of the largest kinetic energy above H*. The capsule's supporting planes (docs/method.md, "The
+// pair's half-space") and the blend's payment for the projection ("Final projection") each bring
+// it within the contact target (measured: 0.0026 with the payment alone, 0.0023 with both), no
+// vertex deeper than the tolerance.
+TEST(Contact, ABarThrownAcrossAThinRodKeepsTheBooks) {
+  TetBarParams params;
+  params.nx = 16;
+  params.ny = params.nz = 4;
+  Scene s = makeTetBar(params);
+  s.pins.clear();
+  s.positions.col(0).array() -= 0.5;
+  s.positions.col(2).array() -= 0.125;
+  s.positions.col(1).array() += 0.05;
+  s.rest_positions = s.positions;
+  s.velocities.col(1).setConstant(-20.0);
+  Collider rod;
+  rod.shape = ColliderShape::Capsule;
+  rod.center = Eigen::Vector3d(0.0, -0.03, -0.5);
+  rod.end = Eigen::Vector3d(0.0, -0.03, 0.5);
+  rod.radius = 0.03;
+  s.colliders.push_back(rod);
+  SimulatorOptions o;
+  Simulator sim(s, o);
+  double excess = 0.0, largest_kinetic = 0.0, deepest = 0.0;
+  for (int i = 0; i < 60; ++i) {
+    const StepReport& r = sim.step();
+    excess = std::max(excess, r.energy.total() - r.target);
+    largest_kinetic = std::max(largest_kinetic, r.energy.kinetic);
+    deepest = std::max(deepest, deepestPenetration(s, sim.positions(), sim.time()));
+  }
+  std::printf("bar at 20 m/s across a 3 cm rod: excess %.4f of K_max, deepest %.4f m\n", excess / largest_kinetic,
+              deepest);
+  EXPECT_LE(excess, 0.05 * largest_kinetic);
+  EXPECT_LE(deepest, o.contact_tolerance + 1e-12);
+}
+
 // A collider's elastic_ratio and restitution are checked like its other fields: an elastic_ratio
 // that is negative or not finite and a restitution outside [0, 1] (or NaN) are refused, naming
 // the collider and the field.

@@ -1,6 +1,6 @@
 #include "bench_common.hpp"
 
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 
 #include <algorithm>
 #include <array>

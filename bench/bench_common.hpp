@@ -56,7 +56,7 @@ void registerFixtureRelease(std::function<void()> release);
 /// the OpenCL runtime is still loaded).
 void releaseAllFixtures();
 
-/// Sets the process's CPU thread count (cpu/worker_pool.hpp) for one case and puts the previous
+/// Sets the process's CPU thread count (common/worker_pool.hpp) for one case and puts the previous
 /// one back.
 class ThreadsFor {
  public:

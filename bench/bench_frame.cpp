@@ -29,7 +29,7 @@
 #include "bench_common.hpp"
 #include "first_step.hpp"
 
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 #include "elements/element_type.hpp"
 #include "elements/projections.hpp"
 

@@ -27,7 +27,7 @@
 // A per-column solve reads the factor three times as often (passes counts the reads).
 #include "bench_common.hpp"
 
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/factor_solve.hpp"
 #include "solver/global_system.hpp"

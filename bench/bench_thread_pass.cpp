@@ -26,7 +26,7 @@
 #include "first_step.hpp"
 
 #include "cpu/cpu_backend.hpp"
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 #include "elements/element_type.hpp"
 #include "elements/energy_sum.hpp"
 

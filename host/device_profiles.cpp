@@ -1,6 +1,6 @@
 #include "device_profiles.hpp"
 
-#include "io/text_reader.hpp"  // shown: the name is user text
+#include "common/text_reader.hpp"  // shown: the name is user text
 
 #include <stabint/errors.hpp>
 

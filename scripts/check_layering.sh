@@ -21,4 +21,52 @@ if violations=$(grep -rnE '#include *"scene/' host/elements); then
   echo "layering: host/elements reads a running scene through RunningScene, never scene/ (docs/development.md, \"Layering\")" >&2
   exit 1
 fi
+# The floors (docs/architecture.md): every include of a host file names a room on its own floor or
+# below. A room not listed here, or a loose file at the top of host/ not listed, fails too, so a
+# new one gets its floor when it is made.
+/usr/bin/env python3 - <<'PY'
+import os, re, sys
+
+FLOORS = [
+    ["common", "kernel_constants.hpp", "kernel_constants.cpp", "simd.hpp", "member_count.hpp",
+     "out_of_memory.hpp", "validation.hpp"],
+    ["elements"],
+    ["scene"],
+    ["io", "backend.hpp", "device_profiles.hpp", "device_profiles.cpp"],
+    ["cpu", "opencl", "opencl_disabled", "solver"],
+    ["contact"],
+    ["state"],
+    ["integrator", "scripting", "reporting"],
+    ["c_api"],
+]
+floor = {room: i for i, rooms in enumerate(FLOORS) for room in rooms}
+bad = []
+for root, _, files in os.walk("host"):
+    for name in files:
+        if not name.endswith((".cpp", ".hpp", ".h")):
+            continue
+        path = os.path.join(root, name)
+        parts = path.split(os.sep)
+        room = parts[1]
+        if room not in floor:
+            bad.append(f"{path}: room '{room}' has no floor in scripts/check_layering.sh")
+            continue
+        for number, line in enumerate(open(path), 1):
+            m = re.match(r'\s*#include\s+"([^"]+)"', line)
+            if not m:
+                continue
+            target = m.group(1).split("/")[0]
+            if "/" not in m.group(1) and os.path.exists(os.path.join(root, m.group(1))):
+                target = room  # its own room's file, by a relative name
+            if target not in floor:
+                continue  # a header outside host/ (kernels' generated sources, ...)
+            if floor[target] > floor[room]:
+                bad.append(f"{path}:{number}: {room} (floor {floor[room]}) includes {m.group(1)} "
+                           f"(floor {floor[target]}), a floor above it")
+if bad:
+    print("\n".join(bad), file=sys.stderr)
+    print("layering: the lines above break the floors (docs/architecture.md)", file=sys.stderr)
+    sys.exit(1)
+print(f"layering: ok ({sum(map(len, FLOORS))} rooms and loose files on {len(FLOORS)} floors)")
+PY
 echo "layering: ok (${lower[*]} include neither the facade nor the driver's rooms)"

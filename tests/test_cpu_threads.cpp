@@ -1,11 +1,11 @@
-// The CPU side's threads (host/cpu/worker_pool.hpp, docs/method.md "Threads on the CPU"): the
+// The CPU side's threads (host/common/worker_pool.hpp, docs/method.md "Threads on the CPU"): the
 // CPU reference's element passes and the host solve give the same results bit for bit on one
 // thread and on several, on scenes whose passes take a threaded path (by the library's choice,
 // and each path forced: host/cpu/cpu_backend.hpp, ThreadedPassPath) with every element type and
 // the blocks after them that stay on one thread (contact, pins).
 #include "contact_scenes.hpp"
 #include "cpu/cpu_backend.hpp"
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 #include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"

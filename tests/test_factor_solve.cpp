@@ -2,7 +2,7 @@
 // CHOLMOD's simplicial factor: CHOLMOD's own solve to round-off on the LL' factor as factored and
 // on the LDL' factor that cholmod_updown leaves, and the same bit for bit whatever the lanes
 // (three columns as {x, y, z, 0}, or as {x, y} and {z, 0}).
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/factor_solve.hpp"

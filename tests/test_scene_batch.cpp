@@ -9,7 +9,7 @@
 
 #include "batch_scenes.hpp"
 #include "cpu/cpu_backend.hpp"
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 #include "elements/element_type.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/forcing.hpp"

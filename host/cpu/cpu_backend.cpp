@@ -1,7 +1,7 @@
 #include "cpu/cpu_backend.hpp"
 
 #include "cpu/threaded_pass.hpp"
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 #include "elements/energy_sum.hpp"
 
 #include "scene/scene_data.hpp"

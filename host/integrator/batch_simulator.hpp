@@ -131,7 +131,7 @@ struct BatchDriver {
     double target_now = 0.0;          // H* with this step's forcing, damping
     BlendStep blend;
   };
-  // ---- checkpoints (state/batch_checkpoint.cpp) --------------------------------------------------
+  // ---- checkpoints (integrator/batch_checkpoint.cpp) --------------------------------------------------
   // Simulator's CheckpointData twice over: the batch's state as a Simulator of the concatenation
   // would save it (its pins, forcing, elements and contact log: what ElementChanges and
   // ContactResolver restore), and each scene's part of it as a Simulator of the scene alone would.

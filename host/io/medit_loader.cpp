@@ -2,7 +2,7 @@
 // a keyword and its count may share a line or not, so it is read as a token stream.
 #include "out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 #include "validation.hpp"
 
 #include <stabint/io.hpp>

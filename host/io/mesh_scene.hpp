@@ -1,7 +1,7 @@
 #pragma once
 // What the mesh loaders share after parsing: turning file vertices and elements into a Scene,
 // reading tet vertex indices, and the mesh-wide orientation rule of io.hpp.
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 
 #include <stabint/io.hpp>
 

@@ -2,7 +2,7 @@
 // and materials are skipped.
 #include "out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 #include "scene/lumping.hpp"
 #include "validation.hpp"
 

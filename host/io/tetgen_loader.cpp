@@ -1,7 +1,7 @@
 // TetGen .node/.ele reader (https://wias-berlin.de/software/tetgen/fformats.html).
 #include "out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 #include "validation.hpp"
 
 #include <stabint/io.hpp>

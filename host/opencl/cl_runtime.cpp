@@ -1,6 +1,6 @@
 #include "opencl/cl_runtime.hpp"
 
-#include "io/text_reader.hpp"  // shown: the selectors are user text
+#include "common/text_reader.hpp"  // shown: the selectors are user text
 #include "kernel_constants.hpp"
 
 #include <algorithm>

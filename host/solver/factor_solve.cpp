@@ -1,6 +1,6 @@
 #include "solver/factor_solve.hpp"
 
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 
 #include <algorithm>
 #include <cstdint>

@@ -2,7 +2,7 @@
 // L-BFGS's passes over its history (host/solver/lbfgs.cpp): fused multiply-add kernels over
 // `len` contiguous values and the loops that run them over a segment's rows in cache-sized chunks
 // and over a batch's segments on threads.
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 
 #include <Eigen/Core>
 

@@ -2,7 +2,7 @@
 
 #include "contact/contact_resolver.hpp"
 #include "elements/element_type.hpp"
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 #include "out_of_memory.hpp"
 #include "validation.hpp"
 

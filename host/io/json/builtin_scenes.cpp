@@ -2,7 +2,7 @@
 // scene file's "builtin" entry or from builtinScene's JSON, and listed for usage texts.
 #include "io/json/json_internal.hpp"
 
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>

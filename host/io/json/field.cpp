@@ -2,7 +2,7 @@
 // file and the field ("springs[3].stiffness"), and the checks a JSON text passes before it is read.
 #include "io/json/json_internal.hpp"
 
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 #include "validation.hpp"
 
 #include <stabint/errors.hpp>

@@ -2,7 +2,7 @@
 // through the mesh loaders (stabint/io.hpp) and reported inside the scene file's context.
 #include "io/json/json_internal.hpp"
 
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 
 #include <stabint/errors.hpp>
 #include <stabint/io.hpp>

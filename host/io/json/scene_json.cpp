@@ -4,7 +4,7 @@
 #include "io/json/json_internal.hpp"
 
 #include "out_of_memory.hpp"
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 
 #include <stabint/errors.hpp>
 #include <stabint/events.hpp>

@@ -5,7 +5,7 @@
 
 #include "elements/element_type.hpp"
 #include "io/mesh_scene.hpp"
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 #include "scene/lumping.hpp"
 #include "scene/scene_batch.hpp"
 #include "validation.hpp"

@@ -7,7 +7,7 @@
 
 #include "elements/element_type.hpp"
 #include "integrator/integrator_steps.hpp"
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 #include "out_of_memory.hpp"
 #include "validation.hpp"
 

@@ -1,4 +1,4 @@
-#include "cpu/worker_pool.hpp"
+#include "common/worker_pool.hpp"
 
 #include <algorithm>
 #include <atomic>

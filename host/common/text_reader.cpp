@@ -1,4 +1,4 @@
-#include "io/text_reader.hpp"
+#include "common/text_reader.hpp"
 #include "validation.hpp"
 
 #include <cerrno>

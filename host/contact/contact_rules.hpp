@@ -48,23 +48,23 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
                                   const Eigen::MatrixX3d& v);
 
 /// The geometry each pair of `part` in the contact set acts with over a step of length h from
-/// (x, v) at time t (docs/method.md, "Contact", "The pair's half-space"), written to its params.
-/// A pair of a collider at rest over the step whose path x_j -> x_j + h v_j goes deeper than a
-/// quarter of the way from the face to the collider's middle (a box's half extent under that
-/// face, a radius), and which is inside or enters within the step, acts with the
-/// plane that supports the collider (it lies inside) at the surface point nearest to x_j when
-/// x_j is inside, else at the point where the path enters: a fast particle then meets the face
-/// it comes in by whatever it crosses within the step, and a particle inside stays pushed out of
-/// the face nearest to it. Every other pair acts with its collider, whose nearest point is
-/// continuous where a half-space chosen once per step is not (near a box's edges). A plane
-/// collider is its own geometry. The geometry is a function of (x, v, t) and the set alone, so a
-/// restored state gets it back by calling this again. Returns whether a pair's geometry changed:
-/// the potential of x may then be lower than before (the collider is convex: its nearest face
-/// is never farther than a half-space it supports), and the caller evaluates it again and books
-/// the loss. A pair of a mesh collider always acts with a half-space: the plane at the path's
-/// entry into the mesh (with the crossed triangle's normal) when the path enters it from outside,
-/// else the plane through the surface point nearest to x_j, facing x_j from outside and away from
-/// it from inside (docs/method.md, "Mesh colliders").
+/// (x, v) at time t (docs/method.md, "Contact", "The pair's half-space"), written to its params:
+/// - a box or a capsule at rest: the plane that supports it at the surface point nearest to x_j
+///   (its own face when inside), or where the path x_j -> x_j + h v_j enters when it goes deeper
+///   than a quarter of the way to the collider's middle; the solve then keeps each particle on the
+///   side it came from, where the nearest point flips to the far side of a thin plate or rod;
+/// - a moving box: the plane of its nearest face for a particle inside;
+/// - a sphere at rest: the plane where a deep path enters, or at the nearest point from inside;
+/// - every other pair acts with its collider, whose nearest point a draped cloth follows within
+///   the step. A plane collider is its own geometry.
+/// At x_j a supporting plane's potential is the collider's, and the geometry is a function of
+/// (x, v, t) and the set alone, so a restored state gets it back by calling this again. Returns
+/// whether a pair's geometry changed: the potential of x may then be lower than before (the
+/// collider is convex: its nearest face is never farther than a half-space it supports), and the
+/// caller evaluates it again and books the loss. A pair of a mesh collider always acts with a
+/// half-space: the plane at the path's entry into the mesh (with the crossed triangle's normal)
+/// when the path enters it from outside, else the plane through the surface point nearest to x_j,
+/// facing x_j from outside and away from it from inside (docs/method.md, "Mesh colliders").
 bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const MeshColliders& meshes, const ContactPart& part,
                      double t, double h, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 

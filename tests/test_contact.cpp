@@ -347,6 +347,23 @@ TEST(Contact, FastBodiesDoNotPassThroughThinColliders) {
   }
 }
 
+// A free tet bar of 16 x 4 x 4 cells (1 x 0.25 x 0.25 m, 62.5 kg) of `stiffness` Pa, centred over
+// the origin in x and z with its bottom 5 cm above y = 0, thrown straight down at `speed`.
+Scene thrownBar(double stiffness, double speed) {
+  TetBarParams params;
+  params.nx = 16;
+  params.ny = params.nz = 4;
+  params.stiffness = stiffness;
+  Scene s = makeTetBar(params);
+  s.pins.clear();
+  s.positions.col(0).array() -= 0.5;
+  s.positions.col(2).array() -= 0.125;
+  s.positions.col(1).array() += 0.05;
+  s.rest_positions = s.positions;
+  s.velocities.col(1).setConstant(-speed);
+  return s;
+}
+
 // Nothing passes through a thin collider, whatever carries it there, on bodies and speeds the
 // test above does not try (a probe of 728 drops found each of these going through):
 // - a soft bar (1e4 Pa) set down at 0.5 m/s on a 2 cm plate narrower than it: its weight presses
@@ -373,17 +390,7 @@ TEST(Contact, NothingPassesAThinPlateWhateverCarriesIt) {
       {"a 1e5 Pa bar at 20 m/s on a narrow box", 1e5, 20.0, boxCollider(center, narrow, 1e4)},
       {"a 1e5 Pa bar at 20 m/s on a narrow mesh plate", 1e5, 20.0, testing::boxMeshCollider(center, narrow)}};
   for (const Drop& d : drops) {
-    TetBarParams params;
-    params.nx = 16;
-    params.ny = params.nz = 4;
-    params.stiffness = d.stiffness;
-    Scene s = makeTetBar(params);
-    s.pins.clear();
-    s.positions.col(0).array() -= 0.5;
-    s.positions.col(2).array() -= 0.125;
-    s.positions.col(1).array() += 0.05;
-    s.rest_positions = s.positions;
-    s.velocities.col(1).setConstant(-d.speed);
+    Scene s = thrownBar(d.stiffness, d.speed);
     // Depths are measured against the analytic box (the mesh plate is the same box).
     Scene measured = s;
     measured.colliders.push_back(
@@ -430,16 +437,7 @@ TEST(Contact, NothingPassesAThinPlateWhateverCarriesIt) {
 // it within the contact target (measured: 0.0026 with the payment alone, 0.0023 with both), no
 // vertex deeper than the tolerance.
 TEST(Contact, ABarThrownAcrossAThinRodKeepsTheBooks) {
-  TetBarParams params;
-  params.nx = 16;
-  params.ny = params.nz = 4;
-  Scene s = makeTetBar(params);
-  s.pins.clear();
-  s.positions.col(0).array() -= 0.5;
-  s.positions.col(2).array() -= 0.125;
-  s.positions.col(1).array() += 0.05;
-  s.rest_positions = s.positions;
-  s.velocities.col(1).setConstant(-20.0);
+  Scene s = thrownBar(1e5, 20.0);
   Collider rod;
   rod.shape = ColliderShape::Capsule;
   rod.center = Eigen::Vector3d(0.0, -0.03, -0.5);

@@ -98,10 +98,9 @@ std::vector<char> ContactResolver::refreshHalfSpaces(double t, const Eigen::Matr
   return changed;
 }
 
-ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(const ContactPart& part, double t1,
-                                                                      const Eigen::MatrixX3d& x0, Eigen::MatrixX3d& x,
-                                                                      Eigen::MatrixX3d& v, double& target,
-                                                                      StepReport& report) const {
+ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(
+    const ContactPart& part, double t1, const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
+    Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target, StepReport& report) const {
   Resolved resolved;
   if (part.colliders.count == 0) return resolved;
   resolved.velocities_changed =

@@ -65,7 +65,8 @@ class ContactResolver {
     double kept = 1.0;  // the share of the projection's removal the colliders' restitution keeps
   };
   /// `x0`: the part's positions at the step's start (rows as x's), for the projection's path rule.
-  Resolved applyFrictionAndProjection(const ContactPart& part, double t1, const Eigen::MatrixX3d& x0,
+  Resolved applyFrictionAndProjection(const ContactPart& part, double t1,
+                                      const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
                                       Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target,
                                       StepReport& report) const;
   /// Books the final projection of a part whose potential went from `p` to `projected` (one

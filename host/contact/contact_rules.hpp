@@ -106,7 +106,7 @@ int applyFriction(const SceneData& scene, const Forcing& forcing, const MeshColl
 /// comes out beyond it (docs/method.md, "Final projection").
 struct StepStart {
   double t;
-  const Eigen::MatrixX3d& x;
+  Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>> x;  // a view: a batch scene's rows
 };
 int projectOutOfColliders(const SceneData& scene, const Forcing& forcing, const MeshColliders& meshes,
                           const ContactPart& part, double t, double tolerance, Eigen::MatrixX3d& x,

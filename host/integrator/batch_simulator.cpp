@@ -431,9 +431,9 @@ void BatchDriver::resolveContact(double t1) {
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     PerScene& p = per_scene_[s];
     if (!p.stepping) continue;
-    const Eigen::MatrixX3d x0 = blockOf(x_, segments_[s]);
-    const ContactResolver::Resolved resolved = contact_.applyFrictionAndProjection(
-        contactPart(s, segments_[s].first_particle), t1, x0, p.x_new, p.v_new, p.target_now, report_.scenes[s]);
+    const ContactResolver::Resolved resolved =
+        contact_.applyFrictionAndProjection(contactPart(s, segments_[s].first_particle), t1, blockOf(x_, segments_[s]),
+                                            p.x_new, p.v_new, p.target_now, report_.scenes[s]);
     p.velocities_changed = p.velocities_changed || resolved.velocities_changed;
     if (!resolved.positions_moved) continue;
     kept[s] = resolved.kept;

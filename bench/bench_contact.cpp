@@ -5,7 +5,9 @@
 //   against the same cloth without colliders; the counter `contact_vs_none` is the colliders'
 //   step time over the plain one (issue 10: at most 1.15);
 // - mesh_vs_sphere: the cloth onto an icosphere mesh of 20,480 triangles and the ground against
-//   the analytic sphere's (docs/method.md, "Mesh colliders"); `mesh_vs_sphere` is the ratio.
+//   the analytic sphere's (docs/method.md, "Mesh colliders"); `mesh_vs_sphere` is the ratio;
+// - self_vs_none: a cloth crumpling onto the ground with self-contact (4 mm) against the same
+//   cloth without (docs/method.md, "Self-contact"); `self_vs_none` is the ratio.
 // The others split each run's step into its phases (`_solves`: the local steps, gathers,
 // transfers and global solves; `_energy`: the energy passes; `_bookkeeping`: the rest, the
 // contact set and its changes of the factors and a mesh's queries included) and count its
@@ -59,15 +61,19 @@ Scene clothOnMeshSphereAndGround() {
   return s;
 }
 
-// The scenes of one comparison, and the names of its counters.
+// The scenes of one comparison, the names of its counters, and the first one's self-contact
+// thickness (SimulatorOptions::self_contact_thickness).
 struct Comparison {
   Scene (*first)();
   Scene (*second)();
   const char* first_name;
   const char* second_name;
+  double first_self_contact = 0.0;
 };
 const Comparison kContactVsNone{clothOnSphereAndGround, flatCloth, "contact", "none"};
 const Comparison kMeshVsSphere{clothOnMeshSphereAndGround, clothOnSphereAndGround, "mesh", "sphere"};
+// The crumpling cloth (tests/contact_scenes.hpp) with and without self-contact at 4 mm.
+const Comparison kSelfVsNone{testing::crumplingCloth, testing::crumplingCloth, "self", "none", 4e-3};
 
 struct ContactFixture {
   std::unique_ptr<Simulator> first, second;
@@ -85,7 +91,9 @@ void runContact(benchmark::State& state, const std::string& key, BackendChoice b
     fixture = &cachedFixture<ContactFixture>(key, [&] {
       auto f = std::make_unique<ContactFixture>();
       const SimulatorOptions o = optionsFor(backend, integrator);
-      f->first = std::make_unique<Simulator>(comparison.first(), o);
+      SimulatorOptions first_options = o;
+      first_options.self_contact_thickness = comparison.first_self_contact;
+      f->first = std::make_unique<Simulator>(comparison.first(), first_options);
       f->second = std::make_unique<Simulator>(comparison.second(), o);
       f->first_start = f->first->checkpoint();
       f->second_start = f->second->checkpoint();
@@ -216,7 +224,7 @@ void registerContactCases() {
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("contact_active_set_updates/cloth50", runActiveSetUpdates)
       ->Unit(benchmark::kMicrosecond);
-  for (const Comparison* comparison : {&kContactVsNone, &kMeshVsSphere}) {
+  for (const Comparison* comparison : {&kContactVsNone, &kMeshVsSphere, &kSelfVsNone}) {
     for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
       for (BackendChoice backend : allBackends()) {
         const std::string name = std::string(comparison->first_name) + "_vs_" + comparison->second_name + "/cloth50/" +

@@ -17,6 +17,8 @@ build_packages=(
   libgtest-dev libgmock-dev
   libbenchmark-dev
   nlohmann-json3-dev     # scene files
+  libcgal-dev            # exact triangle-triangle tests of self-contact (tests/triangle_intersections.cpp)
+  libgmp-dev libmpfr-dev # CGAL's CMake config requires both (libcgal-dev depends on them anyway)
   python3                # the reports of scripts/bench.sh and scripts/gpu_report.sh
 )
 packages=(

@@ -4,6 +4,7 @@
 #include <stabint/builders.hpp>
 #include <stabint/scene.hpp>
 
+#include <cmath>
 #include <map>
 #include <utility>
 
@@ -138,6 +139,65 @@ inline Collider boxMeshCollider(const Eigen::Vector3d& center, const Eigen::Vect
   c.mesh_triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                       {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
   return c;
+}
+
+/// Self-contact (docs/method.md, "Self-contact"): a 50 x 50 spring cloth (1 m) standing almost upright (0.3 rad from
+/// the vertical), its lower edge 2 cm above a ground with friction 0.5, unpinned, with a soft bend (1 N/m): it
+/// collapses and crumples into a pile of folds. With backward Euler the pile interpenetrates at once without
+/// self-contact (hundreds of crossing triangle pairs).
+inline Scene crumplingCloth() {
+  ClothGridParams p;
+  p.nx = p.ny = 50;
+  p.bend_stiffness = 1.0;
+  Scene s = makeClothGrid(p);
+  s.pins.clear();
+  const double y_min = s.positions.col(1).minCoeff(), tilt = 0.3;
+  for (int i = 0; i < s.numParticles(); ++i) {
+    const double up = s.positions(i, 1) - y_min;
+    s.positions(i, 1) = 0.02 + up * std::cos(tilt);
+    s.positions(i, 2) = up * std::sin(tilt);
+  }
+  s.rest_positions = s.positions;
+  Collider ground;
+  ground.friction = 0.5;
+  s.colliders = {ground};
+  return s;
+}
+
+/// Two 25 x 25 spring cloths (0.5 m) of one scene: one lying flat 5 mm above the ground, the
+/// other 15 cm above it, turned 0.4 rad about the vertical and tilted 0.2 rad, falling onto it.
+/// Without self-contact the upper one lands through the lower one.
+inline Scene clothOnCloth() {
+  ClothGridParams p;
+  p.nx = p.ny = 25;
+  p.width = p.height = 0.5;
+  const Scene one = makeClothGrid(p);
+  const int n = one.numParticles();
+  Scene s = one;
+  s.pins.clear();
+  s.positions.resize(2 * n, 3);
+  s.velocities = Eigen::MatrixX3d::Zero(2 * n, 3);
+  s.masses.resize(2 * n);
+  s.masses << one.masses, one.masses;
+  const Eigen::Vector2d centre(one.positions.col(0).mean(), one.positions.col(1).mean());
+  for (int i = 0; i < n; ++i) {
+    const double u = one.positions(i, 0) - centre.x(), w = one.positions(i, 1) - centre.y();
+    s.positions.row(i) << u, 0.005, w;
+    const double c = std::cos(0.4), sn = std::sin(0.4);
+    s.positions.row(n + i) << c * u - sn * w, 0.15 + 0.2 * u, sn * u + c * w;
+  }
+  s.rest_positions = s.positions;
+  for (const Spring& spring : one.springs) {
+    Spring second = spring;
+    second.a += n;
+    second.b += n;
+    s.springs.push_back(second);
+  }
+  for (const auto& t : one.triangles) s.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+  Collider ground;
+  ground.friction = 0.5;
+  s.colliders = {ground};
+  return s;
 }
 
 }  // namespace stabint::testing

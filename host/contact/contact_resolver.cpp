@@ -122,6 +122,14 @@ ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(
   return resolved;
 }
 
+bool ContactResolver::projectOut(const ContactPart& part, double t1,
+                                 const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
+                                 Eigen::MatrixX3d& x) const {
+  if (part.colliders.count == 0) return false;
+  const StepStart start{t1 - time_step_, x0};
+  return projectOutOfColliders(scene_, forcing_, meshes_, part, t1, tolerance_, x, nullptr, &start) > 0;
+}
+
 void ContactResolver::bookProjection(const PotentialEnergy& projected, double kept, PotentialEnergy& p, double& target,
                                      StepReport& report) {
   ++report.energy_evaluations;

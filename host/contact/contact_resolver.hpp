@@ -69,6 +69,10 @@ class ContactResolver {
                                       const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
                                       Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double& target,
                                       StepReport& report) const;
+  /// The final projection of `part` alone (no friction, nothing booked), after another
+  /// correction (self-contact's impulses) moved x; returns whether it moved a particle.
+  bool projectOut(const ContactPart& part, double t1,
+                  const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0, Eigen::MatrixX3d& x) const;
   /// Books the final projection of a part whose potential went from `p` to `projected` (one
   /// energy evaluation): of the energy it removed, the share its restitution does not keep
   /// (1 - `kept`, Resolved::kept) leaves `target` (report.contact_projection); `p` becomes

@@ -58,6 +58,8 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
       v_slot_(batch.scene.velocities),
       contact_(data_, forcing_, system_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
       per_scene_(segments_.size()) {
+  if (options_.self_contact_thickness > 0.0)
+    for (const Scene& own : scenes_) self_contact_.emplace_back(own, options_.self_contact_thickness);
   // A float device holds coordinates and speeds up to validation::kMaxMagnitudeFloat, not the
   // scene's 1e150: beyond it a scene lost its speeds in its first step, silently.
   const double limit = inputLimit(choice_);
@@ -424,16 +426,32 @@ void BatchDriver::bookContactGeometry(const std::vector<std::size_t>& scenes, co
 }
 
 void BatchDriver::resolveContact(double t1) {
-  if (contact_.count() == 0) return;
+  if (contact_.count() == 0 && self_contact_.empty()) return;
   std::vector<char> projected(segments_.size(), 0);
   std::vector<double> kept(segments_.size(), 1.0);
   bool any = false;
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     PerScene& p = per_scene_[s];
     if (!p.stepping) continue;
-    const ContactResolver::Resolved resolved =
-        contact_.applyFrictionAndProjection(contactPart(s, segments_[s].first_particle), t1, blockOf(x_, segments_[s]),
-                                            p.x_new, p.v_new, p.target_now, report_.scenes[s]);
+    const ContactPart part = contactPart(s, segments_[s].first_particle);
+    const auto x0 = blockOf(x_, segments_[s]);
+    ContactResolver::Resolved resolved;
+    if (contact_.count() > 0)
+      resolved = contact_.applyFrictionAndProjection(part, t1, x0, p.x_new, p.v_new, p.target_now, report_.scenes[s]);
+    if (!self_contact_.empty() && !self_contact_[s].empty()) {
+      // Self-contact after the colliders' projection, which it repeats after each round of its
+      // impulses (an impulse may push a particle back into a collider); what its impulses take
+      // from the motion is lost (inelastic), booked like friction.
+      std::vector<int> fixed;
+      for (const Pin& pin : scenes_[s].pins) fixed.push_back(pin.vertex);
+      const SelfContactResult r =
+          self_contact_[s].resolve(x0, p.x_new, p.v_new, scenes_[s].masses, fixed,
+                                   [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); });
+      p.target_now -= r.kinetic_removed;
+      report_.scenes[s].contact_projection -= r.kinetic_removed;
+      resolved.velocities_changed = resolved.velocities_changed || r.velocities_changed;
+      resolved.positions_moved = resolved.positions_moved || r.positions_moved;
+    }
     p.velocities_changed = p.velocities_changed || resolved.velocities_changed;
     if (!resolved.positions_moved) continue;
     kept[s] = resolved.kept;

@@ -12,6 +12,7 @@
 // and CG on its own block), so that one scene's NaN never reaches the others.
 #include "backend.hpp"
 #include "contact/contact_resolver.hpp"
+#include "contact/self_contact.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
 #include "state/checkpoint.hpp"
@@ -254,9 +255,10 @@ struct BatchDriver {
   // after any scene's setState, whichever rows it writes; a step keeps them so (its candidates
   // come from the slots or are rounded to them).
   bool host_copies_stored_ = false;
-  ContactResolver contact_;         // every scene's colliders, each on its own particles
-  Eigen::MatrixX3d x_aux_, v_aux_;  // host copies of the partner or the full-budget BE solve
-  Eigen::MatrixX3d x_trial_;        // the root finds' trial positions
+  ContactResolver contact_;                // every scene's colliders, each on its own particles
+  std::vector<SelfContact> self_contact_;  // per scene (none when self_contact_thickness is 0)
+  Eigen::MatrixX3d x_aux_, v_aux_;         // host copies of the partner or the full-budget BE solve
+  Eigen::MatrixX3d x_trial_;               // the root finds' trial positions
   std::vector<PotentialEnergy> p_all_, new_mid_, old_mid_, aux_mid_;  // per-scene potentials
   std::vector<PotentialEnergy> partner_potentials_;                   // of the BE partner, when its solve left them
   double t_ = 0.0;                                                    // the batch's time (of the active scenes)

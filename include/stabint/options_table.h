@@ -95,6 +95,11 @@
      velocity, will be) that close to a collider carries its contact term. */                                          \
   FIELD(T(double), contact_tolerance, 1e-2, nonNegative(),                                                             \
         "deepest a particle may stay inside a collider after a step, m, >= 0")                                         \
+  /* Self-contact and contact between the bodies of a scene (docs/method.md, "Self-contact"), off                      \
+     when 0: after every step the surface triangles (Scene::triangles, else the tets' surface) keep                    \
+     this distance apart and no triangle passes through another within the step. */                                    \
+  FIELD(T(double), self_contact_thickness, 0.0, nonNegative(),                                                         \
+        "distance the scene's surfaces keep from each other, m (0: no self-contact)")                                  \
   FIELD(T(BackendKind), backend, BackendKind::CpuReference, isEnum(),                                                  \
         "where the element work runs: cpu, opencl or auto")                                                            \
   NESTED(T(OpenCLOptions), opencl, T(OPENCL_OPTIONS_FIELDS), "OpenCL device and precision (backend opencl or auto)")

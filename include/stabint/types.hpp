@@ -311,7 +311,7 @@ struct StepReport {
   /// energy the contact booked as lost (<= 0, added to H*): of what the final projection out of
   /// the colliders removed, the share their restitution does not keep, and what the step's
   /// half-spaces took from the potential of the same positions (energy the projection adds is
-  /// not booked: the blend takes it out).
+  /// not booked: the blend takes it out), and the kinetic energy self-contact's impulses removed.
   ///@{
   double friction = 0.0;
   double contact_projection = 0.0;
@@ -322,22 +322,23 @@ struct StepReport {
 };
 
 /// The fields of StepReport, `FIELD(name, "doc")` in the struct's order (stabint/field_list.hpp).
-#define STABINT_STEP_REPORT_FIELDS(FIELD)                                                                        \
-  FIELD(step, "index of the step (0 = first)")                                                                   \
-  FIELD(time, "time at the end of the step")                                                                     \
-  FIELD(energy, "H of the new state, split by term")                                                             \
-  FIELD(target, "tracked target H* after the step")                                                              \
-  FIELD(forcing, "energy added to H* by time-dependent potentials")                                              \
-  FIELD(damping, "kinetic energy removed by damping (>= 0)")                                                     \
-  FIELD(branch, "what the blend did")                                                                            \
-  FIELD(alpha, "blend weight of the BE partner (0 = pure IM)")                                                   \
-  FIELD(velocity_scale, "factor the blend applied to the velocities (1 = none)")                                 \
-  FIELD(event_energy, "energy added to H* by set_state/set_positions/set_velocities since the previous step")    \
-  FIELD(friction, "kinetic energy friction removed (negative when a moving collider drags particles along)")     \
-  FIELD(contact_projection,                                                                                      \
-        "energy the contact booked as lost: the final projection's beyond restitution, the half-spaces' (<= 0)") \
-  FIELD(iterations, "local/global iterations of all solves of the step")                                         \
-  FIELD(energy_evaluations, "element energy passes (root find included)")                                        \
+#define STABINT_STEP_REPORT_FIELDS(FIELD)                                                                     \
+  FIELD(step, "index of the step (0 = first)")                                                                \
+  FIELD(time, "time at the end of the step")                                                                  \
+  FIELD(energy, "H of the new state, split by term")                                                          \
+  FIELD(target, "tracked target H* after the step")                                                           \
+  FIELD(forcing, "energy added to H* by time-dependent potentials")                                           \
+  FIELD(damping, "kinetic energy removed by damping (>= 0)")                                                  \
+  FIELD(branch, "what the blend did")                                                                         \
+  FIELD(alpha, "blend weight of the BE partner (0 = pure IM)")                                                \
+  FIELD(velocity_scale, "factor the blend applied to the velocities (1 = none)")                              \
+  FIELD(event_energy, "energy added to H* by set_state/set_positions/set_velocities since the previous step") \
+  FIELD(friction, "kinetic energy friction removed (negative when a moving collider drags particles along)")  \
+  FIELD(contact_projection,                                                                                   \
+        "energy the contact booked as lost: the final projection's beyond restitution, the half-spaces', "    \
+        "self-contact's (<= 0)")                                                                              \
+  FIELD(iterations, "local/global iterations of all solves of the step")                                      \
+  FIELD(energy_evaluations, "element energy passes (root find included)")                                     \
   FIELD(times, "wall-clock seconds per phase")
 /// @cond
 STABINT_FIELD_TABLE_(StepReport, STABINT_STEP_REPORT_FIELDS,

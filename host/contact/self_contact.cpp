@@ -1,0 +1,588 @@
+#include "contact/self_contact.hpp"
+
+#include "common/worker_pool.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <utility>
+
+namespace stabint {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Rows = Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>;
+
+Vec3 row(const Rows& x, int i) { return x.row(i).transpose(); }
+Vec3 row(const Eigen::MatrixX3d& x, int i) { return x.row(i).transpose(); }
+
+// Barycentric weights (of a, b, c) of the point of triangle abc closest to p (Ericson, "Real-Time
+// Collision Detection", 5.1.5). A degenerate triangle gives its closest vertex or edge point.
+Vec3 closestOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return {1, 0, 0};
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return {0, 1, 0};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    return {1 - v, v, 0};
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return {0, 0, 1};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double w = d2 / (d2 - d6);
+    return {1 - w, 0, w};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {0, 1 - w, w};
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0.0)) return {1, 0, 0};  // degenerate: its first vertex
+  const double v = vb / sum, w = vc / sum;
+  return {1 - v - w, v, w};
+}
+
+// Parameters (s on p1 q1, t on p2 q2) of the closest points of two segments (Ericson 5.1.9).
+std::pair<double, double> closestOnSegments(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2) {
+  const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  constexpr double kTiny = 1e-300;
+  if (a <= kTiny && e <= kTiny) return {0.0, 0.0};
+  double s = 0.0, t = 0.0;
+  if (a <= kTiny) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= kTiny) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2), denom = a * e - b * b;
+      s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;  // parallel: any s
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  return {s, t};
+}
+
+// The times in (0, 1] worth a look for a pair whose coplanarity is the cubic
+// f(t) = c[0] + c[1] t + c[2] t^2 + c[3] t^3: its roots in [0, 1] (sign changes, bisected to the
+// last bit) and its extrema in (0, 1) (where a pair that touches without crossing is closest),
+// ascending.
+int timesToCheck(const double c[4], double out[8]) {
+  auto f = [&](double t) { return ((c[3] * t + c[2]) * t + c[1]) * t + c[0]; };
+  double knots[4] = {0.0, 0.0, 0.0, 0.0};
+  int k = 0;
+  knots[k++] = 0.0;
+  // f'(t) = 3 c3 t^2 + 2 c2 t + c1.
+  const double qa = 3.0 * c[3], qb = 2.0 * c[2], qc = c[1];
+  double extrema[2];
+  int ne = 0;
+  if (qa != 0.0) {
+    const double disc = qb * qb - 4.0 * qa * qc;
+    if (disc >= 0.0) {
+      const double sq = std::sqrt(disc);
+      const double q = -0.5 * (qb + (qb >= 0.0 ? sq : -sq));
+      const double r1 = q != 0.0 ? q / qa : 0.0, r2 = q != 0.0 ? qc / q : 0.0;
+      extrema[ne++] = std::min(r1, r2);
+      if (r1 != r2) extrema[ne++] = std::max(r1, r2);
+    }
+  } else if (qb != 0.0) {
+    extrema[ne++] = -qc / qb;
+  }
+  int n = 0;
+  for (int i = 0; i < ne; ++i)
+    if (extrema[i] > 0.0 && extrema[i] < 1.0) knots[k++] = extrema[i];
+  knots[k++] = 1.0;
+  for (int i = 0; i + 1 < k; ++i) {
+    double lo = knots[i], hi = knots[i + 1];
+    double flo = f(lo), fhi = f(hi);
+    if (flo == 0.0 && i == 0) out[n++] = 0.0;
+    if ((flo < 0.0 && fhi > 0.0) || (flo > 0.0 && fhi < 0.0)) {
+      for (int it = 0; it < 80 && hi - lo > 0.0; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        if (mid <= lo || mid >= hi) break;
+        const double fm = f(mid);
+        if ((fm < 0.0) == (flo < 0.0)) {
+          lo = mid;
+          flo = fm;
+        } else {
+          hi = mid;
+        }
+      }
+      out[n++] = hi;
+    } else if (fhi == 0.0) {
+      out[n++] = hi;
+    }
+    if (i + 2 < k) out[n++] = knots[i + 1];  // the extremum itself
+  }
+  std::sort(out, out + n);
+  return static_cast<int>(std::unique(out, out + n) - out);
+}
+
+// The coplanarity cubic of four moving points, f(t) = ((u x w) . q)(t) with u, w, q linear in t.
+void coplanarityCubic(const Vec3& u0, const Vec3& u1, const Vec3& w0, const Vec3& w1, const Vec3& q0, const Vec3& q1,
+                      double c[4]) {
+  const Vec3 du = u1 - u0, dw = w1 - w0, dq = q1 - q0;
+  const Vec3 c0 = u0.cross(w0), c1 = u0.cross(dw) + du.cross(w0), c2 = du.cross(dw);
+  c[0] = c0.dot(q0);
+  c[1] = c0.dot(dq) + c1.dot(q0);
+  c[2] = c1.dot(dq) + c2.dot(q0);
+  c[3] = c2.dot(dq);
+}
+
+Vec3 lerp(const Vec3& a, const Vec3& b, double t) { return a + t * (b - a); }
+
+// The pair's direction at x0: from the second primitive's closest point to the first's, or,
+// where they touch at x0, `fallback` turned against the pair's relative motion `motion`.
+bool separatingDirection(const Vec3& gap, const Vec3& fallback, const Vec3& motion, double scale, Vec3& n) {
+  const double length = gap.norm();
+  if (length > 1e-12 * scale) {
+    n = gap / length;
+    return true;
+  }
+  const double f = fallback.norm();
+  if (!(f > 0.0)) return false;
+  n = fallback / f;
+  if (n.dot(motion) > 0.0) n = -n;
+  return true;
+}
+
+struct Box {
+  Vec3 lo, hi;
+  bool overlaps(const Box& o) const { return (lo.array() <= o.hi.array()).all() && (o.lo.array() <= hi.array()).all(); }
+};
+
+// The box a primitive sweeps in a frame that moves by `shift` over the step (the surface's mean
+// motion: a body falling as a whole sweeps small boxes in it, and the pairs it finds are the same,
+// contact depending on relative motion only).
+template <std::size_t K>
+Box sweptBox(const std::array<int, K>& v, const Rows& x0, const Eigen::MatrixX3d& x1, const Vec3& shift, double grow) {
+  Box b{row(x0, v[0]), row(x0, v[0])};
+  for (std::size_t i = 0; i < K; ++i) {
+    for (const Vec3& p : {row(x0, v[i]), Vec3(row(x1, v[i]) - shift)}) {
+      b.lo = b.lo.cwiseMin(p);
+      b.hi = b.hi.cwiseMax(p);
+    }
+  }
+  b.lo.array() -= grow;
+  b.hi.array() += grow;
+  return b;
+}
+
+// A uniform grid of boxes over their bounding box, dense: each box in every cell it covers, the
+// cells' lists one array (counting sort), each list in box order.
+class Grid {
+ public:
+  // The boxes whose `included` flag is set (all without flags).
+  Grid(const std::vector<Box>& boxes, double cell, const std::vector<char>* included = nullptr) {
+    bool any = false;
+    Vec3 hi = Vec3::Zero();
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      if (included && !(*included)[i]) continue;
+      lo_ = any ? lo_.cwiseMin(boxes[i].lo) : boxes[i].lo;
+      hi = any ? hi.cwiseMax(boxes[i].hi) : boxes[i].hi;
+      any = true;
+    }
+    if (!any) return;
+    // At most about 2^21 cells: coarser cells for a scene spread far.
+    const Vec3 span = hi - lo_;
+    constexpr double kMaxCells = double(1 << 21);
+    const double cells = ((span / cell).array() + 1.0).prod();
+    if (cells > kMaxCells) cell *= std::cbrt(cells / kMaxCells) * 1.01;
+    cell_ = cell;
+    for (int c = 0; c < 3; ++c) dims_[c] = static_cast<int>(span[c] / cell_) + 1;
+    starts_.assign(std::size_t(dims_[0]) * std::size_t(dims_[1]) * std::size_t(dims_[2]) + 1, 0);
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+      if (!included || (*included)[i]) forCells(boxes[i], [&](std::size_t key) { ++starts_[key + 1]; });
+    for (std::size_t k = 1; k < starts_.size(); ++k) starts_[k] += starts_[k - 1];
+    entries_.resize(std::size_t(starts_.back()));
+    std::vector<int> fill(starts_.begin(), starts_.end() - 1);
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+      if (!included || (*included)[i])
+        forCells(boxes[i], [&](std::size_t key) {
+          entries_[std::size_t(fill[key]++)] = {boxes[i], static_cast<int>(i)};
+        });
+  }
+  // Every box overlapping `b` that `wanted(index)` accepts, each once: a pair is reported in the
+  // cell of its overlap's lowest corner only.
+  template <typename Wanted, typename F>
+  void query(const Box& b, Wanted&& wanted, F&& f) const {
+    if (entries_.empty()) return;
+    forCells(b, [&](std::size_t key) {
+      for (int e = starts_[key]; e < starts_[key + 1]; ++e) {
+        const Entry& o = entries_[std::size_t(e)];
+        if (wanted(o.index) && b.overlaps(o.box) && cellOf(b.lo.cwiseMax(o.box.lo)) == key) f(o.index);
+      }
+    });
+  }
+
+ private:
+  struct Entry {
+    Box box;  // a copy: a cell's boxes are read in one run
+    int index;
+  };
+  template <typename F>
+  void forCells(const Box& b, F&& f) const {
+    int lo[3], hi[3];
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = coordinate(b.lo[c], c);
+      hi[c] = coordinate(b.hi[c], c);
+    }
+    for (int k = lo[2]; k <= hi[2]; ++k)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int i = lo[0]; i <= hi[0]; ++i) f(key(i, j, k));
+  }
+  // A point outside the grid's box (a query's) falls in its nearest cell.
+  int coordinate(double x, int c) const {
+    return std::clamp(static_cast<int>(std::floor((x - lo_[c]) / cell_)), 0, dims_[c] - 1);
+  }
+  std::size_t cellOf(const Vec3& p) const { return key(coordinate(p[0], 0), coordinate(p[1], 1), coordinate(p[2], 2)); }
+  std::size_t key(int i, int j, int k) const {
+    return std::size_t(i) + std::size_t(dims_[0]) * (std::size_t(j) + std::size_t(dims_[1]) * std::size_t(k));
+  }
+  Vec3 lo_ = Vec3::Zero();
+  double cell_ = 1.0;
+  int dims_[3] = {1, 1, 1};
+  std::vector<int> starts_;
+  std::vector<Entry> entries_;
+};
+
+// A vertex-triangle pair's event, if it has one, onto `out`.
+void vertexTriangle(const Rows& x0, const Eigen::MatrixX3d& x1, int v, const std::array<int, 3>& tri,
+                    double closer_than, double touching, double scale, std::vector<ContactEvent>& out) {
+  double times[8];
+  const Vec3 p0 = row(x0, v), p1 = row(x1, v);
+  const Vec3 a0 = row(x0, tri[0]), a1 = row(x1, tri[0]);
+  const Vec3 b0 = row(x0, tri[1]), b1 = row(x1, tri[1]);
+  const Vec3 c0 = row(x0, tri[2]), c1 = row(x1, tri[2]);
+  // The pair's distance shrinks over the step by at most the largest motion of the particle
+  // relative to a vertex of the triangle: a pair farther apart than that (and the thickness)
+  // at x0 cannot meet.
+  const Vec3 dp = p1 - p0;
+  const double relative = std::sqrt(
+      std::max({(dp - (a1 - a0)).squaredNorm(), (dp - (b1 - b0)).squaredNorm(), (dp - (c1 - c0)).squaredNorm()}));
+  const double reach = relative + std::max(closer_than, touching);
+  // First by the triangle's bounding sphere about its centroid (most pairs stop here).
+  const Vec3 centroid = (a0 + b0 + c0) / 3.0;
+  const double radius = std::sqrt(
+      std::max({(a0 - centroid).squaredNorm(), (b0 - centroid).squaredNorm(), (c0 - centroid).squaredNorm()}));
+  if ((p0 - centroid).norm() - radius > reach) return;
+  const Vec3 w_start = closestOnTriangle(p0, a0, b0, c0);
+  const double d_start = (p0 - (w_start[0] * a0 + w_start[1] * b0 + w_start[2] * c0)).norm();
+  if (d_start > reach) return;
+  double cubic[4];
+  coplanarityCubic(b0 - a0, b1 - a1, c0 - a0, c1 - a1, p0 - a0, p1 - a1, cubic);
+  const int count = timesToCheck(cubic, times);
+  bool found = false, crossing = false;
+  Vec3 bary;
+  for (int i = 0; i < count && !found; ++i) {
+    const double s = times[i];
+    const Vec3 p = lerp(p0, p1, s), a = lerp(a0, a1, s), b = lerp(b0, b1, s), c = lerp(c0, c1, s);
+    const Vec3 w = closestOnTriangle(p, a, b, c);
+    if ((p - (w[0] * a + w[1] * b + w[2] * c)).norm() <= touching) found = crossing = true, bary = w;
+  }
+  if (!found) {
+    const Vec3 w = closestOnTriangle(p1, a1, b1, c1);
+    if ((p1 - (w[0] * a1 + w[1] * b1 + w[2] * c1)).norm() < closer_than) found = true, bary = w;
+  }
+  if (!found) return;
+  const Vec3 gap = p0 - (w_start[0] * a0 + w_start[1] * b0 + w_start[2] * c0);
+  const Vec3 motion = (p1 - p0) - (bary[0] * (a1 - a0) + bary[1] * (b1 - b0) + bary[2] * (c1 - c0));
+  ContactEvent e;
+  if (!separatingDirection(gap, (b0 - a0).cross(c0 - a0), motion, scale, e.normal)) return;
+  e.vertices = {v, tri[0], tri[1], tri[2]};
+  e.weights = {1.0, -bary[0], -bary[1], -bary[2]};
+  e.crossing = crossing;
+  out.push_back(e);
+}
+
+// An edge-edge pair's event, if it has one, onto `out`.
+void edgeEdge(const Rows& x0, const Eigen::MatrixX3d& x1, const std::array<int, 2>& e1, const std::array<int, 2>& e2,
+              double closer_than, double touching, double scale, std::vector<ContactEvent>& out) {
+  double times[8];
+  const Vec3 a0 = row(x0, e1[0]), a1 = row(x1, e1[0]), b0 = row(x0, e1[1]), b1 = row(x1, e1[1]);
+  const Vec3 c0 = row(x0, e2[0]), c1 = row(x1, e2[0]), d0 = row(x0, e2[1]), d1 = row(x1, e2[1]);
+  // As for a vertex and a triangle: the largest relative motion of two of the four ends bounds
+  // how much nearer the edges can come.
+  double relative = 0.0;
+  for (const Vec3& u : {Vec3(a1 - a0), Vec3(b1 - b0)})
+    for (const Vec3& w : {Vec3(c1 - c0), Vec3(d1 - d0)}) relative = std::max(relative, (u - w).squaredNorm());
+  relative = std::sqrt(relative);
+  const double reach = relative + std::max(closer_than, touching);
+  // First by the edges' bounding spheres (most pairs stop here).
+  if ((0.5 * (a0 + b0 - c0 - d0)).norm() - 0.5 * ((b0 - a0).norm() + (d0 - c0).norm()) > reach) return;
+  const auto q0 = closestOnSegments(a0, b0, c0, d0);
+  const Vec3 gap = lerp(a0, b0, q0.first) - lerp(c0, d0, q0.second);
+  if (gap.norm() > reach) return;
+  double cubic[4];
+  coplanarityCubic(b0 - a0, b1 - a1, d0 - c0, d1 - c1, c0 - a0, c1 - a1, cubic);
+  const int count = timesToCheck(cubic, times);
+  bool found = false, crossing = false;
+  std::pair<double, double> st;
+  for (int k = 0; k < count && !found; ++k) {
+    const double s = times[k];
+    const Vec3 a = lerp(a0, a1, s), b = lerp(b0, b1, s), c = lerp(c0, c1, s), d = lerp(d0, d1, s);
+    const auto q = closestOnSegments(a, b, c, d);
+    if ((lerp(a, b, q.first) - lerp(c, d, q.second)).norm() <= touching) found = crossing = true, st = q;
+  }
+  if (!found) {
+    const auto q = closestOnSegments(a1, b1, c1, d1);
+    if ((lerp(a1, b1, q.first) - lerp(c1, d1, q.second)).norm() < closer_than) found = true, st = q;
+  }
+  if (!found) return;
+  const Vec3 motion =
+      (lerp(a1, b1, st.first) - lerp(a0, b0, st.first)) - (lerp(c1, d1, st.second) - lerp(c0, d0, st.second));
+  ContactEvent e;
+  if (!separatingDirection(gap, (b0 - a0).cross(d0 - c0), motion, scale, e.normal)) return;
+  e.vertices = {e1[0], e1[1], e2[0], e2[1]};
+  e.weights = {1.0 - st.first, st.first, -(1.0 - st.second), -st.second};
+  e.crossing = crossing;
+  out.push_back(e);
+}
+
+}  // namespace
+
+ContactSurface ContactSurface::of(const Scene& scene) {
+  ContactSurface s;
+  s.triangles = !scene.triangles.empty() ? scene.triangles : tetSurface(scene.tets);
+  for (const auto& t : s.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+      s.edges.push_back({std::min(a, b), std::max(a, b)});
+      s.vertices.push_back(a);
+    }
+  }
+  std::sort(s.edges.begin(), s.edges.end());
+  s.edges.erase(std::unique(s.edges.begin(), s.edges.end()), s.edges.end());
+  std::sort(s.vertices.begin(), s.vertices.end());
+  s.vertices.erase(std::unique(s.vertices.begin(), s.vertices.end()), s.vertices.end());
+  return s;
+}
+
+SelfContact::SelfContact(const Scene& scene, double thickness)
+    : surface_(ContactSurface::of(scene)), thickness_(thickness) {}
+
+std::vector<ContactEvent> SelfContact::events(const Rows& x0, const Eigen::MatrixX3d& x1, double closer_than,
+                                              const std::vector<char>* moved) const {
+  std::vector<ContactEvent> out;
+  if (surface_.empty()) return out;
+  const double grow = 0.5 * thickness_;
+  const auto& tris = surface_.triangles;
+  const auto& edges = surface_.edges;
+  const auto& verts = surface_.vertices;
+  std::vector<Box> tri_boxes(tris.size()), edge_boxes(edges.size()), vert_boxes(verts.size());
+  Vec3 shift = Vec3::Zero();
+  for (int v : verts) shift += row(x1, v) - row(x0, v);
+  shift /= double(verts.size());
+  double extent = 0.0;
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    tri_boxes[i] = sweptBox(tris[i], x0, x1, shift, grow);
+    extent += (tri_boxes[i].hi - tri_boxes[i].lo).maxCoeff();
+  }
+  for (std::size_t i = 0; i < edges.size(); ++i) edge_boxes[i] = sweptBox(edges[i], x0, x1, shift, grow);
+  for (std::size_t i = 0; i < verts.size(); ++i)
+    vert_boxes[i] = sweptBox(std::array<int, 1>{verts[i]}, x0, x1, shift, grow);
+  // Cells about one triangle's swept box wide: each box covers a few cells, each cell a few boxes.
+  const double cell = std::max(extent / double(tris.size()), 4.0 * thickness_);
+  // The scene's size, for what counts as touching at x0.
+  const double scale = std::max((x0.colwise().maxCoeff() - x0.colwise().minCoeff()).maxCoeff(), thickness_);
+  // A pair passes within the step when it is coplanar (or closest) with its closest points this
+  // near: a tenth of the thickness, far below any distance the impulses leave.
+  const double touching = 0.1 * thickness_;
+
+  // With `moved`, only the pairs with a moved vertex: the active primitives are those with one.
+  std::vector<char> active_vertex, active_triangle, active_edge;
+  if (moved) {
+    auto any = [&](const auto& primitive) {
+      for (int v : primitive)
+        if ((*moved)[std::size_t(v)]) return char(1);
+      return char(0);
+    };
+    for (int v : verts) active_vertex.push_back((*moved)[std::size_t(v)]);
+    for (const auto& t : tris) active_triangle.push_back(any(t));
+    for (const auto& e : edges) active_edge.push_back(any(e));
+  }
+  const Grid triangle_grid(tri_boxes, cell), edge_grid(edge_boxes, cell);
+  const Grid active_triangle_grid =
+      moved ? Grid(tri_boxes, cell, &active_triangle) : Grid(std::vector<Box>{}, cell, nullptr);
+  // The queries and the narrow phase in chunks of vertices and of edges on the worker threads,
+  // each chunk's events in its own list, the lists joined in chunk order: the serial order.
+  constexpr int kChunk = 256;
+  const int vertex_chunks = static_cast<int>((verts.size() + kChunk - 1) / kChunk);
+  const int edge_chunks = static_cast<int>((edges.size() + kChunk - 1) / kChunk);
+  std::vector<std::vector<ContactEvent>> found(std::size_t(vertex_chunks + edge_chunks));
+  parallelFor(vertex_chunks + edge_chunks, [&](int chunk) {
+    std::vector<ContactEvent>& list = found[std::size_t(chunk)];
+    if (chunk < vertex_chunks) {
+      const std::size_t end = std::min(verts.size(), std::size_t(chunk + 1) * kChunk);
+      for (std::size_t i = std::size_t(chunk) * kChunk; i < end; ++i) {
+        const int v = verts[i];
+        // A vertex that moved meets every triangle; one that did not, those that moved.
+        const Grid& grid = !moved || active_vertex[i] ? triangle_grid : active_triangle_grid;
+        grid.query(
+            vert_boxes[i],
+            [&](int t) {
+              const auto& tri = tris[std::size_t(t)];
+              return tri[0] != v && tri[1] != v && tri[2] != v;
+            },
+            [&](int t) { vertexTriangle(x0, x1, v, tris[std::size_t(t)], closer_than, touching, scale, list); });
+      }
+      return;
+    }
+    const std::size_t first = std::size_t(chunk - vertex_chunks) * kChunk;
+    const std::size_t end = std::min(edges.size(), first + kChunk);
+    for (std::size_t i = first; i < end; ++i) {
+      // Each pair once: from its higher edge, or, with `moved`, from its moved edge (the higher
+      // one when both moved).
+      if (moved && !active_edge[i]) continue;
+      const auto& e = edges[i];
+      edge_grid.query(
+          edge_boxes[i],
+          [&](int j) {
+            if (moved ? j == static_cast<int>(i) || (active_edge[std::size_t(j)] && j < static_cast<int>(i))
+                      : j <= static_cast<int>(i))
+              return false;
+            const auto& f = edges[std::size_t(j)];
+            return e[0] != f[0] && e[0] != f[1] && e[1] != f[0] && e[1] != f[1];
+          },
+          [&](int j) { edgeEdge(x0, x1, e, edges[std::size_t(j)], closer_than, touching, scale, list); });
+    }
+  });
+  for (const auto& list : found) out.insert(out.end(), list.begin(), list.end());
+  return out;
+}
+
+namespace {
+
+double kinetic(const Eigen::MatrixX3d& v, const Eigen::VectorXd& masses) {
+  return 0.5 * (v.rowwise().squaredNorm().transpose().array() * masses.transpose().array()).sum();
+}
+
+int findRoot(std::vector<int>& parent, int i) {
+  while (parent[std::size_t(i)] != i) i = parent[std::size_t(i)] = parent[std::size_t(parent[std::size_t(i)])];
+  return i;
+}
+
+}  // namespace
+
+SelfContactResult SelfContact::resolve(const Rows& x0, Eigen::MatrixX3d& x1, Eigen::MatrixX3d& v1,
+                                       const Eigen::VectorXd& masses, const std::vector<int>& fixed,
+                                       const std::function<bool(Eigen::MatrixX3d&)>& keep_out) const {
+  SelfContactResult result;
+  if (surface_.empty()) return result;
+  const Eigen::Index n = x1.rows();
+  Eigen::VectorXd inverse_mass = masses.cwiseInverse();
+  for (int f : fixed) inverse_mass[f] = 0.0;
+  const double kinetic_before = kinetic(v1, masses);
+
+  bool clean = false;
+  // The particles the last round moved: a later round checks only their pairs (the others had
+  // no event at a stricter threshold and have not changed).
+  std::vector<char> moved(static_cast<std::size_t>(n), 0);
+  for (int round = 0; round < kRounds && !clean; ++round) {
+    // The first round pushes every pair nearer than the thickness out to it; the later ones only
+    // those the earlier impulses left at less than half of it, and the crossings.
+    const std::vector<ContactEvent> events =
+        round == 0 ? this->events(x0, x1, thickness_) : this->events(x0, x1, 0.5 * thickness_, &moved);
+    clean = events.empty();
+    std::fill(moved.begin(), moved.end(), 0);
+    for (const ContactEvent& e : events) {
+      double weight = 0.0;  // sum w_i^2 / m_i
+      for (int k = 0; k < 4; ++k)
+        weight += e.weights[std::size_t(k)] * e.weights[std::size_t(k)] * inverse_mass[e.vertices[std::size_t(k)]];
+      if (!(weight > 0.0)) continue;
+      double gap = 0.0, speed = 0.0;
+      for (int k = 0; k < 4; ++k) {
+        const int i = e.vertices[std::size_t(k)];
+        gap += e.weights[std::size_t(k)] * e.normal.dot(x1.row(i).transpose());
+        speed += e.weights[std::size_t(k)] * e.normal.dot(v1.row(i).transpose());
+      }
+      const double push = gap < thickness_ ? (thickness_ - gap) / weight : 0.0;
+      const double stop = speed < 0.0 ? -speed / weight : 0.0;
+      if (push == 0.0 && stop == 0.0) continue;
+      ++result.events;
+      for (int k = 0; k < 4; ++k) {
+        const int i = e.vertices[std::size_t(k)];
+        const double share = e.weights[std::size_t(k)] * inverse_mass[i];
+        if (push != 0.0 && share != 0.0) {
+          x1.row(i) += (push * share) * e.normal.transpose();
+          moved[std::size_t(i)] = 1;
+        }
+        if (stop != 0.0) v1.row(i) += (stop * share) * e.normal.transpose();
+      }
+      result.positions_moved = result.positions_moved || push != 0.0;
+      result.velocities_changed = result.velocities_changed || stop != 0.0;
+    }
+    if (!clean && result.positions_moved && keep_out) {
+      const Eigen::MatrixX3d before = x1;
+      if (keep_out(x1)) {
+        for (Eigen::Index i = 0; i < n; ++i)
+          if (x1.row(i) != before.row(i)) moved[std::size_t(i)] = 1;
+      }
+    }
+  }
+
+  // Impact zones: the vertices of the pairs that still cross keep x0 and move on together
+  // (mass-weighted mean velocity), zones merging until nothing crosses. A pair whose vertices
+  // all keep x0 already is as the last step left it.
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<char> frozen(static_cast<std::size_t>(n), 0);
+  while (!clean) {
+    bool grew = false;
+    for (const ContactEvent& e : events(x0, x1, 0.0)) {
+      if (!e.crossing) continue;
+      bool all_frozen = true;
+      for (int v : e.vertices) all_frozen = all_frozen && (frozen[std::size_t(v)] || inverse_mass[v] == 0.0);
+      if (all_frozen) continue;
+      for (int k = 1; k < 4; ++k)
+        parent[std::size_t(findRoot(parent, e.vertices[std::size_t(k)]))] = findRoot(parent, e.vertices[0]);
+      for (int v : e.vertices) {
+        if (frozen[std::size_t(v)]) continue;
+        frozen[std::size_t(v)] = 1;
+        grew = true;
+      }
+    }
+    if (!grew) break;
+    // Each zone's momentum over its movable mass, in vertex order.
+    std::vector<Eigen::Vector3d> momentum(static_cast<std::size_t>(n), Eigen::Vector3d::Zero());
+    std::vector<double> mass(static_cast<std::size_t>(n), 0.0);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!frozen[std::size_t(i)] || inverse_mass[i] == 0.0) continue;
+      const int r = findRoot(parent, static_cast<int>(i));
+      momentum[std::size_t(r)] += masses[i] * v1.row(i).transpose();
+      mass[std::size_t(r)] += masses[i];
+    }
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!frozen[std::size_t(i)]) continue;
+      x1.row(i) = x0.row(i);
+      if (inverse_mass[i] == 0.0) continue;
+      const int r = findRoot(parent, static_cast<int>(i));
+      v1.row(i) = (momentum[std::size_t(r)] / mass[std::size_t(r)]).transpose();
+    }
+    result.positions_moved = result.velocities_changed = true;
+  }
+  result.frozen = static_cast<int>(std::count(frozen.begin(), frozen.end(), 1));
+  if (result.velocities_changed) result.kinetic_removed = kinetic_before - kinetic(v1, masses);
+  return result;
+}
+
+}  // namespace stabint

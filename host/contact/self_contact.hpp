@@ -1,0 +1,88 @@
+#pragma once
+// Self-contact and contact between the bodies of one scene (docs/method.md, "Self-contact"): the
+// step from x0 to the candidate x1 is made free of crossings between the scene's surface
+// triangles, and every surface keeps `thickness` from every other, after the solve (as the final
+// projection out of the colliders is).
+//
+// - Broad phase: a uniform grid over the primitives' swept boxes (x0 to x1, grown by the
+//   thickness); the candidate pairs are sorted, so the result does not depend on the grid's
+//   hashing order and a run repeats bit for bit.
+// - Narrow phase: vertex-triangle and edge-edge pairs, by continuous detection (the times where
+//   the four points are coplanar, where the pair's distance is least, and the step's end).
+// - Response: an inelastic, momentum-conserving impulse per event along the pair's separating
+//   direction at x0, on the positions (to `thickness` apart) and on the velocities (the approach
+//   speed removed), Gauss-Seidel over the events in a fixed order, for a few rounds; what still
+//   crosses after them is an impact zone whose vertices keep x0 and move on with their mean
+//   velocity (x0 crosses nothing, so the fallback always ends crossing-free).
+// The guard keeps no state between steps: checkpoints continue bit for bit without it.
+#include <stabint/scene.hpp>
+
+#include <Eigen/Core>
+
+#include <array>
+#include <functional>
+#include <vector>
+
+namespace stabint {
+
+/// The surface self-contact acts on: Scene::triangles, else the surface of the scene's tets; its
+/// edges, each once (first < second, ascending), and the vertices the triangles use (ascending).
+struct ContactSurface {
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<std::array<int, 2>> edges;
+  std::vector<int> vertices;
+  static ContactSurface of(const Scene& scene);
+  bool empty() const { return triangles.empty(); }
+};
+
+/// A vertex-triangle pair (vertices p, a, b, c) or an edge-edge pair (a b against c d) that meets
+/// within the step: the four vertices, the weights of the pair's separation d = sum w_i x_i
+/// (1, -b_a, -b_b, -b_c for a vertex against the barycentric point of a triangle; 1 - s, s,
+/// -(1 - t), -t between the closest points of two edges) and its direction n at x0.
+struct ContactEvent {
+  std::array<int, 4> vertices{};
+  std::array<double, 4> weights{};
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  bool crossing = false;  // the pair passes (or touches) within the step; else it only ends too close
+};
+
+/// What SelfContact::resolve did in one step.
+struct SelfContactResult {
+  int events = 0;                // impulses applied
+  int frozen = 0;                // vertices of impact zones put back at x0
+  double kinetic_removed = 0.0;  // >= 0: what the impulses and the zones took from the motion
+  bool positions_moved = false;
+  bool velocities_changed = false;
+};
+
+class SelfContact {
+ public:
+  /// `scene`'s surface (ContactSurface::of); thickness > 0.
+  SelfContact(const Scene& scene, double thickness);
+  bool empty() const { return surface_.empty(); }
+  const ContactSurface& surface() const { return surface_; }
+
+  /// The pairs that meet on the path x0 -> x1 (crossing or touching within the step, or ending
+  /// closer than `closer_than`), in a fixed order; with `moved` (a flag per particle), only the
+  /// pairs with a moved vertex.
+  std::vector<ContactEvent> events(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
+                                   const Eigen::MatrixX3d& x1, double closer_than,
+                                   const std::vector<char>* moved = nullptr) const;
+
+  /// Makes the step x0 -> x1 crossing-free and leaves the surfaces `thickness` apart where it
+  /// can, moving x1 and v1 (rows as x0's) by the impulses; `masses` are the scene's, and the
+  /// `fixed` vertices (pins) take no impulse. `keep_out`, called after each round of impulses
+  /// with x1, may move particles again (the colliders' projection); returns whether it did.
+  SelfContactResult resolve(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0, Eigen::MatrixX3d& x1,
+                            Eigen::MatrixX3d& v1, const Eigen::VectorXd& masses, const std::vector<int>& fixed,
+                            const std::function<bool(Eigen::MatrixX3d&)>& keep_out = {}) const;
+
+  /// Rounds of impulses before the impact zones.
+  static constexpr int kRounds = 8;
+
+ private:
+  ContactSurface surface_;
+  double thickness_;
+};
+
+}  // namespace stabint

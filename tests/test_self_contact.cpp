@@ -225,13 +225,19 @@ TEST_P(SelfContactOnEveryBackend, AClothDroppedOnAnotherRestsOnIt) {
   SimulatorOptions o = options();
   o.self_contact_thickness = 3e-3;
   Simulator sim(scene, o);
-  double booked = 0.0;
+  double booked = 0.0, excess = 0.0, kinetic = 0.0;
   for (int k = 0; k < 40; ++k) {
     const StepReport& r = sim.step();
     ASSERT_EQ(testing::intersectingTrianglePairs(sim.positions(), scene.triangles), 0) << "step " << k;
     booked += r.contact_projection;
+    excess = std::max(excess, r.energy.total() - r.target);
+    kinetic = std::max(kinetic, r.energy.kinetic);
   }
   EXPECT_LT(booked, 0.0);  // the landing's impulses took energy, and H* lost it
+  // The books at the impact, by the contact issue's measure: the blend's H at most 0.05 of the
+  // run's largest kinetic energy above H* (0.012 measured; 11 with the impulses after the solve
+  // alone, which stretched the springs at the contact's edge).
+  EXPECT_LE(excess, 0.05 * kinetic);
   // The upper cloth rests on the lower one: its lowest point above the lower one's highest.
   const int n = scene.numParticles() / 2;
   const Eigen::MatrixX3d x = sim.positions();
@@ -251,20 +257,21 @@ TEST_P(SelfContactOnEveryBackend, FollowsTheCpuReferenceAndContinuesFromACheckpo
   for (int k = 0; k < 8; ++k) sim.step();
   EXPECT_EQ(sim.positions(), x20);
   EXPECT_EQ(sim.velocities(), v20);
-  // Against the CPU reference over the landing (its first impulses at step 6): double to
-  // round-off amplified over 20 steps (1.4e-11 measured), float to its rounding of the state
-  // (1e-5 measured at step 12). Float stops there: from step 14 on, a pair within round-off of
-  // the detection's thresholds takes its impulse on one backend and not the other, and the
-  // landings part by millimetres, as any two runs a rounding apart do on a chaotic impact.
+  // Against the CPU reference over the landing (its first impulses at step 4): double to
+  // round-off amplified over 20 steps (7e-13 measured), float to its rounding of the state
+  // amplified by the first impacts (1.4e-4 measured at step 6). Float stops there: from then on
+  // a pair within a rounding of the impulses' thresholds takes its impulse on one backend and
+  // not the other, and the landings part by millimetres (1 cm at step 18), as two runs a
+  // rounding apart do on a chaotic impact.
   SimulatorOptions cpu = o;
   cpu.backend = BackendKind::CpuReference;
   Simulator here(scene, o), reference(scene, cpu);
-  const int steps = backend().isFloat() ? 12 : 20;
+  const int steps = backend().isFloat() ? 6 : 20;
   for (int k = 0; k < steps; ++k) {
     here.step();
     reference.step();
   }
-  const double tolerance = backend().isFloat() ? 1e-4 : 1e-9;
+  const double tolerance = backend().isFloat() ? 5e-4 : 1e-9;
   EXPECT_LT((here.positions() - reference.positions()).cwiseAbs().maxCoeff(), tolerance);
 }
 

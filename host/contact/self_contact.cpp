@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
+#include <tuple>
 #include <utility>
 
 namespace stabint {
@@ -380,10 +381,10 @@ ContactSurface ContactSurface::of(const Scene& scene) {
 SelfContact::SelfContact(const Scene& scene, double thickness)
     : surface_(ContactSurface::of(scene)), thickness_(thickness) {}
 
-std::vector<ContactEvent> SelfContact::events(const Rows& x0, const Eigen::MatrixX3d& x1, double closer_than,
-                                              const std::vector<char>* moved) const {
-  std::vector<ContactEvent> out;
-  if (surface_.empty()) return out;
+ContactCandidates SelfContact::candidates(const Rows& x0, const Eigen::MatrixX3d& x1,
+                                          const std::vector<char>* moved) const {
+  ContactCandidates found;
+  if (surface_.empty()) return found;
   const double grow = 0.5 * thickness_;
   const auto& tris = surface_.triangles;
   const auto& edges = surface_.edges;
@@ -402,11 +403,6 @@ std::vector<ContactEvent> SelfContact::events(const Rows& x0, const Eigen::Matri
     vert_boxes[i] = sweptBox(std::array<int, 1>{verts[i]}, x0, x1, shift, grow);
   // Cells about one triangle's swept box wide: each box covers a few cells, each cell a few boxes.
   const double cell = std::max(extent / double(tris.size()), 4.0 * thickness_);
-  // The scene's size, for what counts as touching at x0.
-  const double scale = std::max((x0.colwise().maxCoeff() - x0.colwise().minCoeff()).maxCoeff(), thickness_);
-  // A pair passes within the step when it is coplanar (or closest) with its closest points this
-  // near: a tenth of the thickness, far below any distance the impulses leave.
-  const double touching = 0.1 * thickness_;
 
   // With `moved`, only the pairs with a moved vertex: the active primitives are those with one.
   std::vector<char> active_vertex, active_triangle, active_edge;
@@ -423,14 +419,14 @@ std::vector<ContactEvent> SelfContact::events(const Rows& x0, const Eigen::Matri
   const Grid triangle_grid(tri_boxes, cell), edge_grid(edge_boxes, cell);
   const Grid active_triangle_grid =
       moved ? Grid(tri_boxes, cell, &active_triangle) : Grid(std::vector<Box>{}, cell, nullptr);
-  // The queries and the narrow phase in chunks of vertices and of edges on the worker threads,
-  // each chunk's events in its own list, the lists joined in chunk order: the serial order.
+  // The queries in chunks of vertices and of edges on the worker threads, each chunk's pairs in
+  // its own list, the lists joined in chunk order: the serial order.
   constexpr int kChunk = 256;
   const int vertex_chunks = static_cast<int>((verts.size() + kChunk - 1) / kChunk);
   const int edge_chunks = static_cast<int>((edges.size() + kChunk - 1) / kChunk);
-  std::vector<std::vector<ContactEvent>> found(std::size_t(vertex_chunks + edge_chunks));
+  std::vector<std::vector<std::pair<int, int>>> pairs(std::size_t(vertex_chunks + edge_chunks));
   parallelFor(vertex_chunks + edge_chunks, [&](int chunk) {
-    std::vector<ContactEvent>& list = found[std::size_t(chunk)];
+    std::vector<std::pair<int, int>>& list = pairs[std::size_t(chunk)];
     if (chunk < vertex_chunks) {
       const std::size_t end = std::min(verts.size(), std::size_t(chunk + 1) * kChunk);
       for (std::size_t i = std::size_t(chunk) * kChunk; i < end; ++i) {
@@ -443,7 +439,7 @@ std::vector<ContactEvent> SelfContact::events(const Rows& x0, const Eigen::Matri
               const auto& tri = tris[std::size_t(t)];
               return tri[0] != v && tri[1] != v && tri[2] != v;
             },
-            [&](int t) { vertexTriangle(x0, x1, v, tris[std::size_t(t)], closer_than, touching, scale, list); });
+            [&](int t) { list.emplace_back(v, t); });
       }
       return;
     }
@@ -463,10 +459,56 @@ std::vector<ContactEvent> SelfContact::events(const Rows& x0, const Eigen::Matri
             const auto& f = edges[std::size_t(j)];
             return e[0] != f[0] && e[0] != f[1] && e[1] != f[0] && e[1] != f[1];
           },
-          [&](int j) { edgeEdge(x0, x1, e, edges[std::size_t(j)], closer_than, touching, scale, list); });
+          [&](int j) { list.emplace_back(static_cast<int>(i), j); });
+    }
+  });
+  for (int c = 0; c < vertex_chunks + edge_chunks; ++c) {
+    auto& into = c < vertex_chunks ? found.vertex_triangle : found.edge_edge;
+    into.insert(into.end(), pairs[std::size_t(c)].begin(), pairs[std::size_t(c)].end());
+  }
+  return found;
+}
+
+std::vector<ContactEvent> SelfContact::events(const Rows& x0, const Eigen::MatrixX3d& x1, double closer_than,
+                                              const std::vector<char>* moved) const {
+  std::vector<ContactEvent> out;
+  if (surface_.empty()) return out;
+  const ContactCandidates pairs = candidates(x0, x1, moved);
+  const auto& tris = surface_.triangles;
+  const auto& edges = surface_.edges;
+  // The scene's size, for what counts as touching at x0.
+  const double scale = std::max((x0.colwise().maxCoeff() - x0.colwise().minCoeff()).maxCoeff(), thickness_);
+  // A pair passes within the step when it is coplanar (or closest) with its closest points this
+  // near: a tenth of the thickness, far below any distance the impulses leave.
+  const double touching = 0.1 * thickness_;
+  // The narrow phase in chunks of pairs on the worker threads, joined in chunk order.
+  constexpr std::size_t kChunk = 512;
+  const std::size_t vt = pairs.vertex_triangle.size(), ee = pairs.edge_edge.size();
+  const int vt_chunks = static_cast<int>((vt + kChunk - 1) / kChunk);
+  const int chunks = vt_chunks + static_cast<int>((ee + kChunk - 1) / kChunk);
+  std::vector<std::vector<ContactEvent>> found(static_cast<std::size_t>(chunks));
+  parallelFor(chunks, [&](int chunk) {
+    std::vector<ContactEvent>& list = found[std::size_t(chunk)];
+    if (chunk < vt_chunks) {
+      for (std::size_t k = std::size_t(chunk) * kChunk; k < std::min(vt, std::size_t(chunk + 1) * kChunk); ++k) {
+        const auto [v, t] = pairs.vertex_triangle[k];
+        const auto& tri = tris[std::size_t(t)];
+        vertexTriangle(x0, x1, v, tri, closer_than, touching, scale, list);
+      }
+      return;
+    }
+    const std::size_t first = std::size_t(chunk - vt_chunks) * kChunk;
+    for (std::size_t k = first; k < std::min(ee, first + kChunk); ++k) {
+      const auto [i, j] = pairs.edge_edge[k];
+      const auto& e = edges[std::size_t(i)];
+      const auto& f = edges[std::size_t(j)];
+      edgeEdge(x0, x1, e, f, closer_than, touching, scale, list);
     }
   });
   for (const auto& list : found) out.insert(out.end(), list.begin(), list.end());
+  std::sort(out.begin(), out.end(), [](const ContactEvent& a, const ContactEvent& b) {
+    return std::tie(a.edge_edge, a.vertices) < std::tie(b.edge_edge, b.vertices);
+  });
   return out;
 }
 
@@ -482,6 +524,42 @@ int findRoot(std::vector<int>& parent, int i) {
 }
 
 }  // namespace
+
+double SelfContact::stopApproach(const Rows& x, Eigen::MatrixX3d& v, const Eigen::MatrixX3d& predicted, double h,
+                                 const Eigen::VectorXd& masses, const std::vector<int>& fixed) const {
+  if (surface_.empty()) return 0.0;
+  Eigen::VectorXd inverse_mass = masses.cwiseInverse();
+  for (int f : fixed) inverse_mass[f] = 0.0;
+  bool changed = false;
+  const double kinetic_before = kinetic(v, masses);
+  for (const ContactEvent& e : events(x, predicted, thickness_)) {
+    double weight = 0.0, gap = 0.0, speed = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const int i = e.vertices[std::size_t(k)];
+      const double w = e.weights[std::size_t(k)];
+      weight += w * w * inverse_mass[i];
+      gap += w * e.normal.dot(x.row(i).transpose());
+      speed += w * e.normal.dot(v.row(i).transpose());
+    }
+    // The approach the prediction adds to the velocities' (gravity against a supported body).
+    double drift = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const int i = e.vertices[std::size_t(k)];
+      drift += e.weights[std::size_t(k)] * e.normal.dot(predicted.row(i).transpose() - x.row(i).transpose());
+    }
+    drift = drift / h - speed;
+    // The approach speed that ends the step at the thickness with that drift, never a separating one.
+    const double wanted = std::min(0.0, (thickness_ - gap) / h - std::min(drift, 0.0));
+    if (!(weight > 0.0) || !(speed < wanted)) continue;
+    const double impulse = (wanted - speed) / weight;
+    for (int k = 0; k < 4; ++k) {
+      const int i = e.vertices[std::size_t(k)];
+      v.row(i) += (impulse * e.weights[std::size_t(k)] * inverse_mass[i]) * e.normal.transpose();
+    }
+    changed = true;
+  }
+  return changed ? kinetic_before - kinetic(v, masses) : 0.0;
+}
 
 SelfContactResult SelfContact::resolve(const Rows& x0, Eigen::MatrixX3d& x1, Eigen::MatrixX3d& v1,
                                        const Eigen::VectorXd& masses, const std::vector<int>& fixed,

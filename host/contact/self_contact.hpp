@@ -44,6 +44,13 @@ struct ContactEvent {
   std::array<double, 4> weights{};
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   bool crossing = false;  // the pair passes (or touches) within the step; else it only ends too close
+  bool edge_edge = false;
+};
+
+/// A broad phase's pairs: vertex-triangle (particle, triangle) and edge-edge (two edges of
+/// ContactSurface::edges).
+struct ContactCandidates {
+  std::vector<std::pair<int, int>> vertex_triangle, edge_edge;
 };
 
 /// What SelfContact::resolve did in one step.
@@ -62,9 +69,13 @@ class SelfContact {
   bool empty() const { return surface_.empty(); }
   const ContactSurface& surface() const { return surface_; }
 
+  /// The broad phase of the path x0 -> x1: every pair that may meet on it (with `moved`, a flag
+  /// per particle, only the pairs with a moved vertex).
+  ContactCandidates candidates(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
+                               const Eigen::MatrixX3d& x1, const std::vector<char>* moved = nullptr) const;
   /// The pairs that meet on the path x0 -> x1 (crossing or touching within the step, or ending
-  /// closer than `closer_than`), in a fixed order; with `moved` (a flag per particle), only the
-  /// pairs with a moved vertex.
+  /// closer than `closer_than`), sorted (vertex-triangle before edge-edge, then by vertices);
+  /// with `moved`, only the pairs with a moved vertex.
   std::vector<ContactEvent> events(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
                                    const Eigen::MatrixX3d& x1, double closer_than,
                                    const std::vector<char>* moved = nullptr) const;
@@ -76,6 +87,17 @@ class SelfContact {
   SelfContactResult resolve(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0, Eigen::MatrixX3d& x1,
                             Eigen::MatrixX3d& v1, const Eigen::VectorXd& masses, const std::vector<int>& fixed,
                             const std::function<bool(Eigen::MatrixX3d&)>& keep_out = {}) const;
+
+  /// Before a step's solve, from the state (x, v) at its start and the positions `predicted` for
+  /// its end (the caller's: free flight under gravity, kept out of the colliders): the pairs that
+  /// meet on the path x -> predicted lose the approach speed that would bring them nearer than
+  /// the thickness, by inelastic impulses on v alone (momentum kept, pins fixed). The solve then
+  /// stops the rest of each body through its elements, where the positions' correction after the
+  /// solve (resolve) would stretch the few elements at a contact's edge. Returns the kinetic
+  /// energy removed (>= 0).
+  double stopApproach(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x, Eigen::MatrixX3d& v,
+                      const Eigen::MatrixX3d& predicted, double h, const Eigen::VectorXd& masses,
+                      const std::vector<int>& fixed) const;
 
   /// Rounds of impulses before the impact zones.
   static constexpr int kRounds = 8;

@@ -151,6 +151,7 @@ const BatchStepReport& BatchDriver::step() {
   const double h = options_.time_step;
   const double t1 = t_ + h;
   startScenes(t1);
+  stopSelfContactApproach();
   updateContactSets();
   // The forcing's work per scene, by Simulator's rule; a scene whose forcing does not change adds
   // exactly 0 (its terms at t_m and t_1 are the same numbers).
@@ -422,6 +423,37 @@ void BatchDriver::bookContactGeometry(const std::vector<std::size_t>& scenes, co
     p.target += change;
     p.target_now += change;
     p.potential = potentials[scenes[i]];
+  }
+}
+
+void BatchDriver::stopSelfContactApproach() {
+  if (self_contact_.empty()) return;
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    PerScene& p = per_scene_[s];
+    if (!p.stepping || self_contact_[s].empty()) continue;
+    const SceneSegment& seg = segments_[s];
+    std::vector<int> fixed;
+    for (const Pin& pin : scenes_[s].pins) fixed.push_back(pin.vertex);
+    const double h = options_.time_step;
+    const auto x = blockOf(x_, seg);
+    Eigen::MatrixX3d v = blockOf(v_slot_, seg);
+    // Where the particles would be at the step's end in free flight, kept out of the colliders
+    // (a body resting on the ground stays on it while another falls onto it).
+    Eigen::MatrixX3d predicted = x + h * v;
+    predicted.rowwise() += (h * h) * scenes_[s].gravity.transpose();
+    contact_.projectOut(contactPart(s, seg.first_particle), t_ + h, x, predicted);
+    if (self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed) == 0.0) continue;
+    // The velocities as the slot holds them (a float device rounds), and the loss they book.
+    backend_->roundToStorage(v);
+    const double before = p.kinetic;
+    v_slot_.middleRows(seg.first_particle, seg.num_particles) = v;
+    v_.middleRows(seg.first_particle, seg.num_particles) = v;
+    p.kinetic = kineticEnergy(static_cast<int>(s), v_);
+    const double removed = before - p.kinetic;
+    p.target -= removed;
+    p.target_now -= removed;
+    report_.scenes[s].contact_projection -= removed;
+    writeStateRows(seg.first_particle, seg.first_particle + seg.num_particles);
   }
 }
 

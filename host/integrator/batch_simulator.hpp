@@ -231,6 +231,10 @@ struct BatchDriver {
   // Scenes[i] with changed[i] get the potential of x_ at t_ again; a loss is booked in H* and
   // StepReport::contact_projection.
   void bookContactGeometry(const std::vector<std::size_t>& scenes, const std::vector<char>& changed);
+  // Self-contact before the solve: the stepping scenes' approach speeds that would bring their
+  // surfaces nearer than the thickness over the step are removed from the velocities at the
+  // step's start (SelfContact::stopApproach), the loss booked in H* and the slots rewritten.
+  void stopSelfContactApproach();
   // Friction and the final projection of every stepping scene on its candidate, booked in its
   // own target, as Simulator's after its corrections; one energy pass for the projected scenes.
   void resolveContact(double t1);

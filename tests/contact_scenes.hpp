@@ -200,4 +200,37 @@ inline Scene clothOnCloth() {
   return s;
 }
 
+/// Self-contact between two bodies: two default tet bars of one scene (1e5 Pa, 62.5 kg each),
+/// one lying on a ground with friction 0.5, its bottom 1 cm above it, the other crossing it at a
+/// right angle 15 cm above its top and falling onto it. Without self-contact the upper one sinks
+/// into the lower one.
+inline Scene barOnBar() {
+  const Scene one = makeTetBar(TetBarParams{});
+  const int n = one.numParticles();
+  Scene s = one;
+  s.pins.clear();
+  s.positions.resize(2 * n, 3);
+  s.velocities = Eigen::MatrixX3d::Zero(2 * n, 3);
+  s.masses.resize(2 * n);
+  s.masses << one.masses, one.masses;
+  const Eigen::Vector3d mid =
+      0.5 * (one.positions.colwise().maxCoeff() + one.positions.colwise().minCoeff()).transpose();
+  const double bottom = one.positions.col(1).minCoeff(), height = one.positions.col(1).maxCoeff() - bottom;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = one.positions.row(i).transpose() - mid;
+    s.positions.row(i) << p.x(), p.y() + 0.5 * height + 0.01, p.z();
+    s.positions.row(n + i) << p.z(), p.y() + 1.5 * height + 0.16, -p.x();  // turned a quarter about y
+  }
+  s.rest_positions = s.positions;
+  for (const Tet& tet : one.tets) {
+    Tet second = tet;
+    for (int& v : second.vertices) v += n;
+    s.tets.push_back(second);
+  }
+  Collider ground;
+  ground.friction = 0.5;
+  s.colliders = {ground};
+  return s;
+}
+
 }  // namespace stabint::testing

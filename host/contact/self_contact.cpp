@@ -354,6 +354,7 @@ void edgeEdge(const Rows& x0, const Eigen::MatrixX3d& x1, const std::array<int, 
   ContactEvent e;
   if (!separatingDirection(gap, (b0 - a0).cross(d0 - c0), motion, scale, e.normal)) return;
   e.vertices = {e1[0], e1[1], e2[0], e2[1]};
+  e.edge_edge = true;
   e.weights = {1.0 - st.first, st.first, -(1.0 - st.second), -st.second};
   e.crossing = crossing;
   out.push_back(e);
@@ -363,7 +364,7 @@ void edgeEdge(const Rows& x0, const Eigen::MatrixX3d& x1, const std::array<int, 
 
 ContactSurface ContactSurface::of(const Scene& scene) {
   ContactSurface s;
-  s.triangles = !scene.triangles.empty() ? scene.triangles : tetSurface(scene.tets);
+  s.triangles = scene.triangles;
   for (const auto& t : s.triangles) {
     for (int k = 0; k < 3; ++k) {
       const int a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];

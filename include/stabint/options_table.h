@@ -95,9 +95,9 @@
      velocity, will be) that close to a collider carries its contact term. */                                          \
   FIELD(T(double), contact_tolerance, 1e-2, nonNegative(),                                                             \
         "deepest a particle may stay inside a collider after a step, m, >= 0")                                         \
-  /* Self-contact and contact between the bodies of a scene (docs/method.md, "Self-contact"), off                      \
-     when 0: after every step the surface triangles (Scene::triangles, else the tets' surface) keep                    \
-     this distance apart and no triangle passes through another within the step. */                                    \
+  /* Self-contact and contact between the cloths of a scene (docs/method.md, "Self-contact"), off                      \
+     when 0: the surface triangles (Scene::triangles) keep this distance apart and no triangle                         \
+     passes through another within a step; a scene with tets is refused for now. */                                    \
   FIELD(T(double), self_contact_thickness, 0.0, nonNegative(),                                                         \
         "distance the scene's surfaces keep from each other, m (0: no self-contact)")                                  \
   FIELD(T(BackendKind), backend, BackendKind::CpuReference, isEnum(),                                                  \

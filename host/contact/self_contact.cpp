@@ -192,6 +192,7 @@ Box sweptBox(const std::array<int, K>& v, const Rows& x0, const Eigen::MatrixX3d
 // cells' lists one array (counting sort), each list in box order.
 class Grid {
  public:
+  Grid() = default;  // no boxes
   // The boxes whose `included` flag is set (all without flags).
   Grid(const std::vector<Box>& boxes, double cell, const std::vector<char>* included = nullptr) {
     bool any = false;
@@ -417,9 +418,13 @@ ContactCandidates SelfContact::candidates(const Rows& x0, const Eigen::MatrixX3d
     for (const auto& t : tris) active_triangle.push_back(any(t));
     for (const auto& e : edges) active_edge.push_back(any(e));
   }
-  const Grid triangle_grid(tri_boxes, cell), edge_grid(edge_boxes, cell);
-  const Grid active_triangle_grid =
-      moved ? Grid(tri_boxes, cell, &active_triangle) : Grid(std::vector<Box>{}, cell, nullptr);
+  // The grids on the worker threads, one each.
+  Grid triangle_grid, edge_grid, active_triangle_grid;
+  parallelFor(moved ? 3 : 2, [&](int which) {
+    if (which == 0) triangle_grid = Grid(tri_boxes, cell);
+    if (which == 1) edge_grid = Grid(edge_boxes, cell);
+    if (which == 2) active_triangle_grid = Grid(tri_boxes, cell, &active_triangle);
+  });
   // The queries in chunks of vertices and of edges on the worker threads, each chunk's pairs in
   // its own list, the lists joined in chunk order: the serial order.
   constexpr int kChunk = 256;

@@ -72,8 +72,15 @@ struct Comparison {
 };
 const Comparison kContactVsNone{clothOnSphereAndGround, flatCloth, "contact", "none"};
 const Comparison kMeshVsSphere{clothOnMeshSphereAndGround, clothOnSphereAndGround, "mesh", "sphere"};
-// The crumpling cloth (tests/contact_scenes.hpp) with and without self-contact at 4 mm.
-const Comparison kSelfVsNone{testing::crumplingCloth, testing::crumplingCloth, "self", "none", 4e-3};
+// The crumpling cloth (tests/contact_scenes.hpp) of n x n particles with and without
+// self-contact at 4 mm.
+template <int n>
+Scene crumplingCloth() {
+  return testing::crumplingCloth(n);
+}
+const Comparison kSelfVsNone{crumplingCloth<50>, crumplingCloth<50>, "self", "none", 4e-3};
+const Comparison kSelfVsNone100{crumplingCloth<100>, crumplingCloth<100>, "self", "none", 4e-3};
+const Comparison kSelfVsNone200{crumplingCloth<200>, crumplingCloth<200>, "self", "none", 4e-3};
 
 struct ContactFixture {
   std::unique_ptr<Simulator> first, second;
@@ -214,6 +221,18 @@ void runContactSetChange(benchmark::State& state) {
 }  // namespace
 
 void registerContactCases() {
+  // Self-contact's scaling: the crumpling cloth of 100 x 100 and 200 x 200 particles, on the CPU.
+  for (const auto& [comparison, side] : {std::pair<const Comparison*, int>{&kSelfVsNone100, 100},
+                                         std::pair<const Comparison*, int>{&kSelfVsNone200, 200}}) {
+    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+      const std::string name = "self_vs_none/cloth" + std::to_string(side) + "/" + integratorName(integrator) + "/cpu";
+      benchmark::RegisterBenchmark(
+          name.c_str(),
+          [=](benchmark::State& state) { runContact(state, name, BackendChoice::Cpu, integrator, *comparison); })
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond);
+    }
+  }
   benchmark::RegisterBenchmark("contact_set_change/cloth50", runContactSetChange)
       ->Arg(0)
       ->Arg(1)

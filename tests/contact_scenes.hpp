@@ -141,13 +141,13 @@ inline Collider boxMeshCollider(const Eigen::Vector3d& center, const Eigen::Vect
   return c;
 }
 
-/// Self-contact (docs/method.md, "Self-contact"): a 50 x 50 spring cloth (1 m) standing almost upright (0.3 rad from
-/// the vertical), its lower edge 2 cm above a ground with friction 0.5, unpinned, with a soft bend (1 N/m): it
+/// Self-contact (docs/method.md, "Self-contact"): a 50 x 50 (or n x n) spring cloth (1 m) standing almost upright (0.3
+/// rad from the vertical), its lower edge 2 cm above a ground with friction 0.5, unpinned, with a soft bend (1 N/m): it
 /// collapses and crumples into a pile of folds. With backward Euler the pile interpenetrates at once without
 /// self-contact (hundreds of crossing triangle pairs).
-inline Scene crumplingCloth() {
+inline Scene crumplingCloth(int n = 50) {
   ClothGridParams p;
-  p.nx = p.ny = 50;
+  p.nx = p.ny = n;
   p.bend_stiffness = 1.0;
   Scene s = makeClothGrid(p);
   s.pins.clear();

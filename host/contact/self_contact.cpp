@@ -630,9 +630,14 @@ SelfContactResult SelfContact::resolve(const Rows& x0, Eigen::MatrixX3d& x1, Eig
   std::vector<int> parent(static_cast<std::size_t>(n));
   std::iota(parent.begin(), parent.end(), 0);
   std::vector<char> frozen(static_cast<std::size_t>(n), 0);
+  // The first check is of every pair; a later one only of the pairs with a vertex the last
+  // zones put back (nothing else moved).
+  std::vector<char> put_back;
   while (!clean) {
     bool grew = false;
-    for (const ContactEvent& e : events(x0, x1, 0.0)) {
+    const std::vector<char> last = std::move(put_back);
+    put_back.assign(static_cast<std::size_t>(n), 0);
+    for (const ContactEvent& e : events(x0, x1, 0.0, last.empty() ? nullptr : &last)) {
       if (!e.crossing) continue;
       bool all_frozen = true;
       for (int v : e.vertices) all_frozen = all_frozen && (frozen[std::size_t(v)] || inverse_mass[v] == 0.0);
@@ -642,6 +647,7 @@ SelfContactResult SelfContact::resolve(const Rows& x0, Eigen::MatrixX3d& x1, Eig
       for (int v : e.vertices) {
         if (frozen[std::size_t(v)]) continue;
         frozen[std::size_t(v)] = 1;
+        put_back[std::size_t(v)] = 1;
         grew = true;
       }
     }

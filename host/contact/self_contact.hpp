@@ -15,6 +15,8 @@
 //   crosses after them is an impact zone whose vertices keep x0 and move on with their mean
 //   velocity (x0 crosses nothing, so the fallback always ends crossing-free).
 // The guard keeps no state between steps: checkpoints continue bit for bit without it.
+#include "contact/pair_events.hpp"
+
 #include <stabint/scene.hpp>
 
 #include <Eigen/Core>
@@ -34,18 +36,6 @@ struct ContactSurface {
   std::vector<int> vertices;
   static ContactSurface of(const Scene& scene);
   bool empty() const { return triangles.empty(); }
-};
-
-/// A vertex-triangle pair (vertices p, a, b, c) or an edge-edge pair (a b against c d) that meets
-/// within the step: the four vertices, the weights of the pair's separation d = sum w_i x_i
-/// (1, -b_a, -b_b, -b_c for a vertex against the barycentric point of a triangle; 1 - s, s,
-/// -(1 - t), -t between the closest points of two edges) and its direction n at x0.
-struct ContactEvent {
-  std::array<int, 4> vertices{};
-  std::array<double, 4> weights{};
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-  bool crossing = false;  // the pair passes (or touches) within the step; else it only ends too close
-  bool edge_edge = false;
 };
 
 /// A broad phase's pairs: vertex-triangle (particle, triangle) and edge-edge (two edges of

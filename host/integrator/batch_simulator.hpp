@@ -213,6 +213,7 @@ struct BatchDriver {
   // positions are formed on the host (no per-scene combine on the backend interface yet).
   void evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner = {});
   bool potentialsOfStep(const IntegratorSteps& steps, int slot, double t1, const std::vector<char>& which);
+  // ---- contact (integrator/batch_contact.cpp) ---------------------------------------------------
   // Scene s's colliders on host copies whose row 0 is particle `first_row` (0: the batch's).
   ContactPart contactPart(std::size_t s, int first_row) const;
   // The forcing of scene s over the step to its candidate x1 (its own rows): the forcing rule's

@@ -1,0 +1,169 @@
+// The driver's contact stages (docs/method.md, "Contact", "Self-contact"): each scene's colliders
+// on its own particles (the contact set at the step's start, the pairs' geometry after it,
+// friction and the final projection on the candidate, the colliders' share of the forcing),
+// self-contact before and after the solve, and the books of all of them.
+#include "integrator/batch_simulator.hpp"
+#include "integrator/integrator_steps.hpp"
+
+#include <string>
+#include <vector>
+
+namespace stabint {
+
+ContactPart BatchDriver::contactPart(std::size_t s, int first_row) const {
+  const SceneSegment& seg = segments_[s];
+  return ContactPart{IndexRange{seg.first_collider, seg.num_colliders}, first_row};
+}
+
+double BatchDriver::forcingOfStep(std::size_t s, const PotentialEnergy& p_new, const PotentialEnergy& new_mid,
+                                  const PotentialEnergy& old_mid, const Eigen::MatrixX3d& x1) const {
+  const PerScene& p = per_scene_[s];
+  const double rule = forcingWork(p_new, new_mid, old_mid, p.potential);
+  const SceneSegment& seg = segments_[s];
+  if (seg.num_colliders == 0) return rule;
+  const ContactWork work =
+      contactWork(data_, forcing_, contactPart(s, seg.first_particle), t_, options_.time_step, blockOf(x_, seg), x1);
+  return rule - work.split + work.midpoint;
+}
+
+std::vector<std::size_t> BatchDriver::contactScenes(std::vector<ContactPart>& parts) const {
+  std::vector<std::size_t> scenes;
+  parts.clear();
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    if (!per_scene_[s].stepping || segments_[s].num_colliders == 0) continue;
+    scenes.push_back(s);
+    parts.push_back(contactPart(s, 0));
+  }
+  return scenes;
+}
+
+void BatchDriver::updateContactSets() {
+  if (contact_.count() == 0) return;
+  std::vector<ContactPart> parts;
+  const std::vector<std::size_t> scenes = contactScenes(parts);
+  bookContactGeometry(scenes, contact_.updateSet(t_, x_, v_, parts));
+}
+
+void BatchDriver::refreshContactGeometry() {
+  if (contact_.count() == 0) return;
+  std::vector<ContactPart> parts;
+  const std::vector<std::size_t> scenes = contactScenes(parts);
+  const std::vector<char> changed = contact_.refreshHalfSpaces(t_, x_, v_, parts);
+  bookContactGeometry(scenes, changed);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    if (!changed[i]) continue;
+    const PerScene& p = per_scene_[scenes[i]];
+    StepReport& r = report_.scenes[scenes[i]];
+    r.energy = EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
+    r.target = p.target;
+  }
+}
+
+void BatchDriver::bookContactGeometry(const std::vector<std::size_t>& scenes, const std::vector<char>& changed) {
+  if (std::find(changed.begin(), changed.end(), 1) == changed.end()) return;
+  std::vector<char> which(segments_.size(), 0);
+  for (std::size_t i = 0; i < scenes.size(); ++i) which[scenes[i]] = changed[i];
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kX, t_, potentials, &which);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    if (!changed[i]) continue;
+    PerScene& p = per_scene_[scenes[i]];
+    // [project rule] The contact energy of the same positions under the pairs' new geometry: a
+    // half-space that follows x lowers it (the collider is convex: its nearest face is never
+    // farther than a plane that supports it), and that loss is booked like the final projection's
+    // (H and H* move together, now, whether or not the next step is accepted). A pair that
+    // entered already inside raises it, and that is not booked: the blend takes it out.
+    const double change = std::min(0.0, potentials[scenes[i]].total() - p.potential.total());
+    report_.scenes[scenes[i]].contact_projection += change;
+    p.target += change;
+    p.target_now += change;
+    p.potential = potentials[scenes[i]];
+  }
+}
+
+void BatchDriver::stopSelfContactApproach() {
+  if (self_contact_.empty()) return;
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    PerScene& p = per_scene_[s];
+    if (!p.stepping || self_contact_[s].empty()) continue;
+    const SceneSegment& seg = segments_[s];
+    std::vector<int> fixed;
+    for (const Pin& pin : scenes_[s].pins) fixed.push_back(pin.vertex);
+    const double h = options_.time_step;
+    const auto x = blockOf(x_, seg);
+    Eigen::MatrixX3d v = blockOf(v_slot_, seg);
+    // Where the particles would be at the step's end in free flight, kept out of the colliders
+    // (a body resting on the ground stays on it while another falls onto it).
+    Eigen::MatrixX3d predicted = x + h * v;
+    predicted.rowwise() += (h * h) * scenes_[s].gravity.transpose();
+    contact_.projectOut(contactPart(s, seg.first_particle), t_ + h, x, predicted);
+    if (self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed) == 0.0) continue;
+    // The velocities as the slot holds them (a float device rounds), and the loss they book.
+    backend_->roundToStorage(v);
+    const double before = p.kinetic;
+    v_slot_.middleRows(seg.first_particle, seg.num_particles) = v;
+    v_.middleRows(seg.first_particle, seg.num_particles) = v;
+    p.kinetic = kineticEnergy(static_cast<int>(s), v_);
+    const double removed = before - p.kinetic;
+    p.target -= removed;
+    p.target_now -= removed;
+    report_.scenes[s].contact_projection -= removed;
+    writeStateRows(seg.first_particle, seg.first_particle + seg.num_particles);
+  }
+}
+
+void BatchDriver::resolveContact(double t1) {
+  if (contact_.count() == 0 && self_contact_.empty()) return;
+  std::vector<char> projected(segments_.size(), 0);
+  std::vector<double> kept(segments_.size(), 1.0);
+  bool any = false;
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    PerScene& p = per_scene_[s];
+    if (!p.stepping) continue;
+    const ContactPart part = contactPart(s, segments_[s].first_particle);
+    const auto x0 = blockOf(x_, segments_[s]);
+    ContactResolver::Resolved resolved;
+    if (contact_.count() > 0)
+      resolved = contact_.applyFrictionAndProjection(part, t1, x0, p.x_new, p.v_new, p.target_now, report_.scenes[s]);
+    if (!self_contact_.empty() && !self_contact_[s].empty()) {
+      // Self-contact after the colliders' projection, which it repeats after each round of its
+      // impulses (an impulse may push a particle back into a collider); what its impulses take
+      // from the motion is lost (inelastic), booked like friction.
+      std::vector<int> fixed;
+      for (const Pin& pin : scenes_[s].pins) fixed.push_back(pin.vertex);
+      const SelfContactResult r =
+          self_contact_[s].resolve(x0, p.x_new, p.v_new, scenes_[s].masses, fixed,
+                                   [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); });
+      p.target_now -= r.kinetic_removed;
+      report_.scenes[s].contact_projection -= r.kinetic_removed;
+      resolved.velocities_changed = resolved.velocities_changed || r.velocities_changed;
+      resolved.positions_moved = resolved.positions_moved || r.positions_moved;
+    }
+    p.velocities_changed = p.velocities_changed || resolved.velocities_changed;
+    if (!resolved.positions_moved) continue;
+    kept[s] = resolved.kept;
+    if (!any && x_trial_.rows() != x_.rows()) x_trial_ = x_;
+    any = true;
+    projected[s] = 1;
+    x_trial_.middleRows(segments_[s].first_particle, segments_[s].num_particles) = p.x_new;
+  }
+  if (!any) return;
+  // The projected positions as a slot holds them (a float device rounds), and their potentials.
+  backend_->roundToStorage(x_trial_);
+  backend_->write(kXTrial, x_trial_);
+  std::vector<PotentialEnergy> potentials;
+  backend_->potentials(kXTrial, t1, potentials, &projected);
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    if (!projected[s]) continue;
+    PerScene& p = per_scene_[s];
+    p.x_new = blockOf(x_trial_, segments_[s]);
+    const double before = p.p_new.total();
+    ContactResolver::bookProjection(potentials[s], kept[s], p.p_new, p.target_now, report_.scenes[s]);
+    const double added = p.p_new.total() - before;
+    if (options_.integrator == Integrator::EnergyBlend && added > 0.0 &&
+        p.blend.takeOutProjectionExcess(p.x_new, p.v_new, added, p.target_now, p.p_new))
+      p.velocities_changed = true;
+  }
+}
+
+}  // namespace stabint

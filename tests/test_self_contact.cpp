@@ -283,6 +283,39 @@ STABINT_ON_EVERY_BACKEND(SelfContactOnEveryBackend);
 namespace stabint {
 namespace {
 
+TEST(SelfContactRun, EachSceneOfABatchHasItsOwnSelfContactAsItsSimulator) {
+  // Two scenes of one batch: the cloths landing on each other, and the same cloths moved 2 m
+  // aside and 1 cm lower (another landing). Each follows its own Simulator to the batch tests'
+  // standard (tests/batch_scenes.hpp: states to 1e-9 of the scene's size, the energy booked to
+  // 1e-12 of E_scale; the batch's factor orders and updates its blocks otherwise): its surface,
+  // its impulses and its books are its own.
+  SimulatorOptions o;
+  o.self_contact_thickness = 3e-3;
+  const Scene first = clothOnCloth();
+  Scene second = first;
+  second.positions.col(0).array() += 2.0;
+  second.positions.col(1).array() -= 0.01;
+  second.rest_positions = second.positions;
+  second.colliders.front().center.x() = 2.0;
+  BatchSimulator batch({first, second}, o);
+  Simulator alone[2] = {Simulator(first, o), Simulator(second, o)};
+  double booked[2] = {0.0, 0.0};
+  for (int k = 0; k < 12; ++k) {
+    const BatchStepReport& r = batch.step();
+    for (int s = 0; s < 2; ++s) {
+      const StepReport& own = alone[s].step();
+      EXPECT_NEAR(r.scenes[std::size_t(s)].contact_projection, own.contact_projection, 1e-12 * alone[s].energyScale())
+          << "scene " << s << ", step " << k;
+      EXPECT_LE((batch.positions(s) - alone[s].positions()).cwiseAbs().maxCoeff(), 1e-9)
+          << "scene " << s << ", step " << k;
+      booked[s] += own.contact_projection;
+    }
+  }
+  // Both landings took their impulses within the 12 steps.
+  EXPECT_LT(booked[0], 0.0);
+  EXPECT_LT(booked[1], 0.0);
+}
+
 TEST(SelfContactRun, ATetBodyIsRefusedNamingTheOption) {
   // Two tet bars dropped onto each other inverted 583 tets with self-contact (docs/method.md,
   // "Self-contact"): such scenes are refused until contact acts inside the solve.

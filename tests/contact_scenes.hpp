@@ -164,6 +164,38 @@ inline Scene crumplingCloth(int n = 50) {
   return s;
 }
 
+/// Two copies of `one` in one scene (no pins, at rest; the positions are `one`'s twice, for the
+/// caller to place): its particles and elements, the second copy's indices shifted.
+inline Scene twoCopies(const Scene& one) {
+  const int n = one.numParticles();
+  Scene s = one;
+  s.pins.clear();
+  s.positions.resize(2 * n, 3);
+  s.positions << one.positions, one.positions;
+  s.velocities = Eigen::MatrixX3d::Zero(2 * n, 3);
+  s.masses.resize(2 * n);
+  s.masses << one.masses, one.masses;
+  for (Spring spring : one.springs) {
+    spring.a += n;
+    spring.b += n;
+    s.springs.push_back(spring);
+  }
+  for (const auto& t : one.triangles) s.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+  for (Tet tet : one.tets) {
+    for (int& v : tet.vertices) v += n;
+    s.tets.push_back(tet);
+  }
+  for (TriangleStrain strain : one.triangle_strains) {
+    for (int& v : strain.vertices) v += n;
+    s.triangle_strains.push_back(strain);
+  }
+  for (BendingHinge hinge : one.bending_hinges) {
+    for (int& v : hinge.vertices) v += n;
+    s.bending_hinges.push_back(hinge);
+  }
+  return s;
+}
+
 /// Two 25 x 25 spring cloths (0.5 m) of one scene: one lying flat 5 mm above the ground, the
 /// other 15 cm above it, turned 0.4 rad about the vertical and tilted 0.2 rad, falling onto it.
 /// Without self-contact the upper one lands through the lower one.
@@ -173,27 +205,15 @@ inline Scene clothOnCloth() {
   p.width = p.height = 0.5;
   const Scene one = makeClothGrid(p);
   const int n = one.numParticles();
-  Scene s = one;
-  s.pins.clear();
-  s.positions.resize(2 * n, 3);
-  s.velocities = Eigen::MatrixX3d::Zero(2 * n, 3);
-  s.masses.resize(2 * n);
-  s.masses << one.masses, one.masses;
+  Scene s = twoCopies(one);
   const Eigen::Vector2d centre(one.positions.col(0).mean(), one.positions.col(1).mean());
+  const double c = std::cos(0.4), sn = std::sin(0.4);
   for (int i = 0; i < n; ++i) {
     const double u = one.positions(i, 0) - centre.x(), w = one.positions(i, 1) - centre.y();
     s.positions.row(i) << u, 0.005, w;
-    const double c = std::cos(0.4), sn = std::sin(0.4);
     s.positions.row(n + i) << c * u - sn * w, 0.15 + 0.2 * u, sn * u + c * w;
   }
   s.rest_positions = s.positions;
-  for (const Spring& spring : one.springs) {
-    Spring second = spring;
-    second.a += n;
-    second.b += n;
-    s.springs.push_back(second);
-  }
-  for (const auto& t : one.triangles) s.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
   Collider ground;
   ground.friction = 0.5;
   s.colliders = {ground};
@@ -207,12 +227,7 @@ inline Scene clothOnCloth() {
 inline Scene barOnBar() {
   const Scene one = makeTetBar(TetBarParams{});
   const int n = one.numParticles();
-  Scene s = one;
-  s.pins.clear();
-  s.positions.resize(2 * n, 3);
-  s.velocities = Eigen::MatrixX3d::Zero(2 * n, 3);
-  s.masses.resize(2 * n);
-  s.masses << one.masses, one.masses;
+  Scene s = twoCopies(one);
   const Eigen::Vector3d mid =
       0.5 * (one.positions.colwise().maxCoeff() + one.positions.colwise().minCoeff()).transpose();
   const double bottom = one.positions.col(1).minCoeff(), height = one.positions.col(1).maxCoeff() - bottom;
@@ -222,11 +237,6 @@ inline Scene barOnBar() {
     s.positions.row(n + i) << p.z(), p.y() + 1.5 * height + 0.16, -p.x();  // turned a quarter about y
   }
   s.rest_positions = s.positions;
-  for (const Tet& tet : one.tets) {
-    Tet second = tet;
-    for (int& v : second.vertices) v += n;
-    s.tets.push_back(second);
-  }
   Collider ground;
   ground.friction = 0.5;
   s.colliders = {ground};

@@ -238,6 +238,23 @@ TEST(Contact, TheDroppedBarBouncesByItsRestitution) {
   }
 }
 
+// A free tet bar of 16 x 4 x 4 cells (1 x 0.25 x 0.25 m, 62.5 kg) of `stiffness` Pa, centred over
+// the origin in x and z with its bottom 5 cm above y = 0, thrown straight down at `speed`.
+Scene thrownBar(double stiffness, double speed) {
+  TetBarParams params;
+  params.nx = 16;
+  params.ny = params.nz = 4;
+  params.stiffness = stiffness;
+  Scene s = makeTetBar(params);
+  s.pins.clear();
+  s.positions.col(0).array() -= 0.5;
+  s.positions.col(2).array() -= 0.125;
+  s.positions.col(1).array() += 0.05;
+  s.rest_positions = s.positions;
+  s.velocities.col(1).setConstant(-speed);
+  return s;
+}
+
 // An impact keeps the books (docs/method.md, "Contact", "The contact weight"): soft bodies of
 // three stiffnesses (a 16 x 4 x 4 tet bar, 62.5 kg, 1e5, 1e6 and 1e7 Pa) thrown onto the ground
 // (friction 0.5) at 1, 3 and 6 m/s, and a 30 x 30 cloth thrown at 5 m/s onto a sphere and the
@@ -254,14 +271,7 @@ TEST(Contact, ThrownBodiesKeepTheBooksAtImpact) {
   std::vector<Throw> throws;
   for (double stiffness : {1e5, 1e6, 1e7}) {
     for (double speed : {1.0, 3.0, 6.0}) {
-      TetBarParams p;
-      p.nx = 16;
-      p.ny = p.nz = 4;
-      p.stiffness = stiffness;
-      Scene s = makeTetBar(p);
-      s.pins.clear();
-      s.positions.col(1).array() += 0.05 - s.positions.col(1).minCoeff();
-      s.velocities.col(1).setConstant(-speed);
+      Scene s = thrownBar(stiffness, speed);
       s.colliders.push_back(groundPlane(0.0, 1e4, 0.5));
       char name[64];
       std::snprintf(name, sizeof name, "bar of %g Pa at %g m/s", stiffness, speed);
@@ -345,23 +355,6 @@ TEST(Contact, FastBodiesDoNotPassThroughThinColliders) {
       }
     }
   }
-}
-
-// A free tet bar of 16 x 4 x 4 cells (1 x 0.25 x 0.25 m, 62.5 kg) of `stiffness` Pa, centred over
-// the origin in x and z with its bottom 5 cm above y = 0, thrown straight down at `speed`.
-Scene thrownBar(double stiffness, double speed) {
-  TetBarParams params;
-  params.nx = 16;
-  params.ny = params.nz = 4;
-  params.stiffness = stiffness;
-  Scene s = makeTetBar(params);
-  s.pins.clear();
-  s.positions.col(0).array() -= 0.5;
-  s.positions.col(2).array() -= 0.125;
-  s.positions.col(1).array() += 0.05;
-  s.rest_positions = s.positions;
-  s.velocities.col(1).setConstant(-speed);
-  return s;
 }
 
 // Nothing passes through a thin collider, whatever carries it there, on bodies and speeds the

@@ -119,6 +119,7 @@ ContactResolver::Resolved ContactResolver::applyFrictionAndProjection(
     kept += drops[std::size_t(c)] * e * e;
   }
   resolved.kept = total > 0.0 ? kept / total : 1.0;
+  resolved.removed = total;
   return resolved;
 }
 

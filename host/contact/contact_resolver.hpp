@@ -62,7 +62,8 @@ class ContactResolver {
   struct Resolved {
     bool velocities_changed = false;
     bool positions_moved = false;
-    double kept = 1.0;  // the share of the projection's removal the colliders' restitution keeps
+    double kept = 1.0;     // the share of the projection's removal the colliders' restitution keeps
+    double removed = 0.0;  // the contact energy the colliders' moves removed (>= 0)
   };
   /// `x0`: the part's positions at the step's start (rows as x's), for the projection's path rule.
   Resolved applyFrictionAndProjection(const ContactPart& part, double t1,

@@ -87,8 +87,7 @@ void BatchDriver::stopSelfContactApproach() {
     PerScene& p = per_scene_[s];
     if (!p.stepping || self_contact_[s].empty()) continue;
     const SceneSegment& seg = segments_[s];
-    std::vector<int> fixed;
-    for (const Pin& pin : scenes_[s].pins) fixed.push_back(pin.vertex);
+    const std::vector<int> fixed = pinnedVertices(s);
     const double h = options_.time_step;
     const auto x = blockOf(x_, seg);
     Eigen::MatrixX3d v = blockOf(v_slot_, seg);
@@ -112,10 +111,18 @@ void BatchDriver::stopSelfContactApproach() {
   }
 }
 
+std::vector<int> BatchDriver::pinnedVertices(std::size_t s) const {
+  std::vector<int> pinned;
+  for (const Pin& pin : scenes_[s].pins)
+    if (pin.stiffness > 0.0) pinned.push_back(pin.vertex);  // a released pin holds nothing
+  return pinned;
+}
+
 void BatchDriver::resolveContact(double t1) {
   if (contact_.count() == 0 && self_contact_.empty()) return;
   std::vector<char> projected(segments_.size(), 0);
-  std::vector<double> kept(segments_.size(), 1.0);
+  std::vector<ContactResolver::Resolved> moves(segments_.size());
+  std::vector<char> self_moved(segments_.size(), 0);
   bool any = false;
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     PerScene& p = per_scene_[s];
@@ -129,19 +136,18 @@ void BatchDriver::resolveContact(double t1) {
       // Self-contact after the colliders' projection, which it repeats after each round of its
       // impulses (an impulse may push a particle back into a collider); what its impulses take
       // from the motion is lost (inelastic), booked like friction.
-      std::vector<int> fixed;
-      for (const Pin& pin : scenes_[s].pins) fixed.push_back(pin.vertex);
       const SelfContactResult r =
-          self_contact_[s].resolve(x0, p.x_new, p.v_new, scenes_[s].masses, fixed,
+          self_contact_[s].resolve(x0, p.x_new, p.v_new, scenes_[s].masses, pinnedVertices(s),
                                    [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); });
       p.target_now -= r.kinetic_removed;
       report_.scenes[s].contact_projection -= r.kinetic_removed;
       resolved.velocities_changed = resolved.velocities_changed || r.velocities_changed;
       resolved.positions_moved = resolved.positions_moved || r.positions_moved;
+      self_moved[s] = r.positions_moved;
     }
     p.velocities_changed = p.velocities_changed || resolved.velocities_changed;
     if (!resolved.positions_moved) continue;
-    kept[s] = resolved.kept;
+    moves[s] = resolved;
     if (!any && x_trial_.rows() != x_.rows()) x_trial_ = x_;
     any = true;
     projected[s] = 1;
@@ -158,7 +164,14 @@ void BatchDriver::resolveContact(double t1) {
     PerScene& p = per_scene_[s];
     p.x_new = blockOf(x_trial_, segments_[s]);
     const double before = p.p_new.total();
-    ContactResolver::bookProjection(potentials[s], kept[s], p.p_new, p.target_now, report_.scenes[s]);
+    double kept = moves[s].kept;
+    if (self_moved[s]) {
+      // Self-contact is inelastic: of the potential the moves removed, the colliders' restitution
+      // keeps its share of what their own moves removed, and the rest is lost.
+      const double removed = std::max(0.0, before - potentials[s].total());
+      kept = removed > 0.0 ? moves[s].kept * std::min(moves[s].removed, removed) / removed : 1.0;
+    }
+    ContactResolver::bookProjection(potentials[s], kept, p.p_new, p.target_now, report_.scenes[s]);
     const double added = p.p_new.total() - before;
     if (options_.integrator == Integrator::EnergyBlend && added > 0.0 &&
         p.blend.takeOutProjectionExcess(p.x_new, p.v_new, added, p.target_now, p.p_new))

@@ -236,6 +236,8 @@ struct BatchDriver {
   // surfaces nearer than the thickness over the step are removed from the velocities at the
   // step's start (SelfContact::stopApproach), the loss booked in H* and the slots rewritten.
   void stopSelfContactApproach();
+  // Scene s's particles that self-contact's impulses leave alone: those its active pins hold.
+  std::vector<int> pinnedVertices(std::size_t s) const;
   // Friction and the final projection of every stepping scene on its candidate, booked in its
   // own target, as Simulator's after its corrections; one energy pass for the projected scenes.
   void resolveContact(double t1);

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
+#include <set>
 #include <tuple>
 #include <utility>
 
@@ -123,7 +124,15 @@ class Grid {
 
 ContactSurface ContactSurface::of(const Scene& scene) {
   ContactSurface s;
-  s.triangles = scene.triangles;
+  // The cloth's triangles and the tet bodies' surfaces, a face given by both once.
+  std::set<std::array<int, 3>> seen;
+  for (const auto& list : {scene.triangles, tetSurface(scene.tets)}) {
+    for (const auto& t : list) {
+      std::array<int, 3> key = t;
+      std::sort(key.begin(), key.end());
+      if (seen.insert(key).second) s.triangles.push_back(t);
+    }
+  }
   for (const auto& t : s.triangles) {
     for (int k = 0; k < 3; ++k) {
       const int a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
@@ -138,8 +147,39 @@ ContactSurface ContactSurface::of(const Scene& scene) {
   return s;
 }
 
+namespace {
+
+int findRoot(std::vector<int>& parent, int i) {
+  while (parent[std::size_t(i)] != i) i = parent[std::size_t(i)] = parent[std::size_t(parent[std::size_t(i)])];
+  return i;
+}
+
+}  // namespace
+
 SelfContact::SelfContact(const Scene& scene, double thickness)
-    : surface_(ContactSurface::of(scene)), thickness_(thickness) {}
+    : surface_(ContactSurface::of(scene)),
+      thickness_(thickness),
+      solid_of_(static_cast<std::size_t>(scene.numParticles()), -1) {
+  // The tet bodies: the particles their tets connect.
+  std::vector<int> parent(static_cast<std::size_t>(scene.numParticles()));
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const Tet& t : scene.tets)
+    for (int k = 1; k < 4; ++k) parent[std::size_t(findRoot(parent, t.vertices[k]))] = findRoot(parent, t.vertices[0]);
+  std::vector<int> index_of_root(parent.size(), -1);
+  std::vector<char> in_tet(parent.size(), 0);
+  for (const Tet& t : scene.tets)
+    for (int v : t.vertices) in_tet[std::size_t(v)] = 1;
+  for (std::size_t i = 0; i < parent.size(); ++i) {
+    if (!in_tet[i]) continue;
+    int& b = index_of_root[std::size_t(findRoot(parent, static_cast<int>(i)))];
+    if (b < 0) {
+      b = static_cast<int>(solids_.size());
+      solids_.emplace_back();
+    }
+    solid_of_[i] = b;
+    solids_[std::size_t(b)].push_back(static_cast<int>(i));
+  }
+}
 
 ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::MatrixX3d& x1,
                                           const std::vector<char>* moved) const {
@@ -282,57 +322,217 @@ double kinetic(const Eigen::MatrixX3d& v, const Eigen::VectorXd& masses) {
   return 0.5 * (v.rowwise().squaredNorm().transpose().array() * masses.transpose().array()).sum();
 }
 
-int findRoot(std::vector<int>& parent, int i) {
-  while (parent[std::size_t(i)] != i) i = parent[std::size_t(i)] = parent[std::size_t(parent[std::size_t(i)])];
-  return i;
-}
+// How the particles answer a pair's impulse: a cloth's particle alone, through its own mass; a
+// tet body as a rigid body, through its mass and its inertia about its centre at the reference
+// positions x (a body's contact layer stopped or pushed back alone is carried on by the rest of
+// the body within the step, and its elements invert: two tet bars dropped onto each other inverted
+// 583 tets). A pair whose four vertices are all of one tet body (a body touching itself) answers
+// per particle. A body with a pinned particle, like a pinned particle, takes no impulse.
+class Response {
+ public:
+  Response(const std::vector<int>& solid_of, const std::vector<std::vector<int>>& solids, const PositionRows& x,
+           const Eigen::VectorXd& masses, const std::vector<int>& fixed)
+      : solid_of_(solid_of), solids_(solids), x_(x), inverse_mass_(masses.cwiseInverse()) {
+    for (int f : fixed) inverse_mass_[f] = 0.0;
+    for (const std::vector<int>& body : solids) {
+      double mass = 0.0;
+      Vec3 centre = Vec3::Zero();
+      bool pinned = false;
+      for (int i : body) {
+        mass += masses[i];
+        centre += masses[i] * rowOf(x, i);
+        pinned = pinned || inverse_mass_[i] == 0.0;
+      }
+      centre /= mass;
+      Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+      for (int i : body) {
+        const Vec3 r = rowOf(x, i) - centre;
+        inertia += masses[i] * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+      }
+      centres_.push_back(centre);
+      inverse_body_mass_.push_back(pinned ? 0.0 : 1.0 / mass);
+      inverse_inertia_.push_back(pinned ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(inertia.inverse()));
+    }
+  }
+
+  // The body vertex i of `e` answers through (-1: alone).
+  int bodyOf(const ContactEvent& e, int k) const {
+    const int b = solid_of_[std::size_t(e.vertices[std::size_t(k)])];
+    if (b < 0) return -1;
+    for (int v : e.vertices)
+      if (solid_of_[std::size_t(v)] != b) return b;
+    return -1;  // the body touches itself
+  }
+  // Whether vertex k of `e` takes no share of a position push with `up` set: it is on the pair's
+  // lower side, and the pair's direction within 60 degrees of the vertical (docs/method.md,
+  // "Self-contact": a stack is pushed apart upwards, never into what supports it).
+  static bool below(const ContactEvent& e, int k, const Vec3* up) {
+    if (!up) return false;
+    const double vertical = e.normal.dot(*up);
+    return std::abs(vertical) >= 0.5 && e.weights[std::size_t(k)] * vertical < 0.0;
+  }
+  // A body's share of `e`: the sum of its vertices' weights and of their moments about its centre.
+  void share(const ContactEvent& e, int b, double& weight, Vec3& moment, const Vec3* up = nullptr) const {
+    weight = 0.0;
+    moment.setZero();
+    for (int k = 0; k < 4; ++k) {
+      if (bodyOf(e, k) != b || below(e, k, up)) continue;
+      const int i = e.vertices[std::size_t(k)];
+      weight += e.weights[std::size_t(k)];
+      moment += e.weights[std::size_t(k)] * (rowOf(x_, i) - centres_[std::size_t(b)]).cross(e.normal);
+    }
+  }
+  // How far a unit impulse along e's normal moves its separation: sum w_i^2 / m_i over the particles
+  // that answer alone, and a^2 / M + t . I^-1 t over the bodies (a, t: share).
+  // With `up`, the pair's lower side takes no share (below).
+  double compliance(const ContactEvent& e, const Vec3* up = nullptr) const {
+    double c = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      if (below(e, k, up)) continue;
+      const int b = bodyOf(e, k);
+      const double w = e.weights[std::size_t(k)];
+      if (b < 0) {
+        c += w * w * inverse_mass_[e.vertices[std::size_t(k)]];
+        continue;
+      }
+      if (firstOfBody(e, k, up)) {
+        double a;
+        Vec3 t;
+        share(e, b, a, t, up);
+        c += a * a * inverse_body_mass_[std::size_t(b)] + t.dot(inverse_inertia_[std::size_t(b)] * t);
+      }
+    }
+    return c;
+  }
+  bool firstOfBody(const ContactEvent& e, int k, const Vec3* up = nullptr) const {
+    for (int j = 0; j < k; ++j)
+      if (!below(e, j, up) && bodyOf(e, j) == bodyOf(e, k)) return false;
+    return true;
+  }
+  double inverseMass(int i) const { return inverse_mass_[i]; }
+  const Vec3& centre(int b) const { return centres_[std::size_t(b)]; }
+  double inverseBodyMass(int b) const { return inverse_body_mass_[std::size_t(b)]; }
+  const Eigen::Matrix3d& inverseInertia(int b) const { return inverse_inertia_[std::size_t(b)]; }
+  const std::vector<int>& solidOf() const { return solid_of_; }
+  const std::vector<std::vector<int>>& solids() const { return solids_; }
+  const PositionRows& reference() const { return x_; }
+
+ private:
+  const std::vector<int>& solid_of_;
+  const std::vector<std::vector<int>>& solids_;
+  PositionRows x_;
+  Eigen::VectorXd inverse_mass_;
+  std::vector<Vec3> centres_;
+  std::vector<double> inverse_body_mass_;
+  std::vector<Eigen::Matrix3d> inverse_inertia_;
+};
+
+// Rows (velocities or positions) that impulses change through a Response: a particle's row at
+// once, a body's as a pending linear and angular change, applied to all its rows by settle().
+class Motion {
+ public:
+  Motion(const Response& response, Eigen::MatrixX3d& rows)
+      : response_(response),
+        rows_(rows),
+        linear_(response.solids().size(), Vec3::Zero()),
+        angular_(response.solids().size(), Vec3::Zero()) {}
+
+  Vec3 at(int i) const {
+    const int b = response_.solidOf()[std::size_t(i)];
+    Vec3 r = rowOf(rows_, i);
+    if (b >= 0)
+      r += linear_[std::size_t(b)] +
+           angular_[std::size_t(b)].cross(rowOf(response_.reference(), i) - response_.centre(b));
+    return r;
+  }
+  // The separation of `e` along its normal (sum w_i n . row_i).
+  double along(const ContactEvent& e) const {
+    double d = 0.0;
+    for (int k = 0; k < 4; ++k) d += e.weights[std::size_t(k)] * e.normal.dot(at(e.vertices[std::size_t(k)]));
+    return d;
+  }
+  // An impulse `j` along e's normal (with `up`, on the pair's upper side alone); `moved` (when
+  // given) flags the particles that answer alone.
+  void push(const ContactEvent& e, double j, std::vector<char>* moved = nullptr, const Vec3* up = nullptr) {
+    for (int k = 0; k < 4; ++k) {
+      if (Response::below(e, k, up)) continue;
+      const int b = response_.bodyOf(e, k);
+      const int i = e.vertices[std::size_t(k)];
+      if (b < 0) {
+        const double share = e.weights[std::size_t(k)] * response_.inverseMass(i);
+        if (share == 0.0) continue;
+        rows_.row(i) += (j * share) * e.normal.transpose();
+        if (moved) (*moved)[std::size_t(i)] = 1;
+        continue;
+      }
+      if (!response_.firstOfBody(e, k, up)) continue;
+      double a;
+      Vec3 t;
+      response_.share(e, b, a, t, up);
+      linear_[std::size_t(b)] += (j * a * response_.inverseBodyMass(b)) * e.normal;
+      angular_[std::size_t(b)] += j * (response_.inverseInertia(b) * t);
+    }
+  }
+  // Applies the bodies' pending changes to their rows; `moved` flags the rows of bodies that changed.
+  void settle(std::vector<char>* moved = nullptr) {
+    for (std::size_t b = 0; b < linear_.size(); ++b) {
+      if (linear_[b].isZero() && angular_[b].isZero()) continue;
+      for (int i : response_.solids()[b]) {
+        rows_.row(i) = at(i).transpose();
+        if (moved) (*moved)[std::size_t(i)] = 1;
+      }
+      linear_[b].setZero();
+      angular_[b].setZero();
+    }
+  }
+
+ private:
+  const Response& response_;
+  Eigen::MatrixX3d& rows_;
+  std::vector<Vec3> linear_, angular_;
+};
 
 }  // namespace
 
 double SelfContact::stopApproach(const PositionRows& x, Eigen::MatrixX3d& v, const Eigen::MatrixX3d& predicted,
                                  double h, const Eigen::VectorXd& masses, const std::vector<int>& fixed) const {
   if (surface_.empty()) return 0.0;
-  Eigen::VectorXd inverse_mass = masses.cwiseInverse();
-  for (int f : fixed) inverse_mass[f] = 0.0;
+  const Response response(solid_of_, solids_, x, masses, fixed);
+  Motion velocity(response, v);
   bool changed = false;
   const double kinetic_before = kinetic(v, masses);
   for (const ContactEvent& e : events(x, predicted, thickness_)) {
-    double weight = 0.0, gap = 0.0, speed = 0.0;
+    const double compliance = response.compliance(e);
+    if (!(compliance > 0.0)) continue;
+    double gap = 0.0, path = 0.0;
     for (int k = 0; k < 4; ++k) {
       const int i = e.vertices[std::size_t(k)];
-      const double w = e.weights[std::size_t(k)];
-      weight += w * w * inverse_mass[i];
-      gap += w * e.normal.dot(x.row(i).transpose());
-      speed += w * e.normal.dot(v.row(i).transpose());
+      gap += e.weights[std::size_t(k)] * e.normal.dot(rowOf(x, i));
+      path += e.weights[std::size_t(k)] * e.normal.dot(rowOf(predicted, i) - rowOf(x, i));
     }
+    const double speed = velocity.along(e);
     // The approach the prediction adds to the velocities' (gravity against a supported body).
-    double drift = 0.0;
-    for (int k = 0; k < 4; ++k) {
-      const int i = e.vertices[std::size_t(k)];
-      drift += e.weights[std::size_t(k)] * e.normal.dot(predicted.row(i).transpose() - x.row(i).transpose());
-    }
-    drift = drift / h - speed;
+    const double drift = path / h - speed;
     // The approach speed that ends the step at the thickness with that drift, never a separating one.
     const double wanted = std::min(0.0, (thickness_ - gap) / h - std::min(drift, 0.0));
-    if (!(weight > 0.0) || !(speed < wanted)) continue;
-    const double impulse = (wanted - speed) / weight;
-    for (int k = 0; k < 4; ++k) {
-      const int i = e.vertices[std::size_t(k)];
-      v.row(i) += (impulse * e.weights[std::size_t(k)] * inverse_mass[i]) * e.normal.transpose();
-    }
+    if (!(speed < wanted)) continue;
+    velocity.push(e, (wanted - speed) / compliance);
     changed = true;
   }
+  velocity.settle();
   return changed ? kinetic_before - kinetic(v, masses) : 0.0;
 }
 
 SelfContactResult SelfContact::resolve(const PositionRows& x0, Eigen::MatrixX3d& x1, Eigen::MatrixX3d& v1,
                                        const Eigen::VectorXd& masses, const std::vector<int>& fixed,
-                                       const std::function<bool(Eigen::MatrixX3d&)>& keep_out) const {
+                                       const std::function<bool(Eigen::MatrixX3d&)>& keep_out,
+                                       const Eigen::Vector3d& up) const {
   SelfContactResult result;
   if (surface_.empty()) return result;
   const Eigen::Index n = x1.rows();
-  Eigen::VectorXd inverse_mass = masses.cwiseInverse();
-  for (int f : fixed) inverse_mass[f] = 0.0;
+  // The bodies answer about their positions at the step's end, as the solve left them.
+  const Eigen::MatrixX3d reference = x1;
+  const Response response(solid_of_, solids_, reference, masses, fixed);
   const double kinetic_before = kinetic(v1, masses);
 
   bool clean = false;
@@ -346,33 +546,26 @@ SelfContactResult SelfContact::resolve(const PositionRows& x0, Eigen::MatrixX3d&
         round == 0 ? this->events(x0, x1, thickness_) : this->events(x0, x1, 0.5 * thickness_, &moved);
     clean = events.empty();
     std::fill(moved.begin(), moved.end(), 0);
+    Motion position(response, x1), velocity(response, v1);
     for (const ContactEvent& e : events) {
-      double weight = 0.0;  // sum w_i^2 / m_i
-      for (int k = 0; k < 4; ++k)
-        weight += e.weights[std::size_t(k)] * e.weights[std::size_t(k)] * inverse_mass[e.vertices[std::size_t(k)]];
-      if (!(weight > 0.0)) continue;
-      double gap = 0.0, speed = 0.0;
-      for (int k = 0; k < 4; ++k) {
-        const int i = e.vertices[std::size_t(k)];
-        gap += e.weights[std::size_t(k)] * e.normal.dot(x1.row(i).transpose());
-        speed += e.weights[std::size_t(k)] * e.normal.dot(v1.row(i).transpose());
-      }
-      const double push = gap < thickness_ ? (thickness_ - gap) / weight : 0.0;
-      const double stop = speed < 0.0 ? -speed / weight : 0.0;
+      const double compliance = response.compliance(e);
+      if (!(compliance > 0.0)) continue;
+      const double gap = position.along(e), speed = velocity.along(e);
+      // The positions' push upwards where the pair is stacked and its upper side can move.
+      const Vec3* stacked = up.isZero() ? nullptr : &up;
+      const double push_compliance = stacked ? response.compliance(e, stacked) : compliance;
+      if (!(push_compliance > 0.0)) stacked = nullptr;
+      const double push = gap < thickness_ ? (thickness_ - gap) / (stacked ? push_compliance : compliance) : 0.0;
+      const double stop = speed < 0.0 ? -speed / compliance : 0.0;
       if (push == 0.0 && stop == 0.0) continue;
       ++result.events;
-      for (int k = 0; k < 4; ++k) {
-        const int i = e.vertices[std::size_t(k)];
-        const double share = e.weights[std::size_t(k)] * inverse_mass[i];
-        if (push != 0.0 && share != 0.0) {
-          x1.row(i) += (push * share) * e.normal.transpose();
-          moved[std::size_t(i)] = 1;
-        }
-        if (stop != 0.0) v1.row(i) += (stop * share) * e.normal.transpose();
-      }
+      if (push != 0.0) position.push(e, push, &moved, stacked);
+      if (stop != 0.0) velocity.push(e, stop);
       result.positions_moved = result.positions_moved || push != 0.0;
       result.velocities_changed = result.velocities_changed || stop != 0.0;
     }
+    position.settle(&moved);
+    velocity.settle();
     if (!clean && result.positions_moved && keep_out) {
       const Eigen::MatrixX3d before = x1;
       if (keep_out(x1)) {
@@ -398,15 +591,23 @@ SelfContactResult SelfContact::resolve(const PositionRows& x0, Eigen::MatrixX3d&
     for (const ContactEvent& e : events(x0, x1, 0.0, last.empty() ? nullptr : &last)) {
       if (!e.crossing) continue;
       bool all_frozen = true;
-      for (int v : e.vertices) all_frozen = all_frozen && (frozen[std::size_t(v)] || inverse_mass[v] == 0.0);
+      for (int v : e.vertices) all_frozen = all_frozen && (frozen[std::size_t(v)] || response.inverseMass(v) == 0.0);
       if (all_frozen) continue;
       for (int k = 1; k < 4; ++k)
         parent[std::size_t(findRoot(parent, e.vertices[std::size_t(k)]))] = findRoot(parent, e.vertices[0]);
-      for (int v : e.vertices) {
-        if (frozen[std::size_t(v)]) continue;
+      // A tet body joins a zone whole (put back in part, its elements would invert).
+      const auto freeze = [&](int v) {
+        if (frozen[std::size_t(v)]) return;
         frozen[std::size_t(v)] = 1;
         put_back[std::size_t(v)] = 1;
+        parent[std::size_t(findRoot(parent, v))] = findRoot(parent, e.vertices[0]);
         grew = true;
+      };
+      for (int v : e.vertices) {
+        freeze(v);
+        const int b = solid_of_[std::size_t(v)];
+        if (b >= 0)
+          for (int u : solids_[std::size_t(b)]) freeze(u);
       }
     }
     if (!grew) break;
@@ -414,7 +615,7 @@ SelfContactResult SelfContact::resolve(const PositionRows& x0, Eigen::MatrixX3d&
     std::vector<Eigen::Vector3d> momentum(static_cast<std::size_t>(n), Eigen::Vector3d::Zero());
     std::vector<double> mass(static_cast<std::size_t>(n), 0.0);
     for (Eigen::Index i = 0; i < n; ++i) {
-      if (!frozen[std::size_t(i)] || inverse_mass[i] == 0.0) continue;
+      if (!frozen[std::size_t(i)] || response.inverseMass(static_cast<int>(i)) == 0.0) continue;
       const int r = findRoot(parent, static_cast<int>(i));
       momentum[std::size_t(r)] += masses[i] * v1.row(i).transpose();
       mass[std::size_t(r)] += masses[i];
@@ -422,7 +623,7 @@ SelfContactResult SelfContact::resolve(const PositionRows& x0, Eigen::MatrixX3d&
     for (Eigen::Index i = 0; i < n; ++i) {
       if (!frozen[std::size_t(i)]) continue;
       x1.row(i) = x0.row(i);
-      if (inverse_mass[i] == 0.0) continue;
+      if (response.inverseMass(static_cast<int>(i)) == 0.0) continue;
       const int r = findRoot(parent, static_cast<int>(i));
       v1.row(i) = (momentum[std::size_t(r)] / mass[std::size_t(r)]).transpose();
     }

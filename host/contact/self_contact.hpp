@@ -74,10 +74,14 @@ class SelfContact {
   /// Makes the step x0 -> x1 crossing-free and leaves the surfaces `thickness` apart where it
   /// can, moving x1 and v1 (rows as x0's) by the impulses; `masses` are the scene's, and the
   /// `fixed` vertices (pins) take no impulse. `keep_out`, called after each round of impulses
-  /// with x1, may move particles again (the colliders' projection); returns whether it did.
+  /// with x1, may move particles again (the colliders' projection); returns whether it did. `up`
+  /// (unit, against gravity; zero: none): a pair stacked along it has its positions pushed apart
+  /// by moving its upper side alone, so that a body resting on another is lifted out of it and
+  /// never pushes the lower one into what supports it (shock propagation).
   SelfContactResult resolve(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0, Eigen::MatrixX3d& x1,
                             Eigen::MatrixX3d& v1, const Eigen::VectorXd& masses, const std::vector<int>& fixed,
-                            const std::function<bool(Eigen::MatrixX3d&)>& keep_out = {}) const;
+                            const std::function<bool(Eigen::MatrixX3d&)>& keep_out = {},
+                            const Eigen::Vector3d& up = Eigen::Vector3d::Zero()) const;
 
   /// Before a step's solve, from the state (x, v) at its start and the positions `predicted` for
   /// its end (the caller's: free flight under gravity, kept out of the colliders): the pairs that
@@ -96,6 +100,10 @@ class SelfContact {
  private:
   ContactSurface surface_;
   double thickness_;
+  // The tet bodies (the particles their tets connect, ascending), which answer impulses as rigid
+  // bodies, and each particle's body (-1: none).
+  std::vector<int> solid_of_;
+  std::vector<std::vector<int>> solids_;
 };
 
 }  // namespace stabint

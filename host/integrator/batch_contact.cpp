@@ -103,7 +103,9 @@ void BatchDriver::stopSelfContactApproach() {
     v_slot_.middleRows(seg.first_particle, seg.num_particles) = v;
     v_.middleRows(seg.first_particle, seg.num_particles) = v;
     p.kinetic = kineticEnergy(static_cast<int>(s), v_);
-    const double removed = before - p.kinetic;
+    // A loss is booked; a gain (an impulse on a tet body that vibrates against its contact) is
+    // not, and the blend takes it out of the step.
+    const double removed = std::max(0.0, before - p.kinetic);
     p.target -= removed;
     p.target_now -= removed;
     report_.scenes[s].contact_projection -= removed;
@@ -122,7 +124,10 @@ void BatchDriver::resolveContact(double t1) {
   if (contact_.count() == 0 && self_contact_.empty()) return;
   std::vector<char> projected(segments_.size(), 0);
   std::vector<ContactResolver::Resolved> moves(segments_.size());
+  // Per scene that self-contact moved: the kinetic energy its impulses removed, booked with the
+  // potential its moves changed.
   std::vector<char> self_moved(segments_.size(), 0);
+  std::vector<double> self_kinetic(segments_.size(), 0.0);
   bool any = false;
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     PerScene& p = per_scene_[s];
@@ -135,15 +140,19 @@ void BatchDriver::resolveContact(double t1) {
     if (!self_contact_.empty() && !self_contact_[s].empty()) {
       // Self-contact after the colliders' projection, which it repeats after each round of its
       // impulses (an impulse may push a particle back into a collider); what its impulses take
-      // from the motion is lost (inelastic), booked like friction.
-      const SelfContactResult r =
-          self_contact_[s].resolve(x0, p.x_new, p.v_new, scenes_[s].masses, pinnedVertices(s),
-                                   [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); });
-      p.target_now -= r.kinetic_removed;
-      report_.scenes[s].contact_projection -= r.kinetic_removed;
+      // from the motion is lost (inelastic), booked like friction when they moved no position.
+      const SelfContactResult r = self_contact_[s].resolve(
+          x0, p.x_new, p.v_new, scenes_[s].masses, pinnedVertices(s),
+          [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); }, -scenes_[s].gravity.normalized());
       resolved.velocities_changed = resolved.velocities_changed || r.velocities_changed;
       resolved.positions_moved = resolved.positions_moved || r.positions_moved;
       self_moved[s] = r.positions_moved;
+      if (r.positions_moved) {
+        self_kinetic[s] = r.kinetic_removed;
+      } else if (r.kinetic_removed > 0.0) {
+        p.target_now -= r.kinetic_removed;
+        report_.scenes[s].contact_projection -= r.kinetic_removed;
+      }
     }
     p.velocities_changed = p.velocities_changed || resolved.velocities_changed;
     if (!resolved.positions_moved) continue;
@@ -164,15 +173,27 @@ void BatchDriver::resolveContact(double t1) {
     PerScene& p = per_scene_[s];
     p.x_new = blockOf(x_trial_, segments_[s]);
     const double before = p.p_new.total();
-    double kept = moves[s].kept;
+    double added = 0.0;
     if (self_moved[s]) {
-      // Self-contact is inelastic: of the potential the moves removed, the colliders' restitution
-      // keeps its share of what their own moves removed, and the rest is lost.
-      const double removed = std::max(0.0, before - potentials[s].total());
-      kept = removed > 0.0 ? moves[s].kept * std::min(moves[s].removed, removed) / removed : 1.0;
+      // [project rule] Self-contact's correction is inelastic and books its net change of H: the
+      // kinetic energy its impulses removed less the potential its moves added (a body resting on
+      // another falls into the thickness under gravity within the step and is put back, the speed
+      // it gained stopped: nothing is lost, where booking the stop alone lowered H* by the
+      // speed's energy at every step). Of a net loss, the colliders' restitution keeps its share
+      // of what their own moves removed; a net gain is not booked.
+      ++report_.scenes[s].energy_evaluations;
+      const double change = potentials[s].total() - before - self_kinetic[s];
+      if (change < 0.0) {
+        const double kept = moves[s].kept * std::min(moves[s].removed, -change) / -change;
+        report_.scenes[s].contact_projection += change * (1.0 - kept);
+        p.target_now += change * (1.0 - kept);
+      }
+      p.p_new = potentials[s];
+      added = std::max(0.0, change);
+    } else {
+      ContactResolver::bookProjection(potentials[s], moves[s].kept, p.p_new, p.target_now, report_.scenes[s]);
+      added = p.p_new.total() - before;
     }
-    ContactResolver::bookProjection(potentials[s], kept, p.p_new, p.target_now, report_.scenes[s]);
-    const double added = p.p_new.total() - before;
     if (options_.integrator == Integrator::EnergyBlend && added > 0.0 &&
         p.blend.takeOutProjectionExcess(p.x_new, p.v_new, added, p.target_now, p.p_new))
       p.velocities_changed = true;

@@ -60,15 +60,6 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
       per_scene_(segments_.size()) {
   if (options_.self_contact_thickness > 0.0) {
     for (std::size_t s = 0; s < scenes_.size(); ++s) {
-      // [project rule] Self-contact acts on cloth for now: a stiff tet body's contact layer,
-      // stopped alone before the solve, is carried on by the rest of the body, and pushed back
-      // alone after it, its elements invert (two tet bars dropped onto each other: 583 inverted
-      // tets). docs/method.md, "Self-contact".
-      if (!scenes_[s].tets.empty())
-        throw InvalidInputError(std::string(scenes_.size() == 1 ? "" : "scene " + std::to_string(s) + ": ") +
-                                "self_contact_thickness: self-contact acts on cloth only for now, and this scene has " +
-                                std::to_string(scenes_[s].tets.size()) +
-                                " tets (docs/method.md, \"Self-contact\"); set it to 0 for tet bodies");
       self_contact_.emplace_back(scenes_[s], options_.self_contact_thickness);
     }
   }

@@ -96,8 +96,8 @@
   FIELD(T(double), contact_tolerance, 1e-2, nonNegative(),                                                             \
         "deepest a particle may stay inside a collider after a step, m, >= 0")                                         \
   /* Self-contact and contact between the cloths of a scene (docs/method.md, "Self-contact"), off                      \
-     when 0: the surface triangles (Scene::triangles) keep this distance apart and no triangle                         \
-     passes through another within a step; a scene with tets is refused for now. */                                    \
+     when 0: the surface triangles (Scene::triangles and the tets' boundary faces) keep this distance                  \
+     apart and no triangle passes through another within a step. */                                                    \
   FIELD(T(double), self_contact_thickness, 0.0, nonNegative(),                                                         \
         "distance the scene's surfaces keep from each other, m (0: no self-contact)")                                  \
   FIELD(T(BackendKind), backend, BackendKind::CpuReference, isEnum(),                                                  \

@@ -311,7 +311,8 @@ struct StepReport {
   /// energy the contact booked as lost (<= 0, added to H*): of what the final projection out of
   /// the colliders removed, the share their restitution does not keep, and what the step's
   /// half-spaces took from the potential of the same positions (energy the projection adds is
-  /// not booked: the blend takes it out), and the kinetic energy self-contact's impulses removed.
+  /// not booked: the blend takes it out), and what self-contact's correction removed (its
+  /// impulses' kinetic energy less the potential its moves added).
   ///@{
   double friction = 0.0;
   double contact_projection = 0.0;

@@ -164,37 +164,42 @@ inline Scene crumplingCloth(int n = 50) {
   return s;
 }
 
-/// Two copies of `one` in one scene (no pins, at rest; the positions are `one`'s twice, for the
-/// caller to place): its particles and elements, the second copy's indices shifted.
-inline Scene twoCopies(const Scene& one) {
-  const int n = one.numParticles();
-  Scene s = one;
+/// `a` and `b` as one scene (no pins, at rest, `a`'s colliders and gravity): `a`'s particles and
+/// elements, then `b`'s, its indices shifted.
+inline Scene combined(const Scene& a, const Scene& b) {
+  const int n = a.numParticles();
+  Scene s = a;
   s.pins.clear();
-  s.positions.resize(2 * n, 3);
-  s.positions << one.positions, one.positions;
-  s.velocities = Eigen::MatrixX3d::Zero(2 * n, 3);
-  s.masses.resize(2 * n);
-  s.masses << one.masses, one.masses;
-  for (Spring spring : one.springs) {
+  s.positions.resize(n + b.numParticles(), 3);
+  s.positions << a.positions, b.positions;
+  s.rest_positions.resize(n + b.numParticles(), 3);
+  s.rest_positions << a.rest_positions, b.rest_positions;
+  s.velocities = Eigen::MatrixX3d::Zero(s.positions.rows(), 3);
+  s.masses.resize(s.positions.rows());
+  s.masses << a.masses, b.masses;
+  for (Spring spring : b.springs) {
     spring.a += n;
     spring.b += n;
     s.springs.push_back(spring);
   }
-  for (const auto& t : one.triangles) s.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
-  for (Tet tet : one.tets) {
+  for (const auto& t : b.triangles) s.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+  for (Tet tet : b.tets) {
     for (int& v : tet.vertices) v += n;
     s.tets.push_back(tet);
   }
-  for (TriangleStrain strain : one.triangle_strains) {
+  for (TriangleStrain strain : b.triangle_strains) {
     for (int& v : strain.vertices) v += n;
     s.triangle_strains.push_back(strain);
   }
-  for (BendingHinge hinge : one.bending_hinges) {
+  for (BendingHinge hinge : b.bending_hinges) {
     for (int& v : hinge.vertices) v += n;
     s.bending_hinges.push_back(hinge);
   }
   return s;
 }
+
+/// Two copies of `one` in one scene (combined), for the caller to place.
+inline Scene twoCopies(const Scene& one) { return combined(one, one); }
 
 /// Two 25 x 25 spring cloths (0.5 m) of one scene: one lying flat 5 mm above the ground, the
 /// other 15 cm above it, turned 0.4 rad about the vertical and tilted 0.2 rad, falling onto it.
@@ -235,6 +240,38 @@ inline Scene barOnBar() {
     const Eigen::Vector3d p = one.positions.row(i).transpose() - mid;
     s.positions.row(i) << p.x(), p.y() + 0.5 * height + 0.01, p.z();
     s.positions.row(n + i) << p.z(), p.y() + 1.5 * height + 0.16, -p.x();  // turned a quarter about y
+  }
+  s.rest_positions = s.positions;
+  Collider ground;
+  ground.friction = 0.5;
+  s.colliders = {ground};
+  return s;
+}
+
+/// A cloth on a soft body: a default tet bar (1e5 Pa) lying on a ground with friction 0.5, its
+/// bottom 1 cm above it, and a 30 x 30 spring cloth (1 m) flat 20 cm above its top, turned 0.3
+/// rad about the vertical, falling onto it and draping over it. Without self-contact the cloth
+/// falls through the bar.
+inline Scene clothOnBar() {
+  const Scene bar = makeTetBar(TetBarParams{});
+  ClothGridParams p;
+  p.nx = p.ny = 30;
+  const Scene cloth = makeClothGrid(p);
+  Scene s = combined(bar, cloth);
+  const int n = bar.numParticles();
+  const Eigen::Vector3d mid =
+      0.5 * (bar.positions.colwise().maxCoeff() + bar.positions.colwise().minCoeff()).transpose();
+  const double bottom = bar.positions.col(1).minCoeff(), top = bar.positions.col(1).maxCoeff();
+  for (int i = 0; i < n; ++i) {
+    s.positions(i, 0) -= mid.x();
+    s.positions(i, 1) += 0.01 - bottom;
+    s.positions(i, 2) -= mid.z();
+  }
+  const Eigen::Vector2d centre(cloth.positions.col(0).mean(), cloth.positions.col(1).mean());
+  const double c = std::cos(0.3), sn = std::sin(0.3);
+  for (int i = 0; i < cloth.numParticles(); ++i) {
+    const double u = cloth.positions(i, 0) - centre.x(), w = cloth.positions(i, 1) - centre.y();
+    s.positions.row(n + i) << c * u - sn * w, top - bottom + 0.21, sn * u + c * w;
   }
   s.rest_positions = s.positions;
   Collider ground;

@@ -238,10 +238,11 @@ TEST_P(SelfContactOnEveryBackend, AClothDroppedOnAnotherRestsOnIt) {
   // run's largest kinetic energy above H* (0.012 measured; 11 with the impulses after the solve
   // alone, which stretched the springs at the contact's edge).
   EXPECT_LE(excess, 0.05 * kinetic);
-  // The upper cloth rests on the lower one: its lowest point above the lower one's highest.
+  // The upper cloth rests on the lower one: on average at least half the thickness above it (its
+  // corners, which overhang the lower cloth, may reach the ground).
   const int n = scene.numParticles() / 2;
   const Eigen::MatrixX3d x = sim.positions();
-  EXPECT_GT(x.col(1).tail(n).minCoeff(), x.col(1).head(n).minCoeff());
+  EXPECT_GT(x.col(1).tail(n).mean(), x.col(1).head(n).mean() + 0.5 * o.self_contact_thickness);
 }
 
 TEST_P(SelfContactOnEveryBackend, FollowsTheCpuReferenceAndContinuesFromACheckpointBitForBit) {
@@ -287,7 +288,8 @@ TEST(SelfContactRun, EachSceneOfABatchHasItsOwnSelfContactAsItsSimulator) {
   // Two scenes of one batch: the cloths landing on each other, and the same cloths moved 2 m
   // aside and 1 cm lower (another landing). Each follows its own Simulator to the batch tests'
   // standard (tests/batch_scenes.hpp: states to 1e-9 of the scene's size, the energy booked to
-  // 1e-12 of E_scale; the batch's factor orders and updates its blocks otherwise): its surface,
+  // 1e-12 of E_scale, 1e-11 for the booked contact loss; the batch's factor orders and updates
+  // its blocks otherwise): its surface,
   // its impulses and its books are its own.
   SimulatorOptions o;
   o.self_contact_thickness = 3e-3;
@@ -304,7 +306,10 @@ TEST(SelfContactRun, EachSceneOfABatchHasItsOwnSelfContactAsItsSimulator) {
     const BatchStepReport& r = batch.step();
     for (int s = 0; s < 2; ++s) {
       const StepReport& own = alone[s].step();
-      EXPECT_NEAR(r.scenes[std::size_t(s)].contact_projection, own.contact_projection, 1e-12 * alone[s].energyScale())
+      // The booked loss after the solve is the potentials' change over the pushes, which
+      // follows the states' round-off (within the 1e-9 above) more closely than the energy:
+      // 1e-11 of E_scale (4e-12 measured).
+      EXPECT_NEAR(r.scenes[std::size_t(s)].contact_projection, own.contact_projection, 1e-11 * alone[s].energyScale())
           << "scene " << s << ", step " << k;
       EXPECT_LE((batch.positions(s) - alone[s].positions()).cwiseAbs().maxCoeff(), 1e-9)
           << "scene " << s << ", step " << k;
@@ -426,6 +431,47 @@ TEST(SelfContactRun, TwoTetBarsDroppedOnEachOtherNeitherInterpenetrateNorInvert)
           EXPECT_LE(excess, 0.05 * kinetic) << name;
         }
       }
+    }
+  }
+}
+
+// A cloth on a soft body (the case, a cloth on a tet body): a 30 x 30 cloth falling
+// 20 cm onto a tet bar lying on the ground drapes over it, at rest and thrown at 5 m/s, with
+// backward Euler and the blend. Without self-contact it falls through the bar.
+// With it, over 60 steps: no surface triangle pair intersects and no tet inverts at any step,
+// and the cloth stays over the bar (its highest point above the bar's). Its books are not
+// asserted: while the cloth lies on the bar, gravity pulls it into the thickness within each
+// solve and the pushes after it stretch its springs at the bar's edges, which the blend takes
+// out of the scene's motion (docs/method.md, "Self-contact", the measured table).
+TEST(SelfContactRun, AClothDropsOntoATetBarAndDrapesOverIt) {
+  const std::vector<std::array<int, 3>> surface = ContactSurface::of(testing::clothOnBar()).triangles;
+  const int cloth = 900;
+  {
+    Simulator sim(testing::clothOnBar(), SimulatorOptions{});
+    int worst = 0;
+    for (int k = 0; k < 40; ++k) {
+      sim.step();
+      worst = std::max(worst, testing::intersectingTrianglePairs(sim.positions(), surface));
+    }
+    EXPECT_GT(worst, 50);  // 279 measured
+  }
+  for (double speed : {0.0, 5.0}) {
+    for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
+      Scene scene = testing::clothOnBar();
+      scene.velocities.bottomRows(cloth).col(1).setConstant(-speed);
+      SimulatorOptions o;
+      o.integrator = integrator;
+      o.self_contact_thickness = 5e-3;
+      Simulator sim(scene, o);
+      const std::string name =
+          std::to_string(speed) + " m/s, " + (integrator == Integrator::BackwardEuler ? "BE" : "the blend");
+      for (int k = 0; k < 60; ++k) {
+        sim.step();
+        ASSERT_EQ(testing::intersectingTrianglePairs(sim.positions(), surface), 0) << name << ", step " << k;
+        ASSERT_EQ(invertedTets(scene, sim.positions()), 0) << name << ", step " << k;
+      }
+      const Eigen::MatrixX3d x = sim.positions();
+      EXPECT_GT(x.col(1).tail(cloth).maxCoeff(), x.col(1).head(x.rows() - cloth).maxCoeff()) << name;
     }
   }
 }

@@ -551,10 +551,12 @@ SelfContactResult SelfContact::resolve(const PositionRows& x0, Eigen::MatrixX3d&
       const double compliance = response.compliance(e);
       if (!(compliance > 0.0)) continue;
       const double gap = position.along(e), speed = velocity.along(e);
-      // The positions' push upwards where the pair is stacked and its upper side can move.
+      // The positions' push upwards where the pair is stacked and its upper side is not much
+      // heavier than its lower one (a cloth under a tet body lying on the ground beside it takes
+      // the push, shared by mass, rather than lifting the body at every step).
       const Vec3* stacked = up.isZero() ? nullptr : &up;
       const double push_compliance = stacked ? response.compliance(e, stacked) : compliance;
-      if (!(push_compliance > 0.0)) stacked = nullptr;
+      if (!(push_compliance > 0.0) || push_compliance < 0.5 * (compliance - push_compliance)) stacked = nullptr;
       const double push = gap < thickness_ ? (thickness_ - gap) / (stacked ? push_compliance : compliance) : 0.0;
       const double stop = speed < 0.0 ? -speed / compliance : 0.0;
       if (push == 0.0 && stop == 0.0) continue;

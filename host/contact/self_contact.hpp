@@ -75,9 +75,10 @@ class SelfContact {
   /// can, moving x1 and v1 (rows as x0's) by the impulses; `masses` are the scene's, and the
   /// `fixed` vertices (pins) take no impulse. `keep_out`, called after each round of impulses
   /// with x1, may move particles again (the colliders' projection); returns whether it did. `up`
-  /// (unit, against gravity; zero: none): a pair stacked along it has its positions pushed apart
-  /// by moving its upper side alone, so that a body resting on another is lifted out of it and
-  /// never pushes the lower one into what supports it (shock propagation).
+  /// (unit, against gravity; zero: none): a pair stacked along it, whose upper side is not much
+  /// heavier than its lower one, has its positions pushed apart by moving its upper side alone,
+  /// so that a body resting on another is lifted out of it and never pushes the lower one into
+  /// what supports it (shock propagation).
   SelfContactResult resolve(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0, Eigen::MatrixX3d& x1,
                             Eigen::MatrixX3d& v1, const Eigen::VectorXd& masses, const std::vector<int>& fixed,
                             const std::function<bool(Eigen::MatrixX3d&)>& keep_out = {},

@@ -97,6 +97,9 @@ void BatchDriver::stopSelfContactApproach() {
     predicted.rowwise() += (h * h) * scenes_[s].gravity.transpose();
     contact_.projectOut(contactPart(s, seg.first_particle), t_ + h, x, predicted);
     if (self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed) == 0.0) continue;
+    // BDF2's history is not the changed state's: this step is a BE step (a batch with BDF2 and
+    // self-contact has one scene).
+    has_history_ = false;
     // The velocities as the slot holds them (a float device rounds), and the loss they book.
     backend_->roundToStorage(v);
     const double before = p.kinetic;
@@ -147,6 +150,7 @@ void BatchDriver::resolveContact(double t1) {
       resolved.velocities_changed = resolved.velocities_changed || r.velocities_changed;
       resolved.positions_moved = resolved.positions_moved || r.positions_moved;
       self_moved[s] = r.positions_moved;
+      restart_history_ = restart_history_ || r.positions_moved || r.velocities_changed;
       if (r.positions_moved) {
         self_kinetic[s] = r.kinetic_removed;
       } else if (r.kinetic_removed > 0.0) {

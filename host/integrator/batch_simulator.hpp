@@ -270,6 +270,7 @@ struct BatchDriver {
   std::vector<PotentialEnergy> partner_potentials_;                   // of the BE partner, when its solve left them
   double t_ = 0.0;                                                    // the batch's time (of the active scenes)
   bool has_history_ = false;                                          // BDF2: (kXPrev, kVPrev) hold the previous step
+  bool restart_history_ = false;  // BDF2: self-contact corrected this step, the next is a BE step
   std::vector<PerScene> per_scene_;
   std::vector<int> unsettled_;  // the scenes whose event_unsettled is set, in the order changed
   BatchStepReport report_;

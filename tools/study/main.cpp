@@ -40,13 +40,16 @@ void usage(std::FILE* to) {
                "  drop        a TetGen soft body (--mesh BASE, made by scripts/soft_body_mesh.sh) dropped on the\n"
                "              ground with BE, BDF2 and the blend (drop_surface.csv, drop_energy.csv,\n"
                "              drop_<integrator>.bin); not part of all, which needs no mesher\n"
+               "  fold        self-contact: a cloth folding on the ground, dragged over a TetGen body's surface\n"
+               "              (--mesh BASE) with BE, BDF2 and the blend (fold_triangles.csv, fold_body.csv,\n"
+               "              fold_energy.csv, fold_<integrator>.bin); not part of all\n"
                "options:\n"
                "  --out DIR          output directory (default results)\n"
                "  --backend NAME     opencl (default; cpu when no OpenCL device exists) or cpu for the\n"
                "                     simulations; references are\n"
                "                     always computed on the CPU reference backend\n"
                "  --quick            smoke-test sizes (fewer frames and cells); not for reported numbers\n"
-               "  --mesh BASE        drop: the TetGen mesh BASE.node/BASE.ele\n");
+               "  --mesh BASE        drop, fold: the TetGen mesh BASE.node/BASE.ele\n");
 }
 
 }  // namespace
@@ -94,21 +97,14 @@ int main(int argc, char** argv) {
       const char* name;
       void (*run)(const StudyOptions&);
     };
-    const Step steps[] = {{"table", runTable},
-                          {"reference", runReference},
-                          {"sweep", runSweep},
-                          {"stability", runStability},
-                          {"energy", runEnergy},
-                          {"crosscheck", runCrosscheck},
-                          {"motion", runMotion},
-                          {"teaser", runTeaser},
-                          {"interaction", runInteraction},
-                          {"contact", runContact},
-                          {"drop", runDrop}};
+    const Step steps[] = {{"table", runTable},         {"reference", runReference}, {"sweep", runSweep},
+                          {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck},
+                          {"motion", runMotion},       {"teaser", runTeaser},       {"interaction", runInteraction},
+                          {"contact", runContact},     {"drop", runDrop},           {"fold", runFold}};
     bool found = false;
     for (const Step& s : steps) {
-      // `drop` needs a mesh made by an external mesher, so `all` leaves it out.
-      if (command == "all" ? s.run == runDrop : command != s.name) continue;
+      // `drop` and `fold` need a mesh made by an external mesher, so `all` leaves them out.
+      if (command == "all" ? s.run == runDrop || s.run == runFold : command != s.name) continue;
       found = true;
       progress(std::string("== ") + s.name + " (backend " + stabint::backendName(options.backend) + ", out " +
                options.out + ")");

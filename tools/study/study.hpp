@@ -24,7 +24,7 @@ struct StudyOptions {
   std::string out = "results";
   BackendKind backend = BackendKind::CpuReference;
   bool quick = false;  // smoke-test sizes: fewer frames and cells; never for reported numbers
-  std::string mesh;    // drop: the TetGen mesh (BASE, BASE.node or BASE.ele)
+  std::string mesh;    // drop, fold: the TetGen mesh (BASE, BASE.node or BASE.ele)
 };
 
 // ---- scenes --------------------------------------------------------------------------------
@@ -331,6 +331,7 @@ void runTeaser(const StudyOptions& options);       // cmd_teaser.cpp
 void runInteraction(const StudyOptions& options);  // cmd_interaction.cpp
 void runContact(const StudyOptions& options);      // cmd_contact.cpp
 void runDrop(const StudyOptions& options);         // cmd_drop.cpp (needs options.mesh; not in `all`)
+void runFold(const StudyOptions& options);         // cmd_fold.cpp (needs options.mesh; not in `all`)
 
 // ---- small helpers -------------------------------------------------------------------------
 

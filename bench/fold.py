@@ -13,7 +13,6 @@ Rendered as the teaser is (bench/povray_render.py, POV-Ray): the cloth a thin sh
 side its triangles face and ochre on the other, so that its folds show; the body grey. The curves
 are H - H_0 and, dashed, the blend's target H* - H_0 (the drag's work less the booked losses).
 """
-import argparse
 import csv
 import os
 import sys
@@ -29,27 +28,12 @@ from PIL import Image  # noqa: E402
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import povray_render as pr  # noqa: E402
 from drop import label_frame  # noqa: E402
+from teaser import BACK, COLOURS, FRONT, TITLES, picture_args, read_energy  # noqa: E402
 
-INTEGRATORS = ("BE", "BDF2", "blend")
-TITLES = {"BE": "backward Euler", "BDF2": "BDF2", "blend": "energy-tracking blend"}
-COLOURS = {"BE": "tab:blue", "BDF2": "tab:orange", "blend": "tab:green"}
-FRONT = (0.30, 0.52, 0.75)  # steel blue
-BACK = (0.88, 0.60, 0.30)   # ochre
 BODY = (0.62, 0.62, 0.60)   # grey
 VIEW = [-0.25, -0.55, -1.0]  # from the eye to the scene: from the front, above
 GAP = 0.25                  # m between the three panels' widest extents
 STILL_TIME = 4.5            # s: the folded cloth pulled over the body
-
-
-def read_energy(results):
-    rows = list(csv.DictReader(open(os.path.join(results, "fold_energy.csv"))))
-    out = {}
-    for integ in INTEGRATORS:
-        rs = [r for r in rows if r["integrator"] == integ]
-        if rs:
-            out[integ] = {k: np.array([float(r[k]) for r in rs]) for k in ("time", "H", "H_target", "kinetic")}
-            out[integ]["particles"] = int(rs[0]["particles"])
-    return out
 
 
 def read_body(results):
@@ -78,19 +62,8 @@ def energy_axes(ax, energy, mark=None):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("results")
-    ap.add_argument("--charts", default=None)
-    ap.add_argument("--every", type=int, default=3, help="simulation frames per animation frame")
-    args = ap.parse_args()
-    charts = args.charts or os.path.join(args.results, "charts")
-    os.makedirs(charts, exist_ok=True)
-    if not os.path.exists(os.path.join(args.results, "fold_energy.csv")):
-        sys.exit(f"fold.py: {args.results}/fold_energy.csv missing (run stabint-study fold)")
-    if not pr.available():
-        sys.exit(f"fold.py: {pr.POVRAY} missing (Debian package povray; scripts/install-deps.sh)")
-
-    energy = read_energy(args.results)
+    args, charts = picture_args(__doc__, "fold")
+    energy = read_energy(args.results, "fold")
     particles = next(iter(energy.values()))["particles"]
     triangles = np.loadtxt(os.path.join(args.results, "fold_triangles.csv"), delimiter=",", skiprows=1, dtype=int)
     body, body_triangles = read_body(args.results)

@@ -43,8 +43,9 @@ GAP = 0.12                  # m between the three cloths' widest extents
 STILL_TIME = 5.0  # s: BE and BDF2 hang still in their folds; the blend is at the top of its swing
 
 
-def read_energy(results):
-    rows = list(csv.DictReader(open(os.path.join(results, "teaser_energy.csv"))))
+def read_energy(results, name="teaser"):
+    """Every frame's energies per integrator from RESULTS/<name>_energy.csv (a study command's)."""
+    rows = list(csv.DictReader(open(os.path.join(results, f"{name}_energy.csv"))))
     out = {}
     for integ in INTEGRATORS:
         rs = [r for r in rows if r["integrator"] == integ]
@@ -74,19 +75,25 @@ def energy_axes(ax, energy, mark=None):
     ax.grid(alpha=0.3)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def picture_args(doc, name):
+    """The command line of a picture script for `stabint-study <name>`'s results: the parsed
+    arguments and the charts directory (made); exits when the results or POV-Ray are missing."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     ap.add_argument("results")
     ap.add_argument("--charts", default=None)
     ap.add_argument("--every", type=int, default=3, help="simulation frames per animation frame")
     args = ap.parse_args()
     charts = args.charts or os.path.join(args.results, "charts")
     os.makedirs(charts, exist_ok=True)
-    if not os.path.exists(os.path.join(args.results, "teaser_energy.csv")):
-        sys.exit(f"teaser.py: {args.results}/teaser_energy.csv missing (run stabint-study teaser)")
-
+    if not os.path.exists(os.path.join(args.results, f"{name}_energy.csv")):
+        sys.exit(f"{name}.py: {args.results}/{name}_energy.csv missing (run stabint-study {name})")
     if not pr.available():
-        sys.exit(f"teaser.py: {pr.POVRAY} missing (Debian package povray; scripts/install-deps.sh)")
+        sys.exit(f"{name}.py: {pr.POVRAY} missing (Debian package povray; scripts/install-deps.sh)")
+    return args, charts
+
+
+def main():
+    args, charts = picture_args(__doc__, "teaser")
 
     energy = read_energy(args.results)
     particles = next(iter(energy.values()))["particles"]

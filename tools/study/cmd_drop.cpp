@@ -39,24 +39,13 @@ constexpr double kGroundFriction = 0.3;
 constexpr double kSeconds = 4.0;
 constexpr double kLateSeconds = 1.0;  // the mean kinetic energy over the last second
 
-void writePositions(std::ofstream& out, const Eigen::MatrixX3d& x) {
-  std::vector<float> row;
-  row.reserve(static_cast<size_t>(x.size()));
-  for (Eigen::Index r = 0; r < x.rows(); ++r)
-    for (int c = 0; c < 3; ++c) row.push_back(static_cast<float>(x(r, c)));
-  out.write(reinterpret_cast<const char*>(row.data()), static_cast<std::streamsize>(row.size() * sizeof(float)));
-}
-
 // The mesh as loaded, scaled to kSize, tilted, centred over the origin and lifted kDropHeight
 // above the ground; masses lumped again for the scaled volume.
 Scene dropScene(const std::string& mesh) {
-  std::string base = mesh;
-  for (const char* ext : {".node", ".ele"})
-    if (base.size() > 5 && base.compare(base.size() - 5, 5, ext) == 0) base.resize(base.size() - 5);
   stabint::SolidMaterial material;
   material.density = kDensity;
   material.stiffness = kStiffness;
-  Scene s = stabint::loadTetGen(base, material);
+  Scene s = loadTetGenMesh(mesh, material);
   const Eigen::Vector3d lo = s.rest_positions.colwise().minCoeff(), hi = s.rest_positions.colwise().maxCoeff();
   const double scale = kSize / (hi - lo).maxCoeff();
   const Eigen::RowVector3d mid = (0.5 * (lo + hi)).transpose();
@@ -109,7 +98,7 @@ void runDrop(const StudyOptions& options) {
                       std::ios::binary | std::ios::trunc);
     if (!bin)
       throw std::runtime_error("cannot write drop_" + std::string(stabint::integratorName(integrator)) + ".bin");
-    writePositions(bin, sim.positions());
+    appendPositions(bin, sim.positions());
     const stabint::EnergyReport e0 = sim.energy();
     const double h0 = e0.total(), com0 = comHeight(sim.positions());
     csv << stabint::integratorName(integrator) << stabint::backendName(options.backend) << scene.numParticles() << 0
@@ -132,7 +121,7 @@ void runDrop(const StudyOptions& options) {
       if (!landed) lowest = std::min(lowest, com);
       if (landed) rebound = std::max(rebound, com - lowest);
       if (f > frames - late) late_kinetic += r.energy.kinetic;
-      writePositions(bin, sim.positions());
+      appendPositions(bin, sim.positions());
       csv << stabint::integratorName(integrator) << stabint::backendName(options.backend) << scene.numParticles() << f
           << r.time << r.energy.total() << r.target << r.energy.kinetic << r.energy.elastic << r.energy.external
           << friction << com << 1e3 * seconds / f;

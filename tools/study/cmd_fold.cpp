@@ -37,21 +37,10 @@ constexpr double kHandSpeed = 0.4;      // m/s along +x, over the body
 constexpr double kHandLift = 0.8;       // m above where it grabbed, reached at 1 m/s
 constexpr double kSeconds = 6.0;
 
-void writePositions(std::ofstream& out, const Eigen::MatrixX3d& x) {
-  std::vector<float> row;
-  row.reserve(static_cast<size_t>(x.size()));
-  for (Eigen::Index r = 0; r < x.rows(); ++r)
-    for (int c = 0; c < 3; ++c) row.push_back(static_cast<float>(x(r, c)));
-  out.write(reinterpret_cast<const char*>(row.data()), static_cast<std::streamsize>(row.size() * sizeof(float)));
-}
-
 // The body: the surface of the TetGen mesh `mesh`, scaled so that its longest side is kBodySize,
 // centred over the origin and standing on the ground.
 stabint::Collider bodyCollider(const std::string& mesh) {
-  std::string base = mesh;
-  for (const char* ext : {".node", ".ele"})
-    if (base.size() > 5 && base.compare(base.size() - 5, 5, ext) == 0) base.resize(base.size() - 5);
-  const Scene solid = stabint::loadTetGen(base, stabint::SolidMaterial{});
+  const Scene solid = loadTetGenMesh(mesh, stabint::SolidMaterial{});
   const Eigen::Vector3d lo = solid.rest_positions.colwise().minCoeff(), hi = solid.rest_positions.colwise().maxCoeff();
   const double scale = kBodySize / (hi - lo).maxCoeff();
   stabint::Collider body;
@@ -137,7 +126,7 @@ void runFold(const StudyOptions& options) {
     const char* name = stabint::integratorName(integrator);
     std::ofstream bin(joinPath(options.out, std::string("fold_") + name + ".bin"), std::ios::binary | std::ios::trunc);
     if (!bin) throw std::runtime_error(std::string("cannot write fold_") + name + ".bin");
-    writePositions(bin, sim.positions());
+    appendPositions(bin, sim.positions());
     const stabint::EnergyReport e0 = sim.energy();
     csv << name << stabint::backendName(options.backend) << scene.numParticles() << 0 << 0.0 << e0.total() << e0.total()
         << e0.kinetic << e0.elastic << e0.external << 0.0;
@@ -162,7 +151,7 @@ void runFold(const StudyOptions& options) {
         excess = std::max(excess, r.energy.total() - r.target);
         largest_kinetic = std::max(largest_kinetic, r.energy.kinetic);
         booked += r.contact_projection;
-        writePositions(bin, sim.positions());
+        appendPositions(bin, sim.positions());
         csv << name << stabint::backendName(options.backend) << scene.numParticles() << f << r.time << r.energy.total()
             << r.target << r.energy.kinetic << r.energy.elastic << r.energy.external << 1e3 * seconds / f;
         csv.endRow();

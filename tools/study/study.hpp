@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -338,6 +339,11 @@ void runFold(const StudyOptions& options);         // cmd_fold.cpp (needs option
 /// Creates the directory (and parents) if needed.
 void ensureDirectory(const std::string& path);
 std::string joinPath(const std::string& dir, const std::string& name);
+/// Appends one frame of positions to a `<command>_<integrator>.bin` file: float32 little-endian,
+/// particles x 3 (bench/povray_render.py's readers take frames x particles x 3).
+void appendPositions(std::ofstream& out, const Eigen::MatrixX3d& x);
+/// The TetGen mesh --mesh names (BASE, BASE.node or BASE.ele), loaded with `material`.
+Scene loadTetGenMesh(const std::string& mesh, const stabint::SolidMaterial& material);
 /// The label suffix of a series by its solver: "" for the library's default (L-BFGS), "+PD"
 /// (plain Projective-Dynamics iterations), "+AA" (Anderson), "+LB" (L-BFGS), "+NT" (Newton-CG),
 /// "+CH" (Chebyshev).

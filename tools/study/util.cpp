@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <vector>
 
 namespace study {
 
@@ -15,6 +17,21 @@ void ensureDirectory(const std::string& path) { std::filesystem::create_director
 
 std::string joinPath(const std::string& dir, const std::string& name) {
   return (std::filesystem::path(dir) / name).string();
+}
+
+void appendPositions(std::ofstream& out, const Eigen::MatrixX3d& x) {
+  std::vector<float> row;
+  row.reserve(static_cast<size_t>(x.size()));
+  for (Eigen::Index r = 0; r < x.rows(); ++r)
+    for (int c = 0; c < 3; ++c) row.push_back(static_cast<float>(x(r, c)));
+  out.write(reinterpret_cast<const char*>(row.data()), static_cast<std::streamsize>(row.size() * sizeof(float)));
+}
+
+Scene loadTetGenMesh(const std::string& mesh, const stabint::SolidMaterial& material) {
+  std::string base = mesh;
+  for (const char* ext : {".node", ".ele"})
+    if (base.size() > 5 && base.compare(base.size() - 5, 5, ext) == 0) base.resize(base.size() - 5);
+  return stabint::loadTetGen(base, material);
 }
 
 const char* accelerationSuffix(stabint::Acceleration acceleration) {

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -418,7 +419,7 @@ int invertedTets(const Scene& scene, const Eigen::MatrixX3d& x) {
 // bar sinks through the lower one. With it, over 90 steps (3 s: the landing, the upper bar
 // tipping over the lower one onto the ground): no surface triangle pair intersects and no tet
 // inverts at any step, and the blend keeps its books (H at most 0.05 of the run's largest
-// kinetic energy above H*; 0.025 measured, on the bar set down at rest).
+// kinetic energy above H*; 0.037 measured, on the 1e6 Pa bar set down at rest).
 TEST(SelfContactRun, TwoTetBarsDroppedOnEachOtherNeitherInterpenetrateNorInvert) {
   const std::vector<std::array<int, 3>> surface = ContactSurface::of(testing::barOnBar()).triangles;
   {
@@ -443,8 +444,9 @@ TEST(SelfContactRun, TwoTetBarsDroppedOnEachOtherNeitherInterpenetrateNorInvert)
         o.integrator = integrator;
         o.self_contact_thickness = 5e-3;
         Simulator sim(scene, o);
-        const std::string name = std::to_string(stiffness) + " Pa at " + std::to_string(speed) + " m/s, " +
-                                 (integrator == Integrator::BackwardEuler ? "BE" : "the blend");
+        char name[64];
+        std::snprintf(name, sizeof name, "%g Pa at %g m/s, %s", stiffness, speed,
+                      integrator == Integrator::BackwardEuler ? "BE" : "the blend");
         double excess = 0.0, kinetic = 0.0;
         for (int k = 0; k < 90; ++k) {
           const StepReport& r = sim.step();
@@ -453,6 +455,7 @@ TEST(SelfContactRun, TwoTetBarsDroppedOnEachOtherNeitherInterpenetrateNorInvert)
           excess = std::max(excess, r.energy.total() - r.target);
           kinetic = std::max(kinetic, r.energy.kinetic);
         }
+        std::printf("two bars, %s: max(H - H*) / K_max %.4f\n", name, excess / kinetic);
         if (integrator == Integrator::EnergyBlend) {
           EXPECT_LE(excess, 0.05 * kinetic) << name;
         }
@@ -489,13 +492,18 @@ TEST(SelfContactRun, AClothDropsOntoATetBarAndDrapesOverIt) {
       o.integrator = integrator;
       o.self_contact_thickness = 5e-3;
       Simulator sim(scene, o);
-      const std::string name =
-          std::to_string(speed) + " m/s, " + (integrator == Integrator::BackwardEuler ? "BE" : "the blend");
+      char name[64];
+      std::snprintf(name, sizeof name, "%g m/s, %s", speed,
+                    integrator == Integrator::BackwardEuler ? "BE" : "the blend");
+      double excess = 0.0, kinetic = 0.0;
       for (int k = 0; k < 60; ++k) {
-        sim.step();
+        const StepReport& r = sim.step();
         ASSERT_EQ(testing::intersectingTrianglePairs(sim.positions(), surface), 0) << name << ", step " << k;
         ASSERT_EQ(invertedTets(scene, sim.positions()), 0) << name << ", step " << k;
+        excess = std::max(excess, r.energy.total() - r.target);
+        kinetic = std::max(kinetic, r.energy.kinetic);
       }
+      std::printf("cloth on a bar, %s: max(H - H*) / K_max %.4g (not asserted)\n", name, excess / kinetic);
       const Eigen::MatrixX3d x = sim.positions();
       EXPECT_GT(x.col(1).tail(cloth).maxCoeff(), x.col(1).head(x.rows() - cloth).maxCoeff()) << name;
     }

@@ -27,9 +27,9 @@
 
 namespace stabint {
 
-/// The surface self-contact acts on: Scene::triangles (a cloth's; tet bodies are refused for now,
-/// docs/method.md "Self-contact"); its edges, each once (first < second, ascending), and the
-/// vertices the triangles use (ascending).
+/// The surface self-contact acts on: Scene::triangles and the tets' boundary faces (tetSurface),
+/// a face both give once (docs/method.md "Self-contact"); its edges, each once (first < second,
+/// ascending), and the vertices the triangles use (ascending).
 struct ContactSurface {
   std::vector<std::array<int, 3>> triangles;
   std::vector<std::array<int, 2>> edges;

@@ -468,10 +468,12 @@ TEST(SelfContactRun, TwoTetBarsDroppedOnEachOtherNeitherInterpenetrateNorInvert)
 // 20 cm onto a tet bar lying on the ground drapes over it, at rest and thrown at 5 m/s, with
 // backward Euler and the blend. Without self-contact it falls through the bar.
 // With it, over 60 steps: no surface triangle pair intersects and no tet inverts at any step,
-// and the cloth stays over the bar (its highest point above the bar's). Its books are not
-// asserted: while the cloth lies on the bar, gravity pulls it into the thickness within each
-// solve and the pushes after it stretch its springs at the bar's edges, which the blend takes
-// out of the scene's motion (docs/method.md, "Self-contact", the measured table).
+// and the cloth stays over the bar (its highest point above the bar's). The blend's H stays at
+// most 0.3 of the run's largest kinetic energy above H* (0.18 measured at rest, 0.17 at 5 m/s):
+// the supports hold the cloth on the bar within the solve (docs/method.md, "Self-contact",
+// "Support in the solve"); with the pushes after the solve alone it ran 2.1 and 47 times above,
+// as they stretched the draped cloth at the bar's edges at every step. The 0.05 is not
+// reached yet.
 TEST(SelfContactRun, AClothDropsOntoATetBarAndDrapesOverIt) {
   const std::vector<std::array<int, 3>> surface = ContactSurface::of(testing::clothOnBar()).triangles;
   const int cloth = 900;
@@ -503,11 +505,75 @@ TEST(SelfContactRun, AClothDropsOntoATetBarAndDrapesOverIt) {
         excess = std::max(excess, r.energy.total() - r.target);
         kinetic = std::max(kinetic, r.energy.kinetic);
       }
-      std::printf("cloth on a bar, %s: max(H - H*) / K_max %.4g (not asserted)\n", name, excess / kinetic);
+      std::printf("cloth on a bar, %s: max(H - H*) / K_max %.4g\n", name, excess / kinetic);
+      if (integrator == Integrator::EnergyBlend) {
+        EXPECT_LE(excess, 0.3 * kinetic) << name;
+      }
       const Eigen::MatrixX3d x = sim.positions();
       EXPECT_GT(x.col(1).tail(cloth).maxCoeff(), x.col(1).head(x.rows() - cloth).maxCoeff()) << name;
     }
   }
+}
+
+}  // namespace
+}  // namespace stabint
+
+namespace stabint {
+namespace {
+
+// Self-contact's supports act through a collider of their own (SceneSegment::support_collider),
+// which the scene a Simulator shows does not list: its colliders are the user's.
+TEST(SelfContactRun, TheSceneShownKeepsTheUsersColliders) {
+  const Scene scene = testing::clothOnCloth();
+  SimulatorOptions o;
+  o.self_contact_thickness = 3e-3;
+  Simulator sim(scene, o);
+  for (int k = 0; k < 6; ++k) sim.step();  // landed: supports in use
+  ASSERT_EQ(sim.scene().colliders.size(), scene.colliders.size());
+  EXPECT_EQ(sim.scene().colliders[0].shape, scene.colliders[0].shape);
+  EXPECT_EQ(sim.scene().colliders[0].center, scene.colliders[0].center);
+}
+
+// Coulomb friction between the surfaces (SimulatorOptions::self_contact_friction): a cloth thrown
+// sideways onto another lying on the ground (a 0.4 m cloth 2 cm above a 1 m one, at 1 m/s)
+// slides farther without friction than with mu = 0.5, and the friction's loss is booked (BE's
+// target never rises). Measured: its mean velocity after 30 steps is 0.995 m/s without friction
+// and 0.35 m/s with it; the supports' normal impulses carry the cloth's weight, and their friction
+// brakes it (asserted: at least 5 % slower).
+TEST(SelfContactRun, FrictionBetweenTheSurfacesBrakesASlidingCloth) {
+  Scene lower = testing::horizontalCloth(40, 0.002);
+  ClothGridParams p;
+  p.nx = p.ny = 20;
+  p.width = p.height = 0.4;
+  Scene upper = makeClothGrid(p);
+  upper.pins.clear();
+  for (int i = 0; i < upper.numParticles(); ++i) {
+    const double u = upper.positions(i, 0), w = upper.positions(i, 1);
+    upper.positions.row(i) << u - 0.45, 0.02, w - 0.2;
+  }
+  upper.rest_positions = upper.positions;
+  Scene scene = testing::combined(lower, upper);
+  const int n = upper.numParticles();
+  scene.velocities.bottomRows(n).col(0).setConstant(1.0);
+  scene.colliders = {testing::groundPlane(0.0, 1e4, 0.5)};
+  double slide[2];
+  for (int run = 0; run < 2; ++run) {
+    SimulatorOptions o;
+    o.integrator = Integrator::BackwardEuler;
+    o.self_contact_thickness = 3e-3;
+    o.self_contact_friction = run == 0 ? 0.0 : 0.5;
+    Simulator sim(scene, o);
+    double target = sim.target();
+    for (int k = 0; k < 30; ++k) {
+      const StepReport& r = sim.step();
+      EXPECT_LE(r.target, target + 1e-12) << "step " << k;
+      target = r.target;
+    }
+    slide[run] = sim.velocities().col(0).tail(n).mean();
+  }
+  std::printf("the upper cloth's mean velocity after 30 steps: %.3f m/s without friction, %.3f with mu 0.5\n", slide[0],
+              slide[1]);
+  EXPECT_LT(slide[1], 0.95 * slide[0]);
 }
 
 }  // namespace

@@ -72,21 +72,98 @@ std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x
     change.leaving.insert(change.leaving.end(), part.leaving.begin(), part.leaving.end());
     potential_changed[i] = part.entered_inside ? 1 : 0;
   }
-  if (!change.empty()) {
-    const int columns = static_cast<int>(change.entering.size() + change.leaving.size());
-    if (changeSet(change.entering, change.leaving, log_columns_ + columns > kMaxContactLogColumns)) {
-      log_.clear();
-      log_columns_ = 0;
-    } else {
-      for (int e : change.entering) log_.push_back(e + 1);
-      for (int e : change.leaving) log_.push_back(-(e + 1));
-      log_.push_back(0);
-      log_columns_ += columns;
-    }
-  }
+  if (!change.empty()) changeSetLogged(change.entering, change.leaving);
   const std::vector<char> changed = refreshHalfSpaces(t, x, v, parts);
   for (std::size_t i = 0; i < parts.size(); ++i) potential_changed[i] = potential_changed[i] || changed[i];
   return potential_changed;
+}
+
+void ContactResolver::changeSetLogged(const std::vector<int>& entering, const std::vector<int>& leaving) {
+  const int columns = static_cast<int>(entering.size() + leaving.size());
+  if (changeSet(entering, leaving, log_columns_ + columns > kMaxContactLogColumns)) {
+    log_.clear();
+    log_columns_ = 0;
+    return;
+  }
+  for (int e : entering) log_.push_back(e + 1);
+  for (int e : leaving) log_.push_back(-(e + 1));
+  log_.push_back(0);
+  log_columns_ += columns;
+}
+
+void ContactResolver::setSupports(const std::vector<Supports>& supports) {
+  const Scene& scene = scene_.scene();
+  std::vector<int> entering, leaving;
+  std::vector<std::pair<int, const SupportPlane*>> planes;  // (pair, its plane)
+  for (const Supports& set : supports) {
+    const IndexRange particles = colliderParticles(scene, set.collider);
+    const int first = firstContactElement(scene, set.collider);
+    std::vector<const SupportPlane*> of(static_cast<std::size_t>(particles.count), nullptr);
+    for (const SupportPlane& plane : set.planes) of[std::size_t(plane.particle - particles.first)] = &plane;
+    for (int k = 0; k < particles.count; ++k) {
+      const int e = first + k;
+      const bool in = scene_.elementEnabled(block_, e);
+      if (of[std::size_t(k)] && !in) entering.push_back(e);
+      if (!of[std::size_t(k)] && in) leaving.push_back(e);
+      if (of[std::size_t(k)]) planes.emplace_back(e, of[std::size_t(k)]);
+    }
+  }
+  if (!entering.empty() || !leaving.empty()) changeSetLogged(entering, leaving);
+  for (const auto& [e, plane] : planes) {
+    const Eigen::Vector3d& point = plane->point;
+    double geometry[kColliderGeometry] = {};
+    geometry[kGeometryShape] = static_cast<double>(static_cast<int>(ColliderShape::Plane));
+    for (int c = 0; c < 3; ++c) {
+      geometry[kGeometryCenter + c] = point[c];
+      geometry[kGeometryA + c] = plane->normal[c];
+    }
+    scene_.setElementParams(block_, e, kContactGeometry, geometry, kColliderGeometry);
+  }
+}
+
+bool ContactResolver::relaxSupports(int collider, const Eigen::MatrixX3d& x) {
+  const Scene& scene = scene_.scene();
+  const IndexRange particles = colliderParticles(scene, collider);
+  const int first = firstContactElement(scene, collider);
+  const ElementBlock& block = scene_.blocks()[static_cast<std::size_t>(block_)];
+  const std::size_t P = static_cast<std::size_t>(block.type->shape().params);
+  bool moved = false;
+  for (int k = 0; k < particles.count; ++k) {
+    const int e = first + k;
+    if (!scene_.elementEnabled(block_, e)) continue;
+    const double* g = block.params.data() + P * std::size_t(e) + kContactGeometry;
+    const int j = particles.first + k;
+    double depth = 0.0;
+    for (int c = 0; c < 3; ++c) depth += (x(j, c) - g[kGeometryCenter + c]) * g[kGeometryA + c];
+    if (!(depth < 0.0)) continue;
+    // Clearly below x, where a float device's rounding also finds x outside (energy exactly 0, as
+    // without the plane).
+    const double below = depth - 1e-6 * (1.0 + x.row(j).cwiseAbs().maxCoeff());
+    double geometry[kColliderGeometry];
+    std::copy(g, g + kColliderGeometry, geometry);
+    for (int c = 0; c < 3; ++c) geometry[kGeometryCenter + c] += below * geometry[kGeometryA + c];
+    scene_.setElementParams(block_, e, kContactGeometry, geometry, kColliderGeometry);
+    moved = true;
+  }
+  return moved;
+}
+
+std::vector<double> ContactResolver::supportImpulses(int collider, const std::vector<SupportPlane>& supports,
+                                                     const Eigen::MatrixX3d& x, int first_row) const {
+  const Scene& scene = scene_.scene();
+  const IndexRange particles = colliderParticles(scene, collider);
+  const int first = firstContactElement(scene, collider);
+  const ElementBlock& block = scene_.blocks()[static_cast<std::size_t>(block_)];
+  const std::size_t P = static_cast<std::size_t>(block.type->shape().params);
+  std::vector<double> impulses;
+  for (const SupportPlane& s : supports) {
+    const int e = first + s.particle - particles.first;
+    const double* g = block.params.data() + P * std::size_t(e) + kContactGeometry;
+    double depth = 0.0;
+    for (int c = 0; c < 3; ++c) depth -= (x(s.particle - first_row, c) - g[kGeometryCenter + c]) * g[kGeometryA + c];
+    impulses.push_back(time_step_ * scene_.elementWeight(block_, e) * std::max(0.0, depth));
+  }
+  return impulses;
 }
 
 std::vector<char> ContactResolver::refreshHalfSpaces(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,

@@ -9,6 +9,7 @@
 // neither them nor the facade: scripts/check_layering.sh), so that the batch can hold one too.
 #include "backend.hpp"
 #include "contact/contact_rules.hpp"  // ContactPart
+#include "contact/self_contact.hpp"   // SupportPlane
 
 #include <stabint/types.hpp>
 
@@ -31,6 +32,9 @@ class ContactResolver {
   ContactResolver(SceneData& scene, const Forcing& forcing, GlobalSystem& system, const SimulatorOptions& options,
                   double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
+  /// How near a pair must be to its collider (or will be, at its velocity) to enter the contact
+  /// set: contact_tolerance + time_step^2 |gravity|.
+  double margin() const;
   /// The number of (collider, particle) pairs: 0 without colliders.
   int count() const;
   /// The contact element type's block in the scene (-1 without one).
@@ -54,6 +58,27 @@ class ContactResolver {
   /// updateSet. Entry i of the result is 1 when a pair of parts[i] changed.
   std::vector<char> refreshHalfSpaces(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
                                       const std::vector<ContactPart>& parts);
+
+  /// Self-contact's supports in the solve (docs/method.md, "Self-contact", "Support in the
+  /// solve"): per support collider (SceneSegment::support_collider), the half-spaces its
+  /// particles act with in the next solve. The collider's pairs in the contact set become exactly
+  /// the listed particles' (one change of L and the factors for all, logged like the broad
+  /// phase's), each with its plane.
+  struct Supports {
+    int collider;
+    std::vector<SupportPlane> planes;  // at most one per particle, the concatenation's indices
+  };
+  void setSupports(const std::vector<Supports>& supports);
+  /// Moves every support plane of `collider` that positions `x` (the scene's rows) are inside
+  /// of to pass through them, so that the supports hold no energy in a state a step ends with:
+  /// a restore, which does not know the planes, gets the same potential. Returns whether a plane
+  /// moved (the caller books the loss).
+  bool relaxSupports(int collider, const Eigen::MatrixX3d& x);
+  /// The normal impulse h w d of each of `supports` (of support collider `collider`, the
+  /// concatenation's particle indices) at positions `x` (rows from `first_row`): d its depth in
+  /// its plane, w its weight.
+  std::vector<double> supportImpulses(int collider, const std::vector<SupportPlane>& supports,
+                                      const Eigen::MatrixX3d& x, int first_row) const;
 
   /// After the solve, for `part` on its host copies (x, v) of the accepted state at t1: friction takes kinetic energy
   /// out of v and out of `target` (H*) with it, like damping (report.friction); the final projection moves the
@@ -99,8 +124,9 @@ class ContactResolver {
   void restore(const std::vector<std::int32_t>& log);
 
  private:
-  double margin() const;
   bool changeSet(const std::vector<int>& entering, const std::vector<int>& leaving, bool refactor);
+  // changeSet, with the change in the log (or the log restarted when L was assembled anew).
+  void changeSetLogged(const std::vector<int>& entering, const std::vector<int>& leaving);
 
   SceneData& scene_;
   const Forcing& forcing_;

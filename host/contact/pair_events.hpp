@@ -17,7 +17,8 @@ struct ContactEvent {
   std::array<int, 4> vertices{};
   std::array<double, 4> weights{};
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-  bool crossing = false;  // the pair passes (or touches) within the step; else it only ends too close
+  bool crossing = false;      // the pair passes (or touches) within the step; else it only ends too close
+  bool support_only = false;  // it neither meets nor ends nearer than closer_than: a support's pair
   bool edge_edge = false;
 };
 
@@ -31,8 +32,11 @@ inline Eigen::Vector3d rowOf(const Eigen::MatrixX3d& x, int i) { return x.row(i)
 /// `out`: they cross or touch (closest points within `touching`) at a root or an extremum of
 /// their coplanarity cubic, or end nearer than `closer_than`. `scale`, the scene's size, decides
 /// what counts as touching at x0 (where the direction falls back to the triangle's normal).
+/// With `support_reach`, also a pair that ends within it with the vertex over the triangle's face
+/// (their direction within 60 degrees of its normal), as a support_only event.
 void vertexTriangleEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int v, const std::array<int, 3>& tri,
-                         double closer_than, double touching, double scale, std::vector<ContactEvent>& out);
+                         double closer_than, double touching, double scale, std::vector<ContactEvent>& out,
+                         double support_reach = 0.0);
 /// The same for edges e1 and e2.
 void edgeEdgeEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, const std::array<int, 2>& e1,
                    const std::array<int, 2>& e2, double closer_than, double touching, double scale,

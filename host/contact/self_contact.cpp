@@ -156,9 +156,11 @@ int findRoot(std::vector<int>& parent, int i) {
 
 }  // namespace
 
-SelfContact::SelfContact(const Scene& scene, double thickness)
+SelfContact::SelfContact(const Scene& scene, double thickness, double friction, double support_margin)
     : surface_(ContactSurface::of(scene)),
       thickness_(thickness),
+      friction_(friction),
+      support_margin_(support_margin),
       solid_of_(static_cast<std::size_t>(scene.numParticles()), -1) {
   // The tet bodies: the particles their tets connect.
   std::vector<int> parent(static_cast<std::size_t>(scene.numParticles()));
@@ -182,10 +184,12 @@ SelfContact::SelfContact(const Scene& scene, double thickness)
 }
 
 ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::MatrixX3d& x1,
-                                          const std::vector<char>* moved) const {
+                                          const std::vector<char>* moved, double support_reach) const {
   ContactCandidates found;
   if (surface_.empty()) return found;
   const double grow = 0.5 * thickness_;
+  // Vertex-triangle pairs also within the support reach.
+  const double grow_vt = 0.5 * std::max(thickness_, support_reach);
   const auto& tris = surface_.triangles;
   const auto& edges = surface_.edges;
   const auto& verts = surface_.vertices;
@@ -195,12 +199,12 @@ ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::M
   shift /= double(verts.size());
   double extent = 0.0;
   for (std::size_t i = 0; i < tris.size(); ++i) {
-    tri_boxes[i] = sweptBox(tris[i], x0, x1, shift, grow);
+    tri_boxes[i] = sweptBox(tris[i], x0, x1, shift, grow_vt);
     extent += (tri_boxes[i].hi - tri_boxes[i].lo).maxCoeff();
   }
   for (std::size_t i = 0; i < edges.size(); ++i) edge_boxes[i] = sweptBox(edges[i], x0, x1, shift, grow);
   for (std::size_t i = 0; i < verts.size(); ++i)
-    vert_boxes[i] = sweptBox(std::array<int, 1>{verts[i]}, x0, x1, shift, grow);
+    vert_boxes[i] = sweptBox(std::array<int, 1>{verts[i]}, x0, x1, shift, grow_vt);
   // Cells about one triangle's swept box wide: each box covers a few cells, each cell a few boxes.
   const double cell = std::max(extent / double(tris.size()), 4.0 * thickness_);
 
@@ -274,10 +278,10 @@ ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::M
 }
 
 std::vector<ContactEvent> SelfContact::events(const PositionRows& x0, const Eigen::MatrixX3d& x1, double closer_than,
-                                              const std::vector<char>* moved) const {
+                                              const std::vector<char>* moved, double support_reach) const {
   std::vector<ContactEvent> out;
   if (surface_.empty()) return out;
-  const ContactCandidates pairs = candidates(x0, x1, moved);
+  const ContactCandidates pairs = candidates(x0, x1, moved, support_reach);
   const auto& tris = surface_.triangles;
   const auto& edges = surface_.edges;
   // The scene's size, for what counts as touching at x0.
@@ -297,7 +301,7 @@ std::vector<ContactEvent> SelfContact::events(const PositionRows& x0, const Eige
       for (std::size_t k = std::size_t(chunk) * kChunk; k < std::min(vt, std::size_t(chunk + 1) * kChunk); ++k) {
         const auto [v, t] = pairs.vertex_triangle[k];
         const auto& tri = tris[std::size_t(t)];
-        vertexTriangleEvent(x0, x1, v, tri, closer_than, touching, scale, list);
+        vertexTriangleEvent(x0, x1, v, tri, closer_than, touching, scale, list, support_reach);
       }
       return;
     }
@@ -371,21 +375,24 @@ class Response {
     const double vertical = e.normal.dot(*up);
     return std::abs(vertical) >= 0.5 && e.weights[std::size_t(k)] * vertical < 0.0;
   }
-  // A body's share of `e`: the sum of its vertices' weights and of their moments about its centre.
-  void share(const ContactEvent& e, int b, double& weight, Vec3& moment, const Vec3* up = nullptr) const {
+  // A body's share of an impulse on `e` along `dir`: the sum of its vertices' weights and of their
+  // moments about its centre.
+  void share(const ContactEvent& e, int b, const Vec3& dir, double& weight, Vec3& moment,
+             const Vec3* up = nullptr) const {
     weight = 0.0;
     moment.setZero();
     for (int k = 0; k < 4; ++k) {
       if (bodyOf(e, k) != b || below(e, k, up)) continue;
       const int i = e.vertices[std::size_t(k)];
       weight += e.weights[std::size_t(k)];
-      moment += e.weights[std::size_t(k)] * (rowOf(x_, i) - centres_[std::size_t(b)]).cross(e.normal);
+      moment += e.weights[std::size_t(k)] * (rowOf(x_, i) - centres_[std::size_t(b)]).cross(dir);
     }
   }
-  // How far a unit impulse along e's normal moves its separation: sum w_i^2 / m_i over the particles
-  // that answer alone, and a^2 / M + t . I^-1 t over the bodies (a, t: share).
-  // With `up`, the pair's lower side takes no share (below).
-  double compliance(const ContactEvent& e, const Vec3* up = nullptr) const {
+  // How far a unit impulse along `dir` (e's normal, or a tangent for friction) moves the pair's
+  // relative motion along it: sum w_i^2 / m_i over the particles that answer alone, and
+  // a^2 / M + t . I^-1 t over the bodies (a, t: share). With `up`, the pair's lower side takes no
+  // share (below).
+  double compliance(const ContactEvent& e, const Vec3& dir, const Vec3* up = nullptr) const {
     double c = 0.0;
     for (int k = 0; k < 4; ++k) {
       if (below(e, k, up)) continue;
@@ -398,7 +405,7 @@ class Response {
       if (firstOfBody(e, k, up)) {
         double a;
         Vec3 t;
-        share(e, b, a, t, up);
+        share(e, b, dir, a, t, up);
         c += a * a * inverse_body_mass_[std::size_t(b)] + t.dot(inverse_inertia_[std::size_t(b)] * t);
       }
     }
@@ -445,15 +452,18 @@ class Motion {
            angular_[std::size_t(b)].cross(rowOf(response_.reference(), i) - response_.centre(b));
     return r;
   }
-  // The separation of `e` along its normal (sum w_i n . row_i).
-  double along(const ContactEvent& e) const {
-    double d = 0.0;
-    for (int k = 0; k < 4; ++k) d += e.weights[std::size_t(k)] * e.normal.dot(at(e.vertices[std::size_t(k)]));
+  // The pair's relative row, sum w_i row_i.
+  Vec3 relative(const ContactEvent& e) const {
+    Vec3 d = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) d += e.weights[std::size_t(k)] * at(e.vertices[std::size_t(k)]);
     return d;
   }
-  // An impulse `j` along e's normal (with `up`, on the pair's upper side alone); `moved` (when
-  // given) flags the particles that answer alone.
-  void push(const ContactEvent& e, double j, std::vector<char>* moved = nullptr, const Vec3* up = nullptr) {
+  // The separation of `e` along its normal (n . sum w_i row_i).
+  double along(const ContactEvent& e) const { return e.normal.dot(relative(e)); }
+  // An impulse `j` along `dir` (with `up`, on the pair's upper side alone); `moved` (when given)
+  // flags the particles that answer alone.
+  void push(const ContactEvent& e, double j, const Vec3& dir, std::vector<char>* moved = nullptr,
+            const Vec3* up = nullptr) {
     for (int k = 0; k < 4; ++k) {
       if (Response::below(e, k, up)) continue;
       const int b = response_.bodyOf(e, k);
@@ -461,15 +471,15 @@ class Motion {
       if (b < 0) {
         const double share = e.weights[std::size_t(k)] * response_.inverseMass(i);
         if (share == 0.0) continue;
-        rows_.row(i) += (j * share) * e.normal.transpose();
+        rows_.row(i) += (j * share) * dir.transpose();
         if (moved) (*moved)[std::size_t(i)] = 1;
         continue;
       }
       if (!response_.firstOfBody(e, k, up)) continue;
       double a;
       Vec3 t;
-      response_.share(e, b, a, t, up);
-      linear_[std::size_t(b)] += (j * a * response_.inverseBodyMass(b)) * e.normal;
+      response_.share(e, b, dir, a, t, up);
+      linear_[std::size_t(b)] += (j * a * response_.inverseBodyMass(b)) * dir;
       angular_[std::size_t(b)] += j * (response_.inverseInertia(b) * t);
     }
   }
@@ -492,17 +502,81 @@ class Motion {
   std::vector<Vec3> linear_, angular_;
 };
 
+// [project rule] Coulomb friction between the surfaces (docs/method.md, "Self-contact"): the
+// pair's relative tangential velocity shrinks by at most mu times the change `normal` (>= 0) the
+// impulse just applied made to its normal velocity, and never reverses. Friction removes kinetic
+// energy only (an impulse that slows the relative motion it acts along, without reversing it).
+void applyFriction(const ContactEvent& e, double mu, double normal, const Response& response, Motion& velocity) {
+  if (!(mu > 0.0) || !(normal > 0.0)) return;
+  const Vec3 relative = velocity.relative(e);
+  const Vec3 tangential = relative - e.normal.dot(relative) * e.normal;
+  const double slip = tangential.norm();
+  if (!(slip > 0.0)) return;
+  const Vec3 dir = tangential / slip;
+  const double compliance = response.compliance(e, dir);
+  if (!(compliance > 0.0)) return;
+  velocity.push(e, -std::min(slip, mu * normal) / compliance, dir);
+}
+
+// Each particle's support in the solve (SelfContact::stopApproach), against where the other side
+// of its pair is predicted at the step's end (`ends`).
+void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x, const Eigen::MatrixX3d& ends,
+                   double thickness, double reach, const Response& response, std::vector<SupportPlane>& supports) {
+  // Per particle the plane with the least room between x and the thickness (slack), the first of equals.
+  std::vector<int> chosen(static_cast<std::size_t>(x.rows()), -1);
+  std::vector<double> slack;
+  for (const ContactEvent& e : found) {
+    const int p = e.vertices[0];
+    // A tet body's particles answer as the body (Response): a support of one would hold it alone.
+    if (e.edge_edge || response.inverseMass(p) == 0.0 || response.solidOf()[std::size_t(p)] >= 0) continue;
+    // Where the triangle's contact point is predicted at the step's end.
+    Vec3 q = Vec3::Zero();
+    for (int k = 1; k < 4; ++k) q -= e.weights[std::size_t(k)] * rowOf(ends, e.vertices[std::size_t(k)]);
+    const double gap = e.normal.dot(rowOf(x, p) - q);
+    if (!(gap > 0.0)) continue;
+    // Resting or slow contact only: a pair whose vertex moves relative to the triangle's point by
+    // more than the reach within the step is an impact or a slide, which the impulses answer.
+    Vec3 q0 = Vec3::Zero();
+    for (int k = 1; k < 4; ++k) q0 -= e.weights[std::size_t(k)] * rowOf(x, e.vertices[std::size_t(k)]);
+    if ((rowOf(ends, p) - rowOf(x, p) - (q - q0)).norm() > reach) continue;
+    const double offset = std::min(thickness, gap);
+    int& c = chosen[std::size_t(p)];
+    if (c >= 0 && !(gap - offset < slack[std::size_t(c)])) continue;
+    if (c < 0) {
+      c = static_cast<int>(supports.size());
+      supports.emplace_back();
+      slack.push_back(0.0);
+    }
+    SupportPlane& plane = supports[std::size_t(c)];
+    plane.particle = p;
+    plane.point = q + offset * e.normal;
+    plane.normal = e.normal;
+    plane.triangle = {e.vertices[1], e.vertices[2], e.vertices[3]};
+    plane.bary = Vec3(-e.weights[1], -e.weights[2], -e.weights[3]);
+    slack[std::size_t(c)] = gap - offset;
+  }
+}
+
 }  // namespace
 
 double SelfContact::stopApproach(const PositionRows& x, Eigen::MatrixX3d& v, const Eigen::MatrixX3d& predicted,
-                                 double h, const Eigen::VectorXd& masses, const std::vector<int>& fixed) const {
+                                 double h, const Eigen::VectorXd& masses, const std::vector<int>& fixed,
+                                 std::vector<SupportPlane>* supports, const Eigen::Vector3d& fall) const {
+  if (supports) supports->clear();
   if (surface_.empty()) return 0.0;
+  // What the prediction adds to the velocities' path (gravity, the colliders' projection).
+  const Eigen::MatrixX3d drift = supports ? Eigen::MatrixX3d(predicted - x - h * v) : Eigen::MatrixX3d();
   const Response response(solid_of_, solids_, x, masses, fixed);
   Motion velocity(response, v);
   bool changed = false;
   const double kinetic_before = kinetic(v, masses);
-  for (const ContactEvent& e : events(x, predicted, thickness_)) {
-    const double compliance = response.compliance(e);
+  // With supports, also the vertex-triangle pairs that end within the support margin of the
+  // thickness.
+  const std::vector<ContactEvent> found =
+      events(x, predicted, thickness_, nullptr, supports ? thickness_ + support_margin_ : 0.0);
+  for (const ContactEvent& e : found) {
+    if (e.support_only) continue;
+    const double compliance = response.compliance(e, e.normal);
     if (!(compliance > 0.0)) continue;
     double gap = 0.0, path = 0.0;
     for (int k = 0; k < 4; ++k) {
@@ -516,11 +590,45 @@ double SelfContact::stopApproach(const PositionRows& x, Eigen::MatrixX3d& v, con
     // The approach speed that ends the step at the thickness with that drift, never a separating one.
     const double wanted = std::min(0.0, (thickness_ - gap) / h - std::min(drift, 0.0));
     if (!(speed < wanted)) continue;
-    velocity.push(e, (wanted - speed) / compliance);
+    velocity.push(e, (wanted - speed) / compliance, e.normal);
+    applyFriction(e, friction_, wanted - speed, response, velocity);
     changed = true;
   }
   velocity.settle();
+  if (supports) {
+    // The step's ends with the stopped velocities; a tet body's as a rigid body's: its fall, less
+    // the most the colliders lift one of its particles against it (a bar lying on the ground stays).
+    Eigen::MatrixX3d ends = x + h * v + drift;
+    const double f = fall.norm();
+    for (const std::vector<int>& body : solids_) {
+      double lift = 0.0;
+      if (f > 0.0)
+        for (int i : body) lift = std::max(lift, -(rowOf(drift, i) - fall).dot(fall) / f);
+      const Vec3 move = f > 0.0 ? Vec3(fall * (1.0 - lift / f)) : Vec3::Zero();
+      for (int i : body) ends.row(i) = x.row(i) + h * v.row(i) + move.transpose();
+    }
+    supportPlanes(found, x, ends, thickness_, thickness_ + support_margin_, response, *supports);
+  }
   return changed ? kinetic_before - kinetic(v, masses) : 0.0;
+}
+
+double SelfContact::supportFriction(const std::vector<SupportPlane>& supports, const std::vector<double>& impulses,
+                                    const PositionRows& x, Eigen::MatrixX3d& v, const Eigen::VectorXd& masses,
+                                    const std::vector<int>& fixed) const {
+  if (!(friction_ > 0.0) || supports.empty()) return 0.0;
+  const Response response(solid_of_, solids_, x, masses, fixed);
+  Motion velocity(response, v);
+  const double kinetic_before = kinetic(v, masses);
+  for (std::size_t i = 0; i < supports.size(); ++i) {
+    const SupportPlane& s = supports[i];
+    ContactEvent e;
+    e.vertices = {s.particle, s.triangle[0], s.triangle[1], s.triangle[2]};
+    e.weights = {1.0, -s.bary[0], -s.bary[1], -s.bary[2]};
+    e.normal = s.normal;
+    applyFriction(e, friction_, impulses[i] * response.inverseMass(s.particle), response, velocity);
+  }
+  velocity.settle();
+  return kinetic_before - kinetic(v, masses);
 }
 
 SelfContactResult SelfContact::resolve(const PositionRows& x0, Eigen::MatrixX3d& x1, Eigen::MatrixX3d& v1,
@@ -548,21 +656,24 @@ SelfContactResult SelfContact::resolve(const PositionRows& x0, Eigen::MatrixX3d&
     std::fill(moved.begin(), moved.end(), 0);
     Motion position(response, x1), velocity(response, v1);
     for (const ContactEvent& e : events) {
-      const double compliance = response.compliance(e);
+      const double compliance = response.compliance(e, e.normal);
       if (!(compliance > 0.0)) continue;
       const double gap = position.along(e), speed = velocity.along(e);
       // The positions' push upwards where the pair is stacked and its upper side is not much
       // heavier than its lower one (a cloth under a tet body lying on the ground beside it takes
       // the push, shared by mass, rather than lifting the body at every step).
       const Vec3* stacked = up.isZero() ? nullptr : &up;
-      const double push_compliance = stacked ? response.compliance(e, stacked) : compliance;
+      const double push_compliance = stacked ? response.compliance(e, e.normal, stacked) : compliance;
       if (!(push_compliance > 0.0) || push_compliance < 0.5 * (compliance - push_compliance)) stacked = nullptr;
       const double push = gap < thickness_ ? (thickness_ - gap) / (stacked ? push_compliance : compliance) : 0.0;
       const double stop = speed < 0.0 ? -speed / compliance : 0.0;
       if (push == 0.0 && stop == 0.0) continue;
       ++result.events;
-      if (push != 0.0) position.push(e, push, &moved, stacked);
-      if (stop != 0.0) velocity.push(e, stop);
+      if (push != 0.0) position.push(e, push, e.normal, &moved, stacked);
+      if (stop != 0.0) {
+        velocity.push(e, stop, e.normal);
+        applyFriction(e, friction_, -speed, response, velocity);
+      }
       result.positions_moved = result.positions_moved || push != 0.0;
       result.velocities_changed = result.velocities_changed || stop != 0.0;
     }

@@ -44,6 +44,15 @@ struct ContactCandidates {
   std::vector<std::pair<int, int>> vertex_triangle, edge_edge;
 };
 
+/// A half-space a particle acts with in a solve, n . (x - point) >= 0 (docs/method.md,
+/// "Self-contact", "Support in the solve").
+struct SupportPlane {
+  int particle;
+  Eigen::Vector3d point, normal;
+  std::array<int, 3> triangle;  // the pair's triangle and its closest point's barycentric weights
+  Eigen::Vector3d bary;
+};
+
 /// What SelfContact::resolve did in one step.
 struct SelfContactResult {
   int events = 0;                // impulses applied
@@ -55,21 +64,27 @@ struct SelfContactResult {
 
 class SelfContact {
  public:
-  /// `scene`'s surface (ContactSurface::of); thickness > 0.
-  SelfContact(const Scene& scene, double thickness);
+  /// `scene`'s surface (ContactSurface::of); thickness > 0; `friction`, the Coulomb coefficient
+  /// between the surfaces (>= 0); `support_margin`, how much farther than the thickness a pair's
+  /// end may be and still give a support (stopApproach).
+  SelfContact(const Scene& scene, double thickness, double friction = 0.0, double support_margin = 0.0);
   bool empty() const { return surface_.empty(); }
   const ContactSurface& surface() const { return surface_; }
 
-  /// The broad phase of the path x0 -> x1: every pair that may meet on it (with `moved`, a flag
-  /// per particle, only the pairs with a moved vertex).
+  /// The broad phase of the path x0 -> x1: every pair that may meet on it or end within the
+  /// thickness, and the vertex-triangle pairs within `support_reach` (with `moved`, a flag per
+  /// particle, only the pairs with a moved vertex).
   ContactCandidates candidates(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
-                               const Eigen::MatrixX3d& x1, const std::vector<char>* moved = nullptr) const;
+                               const Eigen::MatrixX3d& x1, const std::vector<char>* moved = nullptr,
+                               double support_reach = 0.0) const;
   /// The pairs that meet on the path x0 -> x1 (crossing or touching within the step, or ending
   /// closer than `closer_than`), sorted (vertex-triangle before edge-edge, then by vertices);
-  /// with `moved`, only the pairs with a moved vertex.
+  /// with `moved`, only the pairs with a moved vertex; with `support_reach`, also the
+  /// vertex-triangle pairs that end within it, the vertex over the triangle's face
+  /// (ContactEvent::support_only).
   std::vector<ContactEvent> events(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
                                    const Eigen::MatrixX3d& x1, double closer_than,
-                                   const std::vector<char>* moved = nullptr) const;
+                                   const std::vector<char>* moved = nullptr, double support_reach = 0.0) const;
 
   /// Makes the step x0 -> x1 crossing-free and leaves the surfaces `thickness` apart where it
   /// can, moving x1 and v1 (rows as x0's) by the impulses; `masses` are the scene's, and the
@@ -90,10 +105,25 @@ class SelfContact {
   /// the thickness, by inelastic impulses on v alone (momentum kept, pins fixed). The solve then
   /// stops the rest of each body through its elements, where the positions' correction after the
   /// solve (resolve) would stretch the few elements at a contact's edge. Returns the kinetic
-  /// energy removed (>= 0).
+  /// energy removed (>= 0). With `supports`, also each particle's support in the solve: a cloth
+  /// vertex of a vertex-triangle pair keeps its side of the triangle where the prediction (as
+  /// stopped; a tet body's rigidly: `fall`, h^2 g, less what the colliders lift it) puts the
+  /// triangle at the step's end, the thickness apart or as far as it is now (never inside at x:
+  /// the support adds no energy to the state it starts from); of several, the nearest.
   double stopApproach(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x, Eigen::MatrixX3d& v,
                       const Eigen::MatrixX3d& predicted, double h, const Eigen::VectorXd& masses,
-                      const std::vector<int>& fixed) const;
+                      const std::vector<int>& fixed, std::vector<SupportPlane>* supports = nullptr,
+                      const Eigen::Vector3d& fall = Eigen::Vector3d::Zero()) const;
+
+  /// Coulomb friction of the supports after the solve (docs/method.md, "Self-contact",
+  /// "Friction"): for each support (rows as v's), its normal impulse `impulses[i]` (h w d, from
+  /// its depth d in its plane at the solve's end) lets the relative tangential velocity of its
+  /// vertex and triangle shrink by at most mu times it over the vertex's mass, never reversing,
+  /// by an impulse on both (momentum kept, pins fixed). Returns the kinetic energy removed.
+  double supportFriction(const std::vector<SupportPlane>& supports, const std::vector<double>& impulses,
+                         const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x, Eigen::MatrixX3d& v,
+                         const Eigen::VectorXd& masses, const std::vector<int>& fixed) const;
+  double friction() const { return friction_; }
 
   /// Rounds of impulses before the impact zones.
   static constexpr int kRounds = 8;
@@ -101,6 +131,8 @@ class SelfContact {
  private:
   ContactSurface surface_;
   double thickness_;
+  double friction_;
+  double support_margin_;
   // The tet bodies (the particles their tets connect, ascending), which answer impulses as rigid
   // bodies, and each particle's body (-1: none).
   std::vector<int> solid_of_;

@@ -47,8 +47,20 @@ void BatchDriver::updateContactSets() {
 void BatchDriver::refreshContactGeometry() {
   if (contact_.count() == 0) return;
   std::vector<ContactPart> parts;
-  const std::vector<std::size_t> scenes = contactScenes(parts);
-  const std::vector<char> changed = contact_.refreshHalfSpaces(t_, x_, v_, parts);
+  std::vector<std::size_t> scenes = contactScenes(parts);
+  std::vector<char> changed = contact_.refreshHalfSpaces(t_, x_, v_, parts);
+  // Self-contact's supports hold no energy in the state the step ends with (relaxSupports).
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    if (!per_scene_[s].stepping || segments_[s].support_collider < 0) continue;
+    if (!contact_.relaxSupports(segments_[s].support_collider, x_)) continue;
+    const auto at = std::lower_bound(scenes.begin(), scenes.end(), s);
+    if (at != scenes.end() && *at == s) {
+      changed[std::size_t(at - scenes.begin())] = 1;
+    } else {
+      changed.insert(changed.begin() + (at - scenes.begin()), 1);
+      scenes.insert(at, s);
+    }
+  }
   bookContactGeometry(scenes, changed);
   for (std::size_t i = 0; i < scenes.size(); ++i) {
     if (!changed[i]) continue;
@@ -83,6 +95,8 @@ void BatchDriver::bookContactGeometry(const std::vector<std::size_t>& scenes, co
 
 void BatchDriver::stopSelfContactApproach() {
   if (self_contact_.empty()) return;
+  std::vector<ContactResolver::Supports> supports;
+  step_supports_.resize(segments_.size());
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     PerScene& p = per_scene_[s];
     if (!p.stepping || self_contact_[s].empty()) continue;
@@ -96,7 +110,13 @@ void BatchDriver::stopSelfContactApproach() {
     Eigen::MatrixX3d predicted = x + h * v;
     predicted.rowwise() += (h * h) * scenes_[s].gravity.transpose();
     contact_.projectOut(contactPart(s, seg.first_particle), t_ + h, x, predicted);
-    if (self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed) == 0.0) continue;
+    std::vector<SupportPlane>& own = step_supports_[s];
+    const double stopped =
+        self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed, &own, h * h * scenes_[s].gravity);
+    std::vector<SupportPlane> planes = own;
+    for (SupportPlane& plane : planes) plane.particle += seg.first_particle;
+    supports.push_back(ContactResolver::Supports{seg.support_collider, std::move(planes)});
+    if (stopped == 0.0) continue;
     // BDF2's history is not the changed state's: this step is a BE step (a batch with BDF2 and
     // self-contact has one scene).
     has_history_ = false;
@@ -114,6 +134,7 @@ void BatchDriver::stopSelfContactApproach() {
     report_.scenes[s].contact_projection -= removed;
     writeStateRows(seg.first_particle, seg.first_particle + seg.num_particles);
   }
+  contact_.setSupports(supports);
 }
 
 std::vector<int> BatchDriver::pinnedVertices(std::size_t s) const {
@@ -140,6 +161,20 @@ void BatchDriver::resolveContact(double t1) {
     ContactResolver::Resolved resolved;
     if (contact_.count() > 0)
       resolved = contact_.applyFrictionAndProjection(part, t1, x0, p.x_new, p.v_new, p.target_now, report_.scenes[s]);
+    if (!self_contact_.empty() && !self_contact_[s].empty() && self_contact_[s].friction() > 0.0 &&
+        !step_supports_[s].empty()) {
+      // The supports' friction, booked like the colliders' (a loss, report.friction).
+      std::vector<SupportPlane> planes = step_supports_[s];
+      for (SupportPlane& plane : planes) plane.particle += segments_[s].first_particle;
+      const std::vector<double> impulses =
+          contact_.supportImpulses(segments_[s].support_collider, planes, p.x_new, segments_[s].first_particle);
+      const double removed =
+          std::max(0.0, self_contact_[s].supportFriction(step_supports_[s], impulses, p.x_new, p.v_new,
+                                                         scenes_[s].masses, pinnedVertices(s)));
+      report_.scenes[s].friction += removed;
+      p.target_now -= removed;
+      resolved.velocities_changed = true;
+    }
     if (!self_contact_.empty() && !self_contact_[s].empty()) {
       // Self-contact after the colliders' projection, which it repeats after each round of its
       // impulses (an impulse may push a particle back into a collider); what its impulses take

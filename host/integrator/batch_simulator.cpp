@@ -32,13 +32,17 @@ Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) { retu
 }  // namespace
 
 BatchDriver::BatchDriver(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : BatchDriver(concatenateScenes(scenes), scenes, checkedOptions(options)) {}
+    : BatchDriver(checkedOptions(options).self_contact_thickness > 0.0 ? withSupportColliders(scenes, false)
+                                                                       : concatenateScenes(scenes),
+                  scenes, options) {}
 
 std::unique_ptr<BatchDriver> BatchDriver::forSimulator(const Scene& scene, const SimulatorOptions& options) {
   // Simulator's order of checks: the options, then the scene (SceneData validates it, with
   // Simulator's messages).
   validateOptions(options);
-  auto impl = std::make_unique<BatchDriver>(batchOfOne(scene), std::vector<Scene>{scene}, options);
+  auto impl = std::make_unique<BatchDriver>(
+      options.self_contact_thickness > 0.0 ? withSupportColliders({scene}, true) : batchOfOne(scene),
+      std::vector<Scene>{scene}, options);
   impl->as_simulator_ = true;
   return impl;
 }
@@ -64,7 +68,10 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
           "self_contact_thickness: BDF2 restarts with a BE step where self-contact acts, which would restart every "
           "scene of the batch; only a batch of one can");
     for (std::size_t s = 0; s < scenes_.size(); ++s) {
-      self_contact_.emplace_back(scenes_[s], options_.self_contact_thickness);
+      // The supports' margin is the colliders' contact-set margin (ContactResolver::margin): a
+      // pair that is, or at its velocity will be, that close carries its contact term.
+      self_contact_.emplace_back(scenes_[s], options_.self_contact_thickness, options_.self_contact_friction,
+                                 contact_.margin());
     }
   }
   // A float device holds coordinates and speeds up to validation::kMaxMagnitudeFloat, not the
@@ -110,6 +117,13 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
 double BatchDriver::kineticEnergy(int scene, const Eigen::MatrixX3d& v) const {
   const SceneSegment& seg = segments_[std::size_t(scene)];
   return stabint::kineticEnergy(scenes_[std::size_t(scene)].masses, rowsOf(v, seg));
+}
+
+const Scene& BatchDriver::publicScene() const {
+  if (segments_.front().support_collider < 0) return data_.scene();
+  public_scene_ = data_.scene();
+  public_scene_.colliders.pop_back();
+  return public_scene_;
 }
 
 Eigen::MatrixX3d BatchDriver::positions(int scene) const { return rowsOf(x_, segments_[std::size_t(scene)]); }

@@ -107,6 +107,9 @@ struct BatchDriver {
   int size() const { return static_cast<int>(segments_.size()); }
   /// Throws InvalidInputError unless 0 <= scene < size().
   void checkScene(int scene, const char* call) const;
+  /// The scene a Simulator shows (Simulator::scene): data_'s, without the support collider
+  /// self-contact adds (valid until the next call).
+  const Scene& publicScene() const;
   Eigen::MatrixX3d positions(int scene) const;
   Eigen::MatrixX3d velocities(int scene) const;
   /// The scene's energies (its events settled).
@@ -249,7 +252,8 @@ struct BatchDriver {
   std::vector<SceneSegment> segments_;
   SimulatorOptions options_;
   SceneData data_;
-  Forcing forcing_;  // data_'s: pin targets, forces and collider motion
+  mutable Scene public_scene_;  // publicScene's copy, where data_'s holds support colliders
+  Forcing forcing_;             // data_'s: pin targets, forces and collider motion
   BackendSelection choice_;
   std::unique_ptr<Backend> backend_;
   GlobalSystem system_;
@@ -264,8 +268,10 @@ struct BatchDriver {
   bool host_copies_stored_ = false;
   ContactResolver contact_;                // every scene's colliders, each on its own particles
   std::vector<SelfContact> self_contact_;  // per scene (none when self_contact_thickness is 0)
-  Eigen::MatrixX3d x_aux_, v_aux_;         // host copies of the partner or the full-budget BE solve
-  Eigen::MatrixX3d x_trial_;               // the root finds' trial positions
+  // Per scene, this step's self-contact supports (its rows), for their friction after the solve.
+  std::vector<std::vector<SupportPlane>> step_supports_;
+  Eigen::MatrixX3d x_aux_, v_aux_;  // host copies of the partner or the full-budget BE solve
+  Eigen::MatrixX3d x_trial_;        // the root finds' trial positions
   std::vector<PotentialEnergy> p_all_, new_mid_, old_mid_, aux_mid_;  // per-scene potentials
   std::vector<PotentialEnergy> partner_potentials_;                   // of the BE partner, when its solve left them
   double t_ = 0.0;                                                    // the batch's time (of the active scenes)

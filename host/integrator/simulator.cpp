@@ -103,7 +103,7 @@ int Simulator::stepCount() const { return static_cast<int>(impl_->state().steps)
 double Simulator::target() const { return impl_->driver->target(0); }
 EnergyReport Simulator::energy() const { return impl_->driver->energy(0); }
 double Simulator::energyScale() const { return impl_->state().energy_scale; }
-const Scene& Simulator::scene() const { return impl_->driver->data_.scene(); }
+const Scene& Simulator::scene() const { return impl_->driver->publicScene(); }
 const SimulatorOptions& Simulator::options() const { return impl_->driver->options_; }
 const StepReport& Simulator::lastReport() const { return impl_->report; }
 std::string Simulator::backendDescription() const { return impl_->driver->backendDescription(); }

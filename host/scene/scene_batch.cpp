@@ -106,4 +106,21 @@ SceneBatch batchOfOne(const Scene& scene) {
   return SceneBatch{scene, {segment}};
 }
 
+SceneBatch withSupportColliders(const std::vector<Scene>& scenes, bool one) {
+  std::vector<Scene> with = scenes;
+  for (Scene& s : with) {
+    Collider support;
+    support.shape = ColliderShape::Plane;
+    support.normal = Eigen::Vector3d::UnitY();
+    support.center = Eigen::Vector3d(0.0, -1e30, 0.0);
+    s.colliders.push_back(support);
+  }
+  SceneBatch batch = one ? batchOfOne(with.front()) : concatenateScenes(with);
+  for (SceneSegment& seg : batch.segments) {
+    --seg.num_colliders;
+    seg.support_collider = seg.first_collider + seg.num_colliders;
+  }
+  return batch;
+}
+
 }  // namespace stabint

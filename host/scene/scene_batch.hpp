@@ -30,6 +30,11 @@ struct SceneSegment {
   /// concatenation's, acting on the scene's particles only.
   int first_collider = 0;
   int num_colliders = 0;
+  /// With self-contact, the collider whose contact pairs hold the scene's particles on their
+  /// side of the surfaces they rest on within the solve (docs/method.md, "Self-contact",
+  /// "Support in the solve"): the concatenation's, right after the scene's own colliders, and no
+  /// collider of the scene's (-1: none).
+  int support_collider = -1;
 };
 
 struct SceneBatch {
@@ -42,6 +47,12 @@ struct SceneBatch {
 /// the batch has per-segment gravity (docs/batch_design.md, "Segments"). Each scene's colliders
 /// act on its own particles only.
 SceneBatch concatenateScenes(const std::vector<Scene>& scenes);
+
+/// `scenes` concatenated (or, with `one`, the single scene as batchOfOne gives it) with a support
+/// collider per scene after its own colliders (SceneSegment::support_collider): a plane far below
+/// everything, which the broad phase never enters and whose pairs act with the half-spaces
+/// self-contact writes.
+SceneBatch withSupportColliders(const std::vector<Scene>& scenes, bool one);
 
 /// `scene` itself as a batch of one (a Simulator's: its scene as it is, not appended to an empty
 /// one), with the segment that covers all of it. Not validated: SceneData validates it.

@@ -100,6 +100,8 @@
      apart and no triangle passes through another within a step. */                                                    \
   FIELD(T(double), self_contact_thickness, 0.0, nonNegative(),                                                         \
         "distance the scene's surfaces keep from each other, m (0: no self-contact)")                                  \
+  FIELD(T(double), self_contact_friction, 0.0, nonNegative(),                                                          \
+        "Coulomb coefficient mu between the scene's surfaces in self-contact, >= 0")                                   \
   FIELD(T(BackendKind), backend, BackendKind::CpuReference, isEnum(),                                                  \
         "where the element work runs: cpu, opencl or auto")                                                            \
   NESTED(T(OpenCLOptions), opencl, T(OPENCL_OPTIONS_FIELDS), "OpenCL device and precision (backend opencl or auto)")

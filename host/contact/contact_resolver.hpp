@@ -32,9 +32,6 @@ class ContactResolver {
   ContactResolver(SceneData& scene, const Forcing& forcing, GlobalSystem& system, const SimulatorOptions& options,
                   double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v);
 
-  /// How near a pair must be to its collider (or will be, at its velocity) to enter the contact
-  /// set: contact_tolerance + time_step^2 |gravity|.
-  double margin() const;
   /// The number of (collider, particle) pairs: 0 without colliders.
   int count() const;
   /// The contact element type's block in the scene (-1 without one).
@@ -124,6 +121,7 @@ class ContactResolver {
   void restore(const std::vector<std::int32_t>& log);
 
  private:
+  double margin() const;
   bool changeSet(const std::vector<int>& entering, const std::vector<int>& leaving, bool refactor);
   // changeSet, with the change in the log (or the log restarted when L was assembled anew).
   void changeSetLogged(const std::vector<int>& entering, const std::vector<int>& leaving);

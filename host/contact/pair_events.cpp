@@ -156,13 +156,12 @@ bool separatingDirection(const Vec3& gap, const Vec3& fallback, const Vec3& moti
   return true;
 }
 
-// A support's pair (vertexTriangleEvent): vertex v ends within `reach` of triangle `tri`, over
-// its face at x0 (the direction from its closest point there, `w_start`, within 60 degrees of
-// the face's normal: a cloth's own neighbouring triangles, beside each vertex within the reach,
-// are no support).
-void supportEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int v, const std::array<int, 3>& tri,
-                  const Vec3& w_start, double reach, double scale, std::vector<ContactEvent>& out) {
+}  // namespace
+
+void supportPairEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int v, const std::array<int, 3>& tri,
+                      double reach, double scale, std::vector<ContactEvent>& out) {
   const Vec3 p0 = rowOf(x0, v), a0 = rowOf(x0, tri[0]), b0 = rowOf(x0, tri[1]), c0 = rowOf(x0, tri[2]);
+  const Vec3 w_start = closestOnTriangle(p0, a0, b0, c0);
   const Vec3 gap = p0 - (w_start[0] * a0 + w_start[1] * b0 + w_start[2] * c0);
   const Vec3 face = (b0 - a0).cross(c0 - a0);
   const double length = gap.norm();
@@ -174,15 +173,11 @@ void supportEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int v, con
   e.normal = gap / length;
   e.vertices = {v, tri[0], tri[1], tri[2]};
   e.weights = {1.0, -w[0], -w[1], -w[2]};
-  e.support_only = true;
   out.push_back(e);
 }
 
-}  // namespace
-
 void vertexTriangleEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int v, const std::array<int, 3>& tri,
-                         double closer_than, double touching, double scale, std::vector<ContactEvent>& out,
-                         double support_reach) {
+                         double closer_than, double touching, double scale, std::vector<ContactEvent>& out) {
   double times[8];
   const Vec3 p0 = rowOf(x0, v), p1 = rowOf(x1, v);
   const Vec3 a0 = rowOf(x0, tri[0]), a1 = rowOf(x1, tri[0]);
@@ -195,20 +190,14 @@ void vertexTriangleEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int
   const double relative = std::sqrt(
       std::max({(dp - (a1 - a0)).squaredNorm(), (dp - (b1 - b0)).squaredNorm(), (dp - (c1 - c0)).squaredNorm()}));
   const double reach = relative + std::max(closer_than, touching);
-  // A support's pair ends within support_reach: it starts within that and the relative motion.
-  const double any_reach = std::max(reach, relative + support_reach);
   // First by the triangle's bounding sphere about its centroid (most pairs stop here).
   const Vec3 centroid = (a0 + b0 + c0) / 3.0;
   const double radius = std::sqrt(
       std::max({(a0 - centroid).squaredNorm(), (b0 - centroid).squaredNorm(), (c0 - centroid).squaredNorm()}));
-  if ((p0 - centroid).norm() - radius > any_reach) return;
+  if ((p0 - centroid).norm() - radius > reach) return;
   const Vec3 w_start = closestOnTriangle(p0, a0, b0, c0);
   const double d_start = (p0 - (w_start[0] * a0 + w_start[1] * b0 + w_start[2] * c0)).norm();
-  if (d_start > any_reach) return;
-  if (d_start > reach) {
-    supportEvent(x0, x1, v, tri, w_start, support_reach, scale, out);
-    return;
-  }
+  if (d_start > reach) return;
   double cubic[4];
   coplanarityCubic(b0 - a0, b1 - a1, c0 - a0, c1 - a1, p0 - a0, p1 - a1, cubic);
   const int count = timesToCheck(cubic, times);
@@ -224,10 +213,7 @@ void vertexTriangleEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int
     const Vec3 w = closestOnTriangle(p1, a1, b1, c1);
     if ((p1 - (w[0] * a1 + w[1] * b1 + w[2] * c1)).norm() < closer_than) found = true, bary = w;
   }
-  if (!found) {
-    if (support_reach > 0.0) supportEvent(x0, x1, v, tri, w_start, support_reach, scale, out);
-    return;
-  }
+  if (!found) return;
   const Vec3 gap = p0 - (w_start[0] * a0 + w_start[1] * b0 + w_start[2] * c0);
   const Vec3 motion = (p1 - p0) - (bary[0] * (a1 - a0) + bary[1] * (b1 - b0) + bary[2] * (c1 - c0));
   ContactEvent e;

@@ -17,8 +17,7 @@ struct ContactEvent {
   std::array<int, 4> vertices{};
   std::array<double, 4> weights{};
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-  bool crossing = false;      // the pair passes (or touches) within the step; else it only ends too close
-  bool support_only = false;  // it neither meets nor ends nearer than closer_than: a support's pair
+  bool crossing = false;  // the pair passes (or touches) within the step; else it only ends too close
   bool edge_edge = false;
 };
 
@@ -32,11 +31,15 @@ inline Eigen::Vector3d rowOf(const Eigen::MatrixX3d& x, int i) { return x.row(i)
 /// `out`: they cross or touch (closest points within `touching`) at a root or an extremum of
 /// their coplanarity cubic, or end nearer than `closer_than`. `scale`, the scene's size, decides
 /// what counts as touching at x0 (where the direction falls back to the triangle's normal).
-/// With `support_reach`, also a pair that ends within it with the vertex over the triangle's face
-/// (their direction within 60 degrees of its normal), as a support_only event.
 void vertexTriangleEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int v, const std::array<int, 3>& tri,
-                         double closer_than, double touching, double scale, std::vector<ContactEvent>& out,
-                         double support_reach = 0.0);
+                         double closer_than, double touching, double scale, std::vector<ContactEvent>& out);
+/// A self-contact support's pair (docs/method.md, "Self-contact", "Support in the solve"): vertex
+/// `v` ends (at x1) within `reach` of triangle `tri`, over its face at x0 (the direction from the
+/// triangle's closest point to the vertex there within 60 degrees of the face's normal: a cloth's
+/// own neighbouring triangles, beside each vertex within the reach, are no support). The event's
+/// weights are those of the closest point at x1, its direction that at x0.
+void supportPairEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, int v, const std::array<int, 3>& tri,
+                      double reach, double scale, std::vector<ContactEvent>& out);
 /// The same for edges e1 and e2.
 void edgeEdgeEvent(const PositionRows& x0, const Eigen::MatrixX3d& x1, const std::array<int, 2>& e1,
                    const std::array<int, 2>& e2, double closer_than, double touching, double scale,

@@ -156,11 +156,10 @@ int findRoot(std::vector<int>& parent, int i) {
 
 }  // namespace
 
-SelfContact::SelfContact(const Scene& scene, double thickness, double friction, double support_margin)
+SelfContact::SelfContact(const Scene& scene, double thickness, double friction)
     : surface_(ContactSurface::of(scene)),
       thickness_(thickness),
       friction_(friction),
-      support_margin_(support_margin),
       solid_of_(static_cast<std::size_t>(scene.numParticles()), -1) {
   // The tet bodies: the particles their tets connect.
   std::vector<int> parent(static_cast<std::size_t>(scene.numParticles()));
@@ -187,11 +186,13 @@ ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::M
                                           const std::vector<char>* moved, double support_reach) const {
   ContactCandidates found;
   if (surface_.empty()) return found;
+  // A supports' query: the vertex-triangle pairs within support_reach, no edges.
+  const bool supports_only = support_reach > 0.0;
   const double grow = 0.5 * thickness_;
-  // Vertex-triangle pairs also within the support reach.
-  const double grow_vt = 0.5 * std::max(thickness_, support_reach);
+  const double grow_vt = supports_only ? 0.5 * support_reach : grow;
   const auto& tris = surface_.triangles;
-  const auto& edges = surface_.edges;
+  static const std::vector<std::array<int, 2>> kNoEdges;
+  const auto& edges = supports_only ? kNoEdges : surface_.edges;
   const auto& verts = surface_.vertices;
   std::vector<Box> tri_boxes(tris.size()), edge_boxes(edges.size()), vert_boxes(verts.size());
   Vec3 shift = Vec3::Zero();
@@ -278,10 +279,10 @@ ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::M
 }
 
 std::vector<ContactEvent> SelfContact::events(const PositionRows& x0, const Eigen::MatrixX3d& x1, double closer_than,
-                                              const std::vector<char>* moved, double support_reach) const {
+                                              const std::vector<char>* moved) const {
   std::vector<ContactEvent> out;
   if (surface_.empty()) return out;
-  const ContactCandidates pairs = candidates(x0, x1, moved, support_reach);
+  const ContactCandidates pairs = candidates(x0, x1, moved);
   const auto& tris = surface_.triangles;
   const auto& edges = surface_.edges;
   // The scene's size, for what counts as touching at x0.
@@ -301,7 +302,7 @@ std::vector<ContactEvent> SelfContact::events(const PositionRows& x0, const Eige
       for (std::size_t k = std::size_t(chunk) * kChunk; k < std::min(vt, std::size_t(chunk + 1) * kChunk); ++k) {
         const auto [v, t] = pairs.vertex_triangle[k];
         const auto& tri = tris[std::size_t(t)];
-        vertexTriangleEvent(x0, x1, v, tri, closer_than, touching, scale, list, support_reach);
+        vertexTriangleEvent(x0, x1, v, tri, closer_than, touching, scale, list);
       }
       return;
     }
@@ -521,7 +522,8 @@ void applyFriction(const ContactEvent& e, double mu, double normal, const Respon
 // Each particle's support in the solve (SelfContact::stopApproach), against where the other side
 // of its pair is predicted at the step's end (`ends`).
 void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x, const Eigen::MatrixX3d& ends,
-                   double thickness, double reach, const Response& response, std::vector<SupportPlane>& supports) {
+                   double thickness, double reach, const Vec3& up, const Response& response,
+                   std::vector<SupportPlane>& supports) {
   // Per particle the plane with the least room between x and the thickness (slack), the first of equals.
   std::vector<int> chosen(static_cast<std::size_t>(x.rows()), -1);
   std::vector<double> slack;
@@ -529,6 +531,10 @@ void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x
     const int p = e.vertices[0];
     // A tet body's particles answer as the body (Response): a support of one would hold it alone.
     if (e.edge_edge || response.inverseMass(p) == 0.0 || response.solidOf()[std::size_t(p)] >= 0) continue;
+    // Only a vertex resting on the triangle against gravity (their direction within 60 degrees of
+    // the vertical, the vertex above): the plane does not give way, and a vertex under a layer,
+    // pulled up against it, stayed trapped under it while its cloth was dragged away.
+    if (!(e.normal.dot(up) >= 0.5)) continue;
     // Where the triangle's contact point is predicted at the step's end.
     Vec3 q = Vec3::Zero();
     for (int k = 1; k < 4; ++k) q -= e.weights[std::size_t(k)] * rowOf(ends, e.vertices[std::size_t(k)]);
@@ -570,12 +576,8 @@ double SelfContact::stopApproach(const PositionRows& x, Eigen::MatrixX3d& v, con
   Motion velocity(response, v);
   bool changed = false;
   const double kinetic_before = kinetic(v, masses);
-  // With supports, also the vertex-triangle pairs that end within the support margin of the
-  // thickness.
-  const std::vector<ContactEvent> found =
-      events(x, predicted, thickness_, nullptr, supports ? thickness_ + support_margin_ : 0.0);
+  const std::vector<ContactEvent> found = events(x, predicted, thickness_);
   for (const ContactEvent& e : found) {
-    if (e.support_only) continue;
     const double compliance = response.compliance(e, e.normal);
     if (!(compliance > 0.0)) continue;
     double gap = 0.0, path = 0.0;
@@ -607,7 +609,17 @@ double SelfContact::stopApproach(const PositionRows& x, Eigen::MatrixX3d& v, con
       const Vec3 move = f > 0.0 ? Vec3(fall * (1.0 - lift / f)) : Vec3::Zero();
       for (int i : body) ends.row(i) = x.row(i) + h * v.row(i) + move.transpose();
     }
-    supportPlanes(found, x, ends, thickness_, thickness_ + support_margin_, response, *supports);
+    // The step's pairs, and those near at its predicted end (a static query at the ends): within
+    // the thickness and the fall under gravity over the step, the gap gravity alone closes. (The
+    // colliders' wider margin, contact_tolerance more, cost three times as much on a crumpled
+    // pile for no better books.)
+    const double reach = thickness_ + fall.norm();
+    if (!(fall.norm() > 0.0)) return changed ? kinetic_before - kinetic(v, masses) : 0.0;  // nothing rests
+    std::vector<ContactEvent> pairs = found;
+    const double scale = std::max((x.colwise().maxCoeff() - x.colwise().minCoeff()).maxCoeff(), thickness_);
+    for (const auto& [p, t] : candidates(ends, ends, nullptr, reach).vertex_triangle)
+      supportPairEvent(x, ends, p, surface_.triangles[std::size_t(t)], reach, scale, pairs);
+    supportPlanes(pairs, x, ends, thickness_, reach, Vec3(-fall.normalized()), response, *supports);
   }
   return changed ? kinetic_before - kinetic(v, masses) : 0.0;
 }

@@ -65,26 +65,23 @@ struct SelfContactResult {
 class SelfContact {
  public:
   /// `scene`'s surface (ContactSurface::of); thickness > 0; `friction`, the Coulomb coefficient
-  /// between the surfaces (>= 0); `support_margin`, how much farther than the thickness a pair's
-  /// end may be and still give a support (stopApproach).
-  SelfContact(const Scene& scene, double thickness, double friction = 0.0, double support_margin = 0.0);
+  /// between the surfaces (>= 0).
+  SelfContact(const Scene& scene, double thickness, double friction = 0.0);
   bool empty() const { return surface_.empty(); }
   const ContactSurface& surface() const { return surface_; }
 
   /// The broad phase of the path x0 -> x1: every pair that may meet on it or end within the
-  /// thickness, and the vertex-triangle pairs within `support_reach` (with `moved`, a flag per
-  /// particle, only the pairs with a moved vertex).
+  /// thickness (with `moved`, a flag per particle, only the pairs with a moved vertex); with
+  /// `support_reach`, only the vertex-triangle pairs that may come that near (supports' query).
   ContactCandidates candidates(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
                                const Eigen::MatrixX3d& x1, const std::vector<char>* moved = nullptr,
                                double support_reach = 0.0) const;
   /// The pairs that meet on the path x0 -> x1 (crossing or touching within the step, or ending
   /// closer than `closer_than`), sorted (vertex-triangle before edge-edge, then by vertices);
-  /// with `moved`, only the pairs with a moved vertex; with `support_reach`, also the
-  /// vertex-triangle pairs that end within it, the vertex over the triangle's face
-  /// (ContactEvent::support_only).
+  /// with `moved`, only the pairs with a moved vertex.
   std::vector<ContactEvent> events(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0,
                                    const Eigen::MatrixX3d& x1, double closer_than,
-                                   const std::vector<char>* moved = nullptr, double support_reach = 0.0) const;
+                                   const std::vector<char>* moved = nullptr) const;
 
   /// Makes the step x0 -> x1 crossing-free and leaves the surfaces `thickness` apart where it
   /// can, moving x1 and v1 (rows as x0's) by the impulses; `masses` are the scene's, and the
@@ -132,7 +129,6 @@ class SelfContact {
   ContactSurface surface_;
   double thickness_;
   double friction_;
-  double support_margin_;
   // The tet bodies (the particles their tets connect, ascending), which answer impulses as rigid
   // bodies, and each particle's body (-1: none).
   std::vector<int> solid_of_;

@@ -112,10 +112,14 @@ void BatchDriver::stopSelfContactApproach() {
     contact_.projectOut(contactPart(s, seg.first_particle), t_ + h, x, predicted);
     std::vector<SupportPlane>& own = step_supports_[s];
     const double stopped =
-        self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed, &own, h * h * scenes_[s].gravity);
-    std::vector<SupportPlane> planes = own;
-    for (SupportPlane& plane : planes) plane.particle += seg.first_particle;
-    supports.push_back(ContactResolver::Supports{seg.support_collider, std::move(planes)});
+        self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed,
+                                      seg.support_collider >= 0 ? &own : nullptr, h * h * scenes_[s].gravity);
+    if (seg.support_collider < 0) own.clear();
+    if (seg.support_collider >= 0) {
+      std::vector<SupportPlane> planes = own;
+      for (SupportPlane& plane : planes) plane.particle += seg.first_particle;
+      supports.push_back(ContactResolver::Supports{seg.support_collider, std::move(planes)});
+    }
     if (stopped == 0.0) continue;
     // BDF2's history is not the changed state's: this step is a BE step (a batch with BDF2 and
     // self-contact has one scene).

@@ -26,23 +26,26 @@ const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   return o;
 }
 
+// Self-contact with its supports in the solve (docs/method.md, "Self-contact", "Support in the
+// solve"): the scenes get their support colliders.
+bool supportsOn(const SimulatorOptions& o) { return o.self_contact_thickness > 0.0 && o.self_contact_supports != 0; }
+
 // As a matrix, for the public per-scene copies.
 Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) { return blockOf(m, s); }
 
 }  // namespace
 
 BatchDriver::BatchDriver(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : BatchDriver(checkedOptions(options).self_contact_thickness > 0.0 ? withSupportColliders(scenes, false)
-                                                                       : concatenateScenes(scenes),
+    : BatchDriver(supportsOn(checkedOptions(options)) ? withSupportColliders(scenes, false) : concatenateScenes(scenes),
                   scenes, options) {}
 
 std::unique_ptr<BatchDriver> BatchDriver::forSimulator(const Scene& scene, const SimulatorOptions& options) {
   // Simulator's order of checks: the options, then the scene (SceneData validates it, with
   // Simulator's messages).
   validateOptions(options);
-  auto impl = std::make_unique<BatchDriver>(
-      options.self_contact_thickness > 0.0 ? withSupportColliders({scene}, true) : batchOfOne(scene),
-      std::vector<Scene>{scene}, options);
+  auto impl =
+      std::make_unique<BatchDriver>(supportsOn(options) ? withSupportColliders({scene}, true) : batchOfOne(scene),
+                                    std::vector<Scene>{scene}, options);
   impl->as_simulator_ = true;
   return impl;
 }
@@ -68,10 +71,7 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
           "self_contact_thickness: BDF2 restarts with a BE step where self-contact acts, which would restart every "
           "scene of the batch; only a batch of one can");
     for (std::size_t s = 0; s < scenes_.size(); ++s) {
-      // The supports' margin is the colliders' contact-set margin (ContactResolver::margin): a
-      // pair that is, or at its velocity will be, that close carries its contact term.
-      self_contact_.emplace_back(scenes_[s], options_.self_contact_thickness, options_.self_contact_friction,
-                                 contact_.margin());
+      self_contact_.emplace_back(scenes_[s], options_.self_contact_thickness, options_.self_contact_friction);
     }
   }
   // A float device holds coordinates and speeds up to validation::kMaxMagnitudeFloat, not the

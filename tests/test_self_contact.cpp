@@ -216,7 +216,12 @@ TEST(SelfContactRun, ACrumplingClothNeverIntersectsItself) {
   EXPECT_EQ(worstIntersections(crumplingCloth(), o, 120), 0);
 }
 
-class SelfContactOnEveryBackend : public testing::BackendTest {};
+class SelfContactOnEveryBackend : public testing::BackendTest {
+ protected:
+  // The landing (with or without supports, SimulatorOptions::self_contact_supports): a restored
+  // checkpoint continues bit for bit, and the backend follows the CPU reference.
+  void followsTheCpuReferenceAndContinuesFromACheckpoint(int supports);
+};
 
 TEST_P(SelfContactOnEveryBackend, AClothDroppedOnAnotherRestsOnIt) {
   const Scene scene = clothOnCloth();
@@ -247,8 +252,16 @@ TEST_P(SelfContactOnEveryBackend, AClothDroppedOnAnotherRestsOnIt) {
 }
 
 TEST_P(SelfContactOnEveryBackend, FollowsTheCpuReferenceAndContinuesFromACheckpointBitForBit) {
+  for (int supports : {0, 1}) {
+    SCOPED_TRACE(supports ? "with supports" : "without supports");
+    followsTheCpuReferenceAndContinuesFromACheckpoint(supports);
+  }
+}
+
+void SelfContactOnEveryBackend::followsTheCpuReferenceAndContinuesFromACheckpoint(int supports) {
   SimulatorOptions o = options();
   o.self_contact_thickness = 3e-3;
+  o.self_contact_supports = supports;
   const Scene scene = clothOnCloth();
   Simulator sim(scene, o);
   for (int k = 0; k < 12; ++k) sim.step();

@@ -611,8 +611,8 @@ double SelfContact::stopApproach(const PositionRows& x, Eigen::MatrixX3d& v, con
     }
     // The step's pairs, and those near at its predicted end (a static query at the ends): within
     // the thickness and the fall under gravity over the step, the gap gravity alone closes. (The
-    // colliders' wider margin, contact_tolerance more, cost three times as much on a crumpled
-    // pile for no better books.)
+    // colliders' wider margin, contact_tolerance more, cost three times as much on a crumpled pile,
+    // and pumped the study scene's dragged pile.)
     const double reach = thickness_ + fall.norm();
     if (!(fall.norm() > 0.0)) return changed ? kinetic_before - kinetic(v, masses) : 0.0;  // nothing rests
     std::vector<ContactEvent> pairs = found;

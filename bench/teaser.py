@@ -50,7 +50,8 @@ def read_energy(results, name="teaser"):
     for integ in INTEGRATORS:
         rs = [r for r in rows if r["integrator"] == integ]
         if rs:
-            out[integ] = {k: np.array([float(r[k]) for r in rs]) for k in ("time", "H", "H_target", "kinetic")}
+            out[integ] = {k: np.array([float(r[k]) for r in rs])
+                          for k in ("time", "H", "H_target", "kinetic", "ms_per_frame") if k in rs[0]}
             out[integ]["particles"] = int(rs[0]["particles"])
     return out
 

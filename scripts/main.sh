@@ -27,12 +27,18 @@ echo "== soft body: scripts/soft_body_mesh.sh results/mesh; stabint-study drop"
 bash scripts/soft_body_mesh.sh results/mesh
 build/tools/study/stabint-study drop --mesh results/mesh/elephant.1 --out results
 
+# Self-contact's study scene (issue 49): a 40 x 40 cloth folds onto itself on the ground and is
+# dragged over the elephant's surface as a mesh collider, with BE, BDF2 and the blend (about 20 s).
+echo "== self-contact: stabint-study fold"
+build/tools/study/stabint-study fold --mesh results/mesh/elephant.1 --out results
+
 echo "== charts"
 /usr/bin/python3 bench/study_charts.py results
 t_pictures=$(date +%s)
 /usr/bin/python3 bench/teaser.py results
 /usr/bin/python3 bench/drop.py results
-echo "== rendered the teaser and the drop (POV-Ray) in $(( $(date +%s) - t_pictures )) s"
+/usr/bin/python3 bench/fold.py results
+echo "== rendered the teaser, the drop and the fold (POV-Ray) in $(( $(date +%s) - t_pictures )) s"
 
 # Chart 4 (scaling): the benchmark suite's cloth scaling family, 10x10 to 224x224 particles, on
 # the CPU reference and OpenCL backends (about a minute). scripts/bench.sh runs the whole suite.
@@ -53,5 +59,7 @@ echo "  charts:         results/charts/{speed_vs_accuracy,stability_map,energy_o
 echo "  teaser:         results/charts/teaser.gif (animation), teaser.png (still and energy curves), teaser_energy.png"
 echo "  soft-body drop: results/charts/drop.gif (animation), drop.png (still and energy curves);"
 echo "                  results/drop_table.md (printed above); the TetGen mesh: results/mesh/elephant.1.{node,ele}"
+echo "  self-contact:   results/charts/fold.gif (animation), fold.png (still and energy curves);"
+echo "                  results/fold_table.md (printed above)"
 echo "  all CSV files:  results/*.csv; cached reference trajectories: results/cache/"
 echo "  API reference:  bash scripts/apidocs.sh -> build/apidocs/html/index.html (C++), build/apidocs/python/index.html"

@@ -121,6 +121,15 @@ void ContactResolver::setSupports(const std::vector<Supports>& supports) {
   }
 }
 
+double ContactResolver::supportHeight(int e, const double* x) const {
+  const ElementBlock& block = scene_.blocks()[static_cast<std::size_t>(block_)];
+  const double* g =
+      block.params.data() + std::size_t(block.type->shape().params) * std::size_t(e) + kContactGeometry;
+  double height = 0.0;
+  for (int c = 0; c < 3; ++c) height += (x[c] - g[kGeometryCenter + c]) * g[kGeometryA + c];
+  return height;
+}
+
 bool ContactResolver::relaxSupports(int collider, const Eigen::MatrixX3d& x) {
   const Scene& scene = scene_.scene();
   const IndexRange particles = colliderParticles(scene, collider);
@@ -131,14 +140,14 @@ bool ContactResolver::relaxSupports(int collider, const Eigen::MatrixX3d& x) {
   for (int k = 0; k < particles.count; ++k) {
     const int e = first + k;
     if (!scene_.elementEnabled(block_, e)) continue;
-    const double* g = block.params.data() + P * std::size_t(e) + kContactGeometry;
     const int j = particles.first + k;
-    double depth = 0.0;
-    for (int c = 0; c < 3; ++c) depth += (x(j, c) - g[kGeometryCenter + c]) * g[kGeometryA + c];
+    const Eigen::Vector3d at = x.row(j).transpose();
+    const double depth = supportHeight(e, at.data());
     if (!(depth < 0.0)) continue;
     // Clearly below x, where a float device's rounding also finds x outside (energy exactly 0, as
     // without the plane).
-    const double below = depth - 1e-6 * (1.0 + x.row(j).cwiseAbs().maxCoeff());
+    const double below = depth - 1e-6 * (1.0 + at.cwiseAbs().maxCoeff());
+    const double* g = block.params.data() + P * std::size_t(e) + kContactGeometry;
     double geometry[kColliderGeometry];
     std::copy(g, g + kColliderGeometry, geometry);
     for (int c = 0; c < 3; ++c) geometry[kGeometryCenter + c] += below * geometry[kGeometryA + c];
@@ -150,18 +159,12 @@ bool ContactResolver::relaxSupports(int collider, const Eigen::MatrixX3d& x) {
 
 std::vector<double> ContactResolver::supportImpulses(int collider, const std::vector<SupportPlane>& supports,
                                                      const Eigen::MatrixX3d& x, int first_row) const {
-  const Scene& scene = scene_.scene();
-  const IndexRange particles = colliderParticles(scene, collider);
-  const int first = firstContactElement(scene, collider);
-  const ElementBlock& block = scene_.blocks()[static_cast<std::size_t>(block_)];
-  const std::size_t P = static_cast<std::size_t>(block.type->shape().params);
+  const int first = firstContactElement(scene_.scene(), collider) - colliderParticles(scene_.scene(), collider).first;
   std::vector<double> impulses;
   for (const SupportPlane& s : supports) {
-    const int e = first + s.particle - particles.first;
-    const double* g = block.params.data() + P * std::size_t(e) + kContactGeometry;
-    double depth = 0.0;
-    for (int c = 0; c < 3; ++c) depth -= (x(s.particle - first_row, c) - g[kGeometryCenter + c]) * g[kGeometryA + c];
-    impulses.push_back(time_step_ * scene_.elementWeight(block_, e) * std::max(0.0, depth));
+    const int e = first + first_row + s.particle;
+    const Eigen::Vector3d at = x.row(s.particle).transpose();
+    impulses.push_back(time_step_ * scene_.elementWeight(block_, e) * std::max(0.0, -supportHeight(e, at.data())));
   }
   return impulses;
 }

@@ -71,9 +71,9 @@ class ContactResolver {
   /// a restore, which does not know the planes, gets the same potential. Returns whether a plane
   /// moved (the caller books the loss).
   bool relaxSupports(int collider, const Eigen::MatrixX3d& x);
-  /// The normal impulse h w d of each of `supports` (of support collider `collider`, the
-  /// concatenation's particle indices) at positions `x` (rows from `first_row`): d its depth in
-  /// its plane, w its weight.
+  /// The normal impulse h w d of each of `supports` (of support collider `collider`; a scene's,
+  /// its particles numbered as the rows of `x`, which are the concatenation's from `first_row`)
+  /// at positions `x`: d its depth in its plane, w its weight.
   std::vector<double> supportImpulses(int collider, const std::vector<SupportPlane>& supports,
                                       const Eigen::MatrixX3d& x, int first_row) const;
 
@@ -125,6 +125,8 @@ class ContactResolver {
   bool changeSet(const std::vector<int>& entering, const std::vector<int>& leaving, bool refactor);
   // changeSet, with the change in the log (or the log restarted when L was assembled anew).
   void changeSetLogged(const std::vector<int>& entering, const std::vector<int>& leaving);
+  // How far `x` lies above support element `e`'s plane (negative: inside it).
+  double supportHeight(int e, const double* x) const;
 
   SceneData& scene_;
   const Forcing& forcing_;

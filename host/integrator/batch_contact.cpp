@@ -114,7 +114,6 @@ void BatchDriver::stopSelfContactApproach() {
     const double stopped =
         self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed,
                                       seg.support_collider >= 0 ? &own : nullptr, h * h * scenes_[s].gravity);
-    if (seg.support_collider < 0) own.clear();
     if (seg.support_collider >= 0) {
       std::vector<SupportPlane> planes = own;
       for (SupportPlane& plane : planes) plane.particle += seg.first_particle;
@@ -168,10 +167,8 @@ void BatchDriver::resolveContact(double t1) {
     if (!self_contact_.empty() && !self_contact_[s].empty() && self_contact_[s].friction() > 0.0 &&
         !step_supports_[s].empty()) {
       // The supports' friction, booked like the colliders' (a loss, report.friction).
-      std::vector<SupportPlane> planes = step_supports_[s];
-      for (SupportPlane& plane : planes) plane.particle += segments_[s].first_particle;
-      const std::vector<double> impulses =
-          contact_.supportImpulses(segments_[s].support_collider, planes, p.x_new, segments_[s].first_particle);
+      const std::vector<double> impulses = contact_.supportImpulses(segments_[s].support_collider, step_supports_[s],
+                                                                    p.x_new, segments_[s].first_particle);
       const double removed =
           std::max(0.0, self_contact_[s].supportFriction(step_supports_[s], impulses, p.x_new, p.v_new,
                                                          scenes_[s].masses, pinnedVertices(s)));

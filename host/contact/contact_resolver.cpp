@@ -123,8 +123,7 @@ void ContactResolver::setSupports(const std::vector<Supports>& supports) {
 
 double ContactResolver::supportHeight(int e, const double* x) const {
   const ElementBlock& block = scene_.blocks()[static_cast<std::size_t>(block_)];
-  const double* g =
-      block.params.data() + std::size_t(block.type->shape().params) * std::size_t(e) + kContactGeometry;
+  const double* g = block.params.data() + std::size_t(block.type->shape().params) * std::size_t(e) + kContactGeometry;
   double height = 0.0;
   for (int c = 0; c < 3; ++c) height += (x[c] - g[kGeometryCenter + c]) * g[kGeometryA + c];
   return height;

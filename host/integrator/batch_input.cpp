@@ -3,6 +3,7 @@
 // what it books is booked in that scene's H* only.
 #include "integrator/batch_simulator.hpp"
 
+#include "contact/surface_crossings.hpp"
 #include "elements/element_type.hpp"
 #include "integrator/backend_choice.hpp"
 #include "integrator/integrator_steps.hpp"
@@ -46,6 +47,22 @@ void BatchDriver::checkState(int scene, const Eigen::MatrixX3d& positions, const
   if (options_.integrator == Integrator::BDF2 && size() > 1)
     throw InvalidInputError(scope(scene, call).where() +
                             "BDF2 would restart every scene of the batch with a BE step; only a batch of one can");
+  if (!self_contact_.empty()) checkNoCrossings(std::size_t(scene), positions, scope(scene, call).where());
+}
+
+void BatchDriver::checkNoCrossings(std::size_t s, const Eigen::MatrixX3d& positions, const std::string& where) const {
+  const ContactSurface& surface = self_contact_[s].surface();
+  const std::vector<std::pair<int, int>> crossing = crossingTriangles(positions, surface.triangles);
+  if (crossing.empty()) return;
+  auto triangle = [&](int t) {
+    const std::array<int, 3>& v = surface.triangles[std::size_t(t)];
+    return "surface triangle " + std::to_string(t) + " (particles " + std::to_string(v[0]) + ", " +
+           std::to_string(v[1]) + ", " + std::to_string(v[2]) + ")";
+  };
+  throw InvalidInputError(where + "self-contact: " + triangle(crossing[0].first) + " and " +
+                          triangle(crossing[0].second) + " cross (" + std::to_string(crossing.size()) +
+                          " crossing pairs in all): self-contact keeps a start free of crossings so and cannot "
+                          "undo one (docs/method.md, \"Self-contact\")");
 }
 
 double BatchDriver::storeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {

@@ -72,6 +72,7 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
           "scene of the batch; only a batch of one can");
     for (std::size_t s = 0; s < scenes_.size(); ++s) {
       self_contact_.emplace_back(scenes_[s], options_.self_contact_thickness, options_.self_contact_friction);
+      checkNoCrossings(s, scenes_[s].positions, "scene " + std::to_string(s) + ": ");
     }
   }
   // A float device holds coordinates and speeds up to validation::kMaxMagnitudeFloat, not the

@@ -268,6 +268,9 @@ struct BatchDriver {
   bool host_copies_stored_ = false;
   ContactResolver contact_;                // every scene's colliders, each on its own particles
   std::vector<SelfContact> self_contact_;  // per scene (none when self_contact_thickness is 0)
+  // InvalidInputError, prefixed `where`, when scene s's surface crosses itself at `positions`
+  // (crossingTriangles): self-contact cannot undo a crossing.
+  void checkNoCrossings(std::size_t s, const Eigen::MatrixX3d& positions, const std::string& where) const;
   // Per scene, this step's self-contact supports (its rows), for their friction after the solve.
   std::vector<std::vector<SupportPlane>> step_supports_;
   Eigen::MatrixX3d x_aux_, v_aux_;  // host copies of the partner or the full-budget BE solve

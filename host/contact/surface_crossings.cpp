@@ -74,7 +74,9 @@ std::vector<std::pair<int, int>> crossingTriangles(const Eigen::MatrixX3d& x,
   Eigen::Vector3d origin = lo[0];
   for (const Eigen::Vector3d& l : lo) origin = origin.cwiseMin(l);
   const double cell = std::max(extent / double(count), largest / 16.0);
-  auto index = [&](double coordinate, double from) { return static_cast<std::int64_t>(std::floor((coordinate - from) / cell)); };
+  auto index = [&](double coordinate, double from) {
+    return static_cast<std::int64_t>(std::floor((coordinate - from) / cell));
+  };
   // (cell key, triangle), sorted by key: the triangles of each cell together, in a fixed order.
   std::vector<std::pair<std::array<std::int64_t, 3>, int>> entries;
   for (std::size_t t = 0; t < count; ++t) {
@@ -94,7 +96,8 @@ std::vector<std::pair<int, int>> crossingTriangles(const Eigen::MatrixX3d& x,
     while (end < entries.size() && entries[end].first == entries[begin].first) ++end;
     for (std::size_t m = begin; m < end; ++m)
       for (std::size_t n = m + 1; n < end; ++n) {
-        const int a = std::min(entries[m].second, entries[n].second), b = std::max(entries[m].second, entries[n].second);
+        const int a = std::min(entries[m].second, entries[n].second),
+                  b = std::max(entries[m].second, entries[n].second);
         const std::size_t ua = std::size_t(a), ub = std::size_t(b);
         if ((lo[ua].array() > hi[ub].array()).any() || (lo[ub].array() > hi[ua].array()).any()) continue;
         if (shareParticle(triangles[ua], triangles[ub])) continue;

@@ -58,3 +58,21 @@ def test_a_cloth_dropped_onto_another_stays_above_it_with_self_contact(thickness
 def test_a_negative_thickness_is_refused_naming_the_option():
     with pytest.raises(stabint.InvalidInputError, match="self_contact_thickness"):
         stabint.Simulator(stabint.builtin_scene("cloth"), stabint.SimulatorOptions(self_contact_thickness=-1.0))
+
+
+def test_a_start_that_crosses_itself_is_refused_and_so_is_such_a_state():
+    scene, n = two_cloths()
+    x = np.asarray(scene.positions).copy()
+    # The upper cloth stood on its edge through the lower one: they cross along a line.
+    upper = x[n:].copy()
+    x[n:] = np.column_stack([upper[:, 0], 0.005 + upper[:, 2], np.full(n, 0.0137)])
+    crossing, _ = two_cloths()
+    crossing.positions = crossing.rest_positions = x
+    options = stabint.SimulatorOptions(self_contact_thickness=3e-3)
+    with pytest.raises(stabint.InvalidInputError, match=r"self-contact: surface triangle \d+ \(particles"):
+        stabint.Simulator(crossing, options)
+    sim = stabint.Simulator(scene, options)
+    before = np.array(sim.positions)
+    with pytest.raises(stabint.InvalidInputError, match="cross"):
+        sim.set_state(x, np.zeros_like(x))
+    assert np.array_equal(np.asarray(sim.positions), before)

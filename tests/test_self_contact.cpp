@@ -266,6 +266,13 @@ TEST(SelfContactRun, AStartThatCrossesItselfIsRefused) {
   }
   SimulatorOptions off;
   EXPECT_NO_THROW(Simulator(crossing, off).step());
+  // In a batch the message names the scene that crosses.
+  try {
+    BatchSimulator refused({lower, crossing}, o);
+    FAIL() << "a batch with a crossing scene was accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("scene 1: self-contact: surface triangle", 0), 0u) << e.what();
+  }
 
   Scene apart = testing::combined(lower, testing::horizontalCloth(10, 0.3));
   Simulator sim(apart, o);

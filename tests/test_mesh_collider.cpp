@@ -299,9 +299,16 @@ TEST(MeshCollider, EachSceneOfABatchHasItsOwnMesh) {
   BatchSimulator batch(scenes, SimulatorOptions{});
   std::vector<Simulator> alone;
   for (const Scene& s : scenes) alone.emplace_back(s, SimulatorOptions{});
-  for (int i = 0; i < 25; ++i) testing::stepAndExpectSame(batch, alone, "step " + std::to_string(i));
+  // The cloth over the sphere is held up: none of its vertices is ever deeper in the sphere than
+  // the contact tolerance (it lands and bounces: the contact is elastic by default).
+  double closest = 1e9;
+  for (int i = 0; i < 25; ++i) {
+    testing::stepAndExpectSame(batch, alone, "step " + std::to_string(i));
+    closest = std::min(closest, batch.positions(0).rowwise().norm().minCoeff());
+  }
   EXPECT_LT(batch.positions(2).col(1).maxCoeff(), 0.2 - 1.5);  // the third fell through both meshes
-  EXPECT_GT(batch.positions(0).col(1).maxCoeff(), 0.25 - SimulatorOptions{}.contact_tolerance);  // held up
+  EXPECT_GT(closest, 0.25 - SimulatorOptions{}.contact_tolerance);
+  EXPECT_GT(batch.positions(0).col(1).maxCoeff(), 0.0);  // on the sphere, not beside it
 }
 
 class MeshColliderFiles : public testing::TempDirTest {};

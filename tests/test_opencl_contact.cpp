@@ -143,10 +143,10 @@ TEST(OpenCLContact, MeshCollidersMatchCpu) {
     for (Integrator integrator : testing::crossBackendIntegrators(precision)) {
       const ContactRun ref = run(scene, integrator, BackendKind::CpuReference, Precision::Double, 30, input);
       const ContactRun got = run(scene, integrator, BackendKind::OpenCL, precision, 30, input);
-      const Reached reached =
-          expectFollowsCpu(got, ref, tol, std::string(integratorName(integrator)) + " " + precisionName(precision));
-      EXPECT_GT(reached.friction, 0.0) << "the cloth must reach the sphere within the run";
-      EXPECT_GT(reached.forcing, 0.0) << "the moved box must reach the cloth within the run";
+      const std::string what = std::string(integratorName(integrator)) + " " + precisionName(precision);
+      const Reached reached = expectFollowsCpu(got, ref, tol, what);
+      EXPECT_GT(reached.friction, 0.0) << what << ": the cloth must reach the sphere within the run";
+      EXPECT_GT(reached.forcing, 0.0) << what << ": the moved box must reach the cloth within the run";
     }
   }
 }

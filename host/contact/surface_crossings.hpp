@@ -14,7 +14,7 @@ namespace stabint {
 /// passes through the inside of the other, both strictly: a point within 1e-10 (relative) of a
 /// plane or a side lies on it, which is a touch, not a crossing. Triangles that share a particle
 /// are not tested (neighbours of a mesh always touch), and triangles in one plane do not cross.
-/// Found through a uniform grid over the triangles' bounding boxes.
+/// Found through the broad phase's grid over the triangles' bounding boxes (box_grid.hpp).
 std::vector<std::pair<int, int>> crossingTriangles(const Eigen::MatrixX3d& x,
                                                    const std::vector<std::array<int, 3>>& triangles);
 

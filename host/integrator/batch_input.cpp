@@ -61,8 +61,8 @@ void BatchDriver::checkNoCrossings(std::size_t s, const Eigen::MatrixX3d& positi
   };
   throw InvalidInputError(where + "self-contact: " + triangle(crossing[0].first) + " and " +
                           triangle(crossing[0].second) + " cross (" + std::to_string(crossing.size()) +
-                          " crossing pairs in all): self-contact keeps a start free of crossings so and cannot "
-                          "undo one (docs/method.md, \"Self-contact\")");
+                          " crossing pairs in all); self-contact keeps a state free of crossings but cannot undo a "
+                          "crossing, so the start must have none (docs/method.md, \"Self-contact\")");
 }
 
 double BatchDriver::storeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {

@@ -1,6 +1,7 @@
 #include "solver/global_system.hpp"
 
 #include "scene/scene_data.hpp"
+#include "common/worker_pool.hpp"
 #include "solver/factor_solve.hpp"
 
 #include <stabint/errors.hpp>
@@ -8,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <exception>
 #include <iterator>
 #include <new>
 #include <sstream>
@@ -126,24 +128,30 @@ bool GlobalSystem::Factor::analysedFor(const Eigen::SparseMatrix<double>& k) con
 
 void GlobalSystem::factor(double c, const char* c_name, std::unique_ptr<Factor> reused) {
   if (factors_.count(c)) return;
+  installFactor(c, c_name, computeFactor(c, std::move(reused)));
+}
+
+std::unique_ptr<GlobalSystem::Factor> GlobalSystem::computeFactor(double c, std::unique_ptr<Factor> reused) const {
   Eigen::SparseMatrix<double> k = shiftedLaplacian(c);
   k.makeCompressed();
-  std::unique_ptr<Factor> factor;
   if (reused && reused->analysedFor(k)) {
     // The same fill-reducing order and tree (AMD on the same pattern would find them again):
     // numbers only, about three quarters of a factorization's time on the 50 x 50 cloth.
-    factor = std::move(reused);
-    factor->shapeChanged();
-    factor->factorize(k);
-  } else {
-    factor = std::make_unique<Factor>();
-    // CHOLMOD reports a failure by printing on stdout (into an application's CSV output); the
-    // failure is reported by the exception below instead.
-    factor->cholmod().print = 0;
-    factor->compute(k);
-    factor->pattern_starts.assign(k.outerIndexPtr(), k.outerIndexPtr() + k.outerSize() + 1);
-    factor->pattern_rows.assign(k.innerIndexPtr(), k.innerIndexPtr() + k.nonZeros());
+    reused->shapeChanged();
+    reused->factorize(k);
+    return reused;
   }
+  auto factor = std::make_unique<Factor>();
+  // CHOLMOD reports a failure by printing on stdout (into an application's CSV output); the
+  // failure is reported by installFactor's exception instead.
+  factor->cholmod().print = 0;
+  factor->compute(k);
+  factor->pattern_starts.assign(k.outerIndexPtr(), k.outerIndexPtr() + k.outerSize() + 1);
+  factor->pattern_rows.assign(k.innerIndexPtr(), k.innerIndexPtr() + k.nonZeros());
+  return factor;
+}
+
+void GlobalSystem::installFactor(double c, const char* c_name, std::unique_ptr<Factor> factor) {
   const bool flagged = factor->info() != Eigen::Success;
   if (!flagged && !simplicialSolveApplies(*factor->factor()))
     throw Error("GlobalSystem::factor: CHOLMOD factor of an unexpected kind");
@@ -309,7 +317,37 @@ void GlobalSystem::refactorAll() {
   keepFactors(true);
   std::map<double, std::unique_ptr<Factor>> previous;
   previous.swap(factors_);
-  for (auto& [c, f] : previous) factor(c, "c", std::move(f));
+  // The factors of the integrator's c at once, one per thread (the blend's two halve a contact
+  // set's refactorization), then checked and kept in the order of c.
+  std::vector<std::pair<double, std::unique_ptr<Factor>>> computed;
+  for (auto& [c, f] : previous) computed.emplace_back(c, std::move(f));
+  std::vector<std::exception_ptr> failed(computed.size());
+  parallelFor(static_cast<int>(computed.size()), [&](int i) {
+    auto& [c, f] = computed[std::size_t(i)];
+    try {
+      f = computeFactor(c, std::move(f));
+    } catch (...) {
+      failed[std::size_t(i)] = std::current_exception();
+    }
+  });
+  for (std::size_t i = 0; i < computed.size(); ++i) {
+    if (failed[i]) std::rethrow_exception(failed[i]);
+    installFactor(computed[i].first, "c", std::move(computed[i].second));
+  }
+}
+
+template <class FactorUpdate>
+void GlobalSystem::updateEveryFactor(const FactorUpdate& update) {
+  std::vector<Factor*> factors;
+  for (auto& entry : factors_) factors.push_back(entry.second.get());
+  std::vector<char> updated(factors.size(), 0);
+  parallelFor(static_cast<int>(factors.size()), [&](int i) {
+    Factor& f = *factors[std::size_t(i)];
+    updated[std::size_t(i)] = update(f) ? 1 : 0;
+    f.shapeChanged();
+  });
+  std::size_t i = 0;
+  for (auto it = factors_.begin(); it != factors_.end(); ++i) it = updated[i] ? std::next(it) : factors_.erase(it);
 }
 
 const std::vector<int>& GlobalSystem::Factor::rowOf() {
@@ -340,38 +378,35 @@ void GlobalSystem::addElementTerm(const int* vertices, int K, const double* a, i
   }
   const int n = static_cast<int>(laplacian_.rows());
   const double scale = std::sqrt(std::abs(delta));
-  for (auto it = factors_.begin(); it != factors_.end();) {
-    cholmod_factor* factor = it->second->factor();
-    cholmod_common& common = it->second->cholmod();
+  // A failed update (out of memory, or a downdate that lost positive definiteness to round-off)
+  // leaves the factor unusable: it is factored again on its next use.
+  updateEveryFactor([&](Factor& f) {
+    cholmod_factor* factor = f.factor();
+    cholmod_common& common = f.cholmod();
     // C = sqrt(|delta|) A^T in the factor's fill-reducing order: vertex v is row k with
     // Perm[k] = v. Each column lists its rows in ascending order, as CHOLMOD requires.
     std::vector<std::pair<int, int>> rows(static_cast<std::size_t>(K));  // (permuted row, k)
-    const std::vector<int>& row_of = it->second->rowOf();
+    const std::vector<int>& row_of = f.rowOf();
     for (int k = 0; k < K; ++k) rows[static_cast<std::size_t>(k)] = {row_of[static_cast<std::size_t>(vertices[k])], k};
     std::sort(rows.begin(), rows.end());
     cholmod_sparse* c = cholmod_allocate_sparse(n, R, static_cast<std::size_t>(K * R), /*sorted=*/1, /*packed=*/1,
                                                 /*stype=*/0, CHOLMOD_REAL, &common);
-    bool updated = false;
-    if (c != nullptr) {
-      int* cp = static_cast<int*>(c->p);
-      int* ci = static_cast<int*>(c->i);
-      double* cx = static_cast<double*>(c->x);
-      for (int r = 0; r < R; ++r) {
-        cp[r] = K * r;
-        for (int k = 0; k < K; ++k) {
-          ci[K * r + k] = rows[static_cast<std::size_t>(k)].first;
-          cx[K * r + k] = scale * a[K * r + rows[static_cast<std::size_t>(k)].second];
-        }
+    if (c == nullptr) return false;
+    int* cp = static_cast<int*>(c->p);
+    int* ci = static_cast<int*>(c->i);
+    double* cx = static_cast<double*>(c->x);
+    for (int r = 0; r < R; ++r) {
+      cp[r] = K * r;
+      for (int k = 0; k < K; ++k) {
+        ci[K * r + k] = rows[static_cast<std::size_t>(k)].first;
+        cx[K * r + k] = scale * a[K * r + rows[static_cast<std::size_t>(k)].second];
       }
-      cp[R] = K * R;
-      updated = cholmod_updown(delta > 0.0 ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
-      cholmod_free_sparse(&c, &common);
     }
-    it->second->shapeChanged();
-    // A failed update (out of memory, or a downdate that lost positive definiteness to
-    // round-off) leaves the factor unusable: factor that c again on its next use.
-    it = updated ? std::next(it) : factors_.erase(it);
-  }
+    cp[R] = K * R;
+    const bool updated = cholmod_updown(delta > 0.0 ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
+    cholmod_free_sparse(&c, &common);
+    return updated;
+  });
 }
 
 void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::vector<double>& deltas) {
@@ -380,10 +415,11 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
   for (std::size_t i = 0; i < vertices.size(); ++i) laplacian_.coeffRef(vertices[i], vertices[i]) += deltas[i];
   laplacianChanged();
   const int n = static_cast<int>(laplacian_.rows());
-  for (auto it = factors_.begin(); it != factors_.end();) {
-    cholmod_factor* factor = it->second->factor();
-    cholmod_common& common = it->second->cholmod();
-    const std::vector<int>& row_of = it->second->rowOf();
+  // As addElementTerm: a failed update leaves the factor to be factored again on its next use.
+  updateEveryFactor([&](Factor& f) {
+    cholmod_factor* factor = f.factor();
+    cholmod_common& common = f.cholmod();
+    const std::vector<int>& row_of = f.rowOf();
     bool updated = true;
     for (const bool update : {true, false}) {
       std::vector<std::size_t> columns;
@@ -393,10 +429,7 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
       const int k = static_cast<int>(columns.size());
       cholmod_sparse* c = cholmod_allocate_sparse(n, static_cast<std::size_t>(k), static_cast<std::size_t>(k),
                                                   /*sorted=*/1, /*packed=*/1, /*stype=*/0, CHOLMOD_REAL, &common);
-      if (c == nullptr) {
-        updated = false;
-        continue;
-      }
+      if (c == nullptr) return false;
       int* cp = static_cast<int*>(c->p);
       int* ci = static_cast<int*>(c->i);
       double* cx = static_cast<double*>(c->x);
@@ -410,10 +443,8 @@ void GlobalSystem::addToDiagonal(const std::vector<int>& vertices, const std::ve
       updated = cholmod_updown(update ? 1 : 0, c, factor, &common) != 0 && common.status == CHOLMOD_OK;
       cholmod_free_sparse(&c, &common);
     }
-    it->second->shapeChanged();
-    // As addElementTerm: a failed update leaves the factor unusable; factor it again on next use.
-    it = updated ? std::next(it) : factors_.erase(it);
-  }
+    return updated;
+  });
 }
 
 std::unique_ptr<GlobalSystem::Factor> GlobalSystem::Factor::copy() {

@@ -241,6 +241,17 @@ class GlobalSystem {
   };
   // factor(c, c_name), computing the numbers into `reused` where it was analysed for K_c's pattern.
   void factor(double c, const char* c_name, std::unique_ptr<Factor> reused);
+  // The factor of K_c (into `reused` where it was analysed for K_c's pattern), unchecked. Reads L
+  // and the masses only, so that several c are factored at once on their own threads.
+  std::unique_ptr<Factor> computeFactor(double c, std::unique_ptr<Factor> reused) const;
+  // Checks a computed factor (InvalidInputError naming c_name when K_c is not numerically positive
+  // definite) and keeps it as the factor of c.
+  void installFactor(double c, const char* c_name, std::unique_ptr<Factor> factor);
+  // update(f) for every factor, each on its own thread (one factor's rank update is serial
+  // arithmetic, so the results do not depend on the thread count); a factor whose update returns
+  // false is dropped, to be factored again on its next use.
+  template <class FactorUpdate>
+  void updateEveryFactor(const FactorUpdate& update);
   // What an open Transaction keeps: L and the factors as they were before their first change.
   struct Kept {
     bool open = false;

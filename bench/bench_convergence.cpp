@@ -25,7 +25,7 @@
 //             plain one, phase by phase (docs/benchmarks.md, "L-BFGS's cost per iteration").
 #include "bench_common.hpp"
 
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/forcing.hpp"

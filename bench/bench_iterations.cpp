@@ -21,7 +21,7 @@
 //                               each method's largest distance from the Jacobi SVD's rotation.
 #include "bench_common.hpp"
 
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "elements/projections.hpp"
 #include "opencl/opencl_backend.hpp"

@@ -3,7 +3,7 @@
 // solve): a backend and the factored global system at a scene's first BE step, x = y = x_0 + h^2 g.
 #include "bench_common.hpp"
 
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/forcing.hpp"

@@ -1,7 +1,7 @@
 """The markdown report of scripts/gpu_report.sh: the machine, the selected OpenCL device, the OpenCL
 tests' outcome and, per benchmark stage (bench-<stage>.json), each case on the CPU reference and
 the OpenCL device side by side, with the sizes from which the device beats the CPU reference (the
-data for BackendKind::Auto's threshold, host/device_profiles.cpp).
+data for BackendKind::Auto's threshold, host/backend/device_profiles.cpp).
 
     python3 bench/gpu_report.py RESULTS_DIR [--quick 0|1] > RESULTS_DIR/report.md
 """
@@ -270,11 +270,11 @@ def main():
         all_cases.update(cases)
     out += ["## Where the device overtakes the CPU reference", "",
             "The data for BackendKind::Auto's costs (DeviceProfile::auto_*, "
-            "host/device_profiles.cpp).", ""]
+            "host/backend/device_profiles.cpp).", ""]
     out += crossing_lines(all_cases)
     out += ["", "## Rows of launch sizes on this device", "",
             "The same OpenCL cases with each row's work-group sizes and reduction grid "
-            "(STABINT_OPENCL_PROFILE=<row>; host/device_profiles.cpp).", ""]
+            "(STABINT_OPENCL_PROFILE=<row>; host/backend/device_profiles.cpp).", ""]
     out += rows_lines(args.results)
     print("\n".join(out))
 

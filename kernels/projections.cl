@@ -28,7 +28,7 @@ inline real halfWeightedSquaredDistance(real w, const real* a, const real* b, in
 // Newton's polar iteration needs det M > 0; below FLAT_VOLUME times ||M||_F^3 the element counts
 // as flat and takes rotationByEigen. The bound MAX_NEWTON_ITERATIONS is never reached in practice.
 // (FLAT_VOLUME, NEWTON_SCALING, MAX_NEWTON_ITERATIONS and MAX_JACOBI_SWEEPS are the prelude's:
-// the CPU reference's values, host/kernel_constants.hpp.)
+// the CPU reference's values, host/common/kernel_constants.hpp.)
 
 /// c = det(X) X^-T (rows a, b, c of X give the rows b x c, c x a, a x b; the same for columns,
 /// so the layout does not matter); returns det X.

@@ -5,7 +5,7 @@
 // The constants the host shares with the kernels (pass flags PASS_*, collider shape codes
 // COLLIDER_*, the collider geometry's and the segment table's layouts, the projections'
 // thresholds, ...) are not defined in any kernel file: ocl::buildProgram puts the prelude
-// generated from host/kernel_constants.hpp before every program's source, so each is declared
+// generated from host/common/kernel_constants.hpp before every program's source, so each is declared
 // once, there.
 //
 // Memory layouts:

@@ -6,7 +6,7 @@
 // single-value reductions form it, would mix neighbouring scenes.
 //
 // The segment table holds, per scene, SEGMENT_ROW_HEAD + SEGMENT_ROW_PER_BLOCK B ints (the
-// prelude's layout, host/kernel_constants.hpp): its first particle and particle count, then for
+// prelude's layout, host/common/kernel_constants.hpp): its first particle and particle count, then for
 // each of the B element blocks the first index of its elements' energies (written by element_pass
 // with PASS_ENERGY_PER_ELEMENT) and their count.
 

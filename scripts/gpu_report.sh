@@ -8,7 +8,7 @@
 # STAGEs, in this order by default (all of them): deps build test bench report. `bench` is
 # bench-frame bench-cg bench-scaling bench-auto bench-blend bench-solver bench-batch bench-rows
 # (most wanted first;
-# bench-rows times a few OpenCL cases with each row of launch sizes of host/device_profiles.cpp,
+# bench-rows times a few OpenCL cases with each row of launch sizes of host/backend/device_profiles.cpp,
 # STABINT_OPENCL_PROFILE, to tune the device's row); each can be given
 # alone, so that every command stays under a lending's 10 minutes (a benchmark stage stops after
 # STABINT_BENCH_TIMEOUT, 200 s), e.g. four commands on the lent machine:

@@ -1,10 +1,10 @@
-// The prelude every OpenCL program starts with (host/kernel_constants.hpp) against the host's
+// The prelude every OpenCL program starts with (host/common/kernel_constants.hpp) against the host's
 // constants, without a device: each entry of the lists is one `#define` with the host's value, and
 // the prelude defines nothing else. tests/test_opencl_kernel_prelude.cpp compiles it and reads the
 // values back from a device.
 #include "elements/contact.hpp"
 #include "elements/element_type.hpp"
-#include "kernel_constants.hpp"
+#include "common/kernel_constants.hpp"
 
 #include <gtest/gtest.h>
 
@@ -62,7 +62,7 @@ TEST(KernelPrelude, DefinesTheListsAndNothingElse) {
   STABINT_KERNEL_INTS(STABINT_NAME)
   STABINT_KERNEL_REALS(STABINT_NAME)
 #undef STABINT_NAME
-  EXPECT_EQ(names.size(), entries) << "a kernel name appears twice in host/kernel_constants.hpp";
+  EXPECT_EQ(names.size(), entries) << "a kernel name appears twice in host/common/kernel_constants.hpp";
   const std::string& prelude = kernelPrelude();
   std::size_t defines = 0;
   for (std::size_t at = prelude.find("#define"); at != std::string::npos; at = prelude.find("#define", at + 1))

@@ -2,7 +2,7 @@
 // an iteration of the scene is estimated to cost less there, else the CPU reference, also when an
 // OpenCL CPU device exists (docs/method.md "Backend choice"). The rule on given device lists,
 // then on this machine's devices.
-#include "device_profiles.hpp"
+#include "backend/device_profiles.hpp"
 #include "integrator/backend_choice.hpp"
 #include "test_opencl_support.hpp"
 

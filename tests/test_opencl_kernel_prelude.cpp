@@ -1,9 +1,9 @@
-// The prelude (host/kernel_constants.hpp) from the kernels' side: no kernel file defines one of
+// The prelude (host/common/kernel_constants.hpp) from the kernels' side: no kernel file defines one of
 // its names (each constant is declared once, on the host), and a program built the way the
 // backends build theirs (ocl::buildProgram, ocl::programOptions) sees exactly the host's values,
 // in double and in float.
 #include "elements/element_type.hpp"
-#include "kernel_constants.hpp"
+#include "common/kernel_constants.hpp"
 #include "opencl/cl_runtime.hpp"
 #include "opencl/embedded_kernels.hpp"
 #include "test_opencl_support.hpp"
@@ -33,7 +33,8 @@ TEST(OpenCLKernelPrelude, NoKernelFileDefinesAPreludeName) {
     const std::regex defined("#[ \\t]*(define|undef)[ \\t]+" + name + "\\b");
     for (std::size_t i = 0; i < ocl::kNumEmbeddedKernelFiles; ++i)
       EXPECT_FALSE(std::regex_search(ocl::kEmbeddedKernelFiles[i].source, defined))
-          << ocl::kEmbeddedKernelFiles[i].name << " defines " << name << ", which host/kernel_constants.hpp declares";
+          << ocl::kEmbeddedKernelFiles[i].name << " defines " << name
+          << ", which host/common/kernel_constants.hpp declares";
   }
 }
 

@@ -10,7 +10,7 @@
 #include <tuple>
 #include <utility>
 
-#include "member_count.hpp"
+#include "common/member_count.hpp"
 
 namespace stabint {
 namespace {

@@ -1,5 +1,5 @@
 #include "common/text_reader.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <cerrno>
 #include <charconv>

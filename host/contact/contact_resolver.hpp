@@ -7,7 +7,7 @@
 // contact_rules.hpp's; the contact energy itself is an element (host/elements/contact.cpp,
 // kernels/contact.cl) that acts inside every solve. It sits below the drivers (it includes
 // neither them nor the facade: scripts/check_layering.sh), so that the batch can hold one too.
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "contact/contact_rules.hpp"  // ContactPart
 #include "contact/self_contact.hpp"   // SupportPlane
 

@@ -1,7 +1,7 @@
 #pragma once
 // CPU reference backend: the same operations as the OpenCL backend in plain double-precision
 // C++ over Eigen arrays. It is the oracle every OpenCL result is checked against.
-#include "backend.hpp"
+#include "backend/backend.hpp"
 
 #include <memory>
 

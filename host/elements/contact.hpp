@@ -4,10 +4,10 @@
 // share: a collider at time t is kColliderGeometry reals,
 //   shape, center (3), a (3), radius
 // at the offsets kGeometryShape, kGeometryCenter, kGeometryA and kGeometryRadius
-// (host/kernel_constants.hpp declares them for both sides), with `a` the unit normal of a plane,
+// (host/common/kernel_constants.hpp declares them for both sides), with `a` the unit normal of a plane,
 // the half extents of a box, the other end of a capsule's axis (unused by spheres).
 // docs/method.md, "Contact", has the rules.
-#include "kernel_constants.hpp"
+#include "common/kernel_constants.hpp"
 
 #include <stabint/scene.hpp>
 

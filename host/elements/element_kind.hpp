@@ -25,7 +25,7 @@
 #include "elements/element_type.hpp"
 #include "elements/kind_passes.hpp"
 #include "elements/projections.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <Eigen/Core>
 

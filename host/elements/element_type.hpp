@@ -10,7 +10,7 @@
 //     kernels/<type>.cl.
 // Everything else is generic over the table of types (elementTypes()): the contribution CSR,
 // L = sum w_e A_e^T A_e, the right-hand-side gather, the energy reductions and the kernels.
-#include "kernel_constants.hpp"  // PassFlags: what an element pass computes
+#include "common/kernel_constants.hpp"  // PassFlags: what an element pass computes
 
 #include <stabint/scene.hpp>
 #include <stabint/types.hpp>

@@ -6,7 +6,7 @@
 #include "elements/element_type.hpp"
 #include "elements/energy_sum.hpp"
 #include "elements/projections.hpp"
-#include "simd.hpp"
+#include "common/simd.hpp"
 
 #include <Eigen/Core>
 

@@ -16,7 +16,7 @@ constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 // flat and takes the eigen-decomposition, which is defined for any M. A bound on the iterations
 // (kMaxNewtonIterations), never reached in practice (scaled Newton needs at most about 9 for any
 // condition number up to 1/epsilon), keeps every call finite. These bounds are the kernels' too:
-// host/kernel_constants.hpp declares them for both.
+// host/common/kernel_constants.hpp declares them for both.
 
 /// c = det(X) X^-T for the 3 x 3 X (rows a, b, c give the rows b x c, c x a, a x b; the same
 /// holds for columns, so the layout does not matter); returns det X.

@@ -2,13 +2,13 @@
 // Projections shared by several element types (reference, double precision). Their OpenCL twins
 // are in kernels/projections.cl and follow the same algorithms step by step, so that the two
 // backends agree to round-off (their thresholds and bounds are declared once, for both, in
-// host/kernel_constants.hpp).
-#include "kernel_constants.hpp"
+// host/common/kernel_constants.hpp).
+#include "common/kernel_constants.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "simd.hpp"
+#include "common/simd.hpp"
 
 #include <algorithm>
 #include <cmath>

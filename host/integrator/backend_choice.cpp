@@ -1,8 +1,8 @@
 #include "integrator/backend_choice.hpp"
 
-#include "validation.hpp"
+#include "common/validation.hpp"
 
-#include "device_profiles.hpp"
+#include "backend/device_profiles.hpp"
 #include "elements/element_type.hpp"
 
 #include "cpu/cpu_backend.hpp"
@@ -48,7 +48,7 @@ std::string microseconds(double us) { return std::to_string(static_cast<long lon
 }  // namespace
 
 // A GPU pays where an iteration costs less there than on the CPU reference: its launches, waits
-// and transfers (data per device class, DeviceProfile::auto_* in host/device_profiles.cpp, measured
+// and transfers (data per device class, DeviceProfile::auto_* in host/backend/device_profiles.cpp, measured
 // on an H200) against the local step's element work (each element type's measured cost) and, with
 // GlobalSolve::ConjugateGradient, the host CG. So tets and triangle strains, whose rotations cost
 // 35-90 ns each, take a GPU from about 1,500-2,000 elements, and a spring cloth, whose 6 springs per

@@ -1,7 +1,7 @@
 #pragma once
 // BackendKind::Auto's rule [project rule, docs/method.md "Backend choice"], apart from the
 // simulator so that tests can give it any list of devices.
-#include "backend.hpp"
+#include "backend/backend.hpp"
 
 #include <stabint/simulator.hpp>
 

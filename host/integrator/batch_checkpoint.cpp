@@ -8,8 +8,8 @@
 #include "elements/element_type.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "common/text_reader.hpp"
-#include "out_of_memory.hpp"
-#include "validation.hpp"
+#include "common/out_of_memory.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/errors.hpp>
 

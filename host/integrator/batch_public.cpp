@@ -3,7 +3,7 @@
 // checkpoints in batch_checkpoint.cpp.
 #include "integrator/batch_simulator.hpp"
 
-#include "out_of_memory.hpp"
+#include "common/out_of_memory.hpp"
 
 #include <cstddef>
 #include <memory>

@@ -3,7 +3,7 @@
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
 #include "integrator/options.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <algorithm>
 #include <chrono>

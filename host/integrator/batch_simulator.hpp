@@ -10,7 +10,7 @@
 // backend that computes per-scene energies (the
 // CPU reference and OpenCL), with every solver option, each run per scene (its reductions, stops
 // and CG on its own block), so that one scene's NaN never reaches the others.
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "contact/contact_resolver.hpp"
 #include "contact/self_contact.hpp"
 #include "integrator/backend_choice.hpp"

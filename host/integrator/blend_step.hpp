@@ -16,7 +16,7 @@
 // Trial positions may be formed on the device (Backend::combine of the slots holding from() and
 // the partner, as Simulator does) or on the host (as BatchSimulator does): the same numbers on
 // the CPU reference.
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "integrator/rigid_motion.hpp"
 #include "integrator/root_find.hpp"
 

@@ -3,7 +3,7 @@
 #include "elements/element_type.hpp"
 #include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/errors.hpp>
 

@@ -6,7 +6,7 @@
 // driver books the jump of H these cause as an event; the contact set's changes are
 // ContactResolver's. A batch changes one scene's elements through the same code (InputScope: its
 // indices and messages).
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "integrator/input_scope.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"

@@ -1,6 +1,6 @@
 #include "integrator/frame_input.hpp"
 
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/errors.hpp>
 

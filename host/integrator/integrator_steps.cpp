@@ -1,6 +1,6 @@
 #include "integrator/integrator_steps.hpp"
 
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <algorithm>
 #include <cmath>

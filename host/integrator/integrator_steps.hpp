@@ -3,7 +3,7 @@
 // scene with them (Simulator, BatchSimulator), so that the two cannot drift: the systems each
 // integrator factors, the y each forms, the velocity update after the solve, the forcing rule,
 // E_scale and the refusal messages (docs/method.md sections 2, 4, 7 and 8).
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 

@@ -8,7 +8,7 @@
 
 #include "integrator/batch_simulator.hpp"
 #include "state/checkpoint.hpp"
-#include "out_of_memory.hpp"
+#include "common/out_of_memory.hpp"
 
 #include <exception>
 #include <memory>

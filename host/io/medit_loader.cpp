@@ -1,9 +1,9 @@
 // Medit .mesh reader (ASCII; the format of Gmsh's and TetGen's -g output). The format is free:
 // a keyword and its count may share a line or not, so it is read as a token stream.
-#include "out_of_memory.hpp"
+#include "common/out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
 #include "common/text_reader.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/io.hpp>
 

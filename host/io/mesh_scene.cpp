@@ -1,6 +1,6 @@
 #include "io/mesh_scene.hpp"
 #include "scene/lumping.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <cmath>
 #include <filesystem>

@@ -1,10 +1,10 @@
 // Wavefront OBJ reader for cloth: only `v` and `f` matter; texture coordinates, normals, groups
 // and materials are skipped.
-#include "out_of_memory.hpp"
+#include "common/out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
 #include "common/text_reader.hpp"
 #include "scene/lumping.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/io.hpp>
 

@@ -1,8 +1,8 @@
 // TetGen .node/.ele reader (https://wias-berlin.de/software/tetgen/fformats.html).
-#include "out_of_memory.hpp"
+#include "common/out_of_memory.hpp"
 #include "io/mesh_scene.hpp"
 #include "common/text_reader.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/io.hpp>
 

@@ -1,7 +1,7 @@
 #include "opencl/cl_runtime.hpp"
 
 #include "common/text_reader.hpp"  // shown: the selectors are user text
-#include "kernel_constants.hpp"
+#include "common/kernel_constants.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -5,7 +5,7 @@
 // include/stabint/.
 #include <CL/opencl.hpp>
 
-#include "device_profiles.hpp"
+#include "backend/device_profiles.hpp"
 
 #include <stabint/errors.hpp>
 #include <stabint/types.hpp>
@@ -57,7 +57,7 @@ cl::Context sharedContext(const cl::Device& device);
 /// kernels/real.cl switches on ("-DSTABINT_DOUBLE" or "-DSTABINT_FLOAT").
 std::string programOptions(Precision precision);
 
-/// Compiles kernelPrelude() (host/kernel_constants.hpp: the constants host and kernels share)
+/// Compiles kernelPrelude() (host/common/kernel_constants.hpp: the constants host and kernels share)
 /// followed by `source` for `device` (uncached), so every program sees the host's values and no
 /// kernel file defines them. Throws KernelBuildError carrying the build log.
 cl::Program buildProgram(const cl::Context& context, const cl::Device& device, const std::string& source,

@@ -1,6 +1,6 @@
 #include "opencl/device_solver.hpp"
 
-#include "kernel_constants.hpp"
+#include "common/kernel_constants.hpp"
 #include "opencl/embedded_kernels.hpp"
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 // The OpenCL program of the backend, generated from element types (those of the scene): the fixed
 // kernel files, each type's kernels/<identifier>.cl with its instance of kernels/element_pass.cl,
 // and the element_pass kernel that hands each work-group to one type (or to the vertices).
-// ocl::buildProgram puts the prelude of shared constants (host/kernel_constants.hpp: PASS_*, ...)
+// ocl::buildProgram puts the prelude of shared constants (host/common/kernel_constants.hpp: PASS_*, ...)
 // before it.
 #include <string>
 #include <vector>

@@ -2,7 +2,7 @@
 // OpenCL backend: state slots, element data and the contribution CSR resident on the device;
 // local projections, right-hand-side gather, explicit forces, energy reductions and vector
 // operations run as kernels (kernels/*.cl, embedded at build time).
-#include "backend.hpp"
+#include "backend/backend.hpp"
 
 #include <memory>
 

@@ -4,7 +4,7 @@
 #include <stabint/builders.hpp>
 #include <stabint/errors.hpp>
 
-#include "out_of_memory.hpp"
+#include "common/out_of_memory.hpp"
 
 #include <algorithm>
 #include <array>

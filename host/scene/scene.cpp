@@ -5,7 +5,7 @@
 
 #include "elements/element_type.hpp"
 #include "scene/lumping.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <Eigen/Dense>
 

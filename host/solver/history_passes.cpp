@@ -1,7 +1,7 @@
 // L-BFGS's history passes (history_passes.hpp).
 #include "solver/history_passes.hpp"
 
-#include "simd.hpp"
+#include "common/simd.hpp"
 
 namespace stabint::history_passes {
 

@@ -4,7 +4,7 @@
 // Each iteration projects every element at the current x (local, on the backend) and solves
 // K_c x = rhs (global): with the prefactored K_c on the host, or by CG (GlobalSolve::
 // ConjugateGradient) on the host or, for OpenCL, on the device. The loop is shared by all backends.
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "scene/scene_batch.hpp"
 #include "solver/global_system.hpp"
 

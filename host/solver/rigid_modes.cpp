@@ -15,7 +15,7 @@
 #include "elements/element_type.hpp"
 #include "scene/scene_data.hpp"
 #include "scene/scene_view.hpp"
-#include "simd.hpp"
+#include "common/simd.hpp"
 #include "solver/local_global.hpp"
 
 #include <Eigen/Eigenvalues>

@@ -3,8 +3,8 @@
 #include "contact/contact_resolver.hpp"
 #include "elements/element_type.hpp"
 #include "common/text_reader.hpp"
-#include "out_of_memory.hpp"
-#include "validation.hpp"
+#include "common/out_of_memory.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/simulator.hpp>
 

@@ -1,7 +1,7 @@
 #pragma once
 // The contents of a Checkpoint and its binary form: one place that writes and one that reads
 // (with every size checked), shared by the in-memory and the file checkpoints.
-#include "backend.hpp"
+#include "backend/backend.hpp"
 #include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 

@@ -49,7 +49,7 @@ Cells = List[Tuple[str, np.ndarray]]
 MAX_FILE_BYTES = 256 << 20
 
 #: Largest magnitude of a velocity component read from a file: the library's bound on every
-#: coordinate and speed (``kMaxMagnitude``, host/validation.hpp), which its loaders apply to a
+#: coordinate and speed (``kMaxMagnitude``, host/common/validation.hpp), which its loaders apply to a
 #: file's coordinates as well.
 _MAX_MAGNITUDE = 1e150
 

@@ -3,7 +3,7 @@
 #include "io/json/json_internal.hpp"
 
 #include "common/text_reader.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/errors.hpp>
 

@@ -3,7 +3,7 @@
 // and checks are by concern in the other files of this folder.
 #include "io/json/json_internal.hpp"
 
-#include "out_of_memory.hpp"
+#include "common/out_of_memory.hpp"
 #include "common/text_reader.hpp"
 
 #include <stabint/errors.hpp>

@@ -8,7 +8,7 @@
 #include "common/text_reader.hpp"
 #include "scene/lumping.hpp"
 #include "scene/scene_batch.hpp"
-#include "validation.hpp"
+#include "common/validation.hpp"
 
 #include <stabint/errors.hpp>
 #include <stabint/io.hpp>

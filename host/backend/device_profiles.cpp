@@ -1,4 +1,4 @@
-#include "device_profiles.hpp"
+#include "backend/device_profiles.hpp"
 
 #include "common/text_reader.hpp"  // shown: the name is user text
 

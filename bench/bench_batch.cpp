@@ -7,7 +7,7 @@
 // accuracy, per scene (runBatchStops).
 #include "bench_common.hpp"
 
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 
 #include <chrono>
 #include <cmath>

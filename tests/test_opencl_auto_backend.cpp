@@ -3,7 +3,7 @@
 // OpenCL CPU device exists (docs/method.md "Backend choice"). The rule on given device lists,
 // then on this machine's devices.
 #include "backend/device_profiles.hpp"
-#include "integrator/backend_choice.hpp"
+#include "driver/backend_choice.hpp"
 #include "test_opencl_support.hpp"
 
 #include <gtest/gtest.h>

@@ -9,7 +9,7 @@
 
 #include "cpu/cpu_backend.hpp"
 #include "elements/element_type.hpp"
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/forcing.hpp"

@@ -1,7 +1,7 @@
 #pragma once
 // The backend interface the integrator driver talks to: whole-array operations on a fixed set of
 // `n by 3` state slots that live in the backend's memory (host arrays for the CPU reference,
-// device buffers for OpenCL). The integrator logic (host/integrator/) is written once against
+// device buffers for OpenCL). The integrators (host/integrator/) are written once against
 // this interface; the global sparse solve stays on the host (host/solver/), except with
 // GlobalSolve::ConjugateGradient on a backend that solvesGlobalSystem() (OpenCL: on the device).
 #include "scene/scene_batch.hpp"

@@ -2,7 +2,7 @@
 // Per-device launch sizes and policies as data: one row per class of OpenCL device (the table in
 // device_profiles.cpp), picked from the device's type, vendor and name. The OpenCL backend takes
 // its work-group sizes and reduction grids from the row; BackendKind::Auto takes the scene size
-// from which the device pays (host/integrator/backend_choice.cpp). No OpenCL types: the rule of
+// from which the device pays (host/driver/backend_choice.cpp). No OpenCL types: the rule of
 // Auto needs the table in a build without OpenCL too.
 #include <stabint/types.hpp>
 
@@ -33,7 +33,7 @@ struct DeviceProfile {
   bool fast_fp64;
 
   /// BackendKind::Auto's estimate of one local/global iteration on this device beyond what the
-  /// CPU reference pays too (host/integrator/backend_choice.cpp): a fixed cost for the launches and
+  /// CPU reference pays too (host/driver/backend_choice.cpp): a fixed cost for the launches and
   /// blocking waits, plus, with the host factor, the transfer of every particle's position and
   /// right-hand side, or, with the device CG, each CG iteration's launches. Infinity: never taken.
   double auto_launch_us;

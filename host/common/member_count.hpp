@@ -1,6 +1,6 @@
 #pragma once
 // The number of members of an aggregate, for the static checks that a field list names every
-// member of its struct (host/integrator/options.cpp, host/c_api/field_tables.cpp): a member
+// member of its struct (host/driver/options.cpp, host/c_api/field_tables.cpp): a member
 // missing from a list changes the count of initializers T{...} takes.
 #include <cstddef>
 #include <utility>

@@ -20,7 +20,7 @@
 #include "integrator/rigid_motion.hpp"
 #include "integrator/root_find.hpp"
 
-#include <stabint/simulator.hpp>
+#include <stabint/types.hpp>
 
 #include <Eigen/Core>
 

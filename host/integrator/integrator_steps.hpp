@@ -7,7 +7,7 @@
 #include "solver/global_system.hpp"
 #include "solver/local_global.hpp"
 
-#include <stabint/simulator.hpp>
+#include <stabint/types.hpp>
 
 #include <Eigen/Core>
 

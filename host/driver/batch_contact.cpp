@@ -2,7 +2,7 @@
 // on its own particles (the contact set at the step's start, the pairs' geometry after it,
 // friction and the final projection on the candidate, the colliders' share of the forcing),
 // self-contact before and after the solve, and the books of all of them.
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 #include "integrator/integrator_steps.hpp"
 
 #include <string>

@@ -1,4 +1,4 @@
-#include "integrator/frame_input.hpp"
+#include "driver/frame_input.hpp"
 
 #include "common/validation.hpp"
 

@@ -1,11 +1,11 @@
 // The batch's per-frame input and element changes (docs/method.md, "Batches"): each call is
 // Simulator's (FrameInput, ElementChanges) on one scene's segment, with the scene's indices, and
 // what it books is booked in that scene's H* only.
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 
 #include "contact/surface_crossings.hpp"
 #include "elements/element_type.hpp"
-#include "integrator/backend_choice.hpp"
+#include "driver/backend_choice.hpp"
 #include "integrator/integrator_steps.hpp"
 
 #include <algorithm>

@@ -6,7 +6,7 @@
 // the public calls onto scene 0 and keeps the report of the last completed step.
 #include <stabint/simulator.hpp>
 
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 #include "state/checkpoint.hpp"
 #include "common/out_of_memory.hpp"
 

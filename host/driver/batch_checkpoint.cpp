@@ -3,7 +3,7 @@
 // ElementChanges::save/restore and ContactResolver::restore serve it unchanged; a scene's
 // checkpoint is its part of that state, numbered as the scene alone numbers it, in Simulator's
 // format. A scene's restore splices its checkpoint into the batch's state and applies the whole.
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 
 #include "elements/element_type.hpp"
 #include "integrator/integrator_steps.hpp"

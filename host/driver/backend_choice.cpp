@@ -1,4 +1,4 @@
-#include "integrator/backend_choice.hpp"
+#include "driver/backend_choice.hpp"
 
 #include "common/validation.hpp"
 

@@ -7,7 +7,7 @@
 // ContactResolver's. A batch changes one scene's elements through the same code (InputScope: its
 // indices and messages).
 #include "backend/backend.hpp"
-#include "integrator/input_scope.hpp"
+#include "driver/input_scope.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/global_system.hpp"
 

@@ -1,7 +1,7 @@
 // The public class BatchSimulator (include/stabint/batch.hpp): its construction, step and
 // getters over its driver, BatchDriver (batch_simulator.cpp); its input is in batch_input.cpp, its
 // checkpoints in batch_checkpoint.cpp.
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 
 #include "common/out_of_memory.hpp"
 

@@ -1,4 +1,4 @@
-#include "integrator/element_changes.hpp"
+#include "driver/element_changes.hpp"
 
 #include "elements/element_type.hpp"
 #include "scene/forcing.hpp"

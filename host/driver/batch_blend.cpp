@@ -3,7 +3,7 @@
 // (solved on where even the whole partner keeps too much energy), and the root finds' energy
 // passes shared by all scenes, one batched pass per round. Each scene's decisions are its own
 // BlendStep's (blend_step.hpp), so a batch's scene blends as its own Simulator does.
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 
 #include "integrator/integrator_steps.hpp"
 

@@ -1,4 +1,4 @@
-#include "integrator/options.hpp"
+#include "driver/options.hpp"
 
 #include <stabint/options_table.h>
 

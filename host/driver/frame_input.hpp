@@ -4,7 +4,7 @@
 // InputScope) and the backend's input bound before anything changes. Targets, forces and collider
 // positions are ramped over the coming step; the driver books what changes H at once (grab,
 // release) as an event.
-#include "integrator/input_scope.hpp"
+#include "driver/input_scope.hpp"
 #include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
 

@@ -13,12 +13,12 @@
 #include "backend/backend.hpp"
 #include "contact/contact_resolver.hpp"
 #include "contact/self_contact.hpp"
-#include "integrator/backend_choice.hpp"
+#include "driver/backend_choice.hpp"
 #include "integrator/blend_step.hpp"
 #include "state/checkpoint.hpp"
-#include "integrator/element_changes.hpp"
-#include "integrator/frame_input.hpp"
-#include "integrator/input_scope.hpp"
+#include "driver/element_changes.hpp"
+#include "driver/frame_input.hpp"
+#include "driver/input_scope.hpp"
 #include "scene/forcing.hpp"
 #include "scene/scene_batch.hpp"
 #include "scene/scene_data.hpp"
@@ -135,7 +135,7 @@ struct BatchDriver {
     double target_now = 0.0;          // H* with this step's forcing, damping
     BlendStep blend;
   };
-  // ---- checkpoints (integrator/batch_checkpoint.cpp) --------------------------------------------------
+  // ---- checkpoints (driver/batch_checkpoint.cpp) --------------------------------------------------
   // Simulator's CheckpointData twice over: the batch's state as a Simulator of the concatenation
   // would save it (its pins, forcing, elements and contact log: what ElementChanges and
   // ContactResolver restore), and each scene's part of it as a Simulator of the scene alone would.
@@ -216,7 +216,7 @@ struct BatchDriver {
   // positions are formed on the host (no per-scene combine on the backend interface yet).
   void evaluateBlendPotentials(double t1, const std::vector<PotentialEnergy>& partner = {});
   bool potentialsOfStep(const IntegratorSteps& steps, int slot, double t1, const std::vector<char>& which);
-  // ---- contact (integrator/batch_contact.cpp) ---------------------------------------------------
+  // ---- contact (driver/batch_contact.cpp) ---------------------------------------------------
   // Scene s's colliders on host copies whose row 0 is particle `first_row` (0: the batch's).
   ContactPart contactPart(std::size_t s, int first_row) const;
   // The forcing of scene s over the step to its candidate x1 (its own rows): the forcing rule's

@@ -1,8 +1,8 @@
-#include "integrator/batch_simulator.hpp"
+#include "driver/batch_simulator.hpp"
 
 #include "integrator/damping.hpp"
 #include "integrator/integrator_steps.hpp"
-#include "integrator/options.hpp"
+#include "driver/options.hpp"
 #include "common/validation.hpp"
 
 #include <algorithm>

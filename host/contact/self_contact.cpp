@@ -438,8 +438,16 @@ void applyFriction(const ContactEvent& e, double mu, double normal, const Respon
 
 // Each particle's support in the solve (SelfContact::stopApproach), against where the other side
 // of its pair is predicted at the step's end (`ends`).
+// Whether a pair's triangle side moves under an impulse along its direction at most a tenth as far
+// as its vertex does: a tet body far heavier than a cloth's vertex, or pinned. A plane fixed for
+// the step then stands for it in any direction.
+bool triangleSideIsHeavy(const ContactEvent& e, const Response& response) {
+  const double vertex = response.inverseMass(e.vertices[0]);
+  return vertex > 0.0 && response.compliance(e, e.normal) - vertex <= 0.1 * vertex;
+}
+
 void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x, const Eigen::MatrixX3d& ends,
-                   double thickness, double reach, const Vec3& up, const Response& response,
+                   double thickness, double reach, const Vec3& up, const Response& response, SupportSurfaces where,
                    std::vector<SupportPlane>& supports) {
   // Per particle the plane with the least room between x and the thickness (slack), the first of equals.
   std::vector<int> chosen(static_cast<std::size_t>(x.rows()), -1);
@@ -448,10 +456,14 @@ void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x
     const int p = e.vertices[0];
     // A tet body's particles answer as the body (Response): a support of one would hold it alone.
     if (e.edge_edge || response.inverseMass(p) == 0.0 || response.solidOf()[std::size_t(p)] >= 0) continue;
-    // Only a vertex resting on the triangle against gravity (their direction within 60 degrees of
-    // the vertical, the vertex above): the plane does not give way, and a vertex under a layer,
-    // pulled up against it, stayed trapped under it while its cloth was dragged away.
-    if (!(e.normal.dot(up) >= 0.5)) continue;
+    // On a heavy side in any direction: the body hardly moves for the vertex (a cloth draped over a
+    // tet bar, held on the top alone, was pushed back after the solve at the bar's sides and H ran
+    // 1.3 times the largest kinetic energy above H*; 0.25 with these). Elsewhere only a vertex
+    // resting on the triangle against gravity (their direction within 60 degrees of the vertical,
+    // the vertex above): the plane does not give way, and a vertex under a layer, pulled up
+    // against it, stayed trapped under it while its cloth was dragged away.
+    if (!triangleSideIsHeavy(e, response) && (where == SupportSurfaces::HeavyBodies || !(e.normal.dot(up) >= 0.5)))
+      continue;
     // Where the triangle's contact point is predicted at the step's end.
     Vec3 q = Vec3::Zero();
     for (int k = 1; k < 4; ++k) q -= e.weights[std::size_t(k)] * rowOf(ends, e.vertices[std::size_t(k)]);
@@ -484,7 +496,8 @@ void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x
 
 double SelfContact::stopApproach(const PositionRows& x, Eigen::MatrixX3d& v, const Eigen::MatrixX3d& predicted,
                                  double h, const Eigen::VectorXd& masses, const std::vector<int>& fixed,
-                                 std::vector<SupportPlane>* supports, const Eigen::Vector3d& fall) const {
+                                 std::vector<SupportPlane>* supports, const Eigen::Vector3d& fall,
+                                 SupportSurfaces where) const {
   if (supports) supports->clear();
   if (surface_.empty()) return 0.0;
   // What the prediction adds to the velocities' path (gravity, the colliders' projection).
@@ -536,7 +549,7 @@ double SelfContact::stopApproach(const PositionRows& x, Eigen::MatrixX3d& v, con
     const double scale = std::max((x.colwise().maxCoeff() - x.colwise().minCoeff()).maxCoeff(), thickness_);
     for (const auto& [p, t] : candidates(ends, ends, nullptr, reach).vertex_triangle)
       supportPairEvent(x, ends, p, surface_.triangles[std::size_t(t)], reach, scale, pairs);
-    supportPlanes(pairs, x, ends, thickness_, reach, Vec3(-fall.normalized()), response, *supports);
+    supportPlanes(pairs, x, ends, thickness_, reach, Vec3(-fall.normalized()), response, where, *supports);
   }
   return changed ? kinetic_before - kinetic(v, masses) : 0.0;
 }

@@ -62,6 +62,12 @@ struct SelfContactResult {
   bool velocities_changed = false;
 };
 
+/// Where a cloth vertex may get a support in the solve (SimulatorOptions::self_contact_supports 1
+/// and 2): on a triangle whose side hardly moves under the pair's impulse (a tet body far heavier
+/// than the vertex, or pinned), in any direction; everywhere, also on any triangle it rests on
+/// against gravity.
+enum class SupportSurfaces { HeavyBodies, Everywhere };
+
 class SelfContact {
  public:
   /// `scene`'s surface (ContactSurface::of); thickness > 0; `friction`, the Coulomb coefficient
@@ -106,11 +112,13 @@ class SelfContact {
   /// vertex of a vertex-triangle pair keeps its side of the triangle where the prediction (as
   /// stopped; a tet body's rigidly: `fall`, h^2 g, less what the colliders lift it) puts the
   /// triangle at the step's end, the thickness apart or as far as it is now (never inside at x:
-  /// the support adds no energy to the state it starts from); of several, the nearest.
+  /// the support adds no energy to the state it starts from); of several, the nearest; on the
+  /// surfaces `where` names.
   double stopApproach(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x, Eigen::MatrixX3d& v,
                       const Eigen::MatrixX3d& predicted, double h, const Eigen::VectorXd& masses,
                       const std::vector<int>& fixed, std::vector<SupportPlane>* supports = nullptr,
-                      const Eigen::Vector3d& fall = Eigen::Vector3d::Zero()) const;
+                      const Eigen::Vector3d& fall = Eigen::Vector3d::Zero(),
+                      SupportSurfaces where = SupportSurfaces::Everywhere) const;
 
   /// Coulomb friction of the supports after the solve (docs/method.md, "Self-contact",
   /// "Friction"): for each support (rows as v's), its normal impulse `impulses[i]` (h w d, from

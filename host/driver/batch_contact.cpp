@@ -111,9 +111,10 @@ void BatchDriver::stopSelfContactApproach() {
     predicted.rowwise() += (h * h) * scenes_[s].gravity.transpose();
     contact_.projectOut(contactPart(s, seg.first_particle), t_ + h, x, predicted);
     std::vector<SupportPlane>& own = step_supports_[s];
-    const double stopped =
-        self_contact_[s].stopApproach(x, v, predicted, h, scenes_[s].masses, fixed,
-                                      seg.support_collider >= 0 ? &own : nullptr, h * h * scenes_[s].gravity);
+    const double stopped = self_contact_[s].stopApproach(
+        x, v, predicted, h, scenes_[s].masses, fixed, seg.support_collider >= 0 ? &own : nullptr,
+        h * h * scenes_[s].gravity,
+        options_.self_contact_supports == 2 ? SupportSurfaces::Everywhere : SupportSurfaces::HeavyBodies);
     if (seg.support_collider >= 0) {
       std::vector<SupportPlane> planes = own;
       for (SupportPlane& plane : planes) plane.particle += seg.first_particle;

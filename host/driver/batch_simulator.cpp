@@ -26,9 +26,32 @@ const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
   return o;
 }
 
-// Self-contact with its supports in the solve (docs/method.md, "Self-contact", "Support in the
-// solve"): the scenes get their support colliders.
-bool supportsOn(const SimulatorOptions& o) { return o.self_contact_thickness > 0.0 && o.self_contact_supports != 0; }
+// Self-contact's supports in the solve (docs/method.md, "Self-contact", "Within the solve"): which
+// scenes get a support collider. On every surface (2), each scene; on heavy bodies (1, the
+// default), a scene with a tet body and particles of no tet (a cloth that may rest on the body).
+std::vector<char> supportedScenes(const std::vector<Scene>& scenes, const SimulatorOptions& o) {
+  std::vector<char> supported(scenes.size(), 0);
+  if (!(o.self_contact_thickness > 0.0) || o.self_contact_supports == 0) return supported;
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const Scene& s = scenes[i];
+    if (o.self_contact_supports == 2) {
+      supported[i] = 1;
+      continue;
+    }
+    std::vector<char> in_tet(std::size_t(s.numParticles()), 0);
+    for (const Tet& t : s.tets)
+      for (int v : t.vertices) in_tet[std::size_t(v)] = 1;
+    supported[i] = !s.tets.empty() && std::find(in_tet.begin(), in_tet.end(), 0) != in_tet.end();
+  }
+  return supported;
+}
+
+SceneBatch batchOf(const std::vector<Scene>& scenes, const SimulatorOptions& o, bool one) {
+  const std::vector<char> supported = supportedScenes(scenes, o);
+  if (std::find(supported.begin(), supported.end(), 1) != supported.end())
+    return withSupportColliders(scenes, supported, one);
+  return one ? batchOfOne(scenes.front()) : concatenateScenes(scenes);
+}
 
 // As a matrix, for the public per-scene copies.
 Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) { return blockOf(m, s); }
@@ -36,16 +59,13 @@ Eigen::MatrixX3d rowsOf(const Eigen::MatrixX3d& m, const SceneSegment& s) { retu
 }  // namespace
 
 BatchDriver::BatchDriver(const std::vector<Scene>& scenes, const SimulatorOptions& options)
-    : BatchDriver(supportsOn(checkedOptions(options)) ? withSupportColliders(scenes, false) : concatenateScenes(scenes),
-                  scenes, options) {}
+    : BatchDriver(batchOf(scenes, checkedOptions(options), false), scenes, options) {}
 
 std::unique_ptr<BatchDriver> BatchDriver::forSimulator(const Scene& scene, const SimulatorOptions& options) {
   // Simulator's order of checks: the options, then the scene (SceneData validates it, with
   // Simulator's messages).
   validateOptions(options);
-  auto impl =
-      std::make_unique<BatchDriver>(supportsOn(options) ? withSupportColliders({scene}, true) : batchOfOne(scene),
-                                    std::vector<Scene>{scene}, options);
+  auto impl = std::make_unique<BatchDriver>(batchOf({scene}, options, true), std::vector<Scene>{scene}, options);
   impl->as_simulator_ = true;
   return impl;
 }

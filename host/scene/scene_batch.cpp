@@ -106,9 +106,11 @@ SceneBatch batchOfOne(const Scene& scene) {
   return SceneBatch{scene, {segment}};
 }
 
-SceneBatch withSupportColliders(const std::vector<Scene>& scenes, bool one) {
+SceneBatch withSupportColliders(const std::vector<Scene>& scenes, const std::vector<char>& supported, bool one) {
   std::vector<Scene> with = scenes;
-  for (Scene& s : with) {
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    if (!supported[i]) continue;
+    Scene& s = with[i];
     Collider support;
     support.shape = ColliderShape::Plane;
     support.normal = Eigen::Vector3d::UnitY();
@@ -116,7 +118,9 @@ SceneBatch withSupportColliders(const std::vector<Scene>& scenes, bool one) {
     s.colliders.push_back(support);
   }
   SceneBatch batch = one ? batchOfOne(with.front()) : concatenateScenes(with);
-  for (SceneSegment& seg : batch.segments) {
+  for (std::size_t i = 0; i < batch.segments.size(); ++i) {
+    if (!supported[i]) continue;
+    SceneSegment& seg = batch.segments[i];
     --seg.num_colliders;
     seg.support_collider = seg.first_collider + seg.num_colliders;
   }

@@ -49,10 +49,10 @@ struct SceneBatch {
 SceneBatch concatenateScenes(const std::vector<Scene>& scenes);
 
 /// `scenes` concatenated (or, with `one`, the single scene as batchOfOne gives it) with a support
-/// collider per scene after its own colliders (SceneSegment::support_collider): a plane far below
-/// everything, which the broad phase never enters and whose pairs act with the half-spaces
-/// self-contact writes.
-SceneBatch withSupportColliders(const std::vector<Scene>& scenes, bool one);
+/// collider after the own colliders of each scene whose flag in `supported` is set
+/// (SceneSegment::support_collider; -1 for the others): a plane far below everything, which the
+/// broad phase never enters and whose pairs act with the half-spaces self-contact writes.
+SceneBatch withSupportColliders(const std::vector<Scene>& scenes, const std::vector<char>& supported, bool one);
 
 /// `scene` itself as a batch of one (a Simulator's: its scene as it is, not appended to an empty
 /// one), with the segment that covers all of it. Not validated: SceneData validates it.

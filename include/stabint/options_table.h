@@ -102,8 +102,8 @@
         "distance the scene's surfaces keep from each other, m (0: no self-contact)")                                  \
   FIELD(T(double), self_contact_friction, 0.0, nonNegative(),                                                          \
         "Coulomb coefficient mu between the scene's surfaces in self-contact, >= 0")                                   \
-  FIELD(T(int), self_contact_supports, 0, inRange(0, 1),                                                               \
-        "self-contact: a cloth resting on a surface held there within the solve (1) or not (0)")                       \
+  FIELD(T(int), self_contact_supports, 1, inRange(0, 2),                                                               \
+        "self-contact's supports in the solve: 0 none, 1 on heavy bodies, 2 also on cloths")                           \
   FIELD(T(BackendKind), backend, BackendKind::CpuReference, isEnum(),                                                  \
         "where the element work runs: cpu, opencl or auto")                                                            \
   NESTED(T(OpenCLOptions), opencl, T(OPENCL_OPTIONS_FIELDS), "OpenCL device and precision (backend opencl or auto)")

@@ -436,8 +436,6 @@ void applyFriction(const ContactEvent& e, double mu, double normal, const Respon
   velocity.push(e, -std::min(slip, mu * normal) / compliance, dir);
 }
 
-// Each particle's support in the solve (SelfContact::stopApproach), against where the other side
-// of its pair is predicted at the step's end (`ends`).
 // Whether a pair's triangle side moves under an impulse along its direction at most a tenth as far
 // as its vertex does: a tet body far heavier than a cloth's vertex, or pinned. A plane fixed for
 // the step then stands for it in any direction.
@@ -446,6 +444,8 @@ bool triangleSideIsHeavy(const ContactEvent& e, const Response& response) {
   return vertex > 0.0 && response.compliance(e, e.normal) - vertex <= 0.1 * vertex;
 }
 
+// Each particle's support in the solve (SelfContact::stopApproach), against where the other side
+// of its pair is predicted at the step's end (`ends`).
 void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x, const Eigen::MatrixX3d& ends,
                    double thickness, double reach, const Vec3& up, const Response& response, SupportSurfaces where,
                    std::vector<SupportPlane>& supports) {
@@ -458,7 +458,7 @@ void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x
     if (e.edge_edge || response.inverseMass(p) == 0.0 || response.solidOf()[std::size_t(p)] >= 0) continue;
     // On a heavy side in any direction: the body hardly moves for the vertex (a cloth draped over a
     // tet bar, held on the top alone, was pushed back after the solve at the bar's sides and H ran
-    // 1.3 times the largest kinetic energy above H*; 0.25 with these). Elsewhere only a vertex
+    // 1.35 times the largest kinetic energy above H*; 0.24 with these). Elsewhere only a vertex
     // resting on the triangle against gravity (their direction within 60 degrees of the vertical,
     // the vertex above): the plane does not give way, and a vertex under a layer, pulled up
     // against it, stayed trapped under it while its cloth was dragged away.

@@ -146,10 +146,18 @@ ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::M
     if (which == 2) active_triangle_grid = Grid(tri_boxes, cell, &active_triangle);
   });
   // The queries in chunks of vertices and of edges on the worker threads, each chunk's pairs in
-  // its own list, the lists joined in chunk order: the serial order.
+  // its own list, the lists joined in chunk order: the serial order. Without `moved` the edge
+  // pairs come from the edge grid's cells (each cell's pairs of entries once), in chunks of cells.
   constexpr int kChunk = 256;
   const int vertex_chunks = static_cast<int>((verts.size() + kChunk - 1) / kChunk);
-  const int edge_chunks = static_cast<int>((edges.size() + kChunk - 1) / kChunk);
+  const std::size_t cells_per_chunk = (edge_grid.cells() + kChunk - 1) / kChunk;
+  const int edge_chunks = moved ? static_cast<int>((edges.size() + kChunk - 1) / kChunk)
+                                : static_cast<int>(cells_per_chunk == 0 ? 0 : kChunk);
+  const auto apart = [&](int i, int j) {
+    const auto& e = edges[std::size_t(i)];
+    const auto& f = edges[std::size_t(j)];
+    return e[0] != f[0] && e[0] != f[1] && e[1] != f[0] && e[1] != f[1];
+  };
   std::vector<std::vector<std::pair<int, int>>> pairs(std::size_t(vertex_chunks + edge_chunks));
   parallelFor(vertex_chunks + edge_chunks, [&](int chunk) {
     std::vector<std::pair<int, int>>& list = pairs[std::size_t(chunk)];
@@ -169,21 +177,22 @@ ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::M
       }
       return;
     }
+    if (!moved) {
+      const std::size_t first = std::size_t(chunk - vertex_chunks) * cells_per_chunk;
+      edge_grid.pairsInCells(first, std::min(edge_grid.cells(), first + cells_per_chunk), apart,
+                             [&](int i, int j) { list.emplace_back(i, j); });
+      return;
+    }
     const std::size_t first = std::size_t(chunk - vertex_chunks) * kChunk;
     const std::size_t end = std::min(edges.size(), first + kChunk);
     for (std::size_t i = first; i < end; ++i) {
-      // Each pair once: from its higher edge, or, with `moved`, from its moved edge (the higher
-      // one when both moved).
-      if (moved && !active_edge[i]) continue;
-      const auto& e = edges[i];
+      // Each pair once, from its moved edge (the lower one when both moved).
+      if (!active_edge[i]) continue;
       edge_grid.query(
           edge_boxes[i],
           [&](int j) {
-            if (moved ? j == static_cast<int>(i) || (active_edge[std::size_t(j)] && j < static_cast<int>(i))
-                      : j <= static_cast<int>(i))
-              return false;
-            const auto& f = edges[std::size_t(j)];
-            return e[0] != f[0] && e[0] != f[1] && e[1] != f[0] && e[1] != f[1];
+            return j != static_cast<int>(i) && !(active_edge[std::size_t(j)] && j < static_cast<int>(i)) &&
+                   apart(static_cast<int>(i), j);
           },
           [&](int j) { list.emplace_back(static_cast<int>(i), j); });
     }

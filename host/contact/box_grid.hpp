@@ -26,16 +26,15 @@ class Grid {
   // The boxes whose `included` flag is set (all without flags).
   Grid(const std::vector<Box>& boxes, double cell, const std::vector<char>* included = nullptr) {
     bool any = false;
-    Eigen::Vector3d hi = Eigen::Vector3d::Zero();
     for (std::size_t i = 0; i < boxes.size(); ++i) {
       if (included && !(*included)[i]) continue;
-      lo_ = any ? lo_.cwiseMin(boxes[i].lo) : boxes[i].lo;
-      hi = any ? hi.cwiseMax(boxes[i].hi) : boxes[i].hi;
+      bounds_.lo = any ? bounds_.lo.cwiseMin(boxes[i].lo) : boxes[i].lo;
+      bounds_.hi = any ? bounds_.hi.cwiseMax(boxes[i].hi) : boxes[i].hi;
       any = true;
     }
     if (!any) return;
     // At most about 2^21 cells: coarser cells for a scene spread far.
-    const Eigen::Vector3d span = hi - lo_;
+    const Eigen::Vector3d span = bounds_.hi - bounds_.lo;
     constexpr double kMaxCells = double(1 << 21);
     const double cells = ((span / cell).array() + 1.0).prod();
     if (cells > kMaxCells) cell *= std::cbrt(cells / kMaxCells) * 1.01;
@@ -64,7 +63,7 @@ class Grid {
   // and in box order within a cell.
   template <typename Wanted, typename F>
   void query(const Box& b, Wanted&& wanted, F&& f) const {
-    if (entries_.empty()) return;
+    if (entries_.empty() || !b.overlaps(bounds_)) return;  // (a grid of a few boxes meets most queries so)
     const CellRange r = cellsOf(b);
     for (int k = r.lo[2]; k <= r.hi[2]; ++k)
       for (int j = r.lo[1]; j <= r.hi[1]; ++j)
@@ -129,12 +128,12 @@ class Grid {
   }
   // A point outside the grid's box (a query's) falls in its nearest cell.
   int coordinate(double x, int c) const {
-    return std::clamp(static_cast<int>(std::floor((x - lo_[c]) / cell_)), 0, dims_[c] - 1);
+    return std::clamp(static_cast<int>(std::floor((x - bounds_.lo[c]) / cell_)), 0, dims_[c] - 1);
   }
   std::size_t key(int i, int j, int k) const {
     return std::size_t(i) + std::size_t(dims_[0]) * (std::size_t(j) + std::size_t(dims_[1]) * std::size_t(k));
   }
-  Eigen::Vector3d lo_ = Eigen::Vector3d::Zero();
+  Box bounds_{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};  // of the boxes it holds
   double cell_ = 1.0;
   int dims_[3] = {1, 1, 1};
   std::vector<int> starts_;

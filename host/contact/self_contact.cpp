@@ -37,6 +37,11 @@ Box sweptBox(const std::array<int, K>& v, const PositionRows& x0, const Eigen::M
   return b;
 }
 
+// Two edges that share no vertex (those that share one always touch).
+bool apart(const std::array<int, 2>& e, const std::array<int, 2>& f) {
+  return e[0] != f[0] && e[0] != f[1] && e[1] != f[0] && e[1] != f[1];
+}
+
 }  // namespace
 
 ContactSurface ContactSurface::of(const Scene& scene) {
@@ -99,10 +104,130 @@ SelfContact::SelfContact(const Scene& scene, double thickness, double friction)
   }
 }
 
+namespace {
+
+// The primitives' swept boxes of one query, and the grids' cell size.
+struct SweptBoxes {
+  std::vector<Box> triangles, edges, vertices;
+  double cell = 0.0;
+};
+
+// Work in chunks on the worker threads, each chunk's pairs in its own list, the lists joined in
+// chunk order: the serial order. `work(chunk, list)` for chunks [0, count).
+template <typename Work>
+std::vector<std::pair<int, int>> inChunks(int count, Work&& work) {
+  std::vector<std::vector<std::pair<int, int>>> lists(static_cast<std::size_t>(count));
+  parallelFor(count, [&](int chunk) { work(chunk, lists[std::size_t(chunk)]); });
+  std::vector<std::pair<int, int>> joined;
+  for (const auto& list : lists) joined.insert(joined.end(), list.begin(), list.end());
+  return joined;
+}
+
+constexpr int kChunk = 256;
+int chunksOf(std::size_t n) { return static_cast<int>((n + kChunk - 1) / kChunk); }
+std::size_t chunkEnd(std::size_t n, int chunk) { return std::min(n, std::size_t(chunk + 1) * kChunk); }
+
+// Every pair: each vertex's triangles from the triangle grid, in vertex order, and the edge pairs
+// from the edge grid's cells (each cell's pairs of entries once), in chunks of cells.
+ContactCandidates allPairs(const ContactSurface& surface, const std::vector<std::array<int, 2>>& edges,
+                           const SweptBoxes& boxes) {
+  const auto& tris = surface.triangles;
+  const auto& verts = surface.vertices;
+  Grid triangle_grid, edge_grid;
+  parallelFor(2, [&](int which) {
+    if (which == 0) triangle_grid = Grid(boxes.triangles, boxes.cell);
+    if (which == 1) edge_grid = Grid(boxes.edges, boxes.cell);
+  });
+  ContactCandidates found;
+  found.vertex_triangle = inChunks(chunksOf(verts.size()), [&](int chunk, std::vector<std::pair<int, int>>& list) {
+    for (std::size_t i = std::size_t(chunk) * kChunk; i < chunkEnd(verts.size(), chunk); ++i) {
+      const int v = verts[i];
+      triangle_grid.query(
+          boxes.vertices[i],
+          [&](int t) {
+            const auto& tri = tris[std::size_t(t)];
+            return tri[0] != v && tri[1] != v && tri[2] != v;
+          },
+          [&](int t) { list.emplace_back(v, t); });
+    }
+  });
+  const std::size_t cells_per_chunk = (edge_grid.cells() + kChunk - 1) / kChunk;
+  found.edge_edge = inChunks(cells_per_chunk == 0 ? 0 : kChunk, [&](int chunk, std::vector<std::pair<int, int>>& list) {
+    const std::size_t first = std::size_t(chunk) * cells_per_chunk;
+    edge_grid.pairsInCells(
+        first, std::min(edge_grid.cells(), first + cells_per_chunk),
+        [&](int i, int j) { return apart(edges[std::size_t(i)], edges[std::size_t(j)]); },
+        [&](int i, int j) { list.emplace_back(i, j); });
+  });
+  return found;
+}
+
+// The pairs with a moved vertex, from grids of the moved primitives alone (a later round of
+// impulses moves a few): each vertex against the triangles that moved, each triangle that did not
+// against the vertices that moved, each edge against the edges that moved. The same pairs as a
+// query of every moved primitive against all, each edge pair as (moved edge, other), the lower
+// first when both moved; in another order, which events() sorts away.
+ContactCandidates movedPairs(const ContactSurface& surface, const std::vector<std::array<int, 2>>& edges,
+                             const SweptBoxes& boxes, const std::vector<char>& moved) {
+  const auto& tris = surface.triangles;
+  const auto& verts = surface.vertices;
+  const auto any = [&](const auto& primitive) {
+    for (int v : primitive)
+      if (moved[std::size_t(v)]) return char(1);
+    return char(0);
+  };
+  std::vector<char> moved_vertex, moved_triangle, moved_edge;
+  for (int v : verts) moved_vertex.push_back(moved[std::size_t(v)]);
+  for (const auto& t : tris) moved_triangle.push_back(any(t));
+  for (const auto& e : edges) moved_edge.push_back(any(e));
+  Grid triangle_grid, vertex_grid, edge_grid;
+  parallelFor(3, [&](int which) {
+    if (which == 0) triangle_grid = Grid(boxes.triangles, boxes.cell, &moved_triangle);
+    if (which == 1) vertex_grid = Grid(boxes.vertices, boxes.cell, &moved_vertex);
+    if (which == 2) edge_grid = Grid(boxes.edges, boxes.cell, &moved_edge);
+  });
+  const auto outside = [&](int v, int t) {
+    const auto& tri = tris[std::size_t(t)];
+    return tri[0] != v && tri[1] != v && tri[2] != v;
+  };
+  const int vertex_chunks = chunksOf(verts.size()), triangle_chunks = chunksOf(tris.size());
+  ContactCandidates found;
+  found.vertex_triangle =
+      inChunks(vertex_chunks + triangle_chunks, [&](int chunk, std::vector<std::pair<int, int>>& list) {
+        if (chunk < vertex_chunks) {
+          for (std::size_t i = std::size_t(chunk) * kChunk; i < chunkEnd(verts.size(), chunk); ++i) {
+            const int v = verts[i];
+            triangle_grid.query(
+                boxes.vertices[i], [&](int t) { return outside(v, t); }, [&](int t) { list.emplace_back(v, t); });
+          }
+          return;
+        }
+        chunk -= vertex_chunks;
+        for (std::size_t t = std::size_t(chunk) * kChunk; t < chunkEnd(tris.size(), chunk); ++t) {
+          if (moved_triangle[t]) continue;
+          const int ti = static_cast<int>(t);
+          vertex_grid.query(
+              boxes.triangles[t], [&](int k) { return outside(verts[std::size_t(k)], ti); },
+              [&](int k) { list.emplace_back(verts[std::size_t(k)], ti); });
+        }
+      });
+  found.edge_edge = inChunks(chunksOf(edges.size()), [&](int chunk, std::vector<std::pair<int, int>>& list) {
+    for (std::size_t q = std::size_t(chunk) * kChunk; q < chunkEnd(edges.size(), chunk); ++q) {
+      const int i = static_cast<int>(q);
+      edge_grid.query(
+          boxes.edges[q],
+          [&](int j) { return j != i && (!moved_edge[q] || i < j) && apart(edges[q], edges[std::size_t(j)]); },
+          [&](int j) { moved_edge[q] ? list.emplace_back(i, j) : list.emplace_back(j, i); });
+    }
+  });
+  return found;
+}
+
+}  // namespace
+
 ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::MatrixX3d& x1,
                                           const std::vector<char>* moved, double support_reach) const {
-  ContactCandidates found;
-  if (surface_.empty()) return found;
+  if (surface_.empty()) return ContactCandidates{};
   // A supports' query: the vertex-triangle pairs within support_reach, no edges.
   const bool supports_only = support_reach > 0.0;
   const double grow = 0.5 * thickness_;
@@ -111,97 +236,32 @@ ContactCandidates SelfContact::candidates(const PositionRows& x0, const Eigen::M
   static const std::vector<std::array<int, 2>> kNoEdges;
   const auto& edges = supports_only ? kNoEdges : surface_.edges;
   const auto& verts = surface_.vertices;
-  std::vector<Box> tri_boxes(tris.size()), edge_boxes(edges.size()), vert_boxes(verts.size());
+  SweptBoxes boxes;
+  boxes.triangles.resize(tris.size());
+  boxes.edges.resize(edges.size());
+  boxes.vertices.resize(verts.size());
   Vec3 shift = Vec3::Zero();
   for (int v : verts) shift += rowOf(x1, v) - rowOf(x0, v);
   shift /= double(verts.size());
+  const int triangle_chunks = chunksOf(tris.size()), edge_chunks = chunksOf(edges.size());
+  parallelFor(triangle_chunks + edge_chunks + chunksOf(verts.size()), [&](int chunk) {
+    if (chunk < triangle_chunks) {
+      for (std::size_t i = std::size_t(chunk) * kChunk; i < chunkEnd(tris.size(), chunk); ++i)
+        boxes.triangles[i] = sweptBox(tris[i], x0, x1, shift, grow_vt);
+    } else if ((chunk -= triangle_chunks) < edge_chunks) {
+      for (std::size_t i = std::size_t(chunk) * kChunk; i < chunkEnd(edges.size(), chunk); ++i)
+        boxes.edges[i] = sweptBox(edges[i], x0, x1, shift, grow);
+    } else {
+      chunk -= edge_chunks;
+      for (std::size_t i = std::size_t(chunk) * kChunk; i < chunkEnd(verts.size(), chunk); ++i)
+        boxes.vertices[i] = sweptBox(std::array<int, 1>{verts[i]}, x0, x1, shift, grow_vt);
+    }
+  });
   double extent = 0.0;
-  for (std::size_t i = 0; i < tris.size(); ++i) {
-    tri_boxes[i] = sweptBox(tris[i], x0, x1, shift, grow_vt);
-    extent += (tri_boxes[i].hi - tri_boxes[i].lo).maxCoeff();
-  }
-  for (std::size_t i = 0; i < edges.size(); ++i) edge_boxes[i] = sweptBox(edges[i], x0, x1, shift, grow);
-  for (std::size_t i = 0; i < verts.size(); ++i)
-    vert_boxes[i] = sweptBox(std::array<int, 1>{verts[i]}, x0, x1, shift, grow_vt);
+  for (const Box& b : boxes.triangles) extent += (b.hi - b.lo).maxCoeff();
   // Cells about one triangle's swept box wide: each box covers a few cells, each cell a few boxes.
-  const double cell = std::max(extent / double(tris.size()), 4.0 * thickness_);
-
-  // With `moved`, only the pairs with a moved vertex: the active primitives are those with one.
-  std::vector<char> active_vertex, active_triangle, active_edge;
-  if (moved) {
-    auto any = [&](const auto& primitive) {
-      for (int v : primitive)
-        if ((*moved)[std::size_t(v)]) return char(1);
-      return char(0);
-    };
-    for (int v : verts) active_vertex.push_back((*moved)[std::size_t(v)]);
-    for (const auto& t : tris) active_triangle.push_back(any(t));
-    for (const auto& e : edges) active_edge.push_back(any(e));
-  }
-  // The grids on the worker threads, one each.
-  Grid triangle_grid, edge_grid, active_triangle_grid;
-  parallelFor(moved ? 3 : 2, [&](int which) {
-    if (which == 0) triangle_grid = Grid(tri_boxes, cell);
-    if (which == 1) edge_grid = Grid(edge_boxes, cell);
-    if (which == 2) active_triangle_grid = Grid(tri_boxes, cell, &active_triangle);
-  });
-  // The queries in chunks of vertices and of edges on the worker threads, each chunk's pairs in
-  // its own list, the lists joined in chunk order: the serial order. Without `moved` the edge
-  // pairs come from the edge grid's cells (each cell's pairs of entries once), in chunks of cells.
-  constexpr int kChunk = 256;
-  const int vertex_chunks = static_cast<int>((verts.size() + kChunk - 1) / kChunk);
-  const std::size_t cells_per_chunk = (edge_grid.cells() + kChunk - 1) / kChunk;
-  const int edge_chunks = moved ? static_cast<int>((edges.size() + kChunk - 1) / kChunk)
-                                : static_cast<int>(cells_per_chunk == 0 ? 0 : kChunk);
-  const auto apart = [&](int i, int j) {
-    const auto& e = edges[std::size_t(i)];
-    const auto& f = edges[std::size_t(j)];
-    return e[0] != f[0] && e[0] != f[1] && e[1] != f[0] && e[1] != f[1];
-  };
-  std::vector<std::vector<std::pair<int, int>>> pairs(std::size_t(vertex_chunks + edge_chunks));
-  parallelFor(vertex_chunks + edge_chunks, [&](int chunk) {
-    std::vector<std::pair<int, int>>& list = pairs[std::size_t(chunk)];
-    if (chunk < vertex_chunks) {
-      const std::size_t end = std::min(verts.size(), std::size_t(chunk + 1) * kChunk);
-      for (std::size_t i = std::size_t(chunk) * kChunk; i < end; ++i) {
-        const int v = verts[i];
-        // A vertex that moved meets every triangle; one that did not, those that moved.
-        const Grid& grid = !moved || active_vertex[i] ? triangle_grid : active_triangle_grid;
-        grid.query(
-            vert_boxes[i],
-            [&](int t) {
-              const auto& tri = tris[std::size_t(t)];
-              return tri[0] != v && tri[1] != v && tri[2] != v;
-            },
-            [&](int t) { list.emplace_back(v, t); });
-      }
-      return;
-    }
-    if (!moved) {
-      const std::size_t first = std::size_t(chunk - vertex_chunks) * cells_per_chunk;
-      edge_grid.pairsInCells(first, std::min(edge_grid.cells(), first + cells_per_chunk), apart,
-                             [&](int i, int j) { list.emplace_back(i, j); });
-      return;
-    }
-    const std::size_t first = std::size_t(chunk - vertex_chunks) * kChunk;
-    const std::size_t end = std::min(edges.size(), first + kChunk);
-    for (std::size_t i = first; i < end; ++i) {
-      // Each pair once, from its moved edge (the lower one when both moved).
-      if (!active_edge[i]) continue;
-      edge_grid.query(
-          edge_boxes[i],
-          [&](int j) {
-            return j != static_cast<int>(i) && !(active_edge[std::size_t(j)] && j < static_cast<int>(i)) &&
-                   apart(static_cast<int>(i), j);
-          },
-          [&](int j) { list.emplace_back(static_cast<int>(i), j); });
-    }
-  });
-  for (int c = 0; c < vertex_chunks + edge_chunks; ++c) {
-    auto& into = c < vertex_chunks ? found.vertex_triangle : found.edge_edge;
-    into.insert(into.end(), pairs[std::size_t(c)].begin(), pairs[std::size_t(c)].end());
-  }
-  return found;
+  boxes.cell = std::max(extent / double(tris.size()), 4.0 * thickness_);
+  return moved ? movedPairs(surface_, edges, boxes, *moved) : allPairs(surface_, edges, boxes);
 }
 
 std::vector<ContactEvent> SelfContact::events(const PositionRows& x0, const Eigen::MatrixX3d& x1, double closer_than,

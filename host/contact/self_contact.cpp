@@ -37,10 +37,11 @@ Box sweptBox(const std::array<int, K>& v, const PositionRows& x0, const Eigen::M
   return b;
 }
 
-// Two edges that share no vertex (those that share one always touch).
+// Two edges that share no vertex, and a vertex not of a triangle (those that share one always touch).
 bool apart(const std::array<int, 2>& e, const std::array<int, 2>& f) {
   return e[0] != f[0] && e[0] != f[1] && e[1] != f[0] && e[1] != f[1];
 }
+bool outside(int v, const std::array<int, 3>& tri) { return tri[0] != v && tri[1] != v && tri[2] != v; }
 
 }  // namespace
 
@@ -143,11 +144,7 @@ ContactCandidates allPairs(const ContactSurface& surface, const std::vector<std:
     for (std::size_t i = std::size_t(chunk) * kChunk; i < chunkEnd(verts.size(), chunk); ++i) {
       const int v = verts[i];
       triangle_grid.query(
-          boxes.vertices[i],
-          [&](int t) {
-            const auto& tri = tris[std::size_t(t)];
-            return tri[0] != v && tri[1] != v && tri[2] != v;
-          },
+          boxes.vertices[i], [&](int t) { return outside(v, tris[std::size_t(t)]); },
           [&](int t) { list.emplace_back(v, t); });
     }
   });
@@ -186,10 +183,6 @@ ContactCandidates movedPairs(const ContactSurface& surface, const std::vector<st
     if (which == 1) vertex_grid = Grid(boxes.vertices, boxes.cell, &moved_vertex);
     if (which == 2) edge_grid = Grid(boxes.edges, boxes.cell, &moved_edge);
   });
-  const auto outside = [&](int v, int t) {
-    const auto& tri = tris[std::size_t(t)];
-    return tri[0] != v && tri[1] != v && tri[2] != v;
-  };
   const int vertex_chunks = chunksOf(verts.size()), triangle_chunks = chunksOf(tris.size());
   ContactCandidates found;
   found.vertex_triangle =
@@ -198,7 +191,8 @@ ContactCandidates movedPairs(const ContactSurface& surface, const std::vector<st
           for (std::size_t i = std::size_t(chunk) * kChunk; i < chunkEnd(verts.size(), chunk); ++i) {
             const int v = verts[i];
             triangle_grid.query(
-                boxes.vertices[i], [&](int t) { return outside(v, t); }, [&](int t) { list.emplace_back(v, t); });
+                boxes.vertices[i], [&](int t) { return outside(v, tris[std::size_t(t)]); },
+                [&](int t) { list.emplace_back(v, t); });
           }
           return;
         }
@@ -207,7 +201,7 @@ ContactCandidates movedPairs(const ContactSurface& surface, const std::vector<st
           if (moved_triangle[t]) continue;
           const int ti = static_cast<int>(t);
           vertex_grid.query(
-              boxes.triangles[t], [&](int k) { return outside(verts[std::size_t(k)], ti); },
+              boxes.triangles[t], [&](int k) { return outside(verts[std::size_t(k)], tris[t]); },
               [&](int k) { list.emplace_back(verts[std::size_t(k)], ti); });
         }
       });

@@ -364,13 +364,15 @@ void SelfContactOnEveryBackend::followsTheCpuReferenceAndContinuesFromACheckpoin
 
 // The default supports (on a heavy body, SimulatorOptions::self_contact_supports 1): a cloth
 // landing on a tet bar (it reaches the bar at step 7) against the CPU reference: double to
-// round-off amplified over 20 steps (4e-11 m measured), float over 8 steps to 2 mm: its rounding
-// of the falling cloth, amplified by the solves, is 0.4 mm by step 6 before any contact (0.8 mm at
-// step 8, 1.1 mm without supports).
+// round-off amplified over 20 steps (8e-11 m measured), float over 8 steps to 5 mm. Float's
+// rounding of the falling cloth, amplified by the solves, is 0.4 mm by step 6 before any contact;
+// the landing's choice of supports (each particle's plane of least room) amplifies it about
+// eightfold by step 8 (3.9 mm measured), as it does on the CPU reference alone: a run started
+// 1e-6 m away is 3.8e-6 m away at step 6 and 3e-5 m at step 8 (without supports 1.1 mm at step 8).
 TEST_P(SelfContactOnEveryBackend, AClothOnABodyFollowsTheCpuReferenceAndContinuesFromACheckpoint) {
   SimulatorOptions o = options();
   o.self_contact_thickness = 5e-3;
-  followsTheCpuReferenceAndContinuesFromACheckpoint(testing::clothOnBar(), o, 8, 2e-3);
+  followsTheCpuReferenceAndContinuesFromACheckpoint(testing::clothOnBar(), o, 8, 5e-3);
 }
 
 STABINT_ON_EVERY_BACKEND(SelfContactOnEveryBackend);
@@ -587,17 +589,20 @@ TEST(SelfContactRun, TwoTetBarsDroppedOnEachOtherNeitherInterpenetrateNorInvert)
 }
 
 // A cloth on a soft body (the issue's case, a cloth on a tet body): a 30 x 30 cloth falling
-// 20 cm onto a tet bar lying on the ground drapes over it, at rest and thrown at 5 m/s, with
-// backward Euler and the blend. Without self-contact it falls through the bar.
+// 20 cm onto a tet bar lying on the ground drapes over it, at rest and thrown at 5 and 12 m/s,
+// with backward Euler and the blend. Without self-contact it falls through the bar.
 // With it, over 60 steps: no surface triangle pair intersects and no tet inverts at any step,
 // and the cloth stays over the bar (its highest point above the bar's). The default supports
-// (SimulatorOptions::self_contact_supports 1: on the heavy bar in any direction) hold the cloth on
-// the bar's top and sides within the solve (docs/method.md, "Self-contact", "Within the solve"):
-// the blend's H stays at most 0.4 (at rest; 0.24 measured) and 0.6 (at 5 m/s, where the cloth
-// also folds on itself; 0.41) of the run's largest kinetic energy above H*. With the pushes after
-// the solve alone it ran 2.1 and 47 times above, as they stretched the draped cloth at the bar's
-// edges at every step; with supports on the top alone, 1.35 and 0.23. The issue's 0.05 is not
-// reached yet: the rest of the excess is within about twice the blend's band.
+// (SimulatorOptions::self_contact_supports 1: wherever the other side is the heavy bar, at any
+// speed) hold the cloth's vertices against the bar's faces, and its triangles and edges against
+// the bar's corners and edges, within the solve (docs/method.md, "Self-contact", "Within the
+// solve"): the blend's H stays within the band tau = energy_tolerance (K + E_int + E_scale) of H*
+// at every step, with half a band for what the pushes after the solve add and the velocities
+// cannot pay (at most 1.0 tau measured). With the pushes after the solve alone it ran 2.1 and 47
+// times the largest kinetic energy above H*; with the cloth's vertices held on the bar's faces
+// alone, and only in slow contact, 1.1, 7.5 and 36 bands (at rest, 5 and 12 m/s), the bar's
+// corners pushing through the cloth in the solve and the cloth sliding over the bar faster than
+// the supports' reach.
 TEST(SelfContactRun, AClothDropsOntoATetBarAndDrapesOverIt) {
   const std::vector<std::array<int, 3>> surface = ContactSurface::of(testing::clothOnBar()).triangles;
   const int cloth = 900;
@@ -610,7 +615,7 @@ TEST(SelfContactRun, AClothDropsOntoATetBarAndDrapesOverIt) {
     }
     EXPECT_GT(worst, 50);  // 279 measured
   }
-  for (double speed : {0.0, 5.0}) {
+  for (double speed : {0.0, 5.0, 12.0}) {
     for (Integrator integrator : {Integrator::BackwardEuler, Integrator::EnergyBlend}) {
       Scene scene = testing::clothOnBar();
       scene.velocities.bottomRows(cloth).col(1).setConstant(-speed);
@@ -621,17 +626,19 @@ TEST(SelfContactRun, AClothDropsOntoATetBarAndDrapesOverIt) {
       char name[64];
       std::snprintf(name, sizeof name, "%g m/s, %s", speed,
                     integrator == Integrator::BackwardEuler ? "BE" : "the blend");
-      double excess = 0.0, kinetic = 0.0;
+      double excess = 0.0, kinetic = 0.0, bands = 0.0;
       for (int k = 0; k < 60; ++k) {
         const StepReport& r = sim.step();
         ASSERT_EQ(testing::intersectingTrianglePairs(sim.positions(), surface), 0) << name << ", step " << k;
         ASSERT_EQ(invertedTets(scene, sim.positions()), 0) << name << ", step " << k;
         excess = std::max(excess, r.energy.total() - r.target);
         kinetic = std::max(kinetic, r.energy.kinetic);
+        const double tau = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+        bands = std::max(bands, (r.energy.total() - r.target) / tau);
       }
-      std::printf("cloth on a bar, %s: max(H - H*) / K_max %.4g\n", name, excess / kinetic);
+      std::printf("cloth on a bar, %s: max(H - H*) / K_max %.4g, / tau %.3g\n", name, excess / kinetic, bands);
       if (integrator == Integrator::EnergyBlend) {
-        EXPECT_LE(excess, (speed == 0.0 ? 0.4 : 0.6) * kinetic) << name;
+        EXPECT_LE(bands, 1.5) << name;
       }
       const Eigen::MatrixX3d x = sim.positions();
       EXPECT_GT(x.col(1).tail(cloth).maxCoeff(), x.col(1).head(x.rows() - cloth).maxCoeff()) << name;

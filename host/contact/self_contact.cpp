@@ -499,12 +499,37 @@ void applyFriction(const ContactEvent& e, double mu, double normal, const Respon
   velocity.push(e, -std::min(slip, mu * normal) / compliance, dir);
 }
 
-// Whether a pair's triangle side moves under an impulse along its direction at most a tenth as far
-// as its vertex does: a tet body far heavier than a cloth's vertex, or pinned. A plane fixed for
-// the step then stands for it in any direction.
-bool triangleSideIsHeavy(const ContactEvent& e, const Response& response) {
-  const double vertex = response.inverseMass(e.vertices[0]);
-  return vertex > 0.0 && response.compliance(e, e.normal) - vertex <= 0.1 * vertex;
+// The side of a pair a support stands for, from the held side's view (side 0: the pair's vertex or
+// first edge; 1: its triangle or second edge): its contact point at x and as predicted at the step's
+// end, and its vertices and weights as a support's "triangle" (a vertex or an edge padded with its
+// first vertex at weight 0), for friction.
+struct OtherSide {
+  Vec3 start = Vec3::Zero(), end = Vec3::Zero();
+  std::array<int, 3> vertices{};
+  Vec3 weights = Vec3::Zero();
+};
+int sideOf(const ContactEvent& e, int k) { return k < (e.edge_edge ? 2 : 1) ? 0 : 1; }
+OtherSide otherSide(const ContactEvent& e, int held, const PositionRows& x, const Eigen::MatrixX3d& ends) {
+  OtherSide other;
+  int count = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (sideOf(e, k) == held) continue;
+    const int v = e.vertices[std::size_t(k)];
+    const double w = std::abs(e.weights[std::size_t(k)]);
+    other.start += w * rowOf(x, v);
+    other.end += w * rowOf(ends, v);
+    other.vertices[std::size_t(count)] = v;
+    other.weights[count++] = w;
+  }
+  for (int j = count; j < 3; ++j) other.vertices[std::size_t(j)] = other.vertices[0];
+  return other;
+}
+
+// The compliance of one side of a pair alone: the pair's with the other side's weights zeroed.
+double sideCompliance(ContactEvent e, int side, const Response& response) {
+  for (int k = 0; k < 4; ++k)
+    if (sideOf(e, k) != side) e.weights[std::size_t(k)] = 0.0;
+  return response.compliance(e, e.normal);
 }
 
 // Each particle's support in the solve (SelfContact::stopApproach), against where the other side
@@ -516,42 +541,51 @@ void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x
   std::vector<int> chosen(static_cast<std::size_t>(x.rows()), -1);
   std::vector<double> slack;
   for (const ContactEvent& e : found) {
-    const int p = e.vertices[0];
-    // A tet body's particles answer as the body (Response): a support of one would hold it alone.
-    if (e.edge_edge || response.inverseMass(p) == 0.0 || response.solidOf()[std::size_t(p)] >= 0) continue;
-    // On a heavy side in any direction: the body hardly moves for the vertex (a cloth draped over a
-    // tet bar, held on the top alone, was pushed back after the solve at the bar's sides and H ran
-    // 1.35 times the largest kinetic energy above H*; 0.24 with these). Elsewhere only a vertex
-    // resting on the triangle against gravity (their direction within 60 degrees of the vertical,
-    // the vertex above): the plane does not give way, and a vertex under a layer, pulled up
-    // against it, stayed trapped under it while its cloth was dragged away.
-    if (!triangleSideIsHeavy(e, response) && (where == SupportSurfaces::HeavyBodies || !(e.normal.dot(up) >= 0.5)))
-      continue;
-    // Where the triangle's contact point is predicted at the step's end.
-    Vec3 q = Vec3::Zero();
-    for (int k = 1; k < 4; ++k) q -= e.weights[std::size_t(k)] * rowOf(ends, e.vertices[std::size_t(k)]);
-    const double gap = e.normal.dot(rowOf(x, p) - q);
-    if (!(gap > 0.0)) continue;
-    // Resting or slow contact only: a pair whose vertex moves relative to the triangle's point by
-    // more than the reach within the step is an impact or a slide, which the impulses answer.
-    Vec3 q0 = Vec3::Zero();
-    for (int k = 1; k < 4; ++k) q0 -= e.weights[std::size_t(k)] * rowOf(x, e.vertices[std::size_t(k)]);
-    if ((rowOf(ends, p) - rowOf(x, p) - (q - q0)).norm() > reach) continue;
-    const double offset = std::min(thickness, gap);
-    int& c = chosen[std::size_t(p)];
-    if (c >= 0 && !(gap - offset < slack[std::size_t(c)])) continue;
-    if (c < 0) {
-      c = static_cast<int>(supports.size());
-      supports.emplace_back();
-      slack.push_back(0.0);
+    const double compliance[2] = {sideCompliance(e, 0, response), sideCompliance(e, 1, response)};
+    for (int held = 0; held < 2; ++held) {
+      // The side held rests on the other one, which stands as a plane fixed for the step:
+      // - in any direction where the other side hardly moves for it (a tenth as far: a tet body
+      //   far heavier than a cloth, or pinned), in every pair shape. A cloth draped over a tet bar,
+      //   held on its top alone, was pushed back after the solve at the bar's sides (H ran 1.35
+      //   times the largest kinetic energy above H*); with its vertices held on the bar's faces
+      //   alone, the bar's corners and edges poked through its triangles and edges in the solve
+      //   and were pushed back by up to 7 cm (H up to 2.4 times the blend's band above H*, within
+      //   1.1 with the cloth's triangles and edges held on them too);
+      // - with `Everywhere`, also a cloth vertex resting on a triangle against gravity (their
+      //   direction within 60 degrees of the vertical, the vertex above): the plane does not give
+      //   way, and a vertex under a layer, pulled up against it, stayed trapped under it while its
+      //   cloth was dragged away.
+      const bool heavy = compliance[held] > 0.0 && compliance[1 - held] <= 0.1 * compliance[held];
+      const bool rests = where == SupportSurfaces::Everywhere && held == 0 && !e.edge_edge && e.normal.dot(up) >= 0.5;
+      if (!heavy && !rests) continue;
+      const Vec3 normal = held == 0 ? e.normal : Vec3(-e.normal);  // the held side's outward direction
+      const OtherSide other = otherSide(e, held, x, ends);
+      for (int k = 0; k < 4; ++k) {
+        if (sideOf(e, k) != held || e.weights[std::size_t(k)] == 0.0) continue;
+        const int p = e.vertices[std::size_t(k)];
+        // A tet body's particles answer as the body (Response): a support of one would hold it alone.
+        if (response.inverseMass(p) == 0.0 || response.solidOf()[std::size_t(p)] >= 0) continue;
+        const double gap = normal.dot(rowOf(x, p) - other.end);
+        if (!(gap > 0.0)) continue;
+        // On a light side, resting or slow contact only: a particle that moves relative to the
+        // other side's point by more than the reach within the step is in an impact or a slide,
+        // which the impulses answer. A heavy side holds at any speed: a cloth thrown at a tet
+        // bar at 12 m/s, held only where slow, crossed the bar's faces in the solve and was
+        // pushed back by up to 11 cm after it, H running 36 times the blend's band above H*
+        // (at most once the band, held at any speed).
+        if (!heavy && (rowOf(ends, p) - rowOf(x, p) - (other.end - other.start)).norm() > reach) continue;
+        const double offset = std::min(thickness, gap);
+        int& c = chosen[std::size_t(p)];
+        if (c >= 0 && !(gap - offset < slack[std::size_t(c)])) continue;
+        if (c < 0) {
+          c = static_cast<int>(supports.size());
+          supports.emplace_back();
+          slack.push_back(0.0);
+        }
+        supports[std::size_t(c)] = SupportPlane{p, other.end + offset * normal, normal, other.vertices, other.weights};
+        slack[std::size_t(c)] = gap - offset;
+      }
     }
-    SupportPlane& plane = supports[std::size_t(c)];
-    plane.particle = p;
-    plane.point = q + offset * e.normal;
-    plane.normal = e.normal;
-    plane.triangle = {e.vertices[1], e.vertices[2], e.vertices[3]};
-    plane.bary = Vec3(-e.weights[1], -e.weights[2], -e.weights[3]);
-    slack[std::size_t(c)] = gap - offset;
   }
 }
 

@@ -49,7 +49,9 @@ struct ContactCandidates {
 struct SupportPlane {
   int particle;
   Eigen::Vector3d point, normal;
-  std::array<int, 3> triangle;  // the pair's triangle and its closest point's barycentric weights
+  // The pair's other side and its contact point's weights: a triangle, or a vertex or an edge
+  // padded with its first vertex at weight 0.
+  std::array<int, 3> triangle;
   Eigen::Vector3d bary;
 };
 

@@ -248,10 +248,10 @@ inline Scene barOnBar() {
   return s;
 }
 
-/// A cloth on a soft body: a tet bar (`params`, by default 1e5 Pa) lying on a ground with friction 0.5, its
-/// bottom 1 cm above it, and a 30 x 30 spring cloth (1 m) flat 20 cm above its top, turned 0.3
-/// rad about the vertical, falling onto it and draping over it. Without self-contact the cloth
-/// falls through the bar.
+/// A cloth on a soft body: a tet bar (`params`, by default 1e5 Pa) lying on a ground with
+/// friction 0.5, its bottom 1 cm above it, and a 30 x 30 spring cloth (1 m) flat 20 cm above its
+/// top, turned 0.3 rad about the vertical, falling onto it and draping over it. Without
+/// self-contact the cloth falls through the bar.
 inline Scene clothOnBar(const TetBarParams& params = TetBarParams{}) {
   const Scene bar = makeTetBar(params);
   ClothGridParams p;

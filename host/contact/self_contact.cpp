@@ -549,7 +549,7 @@ void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x
       //   held on its top alone, was pushed back after the solve at the bar's sides (H ran 1.35
       //   times the largest kinetic energy above H*); with its vertices held on the bar's faces
       //   alone, the bar's corners and edges poked through its triangles and edges in the solve
-      //   and were pushed back by up to 7 cm (H up to 2.4 times the blend's band above H*, within
+      //   and were pushed back by centimetres (H up to 2.4 times the blend's band above H*, within
       //   1.1 with the cloth's triangles and edges held on them too);
       // - with `Everywhere`, also a cloth vertex resting on a triangle against gravity (their
       //   direction within 60 degrees of the vertical, the vertex above): the plane does not give
@@ -570,9 +570,9 @@ void supportPlanes(const std::vector<ContactEvent>& found, const PositionRows& x
         // On a light side, resting or slow contact only: a particle that moves relative to the
         // other side's point by more than the reach within the step is in an impact or a slide,
         // which the impulses answer. A heavy side holds at any speed: a cloth thrown at a tet
-        // bar at 12 m/s, held only where slow, crossed the bar's faces in the solve and was
-        // pushed back by up to 11 cm after it, H running 36 times the blend's band above H*
-        // (at most once the band, held at any speed).
+        // bar, held only where slow, slid over the bar's faces faster than the reach, crossed
+        // them in the solve and was pushed back by centimetres after it (SelfContactRun,
+        // AClothDropsOntoATetBarAndDrapesOverIt).
         if (!heavy && (rowOf(ends, p) - rowOf(x, p) - (other.end - other.start)).norm() > reach) continue;
         const double offset = std::min(thickness, gap);
         int& c = chosen[std::size_t(p)];

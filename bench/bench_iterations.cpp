@@ -101,7 +101,7 @@ struct IterationFixture {
   GlobalSystem system;
   LocalGlobalSolver solver;
   double c;
-  IterationControl control{1, 0.0, 1, 1.0};  // exactly one iteration, no objective tracking
+  IterationControl control = IterationControl::plain(1);  // exactly one iteration, no objective tracking
 };
 
 void runIteration(benchmark::State& state, const std::string& key, const std::function<Scene()>& make_scene,
@@ -165,7 +165,7 @@ void runGlobalSolve(benchmark::State& state, const std::string& key, const Scene
   setPhaseCounters(state, f.backend->times());
   // Accuracy, outside the timed loop: the frame's result against the CPU factor's.
   auto cpu = makeCpuBackend(f.data, f.forcing, kSlots);
-  const Eigen::MatrixX3d reference = frameSolve(*cpu, f.data, f.scene, IterationControl{10, 0.0, 10, 1.0});
+  const Eigen::MatrixX3d reference = frameSolve(*cpu, f.data, f.scene, IterationControl::plain(10));
   const Eigen::MatrixX3d x = frameSolve(*f.backend, f.data, f.scene, f.control);
   const double size = (f.scene.positions.colwise().maxCoeff() - f.scene.positions.colwise().minCoeff()).norm();
   state.counters["position_error"] = (x - reference).cwiseAbs().maxCoeff() / size;

@@ -117,7 +117,7 @@ TEST(HostCgLocalGlobal, ObjectiveNeverIncreasesWithFewCgIterations) {
     backend->write(kX, y);
     const double h = 1.0 / 30.0;
     for (const int cg : {1, 3}) {
-      IterationControl control{40, 0.0, 40, 1.0};
+      IterationControl control = IterationControl::plain(40);
       control.global_solve = GlobalSolve::ConjugateGradient;
       control.cg_iterations = cg;
       std::vector<double> history;

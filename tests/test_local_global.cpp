@@ -100,7 +100,7 @@ TEST_P(LocalGlobalTest, ObjectiveNeverIncreases) {
   f.backend->write(kX, y);
   const double h = 1.0 / 30.0;
   std::vector<double> history;
-  f.solver.solve(1.0 / (h * h), kY, kX, h, IterationControl{60, 0.0, 60, 1.0}, &history);
+  f.solver.solve(1.0 / (h * h), kY, kX, h, IterationControl::plain(60), &history);
   ASSERT_EQ(history.size(), 61u);
   for (size_t k = 1; k < history.size(); ++k)
     EXPECT_LE(history[k], history[k - 1] + 1e-12 * std::abs(history[k - 1])) << "iteration " << k;
@@ -117,7 +117,10 @@ TEST_P(LocalGlobalTest, ConvergedSolutionHasVanishingGradient) {
   // Plain iterations contract slowest with contact, whose pairs are as stiff as the springs at
   // their particles (Collider::elastic_ratio): measured 49,405 iterations there.
   const int cap = GetParam() == SceneKind::Contact ? 100000 : 20000;
-  const int used = f.solver.solve(c, kY, kX, t, IterationControl{0, 1e-15, cap, 1e-12});
+  IterationControl control = IterationControl::plain(cap);
+  control.tolerance = 1e-15;
+  control.energy_scale = 1e-12;
+  const int used = f.solver.solve(c, kY, kX, t, control);
   EXPECT_LT(used, cap) << "did not converge";
 
   Eigen::MatrixX3d x;
@@ -159,7 +162,11 @@ void checkAcceleration(const Scene& s, double max_gap_ratio, Acceleration accele
   auto run = [&](Acceleration variant, int iterations, double tolerance) {
     f.backend->write(kY, y);
     f.backend->write(kX, y);
-    IterationControl control{iterations, tolerance, 20000, 1e-12, variant, 0.98, 5};
+    IterationControl control = IterationControl::plain(iterations);
+    control.tolerance = tolerance;
+    control.max_iterations = 20000;
+    control.energy_scale = 1e-12;
+    control.acceleration = variant;
     std::vector<double> history;
     f.solver.solve(c, kY, kX, t, control, &history);
     return history;
@@ -377,7 +384,9 @@ TEST_P(LocalGlobalTest, GradientToleranceStopsByTheDecrement) {
   const Eigen::MatrixX3d y = inertialTarget(s);
   const double c = 900.0, t = 0.0;
   auto run = [&](double gradient_tolerance, int cap, int* used) {
-    IterationControl control{cap, 0.0, cap, 1e-12, Acceleration::LBFGS};
+    IterationControl control = IterationControl::plain(cap);
+    control.energy_scale = 1e-12;
+    control.acceleration = Acceleration::LBFGS;
     control.gradient_tolerance = gradient_tolerance;
     f.backend->write(kY, y);
     f.backend->write(kX, y);
@@ -471,7 +480,8 @@ TEST_P(LocalGlobalTest, PotentialOfTheResultIsTheEnergyPass) {
     for (bool plain_last : {false, true}) {
       f.backend->write(kX, inertialTarget(s));
       f.backend->write(kY, s.positions);
-      IterationControl control{7, 0.0, 7, 1.0, a};
+      IterationControl control = IterationControl::plain(7);
+      control.acceleration = a;
       control.plain_last_iteration = plain_last;
       std::vector<double> history;
       f.solver.solve(c, kY, kX, t, control, a == Acceleration::None ? &history : nullptr);
@@ -484,7 +494,7 @@ TEST_P(LocalGlobalTest, PotentialOfTheResultIsTheEnergyPass) {
     }
   }
   // A plain solve that does not track its objective ends on a global step.
-  f.solver.solve(c, kY, kX, t, IterationControl{3, 0.0, 3, 1.0});
+  f.solver.solve(c, kY, kX, t, IterationControl::plain(3));
   EXPECT_TRUE(f.solver.potentialsOfResult().empty());
 }
 
@@ -493,10 +503,10 @@ TEST(GlobalSystem, FactorsOncePerDistinctC) {
   Fixture f(s);
   f.backend->write(kY, s.positions);
   f.backend->write(kX, s.positions);
-  f.solver.solve(900.0, kY, kX, 0.0, IterationControl{3, 0.0, 3, 1.0});
-  f.solver.solve(900.0, kY, kX, 0.0, IterationControl{3, 0.0, 3, 1.0});
+  f.solver.solve(900.0, kY, kX, 0.0, IterationControl::plain(3));
+  f.solver.solve(900.0, kY, kX, 0.0, IterationControl::plain(3));
   EXPECT_EQ(f.system.factorizations(), 1);
-  f.solver.solve(3600.0, kY, kX, 0.0, IterationControl{3, 0.0, 3, 1.0});
+  f.solver.solve(3600.0, kY, kX, 0.0, IterationControl::plain(3));
   EXPECT_EQ(f.system.factorizations(), 2);
 }
 

@@ -53,7 +53,7 @@ Eigen::MatrixX3d solveOn(Backend& backend, const SceneData& data, const Scene& s
 }
 
 IterationControl cgControl(int iterations, int cg_iterations, double cg_tolerance) {
-  IterationControl control{iterations, 0.0, iterations, 1.0};
+  IterationControl control = IterationControl::plain(iterations);
   control.global_solve = GlobalSolve::ConjugateGradient;
   control.cg_iterations = cg_iterations;
   control.cg_tolerance = cg_tolerance;
@@ -95,7 +95,7 @@ TEST_P(OpenCLGlobalCgTest, SolvesToTheRequestedToleranceAgainstTheFactor) {
     Forcing forcing(data.scene());
     auto cpu = makeCpuBackend(data, forcing, kSlots);
     auto device = makeOpenCLBackend(data, forcing, kSlots, openclOptions(p));
-    const Eigen::MatrixX3d exact = solveOn(*cpu, data, s, IterationControl{1, 0.0, 1, 1.0});
+    const Eigen::MatrixX3d exact = solveOn(*cpu, data, s, IterationControl::plain(1));
     const Eigen::MatrixX3d x = solveOn(*device, data, s, cgControl(1, 1000, tolerance));
     EXPECT_LE(relativeError(x, exact), 100.0 * tolerance);
   }

@@ -400,8 +400,7 @@ TEST(SceneBatch, ScenesThatTakeNoPartInASolveKeepTheirWarmStart) {
     LocalGlobalSolver solver(*backend, system, 2);
     solver.setSegments(batch.segments, std::vector<double>(scenes.size(), 1.0));
     backend->write(1, batch.scene.positions);
-    IterationControl control;
-    control.iterations = 3;
+    IterationControl control = IterationControl::plain(3);
     for (bool flagged : {true, false}) {
       if (flagged) solver.setSolving(solving);
       backend->write(0, warm);

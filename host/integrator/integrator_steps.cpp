@@ -102,19 +102,12 @@ void IntegratorSteps::commit(Integrator integrator, bool& has_history) {
 
 IterationControl iterationControl(const SimulatorOptions& o, int iterations, double energy_scale) {
   IterationControl c;
-  c.iterations = iterations;
-  c.tolerance = o.tolerance;
-  c.max_iterations = o.max_iterations;
+#define STABINT_COPY_OPTION_(name) c.name = o.name;
+  STABINT_SOLVER_OPTION_NAMES(STABINT_COPY_OPTION_)
+#undef STABINT_COPY_OPTION_
+  c.iterations = iterations;  // the step's budget (setIterations changes it at run time)
   c.energy_scale = energy_scale;
-  c.acceleration = o.acceleration;
-  c.chebyshev_rho = o.chebyshev_rho;
-  c.anderson_window = o.anderson_window;
-  c.lbfgs_history = o.lbfgs_history;
   c.rigid_modes = o.lbfgs_rigid_modes != 0;
-  c.gradient_tolerance = o.gradient_tolerance;
-  c.global_solve = o.global_solve;
-  c.cg_iterations = o.cg_iterations;
-  c.cg_tolerance = o.cg_tolerance;
   return c;
 }
 

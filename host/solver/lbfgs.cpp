@@ -16,8 +16,7 @@
 //
 // Per scene segment (a batch's concatenated scenes, block-diagonal K_c): every dot product, step
 // length and history is the segment's own, so a scene takes the steps it takes alone.
-#include "solver/local_global.hpp"
-
+#include "solver/accelerations.hpp"
 #include "solver/history_passes.hpp"
 
 #include <algorithm>
@@ -28,126 +27,13 @@ namespace stabint {
 
 using namespace history_passes;
 
-namespace {
-
-// Armijo's sufficient-decrease constant. A plain step satisfies the test with any constant up to
-// 1/2 (f(x + d) <= f(x) - 1/2 d^T K_c d, d = -K_c^-1 g), so an empty history always passes.
-constexpr double kArmijo = 1e-4;
-// Halvings of a step that fails the test before the segment stays where it is for this iteration
-// and drops its history (its next direction is the plain step).
-constexpr int kMaxHalvings = 4;
-
-}  // namespace
-
-void LocalGlobalSolver::setSegments(const std::vector<SceneSegment>& segments,
-                                    const std::vector<double>& energy_scales) {
-  rows_.clear();
-  for (const SceneSegment& s : segments) rows_.push_back({s.first_particle, s.num_particles});
-  segments_ = segments;
-  system_.setBlocks(segments);  // a batch's host CG per scene
-  segment_scales_ = energy_scales;
-}
-
-void LocalGlobalSolver::segmentDots(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b,
-                                    std::vector<double>& out) const {
-  out.resize(rows_.size());
-  for (std::size_t s = 0; s < rows_.size(); ++s) {
-    const Segment& seg = rows_[s];
-    out[s] = a.middleRows(seg.first, seg.count).cwiseProduct(b.middleRows(seg.first, seg.count)).sum();
-  }
-}
-
-// The objective of every segment at the positions x_trial_ (already in slot x), from the local
-// step that also leaves the gradient there in trial_gradient_.
-void LocalGlobalSolver::localStepObjectives(double c, int y, int x, double t, std::vector<double>& objective) {
-  objective.resize(rows_.size());
-  if (rows_.size() == 1) {
-    PotentialEnergy potential;
-    backend_.localStepGradient(x, y, c, t, trial_gradient_, &potential);
-    objective[0] = inertia(c, x_trial_) + potential.total();
-    result_potentials_.assign(1, potential);
-    return;
-  }
-  backend_.localStepGradientPerScene(x, y, c, t, trial_gradient_, segment_potentials_, runningMask());
-  keepResultPotentials();
-  for (std::size_t s = 0; s < rows_.size(); ++s)
-    objective[s] = segmentInertia(c, x_trial_, s) + segment_potentials_[s].total();
-}
-
-void LocalGlobalSolver::applyInitialInverseHessian(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
-                                                   Eigen::MatrixX3d& r) {
-  const auto start = std::chrono::steady_clock::now();
-  if (control.global_solve == GlobalSolve::ConjugateGradient) {
-    r.setZero(q.rows(), 3);
-    system_.solveConjugateGradient(c, q, r, control.cg_iterations, control.cg_tolerance, runningMask());
-  } else {
-    system_.solve(c, q, r, runningMask());
-  }
-  backend_.times().global += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-// Backtracking line search from x_cur_ along direction_, per segment: the full step where
-// f(x + a d) <= f(x) + kArmijo a g.d up to round-off of the objective (two backends that agree to
-// round-off must take the same decisions), else halved up to kMaxHalvings times. A segment whose
-// slope is not negative takes no step (step 0); one that finds no decrease stays (step != 0).
-// Leaves x_trial_, slot x and trial_gradient_ at the kept positions, their objectives in `trial_objective`
-// and the segments that moved in moved_.
-void LocalGlobalSolver::lineSearch(double c, int y, int x, double t, const IterationControl& control,
-                                   const std::vector<double>& objective, const std::vector<double>& slope,
-                                   std::vector<double>& step, std::vector<double>& trial_objective) {
-  const std::size_t segments = rows_.size();
-  step.resize(segments);
-  // A segment that takes no step keeps its objective (when none steps, no local step runs).
-  trial_objective = objective;
-  accepted_.assign(segments, 0);
-  moved_.assign(segments, 0);
-  for (std::size_t s = 0; s < segments; ++s) {
-    step[s] = slope[s] < 0.0 ? 1.0 : 0.0;
-    accepted_[s] = step[s] == 0.0;
-  }
-  for (int halving = 0; halving <= kMaxHalvings; ++halving) {
-    bool any_trial = false;
-    for (std::size_t s = 0; s < segments; ++s) {
-      if (accepted_[s]) continue;
-      segmentRows(x_trial_, s) = segmentRows(x_cur_, s) + step[s] * segmentRows(direction_, s);
-      any_trial = true;
-    }
-    if (!any_trial) break;
-    backend_.roundToStorage(x_trial_);
-    backend_.write(x, x_trial_);
-    localStepObjectives(c, y, x, t, trial_objective);
-    for (std::size_t s = 0; s < segments; ++s) {
-      if (accepted_[s]) continue;
-      const double scale = segmentScale(control, s);
-      const double noise = 1e-12 * std::max(std::abs(objective[s]), scale);
-      if (trial_objective[s] <= objective[s] + kArmijo * step[s] * slope[s] + noise) {
-        accepted_[s] = 1;
-        moved_[s] = 1;
-      } else if (halving < kMaxHalvings) {
-        step[s] *= 0.5;
-      } else {
-        accepted_[s] = 1;
-        segmentRows(x_trial_, s) = segmentRows(x_cur_, s);
-      }
-    }
-  }
-  // Slot x and trial_gradient_ must be at the kept positions: a segment that stayed changed slot x in its
-  // trials, so one more local step at them.
-  bool any_stayed = false;
-  for (std::size_t s = 0; s < segments; ++s) any_stayed |= !moved_[s] && step[s] != 0.0;
-  if (any_stayed) {
-    backend_.write(x, x_trial_);
-    localStepObjectives(c, y, x, t, trial_objective);
-  }
-}
-
 // After an accepted line search: the new pair s = x_trial - x_cur, y = g_trial - g into ring slot
 // `slot`, with s.y, y.y, s.s and its products with the other stored pairs (gram_[seg](i, j) =
 // s_i.y_j) and s_j.g_trial for every stored pair (the next direction's first loop); and then
 // x_cur = x_trial, g = g_trial. One pass over the vectors.
-void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy, std::vector<double>& yy,
-                                  std::vector<double>& ss) {
-  const Eigen::Index n = x_cur_.rows();
+void LbfgsIterations::storePair(SolveContext& ctx, int slot, int stored, std::vector<double>& sy,
+                                std::vector<double>& yy, std::vector<double>& ss) {
+  const Eigen::Index n = ctx.x_cur.rows();
   const int window = static_cast<int>(history_s_.size());
   Eigen::MatrixX3d& s_new = history_s_[std::size_t(slot)];
   Eigen::MatrixX3d& y_new = history_y_[std::size_t(slot)];
@@ -155,20 +41,20 @@ void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy,
   y_new.resize(n, 3);
   // The ring after this pair: `kept` slots, the new one included.
   const int kept = std::min(stored + 1, window);
-  sy.assign(rows_.size(), 0.0);
-  yy.assign(rows_.size(), 0.0);
-  ss.assign(rows_.size(), 0.0);
-  forEachSegment(rows_, [&](std::size_t seg) {
-    if (stopped(seg)) return;  // no pair (its products stay 0)
+  sy.assign(ctx.rows().size(), 0.0);
+  yy.assign(ctx.rows().size(), 0.0);
+  ss.assign(ctx.rows().size(), 0.0);
+  forEachSegment(ctx.rows(), [&](std::size_t seg) {
+    if (ctx.stops.stopped(seg)) return;  // no pair (its products stay 0)
     Eigen::MatrixXd& gram = gram_[seg];
     std::vector<double>& sg = history_sg_[seg];
     for (int j = 0; j < window; ++j) gram(slot, j) = gram(j, slot) = sg[std::size_t(j)] = 0.0;
-    forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
+    forEachChunk(ctx.rows()[seg].first, ctx.rows()[seg].count, n, [&](Eigen::Index o, int len) {
       double* s = s_new.data() + o;
       double* y = y_new.data() + o;
-      const double* g_trial = trial_gradient_.data() + o;
+      const double* g_trial = ctx.trial_gradient.data() + o;
       double sums[4];
-      newPair(len, x_trial_.data() + o, g_trial, x_cur_.data() + o, gradient_.data() + o, s, y, sums);
+      newPair(len, ctx.x_trial.data() + o, g_trial, ctx.x_cur.data() + o, ctx.gradient.data() + o, s, y, sums);
       sy[seg] += sums[0];
       yy[seg] += sums[1];
       ss[seg] += sums[2];
@@ -187,17 +73,17 @@ void LocalGlobalSolver::storePair(int slot, int stored, std::vector<double>& sy,
   });
 }
 
-// direction_ = -H g by the two-loop recursion over the newest `pairs` pairs, from the products
+// ctx.direction = -H g by the two-loop recursion over the newest `pairs` pairs, from the products
 // storePair keeps: q = g - sum a_i y_i (a_i = rho_i s_i.q_i, newest first), r = H0 q,
 // d = -(r + sum (a_i - b_i) s_i) (b_i = rho_i y_i.r_i, oldest first); and each segment's slope g.d.
-void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control, int pairs, int newest,
-                                       std::vector<double>& slope) {
-  const Eigen::Index n = gradient_.rows();
+void LbfgsIterations::twoLoopDirection(SolveContext& ctx, double c, const IterationControl& control, int pairs,
+                                       int newest, std::vector<double>& slope) {
+  const Eigen::Index n = ctx.gradient.rows();
   const int window = static_cast<int>(history_s_.size());
   auto slotOf = [&](int k) { return std::size_t((newest - k + window) % window); };  // k-th newest
-  search_.resize(n, 3);
-  forEachSegment(rows_, [&](std::size_t seg) {
-    if (stopped(seg)) return;  // takes no step (its slope is set to 0)
+  ctx.search.resize(n, 3);
+  forEachSegment(ctx.rows(), [&](std::size_t seg) {
+    if (ctx.stops.stopped(seg)) return;  // takes no step (its slope is set to 0)
     const Eigen::MatrixXd& gram = gram_[seg];
     for (int k = 0; k < pairs; ++k) {
       const std::size_t i = slotOf(k);
@@ -205,23 +91,23 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
       for (int l = 0; l < k; ++l) sq -= history_alpha_[slotOf(l)][seg] * gram(Eigen::Index(i), Eigen::Index(slotOf(l)));
       history_alpha_[i][seg] = history_rho_[i][seg] * sq;
     }
-    forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
-      double* q = search_.data() + o;
-      std::copy_n(gradient_.data() + o, len, q);
+    forEachChunk(ctx.rows()[seg].first, ctx.rows()[seg].count, n, [&](Eigen::Index o, int len) {
+      double* q = ctx.search.data() + o;
+      std::copy_n(ctx.gradient.data() + o, len, q);
       for (int k = 0; k < pairs; ++k) {
         const double a = history_alpha_[slotOf(k)][seg];
         if (a != 0.0) subtractScaled(len, q, a, history_y_[slotOf(k)].data() + o);
       }
     });
   });
-  applyTwoLevelInverse(c, control, search_, direction_);
-  slope.assign(rows_.size(), 0.0);
-  forEachSegment(rows_, [&](std::size_t seg) {
-    if (stopped(seg)) return;
+  rigid_modes_.apply(ctx, c, control, ctx.search, ctx.direction);
+  slope.assign(ctx.rows().size(), 0.0);
+  forEachSegment(ctx.rows(), [&](std::size_t seg) {
+    if (ctx.stops.stopped(seg)) return;
     thread_local std::vector<double> yr;  // y_i.r of the newest `pairs` pairs (no allocation per call)
     yr.assign(std::size_t(pairs), 0.0);
-    forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
-      const double* r = direction_.data() + o;
+    forEachChunk(ctx.rows()[seg].first, ctx.rows()[seg].count, n, [&](Eigen::Index o, int len) {
+      const double* r = ctx.direction.data() + o;
       for (int k = 0; k < pairs; ++k) yr[std::size_t(k)] += dot(len, history_y_[slotOf(k)].data() + o, r);
     });
     // The coefficient of s_i in d, oldest first; kept in history_alpha_.
@@ -234,19 +120,19 @@ void LocalGlobalSolver::lbfgsDirection(double c, const IterationControl& control
         y_r += history_alpha_[slotOf(l)][seg] * gram(Eigen::Index(slotOf(l)), Eigen::Index(i));
       history_alpha_[i][seg] = rho == 0.0 ? 0.0 : history_alpha_[i][seg] - rho * y_r;
     }
-    forEachChunk(rows_[seg].first, rows_[seg].count, n, [&](Eigen::Index o, int len) {
-      double* d = direction_.data() + o;
+    forEachChunk(ctx.rows()[seg].first, ctx.rows()[seg].count, n, [&](Eigen::Index o, int len) {
+      double* d = ctx.direction.data() + o;
       for (int k = pairs - 1; k >= 0; --k) {
         const double coefficient = history_alpha_[slotOf(k)][seg];
         if (coefficient != 0.0) addScaled(len, d, coefficient, history_s_[slotOf(k)].data() + o);
       }
-      slope[seg] += negateAndSlope(len, d, gradient_.data() + o);
+      slope[seg] += negateAndSlope(len, d, ctx.gradient.data() + o);
     });
   });
 }
 
 // An empty ring of `window` pairs for every segment.
-void LocalGlobalSolver::resetLbfgsHistory(int window, std::size_t segments) {
+void LbfgsIterations::resetHistory(int window, std::size_t segments) {
   if (static_cast<int>(history_s_.size()) != window) {
     history_s_.assign(std::size_t(window), Eigen::MatrixX3d());
     history_y_.assign(std::size_t(window), Eigen::MatrixX3d());
@@ -271,28 +157,28 @@ void LocalGlobalSolver::resetLbfgsHistory(int window, std::size_t segments) {
 // warm start (`initial`, set in the first iteration), where H = K_c^-1. A converged segment's
 // direction is spent, but it takes no step along it (its rows of slot x and its objective stay
 // the accepted iterate's).
-void LocalGlobalSolver::stopConvergedByGradient(int done, const IterationControl& control,
-                                                const std::vector<double>& slope, std::vector<double>& initial) {
-  if (done == 1) initial.assign(rows_.size(), 0.0);
-  for (std::size_t s = 0; s < rows_.size(); ++s) {
-    if (stopped(s)) continue;
+void LbfgsIterations::stopConvergedByGradient(SolveContext& ctx, int done, const IterationControl& control,
+                                              const std::vector<double>& slope, std::vector<double>& initial) {
+  if (done == 1) initial.assign(ctx.rows().size(), 0.0);
+  for (std::size_t s = 0; s < ctx.rows().size(); ++s) {
+    if (ctx.stops.stopped(s)) continue;
     const double decrement = std::sqrt(std::max(0.0, -slope[s]));
     if (done == 1) initial[s] = decrement;
-    if (done > 1 && decrement <= control.gradient_tolerance * initial[s]) stopSegment(s, done);
+    if (done > 1 && decrement <= control.gradient_tolerance * initial[s]) ctx.stops.stop(s, done);
   }
 }
 
 // A segment the line search left where it was: with a plain direction its objective is at its
 // round-off floor and it stops; else it drops its history (and the rigid motions) and restarts
 // from the plain step.
-void LocalGlobalSolver::handleStayedSegments(int done) {
-  for (std::size_t s = 0; s < rows_.size(); ++s) {
-    if (moved_[s] || stopped(s)) continue;
+void LbfgsIterations::handleStayedSegments(SolveContext& ctx, int done) {
+  for (std::size_t s = 0; s < ctx.rows().size(); ++s) {
+    if (ctx.moved()[s] || ctx.stops.stopped(s)) continue;
     if (plain_direction_[s]) {
-      stopSegment(s, done);
+      ctx.stops.stop(s, done);
     } else {
       for (auto& rho : history_rho_) rho[s] = 0.0;
-      if (usesRigidModes(s)) rigid_on_[s] = 0;
+      if (rigid_modes_.on(s)) rigid_modes_.drop(s);
     }
   }
 }
@@ -300,50 +186,49 @@ void LocalGlobalSolver::handleStayedSegments(int done) {
 // Per segment, after its step: the new pair in ring slot `slot` counts where its curvature s.y is
 // positive (`dot`, `yy`, `ss`: its s.y, y.y, s.s), and the tolerance stop compares the objective
 // before and after the step (`objective` takes `trial_objective`).
-void LocalGlobalSolver::keepCurvaturePairs(int slot, int done, const IterationControl& control,
-                                           const std::vector<double>& step, const std::vector<double>& dot,
-                                           const std::vector<double>& yy, const std::vector<double>& ss,
-                                           std::vector<double>& objective, const std::vector<double>& trial_objective) {
+void LbfgsIterations::keepCurvaturePairs(SolveContext& ctx, int slot, int done, const IterationControl& control,
+                                         const std::vector<double>& step, const std::vector<double>& dot,
+                                         const std::vector<double>& yy, const std::vector<double>& ss,
+                                         std::vector<double>& objective, const std::vector<double>& trial_objective) {
   const bool to_tolerance = control.tolerance > 0.0;
-  for (std::size_t s = 0; s < rows_.size(); ++s) {
+  for (std::size_t s = 0; s < ctx.rows().size(); ++s) {
     // Positive curvature keeps H positive definite; a pair at round-off's angle would not.
-    const bool curvature = moved_[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);
+    const bool curvature = ctx.moved()[s] && std::isfinite(dot[s]) && dot[s] > 1e-10 * std::sqrt(ss[s] * yy[s]);
     history_rho_[std::size_t(slot)][s] = curvature ? 1.0 / dot[s] : 0.0;
     // A segment that stayed for want of decrease has not converged: it restarts from the plain step.
-    const bool stayed = !moved_[s] && step[s] != 0.0;
+    const bool stayed = !ctx.moved()[s] && step[s] != 0.0;
     const double change = std::abs(objective[s] - trial_objective[s]);
-    if (to_tolerance && !stopped(s) && !stayed &&
-        change <= control.tolerance * std::max(std::abs(trial_objective[s]), segmentScale(control, s)))
-      stopSegment(s, done);
+    if (to_tolerance && !ctx.stops.stopped(s) && !stayed &&
+        change <= control.tolerance * std::max(std::abs(trial_objective[s]), ctx.segmentScale(control, s)))
+      ctx.stops.stop(s, done);
     objective[s] = trial_objective[s];
   }
 }
 
-int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const IterationControl& control,
-                                  std::vector<double>* objective_history) {
-  const Eigen::Index n = masses_.size();
-  if (rows_.empty()) rows_.push_back({0, static_cast<int>(n)});
-  const std::size_t segments = rows_.size();
+int LbfgsIterations::solve(SolveContext& ctx, double c, int y, int x, double t, const IterationControl& control,
+                           std::vector<double>* objective_history, const std::vector<char>& rigid) {
+  ctx.coverWholeSystem();
+  const std::size_t segments = ctx.rows().size();
   const bool to_tolerance = control.tolerance > 0.0;
   const int limit = to_tolerance ? control.max_iterations : control.iterations;
   const int window = std::max(1, control.lbfgs_history);
-  resetLbfgsHistory(window, segments);
+  resetHistory(window, segments);
   int stored = 0, newest = -1;  // pairs in the ring, index of the newest
 
-  backend_.read(y, y_host_);
-  backend_.read(x, x_trial_);
-  x_cur_ = x_trial_;
-  std::vector<double>&objective = scalars_[0], &trial_objective = scalars_[1], &slope = scalars_[2], &dot = scalars_[3],
-  &yy = scalars_[4], &ss = scalars_[5], &step = scalars_[6];
+  ctx.backend().read(y, ctx.y_host);
+  ctx.backend().read(x, ctx.x_trial);
+  ctx.x_cur = ctx.x_trial;
+  std::vector<double>&objective = ctx.scalars[0], &trial_objective = ctx.scalars[1], &slope = ctx.scalars[2],
+  &dot = ctx.scalars[3], &yy = ctx.scalars[4], &ss = ctx.scalars[5], &step = ctx.scalars[6];
   step.resize(segments);
   // A segment whose stop (by accuracy) was met takes no more steps: it stays at the iterate it
   // stopped at, with the iterations done by then, as the scene alone stops its solve there. One
   // that takes no part (setSolving) is stopped from the start.
-  startSegmentStops(segments);
-  localStepObjectives(c, y, x, t, objective);
-  gradient_ = trial_gradient_;
-  prepareRigidModes(c, t, control);
-  std::vector<double>& initial_decrement = scalars_[7];
+  ctx.stops.start(segments);
+  ctx.localStepObjectives(c, y, x, t, objective);
+  ctx.gradient = ctx.trial_gradient;
+  rigid_modes_.prepare(ctx, c, t, control, rigid);
+  std::vector<double>& initial_decrement = ctx.scalars[7];
   if (objective_history) objective_history->assign(1, objective[0]);
 
   int done = 0;
@@ -361,17 +246,17 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     // energy; without it the blend could not bring a dragged cloth back into its energy band.
     // In BE the last L-BFGS step is worth more (docs/method.md, "L-BFGS").
     const int pairs = control.plain_last_iteration && !to_tolerance && done == limit - 1 ? 0 : stored;
-    lbfgsDirection(c, control, pairs, newest, slope);
+    twoLoopDirection(ctx, c, control, pairs, newest, slope);
     ++done;
     if (control.gradient_tolerance > 0.0) {
-      stopConvergedByGradient(done, control, slope, initial_decrement);
-      if (running_segments_ == 0) break;
+      stopConvergedByGradient(ctx, done, control, slope, initial_decrement);
+      if (ctx.stops.runningCount() == 0) break;
     }
     for (std::size_t s = 0; s < segments; ++s) {
-      if (stopped(s)) slope[s] = 0.0;  // no step (lineSearch)
+      if (ctx.stops.stopped(s)) slope[s] = 0.0;  // no step (lineSearch)
       // The plain step is K_c^-1's alone: the rigid motions' coarse space, like a curvature pair,
       // is a guess the line search may reject.
-      plain_direction_[s] = (pairs == 0 || !usesHistory(s)) && !usesRigidModes(s);
+      plain_direction_[s] = (pairs == 0 || !usesHistory(s)) && !rigid_modes_.on(s);
     }
     // With positive curvature pairs H is positive definite and the direction descends; a slope
     // >= 0 is round-off (or a converged segment). A segment that does not move restarts from the
@@ -380,23 +265,23 @@ int LocalGlobalSolver::solveLbfgs(double c, int y, int x, double t, const Iterat
     // (in float on a device, long before the budget: the objective's round-off is 1e-7 of it), and
     // every later iteration would try the same step again: the segment stops there. One whose
     // direction used the rigid motions drops them too for the rest of the solve.
-    lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
-    handleStayedSegments(done);
+    ctx.lineSearch(c, y, x, t, control, objective, slope, step, trial_objective);
+    handleStayedSegments(ctx, done);
 
     // The curvature pair of the step, kept where s.y > 0.
     const int slot = (newest + 1) % window;
     if (done < limit) {
-      storePair(slot, stored, dot, yy, ss);
+      storePair(ctx, slot, stored, dot, yy, ss);
     } else {  // the solve's last pair would never be used
       for (std::vector<double>* v : {&dot, &yy, &ss}) v->assign(segments, 0.0);
     }
-    keepCurvaturePairs(slot, done, control, step, dot, yy, ss, objective, trial_objective);
+    keepCurvaturePairs(ctx, slot, done, control, step, dot, yy, ss, objective, trial_objective);
     newest = slot;
     stored = std::min(stored + 1, window);
     if (objective_history) objective_history->push_back(objective[0]);
-    if (running_segments_ == 0) break;
+    if (ctx.stops.runningCount() == 0) break;
   }
-  finishSegmentStops(done);
+  ctx.stops.finish(done);
   return done;
 }
 

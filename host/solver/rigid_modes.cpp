@@ -16,7 +16,7 @@
 #include "scene/scene_data.hpp"
 #include "scene/scene_view.hpp"
 #include "common/simd.hpp"
-#include "solver/local_global.hpp"
+#include "solver/accelerations.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -134,7 +134,7 @@ CoarseSums coarseSums(const Eigen::MatrixX3d& x, const Eigen::RowVector3d& centr
   const double *x0 = x.data() + first, *x1 = x0 + n, *x2 = x1 + n;
   double *a0 = arms.data() + first, *a1 = a0 + n, *a2 = a1 + n;
   const double c0 = centre[0], c1 = centre[1], c2 = centre[2];
-  // (k, l) and (l, k) of the inertia add the same terms (a_k a_l = a_l a_k): six sums.
+  // (ctx, l) and (l, k) of the inertia add the same terms (a_k a_l = a_l a_k): six sums.
   double weight = 0.0, f0 = 0.0, f1 = 0.0, f2 = 0.0;
   double i00 = 0.0, i01 = 0.0, i02 = 0.0, i11 = 0.0, i12 = 0.0, i22 = 0.0;
   for (int i = 0; i < count; ++i) {
@@ -176,19 +176,20 @@ CoarseSums coarseSums(const Eigen::MatrixX3d& x, const Eigen::RowVector3d& centr
 
 }  // namespace
 
-void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationControl& control) {
-  const std::size_t segments = rows_.size();
+void RigidModes::prepare(SolveContext& ctx, double c, double t, const IterationControl& control,
+                         const std::vector<char>& wanted) {
+  const std::size_t segments = ctx.rows().size();
   rigid_on_.assign(segments, 0);
-  const bool none = !rigid_.empty() && std::none_of(rigid_.begin(), rigid_.end(), [](char on) { return on != 0; });
-  if (!control.rigid_modes || scene_ == nullptr || none) return;
-  const Eigen::Index n = x_cur_.rows();
+  const bool none = !wanted.empty() && std::none_of(wanted.begin(), wanted.end(), [](char on) { return on != 0; });
+  if (!control.rigid_modes || ctx.scene() == nullptr || none) return;
+  const Eigen::Index n = ctx.x_cur.rows();
   // The one-particle elements (pins, contacts): their weights go into A, their forces
   // w (p - x_j) into rigid_gradient_, which then becomes the other elements' energy gradient.
-  rigid_weights_ = c * masses_;
+  rigid_weights_ = c * ctx.masses;
   rigid_gradient_.setZero(n, 3);
   thread_local std::vector<double> params;
-  const SceneView running(*scene_, *forcing_);
-  for (const ElementBlock& block : scene_->blocks()) {
+  const SceneView running(*ctx.scene(), *ctx.forcing());
+  for (const ElementBlock& block : ctx.scene()->blocks()) {
     if (block.count == 0 || block.type->shape().vertices != 1) continue;
     const std::size_t stride = static_cast<std::size_t>(block.type->shape().params);
     const bool timed = block.type->timeDependent(running);
@@ -198,7 +199,7 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
       const double* element = p.data() + stride * std::size_t(e);
       if (element[0] == 0.0) continue;
       const int j = block.vertices[std::size_t(e)];
-      const Eigen::Vector3d x = x_cur_.row(j).transpose();
+      const Eigen::Vector3d x = ctx.x_cur.row(j).transpose();
       Eigen::Vector3d projected;
       block.type->project(x.data(), element, projected.data());
       rigid_weights_[j] += element[0];
@@ -211,24 +212,25 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
   // energy's gradient: the gradient less the inertia, the external forces and the one-particle
   // elements' part. A stretched body's tension makes it positive, a compressed one's negative.
   thread_local Eigen::MatrixX3d external;
-  forcing_->externalForces(t, external);
-  rigid_gradient_ += gradient_ - ((x_cur_ - y_host_).array().colwise() * (c * masses_).array()).matrix() + external;
+  ctx.forcing()->externalForces(t, external);
+  rigid_gradient_ +=
+      ctx.gradient - ((ctx.x_cur - ctx.y_host).array().colwise() * (c * ctx.masses).array()).matrix() + external;
   rigid_arms_.resize(n, 3);
   rigid_inverse_.resize(segments);
   for (std::size_t s = 0; s < segments; ++s) {
-    if (stopped(s) || (!rigid_.empty() && !rigid_[s])) continue;  // setRigidModes
-    const Segment& seg = rows_[s];
+    if (ctx.stops.stopped(s) || (!wanted.empty() && !wanted[s])) continue;  // setRigidModes
+    const SegmentRows& seg = ctx.rows()[s];
     // Serial sums in particle order: a batch's scene gets the arms its own Simulator gets, bit for
     // bit (a vectorised reduction would add in an order that depends on where the rows start).
     Eigen::RowVector3d moment = Eigen::RowVector3d::Zero();
     double mass = 0.0;
     for (int i = seg.first; i < seg.first + seg.count; ++i) {
-      moment += masses_[i] * x_cur_.row(i);
-      mass += masses_[i];
+      moment += ctx.masses[i] * ctx.x_cur.row(i);
+      mass += ctx.masses[i];
     }
     const Eigen::RowVector3d centre = moment / mass;
     const CoarseSums sums =
-        coarseSums(x_cur_, centre, rigid_weights_, rigid_gradient_, seg.first, seg.count, rigid_arms_);
+        coarseSums(ctx.x_cur, centre, rigid_weights_, rigid_gradient_, seg.first, seg.count, rigid_arms_);
     const double weight = sums.weight;
     const Eigen::Vector3d& first_moment = sums.first_moment;
     const Eigen::Matrix3d &inertia = sums.inertia, &tension = sums.tension;
@@ -250,13 +252,13 @@ void LocalGlobalSolver::prepareRigidModes(double c, double t, const IterationCon
   }
 }
 
-void LocalGlobalSolver::applyTwoLevelInverse(double c, const IterationControl& control, const Eigen::MatrixX3d& q,
-                                             Eigen::MatrixX3d& r) {
-  const std::size_t segments = rows_.size();
+void RigidModes::apply(SolveContext& ctx, double c, const IterationControl& control, const Eigen::MatrixX3d& q,
+                       Eigen::MatrixX3d& r) {
+  const std::size_t segments = ctx.rows().size();
   bool any = false;
-  for (std::size_t s = 0; s < segments; ++s) any = any || (usesRigidModes(s) && !stopped(s));
+  for (std::size_t s = 0; s < segments; ++s) any = any || (on(s) && !ctx.stops.stopped(s));
   if (!any) {
-    applyInitialInverseHessian(c, control, q, r);
+    ctx.applyInitialInverseHessian(c, control, q, r);
     return;
   }
   // u = S^+ Z^T q, then q - A Z u through K_c^-1, then r + Z (u - S^+ Z^T A r).
@@ -264,15 +266,15 @@ void LocalGlobalSolver::applyTwoLevelInverse(double c, const IterationControl& c
   coarse_step.assign(segments, Vector6d::Zero());
   rigid_q_ = q;
   for (std::size_t s = 0; s < segments; ++s) {
-    if (!usesRigidModes(s) || stopped(s)) continue;
-    const Segment& seg = rows_[s];
+    if (!on(s) || ctx.stops.stopped(s)) continue;
+    const SegmentRows& seg = ctx.rows()[s];
     coarse_step[s] = rigid_inverse_[s] * rigidComponents<false>(rigid_arms_, q, seg.first, seg.count, nullptr);
     moveRows<true>(coarse_step[s], rigid_arms_, rigid_weights_.data(), seg.first, seg.count, rigid_q_);
   }
-  applyInitialInverseHessian(c, control, rigid_q_, r);
+  ctx.applyInitialInverseHessian(c, control, rigid_q_, r);
   for (std::size_t s = 0; s < segments; ++s) {
-    if (!usesRigidModes(s) || stopped(s)) continue;
-    const Segment& seg = rows_[s];
+    if (!on(s) || ctx.stops.stopped(s)) continue;
+    const SegmentRows& seg = ctx.rows()[s];
     const Vector6d correction =
         coarse_step[s] -
         rigid_inverse_[s] * rigidComponents<true>(rigid_arms_, r, seg.first, seg.count, rigid_weights_.data());

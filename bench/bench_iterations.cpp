@@ -24,6 +24,7 @@
 #include "backend/backend.hpp"
 #include "cpu/cpu_backend.hpp"
 #include "elements/projections.hpp"
+#include "integrator/integrator_steps.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "scene/forcing.hpp"
 #include "scene/scene_data.hpp"
@@ -52,13 +53,12 @@ std::unique_ptr<Backend> makeBackend(const SceneData& data, const Forcing& forci
   return makeOpenCLBackend(data, forcing, kSlots, optionsFor(choice, Integrator::BackwardEuler).opencl);
 }
 
-/// The solve's constant c = (factor / h^2) per integrator (docs/method.md section 2).
+/// The solve's coefficient c per integrator, as its steps take it (solveCoefficient).
 double solveConstant(Integrator integrator) {
-  const double h2 = kTimeStep * kTimeStep;
   switch (integrator) {
-    case Integrator::ImplicitMidpoint: return 4.0 / h2;
-    case Integrator::BDF2: return 9.0 / (4.0 * h2);
-    default: return 1.0 / h2;
+    case Integrator::ImplicitMidpoint: return solveCoefficient(ImplicitSolve::Midpoint, kTimeStep);
+    case Integrator::BDF2: return solveCoefficient(ImplicitSolve::Bdf2, kTimeStep);
+    default: return solveCoefficient(ImplicitSolve::BackwardEuler, kTimeStep);
   }
 }
 

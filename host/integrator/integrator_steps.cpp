@@ -8,15 +8,25 @@
 
 namespace stabint {
 
+double solveCoefficient(ImplicitSolve solve, double h) {
+  switch (solve) {
+    case ImplicitSolve::Midpoint: return 4.0 / (h * h);
+    case ImplicitSolve::Bdf2: return 9.0 / (4.0 * h * h);
+    case ImplicitSolve::BackwardEuler: break;
+  }
+  return 1.0 / (h * h);
+}
+
 void factorIntegratorSystems(GlobalSystem& system, const SimulatorOptions& options) {
   const double h = options.time_step;
+  const auto factor = [&](ImplicitSolve solve, const char* name) { system.factor(solveCoefficient(solve, h), name); };
   switch (options.integrator) {
     case Integrator::BDF2:
-      system.factor(9.0 / (4.0 * h * h), "9/(4 time_step^2)");
+      factor(ImplicitSolve::Bdf2, "9/(4 time_step^2)");
       [[fallthrough]];  // and its first step is BE
-    case Integrator::BackwardEuler: system.factor(1.0 / (h * h), "1/time_step^2"); break;
-    case Integrator::EnergyBlend: system.factor(1.0 / (h * h), "1/time_step^2"); [[fallthrough]];
-    case Integrator::ImplicitMidpoint: system.factor(4.0 / (h * h), "4/time_step^2"); break;
+    case Integrator::BackwardEuler: factor(ImplicitSolve::BackwardEuler, "1/time_step^2"); break;
+    case Integrator::EnergyBlend: factor(ImplicitSolve::BackwardEuler, "1/time_step^2"); [[fallthrough]];
+    case Integrator::ImplicitMidpoint: factor(ImplicitSolve::Midpoint, "4/time_step^2"); break;
     case Integrator::ForwardEuler:
     case Integrator::SymplecticEuler: break;  // explicit: no system
   }
@@ -27,7 +37,7 @@ int IntegratorSteps::backwardEuler(double h, double t, int x_out, int v_out, con
                                    bool warm_start) {
   backend_.combine(kY, 1.0, kX, h, kV);
   if (!warm_start) backend_.copy(x_out, kY);
-  const int done = solver_.solve(1.0 / (h * h), kY, x_out, t + h, control);
+  const int done = solver_.solve(solveCoefficient(ImplicitSolve::BackwardEuler, h), kY, x_out, t + h, control);
   potentials_of_step_ = solver_.potentialsOfResult();
   backend_.combine(v_out, 1.0 / h, x_out, -1.0 / h, kX);  // v = (x* - x_n)/h
   return done;
@@ -40,7 +50,8 @@ int IntegratorSteps::implicitMidpoint(double h, double t, int x_out, int v_out, 
   // The solve finds the midpoint and the step extrapolates it, x_1 = 2 x_mid - x_n, doubling
   // its error: L-BFGS ends on a plain iteration, which smooths the error its curvature pairs
   // leave in stiff modes before that doubling turns it into elastic energy.
-  const int done = solver_.solve(4.0 / (h * h), kY, x_out, t + 0.5 * h, endingPlain(control));
+  const int done =
+      solver_.solve(solveCoefficient(ImplicitSolve::Midpoint, h), kY, x_out, t + 0.5 * h, endingPlain(control));
   potentials_of_step_.clear();
   backend_.combine(v_out, 4.0 / h, x_out, -4.0 / h, kX);
   backend_.combine(v_out, 1.0, v_out, -1.0, kV);
@@ -58,7 +69,7 @@ int IntegratorSteps::bdf2(double h, double t, int x_out, int v_out, const Iterat
   // -1/3) and into v = 3/(2h) (x - ...): L-BFGS's stiff-mode error, left unsmoothed, pumped the
   // teaser's cloth by 0.13 J over 6 s where converged BDF2 loses 0.22 J (with the plain last
   // iteration: loses 0.10 J).
-  const int done = solver_.solve(9.0 / (4.0 * h * h), kY, x_out, t + h, endingPlain(control));
+  const int done = solver_.solve(solveCoefficient(ImplicitSolve::Bdf2, h), kY, x_out, t + h, endingPlain(control));
   potentials_of_step_ = solver_.potentialsOfResult();
   backend_.combine(v_out, 1.5 / h, x_out, -1.5 / h, kScratch);
   return done;

@@ -33,8 +33,15 @@ enum DriverSlot : int {
   kNumDriverSlots
 };
 
+/// The implicit solves the integrators run: backward Euler's (BDF2's first step and the blend's
+/// partner too), implicit midpoint's (for its midpoint) and BDF2's.
+enum class ImplicitSolve { BackwardEuler, Midpoint, Bdf2 };
+/// The solve's coefficient c of K_c = c M + L at step h: 1/h^2, 4/h^2, 9/(4 h^2). The one place
+/// the factors and the solves take it from, so that a solve finds its factor by c's exact value.
+double solveCoefficient(ImplicitSolve solve, double h);
+
 /// Factors the systems K_c = c M + L the integrator solves with (the blend: BE's and IM's), with
-/// the same expressions for c as the steps below, so that each is factored once. Explicit
+/// c from solveCoefficient as the steps below take it, so that each is factored once. Explicit
 /// integrators factor nothing. With GlobalSolve::ConjugateGradient the factors only validate the
 /// systems (masses too small for the stiffnesses are refused here, naming them, rather than
 /// failing the first step) and are then dropped: element changes would keep updating them for

@@ -9,6 +9,7 @@
 #include "integrator/integrator_steps.hpp"
 #include "common/out_of_memory.hpp"
 #include "common/validation.hpp"
+#include "state/checkpoint_slices.hpp"
 
 #include <stabint/errors.hpp>
 
@@ -24,64 +25,11 @@
 namespace stabint {
 namespace {
 
-// Replaces v[first, first + count) with `with` (a scene's pins may be more or fewer).
-template <typename T>
-void replaceRange(std::vector<T>& v, int first, int count, const std::vector<T>& with) {
-  v.erase(v.begin() + first, v.begin() + first + count);
-  v.insert(v.begin() + first, with.begin(), with.end());
-}
-
-template <typename T>
-std::vector<T> rangeOf(const std::vector<T>& v, int first, int count) {
-  return std::vector<T>(v.begin() + first, v.begin() + first + count);
-}
-
-std::string timeText(double t) {
-  std::ostringstream out;
-  out.precision(17);
-  out << t;
-  return out.str();
-}
-
 int pinBlock(const SceneData& data) { return data.blockIndex(pinElementType()); }
-
-// Scene rows [first, first + count) of the batch's one user-force ramp `all` take the scene's own
-// ramp `own` at time t. The batch keeps one ramp (one t0, t1) for all particles: a scene's ramp
-// over a step other than the batch's fits only when one of the two is over by t (its value then
-// stays, evaluated as (1 - s) f + s f: round-off, as in setExternalForces).
-void spliceForces(Forcing::Ramp& all, int first, int count, const Forcing::Ramp& own, double t, int particles,
-                  const std::string& where) {
-  if (!own.active) {
-    if (all.active) {
-      all.start.middleRows(first, count).setZero();
-      all.end.middleRows(first, count).setZero();
-    }
-    return;
-  }
-  if (!all.active) {
-    all =
-        Forcing::Ramp{own.t0, own.t1, Eigen::MatrixX3d::Zero(particles, 3), Eigen::MatrixX3d::Zero(particles, 3), true};
-  } else if (own.t0 != all.t0 || own.t1 != all.t1) {
-    if (!(own.t1 > t)) {
-      all.start.middleRows(first, count) = own.end;
-      all.end.middleRows(first, count) = own.end;
-      return;
-    }
-    if (all.t1 > t)
-      throw InvalidInputError(where + "its external forces ramp over [" + timeText(own.t0) + ", " + timeText(own.t1) +
-                              "], the batch's over [" + timeText(all.t0) + ", " + timeText(all.t1) +
-                              "]: one ramp for all scenes");
-    all.start = all.end;  // the other scenes' ramps are over: their values stay
-    all.t0 = own.t0;
-    all.t1 = own.t1;
-  }
-  all.start.middleRows(first, count) = own.start;
-  all.end.middleRows(first, count) = own.end;
-}
 
 // An option's value as a batch checkpoint records it: a double to the bit (17 digits), an int
 // in decimal, an enum by its name.
-std::string optionText(double value) { return timeText(value); }
+std::string optionText(double value) { return exactText(value); }
 std::string optionText(int value) { return std::to_string(value); }
 std::string optionText(Integrator value) { return integratorName(value); }
 std::string optionText(Acceleration value) { return accelerationName(value); }
@@ -142,51 +90,6 @@ CheckpointData BatchDriver::batchData() {
   return d;
 }
 
-CheckpointData BatchDriver::sceneData(const CheckpointData& all, int scene) const {
-  const SceneSegment& seg = segments_[std::size_t(scene)];
-  const PerScene& p = per_scene_[std::size_t(scene)];
-  CheckpointData d;
-  d.scene_fingerprint = sceneFingerprint(scenes_[std::size_t(scene)]);
-  d.particles = seg.num_particles;
-  const std::size_t pb = std::size_t(pinBlock(data_));
-  d.elements.pins = rangeOf(all.elements.pins, seg.first_element[pb], seg.num_elements[pb]);
-  for (Pin& pin : d.elements.pins) pin.vertex -= seg.first_particle;
-  static_cast<SceneBook&>(d) = p;
-  // An inactive scene's rows of the history slots hold its kept state, not its history.
-  d.motion.has_history = all.motion.has_history && p.active;
-  d.motion.x = all.motion.x.middleRows(seg.first_particle, seg.num_particles);
-  d.motion.v = all.motion.v.middleRows(seg.first_particle, seg.num_particles);
-  d.motion.x_prev = all.motion.x_prev.middleRows(seg.first_particle, seg.num_particles);
-  d.motion.v_prev = all.motion.v_prev.middleRows(seg.first_particle, seg.num_particles);
-  d.forcing.pins = rangeOf(all.forcing.pins, seg.first_element[pb], seg.num_elements[pb]);
-  // The batch's ramp has rows of zeros for the scenes never given forces: those have none, as
-  // their own Simulators (for which an active ramp means a pushed scene, no conserved momentum).
-  if (p.has_user_forces) {
-    const Forcing::Ramp& r = all.forcing.user_forces;
-    d.forcing.user_forces = Forcing::Ramp{r.t0, r.t1, r.start.middleRows(seg.first_particle, seg.num_particles),
-                                          r.end.middleRows(seg.first_particle, seg.num_particles), true};
-  }
-  d.forcing.colliders = rangeOf(all.forcing.colliders, seg.first_collider, seg.num_colliders);
-  for (std::size_t b = 0; b < all.elements.stiffness.size(); ++b) {
-    d.elements.stiffness.push_back(rangeOf(all.elements.stiffness[b], seg.first_element[b], seg.num_elements[b]));
-    d.elements.enabled.push_back(rangeOf(all.elements.enabled[b], seg.first_element[b], seg.num_elements[b]));
-  }
-  // The scene's entries of the batch's contact log, numbered from its first pair. Every group's
-  // end (0) is kept, so that the scenes' logs of one batch line up group by group
-  // (mergeContactLogs); an empty group changes nothing when replayed.
-  const std::size_t cb = std::size_t(contact_.block());
-  const int first = seg.first_element[cb], count = seg.num_elements[cb];
-  if (count > 0)
-    for (std::int32_t entry : all.contact_log) {
-      const int e = (entry > 0 ? entry : -entry) - 1;
-      if (entry == 0)
-        d.contact_log.push_back(0);
-      else if (e >= first && e < first + count)
-        d.contact_log.push_back(entry > 0 ? e - first + 1 : -(e - first + 1));
-    }
-  return d;
-}
-
 RestoreTarget BatchDriver::restoreTarget(int scene, const char* call) const {
   checkScene(scene, call);
   const SceneSegment& seg = segments_[std::size_t(scene)];
@@ -200,76 +103,6 @@ RestoreTarget BatchDriver::restoreTarget(int scene, const char* call) const {
   // A Simulator's messages name the call, not a scene.
   target.where = std::string(call) + ": " + (as_simulator_ ? std::string() : "scene " + std::to_string(scene) + ": ");
   return target;
-}
-
-void BatchDriver::splice(CheckpointData& all, std::vector<SceneSegment>& segments, int scene, const CheckpointData& d,
-                         double time) const {
-  SceneSegment& seg = segments[std::size_t(scene)];
-  const std::size_t pb = std::size_t(pinBlock(data_));
-  const int first_pin = seg.first_element[pb], pins = seg.num_elements[pb];
-  std::vector<Pin> pin_list = d.elements.pins;
-  for (Pin& pin : pin_list) pin.vertex += seg.first_particle;
-  replaceRange(all.elements.pins, first_pin, pins, pin_list);
-  replaceRange(all.forcing.pins, first_pin, pins, d.forcing.pins);
-  for (std::size_t b = 0; b < all.elements.stiffness.size(); ++b) {
-    replaceRange(all.elements.stiffness[b], seg.first_element[b], seg.num_elements[b], d.elements.stiffness[b]);
-    replaceRange(all.elements.enabled[b], seg.first_element[b], seg.num_elements[b], d.elements.enabled[b]);
-  }
-  // The scene's pin range takes the checkpoint's count: the later scenes' pins move with it.
-  const int moved = static_cast<int>(pin_list.size()) - pins;
-  seg.num_elements[pb] += moved;
-  for (std::size_t s = std::size_t(scene) + 1; s < segments.size(); ++s) segments[s].first_element[pb] += moved;
-
-  const auto rows = [&](Eigen::MatrixX3d& m) { return m.middleRows(seg.first_particle, seg.num_particles); };
-  rows(all.motion.x) = d.motion.x;
-  rows(all.motion.v) = d.motion.v;
-  rows(all.motion.x_prev) = d.motion.x_prev;
-  rows(all.motion.v_prev) = d.motion.v_prev;
-  const std::vector<Collider>& colliders = scenes_[std::size_t(scene)].colliders;
-  for (int c = 0; c < seg.num_colliders; ++c) {
-    // A checkpoint without collider motion (version 2) has its colliders on their scene laws.
-    const Collider& own = colliders[std::size_t(c)];
-    all.forcing.colliders[std::size_t(seg.first_collider + c)] =
-        d.forcing.colliders.empty() ? Forcing::ColliderMotion{0.0, 0.0, own.center, own.center, own.velocity, false}
-                                    : d.forcing.colliders[std::size_t(c)];
-  }
-  spliceForces(all.forcing.user_forces, seg.first_particle, seg.num_particles, d.forcing.user_forces, time,
-               data_.numParticles(), restoreTarget(scene, "restore").where);
-}
-
-std::vector<std::int32_t> BatchDriver::mergeContactLogs(const std::vector<CheckpointData>& scenes) const {
-  const std::size_t cb = std::size_t(contact_.block());
-  std::vector<std::vector<std::vector<std::int32_t>>> groups(scenes.size());  // per scene, per group: entries
-  std::size_t count = 0;
-  bool first = true;
-  for (std::size_t s = 0; s < scenes.size(); ++s) {
-    if (segments_[s].num_elements[cb] == 0) continue;
-    groups[s].emplace_back();
-    for (std::int32_t entry : scenes[s].contact_log) {
-      if (entry != 0) {
-        const int e = (entry > 0 ? entry : -entry) - 1 + segments_[s].first_element[cb];
-        groups[s].back().push_back(entry > 0 ? e + 1 : -(e + 1));
-      } else {
-        groups[s].emplace_back();
-      }
-    }
-    groups[s].pop_back();  // after the last group's end (checked by checkRestorable)
-    if (!first && groups[s].size() != count)
-      throw InvalidInputError("restore: scene " + std::to_string(s) +
-                              ": its contact set changes do not line up with the other scenes' (checkpoints of one "
-                              "batch only)");
-    count = groups[s].size();
-    first = false;
-  }
-  // A group of the batch's log lists the pairs entering and leaving in one step; the replay takes
-  // them apart by sign, so scene after scene gives the batch's change.
-  std::vector<std::int32_t> merged;
-  for (std::size_t g = 0; g < count; ++g) {
-    for (const auto& scene : groups)
-      if (!scene.empty()) merged.insert(merged.end(), scene[g].begin(), scene[g].end());
-    merged.push_back(0);
-  }
-  return merged;
 }
 
 void BatchDriver::apply(const CheckpointData& all, const std::vector<SceneSegment>& segments,
@@ -357,8 +190,8 @@ void BatchDriver::restoreScene(int scene, const CheckpointData& d) {
   checkRestorable(d, target);
   checkDeviceRange(d, target.where);
   if (d.time != t_)
-    throw InvalidInputError(target.where + "the checkpoint is at t = " + timeText(d.time) +
-                            ", the batch at t = " + timeText(t_) +
+    throw InvalidInputError(target.where + "the checkpoint is at t = " + exactText(d.time) +
+                            ", the batch at t = " + exactText(t_) +
                             ": its scenes share the batch's time, a scene is restored at that time only");
   if (options_.integrator == Integrator::BDF2 && d.motion.has_history != has_history_)
     throw InvalidInputError(target.where +
@@ -373,7 +206,7 @@ void BatchDriver::restoreScene(int scene, const CheckpointData& d) {
   const bool assemble =
       rangeOf(all.elements.enabled[cb], seg.first_element[cb], seg.num_elements[cb]) != d.elements.enabled[cb];
   std::vector<SceneSegment> segments = segments_;
-  splice(all, segments, scene, d, t_);
+  spliceScene(all, segments, scene, pinBlock(data_), d, t_, scenes_[std::size_t(scene)].colliders, target.where);
   if (assemble) all.contact_log.clear();
   std::vector<PerScene> per_scene = per_scene_;
   restoreScalars(per_scene[std::size_t(scene)], d, t_);
@@ -386,15 +219,15 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
                             std::to_string(size()));
   // A clock that a step no longer moves would leave every scene at one time for ever.
   if (!(time + options_.time_step > time))
-    throw InvalidInputError("restore: the checkpoint's time t = " + timeText(time) +
-                            " is too large for a step of h = " + timeText(options_.time_step) + " to advance it");
+    throw InvalidInputError("restore: the checkpoint's time t = " + exactText(time) +
+                            " is too large for a step of h = " + exactText(options_.time_step) + " to advance it");
   for (int s = 0; s < size(); ++s) {
     const RestoreTarget target = restoreTarget(s, "restore");
     checkRestorable(scenes[std::size_t(s)], target);
     checkDeviceRange(scenes[std::size_t(s)], target.where);
     if (!(scenes[std::size_t(s)].time <= time))
-      throw InvalidInputError(target.where + "its time t = " + timeText(scenes[std::size_t(s)].time) +
-                              " is after the batch's, t = " + timeText(time));
+      throw InvalidInputError(target.where + "its time t = " + exactText(scenes[std::size_t(s)].time) +
+                              " is after the batch's, t = " + exactText(time));
   }
   CheckpointData all = batchData();
   all.time = time;
@@ -404,19 +237,22 @@ void BatchDriver::restoreAll(double time, const std::vector<CheckpointData>& sce
   std::vector<PerScene> per_scene = per_scene_;
   for (int s = 0; s < size(); ++s) {
     const CheckpointData& d = scenes[std::size_t(s)];
-    splice(all, segments, s, d, time);
+    spliceScene(all, segments, s, pinBlock(data_), d, time, scenes_[std::size_t(s)].colliders,
+                restoreTarget(s, "restore").where);
     restoreScalars(per_scene[std::size_t(s)], d, time);
     // The batch's history is that of its active scenes (an inactive one's is its kept state).
     if (d.time == time) all.motion.has_history = all.motion.has_history || d.motion.has_history;
   }
-  all.contact_log = mergeContactLogs(scenes);
+  all.contact_log = mergeContactLogs(scenes, segments_, contact_.block());
   restoreChecked(all, segments, per_scene, /*assemble=*/contact_.count() > 0, "restore: ");
 }
 
 // ---- the public classes ----------------------------------------------------------------------------
 
 Checkpoint BatchDriver::checkpointOf(const CheckpointData& all, int scene) const {
-  const CheckpointData d = sceneData(all, scene);
+  const PerScene& p = per_scene_[std::size_t(scene)];
+  const CheckpointData d = cutScene(all, SceneSlice{segments_[std::size_t(scene)], pinBlock(data_), contact_.block()},
+                                    sceneFingerprint(scenes_[std::size_t(scene)]), p, p.active, p.has_user_forces);
   Checkpoint c;
   c.bytes_ = serializeCheckpoint(d);
   c.time_ = d.time;

@@ -138,9 +138,9 @@ struct BatchDriver {
   // ---- checkpoints (driver/batch_checkpoint.cpp) --------------------------------------------------
   // Simulator's CheckpointData twice over: the batch's state as a Simulator of the concatenation
   // would save it (its pins, forcing, elements and contact log: what ElementChanges and
-  // ContactResolver restore), and each scene's part of it as a Simulator of the scene alone would.
+  // ContactResolver restore), and each scene's part of it as a Simulator of the scene alone would
+  // (cut and spliced by host/state/checkpoint_slices.hpp).
   CheckpointData batchData();
-  CheckpointData sceneData(const CheckpointData& all, int scene) const;
   /// Scene `scene`'s checkpoint (its part of `all`, batchData()'s) in Simulator's format: what
   /// Simulator::checkpoint and both of BatchSimulator's return.
   Checkpoint checkpointOf(const CheckpointData& all, int scene) const;
@@ -153,13 +153,6 @@ struct BatchDriver {
   // the scene's 1e150: InvalidInputError, prefixed `where`, for a checkpoint's state or collider
   // motion beyond what the backend holds (per-frame input checks its own).
   void checkDeviceRange(const CheckpointData& d, const std::string& where) const;
-  // Writes scene `scene`'s checkpoint `d` into `all` and `segments` (its pins may be more or
-  // fewer than the scene has now) as of the batch's time `time`.
-  void splice(CheckpointData& all, std::vector<SceneSegment>& segments, int scene, const CheckpointData& d,
-              double time) const;
-  // The scenes' contact logs (each numbered from its first pair, all with the groups of one
-  // batch's log) as the batch's.
-  std::vector<std::int32_t> mergeContactLogs(const std::vector<CheckpointData>& scenes) const;
   // The state `all` with its segments and per-scene values, as Simulator::applyCheckpoint applies
   // its own: with `assemble`, L is assembled from the contact flags of the log's start and the
   // log replayed; else the elements that differ are updated in the factor.

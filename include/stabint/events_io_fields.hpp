@@ -1,11 +1,11 @@
 #pragma once
 /// @file
-/// The field lists of the structs of stabint/events.hpp (the events) and stabint/io.hpp (the
+/// The field lists of the structs of stabint/event_values.hpp (the events) and stabint/io.hpp (the
 /// materials), `FIELD(name, "doc")` in each struct's order, and their FieldTables
 /// (stabint/field_list.hpp), from which Python's classes are generated. They are kept here, not
 /// next to their structs as the scene's and the reports' are, so that those two headers stay as
 /// they are while others change them; a field added to one of these structs is one line here.
-#include <stabint/events.hpp>
+#include <stabint/event_values.hpp>
 #include <stabint/field_list.hpp>
 #include <stabint/io.hpp>
 

@@ -270,9 +270,9 @@ BatchCheckpoint BatchSimulator::checkpoint() const {
   return reportingOutOfMemory("BatchSimulator::checkpoint", [&] {
     const CheckpointData all = impl_->batchData();
     BatchCheckpoint batch;
-    batch.time_ = impl_->t_;
+    batch.time_ = impl_->time();
     for (int s = 0; s < size(); ++s) batch.scenes_.push_back(impl_->checkpointOf(all, s));
-    batch.options_ = recordedOptions(impl_->options_);
+    batch.options_ = recordedOptions(impl_->options());
     batch.has_options_ = true;
     return batch;
   });
@@ -286,7 +286,7 @@ void BatchSimulator::restore(int scene, const Checkpoint& checkpoint) {
 void BatchSimulator::restore(const BatchCheckpoint& checkpoint) {
   reportingOutOfMemory("BatchSimulator::restore", [&] {
     // A version 1 checkpoint recorded no options: restored unchecked, as it was then.
-    if (checkpoint.has_options_) checkSameOptions(checkpoint.options_, impl_->options_);
+    if (checkpoint.has_options_) checkSameOptions(checkpoint.options_, impl_->options());
     std::vector<CheckpointData> scenes;
     for (int s = 0; s < checkpoint.size(); ++s)
       scenes.push_back(

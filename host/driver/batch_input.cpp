@@ -240,25 +240,25 @@ void BatchSimulator::setStates(const std::vector<int>& scenes, const std::vector
 }
 void BatchSimulator::setIterations(int iterations) { impl_->setIterations(iterations); }
 void BatchSimulator::setPinTarget(int scene, int pin, const Eigen::Vector3d& target) {
-  impl_->frameInput(scene, "setPinTarget").setPinTarget(pin, target, impl_->t_);
+  impl_->frameInput(scene, "setPinTarget").setPinTarget(pin, target, impl_->time());
 }
 Eigen::Vector3d BatchSimulator::pinTarget(int scene, int pin) const {
-  return impl_->frameInput(scene, "pinTarget").pinTarget(pin, impl_->t_);
+  return impl_->frameInput(scene, "pinTarget").pinTarget(pin, impl_->time());
 }
 void BatchSimulator::setExternalForces(int scene, const Eigen::MatrixX3d& forces) {
   impl_->setExternalForces(scene, forces);
 }
 void BatchSimulator::setColliderPosition(int scene, int collider, const Eigen::Vector3d& position) {
-  impl_->frameInput(scene, "setColliderPosition").setColliderPosition(collider, position, impl_->t_);
+  impl_->frameInput(scene, "setColliderPosition").setColliderPosition(collider, position, impl_->time());
 }
 void BatchSimulator::setColliderVelocity(int scene, int collider, const Eigen::Vector3d& velocity) {
-  impl_->frameInput(scene, "setColliderVelocity").setColliderVelocity(collider, velocity, impl_->t_);
+  impl_->frameInput(scene, "setColliderVelocity").setColliderVelocity(collider, velocity, impl_->time());
 }
 Eigen::Vector3d BatchSimulator::colliderPosition(int scene, int collider) const {
-  return impl_->frameInput(scene, "colliderPosition").colliderPosition(collider, impl_->t_);
+  return impl_->frameInput(scene, "colliderPosition").colliderPosition(collider, impl_->time());
 }
 Eigen::Vector3d BatchSimulator::colliderVelocity(int scene, int collider) const {
-  return impl_->frameInput(scene, "colliderVelocity").colliderVelocity(collider, impl_->t_);
+  return impl_->frameInput(scene, "colliderVelocity").colliderVelocity(collider, impl_->time());
 }
 int BatchSimulator::grab(int scene, int vertex, double stiffness) { return impl_->grab(scene, vertex, stiffness); }
 void BatchSimulator::release(int scene, int pin) { impl_->release(scene, pin); }

@@ -23,7 +23,7 @@ const BatchStepReport& BatchSimulator::step() {
 int BatchSimulator::size() const { return impl_->size(); }
 bool BatchSimulator::active(int scene) const {
   impl_->checkScene(scene, "active");
-  return impl_->per_scene_[std::size_t(scene)].active;
+  return impl_->book(scene).active;
 }
 Eigen::MatrixX3d BatchSimulator::positions(int scene) const {
   impl_->checkScene(scene, "positions");
@@ -33,23 +33,23 @@ Eigen::MatrixX3d BatchSimulator::velocities(int scene) const {
   impl_->checkScene(scene, "velocities");
   return impl_->velocities(scene);
 }
-const Eigen::MatrixX3d& BatchSimulator::allPositions() const { return impl_->x_; }
+const Eigen::MatrixX3d& BatchSimulator::allPositions() const { return impl_->allPositions(); }
 int BatchSimulator::firstParticle(int scene) const {
   impl_->checkScene(scene, "firstParticle");
-  return impl_->segments_[std::size_t(scene)].first_particle;
+  return impl_->segment(scene).first_particle;
 }
 int BatchSimulator::numParticles(int scene) const {
   impl_->checkScene(scene, "numParticles");
-  return impl_->segments_[std::size_t(scene)].num_particles;
+  return impl_->segment(scene).num_particles;
 }
-double BatchSimulator::time() const { return impl_->t_; }
+double BatchSimulator::time() const { return impl_->time(); }
 double BatchSimulator::time(int scene) const {
   impl_->checkScene(scene, "time");
-  return impl_->per_scene_[std::size_t(scene)].time;
+  return impl_->book(scene).time;
 }
 int BatchSimulator::stepCount(int scene) const {
   impl_->checkScene(scene, "stepCount");
-  return static_cast<int>(impl_->per_scene_[std::size_t(scene)].steps);
+  return static_cast<int>(impl_->book(scene).steps);
 }
 double BatchSimulator::target(int scene) const {
   impl_->checkScene(scene, "target");
@@ -61,8 +61,8 @@ EnergyReport BatchSimulator::energy(int scene) const {
 }
 double BatchSimulator::energyScale(int scene) const {
   impl_->checkScene(scene, "energyScale");
-  return impl_->per_scene_[std::size_t(scene)].energy_scale;
+  return impl_->book(scene).energy_scale;
 }
-const SimulatorOptions& BatchSimulator::options() const { return impl_->options_; }
+const SimulatorOptions& BatchSimulator::options() const { return impl_->options(); }
 std::string BatchSimulator::backendDescription() const { return impl_->backendDescription(); }
 }  // namespace stabint

@@ -65,7 +65,9 @@ std::unique_ptr<BatchDriver> BatchDriver::forSimulator(const Scene& scene, const
   // Simulator's order of checks: the options, then the scene (SceneData validates it, with
   // Simulator's messages).
   validateOptions(options);
-  auto impl = std::make_unique<BatchDriver>(batchOf({scene}, options, true), std::vector<Scene>{scene}, options);
+  // Its constructor from a batch is the driver's own (private): make_unique cannot reach it.
+  std::unique_ptr<BatchDriver> impl(
+      new BatchDriver(batchOf({scene}, options, true), std::vector<Scene>{scene}, options));
   impl->as_simulator_ = true;
   return impl;
 }

@@ -49,8 +49,10 @@ inline auto blockOf(const Eigen::MatrixX3d& m, const SceneSegment& s) {
 }
 
 // The one stepping driver: BatchSimulator's (its Impl, below) and, as a batch of one, Simulator's
-// (forSimulator, simulator.cpp).
-struct BatchDriver {
+// (forSimulator, simulator.cpp). Its state is its own: the facades read it through the accessors
+// below.
+class BatchDriver {
+ public:
   /// Throws InvalidInputError for a bad scene ("scene <i>: ..."), scenes a batch cannot keep
   /// apart (concatenateScenes) or options it does not support yet.
   BatchDriver(const std::vector<Scene>& scenes, const SimulatorOptions& options);
@@ -167,6 +169,16 @@ struct BatchDriver {
   void restoreChecked(const CheckpointData& all, const std::vector<SceneSegment>& segments,
                       const std::vector<PerScene>& per_scene, bool assemble, const std::string& where);
 
+  // What the facades read of the state: the batch's time, a scene's book and segment, the options,
+  // and the whole batch's host copies of the accepted state.
+  double time() const { return t_; }
+  const PerScene& book(int scene) const { return per_scene_[std::size_t(scene)]; }
+  const SceneSegment& segment(int scene) const { return segments_[std::size_t(scene)]; }
+  const SimulatorOptions& options() const { return options_; }
+  const Eigen::MatrixX3d& allPositions() const { return x_; }
+  const Eigen::MatrixX3d& allVelocities() const { return v_; }
+
+ private:
   BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, const SimulatorOptions& options);
   double kineticEnergy(int scene, const Eigen::MatrixX3d& v) const;
   // step()'s parts: each scene's report and H* for the step to t1 (an inactive scene does not

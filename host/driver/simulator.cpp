@@ -20,8 +20,8 @@ namespace stabint {
 struct Simulator::Impl {
   Impl(const Scene& scene, const SimulatorOptions& options) : driver(BatchDriver::forSimulator(scene, options)) {}
 
-  const BatchDriver::PerScene& state() const { return driver->per_scene_[0]; }
-  double time() const { return driver->t_; }
+  const BatchDriver::PerScene& state() const { return driver->book(0); }
+  double time() const { return driver->time(); }
   FrameInput input(const char* call) const { return driver->frameInput(0, call); }
 
   // A refusal throws from inside the driver's step before anything is committed: the report of
@@ -96,15 +96,15 @@ bool Simulator::removeReporter(const std::shared_ptr<Reporter>& reporter) {
 }
 void Simulator::clearReporters() { impl_->reporters.clear(); }
 const std::vector<std::shared_ptr<Reporter>>& Simulator::reporters() const { return impl_->reporters; }
-const Eigen::MatrixX3d& Simulator::positions() const { return impl_->driver->x_; }
-const Eigen::MatrixX3d& Simulator::velocities() const { return impl_->driver->v_; }
+const Eigen::MatrixX3d& Simulator::positions() const { return impl_->driver->allPositions(); }
+const Eigen::MatrixX3d& Simulator::velocities() const { return impl_->driver->allVelocities(); }
 double Simulator::time() const { return impl_->time(); }
 int Simulator::stepCount() const { return static_cast<int>(impl_->state().steps); }
 double Simulator::target() const { return impl_->driver->target(0); }
 EnergyReport Simulator::energy() const { return impl_->driver->energy(0); }
 double Simulator::energyScale() const { return impl_->state().energy_scale; }
 const Scene& Simulator::scene() const { return impl_->driver->publicScene(); }
-const SimulatorOptions& Simulator::options() const { return impl_->driver->options_; }
+const SimulatorOptions& Simulator::options() const { return impl_->driver->options(); }
 const StepReport& Simulator::lastReport() const { return impl_->report; }
 std::string Simulator::backendDescription() const { return impl_->driver->backendDescription(); }
 

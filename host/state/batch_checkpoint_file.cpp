@@ -11,7 +11,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <string>
 #include <utility>
 
@@ -143,14 +142,7 @@ BatchCheckpoint BatchCheckpoint::fromBytes(const std::string& bytes, const std::
   return batch;
 }
 
-void BatchCheckpoint::save(const std::string& path) const {
-  const std::string data = bytes();
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) throw FileFormatError(path, 0, "cannot open the batch checkpoint file for writing");
-  file.write(data.data(), static_cast<std::streamsize>(data.size()));
-  file.flush();
-  if (!file) throw FileFormatError(path, 0, "writing the batch checkpoint failed");
-}
+void BatchCheckpoint::save(const std::string& path) const { writeCheckpointFile(path, bytes(), "batch checkpoint"); }
 
 BatchCheckpoint BatchCheckpoint::load(const std::string& path) {
   // The bounded reader: regular files only, size limited.

@@ -421,13 +421,15 @@ Checkpoint Checkpoint::fromBytes(std::string bytes, const std::string& origin) {
   return c;
 }
 
-void Checkpoint::save(const std::string& path) const {
+void writeCheckpointFile(const std::string& path, const std::string& bytes, const std::string& what) {
   std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) throw FileFormatError(path, 0, "cannot open the checkpoint file for writing");
-  file.write(bytes_.data(), static_cast<std::streamsize>(bytes_.size()));
+  if (!file) throw FileFormatError(path, 0, "cannot open the " + what + " file for writing");
+  file.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   file.flush();
-  if (!file) throw FileFormatError(path, 0, "writing the checkpoint failed");
+  if (!file) throw FileFormatError(path, 0, "writing the " + what + " failed");
 }
+
+void Checkpoint::save(const std::string& path) const { writeCheckpointFile(path, bytes_, "checkpoint"); }
 
 Checkpoint Checkpoint::load(const std::string& path) {
   // The bounded reader: regular files only, size limited (a FIFO or /dev/zero cannot hang us).

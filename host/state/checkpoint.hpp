@@ -73,6 +73,9 @@ std::string serializeCheckpoint(const CheckpointData& data);
 /// The checksum that ends a serialized checkpoint (FNV-1a, 64 bits), for other formats that hold
 /// checkpoints (a batch's).
 std::uint64_t checkpointChecksum(const char* data, std::size_t size);
+/// Writes `bytes` to the file `path` (replacing it); FileFormatError naming the file and `what`
+/// ("checkpoint", "batch checkpoint") when it cannot be opened or written.
+void writeCheckpointFile(const std::string& path, const std::string& bytes, const std::string& what);
 /// Throws FileFormatError(origin, 0, ...) for a wrong header, version, or truncated/oversized data.
 CheckpointData parseCheckpoint(const std::string& bytes, const std::string& origin);
 

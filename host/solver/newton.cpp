@@ -5,8 +5,8 @@
 // H <= K_c, so the conjugate gradients on H d = -g preconditioned with the prefactored K_c^-1 start
 // from the plain step's direction and capture the modes where the springs' true stiffness is far
 // below K_c's (a pinned cloth's swing, transverse to taut springs) in a few iterations. Each CG
-// iteration is one solve with the factor and one product with H; L-BFGS's backtracking line
-// search (lineSearch) keeps the objective from rising.
+// iteration is one solve with the factor and one product with H; the backtracking line search
+// L-BFGS uses too (SolveContext::lineSearch) keeps the objective from rising.
 #include "elements/element_type.hpp"
 #include "scene/scene_data.hpp"
 #include "solver/accelerations.hpp"

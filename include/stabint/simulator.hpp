@@ -38,7 +38,7 @@ class Checkpoint {
   static Checkpoint load(const std::string& path);
 
  private:
-  friend struct BatchDriver;  // the library's one stepping driver writes every checkpoint
+  friend class BatchDriver;  // the library's one stepping driver writes every checkpoint
   std::string bytes_;
   double time_ = 0.0;
   int step_count_ = 0;

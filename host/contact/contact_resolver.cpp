@@ -1,5 +1,6 @@
 #include "contact/contact_resolver.hpp"
 
+#include "contact/collider_queries.hpp"
 #include "contact/contact_rules.hpp"
 #include "elements/element_type.hpp"
 #include "scene/scene_data.hpp"
@@ -208,6 +209,44 @@ bool ContactResolver::projectOut(const ContactPart& part, double t1,
   if (part.colliders.count == 0) return false;
   const StepStart start{t1 - time_step_, x0};
   return projectOutOfColliders(scene_, forcing_, meshes_, part, t1, tolerance_, x, nullptr, &start) > 0;
+}
+
+Eigen::MatrixX3d ContactResolver::heldNormals(const ContactPart& part, double t, const Eigen::MatrixX3d& x,
+                                              double margin) const {
+  Eigen::MatrixX3d normals = Eigen::MatrixX3d::Zero(x.rows(), 3);
+  if (part.colliders.count == 0) return normals;
+  const Scene& scene = scene_.scene();
+  const ElementBlock& block = scene_.blocks()[static_cast<std::size_t>(block_)];
+  // The least height above a collider found for each particle (of several, the nearest holds it).
+  Eigen::VectorXd least = Eigen::VectorXd::Constant(x.rows(), margin);
+  // Pairs in the contact set: their half-space, where x is within `margin` of its plane.
+  int e = firstContactElement(scene, part.colliders.first);
+  for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
+    const Eigen::Vector3d shift = forcing_.colliderPosition(c, t) - scene.colliders[std::size_t(c)].center;
+    const IndexRange particles = colliderParticles(scene, c);
+    for (int j = particles.first; j < particles.end(); ++j, ++e) {
+      if (!scene_.elementEnabled(block_, e)) continue;
+      const double* g =
+          block.params.data() + std::size_t(block.type->shape().params) * std::size_t(e) + kContactGeometry;
+      const Eigen::Vector3d point =
+          Eigen::Vector3d(g[kGeometryCenter], g[kGeometryCenter + 1], g[kGeometryCenter + 2]) + shift;
+      const Eigen::Vector3d normal(g[kGeometryA], g[kGeometryA + 1], g[kGeometryA + 2]);
+      const Eigen::Index r = j - part.first_row;
+      const double height = normal.dot(x.row(r).transpose() - point);
+      if (!(height < least[r])) continue;
+      least[r] = height;
+      normals.row(r) = normal.transpose();
+    }
+  }
+  // Particles inside a collider whose pair is out of the set (the solve pushed them in): the
+  // direction out of it.
+  forEachContact(scene_, forcing_, meshes_, part, t, x,
+                 [&](int, int, Eigen::Index r, const Eigen::Vector3d& p, double depth, int pair) {
+                   if (scene_.elementEnabled(block_, pair) || !(-depth < least[r])) return;
+                   least[r] = -depth;
+                   normals.row(r) = ((p - x.row(r).transpose()) / depth).transpose();
+                 });
+  return normals;
 }
 
 void ContactResolver::bookProjection(const PotentialEnergy& projected, double kept, PotentialEnergy& p, double& target,

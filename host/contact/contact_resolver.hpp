@@ -96,6 +96,11 @@ class ContactResolver {
   /// correction (self-contact's impulses) moved x; returns whether it moved a particle.
   bool projectOut(const ContactPart& part, double t1,
                   const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0, Eigen::MatrixX3d& x) const;
+  /// Per particle of `part` (rows as x's) at time t, the outward normal of the collider it rests
+  /// on: its pair's half-space in the contact set within `margin` of x, or the collider it is
+  /// inside; of several, the nearest; zero for a particle no collider holds. Self-contact's
+  /// impulses do not push these particles into their collider (docs/method.md, "Self-contact").
+  Eigen::MatrixX3d heldNormals(const ContactPart& part, double t, const Eigen::MatrixX3d& x, double margin) const;
   /// Books the final projection of a part whose potential went from `p` to `projected` (one
   /// energy evaluation): of the energy it removed, the share its restitution does not keep
   /// (1 - `kept`, Resolved::kept) leaves `target` (report.contact_projection); `p` becomes

@@ -11,6 +11,16 @@
 
 namespace stabint {
 
+// Which of a pair's vertices take no share of an impulse along its normal (docs/method.md,
+// "Self-contact": a stack is pushed apart upwards, never into what supports it): with `held`, a
+// side that a collider holds against the impulse (ImpulseResponse::heldSide); with `up`, also the
+// pair's lower side where its direction is within 60 degrees of the vertical. Neither, for
+// friction.
+struct Exemption {
+  bool held = false;
+  const Eigen::Vector3d* up = nullptr;
+};
+
 // How the particles answer a pair's impulse: a cloth's particle alone, through its own mass; a
 // tet body as a rigid body, through its mass and its inertia about its centre at the reference
 // positions x (a body's contact layer stopped or pushed back alone is carried on by the rest of
@@ -19,9 +29,11 @@ namespace stabint {
 // per particle. A body with a pinned particle, like a pinned particle, takes no impulse.
 class ImpulseResponse {
  public:
+  // `held` (rows as x's; null: none): the outward normal of the collider each particle rests on,
+  // zero for a particle no collider holds.
   ImpulseResponse(const std::vector<int>& solid_of, const std::vector<std::vector<int>>& solids, const PositionRows& x,
-                  const Eigen::VectorXd& masses, const std::vector<int>& fixed)
-      : solid_of_(solid_of), solids_(solids), x_(x), inverse_mass_(masses.cwiseInverse()) {
+                  const Eigen::VectorXd& masses, const std::vector<int>& fixed, const Eigen::MatrixX3d* held = nullptr)
+      : solid_of_(solid_of), solids_(solids), x_(x), inverse_mass_(masses.cwiseInverse()), held_(held) {
     for (int f : fixed) inverse_mass_[f] = 0.0;
     for (const std::vector<int>& body : solids) {
       double mass = 0.0;
@@ -52,22 +64,39 @@ class ImpulseResponse {
       if (solid_of_[std::size_t(v)] != b) return b;
     return -1;  // the body touches itself
   }
-  // Whether vertex k of `e` takes no share of a position push with `up` set: it is on the pair's
-  // lower side, and the pair's direction within 60 degrees of the vertical (docs/method.md,
-  // "Self-contact": a stack is pushed apart upwards, never into what supports it).
-  static bool below(const ContactEvent& e, int k, const Eigen::Vector3d* up) {
-    if (!up) return false;
-    const double vertical = e.normal.dot(*up);
-    return std::abs(vertical) >= 0.5 && e.weights[std::size_t(k)] * vertical < 0.0;
+  // Whether vertex k of `e` takes no share of an impulse under rule `x` (Exemption).
+  bool exempt(const ContactEvent& e, int k, Exemption x) const {
+    const double w = e.weights[std::size_t(k)];
+    if (x.held && held_ && heldSide(e, k)) return true;
+    if (!x.up) return false;
+    const double vertical = e.normal.dot(*x.up);
+    return std::abs(vertical) >= 0.5 && w * vertical < 0.0;
+  }
+  // Whether the side of `e` vertex k is on (its vertex or first edge, or its triangle or second
+  // edge) is held: most of its weight is on vertices that a collider holds and that the impulse
+  // would push into it (within 60 degrees of the collider's normal). A
+  // side is held whole, since the impulse on what is left of it (an edge's far end at a small
+  // weight) would have to move that part by the push over its weight.
+  bool heldSide(const ContactEvent& e, int k) const {
+    const int split = e.edge_edge ? 2 : 1;  // the first side's vertices are [0, split)
+    const int from = k < split ? 0 : split, to = k < split ? split : 4;
+    double held = 0.0, all = 0.0;
+    for (int j = from; j < to; ++j) {
+      const double w = e.weights[std::size_t(j)];
+      const Eigen::Vector3d n = held_->row(e.vertices[std::size_t(j)]).transpose();
+      all += std::abs(w);
+      if (!n.isZero() && w * e.normal.dot(n) <= -0.5 * std::abs(w)) held += std::abs(w);
+    }
+    return held >= 0.5 * all && held > 0.0;
   }
   // A body's share of an impulse on `e` along `dir`: the sum of its vertices' weights and of their
   // moments about its centre.
   void share(const ContactEvent& e, int b, const Eigen::Vector3d& dir, double& weight, Eigen::Vector3d& moment,
-             const Eigen::Vector3d* up = nullptr) const {
+             Exemption x = {}) const {
     weight = 0.0;
     moment.setZero();
     for (int k = 0; k < 4; ++k) {
-      if (bodyOf(e, k) != b || below(e, k, up)) continue;
+      if (bodyOf(e, k) != b || exempt(e, k, x)) continue;
       const int i = e.vertices[std::size_t(k)];
       weight += e.weights[std::size_t(k)];
       moment += e.weights[std::size_t(k)] * (rowOf(x_, i) - centres_[std::size_t(b)]).cross(dir);
@@ -75,30 +104,29 @@ class ImpulseResponse {
   }
   // How far a unit impulse along `dir` (e's normal, or a tangent for friction) moves the pair's
   // relative motion along it: sum w_i^2 / m_i over the particles that answer alone, and
-  // a^2 / M + t . I^-1 t over the bodies (a, t: share). With `up`, the pair's lower side takes no
-  // share (below).
-  double compliance(const ContactEvent& e, const Eigen::Vector3d& dir, const Eigen::Vector3d* up = nullptr) const {
+  // a^2 / M + t . I^-1 t over the bodies (a, t: share), less the vertices `x` exempts.
+  double compliance(const ContactEvent& e, const Eigen::Vector3d& dir, Exemption x = {}) const {
     double c = 0.0;
     for (int k = 0; k < 4; ++k) {
-      if (below(e, k, up)) continue;
+      if (exempt(e, k, x)) continue;
       const int b = bodyOf(e, k);
       const double w = e.weights[std::size_t(k)];
       if (b < 0) {
         c += w * w * inverse_mass_[e.vertices[std::size_t(k)]];
         continue;
       }
-      if (firstOfBody(e, k, up)) {
+      if (firstOfBody(e, k, x)) {
         double a;
         Eigen::Vector3d t;
-        share(e, b, dir, a, t, up);
+        share(e, b, dir, a, t, x);
         c += a * a * inverse_body_mass_[std::size_t(b)] + t.dot(inverse_inertia_[std::size_t(b)] * t);
       }
     }
     return c;
   }
-  bool firstOfBody(const ContactEvent& e, int k, const Eigen::Vector3d* up = nullptr) const {
+  bool firstOfBody(const ContactEvent& e, int k, Exemption x = {}) const {
     for (int j = 0; j < k; ++j)
-      if (!below(e, j, up) && bodyOf(e, j) == bodyOf(e, k)) return false;
+      if (!exempt(e, j, x) && bodyOf(e, j) == bodyOf(e, k)) return false;
     return true;
   }
   double inverseMass(int i) const { return inverse_mass_[i]; }
@@ -114,6 +142,7 @@ class ImpulseResponse {
   const std::vector<std::vector<int>>& solids_;
   PositionRows x_;
   Eigen::VectorXd inverse_mass_;
+  const Eigen::MatrixX3d* held_;
   std::vector<Eigen::Vector3d> centres_;
   std::vector<double> inverse_body_mass_;
   std::vector<Eigen::Matrix3d> inverse_inertia_;
@@ -145,12 +174,12 @@ class ImpulseMotion {
   }
   // The separation of `e` along its normal (n . sum w_i row_i).
   double along(const ContactEvent& e) const { return e.normal.dot(relative(e)); }
-  // An impulse `j` along `dir` (with `up`, on the pair's upper side alone); `moved` (when given)
+  // An impulse `j` along `dir` on the vertices `x` does not exempt; `moved` (when given)
   // flags the particles that answer alone.
   void push(const ContactEvent& e, double j, const Eigen::Vector3d& dir, std::vector<char>* moved = nullptr,
-            const Eigen::Vector3d* up = nullptr) {
+            Exemption x = {}) {
     for (int k = 0; k < 4; ++k) {
-      if (ImpulseResponse::below(e, k, up)) continue;
+      if (response_.exempt(e, k, x)) continue;
       const int b = response_.bodyOf(e, k);
       const int i = e.vertices[std::size_t(k)];
       if (b < 0) {
@@ -160,10 +189,10 @@ class ImpulseMotion {
         if (moved) (*moved)[std::size_t(i)] = 1;
         continue;
       }
-      if (!response_.firstOfBody(e, k, up)) continue;
+      if (!response_.firstOfBody(e, k, x)) continue;
       double a;
       Eigen::Vector3d t;
-      response_.share(e, b, dir, a, t, up);
+      response_.share(e, b, dir, a, t, x);
       linear_[std::size_t(b)] += (j * a * response_.inverseBodyMass(b)) * dir;
       angular_[std::size_t(b)] += j * (response_.inverseInertia(b) * t);
     }

@@ -98,11 +98,14 @@ class SelfContact {
   /// (unit, against gravity; zero: none): a pair stacked along it, whose upper side is not much
   /// heavier than its lower one, has its positions pushed apart by moving its upper side alone,
   /// so that a body resting on another is lifted out of it and never pushes the lower one into
-  /// what supports it (shock propagation).
+  /// what supports it (shock propagation). `held` (rows as x1's; null: none): per particle, the
+  /// outward normal of the collider holding it (ContactResolver::heldNormals), zero where none;
+  /// the positions' push never moves a held side into its collider.
   SelfContactResult resolve(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x0, Eigen::MatrixX3d& x1,
                             Eigen::MatrixX3d& v1, const Eigen::VectorXd& masses, const std::vector<int>& fixed,
                             const std::function<bool(Eigen::MatrixX3d&)>& keep_out = {},
-                            const Eigen::Vector3d& up = Eigen::Vector3d::Zero()) const;
+                            const Eigen::Vector3d& up = Eigen::Vector3d::Zero(),
+                            const Eigen::MatrixX3d* held = nullptr) const;
 
   /// Before a step's solve, from the state (x, v) at its start and the positions `predicted` for
   /// its end (the caller's: free flight under gravity, kept out of the colliders): the pairs that
@@ -115,12 +118,15 @@ class SelfContact {
   /// stopped; a tet body's rigidly: `fall`, h^2 g, less what the colliders lift it) puts the
   /// triangle at the step's end, the thickness apart or as far as it is now (never inside at x:
   /// the support adds no energy to the state it starts from); of several, the nearest; on the
-  /// surfaces `where` names.
+  /// surfaces `where` names. `held` (as resolve's, at the prediction): a side a collider holds
+  /// takes no share of an impulse pushing it into the collider where the other side is heavy
+  /// (moving at most a tenth as far under it).
   double stopApproach(const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x, Eigen::MatrixX3d& v,
                       const Eigen::MatrixX3d& predicted, double h, const Eigen::VectorXd& masses,
                       const std::vector<int>& fixed, std::vector<SupportPlane>* supports = nullptr,
                       const Eigen::Vector3d& fall = Eigen::Vector3d::Zero(),
-                      SupportSurfaces where = SupportSurfaces::Everywhere) const;
+                      SupportSurfaces where = SupportSurfaces::Everywhere,
+                      const Eigen::MatrixX3d* held = nullptr) const;
 
   /// Coulomb friction of the supports after the solve (docs/method.md, "Self-contact",
   /// "Friction"): for each support (rows as v's), its normal impulse `impulses[i]` (h w d, from
@@ -131,6 +137,7 @@ class SelfContact {
                          const Eigen::Ref<const Eigen::MatrixX3d, 0, Eigen::OuterStride<>>& x, Eigen::MatrixX3d& v,
                          const Eigen::VectorXd& masses, const std::vector<int>& fixed) const;
   double friction() const { return friction_; }
+  double thickness() const { return thickness_; }
 
   /// Rounds of impulses before the impact zones.
   static constexpr int kRounds = 8;

@@ -109,12 +109,14 @@ void BatchDriver::stopSelfContactApproach() {
     // (a body resting on the ground stays on it while another falls onto it).
     Eigen::MatrixX3d predicted = x + h * v;
     predicted.rowwise() += (h * h) * scenes_[s].gravity.transpose();
-    contact_.projectOut(contactPart(s, seg.first_particle), t_ + h, x, predicted);
+    const ContactPart part = contactPart(s, seg.first_particle);
+    contact_.projectOut(part, t_ + h, x, predicted);
+    const Eigen::MatrixX3d held = contact_.heldNormals(part, t_ + h, predicted, self_contact_[s].thickness());
     std::vector<SupportPlane>& own = step_supports_[s];
     const double stopped = self_contact_[s].stopApproach(
         x, v, predicted, h, scenes_[s].masses, fixed, seg.support_collider >= 0 ? &own : nullptr,
         h * h * scenes_[s].gravity,
-        options_.self_contact_supports == 2 ? SupportSurfaces::Everywhere : SupportSurfaces::HeavyBodies);
+        options_.self_contact_supports == 2 ? SupportSurfaces::Everywhere : SupportSurfaces::HeavyBodies, &held);
     if (seg.support_collider >= 0) {
       std::vector<SupportPlane> planes = own;
       for (SupportPlane& plane : planes) plane.particle += seg.first_particle;
@@ -181,9 +183,11 @@ void BatchDriver::resolveContact(double t1) {
       // Self-contact after the colliders' projection, which it repeats after each round of its
       // impulses (an impulse may push a particle back into a collider); what its impulses take
       // from the motion is lost (inelastic), booked like friction when they moved no position.
+      const Eigen::MatrixX3d held = contact_.heldNormals(part, t1, p.x_new, self_contact_[s].thickness());
       const SelfContactResult r = self_contact_[s].resolve(
           x0, p.x_new, p.v_new, scenes_[s].masses, pinnedVertices(s),
-          [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); }, -scenes_[s].gravity.normalized());
+          [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); }, -scenes_[s].gravity.normalized(),
+          &held);
       resolved.velocities_changed = resolved.velocities_changed || r.velocities_changed;
       resolved.positions_moved = resolved.positions_moved || r.positions_moved;
       self_moved[s] = r.positions_moved;

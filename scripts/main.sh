@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The main job (the README's first command): installs missing dependencies, builds the study
-# tool (Release, into build/, the same build directory as scripts/test.sh), runs every
-# experiment of stabint-study (energy and motion tables printed), and draws the charts, the
-# summary and the compact motion table (issue 8's targets, printed at the end of the charts step).
-# Idempotent; the reference trajectories (the IM h/16 accuracy references and the small-step
-# motion references) are cached in results/cache/ so a rerun skips them.
+# tool and the benchmark suite (Release, into build/, the same build directory as scripts/test.sh),
+# runs every experiment of stabint-study (energy and motion tables printed), and draws the charts,
+# the summary and the compact motion table (issue 8's targets, printed at the end of the charts
+# step). Idempotent; the reference trajectories (the IM h/16 accuracy references and the small-step
+# motion references, computed first and two at a time by `stabint-study all`) are cached in
+# results/cache/ so a rerun skips them.
 # Its run time is in the README, "The main job".
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -13,9 +14,12 @@ elapsed() { echo "$(( $(date +%s) - start )) s"; }
 
 bash scripts/install-deps.sh
 
-echo "== build (Release, build/, target stabint-study)"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSTABINT_BUILD_TOOLS=ON
-cmake --build build --target stabint-study -j"$(nproc)"
+# One build for the study tool and the scaling benchmark at the end, so that nothing is built
+# after the experiments (STABINT_BUILD_BENCHMARKS is the default; named in case build/ was
+# configured without it).
+echo "== build (Release, build/, targets stabint-study and stabint_bench)"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSTABINT_BUILD_TOOLS=ON -DSTABINT_BUILD_BENCHMARKS=ON
+cmake --build build --target stabint-study stabint_bench -j"$(nproc)"
 echo "== built in $(elapsed)"
 
 echo "== experiments: build/tools/study/stabint-study all --out results"
@@ -32,18 +36,29 @@ build/tools/study/stabint-study drop --mesh results/mesh/elephant.1 --out result
 echo "== self-contact: stabint-study fold"
 build/tools/study/stabint-study fold --mesh results/mesh/elephant.1 --out results
 
-echo "== charts"
-/usr/bin/python3 bench/study_charts.py results
+# The charts and the three pictures are drawn at once, since none of them is timed and each is
+# mostly one core's work: matplotlib, and a still that is one single-threaded POV-Ray process
+# (POV-Ray's own work threads would change its pixels; separate processes render the same ones).
+# The pictures' output is printed after the charts' (which end with the motion table).
+echo "== charts; the teaser, the drop and the fold (POV-Ray) beside them"
 t_pictures=$(date +%s)
-/usr/bin/python3 bench/teaser.py results
-/usr/bin/python3 bench/drop.py results
-/usr/bin/python3 bench/fold.py results
-echo "== rendered the teaser, the drop and the fold (POV-Ray) in $(( $(date +%s) - t_pictures )) s"
+pictures_log=$(mktemp -d)
+pictures=()
+for picture in teaser drop fold; do
+  /usr/bin/python3 "bench/$picture.py" results > "$pictures_log/$picture.log" 2>&1 &
+  pictures+=("$!")
+done
+/usr/bin/python3 bench/study_charts.py results
+failed=0
+for pid in "${pictures[@]}"; do wait "$pid" || failed=1; done
+cat "$pictures_log"/{teaser,drop,fold}.log
+rm -rf "$pictures_log"
+[ "$failed" = 0 ] || { echo "main.sh: a picture script failed (its output is above)" >&2; exit 1; }
+echo "== charts and pictures (POV-Ray) in $(( $(date +%s) - t_pictures )) s"
 
 # Chart 4 (scaling): the benchmark suite's cloth scaling family, 10x10 to 224x224 particles, on
 # the CPU reference and OpenCL backends (about a minute). scripts/bench.sh runs the whole suite.
 echo "== scaling benchmark: build/bench/stabint_bench --benchmark_filter='^scaling_'"
-cmake --build build --target stabint_bench -j"$(nproc)"
 build/bench/stabint_bench --benchmark_filter='^scaling_' \
   --benchmark_out=results/bench_scaling.json --benchmark_out_format=json
 /usr/bin/python3 bench/scaling_chart.py results/bench_scaling.json --charts results/charts \

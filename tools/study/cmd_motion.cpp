@@ -283,7 +283,6 @@ void handleConvergence(const StudyOptions& options) {
 // Writes handle_response.csv (mean K ratio per frequency and solver) and prints, per solver, the
 // mean |ln(K/K_ref)| over the frequencies (0: the reference's response curve).
 void handleResponse(const StudyOptions& options) {
-  const std::vector<double> frequencies{0.3, 0.4, kHandleFrequency, 0.6, 0.8};
   const std::vector<MotionSeries> solvers = blendSolverSeries();
   CsvWriter csv(joinPath(options.out, "handle_response.csv"),
                 {"frequency_Hz", "series", "mean_K_ratio", "reference_mean_K_J"});
@@ -292,7 +291,7 @@ void handleResponse(const StudyOptions& options) {
   for (const MotionSeries& m : solvers) std::printf(" %10s", m.label.c_str());
   std::printf("\n");
   std::vector<double> log_error(solvers.size(), 0.0);
-  for (double f : frequencies) {
+  for (double f : kHandleFrequencies) {
     const StudyScene s = handleClothScene(f);
     double ref_k = 0.0;
     std::printf("%-6.2f", f);
@@ -306,7 +305,7 @@ void handleResponse(const StudyOptions& options) {
       const JudgedRun j = judgedRun(s, spec, options);
       ref_k = j.motion.mean_k_ref;
       ratios.push_back(j.motion.mean_k_ratio);
-      log_error[i] += std::abs(std::log(j.motion.mean_k_ratio)) / static_cast<double>(frequencies.size());
+      log_error[i] += std::abs(std::log(j.motion.mean_k_ratio)) / static_cast<double>(kHandleFrequencies.size());
       csv << f << solvers[i].label << j.motion.mean_k_ratio << j.motion.mean_k_ref;
       csv.endRow();
     }

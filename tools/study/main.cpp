@@ -13,13 +13,15 @@ void usage(std::FILE* to) {
   std::fprintf(to,
                "usage: stabint-study <command> [--out DIR] [--backend cpu|opencl] [--quick] [--mesh BASE]\n"
                "commands:\n"
+               "  prefetch    every reference trajectory that `all` reads, computed two at a time on two\n"
+               "              threads and cached in DIR/cache (`all` runs it first)\n"
                "  table       energy behaviour of every integrator: chain pendulum and cloth, 300 frames\n"
                "              (printed, and energy_table.csv)\n"
                "  reference   reference trajectories (IM, h/16, converged; cached in DIR/cache) and the\n"
                "              accuracy of every integrator at h = 1/30, 10 iterations (reference.csv,\n"
                "              accuracy.csv)\n"
-               "  sweep       speed versus accuracy: iteration budgets 1..32, explicit substeps 1..256,\n"
-               "              cloth and tet bar (sweep.csv)\n"
+               "  sweep       speed versus accuracy: iteration budgets 1..32, explicit substeps 1, 2, 4, ...\n"
+               "              up to the first stable count, cloths and tet bar (sweep.csv)\n"
                "  stability   stiffness x step size grid per integrator, chain and tet bar (stability.csv)\n"
                "  energy      energy over time: tet bar and cloth with BE, BDF2, IM, blend\n"
                "              (energy_tetbar.csv, energy_cloth.csv, cloth_still_<integrator>.csv)\n"
@@ -97,10 +99,19 @@ int main(int argc, char** argv) {
       const char* name;
       void (*run)(const StudyOptions&);
     };
-    const Step steps[] = {{"table", runTable},         {"reference", runReference}, {"sweep", runSweep},
-                          {"stability", runStability}, {"energy", runEnergy},       {"crosscheck", runCrosscheck},
-                          {"motion", runMotion},       {"teaser", runTeaser},       {"interaction", runInteraction},
-                          {"contact", runContact},     {"drop", runDrop},           {"fold", runFold}};
+    const Step steps[] = {{"prefetch", runPrefetch},
+                          {"table", runTable},
+                          {"reference", runReference},
+                          {"sweep", runSweep},
+                          {"stability", runStability},
+                          {"energy", runEnergy},
+                          {"crosscheck", runCrosscheck},
+                          {"motion", runMotion},
+                          {"teaser", runTeaser},
+                          {"interaction", runInteraction},
+                          {"contact", runContact},
+                          {"drop", runDrop},
+                          {"fold", runFold}};
     bool found = false;
     for (const Step& s : steps) {
       // `drop` and `fold` need a mesh made by an external mesher, so `all` leaves them out.

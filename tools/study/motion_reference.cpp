@@ -19,6 +19,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <sstream>
 
 namespace study {
@@ -141,10 +142,15 @@ const MotionReference& motionReference(const StudyScene& scene, const StudyOptio
     << scene.reference_substeps / 2 << " frame_step=" << scene.frame_step << " frames=" << frames
     << " damping per step rescaled, maxit=" << kMaxIterations << " format=1";
   const std::string description = d.str();
-  // Subcommands of one `all` run share the scenes: keep each reference in memory once loaded.
-  static std::map<std::string, std::unique_ptr<MotionReference>> loaded;
-  std::unique_ptr<MotionReference>& slot = loaded[description];
-  if (slot) return *slot;
+  // Subcommands of one `all` run share the scenes: keep each reference in memory once loaded. The
+  // lock guards the map alone: `prefetch` computes two references at once.
+  static std::mutex mutex;
+  static std::map<std::string, std::unique_ptr<const MotionReference>> loaded;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto found = loaded.find(description);
+    if (found != loaded.end()) return *found->second;
+  }
 
   const std::string path = cachePath(joinPath(options.out, "cache"), scene.key + "-motion", description);
   auto ref = std::make_unique<MotionReference>();
@@ -166,8 +172,8 @@ const MotionReference& motionReference(const StudyScene& scene, const StudyOptio
   }
   ref->method = methodName(scene, ref->substeps);
   ref->frame_step = scene.frame_step;
-  slot = std::move(ref);
-  return *slot;
+  const std::lock_guard<std::mutex> lock(mutex);
+  return *loaded.emplace(description, std::move(ref)).first->second;
 }
 
 }  // namespace study

@@ -8,6 +8,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <sstream>
 
 namespace study {
@@ -55,16 +58,9 @@ std::vector<double> toPayload(const Reference& ref) {
   return payload;
 }
 
-}  // namespace
-
-Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& options) {
-  std::ostringstream d;
-  d << cacheDescription(scene) << " | reference IM h=1/30/" << kReferenceSubsteps << " tol=" << kTolerance
-    << " maxit=" << kMaxIterations << " frames=" << kReferenceFrames << " self-check h/" << kReferenceSubsteps / 2
-    << " format=2";
-  const std::string description = d.str();
+// The reference from <out>/cache/, or computed and written there.
+Reference loadOrCompute(const StudyScene& scene, const std::string& description, const StudyOptions& options) {
   const std::string path = cachePath(joinPath(options.out, "cache"), scene.key, description);
-
   Reference ref;
   std::vector<double> payload;
   if (readCache(path, description, payload) && fromPayload(payload, ref)) {
@@ -93,6 +89,29 @@ Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& op
   done << "reference " << scene.key << ": " << fine.seconds + coarse.seconds << " s, wrote " << path;
   progress(done.str());
   return ref;
+}
+
+}  // namespace
+
+const Reference& loadOrComputeReference(const StudyScene& scene, const StudyOptions& options) {
+  std::ostringstream d;
+  d << cacheDescription(scene) << " | reference IM h=1/30/" << kReferenceSubsteps << " tol=" << kTolerance
+    << " maxit=" << kMaxIterations << " frames=" << kReferenceFrames << " self-check h/" << kReferenceSubsteps / 2
+    << " format=2";
+  const std::string description = d.str();
+  // Subcommands of one `all` run share the scenes: keep each reference in memory once loaded, so
+  // that one computed by `prefetch` still counts as computed by this run (reference.csv's
+  // `cached`). The lock guards the map alone: `prefetch` computes two references at once.
+  static std::mutex mutex;
+  static std::map<std::string, std::unique_ptr<const Reference>> loaded;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto found = loaded.find(description);
+    if (found != loaded.end()) return *found->second;
+  }
+  auto ref = std::make_unique<const Reference>(loadOrCompute(scene, description, options));
+  const std::lock_guard<std::mutex> lock(mutex);
+  return *loaded.emplace(description, std::move(ref)).first->second;
 }
 
 }  // namespace study

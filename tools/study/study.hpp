@@ -67,6 +67,8 @@ StudyScene clothScene(double stretch_stiffness = 1e3);
 constexpr double kStiffClothStretch = 1e6;
 /// The handle cloth's handle frequency in scenes/cloth_handle.json [Hz].
 constexpr double kHandleFrequency = 0.5;
+/// The handle frequencies of the motion command's response curve (handle_response.csv) [Hz].
+constexpr std::array<double, 5> kHandleFrequencies = {0.3, 0.4, kHandleFrequency, 0.6, 0.8};
 /// The same tilted cloth as clothScene, n x n, built from triangle strain and bending hinges
 /// instead of springs (ClothModel::Triangles; key "cloth_triangles" for n = 20).
 /// `strain_min` < 1 lets the membrane compress freely down to it (cloth buckles rather than
@@ -268,8 +270,9 @@ struct Reference {
 constexpr int kReferenceFrames = 60;    // 2 s at 30 frames per second
 constexpr int kReferenceSubsteps = 16;  // reference step h/16
 /// Implicit midpoint with h/16 and local/global iterations to a 1e-10 relative objective change,
-/// sampled at frame times; cached in <out>/cache/<scene>-<hash>.bin.
-Reference loadOrComputeReference(const StudyScene& scene, const StudyOptions& options);
+/// sampled at frame times; cached in <out>/cache/<scene>-<hash>.bin and kept in memory for the
+/// rest of the run. Thread-safe.
+const Reference& loadOrComputeReference(const StudyScene& scene, const StudyOptions& options);
 
 // ---- motion reference ----------------------------------------------------------------------
 
@@ -290,7 +293,8 @@ struct MotionReference {
   double horizon() const { return frame_step * static_cast<double>(positions.size() - 1); }
 };
 /// Computes (or reads from <out>/cache/) the scene's motion reference over its horizon
-/// (StudyScene::reference_seconds; at most 1 s in --quick mode), on the CPU reference backend.
+/// (StudyScene::reference_seconds; at most 1 s in --quick mode), on the CPU reference backend,
+/// and keeps it in memory for the rest of the run. Thread-safe.
 const MotionReference& motionReference(const StudyScene& scene, const StudyOptions& options);
 
 /// Motion of one run against the scene's reference.
@@ -321,6 +325,7 @@ double comY(const RunResult& run, const Scene& scene, size_t frame);
 
 // ---- subcommands ---------------------------------------------------------------------------
 
+void runPrefetch(const StudyOptions& options);  // prefetch.cpp
 void runTable(const StudyOptions& options);
 void runReference(const StudyOptions& options);
 void runSweep(const StudyOptions& options);

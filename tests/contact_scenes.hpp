@@ -250,20 +250,38 @@ inline Scene barOnBar() {
   return s;
 }
 
+/// A tet bar (`params`) and a 30 x 30 spring cloth (1 m) of one scene (combined: the bar's
+/// particles first), for the caller to place: the parts as built, with the bar's box centre and its
+/// lowest and highest y.
+struct BarAndCloth {
+  Scene scene, bar, cloth;
+  Eigen::Vector3d mid;
+  double bottom, top;
+};
+inline BarAndCloth barAndCloth(const TetBarParams& params) {
+  BarAndCloth b;
+  b.bar = makeTetBar(params);
+  ClothGridParams p;
+  p.nx = p.ny = 30;
+  b.cloth = makeClothGrid(p);
+  b.scene = combined(b.bar, b.cloth);
+  b.mid = 0.5 * (b.bar.positions.colwise().maxCoeff() + b.bar.positions.colwise().minCoeff()).transpose();
+  b.bottom = b.bar.positions.col(1).minCoeff();
+  b.top = b.bar.positions.col(1).maxCoeff();
+  return b;
+}
+
 /// A cloth on a soft body: a tet bar (`params`, by default 1e5 Pa) lying on a ground with
 /// friction 0.5, its bottom 1 cm above it, and a 30 x 30 spring cloth (1 m) flat 20 cm above its
 /// top, turned 0.3 rad about the vertical, falling onto it and draping over it. Without
 /// self-contact the cloth falls through the bar.
 inline Scene clothOnBar(const TetBarParams& params = TetBarParams{}) {
-  const Scene bar = makeTetBar(params);
-  ClothGridParams p;
-  p.nx = p.ny = 30;
-  const Scene cloth = makeClothGrid(p);
-  Scene s = combined(bar, cloth);
-  const int n = bar.numParticles();
-  const Eigen::Vector3d mid =
-      0.5 * (bar.positions.colwise().maxCoeff() + bar.positions.colwise().minCoeff()).transpose();
-  const double bottom = bar.positions.col(1).minCoeff(), top = bar.positions.col(1).maxCoeff();
+  const BarAndCloth parts = barAndCloth(params);
+  const Scene& cloth = parts.cloth;
+  Scene s = parts.scene;
+  const int n = parts.bar.numParticles();
+  const Eigen::Vector3d& mid = parts.mid;
+  const double bottom = parts.bottom, top = parts.top;
   for (int i = 0; i < n; ++i) {
     s.positions(i, 0) -= mid.x();
     s.positions(i, 1) += 0.01 - bottom;
@@ -287,15 +305,12 @@ inline Scene clothOnBar(const TetBarParams& params = TetBarParams{}) {
 /// mass) tilted 0.3 rad about x and 0.2 rad about z, its lowest corner 15 cm above the ground,
 /// falling at `speed` onto it. Without self-contact the bar falls through the cloth.
 inline Scene barOnCloth(double speed, const TetBarParams& params = TetBarParams{}) {
-  const Scene bar = makeTetBar(params);
-  ClothGridParams p;
-  p.nx = p.ny = 30;
-  const Scene cloth = makeClothGrid(p);
-  Scene s = combined(bar, cloth);
-  const int n = bar.numParticles();
-  const Eigen::Vector3d mid =
-      0.5 * (bar.positions.colwise().maxCoeff() + bar.positions.colwise().minCoeff()).transpose();
-  const double bottom = bar.positions.col(1).minCoeff();
+  const BarAndCloth parts = barAndCloth(params);
+  const Scene& cloth = parts.cloth;
+  Scene s = parts.scene;
+  const int n = parts.bar.numParticles();
+  const Eigen::Vector3d& mid = parts.mid;
+  const double bottom = parts.bottom;
   const Eigen::Matrix3d turn =
       (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()))
           .toRotationMatrix();

@@ -33,7 +33,12 @@ class ImpulseResponse {
   // zero for a particle no collider holds.
   ImpulseResponse(const std::vector<int>& solid_of, const std::vector<std::vector<int>>& solids, const PositionRows& x,
                   const Eigen::VectorXd& masses, const std::vector<int>& fixed, const Eigen::MatrixX3d* held = nullptr)
-      : solid_of_(solid_of), solids_(solids), x_(x), inverse_mass_(masses.cwiseInverse()), held_(held) {
+      : solid_of_(solid_of),
+        solids_(solids),
+        x_(x),
+        masses_(masses),
+        inverse_mass_(masses.cwiseInverse()),
+        held_(held) {
     for (int f : fixed) inverse_mass_[f] = 0.0;
     for (const std::vector<int>& body : solids) {
       double mass = 0.0;
@@ -50,6 +55,10 @@ class ImpulseResponse {
         const Eigen::Vector3d r = rowOf(x, i) - centre;
         inertia += masses[i] * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
       }
+      held_particles_.emplace_back();
+      if (held)
+        for (int i : body)
+          if (!held->row(i).isZero()) held_particles_.back().push_back(i);
       centres_.push_back(centre);
       inverse_body_mass_.push_back(pinned ? 0.0 : 1.0 / mass);
       inverse_inertia_.push_back(pinned ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(inertia.inverse()));
@@ -67,7 +76,7 @@ class ImpulseResponse {
   // Whether vertex k of `e` takes no share of an impulse under rule `x` (Exemption).
   bool exempt(const ContactEvent& e, int k, Exemption x) const {
     const double w = e.weights[std::size_t(k)];
-    if (x.held && held_ && heldSide(e, k)) return true;
+    if (x.held && held_ && (heldSide(e, k) || heldBody(e, k))) return true;
     if (!x.up) return false;
     const double vertical = e.normal.dot(*x.up);
     return std::abs(vertical) >= 0.5 && w * vertical < 0.0;
@@ -88,6 +97,36 @@ class ImpulseResponse {
       if (!n.isZero() && w * e.normal.dot(n) <= -0.5 * std::abs(w)) held += std::abs(w);
     }
     return held >= 0.5 * all && held > 0.0;
+  }
+  // Whether vertex k of `e` is of a tet body that a collider holds against the impulse
+  // (pushedIntoCollider) while the pair's other side is free to take it instead. A body is rarely
+  // held on the side a pair touches (a bar lying on the ground is touched on its top), and pushed
+  // whole, a stiff bar lying on the ground went 11 J into the ground's contact under a bar resting
+  // on it.
+  bool heldBody(const ContactEvent& e, int k) const {
+    if (!pushedIntoCollider(e, k)) return false;
+    const int split = e.edge_edge ? 2 : 1;
+    const int from = k < split ? split : 0, to = k < split ? 4 : split;  // the other side
+    for (int j = from; j < to; ++j)
+      if (heldSide(e, j) || pushedIntoCollider(e, j)) return false;
+    return true;
+  }
+  // Moving rigidly under an impulse on `e`, one of the held particles of vertex k's body would go
+  // into its collider by more than a quarter of the contact point's move.
+  bool pushedIntoCollider(const ContactEvent& e, int k) const {
+    const int b = bodyOf(e, k);
+    if (b < 0 || held_particles_[std::size_t(b)].empty() || inverse_body_mass_[std::size_t(b)] == 0.0) return false;
+    double a;
+    Eigen::Vector3d t;
+    share(e, b, e.normal, a, t);
+    const Eigen::Vector3d linear = (a * inverse_body_mass_[std::size_t(b)]) * e.normal;
+    const Eigen::Vector3d angular = inverse_inertia_[std::size_t(b)] * t;
+    const double contact_move = a * a * inverse_body_mass_[std::size_t(b)] + t.dot(angular);
+    for (int i : held_particles_[std::size_t(b)]) {
+      const Eigen::Vector3d move = linear + angular.cross(rowOf(x_, i) - centres_[std::size_t(b)]);
+      if (-move.dot(held_->row(i).transpose()) > 0.25 * std::abs(contact_move)) return true;
+    }
+    return false;
   }
   // A body's share of an impulse on `e` along `dir`: the sum of its vertices' weights and of their
   // moments about its centre.
@@ -136,14 +175,28 @@ class ImpulseResponse {
   const std::vector<int>& solidOf() const { return solid_of_; }
   const std::vector<std::vector<int>>& solids() const { return solids_; }
   const PositionRows& reference() const { return x_; }
+  // The rigid part of body b's motion in `rows` as the body answers an impulse: the linear and the
+  // angular velocity about its centre at the reference positions (none for a pinned body).
+  void rigidPart(int b, const Eigen::MatrixX3d& rows, Eigen::Vector3d& linear, Eigen::Vector3d& angular) const {
+    Eigen::Vector3d momentum = Eigen::Vector3d::Zero(), angular_momentum = Eigen::Vector3d::Zero();
+    for (int i : solids_[std::size_t(b)]) {
+      const Eigen::Vector3d mv = masses_[i] * rowOf(rows, i);
+      momentum += mv;
+      angular_momentum += (rowOf(x_, i) - centres_[std::size_t(b)]).cross(mv);
+    }
+    linear = inverse_body_mass_[std::size_t(b)] * momentum;
+    angular = inverse_inertia_[std::size_t(b)] * angular_momentum;
+  }
 
  private:
   const std::vector<int>& solid_of_;
   const std::vector<std::vector<int>>& solids_;
   PositionRows x_;
+  const Eigen::VectorXd& masses_;
   Eigen::VectorXd inverse_mass_;
   const Eigen::MatrixX3d* held_;
   std::vector<Eigen::Vector3d> centres_;
+  std::vector<std::vector<int>> held_particles_;  // per body, the particles a collider holds
   std::vector<double> inverse_body_mass_;
   std::vector<Eigen::Matrix3d> inverse_inertia_;
 };
@@ -174,6 +227,31 @@ class ImpulseMotion {
   }
   // The separation of `e` along its normal (n . sum w_i row_i).
   double along(const ContactEvent& e) const { return e.normal.dot(relative(e)); }
+  // The normal velocity of `e` as the vertices that answer an impulse under `x` see it: a body's
+  // rigid velocity at its vertex, a particle's own. An impulse j along the normal changes the
+  // kinetic energy by j times this plus j^2/2 times the compliance (velocities only).
+  double answeringAlong(const ContactEvent& e, Exemption x = {}) {
+    if (rigid_linear_.empty()) {
+      rigid_linear_.resize(linear_.size());
+      rigid_angular_.resize(linear_.size());
+      for (std::size_t b = 0; b < linear_.size(); ++b)
+        response_.rigidPart(static_cast<int>(b), rows_, rigid_linear_[b], rigid_angular_[b]);
+    }
+    double s = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      if (response_.exempt(e, k, x)) continue;
+      const int i = e.vertices[std::size_t(k)];
+      const int b = response_.bodyOf(e, k);
+      Eigen::Vector3d v = rowOf(rows_, i);
+      if (b >= 0) {
+        const std::size_t c = std::size_t(b);
+        v = rigid_linear_[c] + linear_[c] +
+            (rigid_angular_[c] + angular_[c]).cross(rowOf(response_.reference(), i) - response_.centre(b));
+      }
+      s += e.weights[std::size_t(k)] * e.normal.dot(v);
+    }
+    return s;
+  }
   // An impulse `j` along `dir` on the vertices `x` does not exempt; `moved` (when given)
   // flags the particles that answer alone.
   void push(const ContactEvent& e, double j, const Eigen::Vector3d& dir, std::vector<char>* moved = nullptr,
@@ -208,12 +286,16 @@ class ImpulseMotion {
       linear_[b].setZero();
       angular_[b].setZero();
     }
+    rigid_linear_.clear();  // the rows changed
+    rigid_angular_.clear();
   }
 
  private:
   const ImpulseResponse& response_;
   Eigen::MatrixX3d& rows_;
   std::vector<Eigen::Vector3d> linear_, angular_;
+  // The bodies' rigid motion in rows_ before the pending changes (answeringAlong; empty: not known).
+  std::vector<Eigen::Vector3d> rigid_linear_, rigid_angular_;
 };
 
 }  // namespace stabint

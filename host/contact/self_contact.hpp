@@ -141,6 +141,10 @@ class SelfContact {
 
   /// Rounds of impulses before the impact zones.
   static constexpr int kRounds = 8;
+  /// Sweeps of a round's pushes as accumulated impulses, and the largest move (over the
+  /// thickness) that ends them.
+  static constexpr int kSweeps = 16;
+  static constexpr double kSweepTolerance = 1e-3;
 
  private:
   ContactSurface surface_;

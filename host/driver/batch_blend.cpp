@@ -54,10 +54,11 @@ void BatchDriver::judgeMidpointCandidates(IntegratorSteps& steps, const Iteratio
     const Eigen::VectorXd& masses = scenes_[s].masses;
     r.iterations = sceneIterations(s, im_iterations);
     r.energy_evaluations = 1;
-    p.blend.start(BlendScene{&masses, p.momentum_conserved, p.energy_scale,
-                             blendTolerance(options_, p.kinetic, p.potential, p.energy_scale),
-                             std::max(0.0, p.kinetic + p.potential.total() - p.target)},
-                  options_, r);
+    p.blend.start(
+        BlendScene{&masses, p.momentum_conserved, p.energy_scale,
+                   blendTolerance(options_, p.kinetic, p.potential, p.energy_scale),
+                   std::max(0.0, p.kinetic + p.potential.total() - p.target), p.bodies.empty() ? nullptr : &p.bodies},
+        options_, r);
     p.x_new = blockOf(x_new_, segments_[s]);
     p.v_new = blockOf(v_new_, segments_[s]);
     const PotentialEnergy& p_im = p_all_[s];

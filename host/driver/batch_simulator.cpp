@@ -4,6 +4,7 @@
 #include "integrator/integrator_steps.hpp"
 #include "driver/options.hpp"
 #include "common/validation.hpp"
+#include "scene/connected_bodies.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -130,6 +131,8 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
     const Scene& own = scenes_[s];
     p.energy_scale = initialEnergyScale(p.kinetic, p.potential, own.masses, own.gravity, own.positions);
     p.momentum_conserved = momentumConserved(own, /*has_user_forces=*/false);
+    p.bodies = connectedBodies(own);
+    if (p.bodies.size() == 1) p.bodies.clear();
   }
   std::vector<double> energy_scales;
   for (const PerScene& p : per_scene_) energy_scales.push_back(p.energy_scale);

@@ -126,6 +126,8 @@ class BatchDriver {
     bool active = true;
     double energy_scale = 0.0;
     bool momentum_conserved = false;
+    // The scene's bodies (connectedBodies), empty where the scene is one body.
+    std::vector<std::vector<int>> bodies;
     bool has_user_forces = false;  // setExternalForces was called for the scene
     bool event_unsettled = false;  // an element change's event waits for settleEvents
     double h_before_event = 0.0;   // H before that change

@@ -62,7 +62,8 @@ bool BlendStep::judge(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, const PotentialE
   report_->branch = BlendBranch::BackwardEuler;
   x_im_.swap(x);
   v_im_.swap(v);
-  im_momenta_ = rigidMotion(*scene_.masses, x_im_, v_im_);
+  im_momenta_.clear();
+  for (const std::vector<int>& body : bodies()) im_momenta_.push_back(rigidMotion(*scene_.masses, x_im_, v_im_, body));
   im_momenta_known_ = true;
   stage_ = Stage::Partner;
   return true;
@@ -133,19 +134,40 @@ PotentialEnergy BlendStep::blend(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, const
 
 double BlendStep::excess(const Eigen::MatrixX3d& v) const { return kinetic(v) + p_new_.total() - target_; }
 
-// Scales v (its non-rigid part when keep_rigid) so that the kinetic energy approaches
-// `kinetic_wanted`, with the factor clamped to [s_min, s_max]. Returns true when it scaled.
+const std::vector<std::vector<int>>& BlendStep::bodies() const {
+  static const std::vector<std::vector<int>> whole_scene(1);
+  return scene_.bodies ? *scene_.bodies : whole_scene;
+}
+
+void BlendStep::restoreMomenta(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v) const {
+  const std::vector<std::vector<int>>& parts = bodies();
+  for (std::size_t b = 0; b < parts.size(); ++b)
+    setMomenta(rigidMotion(*scene_.masses, x, v, parts[b]), im_momenta_[b].momentum,
+               im_momenta_[b].angularMomentumAboutOrigin(), x, v, parts[b]);
+}
+
+// Scales v (its non-rigid part, each body's own, when keep_rigid) so that the kinetic energy
+// approaches `kinetic_wanted`, with the factor clamped to [s_min, s_max]. Returns true when it
+// scaled.
 bool BlendStep::scaleVelocities(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double kinetic_wanted, bool keep_rigid,
                                 double s_min, double s_max) const {
   const double k = kinetic(v);
-  const RigidMotion rigid = keep_rigid ? rigidMotion(*scene_.masses, x, v) : RigidMotion{};
-  const double k_scaled = k - rigid.kinetic;
-  if (!(k_scaled > 1e-14 * std::max(k, scene_.energy_scale))) return false;
-  const double s = std::clamp(std::sqrt(std::max(0.0, kinetic_wanted - rigid.kinetic) / k_scaled), s_min, s_max);
-  for (Eigen::Index j = 0; j < v.rows(); ++j) {
-    const Eigen::Vector3d kept = keep_rigid ? rigid.velocityAt(x.row(j).transpose()) : Eigen::Vector3d::Zero();
-    v.row(j) = (kept + s * (v.row(j).transpose() - kept)).transpose();
+  double k_rigid = 0.0;
+  Eigen::MatrixX3d kept = Eigen::MatrixX3d::Zero(v.rows(), 3);
+  if (keep_rigid) {
+    for (const std::vector<int>& body : bodies()) {
+      const RigidMotion rigid = rigidMotion(*scene_.masses, x, v, body);
+      k_rigid += rigid.kinetic;
+      const auto keep = [&](Eigen::Index j) { kept.row(j) = rigid.velocityAt(x.row(j).transpose()).transpose(); };
+      if (body.empty())
+        for (Eigen::Index j = 0; j < v.rows(); ++j) keep(j);
+      for (int j : body) keep(j);
+    }
   }
+  const double k_scaled = k - k_rigid;
+  if (!(k_scaled > 1e-14 * std::max(k, scene_.energy_scale))) return false;
+  const double s = std::clamp(std::sqrt(std::max(0.0, kinetic_wanted - k_rigid) / k_scaled), s_min, s_max);
+  for (Eigen::Index j = 0; j < v.rows(); ++j) v.row(j) = kept.row(j) + s * (v.row(j) - kept.row(j));
   return true;
 }
 
@@ -153,7 +175,9 @@ bool BlendStep::scaleVelocities(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, 
 // rules, docs/method.md]:
 // 1. after a BE blend, the IM candidate's linear and angular momentum are put back with a rigid
 //    velocity field: the partner, a few iterations from x_n, would otherwise stop the swing of
-//    a pendulum-like body at every blend;
+//    a pendulum-like body at every blend. Body by body (BlendScene::bodies), as everywhere a rigid
+//    part is kept: the solve moves a scene's bodies apart, and one field over a turning bar and
+//    the cloth under it threw the cloth up to 8 m;
 // 2. too little energy: the velocities are scaled up, by at most max_velocity_scale per step:
 //    where the scene conserves momentum (no pins, no force fields) only their non-rigid part,
 //    which carries no momentum, elsewhere all of it. This replaces the forward-Euler partner,
@@ -185,12 +209,11 @@ void BlendStep::beginCorrections(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v,
   }
   stage_ = Stage::Moving;
   k_before_ = kinetic(v);
-  const Eigen::VectorXd& m = *scene_.masses;
   // Not where an excess is left in a pinned or driven scene: the candidate's momenta would add to
   // it. A scene that conserves momentum keeps it.
   if (branch == BlendBranch::BackwardEuler && im_momenta_known_ && report_->alpha > 0.0 &&
       (allowance_ == 0.0 || scene_.momentum_conserved)) {
-    setMomenta(rigidMotion(m, x, v), im_momenta_.momentum, im_momenta_.angularMomentumAboutOrigin(), x, v);
+    restoreMomenta(x, v);
     changed_ = true;
   }
   const double tau = scene_.tolerance;
@@ -229,7 +252,6 @@ bool BlendStep::finishCorrections(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, Pote
   if (stage_ == Stage::Done) return false;  // IM accepted: nothing to correct
   stage_ = Stage::Done;
   wants_ = false;
-  const Eigen::VectorXd& m = *scene_.masses;
   if (moving_) {
     if (best_beta_ > 0.0) {
       x = (1.0 - best_beta_) * x + best_beta_ * x_partner_;
@@ -240,8 +262,7 @@ bool BlendStep::finishCorrections(Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, Pote
     // Moving the positions moved the angular momentum about the origin with them.
     // (Not counted as a change of the velocities, as before the blend was shared; it matters only
     // when nothing else changed them: alpha = 0 and no non-rigid motion.)
-    if (scene_.momentum_conserved && im_momenta_known_)
-      setMomenta(rigidMotion(m, x, v), im_momenta_.momentum, im_momenta_.angularMomentumAboutOrigin(), x, v);
+    if (scene_.momentum_conserved && im_momenta_known_) restoreMomenta(x, v);
   }
   if (over_ && excess(v) > excessLeft() && !scene_.momentum_conserved)
     changed_ |= scaleVelocities(x, v, target_ + allowance_ - p_new_.total(), /*keep_rigid=*/false, 0.0, 1.0);

@@ -39,6 +39,9 @@ struct BlendScene {
   double tolerance = 0.0;
   /// max(0, H_n - H*_n): how far above its target the step's start already is.
   double inherited_excess = 0.0;
+  /// The scene's bodies (connectedBodies) when it has more than one; null: the scene is one body.
+  /// The corrections keep and restore each body's rigid motion apart.
+  const std::vector<std::vector<int>>* bodies = nullptr;
 };
 
 /// No pins, no force fields, no user forces and no colliders: IM keeps linear and angular momentum.
@@ -114,6 +117,10 @@ class BlendStep {
   double excessAt(double alpha, const PotentialEnergy& p) const { return k_alpha_.at(alpha) + p.total() - target_; }
   bool scaleVelocities(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v, double kinetic_wanted, bool keep_rigid,
                        double s_min, double s_max) const;
+  // The bodies' particle lists: one empty list (every particle) for a scene of one body.
+  const std::vector<std::vector<int>>& bodies() const;
+  // Correction 1: the IM candidate's momenta put back, body by body, with rigid velocity fields.
+  void restoreMomenta(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& v) const;
   double excess(const Eigen::MatrixX3d& v) const;  // K(v) + P - H* of the corrections
   // The excess the corrections leave: the band, or the carried inherited excess.
   double excessLeft() const { return std::max(scene_.tolerance, allowance_); }
@@ -130,7 +137,7 @@ class BlendStep {
   double target_ = 0.0;
   PotentialEnergy p_im_;
   double vv_im_ = 0.0;
-  RigidMotion im_momenta_;
+  std::vector<RigidMotion> im_momenta_;  // per body
   bool im_momenta_known_ = false;
   bool partner_known_ = false;  // this step's partner: its copies and potential
   Eigen::MatrixX3d x_im_, v_im_, x_partner_, v_partner_, v_scratch_;

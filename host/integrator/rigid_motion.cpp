@@ -36,14 +36,18 @@ RigidMotion rigidMotion(const Eigen::VectorXd& masses, const Eigen::MatrixX3d& p
 }
 
 void setMomenta(const RigidMotion& current, const Eigen::Vector3d& momentum, const Eigen::Vector3d& angular_momentum,
-                const Eigen::MatrixX3d& positions, Eigen::MatrixX3d& velocities) {
+                const Eigen::MatrixX3d& positions, Eigen::MatrixX3d& velocities, const std::vector<int>& particles) {
   if (current.mass <= 0.0) return;
   // A rigid field u + w x (x - c) adds M u to P and I_c w + c x M u to L about the origin.
   const Eigen::Vector3d u = (momentum - current.momentum) / current.mass;
   const Eigen::Vector3d w = current.angularVelocityFor(angular_momentum - current.angularMomentumAboutOrigin() -
                                                        current.center.cross(current.mass * u));
-  for (Eigen::Index j = 0; j < positions.rows(); ++j)
+  const auto add = [&](Eigen::Index j) {
     velocities.row(j) += (u + w.cross(positions.row(j).transpose() - current.center)).transpose();
+  };
+  if (particles.empty())
+    for (Eigen::Index j = 0; j < positions.rows(); ++j) add(j);
+  for (int j : particles) add(j);
 }
 
 }  // namespace stabint

@@ -32,10 +32,12 @@ struct RigidMotion {
 RigidMotion rigidMotion(const Eigen::VectorXd& masses, const Eigen::MatrixX3d& positions,
                         const Eigen::MatrixX3d& velocities, const std::vector<int>& particles = {});
 
-/// Adds the rigid velocity field that changes the momenta of all particles from `current` to the
-/// linear momentum `momentum` and the angular momentum about the origin `angular_momentum`.
-/// `current` must be rigidMotion() of the same positions and velocities.
+/// Adds, to the velocities of `particles` (every particle when empty), the rigid velocity field that
+/// changes their momenta from `current` to the linear momentum `momentum` and the angular momentum
+/// about the origin `angular_momentum`. `current` must be rigidMotion() of the same positions,
+/// velocities and particles.
 void setMomenta(const RigidMotion& current, const Eigen::Vector3d& momentum, const Eigen::Vector3d& angular_momentum,
-                const Eigen::MatrixX3d& positions, Eigen::MatrixX3d& velocities);
+                const Eigen::MatrixX3d& positions, Eigen::MatrixX3d& velocities,
+                const std::vector<int>& particles = {});
 
 }  // namespace stabint

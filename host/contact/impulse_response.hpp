@@ -230,7 +230,9 @@ class ImpulseMotion {
   // The normal velocity of `e` as the vertices that answer an impulse under `x` see it: a body's
   // rigid velocity at its vertex, a particle's own. An impulse j along the normal changes the
   // kinetic energy by j times this plus j^2/2 times the compliance (velocities only).
-  double answeringAlong(const ContactEvent& e, Exemption x = {}) {
+  // `body_answers`: whether a tet body takes a share.
+  double answeringAlong(const ContactEvent& e, Exemption x, bool& body_answers) {
+    body_answers = false;
     if (rigid_linear_.empty()) {
       rigid_linear_.resize(linear_.size());
       rigid_angular_.resize(linear_.size());
@@ -244,6 +246,7 @@ class ImpulseMotion {
       const int b = response_.bodyOf(e, k);
       Eigen::Vector3d v = rowOf(rows_, i);
       if (b >= 0) {
+        body_answers = true;
         const std::size_t c = std::size_t(b);
         v = rigid_linear_[c] + linear_[c] +
             (rigid_angular_[c] + angular_[c]).cross(rowOf(response_.reference(), i) - response_.centre(b));

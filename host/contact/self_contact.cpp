@@ -4,6 +4,7 @@
 
 #include "common/disjoint_sets.hpp"
 #include "contact/impulse_response.hpp"
+#include "scene/connected_bodies.hpp"
 
 #include <Eigen/Geometry>
 
@@ -22,26 +23,10 @@ SelfContact::SelfContact(const Scene& scene, double thickness, double friction)
     : surface_(ContactSurface::of(scene)),
       thickness_(thickness),
       friction_(friction),
-      solid_of_(static_cast<std::size_t>(scene.numParticles()), -1) {
-  // The tet bodies: the particles their tets connect.
-  const std::size_t n = static_cast<std::size_t>(scene.numParticles());
-  DisjointSets sets(scene.numParticles());
-  for (const Tet& t : scene.tets)
-    for (int k = 1; k < 4; ++k) sets.join(t.vertices[k], t.vertices[0]);
-  std::vector<int> index_of_root(n, -1);
-  std::vector<char> in_tet(n, 0);
-  for (const Tet& t : scene.tets)
-    for (int v : t.vertices) in_tet[std::size_t(v)] = 1;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!in_tet[i]) continue;
-    int& b = index_of_root[std::size_t(sets.find(static_cast<int>(i)))];
-    if (b < 0) {
-      b = static_cast<int>(solids_.size());
-      solids_.emplace_back();
-    }
-    solid_of_[i] = b;
-    solids_[std::size_t(b)].push_back(static_cast<int>(i));
-  }
+      solid_of_(static_cast<std::size_t>(scene.numParticles()), -1),
+      solids_(tetBodies(scene)) {
+  for (std::size_t b = 0; b < solids_.size(); ++b)
+    for (int i : solids_[b]) solid_of_[std::size_t(i)] = static_cast<int>(b);
 }
 
 namespace {

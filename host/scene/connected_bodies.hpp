@@ -13,4 +13,8 @@ namespace stabint {
 /// order of their first particle. A particle no element touches is a body of its own.
 std::vector<std::vector<int>> connectedBodies(const Scene& scene);
 
+/// The tet bodies, which self-contact answers as bodies (docs/method.md, "Self-contact"): the
+/// particles the scene's tets connect, in connectedBodies' order. A particle in no tet is in none.
+std::vector<std::vector<int>> tetBodies(const Scene& scene);
+
 }  // namespace stabint

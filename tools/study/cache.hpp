@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -40,6 +43,31 @@ class PayloadReader {
  private:
   const std::vector<double>& data_;
   size_t pos_ = 0;
+};
+
+/// The references of one kind that this process has loaded or computed, each kept once by its
+/// description: the subcommands of one `all` run share them, so one computed by `prefetch` still
+/// counts as computed by this run. The lock guards the map alone: `prefetch` computes two
+/// references at once, each outside it (two threads making the same one keep the first).
+template <class Reference>
+class LoadedReferences {
+ public:
+  /// The reference of `description`, from memory or made by `make()` (its value).
+  template <class Make>
+  const Reference& get(const std::string& description, Make&& make) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      const auto found = loaded_.find(description);
+      if (found != loaded_.end()) return *found->second;
+    }
+    auto made = std::make_unique<const Reference>(make());
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return *loaded_.emplace(description, std::move(made)).first->second;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::map<std::string, std::unique_ptr<const Reference>> loaded_;
 };
 
 /// Frames of positions: appended row-major as stored by Eigen (column-major per frame).

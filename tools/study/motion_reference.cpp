@@ -17,9 +17,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <memory>
-#include <mutex>
 #include <sstream>
 
 namespace study {
@@ -142,38 +139,30 @@ const MotionReference& motionReference(const StudyScene& scene, const StudyOptio
     << scene.reference_substeps / 2 << " frame_step=" << scene.frame_step << " frames=" << frames
     << " damping per step rescaled, maxit=" << kMaxIterations << " format=1";
   const std::string description = d.str();
-  // Subcommands of one `all` run share the scenes: keep each reference in memory once loaded. The
-  // lock guards the map alone: `prefetch` computes two references at once.
-  static std::mutex mutex;
-  static std::map<std::string, std::unique_ptr<const MotionReference>> loaded;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    const auto found = loaded.find(description);
-    if (found != loaded.end()) return *found->second;
-  }
-
-  const std::string path = cachePath(joinPath(options.out, "cache"), scene.key + "-motion", description);
-  auto ref = std::make_unique<MotionReference>();
-  std::vector<double> payload;
-  if (readCache(path, description, payload) && fromPayload(payload, frames, *ref)) {
-    ref->from_cache = true;
-    progress("motion reference " + scene.key + ": cached " + path);
-  } else {
-    progress("motion reference " + scene.key + ": computing (" + methodName(scene, scene.reference_substeps) +
-             " and h/" + std::to_string(scene.reference_substeps / 2) + ", " + std::to_string(frames) + " frames)");
-    *ref = compute(scene, frames);
-    writeCache(path, description, toPayload(*ref));
-    std::ostringstream done;
-    done.precision(3);
-    done << "motion reference " << scene.key << ": " << ref->seconds << " s, energy error " << ref->energy_error
-         << " E_avail, check run differs by " << ref->self_rms << " m RMS over 0-1 s, mean K ratio " << ref->self_mean_k
-         << "; wrote " << path;
-    progress(done.str());
-  }
-  ref->method = methodName(scene, ref->substeps);
-  ref->frame_step = scene.frame_step;
-  const std::lock_guard<std::mutex> lock(mutex);
-  return *loaded.emplace(description, std::move(ref)).first->second;
+  static LoadedReferences<MotionReference> loaded;
+  return loaded.get(description, [&] {
+    const std::string path = cachePath(joinPath(options.out, "cache"), scene.key + "-motion", description);
+    MotionReference ref;
+    std::vector<double> payload;
+    if (readCache(path, description, payload) && fromPayload(payload, frames, ref)) {
+      ref.from_cache = true;
+      progress("motion reference " + scene.key + ": cached " + path);
+    } else {
+      progress("motion reference " + scene.key + ": computing (" + methodName(scene, scene.reference_substeps) +
+               " and h/" + std::to_string(scene.reference_substeps / 2) + ", " + std::to_string(frames) + " frames)");
+      ref = compute(scene, frames);
+      writeCache(path, description, toPayload(ref));
+      std::ostringstream done;
+      done.precision(3);
+      done << "motion reference " << scene.key << ": " << ref.seconds << " s, energy error " << ref.energy_error
+           << " E_avail, check run differs by " << ref.self_rms << " m RMS over 0-1 s, mean K ratio " << ref.self_mean_k
+           << "; wrote " << path;
+      progress(done.str());
+    }
+    ref.method = methodName(scene, ref.substeps);
+    ref.frame_step = scene.frame_step;
+    return ref;
+  });
 }
 
 }  // namespace study

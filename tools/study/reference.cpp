@@ -8,9 +8,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <map>
-#include <memory>
-#include <mutex>
 #include <sstream>
 
 namespace study {
@@ -99,19 +96,10 @@ const Reference& loadOrComputeReference(const StudyScene& scene, const StudyOpti
     << " maxit=" << kMaxIterations << " frames=" << kReferenceFrames << " self-check h/" << kReferenceSubsteps / 2
     << " format=2";
   const std::string description = d.str();
-  // Subcommands of one `all` run share the scenes: keep each reference in memory once loaded, so
-  // that one computed by `prefetch` still counts as computed by this run (reference.csv's
-  // `cached`). The lock guards the map alone: `prefetch` computes two references at once.
-  static std::mutex mutex;
-  static std::map<std::string, std::unique_ptr<const Reference>> loaded;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    const auto found = loaded.find(description);
-    if (found != loaded.end()) return *found->second;
-  }
-  auto ref = std::make_unique<const Reference>(loadOrCompute(scene, description, options));
-  const std::lock_guard<std::mutex> lock(mutex);
-  return *loaded.emplace(description, std::move(ref)).first->second;
+  // Kept once loaded (LoadedReferences): a reference `prefetch` computed counts as computed by
+  // this run in reference.csv's `cached`.
+  static LoadedReferences<Reference> loaded;
+  return loaded.get(description, [&] { return loadOrCompute(scene, description, options); });
 }
 
 }  // namespace study

@@ -33,6 +33,14 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 // An eigenvalue of S below this fraction of the largest is a motion that moves (almost) nothing.
 constexpr double kNullMotion = 1e-12;
 
+// [project rule] A coarse direction whose curvature the tension brings below this share of its
+// inertia's takes a step shrunk smoothly to nothing at zero curvature: the tension is the
+// Hessian's at the warm start, and where it nearly cancels the inertia the step 1/lambda
+// overshoots by the estimate's error. A cloth snapping back from a stretch (clothOnCloth's upper
+// cloth) grew a rotation of its corner sevenfold per iteration, with the sign flipping, from a
+// rounding to 1e-9 m within one step; at a half the step is at most twice the inertia's.
+constexpr double kCurvatureFloor = 0.5;
+
 // Z^T (w v) over `count` rows of three columns (Weighted = false: w_i = 1): the sums of w_i v_i
 // and of arm_i x w_i v_i, in kRigidLanes lanes (row j of the segment in lane j % kRigidLanes), the
 // lanes then summed in a fixed tree (laneSum): the same bits on any machine, and a batch's scene
@@ -243,10 +251,18 @@ void RigidModes::prepare(SolveContext& ctx, double c, double t, const IterationC
     const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(coarse);
     const double largest = eigen.eigenvalues().maxCoeff();
     if (!(largest > 0.0) || !std::isfinite(largest)) continue;
-    // Directions of no or negative curvature (a compressed body's rotation) get no coarse step.
+    // Directions of no or negative curvature (a compressed body's rotation) get no coarse step, and
+    // those the tension takes below kCurvatureFloor of their inertia's (Z^T A Z alone) a smaller one.
+    Matrix6d bare = coarse;
+    bare.bottomRightCorner<3, 3>() = inertia;
     Vector6d inverse = Vector6d::Zero();
-    for (int k = 0; k < 6; ++k)
-      if (eigen.eigenvalues()[k] > kNullMotion * largest) inverse[k] = 1.0 / eigen.eigenvalues()[k];
+    for (int k = 0; k < 6; ++k) {
+      const double lambda = eigen.eigenvalues()[k];
+      if (!(lambda > kNullMotion * largest)) continue;
+      const Vector6d v = eigen.eigenvectors().col(k);
+      const double floor = kCurvatureFloor * v.dot(bare * v);
+      inverse[k] = lambda >= floor ? 1.0 / lambda : lambda / (floor * floor);
+    }
     rigid_inverse_[s] = eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
     rigid_on_[s] = 1;
   }

@@ -32,7 +32,7 @@ ElementChanges BatchDriver::elementChanges(int scene, const char* call) {
 
 void BatchDriver::bookEvent(int scene, double h_before) {
   PerScene& p = per_scene_[std::size_t(scene)];
-  const double event = p.kinetic + p.potential.total() - h_before;
+  const double event = p.energy() - h_before;
   p.target += event;
   p.pending_event_energy += event;
 }
@@ -68,7 +68,7 @@ void BatchDriver::checkNoCrossings(std::size_t s, const Eigen::MatrixX3d& positi
 double BatchDriver::storeState(int scene, const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities) {
   const SceneSegment& seg = segments_[std::size_t(scene)];
   const PerScene& p = per_scene_[std::size_t(scene)];
-  const double h_before = p.kinetic + p.potential.total();
+  const double h_before = p.energy();
   // The slots may hold less precision (a float device): the host copies are what they hold, the
   // other scenes' rows of kV included (v_slot_, which may differ from their host copies in v_ by
   // round-off, as a Simulator's do).
@@ -182,7 +182,7 @@ void BatchDriver::changeElementsAsEvent(int scene, const char* call, Change&& ch
   checkScene(scene, call);
   PerScene& p = per_scene_[std::size_t(scene)];
   if (p.event_unsettled) settleEvents();  // this change's H before is the last one's H after
-  const double h_before = p.kinetic + p.potential.total();
+  const double h_before = p.energy();
   change();
   p.event_unsettled = true;
   p.h_before_event = h_before;

@@ -127,7 +127,7 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
     PerScene& p = per_scene_[s];
     p.potential = potentials[s];
     p.kinetic = kineticEnergy(int(s), v_);
-    p.target = p.kinetic + p.potential.total();
+    p.target = p.energy();
     const Scene& own = scenes_[s];
     p.energy_scale = initialEnergyScale(p.kinetic, p.potential, own.masses, own.gravity, own.positions);
     p.momentum_conserved = momentumConserved(own, /*has_user_forces=*/false);

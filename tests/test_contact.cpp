@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -321,6 +323,92 @@ TEST(Contact, ThrownBodiesKeepTheBooksAtImpact) {
     std::printf("%s: max(H - H*) / K_max %.4f, deepest %.4f m\n", t.name.c_str(), excess / largest_kinetic, deepest);
     EXPECT_LE(excess, 0.05 * largest_kinetic) << t.name;
     EXPECT_LE(deepest, o.contact_tolerance + 1e-12) << t.name;
+  }
+}
+
+// The same books on throws no other test names: a block of 4 x 2 x 2 cells (0.5 m, turned 0.4 rad)
+// of 1e4 and 1e6 Pa, and a 20 x 20 cloth turned 0.3 rad, thrown down and sideways at 2 and 20 m/s
+// onto each analytic shape (friction 0.5) with a ground below: a plane, a sphere, a 4 cm thick
+// plate and a rod. At 20 m/s a body crosses the plate's thickness five times over in a step.
+// Measured: max(H - H*) at most 0.003 of the run's largest kinetic energy, and no vertex deeper
+// than the tolerance (the blocks' deepest exactly at it: the final projection's bound). The 1e6 Pa
+// block inverts no tet on the broad shapes: 20 m/s is below its wave speed sqrt(k / rho), 32 m/s.
+// The 1e4 Pa block (3 m/s) inverts up to all of them for a few steps, as its material must
+// (guide.md, "Materials"); each drop prints the most tets inverted at once.
+TEST(Contact, EveryShapeKeepsTheBooksAtEverySpeedAndStiffness) {
+  const auto tilt = [](Scene& s, double angle, const Eigen::Vector3d& axis) {
+    const Eigen::Vector3d centre = s.positions.colwise().mean().transpose();
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+    for (Eigen::Index i = 0; i < s.positions.rows(); ++i)
+      s.positions.row(i) = (r * (s.positions.row(i).transpose() - centre)).transpose();
+    s.positions.col(1).array() += 0.55 - s.positions.col(1).minCoeff();
+    s.rest_positions = s.positions;
+  };
+  std::vector<std::pair<std::string, Scene>> bodies;
+  for (double stiffness : {1e4, 1e6}) {
+    TetBarParams p;
+    p.nx = 4;
+    p.length = 0.5;
+    p.stiffness = stiffness;
+    Scene block = makeTetBar(p);
+    block.pins.clear();
+    tilt(block, 0.4, Eigen::Vector3d(0.3, 0.5, 0.8));
+    bodies.emplace_back("a block of " + std::to_string(int(stiffness)) + " Pa", block);
+  }
+  Scene cloth = horizontalCloth(20, 0.0);
+  tilt(cloth, 0.3, Eigen::Vector3d(0.3, 0.0, 0.8));
+  bodies.emplace_back("a cloth", cloth);
+  Collider rod;
+  rod.shape = ColliderShape::Capsule;
+  rod.center = Eigen::Vector3d(0.1, 0.1, -0.6);
+  rod.end = Eigen::Vector3d(0.1, 0.1, 0.6);
+  rod.radius = 0.08;
+  rod.friction = 0.5;
+  Collider plate = boxCollider(Eigen::Vector3d(0.1, 0.1, 0.0), Eigen::Vector3d(0.6, 0.02, 0.6), 1e4);
+  plate.friction = 0.5;
+  const std::vector<std::pair<std::string, Collider>> shapes = {
+      {"a plane", groundPlane(0.0, 1e4, 0.5)},
+      {"a sphere", sphereCollider(Eigen::Vector3d(0.1, -0.2, 0.05), 0.4, 1e4, 0.5)},
+      {"a plate", plate},
+      {"a rod", rod}};
+  for (const auto& [body_name, body] : bodies) {
+    for (const auto& [shape_name, shape] : shapes) {
+      for (double speed : {2.0, 20.0}) {
+        Scene s = body;
+        s.velocities = Eigen::MatrixX3d::Zero(s.numParticles(), 3);
+        s.velocities.col(0).setConstant(0.2 * speed);
+        s.velocities.col(1).setConstant(-speed);
+        s.colliders = {shape, groundPlane(-0.7, 1e4, 0.5)};
+        const std::string name = body_name + " onto " + shape_name + " at " + std::to_string(int(speed)) + " m/s";
+        SimulatorOptions o;
+        Simulator sim(s, o);
+        double excess = 0.0, largest_kinetic = 0.0, deepest = 0.0;
+        int inverted = 0;
+        for (int i = 0; i < 60; ++i) {
+          const StepReport& r = sim.step();
+          excess = std::max(excess, r.energy.total() - r.target);
+          largest_kinetic = std::max(largest_kinetic, r.energy.kinetic);
+          deepest = std::max(deepest, deepestPenetration(s, sim.positions(), sim.time()));
+          int now = 0;
+          for (const Tet& t : s.tets) {
+            Eigen::Matrix3d edges;
+            for (int k = 0; k < 3; ++k)
+              edges.col(k) = (sim.positions().row(t.vertices[k + 1]) - sim.positions().row(t.vertices[0])).transpose();
+            now += edges.determinant() <= 0.0;
+          }
+          inverted = std::max(inverted, now);
+        }
+        std::printf("%s: max(H - H*) / K_max %.4f, deepest %.4f m, most tets inverted %d of %zu\n", name.c_str(),
+                    excess / largest_kinetic, deepest, inverted, s.tets.size());
+        EXPECT_LE(excess, 0.05 * largest_kinetic) << name;
+        EXPECT_LE(deepest, o.contact_tolerance + 1e-12) << name;
+        // Below its wave speed (32 m/s) the stiff block stops the impact on a broad collider
+        // within its height (a rod's edge concentrates it: 5 tets measured).
+        if (!s.tets.empty() && s.tets.front().stiffness >= 1e6 && shape.shape != ColliderShape::Capsule) {
+          EXPECT_EQ(inverted, 0) << name;
+        }
+      }
+    }
   }
 }
 

@@ -24,6 +24,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+
 #include <cstring>
 #include <memory>
 #include <vector>
@@ -85,6 +87,50 @@ class OpenCLBackendTest : public ::testing::TestWithParam<Precision> {
     return p;
   }
 };
+
+// Backend::traffic counts what crosses the bus, issue 50's measure of a step that stays on the
+// device: a write of a slot sends its 3 n reals and a read brings them back; a local step that
+// returns its right-hand side (or gradient) brings back 3 n reals and launches the element pass
+// and the gather, and with its energy also the per-group partials (3 reals each, as an energy
+// pass alone reads them in one launch). The CPU reference counts nothing.
+TEST_P(OpenCLBackendTest, TrafficCountsTheBytesAndLaunches) {
+  const std::vector<Case> cases = equivalenceCases();
+  const Case& c = cases[2];  // the cloth
+  Pair p = makePair(c);
+  const std::int64_t real = precision() == Precision::Double ? 8 : 4;
+  const std::int64_t slot = 3 * real * c.scene.numParticles();
+  Backend& b = *p.ocl;
+  Backend::Traffic before = b.traffic();
+  const auto expect = [&](const char* what, std::int64_t to_device, std::int64_t to_host, std::int64_t launches) {
+    const Backend::Traffic& now = b.traffic();
+    EXPECT_EQ(now.to_device - before.to_device, to_device) << what;
+    EXPECT_EQ(now.to_host - before.to_host, to_host) << what;
+    EXPECT_EQ(now.launches - before.launches, launches) << what;
+    before = now;
+  };
+  b.write(0, c.scene.positions);
+  expect("write", slot, 0, 0);
+  Eigen::MatrixX3d out;
+  b.read(0, out);
+  expect("read", 0, slot, 0);
+  b.localStepRhs(0, 1, 900.0, 0.0, out);  // the first also uploads the forcing where it moves
+  before = b.traffic();
+  b.localStepRhs(0, 1, 900.0, 0.0, out);
+  expect("local step", 0, slot, 2);
+  b.localStepGradient(0, 1, 900.0, 0.0, out, nullptr);
+  expect("local step's gradient", 0, slot, 2);
+  b.potential(0, 0.0);
+  const std::int64_t partials = b.traffic().to_host - before.to_host;
+  expect("energy pass", 0, partials, 1);
+  EXPECT_GT(partials, 0);
+  EXPECT_EQ(partials % (3 * real), 0);
+  PotentialEnergy energy;
+  b.localStepRhs(0, 1, 900.0, 0.0, out, &energy);
+  expect("local step with its energy", 0, slot + partials, 2);
+  p.cpu->read(0, out);
+  p.cpu->localStepRhs(0, 1, 900.0, 0.0, out);
+  EXPECT_EQ(p.cpu->traffic().to_device + p.cpu->traffic().to_host + p.cpu->traffic().launches, 0);
+}
 
 TEST_P(OpenCLBackendTest, LocalStepRhsMatchesCpu) {
   for (const Case& c : equivalenceCases()) {

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -169,10 +170,18 @@ class Backend {
 
   /// Phase timers (local, gather, transfer, energy) accumulated since the last reset.
   PhaseTimes& times() { return times_; }
+  /// Bytes copied between host and device and kernels launched since the backend was made
+  /// (zeros on the CPU reference): what issue 50's rule of no transfer inside a solve's
+  /// iterations counts. Device-side copies and fills are neither.
+  struct Traffic {
+    std::int64_t to_device = 0, to_host = 0, launches = 0;
+  };
+  const Traffic& traffic() const { return traffic_; }
   virtual std::string description() const = 0;
 
  protected:
   PhaseTimes times_;
+  Traffic traffic_;
 
  private:
   void noGlobalSolver() const { throw Error(description() + " does not solve the global system itself"); }

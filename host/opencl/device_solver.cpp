@@ -76,6 +76,7 @@ void DeviceConjugateGradient<Real>::setMatrix(const Eigen::SparseMatrix<double>&
   const auto upload = [&](const void* data, std::size_t bytes) {
     cl::Buffer b(context_, CL_MEM_READ_ONLY, bytes, nullptr, &err);
     check(err, "clCreateBuffer");
+    to_device += std::int64_t(bytes);
     check(queue_.enqueueWriteBuffer(b, CL_TRUE, 0, bytes, data), "clEnqueueWriteBuffer");
     return b;
   };
@@ -87,6 +88,7 @@ void DeviceConjugateGradient<Real>::setMatrix(const Eigen::SparseMatrix<double>&
 
 template <typename Real>
 void DeviceConjugateGradient<Real>::columnSums(const cl::Buffer& partials, double sums[3]) {
+  to_host += std::int64_t(host_partials_.size() * sizeof(Real));
   check(queue_.enqueueReadBuffer(partials, CL_TRUE, 0, host_partials_.size() * sizeof(Real), host_partials_.data()),
         "clEnqueueReadBuffer");
   for (int k = 0; k < 3; ++k) {
@@ -107,6 +109,7 @@ int DeviceConjugateGradient<Real>::solve(double c, const cl::Buffer& b, const cl
     check(k.setArg(index, value), "clSetKernelArg");
   };
   const auto run = [&](const cl::Kernel& k) {
+    ++launches;
     check(queue_.enqueueNDRangeKernel(k, cl::NullRange, global, local), "clEnqueueNDRangeKernel");
   };
   const cl_int n = n_;

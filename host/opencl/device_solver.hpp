@@ -8,6 +8,7 @@
 
 #include <Eigen/SparseCore>
 
+#include <cstdint>
 #include <vector>
 
 namespace stabint::ocl {
@@ -28,6 +29,10 @@ class DeviceConjugateGradient {
   /// `tolerance` > 0 it waits after each iteration to read the residual's three column norms and
   /// stops once ||b - K x|| <= tolerance ||b|| in every column. Returns the iterations queued.
   int solve(double c, const cl::Buffer& b, const cl::Buffer& x, int iterations, double tolerance);
+
+  /// Bytes copied between host and device and kernels launched (OpenCLBackend adds them to its
+  /// Backend::traffic after each call).
+  std::int64_t to_device = 0, to_host = 0, launches = 0;
 
  private:
   cl::Buffer buffer(std::size_t count);

@@ -346,6 +346,7 @@ class OpenCLBackend final : public Backend {
   std::size_t next_write_ = 0;
   std::vector<Real> host_partials_;
   std::unique_ptr<ocl::DeviceConjugateGradient<Real>> cg_;  // made by the first setGlobalMatrix
+  void addDeviceSolverTraffic();                            // cg_'s counts into traffic_
 };
 
 extern template class OpenCLBackend<double>;

@@ -101,6 +101,7 @@ void OpenCLBackend<Real>::setGlobalMatrix(const Eigen::SparseMatrix<double>& lap
     cg_ = std::make_unique<ocl::DeviceConjugateGradient<Real>>(context_, device_.device, *device_.profile, queue_, n_,
                                                                masses_);
   cg_->setMatrix(laplacian);
+  addDeviceSolverTraffic();
   times_.transfer += secondsSince(start);
 }
 
@@ -127,7 +128,17 @@ template <typename Real>
 int OpenCLBackend<Real>::solveGlobal(double c, int x, int iterations, double tolerance) {
   checkSlot(x);
   if (!cg_) throw Error("OpenCL backend: solveGlobal before setGlobalMatrix");
-  return cg_->solve(c, rhs_, slots_[x], iterations, tolerance);
+  const int done = cg_->solve(c, rhs_, slots_[x], iterations, tolerance);
+  addDeviceSolverTraffic();
+  return done;
+}
+
+template <typename Real>
+void OpenCLBackend<Real>::addDeviceSolverTraffic() {
+  traffic_.to_device += cg_->to_device;
+  traffic_.to_host += cg_->to_host;
+  traffic_.launches += cg_->launches;
+  cg_->to_device = cg_->to_host = cg_->launches = 0;
 }
 
 template <typename Real>
@@ -198,6 +209,7 @@ PotentialEnergy OpenCLBackend<Real>::sumEnergies() const {
 
 template <typename Real>
 void OpenCLBackend<Real>::enqueue(const Launch& launch, cl::Event* event) {
+  ++traffic_.launches;
   ocl::check(queue_.enqueueNDRangeKernel(launch.kernel, cl::NullRange, launch.global, launch.local, nullptr, event),
              "clEnqueueNDRangeKernel");
 }
@@ -233,6 +245,7 @@ void OpenCLBackend<Real>::enqueueElementGroups(int x, int flags, int first_group
     element_pass_.set(element_args_.first_group, cl_int(first_group));
     element_first_group_ = first_group;
   }
+  ++traffic_.launches;
   ocl::check(queue_.enqueueNDRangeKernel(element_pass_.kernel, cl::NullRange,
                                          cl::NDRange(element_local_ * std::size_t(end_group - first_group)),
                                          element_pass_.local, nullptr, &element_event_),

@@ -163,10 +163,12 @@ void OpenCLBackend<Real>::potentialsOf(const std::vector<int>& segments, int x, 
   const int group = int(segment_energies_.local[0]);
   std::vector<std::pair<int, int>> sums;
   for (int segment : segments) sums.emplace_back(segment / group, segment / group + 1);
-  for (const auto& [first, end] : mergedRanges(std::move(sums)))
+  for (const auto& [first, end] : mergedRanges(std::move(sums))) {
+    ++traffic_.launches;
     ocl::check(queue_.enqueueNDRangeKernel(segment_energies_.kernel, cl::NDRange(std::size_t(first * group)),
                                            cl::NDRange(std::size_t((end - first) * group)), segment_energies_.local),
                "clEnqueueNDRangeKernel");
+  }
   const auto [lowest, highest] = std::minmax_element(segments.begin(), segments.end());
   readSegmentSums(kSegmentEnergies * std::size_t(*highest - *lowest + 1), kSegmentEnergies * std::size_t(*lowest));
   for (int segment : segments) out.push_back(segmentEnergies(std::size_t(segment)));

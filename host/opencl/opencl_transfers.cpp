@@ -31,6 +31,7 @@ void OpenCLBackend<Real>::writeRows(int slot, int first, const Eigen::MatrixX3d&
   const std::size_t count = std::size_t(rows.rows());
   const cl::array<cl::size_type, 3> device_origin{bytes(std::size_t(first)), 0, 0}, host_origin{0, 0, 0},
       region{bytes(count), 3, 1};
+  traffic_.to_device += std::int64_t(bytes(3 * count));
   ocl::check(queue_.enqueueWriteBufferRect(slots_[slot], CL_FALSE, device_origin, host_origin, region,
                                            bytes(std::size_t(n_)), 0, bytes(count), 0, w.data.data(), nullptr, &w.done),
              "clEnqueueWriteBufferRect");
@@ -151,6 +152,7 @@ void OpenCLBackend<Real>::writeAsync(const cl::Buffer& buffer, const double* hos
   if (count == 0) return;
   PendingWrite& w = nextStaging();
   w.data.assign(host, host + count);
+  traffic_.to_device += std::int64_t(bytes(count));
   ocl::check(queue_.enqueueWriteBuffer(buffer, CL_FALSE, bytes(offset), bytes(count), w.data.data(), nullptr, &w.done),
              "clEnqueueWriteBuffer");
 }
@@ -169,6 +171,7 @@ void OpenCLBackend<Real>::readMatrix(const cl::Buffer& buffer, Eigen::MatrixX3d&
   host.resize(n_, 3);
   const std::size_t count = 3 * std::size_t(n_);
   if (count == 0) return;
+  traffic_.to_host += std::int64_t(bytes(count));
   if (kDouble) {
     ocl::check(queue_.enqueueReadBuffer(buffer, CL_TRUE, 0, bytes(count), host.data()), "clEnqueueReadBuffer");
   } else {
@@ -187,6 +190,7 @@ void OpenCLBackend<Real>::readMatrices(const cl::Buffer& buffer_a, Eigen::Matrix
   b.resize(n_, 3);
   const std::size_t count = 3 * std::size_t(n_);
   if (count == 0) return;
+  traffic_.to_host += std::int64_t(2 * bytes(count));
   if (kDouble) {
     ocl::check(queue_.enqueueReadBuffer(buffer_a, CL_FALSE, 0, bytes(count), a.data()), "clEnqueueReadBuffer");
     ocl::check(queue_.enqueueReadBuffer(buffer_b, CL_TRUE, 0, bytes(count), b.data()), "clEnqueueReadBuffer");
@@ -205,6 +209,7 @@ void OpenCLBackend<Real>::readMatrices(const cl::Buffer& buffer_a, Eigen::Matrix
 // when a blocking read queued after it waits).
 template <typename Real>
 void OpenCLBackend<Real>::readPartials(int count, bool blocking) {
+  traffic_.to_host += std::int64_t(bytes(std::size_t(count)));
   ocl::check(queue_.enqueueReadBuffer(partials_, blocking ? CL_TRUE : CL_FALSE, 0, bytes(std::size_t(count)),
                                       host_partials_.data()),
              "clEnqueueReadBuffer");
@@ -214,6 +219,7 @@ void OpenCLBackend<Real>::readPartials(int count, bool blocking) {
 // of a per-scene call; or none, when a blocking read queued after it waits).
 template <typename Real>
 void OpenCLBackend<Real>::readSegmentSums(std::size_t count, std::size_t first, bool blocking) {
+  traffic_.to_host += std::int64_t(bytes(count));
   ocl::check(queue_.enqueueReadBuffer(segment_sums_, blocking ? CL_TRUE : CL_FALSE, bytes(first), bytes(count),
                                       host_segment_sums_.data() + first),
              "clEnqueueReadBuffer");

@@ -333,7 +333,7 @@ TEST(Contact, ThrownBodiesKeepTheBooksAtImpact) {
 // Measured: max(H - H*) at most 0.003 of the run's largest kinetic energy, and no vertex deeper
 // than the tolerance (the blocks' deepest exactly at it: the final projection's bound). The 1e6 Pa
 // block inverts no tet on the broad shapes: 20 m/s is below its wave speed sqrt(k / rho), 32 m/s.
-// The 1e4 Pa block (3 m/s) inverts up to all of them for a few steps, as its material must
+// The 1e4 Pa block (3 m/s) inverts up to all of them at once, as its material must
 // (guide.md, "Materials"); each drop prints the most tets inverted at once.
 TEST(Contact, EveryShapeKeepsTheBooksAtEverySpeedAndStiffness) {
   const auto tilt = [](Scene& s, double angle, const Eigen::Vector3d& axis) {

@@ -66,7 +66,7 @@ void BatchDriver::refreshContactGeometry() {
     if (!changed[i]) continue;
     const PerScene& p = per_scene_[scenes[i]];
     StepReport& r = report_.scenes[scenes[i]];
-    r.energy = EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
+    r.energy = p.report();
     r.target = p.target;
   }
 }

@@ -157,7 +157,7 @@ Eigen::MatrixX3d BatchDriver::velocities(int scene) const { return rowsOf(v_, se
 EnergyReport BatchDriver::energy(int scene) {
   settleEvents();
   const PerScene& p = per_scene_[std::size_t(scene)];
-  return EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
+  return p.report();
 }
 double BatchDriver::target(int scene) {
   settleEvents();
@@ -309,7 +309,7 @@ void BatchDriver::commit(double t1) {
       r.time = p.time;
       r.event_energy = event_energy;
     }
-    r.energy = EnergyReport{p.kinetic, p.potential.elastic(), p.potential.external};
+    r.energy = p.report();
     r.target = p.target;
   }
   backend_->write(kXNew, x_new_);

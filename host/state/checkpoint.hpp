@@ -23,9 +23,10 @@ struct SceneBook {
   double kinetic = 0.0;
   PotentialEnergy potential;          // of the state at `time`
   double pending_event_energy = 0.0;  // booked by events since the last step
-  // H summed as the EnergyReport the scene reports (K + E_int, then the external part), so that an
-  // event books exactly the jump between the energies reported before and after it.
-  double energy() const { return kinetic + potential.elastic() + potential.external; }
+  // The energy the scene reports, and H summed as that report sums it, so that an event books
+  // exactly the jump between the energies reported before and after it.
+  EnergyReport report() const { return EnergyReport{kinetic, potential.elastic(), potential.external}; }
+  double energy() const { return report().total(); }
 };
 
 /// Where the particles are and how they move: positions, velocities and, for BDF2, the previous

@@ -375,6 +375,53 @@ TEST_P(SelfContactOnEveryBackend, AClothOnABodyFollowsTheCpuReferenceAndContinue
   followsTheCpuReferenceAndContinuesFromACheckpoint(testing::clothOnBar(), o, 8, 5e-3);
 }
 
+// Pushes after the solve that relax through the elements (BatchDriver::relaxSelfContactPushes):
+// a 30 kg cloth thrown at 8 m/s onto a 1e5 Pa bar relaxes at steps 3 and 4 (23 iterations at step
+// 4: the candidate's 10, the partner's 3 and the relaxation's 10). On this backend a checkpoint
+// taken before them continues bit for bit, H stays within 1.5 bands of H* with no crossing at each
+// of 20 steps, and the run follows the CPU reference: in double over the 20 steps to 1e-9 m (3e-12
+// measured), in float over the first relaxing step to 1 mm (0.25 mm measured; the landing parts
+// float and double from then on, as SelfContactOnEveryBackend's landings do).
+TEST_P(SelfContactOnEveryBackend, AHeavyClothsPushesRelaxThroughTheElements) {
+  const int cloth = 900;
+  TetBarParams bar;
+  bar.stiffness = 1e5;
+  Scene scene = testing::clothOnBar(bar);
+  scene.velocities.bottomRows(cloth).col(1).setConstant(-8.0);
+  scene.masses.tail(cloth) *= 30.0;
+  const std::vector<std::array<int, 3>> surface = ContactSurface::of(scene).triangles;
+  SimulatorOptions o = options();
+  o.self_contact_thickness = 4e-3;
+  SimulatorOptions cpu = o;
+  cpu.backend = BackendKind::CpuReference;
+  Simulator here(scene, o), reference(scene, cpu);
+  const int compared = backend().isFloat() ? 4 : 20;
+  int most_iterations = 0;
+  Checkpoint at2;
+  Eigen::MatrixX3d x5, v5;
+  for (int k = 0; k < 20; ++k) {
+    if (k == 2) at2 = here.checkpoint();
+    const StepReport& r = here.step();
+    const double tau = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + here.energyScale());
+    EXPECT_LE(r.energy.total() - r.target, 1.5 * tau) << "step " << k;
+    EXPECT_EQ(testing::intersectingTrianglePairs(here.positions(), surface), 0) << "step " << k;
+    if (k == 4) x5 = here.positions(), v5 = here.velocities();
+    most_iterations = std::max(most_iterations, r.iterations);
+    if (k < compared) reference.step();
+    if (k + 1 == compared) {
+      const double difference = (here.positions() - reference.positions()).cwiseAbs().maxCoeff();
+      std::printf("%d steps: %.3g m from the CPU reference\n", compared, difference);
+      EXPECT_LT(difference, backend().isFloat() ? 1e-3 : 1e-9);
+    }
+  }
+  // A relaxation ran: a step without one takes at most the candidate's and the partner's budgets.
+  EXPECT_GT(most_iterations, 2 * o.iterations);
+  here.restore(at2);
+  for (int k = 2; k < 5; ++k) here.step();
+  EXPECT_EQ(here.positions(), x5);
+  EXPECT_EQ(here.velocities(), v5);
+}
+
 STABINT_ON_EVERY_BACKEND(SelfContactOnEveryBackend);
 
 }  // namespace
@@ -662,26 +709,32 @@ TEST(SelfContactRun, AClothDropsOntoATetBarAndDrapesOverIt) {
   }
 }
 
-// The same drop on bodies and cloths of other kinds, with the blend: a soft bar (1e4 Pa) and a
-// stiff one (1e7 Pa) at 8 m/s, and a cloth thirty times heavier at 4 m/s. Each stays within the
-// band of the test above (1.5 tau; 0.99, 0.96 and 0.12 measured with 4 mm). Held only on the bar's
-// faces and in slow contact, they ran 11, 2.5 and 31 bands above H*.
+// The same drop on bodies and cloths of other kinds, with the blend: bars of 1e4, 1e5 and 1e7 Pa
+// under cloths of one and thirty times the mass, thrown at 4 and 8 m/s (12 drops). Each stays
+// within the band of the test above (1.5 tau; at most 1.23 measured with 4 mm). Where self-contact's
+// pushes after the solve moved only the particles they touched, 4 of the 12 did not (2.0, 1.9, 8.5
+// and 3.5 tau): a heavy cloth resting on a bar that springs back was pushed up where it touched,
+// and the stretch around those particles kept up to 39 J that nothing booked. The elements now
+// relax around the pushes (BatchDriver::relaxSelfContactPushes). Held only on the bar's faces and
+// in slow contact, the soft, stiff and heavy drops ran 11, 2.5 and 31 tau above H*.
 TEST(SelfContactRun, AClothOnSoftStiffAndHeavyVariantsKeepsTheBand) {
   const int cloth = 900;
-  struct Variant {
-    const char* name;
-    double stiffness, cloth_mass, speed;
-  };
-  for (const Variant& variant : {Variant{"a soft bar", 1e4, 1.0, 8.0}, Variant{"a stiff bar", 1e7, 1.0, 8.0},
-                                 Variant{"a heavy cloth", 1e5, 30.0, 4.0}}) {
-    TetBarParams bar;
-    bar.stiffness = variant.stiffness;
-    Scene scene = testing::clothOnBar(bar);
-    scene.velocities.bottomRows(cloth).col(1).setConstant(-variant.speed);
-    scene.masses.tail(cloth) *= variant.cloth_mass;
-    SimulatorOptions o;
-    o.self_contact_thickness = 4e-3;
-    EXPECT_LE(dropClothOnBody(scene, o, variant.name).bands, 1.5) << variant.name;
+  for (const double stiffness : {1e4, 1e5, 1e7}) {
+    for (const double speed : {4.0, 8.0}) {
+      for (const double cloth_mass : {1.0, 30.0}) {
+        TetBarParams bar;
+        bar.stiffness = stiffness;
+        Scene scene = testing::clothOnBar(bar);
+        scene.velocities.bottomRows(cloth).col(1).setConstant(-speed);
+        scene.masses.tail(cloth) *= cloth_mass;
+        SimulatorOptions o;
+        o.self_contact_thickness = 4e-3;
+        char name[96];
+        std::snprintf(name, sizeof name, "a %g Pa bar under a cloth of %g times the mass at %g m/s", stiffness,
+                      cloth_mass, speed);
+        EXPECT_LE(dropClothOnBody(scene, o, name).bands, 1.5) << name;
+      }
+    }
   }
 }
 

@@ -251,6 +251,13 @@ class BatchDriver {
   // Friction and the final projection of every stepping scene on its candidate, booked in its
   // own target, as Simulator's after its corrections; one energy pass for the projected scenes.
   void resolveContact(double t1);
+  // Where self-contact's pushes after the solve added more than a scene's band: the elements
+  // relax around the pushed particles, held on planes through where they were pushed, and
+  // self-contact runs again (docs/method.md, "Self-contact"). `before_self`: per scene the
+  // candidate self-contact corrected (empty: none), `self_kinetic` what its impulses removed and
+  // `potentials` those of x_trial_, both updated for the scenes relaxed.
+  void relaxSelfContactPushes(double t1, const std::vector<Eigen::MatrixX3d>& before_self,
+                              std::vector<double>& self_kinetic, std::vector<PotentialEnergy>& potentials);
   // Scene s's step is refused: the scene stops stepping (a batch keeps it inactive, its state and
   // time at the refusal); a Simulator's driver throws instead.
   void refuse(std::size_t s, const StepRefusal& refusal);

@@ -114,10 +114,9 @@ void BatchDriver::stopSelfContactApproach() {
     const Eigen::MatrixX3d held = contact_.heldNormals(part, t_ + h, predicted, self_contact_[s].thickness());
     std::vector<SupportPlane>& own = step_supports_[s];
     const double stopped = self_contact_[s].stopApproach(
-        x, v, predicted, h, scenes_[s].masses, fixed, seg.support_collider >= 0 ? &own : nullptr,
-        h * h * scenes_[s].gravity,
+        x, v, predicted, h, scenes_[s].masses, fixed, solve_supports_[s] ? &own : nullptr, h * h * scenes_[s].gravity,
         options_.self_contact_supports == 2 ? SupportSurfaces::Everywhere : SupportSurfaces::HeavyBodies, &held);
-    if (seg.support_collider >= 0) {
+    if (seg.support_collider >= 0) {  // without supports in the solve, none: the relaxation's leave
       std::vector<SupportPlane> planes = own;
       for (SupportPlane& plane : planes) plane.particle += seg.first_particle;
       supports.push_back(ContactResolver::Supports{seg.support_collider, std::move(planes)});
@@ -252,64 +251,104 @@ void BatchDriver::resolveContact(double t1) {
 // their neighbours: a heavy cloth resting on a soft body that springs back is pushed up where it
 // touches, and the stretch around those particles is energy nothing books (39 J in one step of a
 // 30 kg cloth on a 1e5 Pa bar, more than its motion held, so H stayed 8.5 bands above H*). So
-// where the pushes add more than the scene's band, the elements relax around them: each pushed
-// particle keeps a support plane through where the push put it, across the push, and the scene
-// is solved for min E(x) + c/2 |x - x_pushed|_M from x_pushed (c as backward Euler's). The solve
-// only lowers that objective from where it starts, on its planes with no support energy, so it
-// adds none; self-contact then runs again on the relaxed positions, so that nothing crosses.
-// The velocities stay the corrected ones. Only scenes with supports in the solve (a cloth with a
-// tet body) relax: a scene of cloths alone has no plane to hold its pushed particles.
+// where the pushes add more than the scene's band and leave H more than the band above H*, the
+// elements relax around them: each pushed particle keeps a support plane through where the push
+// put it, across the push, and the scene is solved for min E(x) + c/2 |x - x_pushed|_M from
+// x_pushed (c as backward Euler's). The solve only lowers that objective from where it starts, on
+// its planes with no support energy, so it adds none; self-contact then runs again on the relaxed
+// positions, so that nothing crosses, and the planes are moved out of the state (they are the
+// correction's device: a heavy cloth held on them stored joules in them). Up to kRelaxRounds
+// rounds, each holding what the last one's pushes moved too, while each lowers H. The velocities
+// stay the corrected ones. The planes are the scene's support collider's (every scene with
+// self-contact has one) and leave at the next step's start where the scene takes no supports in
+// the solve. A step that ends below its target relaxes nothing: its gain stays within what it
+// damped.
 void BatchDriver::relaxSelfContactPushes(double t1, const std::vector<Eigen::MatrixX3d>& before_self,
                                          std::vector<double>& self_kinetic, std::vector<PotentialEnergy>& potentials) {
   const std::size_t n = segments_.size();
   std::vector<char> relax(n, 0);
-  std::vector<ContactResolver::Supports> supports;
-  for (std::size_t s = 0; s < n; ++s) {
-    const PerScene& p = per_scene_[s];
-    const SceneSegment& seg = segments_[s];
-    if (!p.stepping || before_self[s].rows() == 0 || seg.support_collider < 0) continue;
-    const double added = potentials[s].total() - p.p_new.total() - self_kinetic[s];
-    if (!(added > blendTolerance(options_, p.kinetic, p.potential, p.energy_scale))) continue;
-    const Eigen::MatrixX3d pushed = blockOf(x_trial_, seg);
-    std::vector<SupportPlane> planes = step_supports_[s];
-    std::vector<int> plane_of(std::size_t(seg.num_particles), -1);
-    for (std::size_t k = 0; k < planes.size(); ++k) plane_of[std::size_t(planes[k].particle)] = int(k);
-    for (int j = 0; j < seg.num_particles; ++j) {
-      const Eigen::Vector3d push = (pushed.row(j) - before_self[s].row(j)).transpose();
-      const double length = push.norm();
-      if (!(length > 0.0)) continue;
-      SupportPlane plane{j, pushed.row(j).transpose(), push / length, {j, j, j}, Eigen::Vector3d(1.0, 0.0, 0.0)};
-      if (plane_of[std::size_t(j)] >= 0) {
-        planes[std::size_t(plane_of[std::size_t(j)])] = plane;
-      } else {
-        planes.push_back(plane);
+  // Per scene its planes so far (each particle's latest) and the positions its last pushes
+  // started from.
+  std::vector<std::vector<SupportPlane>> planes(n);
+  std::vector<Eigen::MatrixX3d> unpushed = before_self;
+  for (int round = 0; round < kRelaxRounds; ++round) {
+    std::vector<ContactResolver::Supports> supports;
+    for (std::size_t s = 0; s < n; ++s) {
+      const PerScene& p = per_scene_[s];
+      const SceneSegment& seg = segments_[s];
+      relax[s] = 0;
+      if (!p.stepping || unpushed[s].rows() == 0 || seg.support_collider < 0) continue;
+      const double added = potentials[s].total() - p.p_new.total() - self_kinetic[s];
+      const double excess = stabint::kineticEnergy(scenes_[s].masses, p.v_new) + potentials[s].total() - p.target_now;
+      const double band = blendTolerance(options_, p.kinetic, p.potential, p.energy_scale);
+      if (!(added > band) || !(excess > band)) {
+        unpushed[s].resize(0, 3);  // done
+        continue;
       }
+      if (round == 0) {
+        planes[s] = step_supports_[s];
+        for (SupportPlane& plane : planes[s]) plane.particle += seg.first_particle;
+      }
+      holdPushedParticles(seg, unpushed[s], planes[s]);
+      supports.push_back(ContactResolver::Supports{seg.support_collider, planes[s]});
+      relax[s] = 1;
     }
-    for (SupportPlane& plane : planes) plane.particle += seg.first_particle;
-    supports.push_back(ContactResolver::Supports{seg.support_collider, std::move(planes)});
-    relax[s] = 1;
+    if (supports.empty()) return;
+    if (!relaxOnce(t1, relax, supports, unpushed, self_kinetic, potentials)) return;
   }
-  if (supports.empty()) return;
+}
+
+// Scene `seg`'s particles that moved from `unpushed` to x_trial_ get a plane through where they
+// went, across the move, in `planes` (the concatenation's rows, one per particle).
+void BatchDriver::holdPushedParticles(const SceneSegment& seg, const Eigen::MatrixX3d& unpushed,
+                                      std::vector<SupportPlane>& planes) const {
+  std::vector<int> plane_of(std::size_t(seg.num_particles), -1);
+  for (std::size_t k = 0; k < planes.size(); ++k)
+    plane_of[std::size_t(planes[k].particle - seg.first_particle)] = int(k);
+  for (int j = 0; j < seg.num_particles; ++j) {
+    const int row = seg.first_particle + j;
+    const Eigen::Vector3d push = (x_trial_.row(row) - unpushed.row(j)).transpose();
+    const double length = push.norm();
+    if (!(length > 0.0)) continue;
+    const SupportPlane plane{
+        row, x_trial_.row(row).transpose(), push / length, {row, row, row}, Eigen::Vector3d(1.0, 0.0, 0.0)};
+    if (plane_of[std::size_t(j)] >= 0) {
+      planes[std::size_t(plane_of[std::size_t(j)])] = plane;
+    } else {
+      planes.push_back(plane);
+    }
+  }
+}
+
+// One round of relaxSelfContactPushes over the scenes flagged in `relax` (whose planes are
+// `supports`): the solve, self-contact again, and the potentials; a scene whose round leaves more
+// than it found keeps its pushed state and is done (its `unpushed` emptied), the others' `unpushed`
+// become their relaxed positions. Returns whether any scene goes on.
+bool BatchDriver::relaxOnce(double t1, const std::vector<char>& relax,
+                            const std::vector<ContactResolver::Supports>& supports,
+                            std::vector<Eigen::MatrixX3d>& unpushed, std::vector<double>& self_kinetic,
+                            std::vector<PotentialEnergy>& potentials) {
+  const std::size_t n = segments_.size();
   contact_.setSupports(supports);
-  const double h = options_.time_step;
   backend_->copy(kY, kXTrial);
   solver_.setSolving(relax);
-  const int done = solver_.solve(solveCoefficient(ImplicitSolve::BackwardEuler, h), kY, kXTrial, t1,
+  const int done = solver_.solve(solveCoefficient(ImplicitSolve::BackwardEuler, options_.time_step), kY, kXTrial, t1,
                                  withoutRigidModes(iterationControl(options_.iterations)));
   const Eigen::MatrixX3d pushed = x_trial_;
   std::vector<Eigen::MatrixX3d> pushed_v(n);
-  std::vector<double> pushed_kinetic = self_kinetic;
+  const std::vector<double> pushed_kinetic = self_kinetic;
   backend_->read(kXTrial, x_trial_);
   for (std::size_t s = 0; s < n; ++s) {
     if (!relax[s]) continue;
-    pushed_v[s] = per_scene_[s].v_new;
     PerScene& p = per_scene_[s];
     const SceneSegment& seg = segments_[s];
+    pushed_v[s] = p.v_new;
     report_.scenes[s].iterations += sceneIterations(s, done);
     const ContactPart part = contactPart(s, seg.first_particle);
     const auto x0 = blockOf(x_, seg);
     Eigen::MatrixX3d x1 = blockOf(x_trial_, seg);
     contact_.projectOut(part, t1, x0, x1);
+    unpushed[s] = x1;
     const Eigen::MatrixX3d held = contact_.heldNormals(part, t1, x1, self_contact_[s].thickness());
     const SelfContactResult r = self_contact_[s].resolve(
         x0, x1, p.v_new, scenes_[s].masses, pinnedVertices(s),
@@ -320,14 +359,19 @@ void BatchDriver::relaxSelfContactPushes(double t1, const std::vector<Eigen::Mat
   }
   backend_->roundToStorage(x_trial_);
   backend_->write(kXTrial, x_trial_);
+  // The planes hold no energy in the state the round ends with: they are the correction's device,
+  // not the scene's (what the step's supports held is booked with the pushes' net change).
+  for (std::size_t s = 0; s < n; ++s)
+    if (relax[s]) contact_.relaxSupports(segments_[s].support_collider, x_trial_);
   std::vector<PotentialEnergy> relaxed;
   backend_->potentials(kXTrial, t1, relaxed, &relax);
-  bool undone = false;
+  bool undone = false, going_on = false;
   for (std::size_t s = 0; s < n; ++s) {
     if (!relax[s]) continue;
     ++report_.scenes[s].energy_evaluations;
     if (relaxed[s].total() - self_kinetic[s] < potentials[s].total() - pushed_kinetic[s]) {
       potentials[s] = relaxed[s];
+      going_on = true;
       continue;
     }
     // The relaxed state keeps more than the pushed one (the second pushes undid the relaxation):
@@ -338,9 +382,11 @@ void BatchDriver::relaxSelfContactPushes(double t1, const std::vector<Eigen::Mat
         pushed.middleRows(seg.first_particle, seg.num_particles);
     p.v_new = pushed_v[s];
     self_kinetic[s] = pushed_kinetic[s];
+    unpushed[s].resize(0, 3);
     undone = true;
   }
   if (undone) backend_->write(kXTrial, x_trial_);
+  return going_on;
 }
 
 }  // namespace stabint

@@ -28,9 +28,9 @@ const SimulatorOptions& checkedOptions(const SimulatorOptions& o) {
 }
 
 // Self-contact's supports in the solve (docs/method.md, "Self-contact", "Within the solve"): which
-// scenes get a support collider. On every surface (2), each scene; on heavy bodies (1, the
-// default), a scene with a tet body and particles of no tet (a cloth that may rest on the body).
-std::vector<char> supportedScenes(const std::vector<Scene>& scenes, const SimulatorOptions& o) {
+// scenes take them. On every surface (2), each scene; on heavy bodies (1, the default), a scene
+// with a tet body and particles of no tet (a cloth that may rest on the body).
+std::vector<char> solveSupports(const std::vector<Scene>& scenes, const SimulatorOptions& o) {
   std::vector<char> supported(scenes.size(), 0);
   if (!(o.self_contact_thickness > 0.0) || o.self_contact_supports == 0) return supported;
   for (std::size_t i = 0; i < scenes.size(); ++i) {
@@ -47,10 +47,10 @@ std::vector<char> supportedScenes(const std::vector<Scene>& scenes, const Simula
   return supported;
 }
 
+// Every scene with self-contact gets a support collider: its planes are the supports in the solve
+// (solveSupports) and those the pushes after the solve relax on (relaxSelfContactPushes).
 SceneBatch batchOf(const std::vector<Scene>& scenes, const SimulatorOptions& o, bool one) {
-  const std::vector<char> supported = supportedScenes(scenes, o);
-  if (std::find(supported.begin(), supported.end(), 1) != supported.end())
-    return withSupportColliders(scenes, supported, one);
+  if (o.self_contact_thickness > 0.0) return withSupportColliders(scenes, std::vector<char>(scenes.size(), 1), one);
   return one ? batchOfOne(scenes.front()) : concatenateScenes(scenes);
 }
 
@@ -87,7 +87,8 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
       v_(batch.scene.velocities),
       v_slot_(batch.scene.velocities),
       contact_(data_, forcing_, system_, options_, 0.0, x_, v_),  // the contact set, before anything is factored
-      per_scene_(segments_.size()) {
+      per_scene_(segments_.size()),
+      solve_supports_(solveSupports(scenes, options)) {
   if (options_.self_contact_thickness > 0.0) {
     if (options_.integrator == Integrator::BDF2 && scenes_.size() > 1)
       throw InvalidInputError(

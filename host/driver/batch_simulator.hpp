@@ -258,6 +258,14 @@ class BatchDriver {
   // `potentials` those of x_trial_, both updated for the scenes relaxed.
   void relaxSelfContactPushes(double t1, const std::vector<Eigen::MatrixX3d>& before_self,
                               std::vector<double>& self_kinetic, std::vector<PotentialEnergy>& potentials);
+  void holdPushedParticles(const SceneSegment& seg, const Eigen::MatrixX3d& unpushed,
+                           std::vector<SupportPlane>& planes) const;
+  bool relaxOnce(double t1, const std::vector<char>& relax, const std::vector<ContactResolver::Supports>& supports,
+                 std::vector<Eigen::MatrixX3d>& unpushed, std::vector<double>& self_kinetic,
+                 std::vector<PotentialEnergy>& potentials);
+  // Rounds of relaxSelfContactPushes at most: each round's pushes start from the last's relaxed
+  // positions and add their planes to the last's.
+  static constexpr int kRelaxRounds = 3;
   // Scene s's step is refused: the scene stops stepping (a batch keeps it inactive, its state and
   // time at the refusal); a Simulator's driver throws instead.
   void refuse(std::size_t s, const StepRefusal& refusal);
@@ -295,6 +303,9 @@ class BatchDriver {
   bool has_history_ = false;                                          // BDF2: (kXPrev, kVPrev) hold the previous step
   bool restart_history_ = false;  // BDF2: self-contact corrected this step, the next is a BE step
   std::vector<PerScene> per_scene_;
+  // Per scene, whether self-contact's supports act in the solve (SimulatorOptions::
+  // self_contact_supports and the scene's bodies); every scene with self-contact has the collider.
+  std::vector<char> solve_supports_;
   std::vector<int> unsettled_;  // the scenes whose event_unsettled is set, in the order changed
   BatchStepReport report_;
   // A Simulator's batch of one (forSimulator): a refused step throws and leaves everything as it

@@ -31,9 +31,9 @@ struct SceneSegment {
   int first_collider = 0;
   int num_colliders = 0;
   /// With self-contact, the collider whose contact pairs hold the scene's particles on their
-  /// side of the surfaces they rest on within the solve (docs/method.md, "Self-contact",
-  /// "Support in the solve"): the concatenation's, right after the scene's own colliders, and no
-  /// collider of the scene's (-1: none).
+  /// side of the surfaces they rest on within the solve, and where self-contact pushed them while
+  /// the elements relax after the solve (docs/method.md, "Self-contact"): the concatenation's,
+  /// right after the scene's own colliders, and no collider of the scene's (-1: none).
   int support_collider = -1;
 };
 

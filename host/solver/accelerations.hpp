@@ -59,8 +59,8 @@ class ExtrapolatedIterations {
   Eigen::MatrixX3d segment_next_;
 };
 
-/// L-BFGS's initial inverse Hessian with each segment's rigid motions as a coarse space
-/// (host/solver/rigid_modes.cpp).
+/// L-BFGS's initial inverse Hessian with the rigid motions of each body of each segment as a
+/// coarse space (host/solver/rigid_modes.cpp).
 class RigidModes {
  public:
   /// At the warm start ctx.x_cur with its gradient ctx.gradient: the coarse space of every running
@@ -74,14 +74,24 @@ class RigidModes {
   void drop(std::size_t s) { rigid_on_[s] = 0; }
 
  private:
-  // Per particle its arm x_i - (its segment's mass centre) at the warm start, its weight c m_i +
-  // (its pins' and contacts' weights) and the other elements' energy gradient there; per segment
-  // the inverse of the 6 x 6 coarse matrix and whether the coarse space is in use; rigid_q_ is the
-  // two-level inverse's right-hand side.
+  // The rows of each segment that move rigidly as one: its bodies where each is one run of rows,
+  // else the whole segment (segment s's are units_[unit_first_[s] .. unit_first_[s + 1])). Found
+  // again when the scene, its element count or the segments change.
+  void findUnits(const SolveContext& ctx);
+
+  // Per particle its arm x_i - (its unit's mass centre) at the warm start, its weight c m_i +
+  // (its pins' and contacts' weights) and the other elements' energy gradient there; per unit the
+  // inverse of the 6 x 6 coarse matrix and whether its coarse space is in use, per segment whether
+  // any of its units' is; rigid_q_ is the two-level inverse's right-hand side.
   Eigen::MatrixX3d rigid_arms_, rigid_gradient_, rigid_q_;
   Eigen::VectorXd rigid_weights_;
   std::vector<Eigen::Matrix<double, 6, 6>> rigid_inverse_;
-  std::vector<char> rigid_on_;
+  std::vector<char> rigid_on_, unit_on_;
+  std::vector<SegmentRows> units_;
+  std::vector<std::size_t> unit_first_;
+  const void* units_scene_ = nullptr;
+  std::size_t units_elements_ = 0;
+  std::vector<std::pair<int, int>> units_segments_;
 };
 
 /// L-BFGS with K_c^-1 (and the rigid motions) as the initial inverse Hessian

@@ -149,6 +149,17 @@ std::vector<int> BatchDriver::pinnedVertices(std::size_t s) const {
   return pinned;
 }
 
+SelfContactResult BatchDriver::resolveSelfContact(std::size_t s, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v) {
+  const SceneSegment& seg = segments_[s];
+  const ContactPart part = contactPart(s, seg.first_particle);
+  const auto x0 = blockOf(x_, seg);
+  const Eigen::MatrixX3d held = contact_.heldNormals(part, t1, x, self_contact_[s].thickness());
+  return self_contact_[s].resolve(
+      x0, x, v, scenes_[s].masses, pinnedVertices(s),
+      [&](Eigen::MatrixX3d& y) { return contact_.projectOut(part, t1, x0, y); }, -scenes_[s].gravity.normalized(),
+      &held);
+}
+
 void BatchDriver::resolveContact(double t1) {
   if (contact_.count() == 0 && self_contact_.empty()) return;
   std::vector<char> projected(segments_.size(), 0);
@@ -180,15 +191,10 @@ void BatchDriver::resolveContact(double t1) {
       resolved.velocities_changed = true;
     }
     if (!self_contact_.empty() && !self_contact_[s].empty()) {
-      // Self-contact after the colliders' projection, which it repeats after each round of its
-      // impulses (an impulse may push a particle back into a collider); what its impulses take
-      // from the motion is lost (inelastic), booked like friction when they moved no position.
-      const Eigen::MatrixX3d held = contact_.heldNormals(part, t1, p.x_new, self_contact_[s].thickness());
+      // Self-contact after the colliders' projection; what its impulses take from the motion is
+      // lost (inelastic), booked like friction when they moved no position.
       before_self[s] = p.x_new;
-      const SelfContactResult r = self_contact_[s].resolve(
-          x0, p.x_new, p.v_new, scenes_[s].masses, pinnedVertices(s),
-          [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); }, -scenes_[s].gravity.normalized(),
-          &held);
+      const SelfContactResult r = resolveSelfContact(s, t1, p.x_new, p.v_new);
       resolved.velocities_changed = resolved.velocities_changed || r.velocities_changed;
       resolved.positions_moved = resolved.positions_moved || r.positions_moved;
       self_moved[s] = r.positions_moved;
@@ -258,8 +264,9 @@ void BatchDriver::resolveContact(double t1) {
 // where it starts, on its planes with no support energy, so it adds none; self-contact then runs
 // again on the relaxed positions, so that nothing crosses, and the planes are moved out of the
 // state (they are the correction's device: a heavy cloth held on them stored joules in them). Up to
-// kRelaxRounds rounds, each holding what the last one's pushes moved too, while each takes out at
-// least half of what the pushes added (a round that lowers H less is kept, and the last). The
+// kRelaxRounds rounds, each holding what the last one's pushes moved too, while H stays above its
+// band and each takes out at least kRelaxProgress of what the pushes added (a round that lowers H
+// less is kept, and the last). The
 // velocities stay the corrected ones. The planes are the scene's support collider's (every scene
 // with self-contact has one) and leave at the next step's start where the scene takes no supports
 // in the solve. A step that ends below its target relaxes nothing: its gain stays within what it
@@ -354,12 +361,7 @@ bool BatchDriver::relaxOnce(double t1, const std::vector<char>& relax,
     Eigen::MatrixX3d x1 = blockOf(x_trial_, seg);
     contact_.projectOut(part, t1, x0, x1);
     unpushed[s] = x1;
-    const Eigen::MatrixX3d held = contact_.heldNormals(part, t1, x1, self_contact_[s].thickness());
-    const SelfContactResult r = self_contact_[s].resolve(
-        x0, x1, p.v_new, scenes_[s].masses, pinnedVertices(s),
-        [&](Eigen::MatrixX3d& x) { return contact_.projectOut(part, t1, x0, x); }, -scenes_[s].gravity.normalized(),
-        &held);
-    self_kinetic[s] += r.kinetic_removed;
+    self_kinetic[s] += resolveSelfContact(s, t1, x1, p.v_new).kinetic_removed;
     x_trial_.middleRows(seg.first_particle, seg.num_particles) = x1;
   }
   backend_->roundToStorage(x_trial_);
@@ -378,9 +380,9 @@ bool BatchDriver::relaxOnce(double t1, const std::vector<char>& relax,
     const double left = relaxed[s].total() - self_kinetic[s] - per_scene_[s].p_new.total();
     if (left < added) {
       potentials[s] = relaxed[s];
-      // Another round where this one took out at least half: a heavy body resting on a cloth took
-      // out 3 % a round, for a whole solve each.
-      if (left <= 0.5 * added) {
+      // Another round where this one took out at least kRelaxProgress of what it found: a heavy
+      // body resting on a cloth took out 3 % a round, for a whole solve each.
+      if (left <= (1.0 - kRelaxProgress) * added) {
         going_on = true;
       } else {
         unpushed[s].resize(0, 3);

@@ -480,5 +480,29 @@ TEST(BatchCheckpointsFile, SavesLoadsAndRefusesCorruption) {
   }
 }
 
+// A checkpoint of a scene with other elements on the same particles, masses and colliders is
+// refused naming the element kind and both counts, and the simulator is unchanged.
+TEST(CheckpointRestore, OtherElementCountsAreNamed) {
+  Scene scene = makeClothGrid(ClothGridParams{});
+  Scene fewer = scene;
+  fewer.springs.pop_back();
+  SimulatorOptions o;
+  o.backend = BackendKind::CpuReference;
+  Simulator sim(scene, o), other(fewer, o);
+  other.step();
+  const Eigen::MatrixX3d x = other.positions();
+  try {
+    other.restore(sim.checkpoint());
+    FAIL() << "a checkpoint with another spring count was restored";
+  } catch (const InvalidInputError& e) {
+    const std::string expected = "restore: checkpoint: it belongs to another scene (" +
+                                 std::to_string(scene.springs.size()) + " spring elements, the scene has " +
+                                 std::to_string(fewer.springs.size()) + ")";
+    EXPECT_EQ(std::string(e.what()), expected);
+  }
+  EXPECT_EQ(other.positions(), x);
+  EXPECT_EQ(other.stepCount(), 1);
+}
+
 }  // namespace
 }  // namespace stabint

@@ -258,13 +258,20 @@ void checkRestorable(const CheckpointData& d, const RestoreTarget& target) {
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(d.particles) +
                               " particles, or other masses, rest shape or colliders)");
     const std::size_t num_blocks = target.element_counts.size();
-    bool same_elements = d.elements.stiffness.size() == num_blocks;
-    for (std::size_t b = 0; same_elements && b < num_blocks; ++b) {
+    if (d.elements.stiffness.size() != num_blocks)
+      throw InvalidInputError("checkpoint: it belongs to another scene (" +
+                              std::to_string(d.elements.stiffness.size()) + " element kinds, the scene's build has " +
+                              std::to_string(num_blocks) + ")");
+    for (std::size_t b = 0; b < num_blocks; ++b) {
       const std::size_t count =
           int(b) == target.pin_block ? d.elements.pins.size() : static_cast<std::size_t>(target.element_counts[b]);
-      same_elements = d.elements.stiffness[b].size() == count;
+      // A scene's contact elements are one per particle and collider, the self-contact scene's
+      // support collider included (a checkpoint written before every such scene had one has fewer).
+      if (d.elements.stiffness[b].size() != count)
+        throw InvalidInputError("checkpoint: it belongs to another scene (" +
+                                std::to_string(d.elements.stiffness[b].size()) + " " + elementTypes()[b]->name() +
+                                " elements, the scene has " + std::to_string(count) + ")");
     }
-    if (!same_elements) throw InvalidInputError("checkpoint: it belongs to another scene (other element counts)");
     const std::size_t motions = d.forcing.colliders.size();
     if (motions != 0 && motions != target.colliders)
       throw InvalidInputError("checkpoint: it belongs to another scene (" + std::to_string(motions) + " colliders)");

@@ -10,6 +10,7 @@
 #include "contact_scenes.hpp"
 #include "stabint/simulator.hpp"
 #include "triangle_intersections.hpp"
+#include "energy_band.hpp"
 
 namespace {
 
@@ -47,7 +48,7 @@ int main() {
       bool inverted_at_end = false;
       for (int k = 0; k < 60; ++k) {
         const StepReport& r = sim.step();
-        const double tau = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+        const double tau = testing::energyBand(sim, r);
         bands = std::max(bands, (r.energy.total() - r.target) / tau);
         inverted_at_end = smallestVolume(scene, sim.positions()) <= 0.0;
         inverted += inverted_at_end ? 1 : 0;

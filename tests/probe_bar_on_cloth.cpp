@@ -13,6 +13,7 @@
 
 #include "contact_scenes.hpp"
 #include "stabint/simulator.hpp"
+#include "energy_band.hpp"
 
 int main(int argc, char** argv) {
   using namespace stabint;
@@ -39,7 +40,7 @@ int main(int argc, char** argv) {
       for (int k = 0; k < steps; ++k) {
         const StepReport& report = sim.step();
         const double over = report.energy.total() - report.target;
-        const double tau = o.energy_tolerance * (report.energy.kinetic + report.energy.elastic + sim.energyScale());
+        const double tau = testing::energyBand(sim, report);
         excess = std::max(excess, over);
         kinetic = std::max(kinetic, report.energy.kinetic);
         bands = std::max(bands, over / tau);

@@ -14,6 +14,7 @@
 
 #include "contact_scenes.hpp"
 #include "stabint/simulator.hpp"
+#include "energy_band.hpp"
 
 namespace {
 
@@ -26,7 +27,7 @@ std::pair<double, int> worstBands(const stabint::Scene& scene, double thickness,
   int at = -1;
   for (int k = 0; k < steps; ++k) {
     const stabint::StepReport& report = sim.step();
-    const double tau = o.energy_tolerance * (report.energy.kinetic + report.energy.elastic + sim.energyScale());
+    const double tau = stabint::testing::energyBand(sim, report);
     const double over = (report.energy.total() - report.target) / tau;
     if (over > bands) bands = over, at = k;
   }

@@ -4,6 +4,7 @@
 // when given the same positions, checkpoints carry the motion, bad input changes nothing.
 #include "backend_suite.hpp"
 #include "contact_scenes.hpp"
+#include "energy_band.hpp"
 
 #include <stabint/simulator.hpp>
 
@@ -53,7 +54,7 @@ TEST_P(ColliderMotion, ColliderMovedPerFramePushesABodyWithinTheBand) {
     sim.setColliderPosition(1, toolAt(sim.time() + o.time_step));
     const StepReport& r = sim.step();
     forcing += r.forcing;
-    const double band = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+    const double band = testing::energyBand(sim, r);
     worst = std::max(worst, std::abs(r.energy.total() - r.target) / band);
     // The position given is where the collider is at the end of the step, exactly.
     ASSERT_EQ(sim.colliderPosition(1), toolAt(sim.time())) << i;

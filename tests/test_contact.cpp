@@ -7,6 +7,7 @@
 #include "temp_dir_test.hpp"
 #include "elements/contact.hpp"
 #include "state/checkpoint.hpp"
+#include "energy_band.hpp"
 
 #include <gtest/gtest.h>
 
@@ -147,7 +148,7 @@ Rebounds reboundHeights(Simulator& sim, int steps, double rest_height, double co
   double highest = 0.0;
   for (int i = 0; i < steps; ++i) {
     const StepReport& r = sim.step();
-    const double band = sim.options().energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+    const double band = testing::energyBand(sim, r);
     if (i < first_landing_steps)
       out.worst_band = std::max(out.worst_band, std::abs(r.energy.total() - r.target) / band);
     const bool touching = sim.positions().col(1).minCoeff() < contact_band;
@@ -678,7 +679,7 @@ TEST(Contact, MovingColliderWorkIsBookedAndCheckpointsContinue) {
   for (int i = 0; i < 30; ++i) {
     const StepReport& r = sim.step();
     forcing += r.forcing;
-    const double band = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+    const double band = testing::energyBand(sim, r);
     worst = std::max(worst, std::abs(r.energy.total() - r.target) / band);
     if (i == 15) mid = sim.checkpoint();
   }

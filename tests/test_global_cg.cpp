@@ -12,6 +12,7 @@
 #include "solver/local_global.hpp"
 #include "contact_scenes.hpp"
 #include "global_cg_scenes.hpp"
+#include "energy_band.hpp"
 
 #include <gtest/gtest.h>
 
@@ -180,7 +181,7 @@ TEST(HostCgSimulator, BlendStaysInTheBandAndNearTheFactorRun) {
   for (int n = 0; n < 60; ++n) {
     factor.step();
     const StepReport& r = cg.step();
-    const double band = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + cg.energyScale());
+    const double band = testing::energyBand(cg, r);
     worst = std::max(worst, std::abs(r.energy.total() - r.target) / band);
   }
   EXPECT_LE(worst, 1.0 + 1e-9);

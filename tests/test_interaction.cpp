@@ -8,6 +8,7 @@
 #include "cloth_and_twin.hpp"
 #include "driven_cloth.hpp"
 #include "temp_dir_test.hpp"
+#include "energy_band.hpp"
 
 #include <gtest/gtest.h>
 
@@ -363,7 +364,7 @@ TEST(Interaction, GrabDragReleaseOfAFreeCorner) {
       // The event is H's jump; energy().total() sums the same terms in another order.
       EXPECT_NEAR(r.event_energy, i == 40 ? released_energy : 0.0, 1e-12 * sim.energyScale()) << "step " << i;
       const double gap = std::abs(r.energy.total() - r.target);
-      const double band = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+      const double band = testing::energyBand(sim, r);
       result.outside_band += gap > 2.0 * band;
       result.worst_gap = std::max(result.worst_gap, gap / sim.energyScale());
       if (i >= 90) result.late_kinetic += r.energy.kinetic / 30.0;

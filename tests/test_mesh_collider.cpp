@@ -9,6 +9,7 @@
 #include "contact/mesh_collider.hpp"
 #include "contact_scenes.hpp"
 #include "temp_dir_test.hpp"
+#include "energy_band.hpp"
 
 #include <gtest/gtest.h>
 
@@ -191,7 +192,7 @@ TEST_P(MeshColliderOnEveryBackend, ClothDrapesOverAMeshSphereWithoutEnteringIt) 
   for (int i = 0; i < 60; ++i) {
     const StepReport& r = sim.step();  // a refused step throws
     deepest = std::max(deepest, deepestInside(mesh, sim.positions(), Eigen::Vector3d::Zero()));
-    const double band = sim.options().energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+    const double band = testing::energyBand(sim, r);
     worst_excess = std::max(worst_excess, (r.energy.total() - r.target) / band);
   }
   std::printf("deepest inside %.3g m; worst (H - H*) / band %.3f\n", deepest, worst_excess);
@@ -329,7 +330,7 @@ TEST(MeshCollider, AMovingMeshPushesABarAndBooksItsWork) {
   for (int i = 0; i < 30; ++i) {
     const StepReport& r = sim.step();  // a refused step throws
     deepest = std::max(deepest, deepestInside(mesh, sim.positions(), sim.time() * pusher.velocity));
-    const double band = o.energy_tolerance * (r.energy.kinetic + r.energy.elastic + sim.energyScale());
+    const double band = testing::energyBand(sim, r);
     worst_excess = std::max(worst_excess, (r.energy.total() - r.target) / band);
     target_rise = std::max(target_rise, r.target - target0);
   }

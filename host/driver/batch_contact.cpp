@@ -160,6 +160,10 @@ SelfContactResult BatchDriver::resolveSelfContact(std::size_t s, double t1, Eige
       &held);
 }
 
+double BatchDriver::selfContactGain(std::size_t s, const PotentialEnergy& potential, double kinetic_removed) const {
+  return potential.total() - per_scene_[s].p_new.total() - kinetic_removed;
+}
+
 void BatchDriver::resolveContact(double t1) {
   if (contact_.count() == 0 && self_contact_.empty()) return;
   std::vector<char> projected(segments_.size(), 0);
@@ -235,7 +239,7 @@ void BatchDriver::resolveContact(double t1) {
       // speed's energy at every step). Of a net loss, the colliders' restitution keeps its share
       // of what their own moves removed; a net gain is not booked.
       ++report_.scenes[s].energy_evaluations;
-      const double change = potentials[s].total() - before - self_kinetic[s];
+      const double change = selfContactGain(s, potentials[s], self_kinetic[s]);
       if (change < 0.0) {
         const double kept = moves[s].kept * std::min(moves[s].removed, -change) / -change;
         report_.scenes[s].contact_projection += change * (1.0 - kept);
@@ -266,12 +270,12 @@ void BatchDriver::resolveContact(double t1) {
 // state (they are the correction's device: a heavy cloth held on them stored joules in them). Up to
 // kRelaxRounds rounds, each holding what the last one's pushes moved too, while H stays above its
 // band and each takes out at least kRelaxProgress of what the pushes added (a round that lowers H
-// less is kept, and the last). The
-// velocities stay the corrected ones. The planes are the scene's support collider's (every scene
-// with self-contact has one) and leave at the next step's start where the scene takes no supports
-// in the solve. A step that ends below its target relaxes nothing: its gain stays within what it
-// damped. Nor does a gain of potential alone: a tet bar resting on a cloth sinks within the step
-// and is put back, and relaxing it doubled the iterations of its steps and took out nothing.
+// less is kept, and the last). The velocities stay the corrected ones. The planes are the scene's
+// support collider's (every scene with self-contact has one) and leave at the next step's start
+// where the scene takes no supports in the solve. A step that ends below its target relaxes
+// nothing: its gain stays within what it damped. Nor does a gain of potential alone: a tet bar
+// resting on a cloth sinks within the step and is put back, and relaxing it doubled the iterations
+// of its steps and took out nothing.
 void BatchDriver::relaxSelfContactPushes(double t1, const std::vector<Eigen::MatrixX3d>& before_self,
                                          std::vector<double>& self_kinetic, std::vector<PotentialEnergy>& potentials) {
   const std::size_t n = segments_.size();
@@ -287,7 +291,7 @@ void BatchDriver::relaxSelfContactPushes(double t1, const std::vector<Eigen::Mat
       const SceneSegment& seg = segments_[s];
       relax[s] = 0;
       if (!p.stepping || unpushed[s].rows() == 0 || seg.support_collider < 0) continue;
-      const double added = potentials[s].total() - p.p_new.total() - self_kinetic[s];
+      const double added = selfContactGain(s, potentials[s], self_kinetic[s]);
       const double excess = stabint::kineticEnergy(scenes_[s].masses, p.v_new) + potentials[s].total() - p.target_now;
       const double band = blendTolerance(options_, p.kinetic, p.potential, p.energy_scale);
       // What the pushes stretched: a body lifted whole (one resting on another, put back where it
@@ -376,8 +380,8 @@ bool BatchDriver::relaxOnce(double t1, const std::vector<char>& relax,
   for (std::size_t s = 0; s < n; ++s) {
     if (!relax[s]) continue;
     ++report_.scenes[s].energy_evaluations;
-    const double added = potentials[s].total() - pushed_kinetic[s] - per_scene_[s].p_new.total();
-    const double left = relaxed[s].total() - self_kinetic[s] - per_scene_[s].p_new.total();
+    const double added = selfContactGain(s, potentials[s], pushed_kinetic[s]);
+    const double left = selfContactGain(s, relaxed[s], self_kinetic[s]);
     if (left < added) {
       potentials[s] = relaxed[s];
       // Another round where this one took out at least kRelaxProgress of what it found: a heavy

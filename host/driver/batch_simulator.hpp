@@ -255,6 +255,10 @@ class BatchDriver {
   // colliders' projection runs after each round of its impulses (an impulse may push a particle
   // back into a collider), and the particles a collider holds keep its normal.
   SelfContactResult resolveSelfContact(std::size_t s, double t1, Eigen::MatrixX3d& x, Eigen::MatrixX3d& v);
+  // What self-contact's correction of scene s adds to H: `potential` (of the corrected positions)
+  // above the potential of the solve's candidate (PerScene::p_new), less `kinetic_removed`, the
+  // kinetic energy its impulses removed.
+  double selfContactGain(std::size_t s, const PotentialEnergy& potential, double kinetic_removed) const;
   // Where self-contact's pushes after the solve added more than a scene's band: the elements
   // relax around the pushed particles, held on planes through where they were pushed, and
   // self-contact runs again (docs/method.md, "Self-contact"). `before_self`: per scene the

@@ -30,6 +30,16 @@ inline Scene horizontalCloth(int n, double height) {
   return s;
 }
 
+/// The particle at the middle of a horizontal cloth's edge at the lowest z, where the lift-off
+/// tests and probe_lift_off hold it.
+inline int edgeMiddle(const Scene& s) {
+  int held = 0;
+  const auto score = [&](int i) { return -s.positions(i, 2) - std::abs(s.positions(i, 0)); };
+  for (int i = 0; i < s.numParticles(); ++i)
+    if (score(i) > score(held)) held = i;
+  return held;
+}
+
 /// The default tet bar (1 m x 0.25 m x 0.25 m, 62.5 kg) without its pins, its bottom at `lift`.
 inline Scene freeBar(double lift) {
   Scene s = makeTetBar(TetBarParams{});

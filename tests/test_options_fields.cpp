@@ -98,7 +98,7 @@ TEST(OptionsFields, EveryFieldRoundTripsThroughTheCApi) {
 #undef CHANGE_NESTED
 #undef CHANGE_SUB
   };
-  EXPECT_EQ(std::size(changes), 27u);  // 24 fields and opencl's 3
+  EXPECT_EQ(std::size(changes), 28u);  // 25 fields and opencl's 3
 
   stabint_scene* scene = nullptr;
   ASSERT_EQ(stabint_scene_create_builtin("oscillator", nullptr, &scene), STABINT_OK);

@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -55,6 +56,26 @@ class ContactResolver {
   /// updateSet. Entry i of the result is 1 when a pair of parts[i] changed.
   std::vector<char> refreshHalfSpaces(double t, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v,
                                       const std::vector<ContactPart>& parts);
+
+  /// Within a solve (docs/method.md, "Contact", "Leaving within the solve"): the pairs of `parts`
+  /// whose particles the iterate x (the solve's positions at its time t) carries away from their
+  /// colliders since the step's start (x0 at t0) leave the set (separatingPairs), with one change
+  /// of L and the factors for all, logged like the broad phase's. Entry i of the result is 1 when
+  /// a pair of parts[i] left. A leaving pair's particle is outside: the objective does not change,
+  /// only the solve's initial Hessian K_c.
+  std::vector<char> releaseSeparating(double t0, const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& v0, double t,
+                                      const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& gradient,
+                                      const std::vector<ContactPart>& parts);
+  /// Within the same solve: the pairs of `parts` that releaseSeparating let go whose particles
+  /// the iterate x (at t) takes back inside their geometry return to the set with it (one change,
+  /// logged). Entry i of the result is 1 when a pair of parts[i] returned.
+  std::vector<char> returnPenetrating(double t, const Eigen::MatrixX3d& x, const std::vector<ContactPart>& parts);
+  /// Every pair of `parts` that releaseSeparating let go since the step began returns with its
+  /// geometry (one change, logged), so that another solve of the same step (the blend's partner
+  /// after its candidate) starts from the step's set.
+  void returnReleased(const std::vector<ContactPart>& parts);
+  /// Starts a step: no pair released yet.
+  void forgetReleased() { released_.clear(); }
 
   /// Self-contact's supports in the solve (docs/method.md, "Self-contact", "Support in the
   /// solve"): per support collider (SceneSegment::support_collider), the half-spaces its
@@ -141,6 +162,17 @@ class ContactResolver {
   int block_ = -1;
   std::vector<std::int32_t> log_;
   int log_columns_ = 0;  // the log's nonzero entries
+  // The pairs released since forgetReleased, each with the geometry it acted with, which a
+  // return puts back (entering the set writes the collider's own).
+  struct Released {
+    int pair;
+    std::array<double, kColliderGeometry> geometry;
+  };
+  std::vector<Released> released_;
+  // The pairs of released_ that `returning` picks (within `parts`) enter the set again with
+  // their geometry; returns them per part.
+  template <class Returning>
+  std::vector<char> returnReleasedIf(const std::vector<ContactPart>& parts, Returning returning);
 };
 
 }  // namespace stabint

@@ -128,6 +128,48 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
   return change;
 }
 
+std::vector<int> separatingPairs(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t0,
+                                 const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& v0, double t,
+                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& gradient, double rise) {
+  std::vector<int> leaving;
+  const int block = scene.blockIndex(contactElementType());
+  int e = firstContactElement(scene.scene(), part.colliders.first);
+  for (int c = part.colliders.first; c < part.colliders.end(); ++c) {
+    const Eigen::Vector3d center = scene.scene().colliders[std::size_t(c)].center;
+    const Eigen::Vector3d shift0 = forcing.colliderPosition(c, t0) - center;
+    const Eigen::Vector3d moved = forcing.colliderPosition(c, t) - forcing.colliderPosition(c, t0);
+    const Eigen::Vector3d speed = t > t0 ? Eigen::Vector3d(moved / (t - t0)) : Eigen::Vector3d::Zero();
+    const IndexRange particles = colliderParticles(scene.scene(), c);
+    for (int j = particles.first; j < particles.end(); ++j, ++e) {
+      if (!scene.elementEnabled(block, e)) continue;
+      const Eigen::Index r = j - part.first_row;
+      // The plane that supports the pair's geometry at x0's nearest point, moving with the
+      // collider: its normal is the direction of separation, and a particle that crossed a thin
+      // collider within the iterate is below it, not above the far side.
+      double g0[kColliderGeometry], plane[kColliderGeometry];
+      const Eigen::Vector3d start = x0.row(r).transpose(), now = x.row(r).transpose();
+      pairGeometry(scene, block, e, nullptr, shift0, g0);
+      supportingPlane(g0, start, plane);
+      const Eigen::Vector3d point(plane[kGeometryCenter], plane[kGeometryCenter + 1], plane[kGeometryCenter + 2]);
+      const Eigen::Vector3d normal(plane[kGeometryA], plane[kGeometryA + 1], plane[kGeometryA + 2]);
+      const double start_height = normal.dot(start - point), height = normal.dot(now - point - moved);
+      // Outside at the start and not approaching: a particle arriving (an impact) is pushed out by
+      // its pair, and an iterate that overshoots the surface is no separation.
+      if (!(start_height >= 0.0) || normal.dot(v0.row(r).transpose() - speed) < 0.0) continue;
+      if (height - start_height <= rise) continue;
+      // The forces on the particle at the iterate (less the objective's gradient, its pair's
+      // part 0 outside) pull it away from the collider: at the solution its contact force would
+      // be negative. A particle that trembles above its collider is pulled back by gravity.
+      if (!(normal.dot(gradient.row(r).transpose()) < 0.0)) continue;
+      double g[kColliderGeometry];
+      pairGeometry(scene, block, e, nullptr, shift0 + moved, g);
+      const double at[3] = {now[0], now[1], now[2]};
+      if (signedDistance(g, at) > 0.0) leaving.push_back(e);
+    }
+  }
+  return leaving;
+}
+
 bool writeHalfSpaces(SceneData& scene, const Forcing& forcing, const MeshColliders& meshes, const ContactPart& part,
                      double t, double h, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
   const int block = scene.blockIndex(contactElementType());

@@ -85,6 +85,7 @@ void BatchDriver::replaceBlownUpCandidates(IntegratorSteps& steps, const Iterati
                                            bool forced, const std::vector<char>& not_finite) {
   const double h = options_.time_step;
   const double tm = t_ + 0.5 * h;
+  returnReleasedContacts(not_finite);
   solver_.setSolving(not_finite);
   backend_->copy(kXTrial, kX);
   const int iterations = steps.backwardEuler(h, t_, kXTrial, kScratch, withoutRigidModes(control), /*warm_start=*/true);
@@ -116,6 +117,7 @@ void BatchDriver::blendWithPartner(IntegratorSteps& steps, IterationControl cont
                                    const std::vector<char>& steady, const std::vector<char>& needs_partner) {
   const std::size_t n = segments_.size();
   control.iterations = options_.be_iterations;
+  returnReleasedContacts(needs_partner);
   solver_.setSolving(needs_partner);
   solver_.setRigidModes(steady);
   backend_->copy(kXPartner, kX);

@@ -39,9 +39,37 @@ std::vector<std::size_t> BatchDriver::contactScenes(std::vector<ContactPart>& pa
 
 void BatchDriver::updateContactSets() {
   if (contact_.count() == 0) return;
+  contact_.forgetReleased();
   std::vector<ContactPart> parts;
   const std::vector<std::size_t> scenes = contactScenes(parts);
   bookContactGeometry(scenes, contact_.updateSet(t_, x_, v_, parts));
+}
+
+std::vector<char> BatchDriver::changeContactsInSolve(int slot, const Eigen::MatrixX3d& gradient, double t,
+                                                     const std::vector<char>& running, bool release) {
+  std::vector<ContactPart> parts;
+  std::vector<std::size_t> scenes;
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    if (!running[running.size() == 1 ? 0 : s] || !per_scene_[s].stepping || segments_[s].num_colliders == 0) continue;
+    scenes.push_back(s);
+    parts.push_back(contactPart(s, 0));
+  }
+  if (parts.empty()) return {};
+  backend_->read(slot, x_release_);
+  const std::vector<char> changed_parts = release
+                                              ? contact_.releaseSeparating(t_, x_, v_, t, x_release_, gradient, parts)
+                                              : contact_.returnPenetrating(t, x_release_, parts);
+  std::vector<char> changed(running.size(), 0);
+  for (std::size_t i = 0; i < scenes.size(); ++i)
+    if (changed_parts[i]) changed[running.size() == 1 ? 0 : scenes[i]] = 1;
+  return changed;
+}
+
+void BatchDriver::returnReleasedContacts(const std::vector<char>& scenes) {
+  std::vector<ContactPart> parts;
+  for (std::size_t s = 0; s < segments_.size(); ++s)
+    if (scenes[s] && segments_[s].num_colliders > 0) parts.push_back(contactPart(s, 0));
+  if (!parts.empty()) contact_.returnReleased(parts);
 }
 
 void BatchDriver::refreshContactGeometry() {

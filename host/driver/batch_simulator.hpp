@@ -237,6 +237,15 @@ class BatchDriver {
   // The pairs' geometry (ContactResolver::refreshHalfSpaces) of the stepping scenes from the
   // state just committed, then bookContactGeometry; their step reports follow.
   void refreshContactGeometry();
+  // The contact set's changes within a solve (SolveContext::ContactChange) in the scenes flagged
+  // in `running` (one flag per segment) that step and have colliders: the pairs the iterate in
+  // `slot` carries away from their colliders leave (`release`), or those that left and are
+  // inside again return; one flag per segment whose set changed.
+  std::vector<char> changeContactsInSolve(int slot, const Eigen::MatrixX3d& gradient, double t,
+                                          const std::vector<char>& running, bool release);
+  // The pairs the solves of this step released in the flagged scenes enter the set again
+  // (ContactResolver::returnReleased): the blend's partner starts from the step's set.
+  void returnReleasedContacts(const std::vector<char>& scenes);
   // The stepping scenes with colliders, and their parts on the whole scene's host copies.
   std::vector<std::size_t> contactScenes(std::vector<ContactPart>& parts) const;
   // Scenes[i] with changed[i] get the potential of x_ at t_ again; a loss is booked in H* and
@@ -309,6 +318,7 @@ class BatchDriver {
   // Per scene, this step's self-contact supports (its rows), for their friction after the solve.
   std::vector<std::vector<SupportPlane>> step_supports_;
   Eigen::MatrixX3d x_aux_, v_aux_;  // host copies of the partner or the full-budget BE solve
+  Eigen::MatrixX3d x_release_;      // the iterate changeContactsInSolve reads
   Eigen::MatrixX3d x_trial_;        // the root finds' trial positions
   std::vector<PotentialEnergy> p_all_, new_mid_, old_mid_, aux_mid_;  // per-scene potentials
   std::vector<PotentialEnergy> partner_potentials_;                   // of the BE partner, when its solve left them

@@ -280,6 +280,24 @@ int LbfgsIterations::solve(SolveContext& ctx, double c, int y, int x, double t, 
     stored = std::min(stored + 1, window);
     if (objective_history) objective_history->push_back(objective[0]);
     if (ctx.stops.runningCount() == 0) break;
+    // Pairs that leave the contact set hold no energy at the iterate: the objective, its gradient
+    // and the curvature pairs stay, and the directions take the new K_c. The rigid motions' coarse
+    // space holds the pairs' weights: a segment whose set changed drops it. A pair that returns
+    // with its particle inside adds its energy: the segment's objective and gradient are those of
+    // a local step at the iterate again, and its curvature pairs, taken without it, are dropped.
+    bool release = false;
+    const std::vector<char> changed = ctx.changeContacts(done, limit, x, t, release);
+    if (std::find(changed.begin(), changed.end(), 1) == changed.end()) continue;
+    for (std::size_t s = 0; s < changed.size(); ++s) {
+      if (!changed[s]) continue;
+      if (rigid_modes_.on(s)) rigid_modes_.drop(s);
+      if (!release)
+        for (auto& rho : history_rho_) rho[s] = 0.0;
+    }
+    if (!release) {
+      ctx.localStepObjectives(c, y, x, t, objective);
+      ctx.gradient = ctx.trial_gradient;
+    }
   }
   ctx.stops.finish(done);
   return done;

@@ -78,6 +78,9 @@ class LocalGlobalSolver {
   /// must outlive the solver); without one Newton-CG's Hessian is K_c and no solve takes the
   /// rigid motions.
   void setScene(const SceneData& scene, const Forcing& forcing) { context_.setScene(scene, forcing); }
+  /// The contact set's changes within L-BFGS's solves (SolveContext::ContactChange); the other
+  /// accelerations keep the step's set through their solves.
+  void setContactChange(SolveContext::ContactChange change) { context_.setContactChange(std::move(change)); }
 
  private:
   SolveContext context_;

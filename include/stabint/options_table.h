@@ -95,6 +95,12 @@
      velocity, will be) that close to a collider carries its contact term. */                                          \
   FIELD(T(double), contact_tolerance, 1e-2, nonNegative(),                                                             \
         "deepest a particle may stay inside a collider after a step, m, >= 0")                                         \
+  /* Contact pairs leaving within the solve (docs/method.md, "Contact", "Leaving within the solve"),                   \
+     L-BFGS only, off when 0: after the solve's third iteration a pair whose particle the iterate                      \
+     and the forces on it carry away from its collider leaves the contact set and the global matrix,                   \
+     and returns if a later iterate takes it back inside. A body lifted off a collider then follows                    \
+     its hand; a settling cloth trembles on its colliders with more kinetic energy, so it is off. */                   \
+  FIELD(T(int), contact_release, 0, inRange(0, 1), "contact pairs leave within the solve (1) or not (0)")              \
   /* Self-contact and contact between the cloths of a scene (docs/method.md, "Self-contact"), off                      \
      when 0: the surface triangles (Scene::triangles and the tets' boundary faces) keep this distance                  \
      apart and no triangle passes through another within a step. */                                                    \

@@ -31,7 +31,8 @@ NON_DEFAULT = dict(
     integrator="BE", time_step=0.01, iterations=3, tolerance=1e-9, max_iterations=50, acceleration="anderson",
     chebyshev_rho=0.9, anderson_window=3, lbfgs_history=3, lbfgs_rigid_modes=0, gradient_tolerance=1e-3,
     global_solve="cg", cg_iterations=7, cg_tolerance=1e-6, be_iterations=2, energy_tolerance=1e-2,
-    max_velocity_scale=1.5, max_root_evaluations=8, energy_limit=10.0, contact_tolerance=0.05, self_contact_thickness=0.003,
+    max_velocity_scale=1.5, max_root_evaluations=8, energy_limit=10.0, contact_tolerance=0.05, contact_release=1,
+    self_contact_thickness=0.003,
     self_contact_friction=0.4, self_contact_supports=2,
     backend="opencl",
     opencl=stabint.OpenCLOptions(platform="0", device="gpu", precision="float"))

@@ -153,7 +153,7 @@ NON_DEFAULT_OPTIONS = dict(
     integrator=Integrator.BackwardEuler, time_step=0.01, iterations=3, tolerance=1e-9,
     max_iterations=50, acceleration=stabint.Acceleration.LBFGS, chebyshev_rho=0.9,
     anderson_window=3, lbfgs_history=3, lbfgs_rigid_modes=0, gradient_tolerance=1e-3, be_iterations=2, energy_tolerance=1e-2, max_velocity_scale=1.5,
-    max_root_evaluations=8, energy_limit=10.0, contact_tolerance=0.05, self_contact_thickness=0.003,
+    max_root_evaluations=8, energy_limit=10.0, contact_tolerance=0.05, contact_release=1, self_contact_thickness=0.003,
     self_contact_friction=0.4, self_contact_supports=2,
     global_solve=stabint.GlobalSolve.ConjugateGradient, cg_iterations=7, cg_tolerance=1e-6,
     backend=stabint.BackendKind.CpuReference)
@@ -207,7 +207,7 @@ def same(a, b):
 
 def test_every_option_field_is_a_keyword_and_a_property_that_round_trips():
     fields = option_fields()
-    assert len(fields) == 25 and fields[0] == "integrator" and fields[-1] == "opencl"
+    assert len(fields) == 26 and fields[0] == "integrator" and fields[-1] == "opencl"
     properties = {name for name, attribute in vars(stabint.SimulatorOptions).items() if isinstance(attribute, property)}
     assert properties == set(fields)
     defaults = stabint.SimulatorOptions()

@@ -88,14 +88,14 @@ std::vector<char> ContactResolver::updateSet(double t, const Eigen::MatrixX3d& x
 
 std::vector<char> ContactResolver::releaseSeparating(double t0, const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& v0,
                                                      double t, const Eigen::MatrixX3d& x,
-                                                     const Eigen::MatrixX3d& gradient,
+                                                     const Eigen::MatrixX3d& forces,
                                                      const std::vector<ContactPart>& parts) {
   std::vector<char> released(parts.size(), 0);
   if (count() == 0) return released;
   std::vector<int> leaving;
   const double rise = kReleaseRise * margin();
   for (std::size_t i = 0; i < parts.size(); ++i) {
-    const std::vector<int> part = separatingPairs(scene_, forcing_, parts[i], t0, x0, v0, t, x, gradient, rise);
+    const std::vector<int> part = separatingPairs(scene_, forcing_, parts[i], t0, x0, v0, t, x, forces, rise);
     leaving.insert(leaving.end(), part.begin(), part.end());
     released[i] = part.empty() ? 0 : 1;
   }

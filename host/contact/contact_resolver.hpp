@@ -58,13 +58,14 @@ class ContactResolver {
                                       const std::vector<ContactPart>& parts);
 
   /// Within a solve (docs/method.md, "Contact", "Leaving within the solve"): the pairs of `parts`
-  /// whose particles the iterate x (the solve's positions at its time t) carries away from their
-  /// colliders since the step's start (x0 at t0) leave the set (separatingPairs), with one change
+  /// whose particles the iterate x (the solve's positions at its time t) and the `forces` there
+  /// carry away from their colliders since the step's start (x0, v0 at t0) leave the set
+  /// (separatingPairs), with one change
   /// of L and the factors for all, logged like the broad phase's. Entry i of the result is 1 when
   /// a pair of parts[i] left. A leaving pair's particle is outside: the objective does not change,
   /// only the solve's initial Hessian K_c.
   std::vector<char> releaseSeparating(double t0, const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& v0, double t,
-                                      const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& gradient,
+                                      const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& forces,
                                       const std::vector<ContactPart>& parts);
   /// Within the same solve: the pairs of `parts` that releaseSeparating let go whose particles
   /// the iterate x (at t) takes back inside their geometry return to the set with it (one change,

@@ -130,7 +130,7 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
 
 std::vector<int> separatingPairs(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t0,
                                  const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& v0, double t,
-                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& gradient, double rise) {
+                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& forces, double rise) {
   std::vector<int> leaving;
   const int block = scene.blockIndex(contactElementType());
   int e = firstContactElement(scene.scene(), part.colliders.first);
@@ -157,10 +157,12 @@ std::vector<int> separatingPairs(const SceneData& scene, const Forcing& forcing,
       // its pair, and an iterate that overshoots the surface is no separation.
       if (!(start_height >= 0.0) || normal.dot(v0.row(r).transpose() - speed) < 0.0) continue;
       if (height - start_height <= rise) continue;
-      // The forces on the particle at the iterate (less the objective's gradient, its pair's
-      // part 0 outside) pull it away from the collider: at the solution its contact force would
-      // be negative. A particle that trembles above its collider is pulled back by gravity.
-      if (!(normal.dot(gradient.row(r).transpose()) < 0.0)) continue;
+      // The forces on the particle at the iterate pull it away from the collider (its pair's
+      // part is 0 outside): at the solution its contact force would be negative. Inertia is left
+      // out, so that a particle that trembles up from its collider, pulled back by gravity and
+      // its neighbours, stays (with inertia, a cloth settling on a sphere and the ground trembled
+      // with 20x the kinetic energy).
+      if (!(normal.dot(forces.row(r).transpose()) > 0.0)) continue;
       double g[kColliderGeometry];
       pairGeometry(scene, block, e, nullptr, shift0 + moved, g);
       const double at[3] = {now[0], now[1], now[2]};

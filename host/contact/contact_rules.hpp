@@ -50,11 +50,12 @@ ContactSetChange contactSetChange(const SceneData& scene, const Forcing& forcing
 /// The pairs of `part` in the contact set that a solve's iterate carries away from their
 /// colliders (docs/method.md, "Contact", "Leaving within the solve"): at the step's start (x0, v0
 /// at t0) x_j is outside the plane that supports the pair's geometry at its nearest point and
-/// does not approach it (relative to the collider), and the iterate x (at t) is outside the pair's
-/// geometry and has risen more than `rise` above that plane, moved with the collider. Ascending.
+/// does not approach it (relative to the collider); the iterate x (at t) is outside the pair's
+/// geometry and has risen more than `rise` above that plane, moved with the collider; and the
+/// `forces` on x_j there (less inertia: SolveContext::ContactChange) pull it away. Ascending.
 std::vector<int> separatingPairs(const SceneData& scene, const Forcing& forcing, const ContactPart& part, double t0,
                                  const Eigen::MatrixX3d& x0, const Eigen::MatrixX3d& v0, double t,
-                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& gradient, double rise);
+                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& forces, double rise);
 
 /// The geometry each pair of `part` in the contact set acts with over a step of length h from
 /// (x, v) at time t (docs/method.md, "Contact", "The pair's half-space"), written to its params:

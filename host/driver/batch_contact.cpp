@@ -45,7 +45,7 @@ void BatchDriver::updateContactSets() {
   bookContactGeometry(scenes, contact_.updateSet(t_, x_, v_, parts));
 }
 
-std::vector<char> BatchDriver::changeContactsInSolve(int slot, const Eigen::MatrixX3d& gradient, double t,
+std::vector<char> BatchDriver::changeContactsInSolve(int slot, const Eigen::MatrixX3d& forces, double t,
                                                      const std::vector<char>& running, bool release) {
   std::vector<ContactPart> parts;
   std::vector<std::size_t> scenes;
@@ -56,9 +56,8 @@ std::vector<char> BatchDriver::changeContactsInSolve(int slot, const Eigen::Matr
   }
   if (parts.empty()) return {};
   backend_->read(slot, x_release_);
-  const std::vector<char> changed_parts = release
-                                              ? contact_.releaseSeparating(t_, x_, v_, t, x_release_, gradient, parts)
-                                              : contact_.returnPenetrating(t, x_release_, parts);
+  const std::vector<char> changed_parts = release ? contact_.releaseSeparating(t_, x_, v_, t, x_release_, forces, parts)
+                                                  : contact_.returnPenetrating(t, x_release_, parts);
   std::vector<char> changed(running.size(), 0);
   for (std::size_t i = 0; i < scenes.size(); ++i)
     if (changed_parts[i]) changed[running.size() == 1 ? 0 : scenes[i]] = 1;

@@ -119,10 +119,9 @@ BatchDriver::BatchDriver(SceneBatch batch, const std::vector<Scene>& scenes, con
                             ") computes no per-scene energies yet (docs/batch_design.md)");
   solver_.setScene(data_, forcing_);  // Newton-CG's spring Hessians, the rigid motions' one-particle elements
   if (contact_.count() > 0 && options_.contact_release != 0)
-    solver_.setContactChange(
-        [this](int slot, const Eigen::MatrixX3d& gradient, double t, const std::vector<char>& running, bool release) {
-          return changeContactsInSolve(slot, gradient, t, running, release);
-        });
+    solver_.setContactChange([this](int slot, const Eigen::MatrixX3d& forces, double t,
+                                    const std::vector<char>& running,
+                                    bool release) { return changeContactsInSolve(slot, forces, t, running, release); });
   factorIntegratorSystems(system_, options_);
   backend_->setSegments(segments_);
   backend_->write(kX, x_);

@@ -241,7 +241,7 @@ class BatchDriver {
   // in `running` (one flag per segment) that step and have colliders: the pairs the iterate in
   // `slot` carries away from their colliders leave (`release`), or those that left and are
   // inside again return; one flag per segment whose set changed.
-  std::vector<char> changeContactsInSolve(int slot, const Eigen::MatrixX3d& gradient, double t,
+  std::vector<char> changeContactsInSolve(int slot, const Eigen::MatrixX3d& forces, double t,
                                           const std::vector<char>& running, bool release);
   // The pairs the solves of this step released in the flagged scenes enter the set again
   // (ContactResolver::returnReleased): the blend's partner starts from the step's set.

@@ -286,7 +286,7 @@ int LbfgsIterations::solve(SolveContext& ctx, double c, int y, int x, double t, 
     // with its particle inside adds its energy: the segment's objective and gradient are those of
     // a local step at the iterate again, and its curvature pairs, taken without it, are dropped.
     bool release = false;
-    const std::vector<char> changed = ctx.changeContacts(done, limit, x, t, release);
+    const std::vector<char> changed = ctx.changeContacts(c, done, limit, x, t, release);
     if (std::find(changed.begin(), changed.end(), 1) == changed.end()) continue;
     for (std::size_t s = 0; s < changed.size(); ++s) {
       if (!changed[s]) continue;

@@ -70,7 +70,7 @@ void SolveContext::setScene(const SceneData& scene, const Forcing& forcing) {
   forcing_ = &forcing;
 }
 
-std::vector<char> SolveContext::changeContacts(int done, int limit, int x, double t, bool& release) {
+std::vector<char> SolveContext::changeContacts(double c, int done, int limit, int x, double t, bool& release) {
   // [project rule] The release after the third iteration: by then a lifted particle's iterate has
   // risen clearly, and seven of ten iterations remain to move it without its pair's weight in
   // K_c. A released particle that an iterate takes back inside its collider returns at once.
@@ -79,7 +79,9 @@ std::vector<char> SolveContext::changeContacts(int done, int limit, int x, doubl
   if (!contact_change_ || done < kReleaseIteration || done >= limit) return {};
   std::vector<char> running(std::max<std::size_t>(1, rows_.size()));
   for (std::size_t s = 0; s < running.size(); ++s) running[s] = stops.stopped(s) ? 0 : 1;
-  return contact_change_(x, gradient, t, running, release);
+  // The forces on the particles at the iterate less the inertia's: -(g - c M (x - y)).
+  if (release) search = ((x_cur - y_host).array().colwise() * (c * masses).array()).matrix() - gradient;
+  return contact_change_(x, search, t, running, release);
 }
 
 double SolveContext::objective(double c, int y, int x, double t) {

@@ -123,18 +123,20 @@ class SolveContext {
   const Forcing* forcing() const { return forcing_; }
 
   /// The contact set's changes within a solve (docs/method.md, "Contact", "Leaving within the
-  /// solve"): called with the slot of the iterate, the objective's gradient there, the solve's
-  /// time, the flags of the segments still running, and `release` (true: pairs the iterate and
-  /// the forces on it carry away from their colliders leave; false: pairs that left and whose
-  /// particles are inside again return). It changes the set, and K_c with it, and returns one
-  /// flag per segment whose set changed (empty: none).
-  using ContactChange = std::function<std::vector<char>(int x, const Eigen::MatrixX3d& gradient, double t,
+  /// solve"): called with the slot of the iterate, the forces on its particles there less the
+  /// inertia's (elastic, pins, external and contact: the objective's gradient less c M (x - y),
+  /// negated), the solve's time, the flags of the segments still running, and `release` (true:
+  /// pairs the iterate and those forces carry away from their colliders leave; false: pairs that
+  /// left and whose particles are inside again return). It changes the set, and K_c with it, and
+  /// returns one flag per segment whose set changed (empty: none).
+  using ContactChange = std::function<std::vector<char>(int x, const Eigen::MatrixX3d& forces, double t,
                                                         const std::vector<char>& running, bool release)>;
   void setContactChange(ContactChange change) { contact_change_ = std::move(change); }
-  /// After iteration `done` of a solve of at most `limit` with the iterate in slot x at time t,
+  /// After iteration `done` of a solve (coefficient c) of at most `limit` with the iterate in slot
+  /// x at time t (x_cur, its gradient in `gradient`; `search` is overwritten),
   /// when iterations follow: the release after the third (kReleaseIteration), the returns after
   /// each later one. The flags of the segments whose set changed; empty where none did.
-  std::vector<char> changeContacts(int done, int limit, int x, double t, bool& release);
+  std::vector<char> changeContacts(double c, int done, int limit, int x, double t, bool& release);
 
   /// Segment s's energy scale: its scene's in a batch, else the control's.
   double segmentScale(const IterationControl& control, std::size_t s) const {

@@ -18,8 +18,9 @@ constexpr int kMaxContactLogColumns = 4096;
 
 // [project rule] A pair leaves within the solve once its particle has risen this share of the
 // set's margin above its collider since the step's start (about 0.1 mm at the defaults): far
-// above the solve's round-off, and early enough that the lift is not held back (a rise of 1 mm
-// kept 11 J of the 56 J a 10-iteration BE solve lost lifting a cloth off the ground).
+// above the solve's round-off, and early enough that the lift is not held back (with the rise
+// alone as the rule, a 40 x 40 cloth's 10-iteration BE lift cost its hand 3.7 J at 0.1 mm and
+// 7.8 J at 0.4 mm, against 56 J with the set kept).
 constexpr double kReleaseRise = 0.005;
 
 }  // namespace
@@ -56,7 +57,6 @@ double ContactResolver::margin() const { return tolerance_ + time_step_ * time_s
 bool ContactResolver::changeSet(const std::vector<int>& entering, const std::vector<int>& leaving, bool refactor) {
   const std::vector<int>& particle = scene_.blocks()[static_cast<std::size_t>(block_)].vertices;
   GlobalSystem::WeightChange weights;
-
   for (int e : entering) {
     scene_.setElementEnabled(block_, e, true);
     weights.addDiagonal(particle[static_cast<std::size_t>(e)], scene_.elementWeight(block_, e));
